@@ -1,0 +1,3 @@
+from groupfit.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,1 @@
+"""One module per command-line verb; :mod:`groupfit.cli` parses and dispatches."""

@@ -1,0 +1,83 @@
+"""Pieces the verbs share: configuration and data loading, JSON output, progress bars."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from groupfit.config import override, read_config
+from groupfit.data import Run, load_run, split_names
+from groupfit.errors import InputError
+from groupfit.modelfile import atomic_write_text, to_json
+
+
+def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:
+    """The configuration file merged with --data, --time, --temps, --error."""
+    config = read_config(config_path)
+    override(config, "data", "path", args.data)
+    override(config, "data", "time", args.time)
+    override(config, "data", "temps", split_names(args.temps))
+    override(config, "data", "error", args.error)
+    return config
+
+
+def load_configured_run(config: dict, path: str | None = None, **options) -> Run:
+    """Load the run named by ``path`` (default: the configuration's data path)."""
+    data = config["data"]
+    path = path or data.get("path")
+    if not path:
+        raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    return load_run(path, temps=data.get("temps"), time=data["time"], error=data["error"], **options)
+
+
+def write_json(target: str | None, obj: Any) -> None:
+    """Write a JSON result to a file, or to stdout for '-'."""
+    if target is None:
+        return
+    text = to_json(obj)
+    if target == "-":
+        sys.stdout.write(text)
+    else:
+        atomic_write_text(target, text)
+
+
+def report_stream(args: argparse.Namespace):
+    """Where the human-readable report goes: stderr when JSON goes to stdout."""
+    return sys.stderr if getattr(args, "json", None) == "-" else sys.stdout
+
+
+def check_output_dir(path: str | Path) -> Path:
+    """Create the output folder or say why it cannot be."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{path}: output path exists and is not a folder; choose another --out")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot create the output folder ({exc.strerror})") from None
+    return path
+
+
+class StageProgress:
+    """A tqdm bar per named stage, driven by ``(stage, fraction)`` callbacks."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.bars: dict[str, tqdm] = {}
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        if not self.enabled:
+            return
+        bar = self.bars.get(stage)
+        if bar is None:
+            bar = self.bars[stage] = tqdm(total=1000, desc=stage, leave=False, file=sys.stderr, disable=None)
+        bar.update(max(0, int(round(1000 * min(fraction, 1.0))) - bar.n))
+
+    def close(self) -> None:
+        for bar in self.bars.values():
+            bar.close()
+        self.bars.clear()

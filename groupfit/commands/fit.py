@@ -1,0 +1,146 @@
+"""``groupfit fit``: optimise the hard breaks, fit the soft groups, save the model."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+from groupfit.commands.common import (
+    StageProgress,
+    check_output_dir,
+    config_with_data_options,
+    load_configured_run,
+    report_stream,
+    write_json,
+)
+from groupfit.config import default_config_path, override
+from groupfit.data import Run
+from groupfit.errors import InputError
+from groupfit.grouping import served_ranges
+from groupfit.modelfile import model_to_dict, save_model
+from groupfit.models.grouped import GroupedRegressor
+
+
+def run_fit(args: argparse.Namespace) -> int:
+    config = config_with_data_options(args, args.config or default_config_path())
+    override(config, "model", "p", args.p)
+    override(config, "model", "n", args.n)
+    override(config, "model", "c", args.c)
+    override(config, "model", "objective", args.objective)
+    if args.no_intercept:
+        config["model"]["intercept"] = False
+    override(config, "model", "criterion", args.criterion)
+    override(config, "search", "method", args.search)
+    override(config, "search", "seed", args.seed)
+    override(config, "output", "dir", args.out)
+
+    run = load_configured_run(config)
+    criterion = config["model"].get("criterion")
+    if criterion is not None and criterion not in run.temp_names:
+        raise InputError(
+            f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
+        )
+    estimator = estimator_from_config(config)
+    out_dir = check_output_dir(config["output"]["dir"])
+    progress = StageProgress(enabled=not args.quiet)
+    try:
+        estimator.fit(run.temps, run.error, progress=progress)
+    finally:
+        progress.close()
+    model = model_to_dict(estimator, run, criterion)
+
+    from groupfit.plots import plot_fit
+
+    model_path = out_dir / "model.json"
+    figure_path = out_dir / "fit.png"
+    save_model(model, model_path)
+    plot_fit(
+        run.time,
+        run.error,
+        run.error - estimator.residuals_,
+        estimator.breaks_,
+        estimator.soft_groups_,
+        figure_path,
+        title=f"{run.name}: grouped model, p = {estimator.p}, {estimator.objective} Rg = {estimator.objective_value_:.4g}",
+    )
+    write_json(args.json, {**model, "search": estimator.search_})
+    print(fit_report(estimator, run, model, [model_path, figure_path]), file=report_stream(args))
+    return 0
+
+
+def estimator_from_config(config: dict) -> GroupedRegressor:
+    model, search = config["model"], config["search"]
+    return GroupedRegressor(
+        p=model["p"],
+        n=model["n"],
+        c=float(model["c"]),
+        objective=model["objective"],
+        fit_intercept=model["intercept"],
+        search=search["method"],
+        population_size=search["population_size"],
+        max_generations=search["max_generations"],
+        stall_generations=search["stall_generations"],
+        polish=search["polish"],
+        random_state=search["seed"],
+    )
+
+
+def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list[Path]) -> str:
+    """The human-readable table printed by ``groupfit fit``."""
+    unit = "µm" if estimator.objective == "sae" else "µm²"
+    search = estimator.search_
+    lines = [
+        f"run     {run.source}: N = {run.n_samples} samples every {run.period:g} s; "
+        f"inputs {', '.join(run.temp_names)} -> {run.error_name}",
+        f"model   p = {estimator.p}, n = {estimator.n}, c = {estimator.c:g}, M = {estimator.n_coef} "
+        f"({'with' if estimator.fit_intercept else 'no'} intercept), objective {estimator.objective}, "
+        f"hard groups > {estimator.c * estimator.n_coef:g} samples",
+        "search  " + search_summary(search, unit),
+        "",
+    ]
+    names = (["const"] if estimator.fit_intercept else []) + list(run.temp_names)
+    header = ["group", "hard", "soft", "serves"] + names + [f"R ({unit})"]
+    served = served_ranges(estimator.breaks_, estimator.n_samples_fit_, estimator.n)
+    rows = []
+    for g, (hard, soft, serve) in enumerate(zip(estimator.hard_groups_, estimator.soft_groups_, served)):
+        coefficients = model["coefficients"][g]
+        rows.append(
+            [str(g + 1), _span(hard), _span(soft), _span(serve)]
+            + [f"{v:.5g}" for v in coefficients]
+            + [f"{estimator.group_objective_[g]:.4f}"]
+        )
+    widths = [max(len(r[i]) for r in [header] + rows) for i in range(len(header))]
+    for row in [header] + rows:
+        lines.append("  ".join(cell.rjust(width) for cell, width in zip(row, widths)))
+    metrics = model["training"]
+    lines += [
+        "",
+        f"breaks  {estimator.breaks_}   Rg = {estimator.objective_value_:.6g} {unit}   "
+        f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
+        f"switch  criterion sensor {model['switching']['criterion']}",
+        "wrote   " + ", ".join(str(p) for p in written),
+    ]
+    return "\n".join(lines)
+
+
+def search_summary(search: dict, unit: str) -> str:
+    if search["method"] == "exact":
+        return f"exact (dynamic programming): {search['evaluations']} segment costs, {search['seconds']:.2f} s"
+    text = (
+        f"ga (DEAP, seed {search['seed']}): {search['generations']} generations ({search['stopped']}), "
+        f"{search['evaluations']} evaluations, {search['seconds']:.2f} s"
+    )
+    if "gap_percent" in search:
+        text += (
+            f"; exact optimum {search['exact_objective']:.6g} {unit} at {search['exact_breaks']}, "
+            f"GA gap {search['gap_percent']:.3g} %"
+        )
+    return text
+
+
+def _span(pair) -> str:
+    return f"{pair[0]}-{pair[1]}"
+
+
+__all__ = ["run_fit", "estimator_from_config", "fit_report"]

@@ -1,0 +1,137 @@
+"""Run configurations: TOML files merged with command-line options.
+
+A configuration has up to four tables; every key is optional::
+
+    [data]
+    path = "../datasets/synthetic_cycle.csv"   # relative to the config file
+    time = "time_s"
+    temps = ["T1", "T2", "T3", "T4"]
+    error = "error_um"
+    validate = ["../datasets/other_run.csv"]
+
+    [model]
+    p = 3
+    n = 3
+    c = 3.0
+    objective = "sae"          # or "sse"
+    intercept = true
+    criterion = "T1"           # switching criterion sensor (default: the most active)
+
+    [search]
+    method = "ga"              # or "exact"
+    seed = 0
+    population_size = 60
+    max_generations = 300
+    stall_generations = 30
+    polish = true
+
+    [output]
+    dir = "groupfit-out"
+
+Command-line options override the file. Unknown tables or keys, and values of
+the wrong type, are errors that name the key.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from groupfit.errors import InputError
+
+SCHEMA: dict[str, dict[str, tuple[type, ...]]] = {
+    "data": {"path": (str,), "time": (str,), "temps": (list,), "error": (str,), "validate": (list,)},
+    "model": {
+        "p": (int,),
+        "n": (int,),
+        "c": (int, float),
+        "objective": (str,),
+        "intercept": (bool,),
+        "criterion": (str,),
+    },
+    "search": {
+        "method": (str,),
+        "seed": (int,),
+        "population_size": (int,),
+        "max_generations": (int,),
+        "stall_generations": (int,),
+        "polish": (bool,),
+    },
+    "output": {"dir": (str,)},
+}
+
+DEFAULTS: dict[str, dict[str, Any]] = {
+    "data": {"time": "time_s", "error": "error_um", "validate": []},
+    "model": {"p": 3, "n": 3, "c": 3.0, "objective": "sae", "intercept": True},
+    "search": {
+        "method": "ga",
+        "seed": 0,
+        "population_size": 60,
+        "max_generations": 300,
+        "stall_generations": 30,
+        "polish": True,
+    },
+    "output": {"dir": "groupfit-out"},
+}
+
+PATH_KEYS = {("data", "path"), ("data", "validate")}
+
+
+def default_config_path() -> Path | None:
+    """``configs/default.toml`` in the working folder, else in the source tree, else None."""
+    for root in (Path.cwd(), Path(__file__).resolve().parents[1]):
+        candidate = root / "configs" / "default.toml"
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
+    """Read and check a TOML configuration; relative data paths are resolved against its folder."""
+    config = {table: dict(values) for table, values in DEFAULTS.items()}
+    if path is None:
+        return config
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: configuration file not found")
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{path}: not valid TOML ({exc})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file") from None
+    check_config(raw, str(path))
+    base = path.resolve().parent
+    for table, values in raw.items():
+        for key, value in values.items():
+            if (table, key) in PATH_KEYS:
+                value = [str((base / v).resolve()) for v in value] if isinstance(value, list) else str((base / value).resolve())
+            config[table][key] = value
+    return config
+
+
+def check_config(raw: dict, label: str) -> None:
+    """Raise InputError naming the first unknown table or key, or wrongly typed value."""
+    for table, values in raw.items():
+        if table not in SCHEMA:
+            raise InputError(f"{label}: unknown table [{table}]; the tables are {', '.join(SCHEMA)}")
+        if not isinstance(values, dict):
+            raise InputError(f"{label}: '{table}' must be a table ([{table}])")
+        for key, value in values.items():
+            if key not in SCHEMA[table]:
+                known = ", ".join(SCHEMA[table])
+                raise InputError(f"{label}: unknown key '{key}' in [{table}]; known keys: {known}")
+            types = SCHEMA[table][key]
+            if isinstance(value, bool) and bool not in types:
+                raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
+            if not isinstance(value, types):
+                raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
+            if types == (list,) and not all(isinstance(v, str) for v in value):
+                raise InputError(f"{label}: [{table}] {key} must be a list of strings")
+
+
+def override(config: dict, table: str, key: str, value: Any) -> None:
+    """Set a value from the command line when it was given."""
+    if value is not None:
+        config[table][key] = value

@@ -1,0 +1,241 @@
+"""Load and validate a run: a time column, temperature columns and the thermal error.
+
+A *run* is one recording of a machine (or one simulation) sampled at a uniform
+period. :func:`load_run` reads it from a CSV file or a pandas DataFrame, checks
+it once, and converts the columns the model uses into numpy arrays. Every
+problem a user can cause is raised as :class:`~groupfit.errors.InputError` with
+a message that names the file, the column and the row.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from groupfit.errors import InputError
+
+PERIOD_TOLERANCE = 0.01
+"""Largest relative deviation of one sampling interval from the run's period."""
+
+DEFAULT_TIME = "time_s"
+DEFAULT_ERROR = "error_um"
+
+
+@dataclass(frozen=True)
+class Run:
+    """One validated run.
+
+    Attributes
+    ----------
+    name : str
+        Short name (the file stem, or the name given for a DataFrame).
+    source : str
+        Where the run came from, used in messages.
+    time : ndarray, shape (N,)
+        Sample times in seconds, strictly increasing.
+    temps : ndarray, shape (N, k)
+        Model input temperatures in °C, in the order of ``temp_names``.
+    temp_names : tuple of str
+    error : ndarray, shape (N,) or None
+        Thermal error in µm, when the run has the error column.
+    error_name : str or None
+    period : float
+        Sampling period in seconds (median interval).
+    frame : DataFrame
+        The whole table, including columns that are not model inputs.
+    """
+
+    name: str
+    source: str
+    time: np.ndarray
+    temps: np.ndarray
+    temp_names: tuple[str, ...]
+    error: np.ndarray | None
+    error_name: str | None
+    period: float
+    frame: pd.DataFrame = field(repr=False)
+
+    @property
+    def n_samples(self) -> int:
+        return len(self.time)
+
+
+def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
+    """Read a CSV file (or take a DataFrame) and return ``(frame, name, label)``.
+
+    ``label`` names the source in error messages.
+    """
+    if isinstance(source, pd.DataFrame):
+        label = name or "DataFrame"
+        return source.reset_index(drop=True), (name or "data"), label
+    path = Path(source)
+    label = str(path)
+    if not path.is_file():
+        raise InputError(f"{label}: data file not found; check the path given to --data")
+    try:
+        frame = pd.read_csv(path, skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{label}: the file is empty; a header line and one row per sample are needed") from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{label}: not a readable CSV table ({first})") from None
+    if frame.shape[0] == 0:
+        raise InputError(f"{label}: the table has a header but no rows")
+    frame.columns = [str(c).strip() for c in frame.columns]
+    return frame, (name or path.stem), label
+
+
+def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
+    """Return one column as float64, naming the first bad cell if there is one.
+
+    Rows are reported 1-based, counting data rows (the header is not a row).
+    """
+    if column not in frame.columns:
+        available = ", ".join(map(str, frame.columns))
+        raise InputError(f"{label}: column '{column}' not found; the columns are: {available}")
+    raw = frame[column]
+    values = pd.to_numeric(raw, errors="coerce")
+    bad_text = values.isna() & raw.notna() & (raw.astype(str).str.strip().str.lower() != "nan")
+    if bad_text.any():
+        row = int(np.flatnonzero(bad_text.to_numpy())[0])
+        raise InputError(
+            f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; "
+            "fix or remove that row"
+        )
+    array = values.to_numpy(dtype=float)
+    if not allow_nonfinite:
+        nonfinite = ~np.isfinite(array)
+        if nonfinite.any():
+            row = int(np.flatnonzero(nonfinite)[0])
+            what = "empty" if np.isnan(array[row]) else f"{array[row]}"
+            raise InputError(
+                f"{label}: row {row + 1}, column '{column}' is {what} "
+                f"({int(nonfinite.sum())} non-finite value(s) in that column); "
+                "a model can only be fitted on finite values: repair or drop those rows"
+            )
+    return array
+
+
+def check_time(time: np.ndarray, label: str, column: str) -> float:
+    """Check that ``time`` is strictly increasing and uniformly sampled; return the period."""
+    if len(time) < 2:
+        raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
+    step = np.diff(time)
+    not_increasing = np.flatnonzero(step <= 0)
+    if not_increasing.size:
+        i = int(not_increasing[0]) + 1
+        raise InputError(
+            f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
+            f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows or remove the duplicate"
+        )
+    period = float(np.median(step))
+    irregular = np.flatnonzero(np.abs(step - period) > PERIOD_TOLERANCE * period)
+    if irregular.size:
+        i = int(irregular[0]) + 1
+        raise InputError(
+            f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
+            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance 1 %); "
+            "resample the run to a uniform period or split it at the gap"
+        )
+    return period
+
+
+def load_run(
+    source: str | Path | pd.DataFrame,
+    *,
+    temps: Sequence[str] | None = None,
+    time: str = DEFAULT_TIME,
+    error: str | None = DEFAULT_ERROR,
+    require_error: bool = True,
+    allow_nonfinite: bool = False,
+    name: str | None = None,
+) -> Run:
+    """Read and validate a run.
+
+    Parameters
+    ----------
+    source : path or DataFrame
+        A CSV file with a header line, one row per sample, or a DataFrame.
+    temps : sequence of str, optional
+        Temperature columns used as model inputs, in order. Default: the
+        columns named like sensors, ``T`` followed by a digit (``T1``,
+        ``T2_front`` …); an ambient column such as ``T_amb`` is not included.
+    time, error : str
+        Names of the time (s) and thermal-error (µm) columns.
+    require_error : bool
+        When False, a run without the error column is accepted (``error`` is None).
+    allow_nonfinite : bool
+        When True, NaN and ±inf in temperature and error columns are kept
+        (the run-time switching logic treats them as sensor faults).
+    name : str, optional
+        Name of the run (default: the file stem).
+
+    Raises
+    ------
+    InputError
+        On any problem with the file or its values.
+    """
+    frame, run_name, label = read_table(source, name)
+    time_values = numeric_column(frame, time, label, allow_nonfinite=False)
+    period = check_time(time_values, label, time)
+
+    if temps is None:
+        temps = default_temperature_columns(frame, exclude=(time, error))
+        if not temps:
+            raise InputError(f"{label}: no temperature columns found; name them with --temps A,B,C")
+    temps = list(temps)
+    duplicates = sorted({t for t in temps if temps.count(t) > 1})
+    if duplicates:
+        raise InputError(f"{label}: temperature column(s) listed twice: {', '.join(duplicates)}")
+    if error is not None and error in temps:
+        raise InputError(f"{label}: column '{error}' is both the error and a temperature input")
+
+    columns = [numeric_column(frame, t, label, allow_nonfinite=allow_nonfinite) for t in temps]
+    temp_array = np.column_stack(columns) if columns else np.empty((len(frame), 0))
+    for j, t in enumerate(temps):
+        finite = temp_array[np.isfinite(temp_array[:, j]), j]
+        if finite.size and np.ptp(finite) == 0.0:
+            raise InputError(
+                f"{label}: temperature column '{t}' is constant ({finite[0]:g} °C) over the whole run; "
+                "it cannot inform the model: drop it from --temps (a dead sensor?)"
+            )
+
+    error_values = None
+    if error is not None and (require_error or error in frame.columns):
+        error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite)
+
+    return Run(
+        name=run_name,
+        source=label,
+        time=time_values,
+        temps=temp_array,
+        temp_names=tuple(temps),
+        error=error_values,
+        error_name=error if error_values is not None else None,
+        period=period,
+        frame=frame,
+    )
+
+
+def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:
+    """Columns named like sensors (``T`` followed by a digit): ``T1``, ``T2_front`` …"""
+    excluded = {e for e in exclude if e}
+    return [
+        c
+        for c in frame.columns
+        if c not in excluded and len(c) > 1 and c[0] in "Tt" and c[1].isdigit()
+    ]
+
+
+def split_names(text: str | None) -> list[str] | None:
+    """Split a comma-separated column list from the command line."""
+    if text is None:
+        return None
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:
+        raise InputError(f"--temps {text!r}: give at least one column name, comma separated")
+    return names

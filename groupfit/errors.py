@@ -1,0 +1,10 @@
+"""Exceptions that carry a user-facing message.
+
+Every error a user can cause by what they feed groupfit (a file, a column, a
+value, a configuration key) is raised as :class:`InputError`. The command line
+prints its message as one line on stderr and exits with status 2.
+"""
+
+
+class InputError(ValueError):
+    """Bad user input: the message names the file, column, row or value at fault."""

@@ -1,0 +1,119 @@
+"""Hard and soft groups of a modelling run, and the constraints on break points.
+
+Conventions (METHODS.md §1): samples are numbered 1…N. A hard break ``b`` is the
+*last* sample of its hard group, so with breaks ``b_1 < … < b_p`` (``b_0 = 0``,
+``b_{p+1} = N``) hard group j holds samples ``b_{j-1}+1 … b_j``. Soft group 1 is
+``1 … b_1``; soft group j ≥ 2 is ``b_{j-1}-n+1 … b_j``: it starts n samples
+before its hard group, so neighbouring soft groups share n samples. In service
+the later group serves the shared samples, so group j *serves*
+``b_{j-1}-n+1 … b_j-n`` (the last group serves up to N).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from groupfit.errors import InputError
+
+
+def min_group_size(c: float, n_coef: int) -> int:
+    """Smallest allowed hard-group size: more than ``c·M`` samples."""
+    if c < 0:
+        raise InputError(f"spacing coefficient c = {c:g} must not be negative")
+    return int(math.floor(c * n_coef + 1e-12)) + 1
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Feasible break vectors for N samples.
+
+    A break vector is feasible when every hard group (the first and the last
+    included) has at least ``min_size`` samples and every break lies strictly
+    between ``n`` and ``N``.
+    """
+
+    n_samples: int
+    n: int
+    min_size: int
+
+    @classmethod
+    def for_model(cls, n_samples: int, n: int, c: float, n_coef: int) -> "Constraints":
+        if n < 0:
+            raise InputError(f"soft offset n = {n} must not be negative")
+        return cls(n_samples=int(n_samples), n=int(n), min_size=min_group_size(c, n_coef))
+
+    @property
+    def lowest_break(self) -> int:
+        return max(self.min_size, self.n + 1)
+
+    @property
+    def highest_break(self) -> int:
+        return self.n_samples - self.min_size
+
+    def max_breaks(self) -> int:
+        """Largest p for which a feasible break vector exists (-1 if even p = 0 is not)."""
+        if self.n_samples < self.min_size:
+            return -1
+        if self.lowest_break > self.highest_break:
+            return 0
+        return 1 + (self.highest_break - self.lowest_break) // self.min_size
+
+    def is_feasible(self, breaks: Sequence[int]) -> bool:
+        b = np.asarray(breaks, dtype=int)
+        if b.size == 0:
+            return self.n_samples >= self.min_size
+        edges = np.concatenate(([0], b, [self.n_samples]))
+        return bool(
+            np.all(np.diff(edges) >= self.min_size)
+            and b[0] > self.n
+            and b[-1] < self.n_samples
+        )
+
+    def require(self, p: int, c: float, n_coef: int) -> None:
+        """Raise a clear InputError when p breaks cannot fit."""
+        if p < 0:
+            raise InputError(f"p = {p}: the number of breaks must be 0 or more")
+        largest = self.max_breaks()
+        if p > largest:
+            if largest < 0:
+                hint = "no model can be fitted: give more samples or lower c"
+            else:
+                hint = f"the largest feasible p is {largest}"
+            raise InputError(
+                f"p = {p} breaks do not fit N = {self.n_samples} samples with c = {c:g}, "
+                f"M = {n_coef} (each hard group needs more than c·M = {c * n_coef:g} samples) "
+                f"and n = {self.n}: {hint}"
+            )
+
+
+def hard_groups(breaks: Sequence[int], n_samples: int) -> list[tuple[int, int]]:
+    """Hard groups as 1-based inclusive ``(first, last)`` pairs."""
+    edges = [0, *map(int, breaks), int(n_samples)]
+    return [(edges[j] + 1, edges[j + 1]) for j in range(len(edges) - 1)]
+
+
+def soft_groups(breaks: Sequence[int], n_samples: int, n: int) -> list[tuple[int, int]]:
+    """Soft groups (the rows each coefficient vector is fitted on), 1-based inclusive."""
+    edges = [0, *map(int, breaks), int(n_samples)]
+    return [
+        (1 if j == 0 else edges[j] - n + 1, edges[j + 1]) for j in range(len(edges) - 1)
+    ]
+
+
+def served_ranges(breaks: Sequence[int], n_samples: int, n: int) -> list[tuple[int, int]]:
+    """Samples each group serves (and is scored on): a partition of 1…N."""
+    soft = soft_groups(breaks, n_samples, n)
+    last = len(soft) - 1
+    return [(first, end if j == last else end - n) for j, (first, end) in enumerate(soft)]
+
+
+def serving_group_index(breaks: Sequence[int], n_samples: int, n: int, length: int | None = None) -> np.ndarray:
+    """0-based group index serving each sample 1…length (samples past N: the last group)."""
+    length = n_samples if length is None else length
+    starts = np.array([first for first, _ in served_ranges(breaks, n_samples, n)])
+    samples = np.arange(1, length + 1)
+    return np.searchsorted(starts, samples, side="right") - 1

@@ -1,0 +1,6 @@
+"""Thermal-error models in the scikit-learn style."""
+
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.mlr import MLR
+
+__all__ = ["GroupedRegressor", "MLR"]

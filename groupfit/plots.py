@@ -1,0 +1,69 @@
+"""Figures (matplotlib, written as PNG files)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def plot_fit(
+    time_s: np.ndarray,
+    measured: np.ndarray,
+    predicted: np.ndarray,
+    breaks: Sequence[int],
+    soft_groups: Sequence[Sequence[int]],
+    path: str | Path,
+    title: str = "",
+) -> None:
+    """Measured vs predicted error over time, hard and soft breaks marked, residual panel below."""
+    hours = np.asarray(time_s, dtype=float) / 3600.0
+    residual = np.asarray(measured) - np.asarray(predicted)
+    fig, (top, bottom) = plt.subplots(
+        2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]}, constrained_layout=True
+    )
+    top.plot(hours, measured, color="black", lw=1.6, label="measured")
+    top.plot(hours, predicted, color="tab:red", lw=1.2, ls="--", label="grouped model")
+    for k, b in enumerate(breaks):
+        for axis in (top, bottom):
+            axis.axvline(hours[b - 1], color="tab:blue", lw=1.0, label="hard break" if (k == 0 and axis is top) else None)
+    for k, (first, _) in enumerate(soft_groups[1:]):
+        for axis in (top, bottom):
+            axis.axvline(
+                hours[first - 1], color="tab:blue", lw=0.8, ls=":", label="soft break" if (k == 0 and axis is top) else None
+            )
+    top.set_ylabel("thermal error (µm)")
+    top.legend(loc="best", fontsize=8)
+    top.set_title(title)
+    bottom.plot(hours, residual, color="tab:gray", lw=1.0)
+    bottom.axhline(0.0, color="black", lw=0.6)
+    bottom.set_ylabel("residual (µm)")
+    bottom.set_xlabel("time (h)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_dataset(frame, path: str | Path, title: str = "", time: str = "time_s", error: str = "error_um") -> None:
+    """Temperatures (sensor-named columns) and the thermal error of a data set over time."""
+    from groupfit.data import default_temperature_columns
+
+    hours = frame[time].to_numpy(dtype=float) / 3600.0
+    sensors = default_temperature_columns(frame, exclude=(time, error))
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, constrained_layout=True)
+    for name in sensors[:12]:
+        top.plot(hours, frame[name], lw=1.0, label=name)
+    top.set_ylabel("temperature (°C)")
+    if sensors:
+        top.legend(loc="best", fontsize=7, ncol=2)
+    top.set_title(title)
+    if error in frame.columns:
+        bottom.plot(hours, frame[error], color="black", lw=1.4)
+    bottom.set_ylabel("thermal error (µm)")
+    bottom.set_xlabel("time (h)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

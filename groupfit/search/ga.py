@@ -1,0 +1,388 @@
+"""Genetic-algorithm break-point search (DEAP), as in the paper.
+
+Encoding. A break vector ``b_1 < … < b_p`` with hard groups of at least ``h``
+samples and ``lowest ≤ b_1``, ``b_p ≤ highest`` is stored as the gaps-free
+vector ``u_j = b_j − (j−1)·h``. The constraints become simply
+``lowest ≤ u_1 ≤ … ≤ u_p ≤ highest − (p−1)·h``, so *any* integer vector is made
+feasible by clipping it to that interval and sorting it: every individual the
+operators produce is repaired, never penalised.
+
+Operators suited to ordered integer vectors: uniform crossover or an
+arithmetic blend of the parents (then rounding), Gaussian integer shifts of
+single breaks with an occasional uniform reset, tournament selection, and
+elitism (the best individuals pass unchanged). The run stops when the best Rg
+has not improved for ``stall_generations`` generations.
+
+Fitness is evaluated for the whole population at once: the distinct ``(a, b)``
+segment pairs not yet seen are costed in one vectorised call and cached, since
+break positions are "soft" and the population revisits the same segments.
+
+With ``polish=True`` (the default) the best individual is finished by a local
+search that moves one break at a time to its best position between its
+neighbours, until no move improves Rg, as MATLAB's ``ga`` does with a hybrid
+function.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import random
+import time as _time
+from dataclasses import dataclass, field
+from typing import Callable, Iterator
+
+import numpy as np
+from deap import base, tools
+
+from groupfit.grouping import Constraints
+from groupfit.objective import SegmentCost
+
+
+@dataclass
+class GAResult:
+    """Outcome of one GA run.
+
+    Attributes
+    ----------
+    breaks : list of int
+    objective : float
+        Rg of ``breaks``.
+    evaluations : int
+        Break vectors whose fitness was evaluated (population members and
+        local-search candidates).
+    segment_costs : int
+        Distinct soft-group costs computed.
+    generations : int
+    seconds : float
+    stopped : str
+        ``"stagnation"`` or ``"max_generations"``.
+    history : list of float
+        Best Rg after each generation.
+    evaluations_history : list of int
+        Evaluations made by the end of each generation.
+    seed : int or None
+    """
+
+    breaks: list[int]
+    objective: float
+    evaluations: int
+    segment_costs: int
+    generations: int
+    seconds: float
+    stopped: str
+    history: list[float] = field(default_factory=list)
+    evaluations_history: list[int] = field(default_factory=list)
+    seed: int | None = None
+
+
+class BreakFitness(base.Fitness):
+    weights = (-1.0,)
+
+
+class Individual(list):
+    """A break vector in gap-free coordinates, with its DEAP fitness."""
+
+    def __init__(self, iterable=()):
+        super().__init__(iterable)
+        self.fitness = BreakFitness()
+
+
+@contextlib.contextmanager
+def seeded_random(seed: int | None) -> Iterator[None]:
+    """Seed Python's ``random`` (which DEAP's tools draw from) and restore it afterwards."""
+    state = random.getstate()
+    random.seed(seed)
+    try:
+        yield
+    finally:
+        random.setstate(state)
+
+
+class CachedObjective:
+    """Rg of break vectors, with every segment cost computed once."""
+
+    def __init__(self, cost: SegmentCost):
+        self.cost = cost
+        self.cache: dict[tuple[int, int], float] = {}
+        self.evaluations = 0
+
+    def totals(self, break_vectors: list[list[int]]) -> list[float]:
+        n_samples = self.cost.n_samples
+        edges = [[0, *b, n_samples] for b in break_vectors]
+        missing = {
+            (e[j], e[j + 1]) for e in edges for j in range(len(e) - 1)
+        }.difference(self.cache)
+        if missing:
+            pairs = np.array(sorted(missing), dtype=np.int64)
+            values = self.cost.pair_costs(pairs[:, 0], pairs[:, 1])
+            self.cache.update(zip(map(tuple, pairs.tolist()), values.tolist()))
+        self.evaluations += len(break_vectors)
+        return [sum(self.cache[(e[j], e[j + 1])] for j in range(len(e) - 1)) for e in edges]
+
+
+class GapFreeEncoding:
+    """Break vectors as gap-free coordinates ``u_j = b_j − (j−1)·h``.
+
+    Feasible break vectors correspond one to one to non-decreasing integer
+    vectors in ``[low, high]``; :meth:`repair` maps any real vector there.
+    """
+
+    def __init__(self, constraints: Constraints, p: int):
+        self.p = p
+        self.offsets = np.arange(p) * constraints.min_size
+        self.low = constraints.lowest_break
+        self.high = constraints.highest_break - (p - 1) * constraints.min_size
+
+    def to_breaks(self, u) -> list[int]:
+        return (np.asarray(u, dtype=np.int64) + self.offsets).tolist()
+
+    def from_breaks(self, breaks) -> list[int]:
+        return (np.asarray(breaks, dtype=np.int64) - self.offsets).tolist()
+
+    def repair(self, individual: list) -> list:
+        """Round, clip to ``[low, high]`` and sort, in place."""
+        individual[:] = sorted(min(self.high, max(self.low, int(round(g)))) for g in individual)
+        return individual
+
+
+class GeneticSearch:
+    """DEAP genetic algorithm over feasible break vectors.
+
+    Parameters
+    ----------
+    population_size : int
+    max_generations : int
+    stall_generations : int
+        Stop when the best Rg has not improved for this many generations.
+    crossover_prob, mutation_prob : float
+        Probabilities that a pair is mated and that a child is mutated.
+    elite : int
+        Individuals copied unchanged into the next generation.
+    tournament_size : int
+    polish : bool
+        Finish with a one-break-at-a-time local search.
+    seed : int or None
+        Seed of the run; the same seed gives the same result.
+    """
+
+    def __init__(
+        self,
+        population_size: int = 60,
+        max_generations: int = 300,
+        stall_generations: int = 30,
+        crossover_prob: float = 0.8,
+        mutation_prob: float = 0.4,
+        elite: int = 2,
+        tournament_size: int = 3,
+        polish: bool = True,
+        seed: int | None = None,
+    ):
+        self.population_size = population_size
+        self.max_generations = max_generations
+        self.stall_generations = stall_generations
+        self.crossover_prob = crossover_prob
+        self.mutation_prob = mutation_prob
+        self.elite = elite
+        self.tournament_size = tournament_size
+        self.polish = polish
+        self.seed = seed
+
+    def run(
+        self,
+        cost: SegmentCost,
+        constraints: Constraints,
+        p: int,
+        progress: Callable[[int, float], None] | None = None,
+    ) -> GAResult:
+        """Search p breaks; ``progress(generation, best)`` is called after each generation."""
+        start = _time.perf_counter()
+        objective = CachedObjective(cost)
+        costs_before = cost.evaluations
+        if p == 0:
+            value = objective.totals([[]])[0]
+            return GAResult(
+                breaks=[],
+                objective=value,
+                evaluations=1,
+                segment_costs=cost.evaluations - costs_before,
+                generations=0,
+                seconds=_time.perf_counter() - start,
+                stopped="trivial",
+                history=[value],
+                seed=self.seed,
+            )
+
+        encoding = GapFreeEncoding(constraints, p)
+        low, high = encoding.low, encoding.high
+        to_breaks, repair = encoding.to_breaks, encoding.repair
+
+        def evaluate(population: list[Individual]) -> None:
+            fresh = [ind for ind in population if not ind.fitness.valid]
+            for ind, value in zip(fresh, objective.totals([to_breaks(ind) for ind in fresh])):
+                ind.fitness.values = (value,)
+
+        span = high - low
+        sigma = max(1.0, 0.1 * span)
+
+        def mate(a: Individual, b: Individual) -> tuple[Individual, Individual]:
+            if p > 1 and random.random() < 0.5:
+                tools.cxUniform(a, b, indpb=0.5)
+            else:
+                weight = random.random()
+                a[:], b[:] = (
+                    [weight * x + (1 - weight) * y for x, y in zip(a, b)],
+                    [(1 - weight) * x + weight * y for x, y in zip(a, b)],
+                )
+            return repair(a), repair(b)
+
+        def mutate(ind: Individual) -> Individual:
+            gene = random.randrange(p)
+            if random.random() < 0.15:
+                ind[gene] = random.randint(low, high)
+            else:
+                scale = sigma if random.random() < 0.5 else 2.0
+                ind[gene] = ind[gene] + random.gauss(0.0, scale)
+            return repair(ind)
+
+        history: list[float] = []
+        evaluations_history: list[int] = []
+        with seeded_random(self.seed):
+            population = [
+                repair(Individual(random.randint(low, high) for _ in range(p)))
+                for _ in range(self.population_size)
+            ]
+            evaluate(population)
+            best = tools.selBest(population, 1)[0]
+            best_value = best.fitness.values[0]
+            stalled = 0
+            stopped = "max_generations"
+            generation = 0
+            for generation in range(1, self.max_generations + 1):
+                elite = [Individual(ind) for ind in tools.selBest(population, self.elite)]
+                for source, copy in zip(tools.selBest(population, self.elite), elite):
+                    copy.fitness.values = source.fitness.values
+                parents = tools.selTournament(population, self.population_size - self.elite, self.tournament_size)
+                children = [Individual(ind) for ind in parents]
+                for a, b in zip(children[::2], children[1::2]):
+                    if random.random() < self.crossover_prob:
+                        mate(a, b)
+                for child in children:
+                    if random.random() < self.mutation_prob:
+                        mutate(child)
+                evaluate(children)
+                population = elite + children
+                leader = tools.selBest(population, 1)[0]
+                if leader.fitness.values[0] < best_value * (1 - 1e-12) - 1e-300:
+                    best, best_value, stalled = leader, leader.fitness.values[0], 0
+                else:
+                    stalled += 1
+                history.append(best_value)
+                evaluations_history.append(objective.evaluations)
+                if progress is not None:
+                    progress(generation, best_value)
+                if stalled >= self.stall_generations:
+                    stopped = "stagnation"
+                    break
+
+        breaks = to_breaks(best)
+        if self.polish:
+            breaks, best_value = polish_breaks(breaks, best_value, objective, constraints)
+        return GAResult(
+            breaks=breaks,
+            objective=best_value,
+            evaluations=objective.evaluations,
+            segment_costs=cost.evaluations - costs_before,
+            generations=generation,
+            seconds=_time.perf_counter() - start,
+            stopped=stopped,
+            history=history,
+            evaluations_history=evaluations_history,
+            seed=self.seed,
+        )
+
+
+def polish_breaks(
+    breaks: list[int],
+    value: float,
+    objective: CachedObjective,
+    constraints: Constraints,
+    max_relocated: int = 2,
+    beam: int = 4,
+) -> tuple[list[int], float]:
+    """Local search from ``breaks`` until no move improves Rg.
+
+    *Shift* moves one break to its best position between its neighbours.
+    *Relocate* removes up to ``max_relocated`` breaks and inserts as many
+    again, one at a time, keeping the ``beam`` best partial vectors at each
+    insertion; each resulting vector is shift-polished before it is compared,
+    so a relocation that only pays once its neighbours have moved is found.
+    """
+    breaks, value = _shift_polish(list(breaks), value, objective, constraints)
+    improved = True
+    while improved:
+        improved = False
+        for size in range(1, min(max_relocated, len(breaks)) + 1):
+            for removed in itertools.combinations(range(len(breaks)), size):
+                rest = [b for i, b in enumerate(breaks) if i not in removed]
+                for trial in _beam_insert(rest, size, beam, objective, constraints):
+                    trial, trial_value = _shift_polish(trial, objective.totals([trial])[0], objective, constraints)
+                    if trial_value < value * (1 - 1e-12) - 1e-300:
+                        breaks, value, improved = trial, trial_value, True
+                        break
+                if improved:
+                    break
+            if improved:
+                break
+    return breaks, value
+
+
+def _beam_insert(
+    rest: list[int], count: int, beam: int, objective: CachedObjective, constraints: Constraints
+) -> list[list[int]]:
+    """Insert ``count`` breaks into ``rest`` one at a time, keeping the ``beam`` best at each step."""
+    frontier = [rest]
+    for _ in range(count):
+        expanded = {tuple(c) for partial in frontier for c in _insertions(partial, constraints)}
+        if not expanded:
+            return []
+        candidates = [list(c) for c in sorted(expanded)]
+        values = np.asarray(objective.totals(candidates))
+        frontier = [candidates[k] for k in np.argsort(values, kind="stable")[:beam]]
+    return frontier
+
+
+def _shift_polish(
+    breaks: list[int], value: float, objective: CachedObjective, constraints: Constraints
+) -> tuple[list[int], float]:
+    improved = True
+    while improved:
+        improved = False
+        for j in range(len(breaks)):
+            candidates = _shift_candidates(breaks, j, constraints)
+            if not candidates:
+                continue
+            values = objective.totals(candidates)
+            k = int(np.argmin(values))
+            if values[k] < value * (1 - 1e-12) - 1e-300:
+                breaks, value, improved = candidates[k], values[k], True
+    return breaks, value
+
+
+def _shift_candidates(breaks: list[int], j: int, constraints: Constraints) -> list[list[int]]:
+    left = breaks[j - 1] if j > 0 else 0
+    right = breaks[j + 1] if j + 1 < len(breaks) else constraints.n_samples
+    first = max(left + constraints.min_size, constraints.lowest_break)
+    last = min(right - constraints.min_size, constraints.highest_break)
+    return [breaks[:j] + [b] + breaks[j + 1 :] for b in range(first, last + 1) if b != breaks[j]]
+
+
+def _insertions(breaks: list[int], constraints: Constraints) -> list[list[int]]:
+    """Every feasible vector with one more break than ``breaks``."""
+    edges = [0, *breaks, constraints.n_samples]
+    candidates = []
+    for k in range(len(edges) - 1):
+        first = max(edges[k] + constraints.min_size, constraints.lowest_break)
+        last = min(edges[k + 1] - constraints.min_size, constraints.highest_break)
+        candidates.extend(breaks[:k] + [b] + breaks[k:] for b in range(first, last + 1))
+    return candidates

@@ -1,0 +1,109 @@
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.errors import InputError
+
+
+def write_run(tmp_path, frame, name="run.csv"):
+    path = tmp_path / name
+    frame.to_csv(path, index=False)
+    return path
+
+
+def good_frame(N=80):
+    t = np.arange(1, N + 1) * 100.0
+    rng = np.random.default_rng(0)
+    return pd.DataFrame(
+        {
+            "time_s": t,
+            "T1": 20 + np.log1p(t / 500.0),
+            "T2": 20 + np.sqrt(t / 1000.0),
+            "T3": 20 + 0.3 * np.sin(t / 2000.0) + 0.01 * rng.normal(size=N),
+            "error_um": 2.0 * np.log1p(t / 700.0),
+            "speed_rpm": 2000,
+        }
+    )
+
+
+def test_good_run_loads_into_arrays(tmp_path):
+    path = write_run(tmp_path, good_frame())
+    run = load_run(path, temps=["T1", "T3"])
+    assert run.temps.shape == (80, 2) and run.temp_names == ("T1", "T3")
+    assert run.period == pytest.approx(100.0) and run.name == "run"
+    np.testing.assert_allclose(run.error, good_frame()["error_um"])
+    assert load_run(path).temp_names == ("T1", "T2", "T3")  # default: sensor-named columns
+
+
+def test_dataframe_input_is_accepted():
+    run = load_run(good_frame(), temps=["T2"], name="frame")
+    assert run.name == "frame" and run.temps.shape == (80, 1)
+
+
+def mutate(frame, column, row, value):
+    frame = frame.astype({column: object})
+    frame.loc[row, column] = value
+    return frame
+
+
+CASES = [
+    ("missing file", None, "data file not found"),
+    ("missing column", lambda f: f.drop(columns="T2"), r"column 'T2' not found"),
+    ("non-numeric cell", lambda f: mutate(f, "T2", 11, "abc"), r"row 12, column 'T2': 'abc' is not a number"),
+    ("empty cell", lambda f: mutate(f, "T1", 4, ""), r"row 5, column 'T1' is empty"),
+    ("infinite value", lambda f: mutate(f, "error_um", 7, np.inf), r"row 8, column 'error_um' is inf"),
+    ("time not increasing", lambda f: mutate(f, "time_s", 20, 1900.0), r"not strictly increasing at row 21"),
+    ("irregular sampling", lambda f: mutate(f, "time_s", 30, 3050.0), r"sampling is not uniform: rows 30 to 31"),
+    ("constant temperature", lambda f: f.assign(T2=21.5), r"column 'T2' is constant \(21.5 °C\)"),
+]
+
+
+@pytest.mark.parametrize("label, change, message", CASES, ids=[c[0] for c in CASES])
+def test_bad_input_is_one_clear_line_and_exit_2(tmp_path, capsys, label, change, message):
+    path = tmp_path / "missing.csv" if change is None else write_run(tmp_path, change(good_frame()))
+    with pytest.raises(InputError, match=message):
+        load_run(path, temps=["T1", "T2", "T3"])
+    out = tmp_path / "out"
+    status = main(["fit", "--data", str(path), "--temps", "T1,T2,T3", "--p", "1", "--out", str(out), "--quiet"])
+    captured = capsys.readouterr()
+    assert status == 2
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and str(path.name) in lines[0]
+    assert "Traceback" not in captured.err
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_too_few_samples_names_the_largest_feasible_p(tmp_path, capsys):
+    path = write_run(tmp_path, good_frame(N=50))
+    out = tmp_path / "out"
+    status = main(["fit", "--data", str(path), "--temps", "T1,T2,T3", "--p", "3", "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert "p = 3 breaks do not fit N = 50" in err and "the largest feasible p is 2" in err  # 4 groups of 13 need 52
+    assert not (out / "model.json").exists()
+
+
+def test_nonfinite_values_kept_when_allowed(tmp_path):
+    path = write_run(tmp_path, mutate(good_frame(), "T1", 3, np.nan))
+    run = load_run(path, temps=["T1"], allow_nonfinite=True)
+    assert np.isnan(run.temps[3, 0])
+
+
+def test_error_column_optional_when_not_required(tmp_path):
+    path = write_run(tmp_path, good_frame().drop(columns="error_um"))
+    assert load_run(path, temps=["T1"], require_error=False).error is None
+    with pytest.raises(InputError, match="column 'error_um' not found"):
+        load_run(path, temps=["T1"])
+
+
+def test_unreadable_or_empty_files(tmp_path):
+    empty = tmp_path / "empty.csv"
+    empty.write_text("")
+    with pytest.raises(InputError, match="empty"):
+        load_run(empty)
+    header_only = tmp_path / "header.csv"
+    header_only.write_text("time_s,T1,error_um\n")
+    with pytest.raises(InputError, match="no rows"):
+        load_run(header_only)
