@@ -88,19 +88,26 @@ def packed_index(m: int) -> np.ndarray:
     return index
 
 
-def ldl_least_squares(gram: np.ndarray, rank_rtol: float = RANK_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def ldl_least_squares(
+    gram: np.ndarray, rank_rtol: float = RANK_RTOL, coefficients: bool = True
+) -> tuple[np.ndarray | None, np.ndarray]:
     """Least squares from stacked augmented Gram matrices.
+
+    A right-looking LDLᵀ elimination, run on all K matrices at once.
 
     Parameters
     ----------
     gram : ndarray, shape (m(m+1)/2, K)
-        The lower triangle (row-major, as :func:`packed_index`) of
+        The lower triangle (in the order of :func:`packed_index`) of
         ``[[AᵀA, Aᵀy], [yᵀA, yᵀy]]`` for K row ranges, one entry per row so
         that every operation runs over a contiguous vector of K ranges.
+        Overwritten.
+    coefficients : bool
+        Whether to solve for the coefficients (the residual sum needs none).
 
     Returns
     -------
-    coef : ndarray, shape (K, M)
+    coef : ndarray, shape (K, M), or None
         A least-squares solution per range (zero for dependent columns).
     sse : ndarray, shape (K,)
         The residual sum of squares of that fit on its own range.
@@ -108,25 +115,29 @@ def ldl_least_squares(gram: np.ndarray, rank_rtol: float = RANK_RTOL) -> tuple[n
     n_packed, K = gram.shape
     m = int(round((np.sqrt(8 * n_packed + 1) - 1) / 2))
     index = packed_index(m)
-    lower = np.zeros((m, m, K))
-    pivots = np.zeros((m, K))
-    for j in range(m):
-        scaled = lower[j, :j] * pivots[:j]
-        diagonal = gram[index[j, j]]
-        pivot = diagonal - np.einsum("qk,qk->k", lower[j, :j], scaled)
-        if j == m - 1:
-            pivots[j] = np.maximum(pivot, 0.0)
-            break
-        alive = pivot > rank_rtol * np.maximum(diagonal, 0.0)
+    floor = rank_rtol * np.maximum(gram[index[np.arange(m), np.arange(m)]], 0.0)
+    multipliers: list[list[np.ndarray]] = []
+    for j in range(m - 1):
+        pivot = gram[index[j, j]]
+        alive = pivot > floor[j]
         inverse = np.where(alive, 1.0 / np.where(alive, pivot, 1.0), 0.0)
-        pivots[j] = np.where(alive, pivot, 0.0)
+        column = [gram[index[i, j]] * inverse for i in range(j + 1, m)]
         for i in range(j + 1, m):
-            lower[i, j] = (gram[index[i, j]] - np.einsum("qk,qk->k", lower[i, :j], scaled)) * inverse
+            factor = column[i - j - 1]
+            for k in range(j + 1, i + 1):
+                gram[index[i, k]] -= factor * gram[index[k, j]]
+        multipliers.append(column)
+    sse = np.maximum(gram[index[m - 1, m - 1]], 0.0)
+    if not coefficients:
+        return None, sse
     n_coef = m - 1
     coef = np.zeros((n_coef, K))
     for k in range(n_coef - 1, -1, -1):
-        coef[k] = lower[n_coef, k] - np.einsum("ik,ik->k", lower[k + 1 : n_coef, k], coef[k + 1 :])
-    return coef.T, pivots[n_coef]
+        column = multipliers[k]
+        coef[k] = column[n_coef - k - 1]
+        for i in range(k + 1, n_coef):
+            coef[k] -= column[i - k - 1] * coef[i]
+    return coef.T, sse
 
 
 def min_norm_lstsq(A: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -197,7 +208,8 @@ class SegmentCost:
         self.evaluations += a.size
         lo = self.fit_rows(a)
         gram = np.take(self._gram_prefix, b, axis=1) - np.take(self._gram_prefix, lo - 1, axis=1)
-        coef, sse_fit = ldl_least_squares(gram)
+        needs_coef = self.objective == "sae" or self.n > 0
+        coef, sse_fit = ldl_least_squares(gram, coefficients=needs_coef)
         if self.objective == "sse":
             cost = sse_fit - self._overlap_sse(b, coef)
             return np.maximum(cost, 0.0) * self.standardiser.y_scale**2

@@ -15,6 +15,14 @@ from groupfit.errors import InputError
 from groupfit.modelfile import atomic_write_text, to_json
 
 
+def add_data_options(parser: argparse.ArgumentParser) -> None:
+    """--data, --time, --temps, --error, shared by the verbs that read a run."""
+    parser.add_argument("--data", metavar="CSV", help="the run (CSV with a header, one row per sample)")
+    parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
+    parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
+    parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
+
+
 def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:
     """The configuration file merged with --data, --time, --temps, --error."""
     config = read_config(config_path)

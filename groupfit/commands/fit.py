@@ -8,6 +8,7 @@ from pathlib import Path
 
 from groupfit.commands.common import (
     StageProgress,
+    add_data_options,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
@@ -20,6 +21,24 @@ from groupfit.errors import InputError
 from groupfit.grouping import served_ranges
 from groupfit.modelfile import model_to_dict, save_model
 from groupfit.models.grouped import GroupedRegressor
+
+
+def add_parser(verbs) -> None:
+    fit = verbs.add_parser("fit", help="optimise hard breaks, fit soft-group coefficients, save the model")
+    fit.add_argument("config", nargs="?", metavar="CONFIG", help="TOML run configuration")
+    add_data_options(fit)
+    fit.add_argument("--p", type=int, help="number of hard break points")
+    fit.add_argument("--n", type=int, help="soft offset: samples shared by neighbouring groups")
+    fit.add_argument("--c", type=float, help="spacing coefficient: groups hold more than c·M samples")
+    fit.add_argument("--objective", choices=("sae", "sse"), help="residual sum to minimise")
+    fit.add_argument("--no-intercept", action="store_true", help="fit groups without a constant term")
+    fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
+    fit.add_argument("--seed", type=int, help="seed of the genetic algorithm")
+    fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
+    fit.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
+    fit.add_argument("--out", metavar="DIR", help="folder for model.json and fit.png")
+    fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    fit.set_defaults(handler=run_fit)
 
 
 def run_fit(args: argparse.Namespace) -> int:

@@ -31,6 +31,14 @@ def simulate_scenario(config: dict, progress: bool):
     return fe.simulate_config(config, progress=progress)
 
 
+def add_parser(verbs) -> None:
+    simulate = verbs.add_parser("simulate", help="generate a data set (finite elements or a lumped model)")
+    simulate.add_argument("config", metavar="CONFIG", help="TOML scenario configuration")
+    simulate.add_argument("-o", "--output", required=True, metavar="CSV", help="data set to write")
+    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    simulate.set_defaults(handler=run_simulate)
+
+
 def run_simulate(args: argparse.Namespace) -> int:
     config = read_scenario(args.config)
     try:
