@@ -48,22 +48,31 @@ def plot_fit(
     plt.close(fig)
 
 
-def plot_dataset(frame, path: str | Path, title: str = "", time: str = "time_s", error: str = "error_um") -> None:
-    """Temperatures (sensor-named columns) and the thermal error of a data set over time."""
-    from groupfit.data import default_temperature_columns
+def plot_dataset(frame, path: str | Path, title: str = "") -> None:
+    """Temperatures (top) and thermal error (bottom) of a data set over time.
 
-    hours = frame[time].to_numpy(dtype=float) / 3600.0
-    sensors = default_temperature_columns(frame, exclude=(time, error))
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, constrained_layout=True)
-    for name in sensors[:12]:
-        top.plot(hours, frame[name], lw=1.0, label=name)
-    top.set_ylabel("temperature (°C)")
-    if sensors:
-        top.legend(loc="best", fontsize=7, ncol=2)
+    The top panel shows the sensor columns and ``T_amb`` (dashed); candidate
+    node columns (``node_*``) and condition columns are left out. A data set
+    whose only input is a heat flux (the rod scenario) shows ``q_W_m2`` instead.
+    """
+    hours = frame["time_s"].to_numpy(dtype=float) / 3600.0
+    skip = {"time_s", "error_um", "speed_rpm", "spindle_on", "q_W_m2"}
+    temps = [c for c in frame.columns if c not in skip and not c.startswith(("node_", "src_"))]
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    if temps:
+        for column in temps[:12]:
+            top.plot(hours, frame[column], label=column, linestyle="--" if column == "T_amb" else "-")
+        top.set_ylabel("temperature (°C)")
+        top.legend(ncol=4, fontsize="small")
+    elif "q_W_m2" in frame:
+        top.step(hours, frame["q_W_m2"], where="pre")
+        top.set_ylabel("heat flux q (W/m²)")
     top.set_title(title)
-    if error in frame.columns:
-        bottom.plot(hours, frame[error], color="black", lw=1.4)
+    if "error_um" in frame:
+        bottom.plot(hours, frame["error_um"], color="k")
     bottom.set_ylabel("thermal error (µm)")
     bottom.set_xlabel("time (h)")
-    fig.savefig(path, dpi=120)
+    for axis in (top, bottom):
+        axis.grid(alpha=0.3)
+    fig.savefig(Path(path), dpi=120)
     plt.close(fig)

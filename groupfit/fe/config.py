@@ -1,0 +1,477 @@
+"""Parse and validate FE scenario configurations (TOML tables as dicts).
+
+Two scenario kinds: ``kind = "headstock"`` (the default; 3-D housing, see
+``configs/paper_cycle.toml`` for every key with its default) and
+``kind = "rod"`` (1-D spindle rod, ``configs/rod_ar1.toml``). Every key is
+optional; unknown keys, wrong types and impossible values raise
+:class:`groupfit.errors.InputError` with the key's dotted name.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from groupfit.errors import InputError
+
+from .geometry import HousingGeometry, MeshResolution
+from .schedule import (PALMGREN_SPEED_EXPONENT, AmbientProfile,
+                       EquilibriumRule, StepSchedule)
+
+RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on",
+                    "q_W_m2"}
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic material; defaults are the headstock values of METHODS.md §1."""
+
+    density: float = 7.8e3            # kg/m³
+    heat_capacity: float = 502.4      # J/(kg·K)
+    conductivity: float = 46.4        # W/(m·K)
+    expansion: float = 1.06e-5        # 1/K
+    poisson: float = 0.3
+    young: float = 209e9              # Pa
+
+
+@dataclass(frozen=True)
+class ThermalBoundary:
+    """Heat-transfer coefficients (W/(m²·K)).
+
+    ``convection`` applies to the outer faces (top, sides, front, rear),
+    ``bore_convection`` to the bore surface outside the bearing seats, and
+    ``mount_conductance`` is the contact conductance of the mounting face to
+    the bed, which is held at the ambient temperature.
+    """
+
+    convection: float = 10.0
+    bore_convection: float = 10.0
+    mount_conductance: float = 100.0
+
+
+@dataclass(frozen=True)
+class BearingHeat:
+    """Bearing heat at the reference speed (W) and the speed law exponent."""
+
+    front_W: float = 102.0
+    rear_W: float = 85.4
+    reference_speed_rpm: float = 2000.0
+    speed_exponent: float = PALMGREN_SPEED_EXPONENT
+
+
+@dataclass(frozen=True)
+class HeatSource:
+    """An extra heat source: ``power_W`` spread uniformly over the boundary
+    facets inside ``region`` (a 3×2 box in metres) while its schedule is 1."""
+
+    name: str
+    power_W: float
+    region: tuple[tuple[float, float], ...]
+    schedule: StepSchedule
+
+
+@dataclass(frozen=True)
+class HeadstockScenario:
+    geometry: HousingGeometry = field(default_factory=HousingGeometry)
+    resolution: MeshResolution = field(default_factory=MeshResolution)
+    material: Material = field(default_factory=Material)
+    boundary: ThermalBoundary = field(default_factory=ThermalBoundary)
+    bearings: BearingHeat = field(default_factory=BearingHeat)
+    ambient: AmbientProfile = field(default_factory=AmbientProfile)
+    spindle: StepSchedule = StepSchedule(((3000.0, 2000.0), (1000.0, 0.0),
+                                          (4000.0, 2000.0), (1000.0, 0.0)))
+    hold_until_equilibrium_rpm: float | None = 2000.0
+    equilibrium: EquilibriumRule = field(default_factory=EquilibriumRule)
+    sampling_period_s: float = 100.0
+    substeps: int = 4
+    max_duration_s: float = 172800.0
+    error_direction: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    sensors: dict = field(default_factory=dict)
+    candidates: str = "none"
+    candidate_count: int = 0
+    sources: tuple[HeatSource, ...] = ()
+
+
+@dataclass(frozen=True)
+class RodScenario:
+    length: float = 0.8
+    radius: float = 0.1
+    conductivity: float = 50.0
+    density: float = 7850.0
+    heat_capacity: float = 460.0
+    expansion: float = 12e-6
+    convection: float = 55.0
+    elements: int = 40
+    order: int = 2
+    sampling_period_s: float = 30.0
+    substeps: int = 3
+    flux: StepSchedule = StepSchedule(((14400.0, 2000.0), (5400.0, 0.0),
+                                       (14400.0, 3000.0), (52200.0, 0.0)))
+
+
+# Sensors 2 mm under the outer surfaces, where thermocouples or PT100 probes
+# would be fitted on a real housing.
+DEFAULT_SENSORS = {
+    "T1": (0.20, 0.448, 0.45),   # top face, above the front bearing
+    "T2": (0.20, 0.448, 0.05),   # top face, above the rear bearing
+    "T3": (0.398, 0.30, 0.25),   # side face at axis height, mid-length
+    "T4": (0.30, 0.30, 0.498),   # front face beside the spindle nose
+    "T5": (0.20, 0.20, 0.002),   # rear face below the bore
+    "T6": (0.398, 0.02, 0.25),   # side face just above the mounting face
+}
+
+
+def _fail(key: str, what: str) -> InputError:
+    return InputError(f"config key '{key}': {what}")
+
+
+class _Table:
+    """Typed access to one config table that remembers which keys were read."""
+
+    def __init__(self, data, name: str):
+        if not isinstance(data, dict):
+            raise _fail(name, "must be a table ([section])")
+        self.data, self.name, self.used = data, name, set()
+
+    def key(self, key: str) -> str:
+        return f"{self.name}.{key}" if self.name else key
+
+    def get(self, key, default):
+        self.used.add(key)
+        return self.data.get(key, default)
+
+    def number(self, key, default, *, positive=False, nonnegative=False):
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            raise _fail(self.key(key), f"expected a number, got {value!r}")
+        if positive and value <= 0:
+            raise _fail(self.key(key), f"must be positive, got {value!r}")
+        if nonnegative and value < 0:
+            raise _fail(self.key(key), f"must not be negative, got {value!r}")
+        return float(value)
+
+    def integer(self, key, default, *, minimum=1):
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise _fail(self.key(key), f"expected an integer, got {value!r}")
+        if value < minimum:
+            raise _fail(self.key(key), f"must be at least {minimum}, got {value}")
+        return int(value)
+
+    def string(self, key, default, choices=None):
+        value = self.get(key, default)
+        if not isinstance(value, str):
+            raise _fail(self.key(key), f"expected a string, got {value!r}")
+        if choices is not None and value not in choices:
+            raise _fail(self.key(key), f"must be one of {', '.join(choices)}, got {value!r}")
+        return value
+
+    def boolean(self, key, default):
+        value = self.get(key, default)
+        if not isinstance(value, bool):
+            raise _fail(self.key(key), f"expected true or false, got {value!r}")
+        return value
+
+    def vector(self, key, default, length):
+        value = self.get(key, default)
+        if (not isinstance(value, (list, tuple)) or len(value) != length
+                or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                       for v in value)):
+            raise _fail(self.key(key), f"expected a list of {length} numbers, got {value!r}")
+        return tuple(float(v) for v in value)
+
+    def sub(self, key) -> "_Table":
+        return _Table(self.get(key, {}), self.key(key))
+
+    def finish(self):
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise _fail(self.key(unknown[0]),
+                        "unknown key; check the spelling against "
+                        "configs/paper_cycle.toml or configs/rod_ar1.toml")
+
+
+def _steps(table: _Table, key: str, default, *, value_check=None) -> StepSchedule | None:
+    raw = table.get(key, default)
+    if raw is None:
+        return None
+    name = table.key(key)
+    if not isinstance(raw, (list, tuple)) or not raw:
+        raise _fail(name, "expected a non-empty list of [duration_s, value] pairs")
+    steps = []
+    for i, step in enumerate(raw):
+        if (not isinstance(step, (list, tuple)) or len(step) != 2
+                or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                       or not math.isfinite(v) for v in step)):
+            raise _fail(name, f"step {i + 1} must be [duration_s, value], got {step!r}")
+        duration, value = float(step[0]), float(step[1])
+        if duration <= 0:
+            raise _fail(name, f"step {i + 1} has duration {step[0]!r}; durations "
+                              "must be positive (seconds)")
+        if value_check is not None:
+            problem = value_check(value)
+            if problem:
+                raise _fail(name, f"step {i + 1}: {problem}")
+        steps.append((duration, value))
+    return StepSchedule(tuple(steps))
+
+
+def _check_alignment(schedule: StepSchedule, key: str, step_s: float):
+    for duration, _ in schedule.steps:
+        if abs(duration / step_s - round(duration / step_s)) > 1e-6:
+            raise _fail(key, f"duration {duration:g} s is not a multiple of the "
+                             f"time step {step_s:g} s (sampling_period_s / substeps)")
+
+
+def _non_negative(value):
+    return None if value >= 0 else f"value must not be negative, got {value:g}"
+
+
+def _on_off(value):
+    return None if value in (0.0, 1.0) else f"value must be 0 (off) or 1 (on), got {value:g}"
+
+
+def parse_config(config: dict) -> HeadstockScenario | RodScenario:
+    """Validate a parsed TOML scenario and return its scenario object.
+
+    Raises
+    ------
+    InputError
+        On a missing ``kind``, an unknown key, a wrong type or an invalid value.
+    """
+    top = _Table(config, "")
+    kind = top.get("kind", "headstock")
+    if kind not in ("headstock", "rod"):
+        raise _fail("kind", f"must be \"headstock\" or \"rod\", got {kind!r}")
+    top.string("description", "")
+    top.string("name", "")
+    scenario = _parse_headstock(top) if kind == "headstock" else _parse_rod(top)
+    top.finish()
+    return scenario
+
+
+def _parse_time(top: _Table, default_period, default_substeps, default_steps,
+                value_check, *, headstock: bool):
+    time = top.sub("time")
+    period = time.number("sampling_period_s", default_period, positive=True)
+    substeps = time.integer("substeps", default_substeps)
+    schedule = _steps(time, "schedule", default_steps, value_check=value_check)
+    _check_alignment(schedule, time.key("schedule"), period / substeps)
+    extra = {}
+    if headstock:
+        hold = time.get("hold_until_equilibrium_rpm", 2000.0)
+        if hold is False:
+            hold = None
+        elif isinstance(hold, bool) or not isinstance(hold, (int, float)) or hold < 0:
+            raise _fail(time.key("hold_until_equilibrium_rpm"),
+                        f"expected a non-negative speed in r/min or false, got {hold!r}")
+        extra["hold_until_equilibrium_rpm"] = None if hold is None else float(hold)
+        extra["max_duration_s"] = time.number("max_duration_s", 172800.0, positive=True)
+        extra["equilibrium"] = EquilibriumRule(
+            window_s=time.number("equilibrium_window_s", 3600.0, positive=True),
+            tolerance=time.number("equilibrium_tolerance", 0.005, positive=True))
+        if extra["max_duration_s"] < schedule.total_duration:
+            raise _fail(time.key("max_duration_s"),
+                        "is shorter than the schedule; raise it or shorten the schedule")
+    time.finish()
+    return period, substeps, schedule, extra
+
+
+def _parse_headstock(top: _Table) -> HeadstockScenario:
+    base = HeadstockScenario()
+    g0 = base.geometry
+    housing = top.sub("housing")
+    geometry = HousingGeometry(
+        width=housing.number("width_m", g0.width, positive=True),
+        height=housing.number("height_m", g0.height, positive=True),
+        length=housing.number("length_m", g0.length, positive=True),
+        axis_height=housing.number("axis_height_m", g0.axis_height, positive=True),
+        bore_diameter=housing.number("bore_diameter_m", g0.bore_diameter, positive=True),
+        front_seat=housing.vector("front_seat_m", g0.front_seat, 2),
+        rear_seat=housing.vector("rear_seat_m", g0.rear_seat, 2),
+    )
+    problems = geometry.problems()
+    if problems:
+        raise _fail("housing", problems[0])
+    housing.finish()
+
+    m0 = base.resolution
+    mesh = top.sub("mesh")
+    resolution = MeshResolution(
+        circumferential=mesh.integer("circumferential", m0.circumferential, minimum=12),
+        radial=mesh.integer("radial", m0.radial, minimum=1),
+        axial_spacing=mesh.number("axial_spacing_m", m0.axial_spacing, positive=True),
+        refinements=mesh.integer("refinements", m0.refinements, minimum=0),
+    )
+    mesh.finish()
+
+    mat = top.sub("material")
+    d = Material()
+    material = Material(
+        density=mat.number("density_kg_m3", d.density, positive=True),
+        heat_capacity=mat.number("heat_capacity_J_kgK", d.heat_capacity, positive=True),
+        conductivity=mat.number("conductivity_W_mK", d.conductivity, positive=True),
+        expansion=mat.number("expansion_1_K", d.expansion, nonnegative=True),
+        poisson=mat.number("poisson", d.poisson, nonnegative=True),
+        young=mat.number("young_Pa", d.young, positive=True),
+    )
+    if not material.poisson < 0.5:
+        raise _fail("material.poisson", "must be below 0.5")
+    mat.finish()
+
+    bnd = top.sub("boundary")
+    b0 = ThermalBoundary()
+    boundary = ThermalBoundary(
+        convection=bnd.number("convection_W_m2K", b0.convection, nonnegative=True),
+        bore_convection=bnd.number("bore_convection_W_m2K", b0.bore_convection,
+                                   nonnegative=True),
+        mount_conductance=bnd.number("mount_conductance_W_m2K", b0.mount_conductance,
+                                     positive=True),
+    )
+    bnd.finish()
+
+    brg = top.sub("bearings")
+    h0 = BearingHeat()
+    bearings = BearingHeat(
+        front_W=brg.number("front_heat_W", h0.front_W, nonnegative=True),
+        rear_W=brg.number("rear_heat_W", h0.rear_W, nonnegative=True),
+        reference_speed_rpm=brg.number("reference_speed_rpm", h0.reference_speed_rpm,
+                                       positive=True),
+        speed_exponent=brg.number("speed_exponent", h0.speed_exponent, nonnegative=True),
+    )
+    brg.finish()
+
+    period, substeps, spindle, extra = _parse_time(
+        top, base.sampling_period_s, base.substeps,
+        [list(s) for s in base.spindle.steps], _non_negative, headstock=True)
+    step_s = period / substeps
+    if abs(extra["equilibrium"].window_s / period
+           - round(extra["equilibrium"].window_s / period)) > 1e-6:
+        raise _fail("time.equilibrium_window_s", "must be a multiple of sampling_period_s")
+
+    ambient = _parse_ambient(top.sub("ambient"), step_s)
+
+    err = top.sub("error")
+    direction = err.vector("direction", base.error_direction, 3)
+    norm = math.sqrt(sum(c * c for c in direction))
+    if norm == 0:
+        raise _fail("error.direction", "must not be the zero vector")
+    err.finish()
+
+    sensors = _parse_sensors(top.get("sensors", None), geometry)
+
+    cand = top.sub("candidates")
+    candidates = cand.string("nodes", "none", ("none", "surface", "all"))
+    candidate_count = cand.integer("max_count", 0, minimum=0)
+    cand.finish()
+
+    sources = _parse_sources(top.get("sources", []), step_s,
+                             set(sensors))
+
+    return HeadstockScenario(
+        geometry=geometry, resolution=resolution, material=material,
+        boundary=boundary, bearings=bearings, ambient=ambient, spindle=spindle,
+        sampling_period_s=period, substeps=substeps,
+        error_direction=tuple(c / norm for c in direction), sensors=sensors,
+        candidates=candidates, candidate_count=candidate_count,
+        sources=tuple(sources), **extra)
+
+
+def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
+    kind = amb.string("profile", "constant", ("constant", "sine", "steps"))
+    profile = AmbientProfile(
+        kind=kind,
+        mean_C=amb.number("mean_C", 20.0),
+        amplitude_C=amb.number("amplitude_C", 0.0, nonnegative=True),
+        period_s=amb.number("period_s", 86400.0, positive=True),
+        phase_s=amb.number("phase_s", 0.0),
+        steps=_steps(amb, "steps", None),
+    )
+    if kind == "steps":
+        if profile.steps is None:
+            raise _fail(amb.key("steps"), "is required when profile = \"steps\"")
+        _check_alignment(profile.steps, amb.key("steps"), step_s)
+    amb.finish()
+    return profile
+
+
+def _parse_sensors(raw, geometry: HousingGeometry) -> dict:
+    from .geometry import points_inside
+
+    if raw is None:
+        return dict(DEFAULT_SENSORS)
+    if not isinstance(raw, dict) or not raw:
+        raise _fail("sensors", "must be a table of NAME = [x_m, y_m, z_m]")
+    sensors = {}
+    for name, point in raw.items():
+        key = f"sensors.{name}"
+        if name in RESERVED_COLUMNS or name.startswith(("node_", "src_")):
+            raise _fail(key, "this name is reserved for another column; rename the sensor")
+        if (not isinstance(point, (list, tuple)) or len(point) != 3
+                or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in point)):
+            raise _fail(key, f"expected [x_m, y_m, z_m], got {point!r}")
+        xyz = tuple(float(v) for v in point)
+        if not points_inside(geometry, np.array(xyz)[:, None])[0]:
+            raise _fail(key, f"point {xyz} is outside the housing material; "
+                             "move it inside the housing (not in the bore)")
+        sensors[name] = xyz
+    return sensors
+
+
+def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
+    if not isinstance(raw, list):
+        raise _fail("sources", "must be an array of tables ([[sources]])")
+    sources, names = [], set()
+    for i, item in enumerate(raw):
+        src = _Table(item, f"sources[{i + 1}]")
+        name = src.string("name", "")
+        if not name.isidentifier():
+            raise _fail(src.key("name"), f"must be a plain identifier, got {name!r}")
+        if name in names:
+            raise _fail(src.key("name"), f"duplicate source name {name!r}")
+        names.add(name)
+        power = src.number("power_W", 0.0, nonnegative=True)
+        region_raw = src.get("region_m", None)
+        if (not isinstance(region_raw, list) or len(region_raw) != 3
+                or any(not isinstance(r, list) or len(r) != 2
+                       or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                              for v in r) or r[0] > r[1] for r in region_raw)):
+            raise _fail(src.key("region_m"),
+                        "expected [[x0, x1], [y0, y1], [z0, z1]] in metres with x0 <= x1 …")
+        schedule = _steps(src, "schedule", [[1.0, 1.0]], value_check=_on_off)
+        if "schedule" in item:
+            _check_alignment(schedule, src.key("schedule"), step_s)
+        schedule = StepSchedule(schedule.steps, src.boolean("repeat", False))
+        src.finish()
+        sources.append(HeatSource(name=name, power_W=power,
+                                  region=tuple(tuple(float(v) for v in r) for r in region_raw),
+                                  schedule=schedule))
+    return sources
+
+
+def _parse_rod(top: _Table) -> RodScenario:
+    d = RodScenario()
+    rod = top.sub("rod")
+    values = dict(
+        length=rod.number("length_m", d.length, positive=True),
+        radius=rod.number("radius_m", d.radius, positive=True),
+        conductivity=rod.number("conductivity_W_mK", d.conductivity, positive=True),
+        density=rod.number("density_kg_m3", d.density, positive=True),
+        heat_capacity=rod.number("heat_capacity_J_kgK", d.heat_capacity, positive=True),
+        expansion=rod.number("expansion_1_K", d.expansion, nonnegative=True),
+        convection=rod.number("convection_W_m2K", d.convection, nonnegative=True),
+    )
+    rod.finish()
+    mesh = top.sub("mesh")
+    values["elements"] = mesh.integer("elements", d.elements)
+    values["order"] = mesh.integer("order", d.order)
+    if values["order"] > 2:
+        raise _fail("mesh.order", "must be 1 or 2")
+    mesh.finish()
+    period, substeps, flux, _ = _parse_time(
+        top, d.sampling_period_s, d.substeps, [list(s) for s in d.flux.steps],
+        None, headstock=False)
+    return RodScenario(sampling_period_s=period, substeps=substeps, flux=flux, **values)
