@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from typing import Sequence
 
@@ -21,7 +22,7 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
-VERBS = ("fit", "simulate")
+VERBS = ("fit", "compare", "simulate")
 """Each verb is a module of :mod:`groupfit.commands` with ``add_parser(verbs)``."""
 
 
@@ -42,6 +43,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         print(f"groupfit {args.verb}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print(f"groupfit {args.verb}: interrupted", file=sys.stderr)
         return 130

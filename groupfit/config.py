@@ -10,7 +10,10 @@ A configuration has up to four tables; every key is optional::
     validate = ["../datasets/other_run.csv"]
 
     [model]
-    p = 3
+    p = 3                      # or "auto": choose p by p_rule over 0…pmax
+    pmax = 6
+    p_rule = "bic"             # or "target": fewest breaks with R <= p_target
+    p_target = "20%"           # µm, or a percentage of R at p = 0
     n = 3
     c = 3.0
     objective = "sae"          # or "sse"
@@ -28,6 +31,18 @@ A configuration has up to four tables; every key is optional::
     [output]
     dir = "groupfit-out"
 
+    [compare]                  # groupfit compare
+    pmax = 4
+    heat = "speed_rpm"         # AR(1) heat-level column
+    ar1_scaling = "heat_law"   # or "rise": C2 of unseen levels by early temperature rise
+    heat_exponent = 1.6667     # heat law C2 ∝ level^exponent
+    rise_sensor = "T2"         # with ar1_scaling = "rise"
+    rise_window_s = 6000.0
+    structural_sensor = "T5"   # optional structural term g·ΔT (g in µm/K)
+    structural_gain_um_per_K = 3.18
+    conditions = ["speed_rpm"] # columns whose changes are changes of operating condition
+    p_target = "20%"           # target rule: µm or a percentage of R at p = 0
+
 Command-line options override the file. Unknown tables or keys, and values of
 the wrong type, are errors that name the key.
 """
@@ -43,7 +58,10 @@ from groupfit.errors import InputError
 SCHEMA: dict[str, dict[str, tuple[type, ...]]] = {
     "data": {"path": (str,), "time": (str,), "temps": (list,), "error": (str,), "validate": (list,)},
     "model": {
-        "p": (int,),
+        "p": (int, str),
+        "pmax": (int,),
+        "p_rule": (str,),
+        "p_target": (str, int, float),
         "n": (int,),
         "c": (int, float),
         "objective": (str,),
@@ -59,11 +77,23 @@ SCHEMA: dict[str, dict[str, tuple[type, ...]]] = {
         "polish": (bool,),
     },
     "output": {"dir": (str,)},
+    "compare": {
+        "pmax": (int,),
+        "heat": (str,),
+        "ar1_scaling": (str,),
+        "heat_exponent": (int, float),
+        "rise_sensor": (str,),
+        "rise_window_s": (int, float),
+        "structural_sensor": (str,),
+        "structural_gain_um_per_K": (int, float),
+        "conditions": (list,),
+        "p_target": (str, int, float),
+    },
 }
 
 DEFAULTS: dict[str, dict[str, Any]] = {
     "data": {"time": "time_s", "error": "error_um", "validate": []},
-    "model": {"p": 3, "n": 3, "c": 3.0, "objective": "sae", "intercept": True},
+    "model": {"p": 3, "pmax": 6, "p_rule": "bic", "n": 3, "c": 3.0, "objective": "sae", "intercept": True},
     "search": {
         "method": "ga",
         "seed": 0,
@@ -73,6 +103,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "polish": True,
     },
     "output": {"dir": "groupfit-out"},
+    "compare": {"pmax": 4, "heat": "speed_rpm", "ar1_scaling": "heat_law", "conditions": ["speed_rpm"], "p_target": "20%"},
 }
 
 PATH_KEYS = {("data", "path"), ("data", "validate")}

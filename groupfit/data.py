@@ -164,6 +164,8 @@ def load_run(
         Temperature columns used as model inputs, in order. Default: the
         columns named like sensors, ``T`` followed by a digit (``T1``,
         ``T2_front`` …); an ambient column such as ``T_amb`` is not included.
+        An empty sequence loads a run without temperature inputs (e.g. a
+        heat-flux run for the AR(1) model).
     time, error : str
         Names of the time (s) and thermal-error (µm) columns.
     require_error : bool

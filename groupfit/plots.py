@@ -76,3 +76,56 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
         axis.grid(alpha=0.3)
     fig.savefig(Path(path), dpi=120)
     plt.close(fig)
+
+
+MODEL_STYLE = {"mlr": ("MLR", "tab:green", "-."), "ar1": ("AR(1) free run", "tab:orange", ":")}
+
+
+def plot_run_comparison(time_s, measured, predictions: dict, path: str | Path, title: str, grouped_shown=(1, 2, 4)) -> None:
+    """Measured vs predicted error of the compared models on one run, residuals below."""
+    hours = np.asarray(time_s, dtype=float) / 3600.0
+    fig, (top, bottom) = plt.subplots(
+        2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
+    )
+    top.plot(hours, measured, color="black", lw=2.0, label="measured")
+    grouped_colors = iter(["tab:blue", "tab:purple", "tab:red", "tab:brown", "tab:pink", "tab:olive"])
+    shown = [key for key in predictions if key in MODEL_STYLE] + [
+        f"grouped{p}" for p in grouped_shown if f"grouped{p}" in predictions
+    ]
+    for key in shown:
+        if key in MODEL_STYLE:
+            label, color, style = MODEL_STYLE[key]
+        else:
+            label, color, style = f"grouped p = {key[7:]}", next(grouped_colors), "--"
+        top.plot(hours, predictions[key], color=color, ls=style, lw=1.3, label=label)
+        bottom.plot(hours, np.asarray(measured) - predictions[key], color=color, ls=style, lw=1.0)
+    bottom.axhline(0.0, color="black", lw=0.6)
+    top.set_ylabel("thermal error (µm)")
+    top.legend(fontsize=8, loc="best")
+    top.set_title(title)
+    bottom.set_ylabel("residual (µm)")
+    bottom.set_xlabel("time (h)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequence[str], path: str | Path) -> None:
+    """The paper's R (µm) against p: the certified optimum and each run's grouped models, MLR and AR(1) marked."""
+    fig, axis = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    axis.plot(range(len(path_R)), path_R, "k-o", lw=1.6, label=f"{runs[0]}: exact optimum")
+    markers = "sD^v"
+    for i, run in enumerate(runs):
+        grouped = sorted((r["p"], r["R_um"]) for r in rows if r["run"] == run and r["model"] == "grouped")
+        mlr = [r["R_um"] for r in rows if r["run"] == run and r["model"] == "mlr"]
+        if grouped:
+            ps, values = zip(*([(0, mlr[0])] if mlr else []) + grouped) if mlr else zip(*grouped)
+            axis.plot(ps, values, ls="--", marker=markers[i % 4], lw=1.0, label=f"{run}: fitted models")
+        ar1 = [r["R_um"] for r in rows if r["run"] == run and r["model"] == "ar1"]
+        if ar1:
+            axis.axhline(ar1[0], ls=":", lw=1.0, color=f"C{i}", label=f"{run}: AR(1)")
+    axis.set_yscale("log")
+    axis.set_xlabel("hard break points p")
+    axis.set_ylabel("R = Σ|e| (µm)")
+    axis.legend(fontsize=7)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -21,13 +21,17 @@ from groupfit.errors import InputError
 from groupfit.grouping import served_ranges
 from groupfit.modelfile import model_to_dict, save_model
 from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.select_p import choose_p, exact_path
 
 
 def add_parser(verbs) -> None:
     fit = verbs.add_parser("fit", help="optimise hard breaks, fit soft-group coefficients, save the model")
     fit.add_argument("config", nargs="?", metavar="CONFIG", help="TOML run configuration")
     add_data_options(fit)
-    fit.add_argument("--p", type=int, help="number of hard break points")
+    fit.add_argument("--p", type=p_value, help="number of hard break points, or 'auto'")
+    fit.add_argument("--pmax", type=int, help="largest p tried by --p auto (default 6)")
+    fit.add_argument("--p-rule", choices=("bic", "target"), help="how --p auto chooses (default bic)")
+    fit.add_argument("--p-target", metavar="R", help="target R for --p-rule target: µm, or a percentage like 20%%")
     fit.add_argument("--n", type=int, help="soft offset: samples shared by neighbouring groups")
     fit.add_argument("--c", type=float, help="spacing coefficient: groups hold more than c·M samples")
     fit.add_argument("--objective", choices=("sae", "sse"), help="residual sum to minimise")
@@ -44,6 +48,9 @@ def add_parser(verbs) -> None:
 def run_fit(args: argparse.Namespace) -> int:
     config = config_with_data_options(args, args.config or default_config_path())
     override(config, "model", "p", args.p)
+    override(config, "model", "pmax", args.pmax)
+    override(config, "model", "p_rule", args.p_rule)
+    override(config, "model", "p_target", args.p_target)
     override(config, "model", "n", args.n)
     override(config, "model", "c", args.c)
     override(config, "model", "objective", args.objective)
@@ -60,6 +67,12 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(
             f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
         )
+    selection = None
+    if config["model"]["p"] == "auto":
+        selection = select_breaks(config, run)
+        config["model"]["p"] = selection["p"]
+    elif not isinstance(config["model"]["p"], int):
+        raise InputError(f"p = {config['model']['p']!r}: give a whole number or 'auto'")
     estimator = estimator_from_config(config)
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
@@ -83,9 +96,55 @@ def run_fit(args: argparse.Namespace) -> int:
         figure_path,
         title=f"{run.name}: grouped model, p = {estimator.p}, {estimator.objective} Rg = {estimator.objective_value_:.4g}",
     )
-    write_json(args.json, {**model, "search": estimator.search_})
-    print(fit_report(estimator, run, model, [model_path, figure_path]), file=report_stream(args))
+    result = {**model, "search": estimator.search_}
+    if selection is not None:
+        result["p_selection"] = selection
+    write_json(args.json, result)
+    report = fit_report(estimator, run, model, [model_path, figure_path])
+    if selection is not None:
+        report = selection_summary(selection) + "\n" + report
+    print(report, file=report_stream(args))
     return 0
+
+
+def p_value(text: str) -> int | str:
+    """--p: a whole number or 'auto'."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid p: {text!r} (a whole number or 'auto')") from None
+
+
+def select_breaks(config: dict, run: Run) -> dict:
+    """Choose p over 0…pmax from the certified optimum of every p."""
+    model = config["model"]
+    path = exact_path(
+        run.temps,
+        run.error,
+        model["pmax"],
+        n=model["n"],
+        c=float(model["c"]),
+        objective=model["objective"],
+        fit_intercept=model["intercept"],
+    )
+    n_coef = run.temps.shape[1] + int(model["intercept"])
+    selection = choose_p(path["rss"], path["R"], run.n_samples, n_coef, model["p_rule"], model.get("p_target"))
+    if selection["p"] is None:
+        raise InputError(
+            f"no p up to {len(path['R']) - 1} meets the target R = {selection['target_um']:g} µm "
+            f"(best: {min(path['R']):.4g} µm); raise --p-target or --pmax"
+        )
+    selection["R_um"] = path["R"]
+    selection["breaks"] = path["breaks"]
+    return selection
+
+
+def selection_summary(selection: dict) -> str:
+    table = ", ".join(f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"])))
+    rule = "smallest BIC" if selection["rule"] == "bic" else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
+    return f"p auto  {rule}: p = {selection['p']}  ({table})"
 
 
 def estimator_from_config(config: dict) -> GroupedRegressor:

@@ -1,0 +1,239 @@
+"""Grouped models against the global MLR and the physics AR(1) model, on several runs.
+
+All models are fitted on the modelling run only; validation runs are
+predicted without any refitting or tuning:
+
+* MLR: the global regression's coefficients on each run's temperatures;
+* AR(1): a free run from the run's first measured error, C2 of unseen heat
+  levels scaled by the heat law or the early-rise ratio;
+* grouped p = 1…P: on the modelling run each sample is served by its group
+  (by sample index); on other runs the run-time switching rule
+  (:mod:`groupfit.switching`) chooses the group from the live criterion
+  temperature when it is available, else the groups are applied by sample
+  index, and the table says which.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+
+from groupfit.data import Run
+from groupfit.errors import InputError
+from groupfit.modelfile import error_metrics, model_to_dict
+from groupfit.models.ar1 import AR1Model, early_rise
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.mlr import MLR
+from groupfit.models.select_p import choose_p, exact_path
+
+
+@dataclass
+class ComparisonSettings:
+    """What ``groupfit compare`` needs beyond the data: the ``[compare]`` table."""
+
+    pmax: int = 4
+    n: int = 3
+    c: float = 3.0
+    objective: str = "sae"
+    fit_intercept: bool = True
+    seed: int = 0
+    heat: str = "speed_rpm"
+    ar1_scaling: str = "heat_law"
+    heat_exponent: float = 5 / 3
+    rise_sensor: str | None = None
+    rise_window_s: float = 6000.0
+    structural_sensor: str | None = None
+    structural_gain_um_per_K: float | None = None
+    conditions: tuple[str, ...] = ("speed_rpm",)
+    p_target: str | float | None = "20%"
+
+
+@dataclass
+class ComparisonResult:
+    runs: list[str]
+    rows: list[dict[str, Any]]
+    predictions: dict[str, dict[str, np.ndarray]]
+    path: dict[str, Any]
+    selection: dict[str, Any]
+    mlr_statistics: dict[str, Any]
+    ar1: dict[str, Any]
+    break_stability: list[dict[str, Any]]
+    condition_changes: list[int]
+    grouped_models: dict[int, dict[str, Any]] = field(default_factory=dict)
+    validation_rule: str = "sample index"
+
+
+def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
+    """Samples (1-based) after which an operating-condition column changes value."""
+    changes: set[int] = set()
+    for column in columns:
+        if column not in run.frame.columns:
+            raise InputError(f"{run.source}: condition column '{column}' not found; set [compare] conditions")
+        values = run.frame[column].to_numpy()
+        changes.update((np.flatnonzero(values[1:] != values[:-1]) + 1).tolist())
+    return sorted(changes)
+
+
+def distance_to_change(breaks: list[int], changes: list[int]) -> list[int | None]:
+    """Each break's distance in samples to the nearest change of operating condition."""
+    if not changes:
+        return [None] * len(breaks)
+    return [int(min(abs(b - c) for c in changes)) for b in breaks]
+
+
+def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
+    """How far the breaks of p move when one more break is allowed (p → p+1)."""
+    rows = []
+    for p in range(1, len(path_breaks) - 1):
+        current, following = path_breaks[p], path_breaks[p + 1]
+        shifts = [min(abs(b - f) for f in following) for b in current]
+        rows.append({"from_p": p, "to_p": p + 1, "max_shift": int(max(shifts)), "shifts": shifts})
+    return rows
+
+
+def heat_column(run: Run, settings: ComparisonSettings) -> np.ndarray:
+    if settings.heat not in run.frame.columns:
+        raise InputError(f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; set [compare] heat")
+    return run.frame[settings.heat].to_numpy(dtype=float)
+
+
+def ar1_inputs(run: Run, settings: ComparisonSettings) -> np.ndarray:
+    columns = [heat_column(run, settings)]
+    if settings.structural_sensor:
+        if settings.structural_sensor not in run.frame.columns:
+            raise InputError(f"{run.source}: structural sensor '{settings.structural_sensor}' not found")
+        columns.append(run.frame[settings.structural_sensor].to_numpy(dtype=float))
+    return np.column_stack(columns)
+
+
+def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
+    """The physics AR(1) model of a run, as ``compare`` fits it."""
+    return AR1Model(
+        structural_gain=settings.structural_gain_um_per_K if settings.structural_sensor else None,
+        scaling=settings.ar1_scaling,
+        heat_exponent=settings.heat_exponent,
+    ).fit(ar1_inputs(run, settings), run.error)
+
+
+def compare_models(
+    modelling: Run,
+    validation: list[Run],
+    settings: ComparisonSettings,
+    live_rule: Callable[[dict, np.ndarray], np.ndarray] | None = None,
+    progress: Callable[[str, float], None] | None = None,
+) -> ComparisonResult:
+    """Fit every model on ``modelling`` and score it on every run.
+
+    Parameters
+    ----------
+    live_rule : callable, optional
+        ``live_rule(model_dict, temps) -> group index per sample (0-based)``;
+        when given, grouped models serve validation runs through it.
+    """
+    for run in validation:
+        if run.temp_names != modelling.temp_names:
+            raise InputError(f"{run.source}: temperature columns differ from the modelling run's")
+        if abs(run.period - modelling.period) > 0.01 * modelling.period:
+            raise InputError(
+                f"{run.source}: sampled every {run.period:g} s but the modelling run every {modelling.period:g} s"
+            )
+    runs = [modelling, *validation]
+    names = [r.name for r in runs]
+    if len(set(names)) != len(names):
+        raise InputError(f"two runs share the name '{[n for n in names if names.count(n) > 1][0]}'; rename a file")
+
+    X, y = modelling.temps, modelling.error
+    named = pd.DataFrame(X, columns=list(modelling.temp_names))
+    mlr = MLR(objective=settings.objective, fit_intercept=settings.fit_intercept).fit(named, y)
+    ar1 = fit_ar1(modelling, settings)
+
+    path = exact_path(
+        X, y, settings.pmax, n=settings.n, c=settings.c, objective=settings.objective, fit_intercept=settings.fit_intercept
+    )
+    pmax = len(path["breaks"]) - 1
+    grouped: dict[int, GroupedRegressor] = {}
+    for p in range(1, pmax + 1):
+        grouped[p] = GroupedRegressor(
+            p=p,
+            n=settings.n,
+            c=settings.c,
+            objective=settings.objective,
+            fit_intercept=settings.fit_intercept,
+            certify=False,
+            random_state=settings.seed,
+        ).fit(X, y)
+        exact_value = path["objective"][p]
+        grouped[p].search_["exact_objective"] = exact_value
+        grouped[p].search_["exact_breaks"] = path["breaks"][p]
+        grouped[p].search_["gap_percent"] = 100.0 * (grouped[p].search_["search_objective"] - exact_value) / exact_value
+        if progress is not None:
+            progress("grouped", p / pmax)
+    model_dicts = {p: model_to_dict(model, modelling) for p, model in grouped.items()}
+
+    changes = condition_changes(modelling, settings.conditions)
+    rows: list[dict[str, Any]] = []
+    predictions: dict[str, dict[str, np.ndarray]] = {}
+    for run in runs:
+        is_modelling = run is modelling
+        preds: dict[str, np.ndarray] = {}
+        preds["mlr"] = mlr.predict(run.temps)
+        rise_ratio = None
+        if settings.ar1_scaling == "rise":
+            sensor = settings.rise_sensor or modelling.temp_names[0]
+            rise_ratio = early_rise(_column(run, sensor), run.period, settings.rise_window_s) / early_rise(
+                _column(modelling, sensor), modelling.period, settings.rise_window_s
+            )
+        preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=run.error[0], rise_ratio=rise_ratio)
+        for p, model in grouped.items():
+            if is_modelling or live_rule is None:
+                preds[f"grouped{p}"] = model.predict(run.temps)
+            else:
+                groups = live_rule(model_dicts[p], run.temps)
+                preds[f"grouped{p}"] = model.intercept_[groups] + np.einsum("ij,ij->i", run.temps, model.coef_[groups])
+        predictions[run.name] = preds
+        for key, prediction in preds.items():
+            metrics = error_metrics(run.error - prediction)
+            if key.startswith("grouped"):
+                p = int(key[len("grouped") :])
+                breaks = grouped[p].breaks_
+                row = {"model": "grouped", "p": p, "breaks": breaks}
+                row["break_distance"] = distance_to_change(breaks, changes) if is_modelling else None
+            else:
+                row = {"model": key, "p": 0 if key == "mlr" else None, "breaks": None, "break_distance": None}
+            row.update({"run": run.name, **metrics, "R_mm": metrics["R_um"] / 1000.0})
+            rows.append(row)
+
+    selection = {
+        rule: choose_p(path["rss"], path["R"], modelling.n_samples, X.shape[1] + int(settings.fit_intercept), rule,
+                       settings.p_target if rule == "target" else None)
+        for rule in ("bic", "target")
+    }
+    ar1_summary = {
+        "C1": ar1.c1_,
+        "C2": {f"{level:g}": value for level, value in ar1.c2_.items()},
+        "scaling": settings.ar1_scaling,
+        "ljung_box": ar1.ljung_box(),
+        "free_run": True,
+    }
+    return ComparisonResult(
+        runs=names,
+        rows=rows,
+        predictions=predictions,
+        path=path,
+        selection=selection,
+        mlr_statistics=mlr.statistics_,
+        ar1=ar1_summary,
+        break_stability=break_stability(path["breaks"]),
+        condition_changes=changes,
+        grouped_models=model_dicts,
+        validation_rule="run-time switching" if live_rule is not None else "sample index",
+    )
+
+
+def _column(run: Run, name: str) -> np.ndarray:
+    if name not in run.frame.columns:
+        raise InputError(f"{run.source}: rise sensor '{name}' not found; set [compare] rise_sensor")
+    return run.frame[name].to_numpy(dtype=float)

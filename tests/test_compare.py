@@ -1,0 +1,101 @@
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from groupfit.cli import main
+from groupfit.comparison import ComparisonSettings, break_stability, distance_to_change, fit_ar1
+from groupfit.data import load_run
+from groupfit.models.ar1 import AR1Model
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def closed_form_rod(q):
+    R, rho, c, alpha, h, dt = 0.1, 7850.0, 460.0, 12e-6, 55.0, 30.0
+    b = 2 * h / (rho * c * R)
+    c1 = np.exp(-b * dt)
+    return c1, q * alpha / (rho * c * b) * (1 - c1) * 1e6
+
+
+def test_ar1_through_compares_code_path_recovers_the_rod_coefficients():
+    run = load_run(ROOT / "datasets" / "rod_ar1.csv", temps=[])
+    model = fit_ar1(run, ComparisonSettings(heat="q_W_m2", heat_exponent=1.0))
+    for q in (2000.0, 3000.0):
+        c1, c2 = closed_form_rod(q)
+        assert model.c1_ == pytest.approx(c1, rel=0.02)
+        assert model.c2_[q] == pytest.approx(c2, rel=0.02)
+    assert model.c1_ == pytest.approx(0.9909, abs=0.0005)
+    assert model.c2_[2000.0] == pytest.approx(0.1985, rel=0.02) and model.c2_[3000.0] == pytest.approx(0.2977, rel=0.02)
+
+
+def test_ar1_free_run_is_exact_on_its_own_process():
+    rng = np.random.default_rng(0)
+    heat = np.repeat(rng.choice([0.0, 1000.0, 2000.0], size=30), 10)
+    c2 = {1000.0: 0.05, 2000.0: 0.16}
+    error = np.zeros(len(heat))
+    for k in range(1, len(heat)):
+        error[k] = 0.97 * error[k - 1] + c2.get(heat[k], 0.0)
+    model = AR1Model().fit(heat[:, None], error)
+    assert model.c1_ == pytest.approx(0.97, rel=1e-10)
+    assert model.c2_[1000.0] == pytest.approx(0.05, rel=1e-8)
+    np.testing.assert_allclose(model.residuals_, 0.0, atol=1e-9)
+    # heat law for an unseen level: 1500 scaled from the nearest fitted level (1000 or 2000, tie → 1000)
+    assert model.c2_for(1500.0) == pytest.approx(0.05 * 1.5 ** (5 / 3))
+    assert AR1Model(scaling="rise").fit(heat[:, None], error).c2_for(1500.0, rise_ratio=0.5) == pytest.approx(0.025)
+
+
+def test_break_distances_and_stability():
+    assert distance_to_change([31, 50, 80], [31, 41, 81, 91]) == [0, 9, 1]
+    rows = break_stability([[], [40], [41, 81], [31, 42, 81]])
+    assert [r["max_shift"] for r in rows] == [1, 1]
+
+
+@pytest.fixture(scope="module")
+def comparison(tmp_path_factory):
+    out = tmp_path_factory.mktemp("compare")
+    status = main(["compare", "--quiet", "--out", str(out), "--json", str(out / "compare.json")])
+    assert status == 0
+    return out, json.loads((out / "compare.json").read_text())
+
+
+def test_compare_json_has_one_row_per_model_and_run(comparison):
+    out, result = comparison
+    assert result["runs"][0] == "paper_cycle" and len(result["runs"]) == 3
+    models = {(r["model"], r["p"]) for r in result["rows"]}
+    assert models == {("mlr", 0), ("ar1", None)} | {("grouped", p) for p in range(1, 5)}
+    assert len(result["rows"]) == 6 * 3
+    for row in result["rows"]:
+        assert row["R_um"] >= row["max_um"] >= row["rms_um"] > 0
+        assert row["R_mm"] == pytest.approx(row["R_um"] / 1000)
+    for name in result["runs"]:
+        assert (out / f"compare_{name}.png").stat().st_size > 10_000
+    assert (out / "R_against_p.png").exists()
+
+
+def test_r_falls_with_p_with_diminishing_returns_on_the_modelling_run(comparison):
+    _, result = comparison
+    R = [next(r["R_um"] for r in result["rows"] if r["run"] == "paper_cycle" and r["model"] in ("mlr", "grouped")
+              and r["p"] == p) for p in range(5)]
+    assert all(b < a for a, b in zip(R, R[1:]))
+    assert R[4] <= 0.5 * R[0]
+    gains = [a - b for a, b in zip(R, R[1:])]
+    assert gains[0] == max(gains)
+    # the GA models equal the certified optimum here
+    np.testing.assert_allclose(R[1:], result["exact_path"]["R"][1:5], rtol=1e-3)
+
+
+def test_mlr_statistics_agree_with_the_fit(comparison):
+    _, result = comparison
+    stats = result["mlr_statistics"]
+    assert [t["name"] for t in stats["terms"]] == ["const", "T1", "T2"]
+    assert stats["f_p_value"] < 1e-10 and 0.99 < stats["r_squared"] <= 1
+    mlr_row = next(r for r in result["rows"] if r["model"] == "mlr" and r["run"] == "paper_cycle")
+    assert stats["sigma_um"] == pytest.approx(mlr_row["rms_um"] * np.sqrt(532 / (532 - 3)), rel=1e-6)
+
+
+def test_bad_validation_file_is_one_line(tmp_path, capsys):
+    assert main(["compare", "--quiet", "--validate", str(tmp_path / "nope.csv"), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nope.csv" in err[0]
