@@ -85,7 +85,7 @@ def test_module_entry_point_and_usage_errors():
     assert ok.returncode == 0 and "--search" in ok.stdout
     bad = subprocess.run([sys.executable, "-m", "groupfit", "fit", "--p", "x"], capture_output=True, text=True)
     assert bad.returncode == 2
-    assert len(bad.stderr.strip().splitlines()) == 1 and "invalid int value: 'x'" in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1 and "invalid p: 'x'" in bad.stderr
 
 
 def test_unknown_criterion_is_rejected(tmp_path, capsys):
