@@ -47,6 +47,8 @@ class Run:
         Sampling period in seconds (median interval).
     frame : DataFrame
         The whole table, including columns that are not model inputs.
+    time_name : str
+        Name of the time column.
     """
 
     name: str
@@ -58,6 +60,7 @@ class Run:
     error_name: str | None
     period: float
     frame: pd.DataFrame = field(repr=False)
+    time_name: str = DEFAULT_TIME
 
     @property
     def n_samples(self) -> int:
@@ -220,6 +223,7 @@ def load_run(
         error_name=error if error_values is not None else None,
         period=period,
         frame=frame,
+        time_name=time,
     )
 
 

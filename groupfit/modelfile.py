@@ -72,7 +72,7 @@ def model_to_dict(model: GroupedRegressor, run: Run, criterion: str | None = Non
         "error": run.error_name,
         "intercept": bool(model.fit_intercept),
         "objective": model.objective,
-        "p": int(model.p),
+        "p": len(model.breaks_),
         "n": int(model.n),
         "c": float(model.c),
         "n_samples": int(model.n_samples_fit_),

@@ -129,3 +129,34 @@ def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequen
     axis.legend(fontsize=7)
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
+    """Residual against the winning candidate, and the residual before/after on every run."""
+    fig, axes = plt.subplots(1 + len(runs), 1, figsize=(9, 3.2 * (1 + len(runs))), constrained_layout=True)
+    data = runs["data"]
+    shown = result.added[0] if result.added else (result.candidates[0] if result.candidates else None)
+    top = axes[0]
+    if shown is not None:
+        feature = shown.feature
+        values = feature.compute(data.frame[feature.column].to_numpy(dtype=float), data.period)
+        residual = result.residuals_before["data"]
+        top.scatter(values, residual, s=6, c=data.time / 3600.0, cmap="viridis")
+        order = np.argsort(values)
+        fit = np.polyfit(values[np.isfinite(residual)], residual[np.isfinite(residual)], 1)
+        top.plot(values[order], np.polyval(fit, values[order]), color="tab:red", lw=1.2)
+        verdict = "added" if result.added else "best candidate, not significant"
+        top.set_title(f"{data.name}: residual against {feature.column}, {feature.describe()} ({verdict})")
+        top.set_xlabel(feature.name)
+    top.set_ylabel("residual before (µm)")
+    for axis, (key, run) in zip(axes[1:], runs.items()):
+        hours = run.time / 3600.0
+        axis.plot(hours, result.residuals_before[key], color="tab:gray", lw=1.0, label="before")
+        axis.plot(hours, result.residuals_after[key], color="tab:blue", lw=1.0, label="after")
+        axis.axhline(0.0, color="black", lw=0.5)
+        axis.set_title(f"{run.name} ({'measured' if key == 'data' else 'validation'}): residual")
+        axis.set_ylabel("µm")
+        axis.legend(fontsize=8)
+    axes[-1].set_xlabel("time (h)")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

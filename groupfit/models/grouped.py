@@ -53,6 +53,11 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         does so when it is cheap.
     random_state : int or None
         Seed of the GA.
+    fixed_breaks : list of int or None
+        Use these hard breaks instead of searching (e.g. to refit a model
+        with another input); they must increase and lie strictly between n
+        and N. ``p`` is then ignored: the model has ``len(fixed_breaks)``
+        breaks.
 
     Attributes
     ----------
@@ -93,6 +98,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         polish: bool = True,
         certify="auto",
         random_state: int | None = None,
+        fixed_breaks: list[int] | None = None,
     ):
         self.p = p
         self.n = n
@@ -106,6 +112,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.polish = polish
         self.certify = certify
         self.random_state = random_state
+        self.fixed_breaks = fixed_breaks
 
     @property
     def n_coef(self) -> int:
@@ -134,6 +141,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             raise InputError(f"X has {len(X)} rows but y has {len(y)}")
         self.n_features_in_ = X.shape[1]
         n_samples = len(y)
+        if self.fixed_breaks is not None:
+            return self._fit_fixed(X, y)
         constraints = Constraints.for_model(n_samples, self.n, self.c, self.n_coef)
         constraints.require(self.p, self.c, self.n_coef)
 
@@ -172,7 +181,20 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
                 info["exact_seconds"] = exact.seconds
                 info["gap_percent"] = 100.0 * (search_value - best) / best if best > 0 else 0.0
         info["search_objective"] = search_value
+        return self._fit_groups(X, y, breaks, info)
 
+    def _fit_fixed(self, X: np.ndarray, y: np.ndarray):
+        breaks = [int(b) for b in self.fixed_breaks]
+        n_samples = len(y)
+        edges = [self.n, *breaks, n_samples]
+        if any(b <= a for a, b in zip(edges[:-1], edges[1:])):
+            raise InputError(
+                f"fixed breaks {breaks} must increase and lie strictly between n = {self.n} and N = {n_samples}"
+            )
+        return self._fit_groups(X, y, breaks, {"method": "fixed", "seconds": 0.0})
+
+    def _fit_groups(self, X: np.ndarray, y: np.ndarray, breaks, info: dict):
+        n_samples = len(y)
         self.breaks_ = [int(b) for b in breaks]
         self.n_samples_fit_ = n_samples
         self.hard_groups_ = hard_groups(self.breaks_, n_samples)

@@ -1,0 +1,25 @@
+"""What is left in a residual: whiteness and drift."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def ljung_box(residual: np.ndarray, lags: int = 10) -> dict[str, float]:
+    """Ljung–Box Q of the residual's autocorrelations up to ``lags`` (statsmodels); white when p is large."""
+    from statsmodels.stats.diagnostic import acorr_ljungbox
+
+    table = acorr_ljungbox(np.asarray(residual, dtype=float), lags=[lags])
+    return {"lags": lags, "Q": float(table["lb_stat"].iloc[0]), "p_value": float(table["lb_pvalue"].iloc[0])}
+
+
+def drift(residual: np.ndarray, time_s: np.ndarray) -> dict[str, float]:
+    """Linear trend of the residual in µm per hour, with a Newey–West (HAC) t-test."""
+    import statsmodels.api as sm
+
+    hours = (np.asarray(time_s, dtype=float) - time_s[0]) / 3600.0
+    lags = int(np.ceil(4 * (len(hours) / 100.0) ** (2 / 9)))
+    fit = sm.OLS(np.asarray(residual, dtype=float), sm.add_constant(hours)).fit(
+        cov_type="HAC", cov_kwds={"maxlags": lags}
+    )
+    return {"slope_um_per_h": float(fit.params[1]), "t": float(fit.tvalues[1]), "p_value": float(fit.pvalues[1])}

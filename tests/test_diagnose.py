@@ -1,0 +1,139 @@
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.diagnose import diagnose
+from groupfit.diagnose.augment import augment_model
+from groupfit.diagnose.candidates import blocked_cv_score, candidate_features, rank_candidates
+from groupfit.diagnose.residual import model_inputs
+from groupfit.features import Feature, lowpass
+from groupfit.grouping import soft_groups
+from groupfit.modelfile import load_model
+from groupfit.synthetic import simulate_lumped
+
+TEMPS = ["T1", "T2", "T3", "T4"]
+
+
+def lumped(seed=0, n_samples=400, schedule=None, ambient_phase_h=0.0):
+    config = {"seed": seed, "n_samples": n_samples}
+    if schedule is not None:
+        config["schedule"] = schedule
+    frame = simulate_lumped(config)
+    hours = frame["time_s"].to_numpy() / 3600.0
+    frame["T_amb"] = 20.0 + 2.0 * np.sin(2 * np.pi * (hours - ambient_phase_h) / 24.0) + 1.5 * (hours > 6.0)
+    return frame
+
+
+def with_ambient_effect(frame, gain=1.2, tau=3600.0):
+    frame = frame.copy()
+    frame["error_um"] = frame["error_um"] + gain * lowpass(frame["T_amb"].to_numpy() - 20.0, tau, 100.0)
+    return frame
+
+
+def fit_model(tmp_path, frame, name, p=0):
+    path = tmp_path / f"{name}.csv"
+    frame.to_csv(path, index=False)
+    out = tmp_path / f"{name}-model"
+    assert main(["fit", "--data", str(path), "--temps", ",".join(TEMPS), "--p", str(p), "--search", "exact",
+                 "--out", str(out), "--quiet"]) == 0
+    return path, out / "model.json"
+
+
+def test_blocked_cv_score_separates_signal_from_chance():
+    rng = np.random.default_rng(0)
+    f = np.cumsum(rng.normal(size=500))
+    assert blocked_cv_score(2.0 * f + 0.1 * rng.normal(size=500), f) > 0.95
+    unrelated = np.cumsum(rng.normal(size=500))
+    assert blocked_cv_score(rng.normal(size=500), unrelated) < 0.05
+
+
+def test_ranking_finds_the_generating_transform():
+    frame = lumped()
+    residual = 1.5 * lowpass(frame["spindle_on"].to_numpy(float), 3600.0, 100.0)
+    ranked = rank_candidates(residual, frame, candidate_features(["spindle_on", "T_amb"], ["T1"]), 100.0)
+    assert ranked[0].feature == Feature("spindle_on", "lowpass", tau_s=3600.0)
+    assert ranked[0].score == pytest.approx(1.0, abs=1e-9)
+    assert ranked[0].coefficient == pytest.approx(1.5, rel=1e-9)
+
+
+def test_augmented_groups_are_least_squares_with_the_extra_input(tmp_path):
+    frame = with_ambient_effect(lumped())
+    path, model_path = fit_model(tmp_path, frame, "amb", p=2)
+    model = load_model(model_path)
+    run = load_run(path, temps=TEMPS)
+    feature = Feature("T_amb", "lowpass", tau_s=3600.0)
+    augmented = augment_model(model, run, model_inputs(model, run), feature)
+    assert augmented["temps"] == TEMPS + ["T_amb~lp3600s"] and augmented["breaks"] == model["breaks"]
+    A = np.column_stack([np.ones(len(frame)), frame[TEMPS], feature.compute(frame["T_amb"].to_numpy(), 100.0)])
+    y = frame["error_um"].to_numpy()
+    for coefficients, (first, last) in zip(augmented["coefficients"], soft_groups(model["breaks"], len(y), model["n"])):
+        reference = np.linalg.lstsq(A[first - 1 : last], y[first - 1 : last], rcond=None)[0]
+        np.testing.assert_allclose(A[first - 1 : last] @ coefficients, A[first - 1 : last] @ reference, atol=1e-7)
+
+
+def test_missing_ambient_effect_is_found_and_judged_on_another_run(tmp_path):
+    modelling = with_ambient_effect(lumped(seed=0))
+    schedule = [[5000.0, 1.0], [3000.0, 0.0], [6000.0, 1.0], [2000.0, 0.0], [30000.0, 1.0]]
+    validation = with_ambient_effect(lumped(seed=1, schedule=schedule, ambient_phase_h=7.0))
+    data_path, model_path = fit_model(tmp_path, modelling, "modelling")
+    validation_path = tmp_path / "validation.csv"
+    validation.to_csv(validation_path, index=False)
+    model = load_model(model_path)
+    result = diagnose(model, load_run(data_path, temps=TEMPS), load_run(validation_path, temps=TEMPS))
+    assert [c.feature.column for c in result.added][:1] == ["T_amb"]
+    assert result.added[0].feature.transform in ("lowpass", "delay")
+    assert result.after["validate"]["rms_um"] <= 0.6 * result.before["validate"]["rms_um"]
+
+
+def test_nothing_missing_leaves_the_model_unchanged(tmp_path, capsys):
+    # the lumped network's error has an unsensed slow part; here the error is the sensors' own, plus noise
+    frame = lumped()
+    rng = np.random.default_rng(2)
+    frame["error_um"] = frame[TEMPS].to_numpy() @ [0.8, 0.5, 1.1, 2.0] - 80.0 + rng.normal(scale=0.05, size=len(frame))
+    data_path, model_path = fit_model(tmp_path, frame, "clean")
+    out = tmp_path / "diag"
+    capsys.readouterr()
+    assert main(["diagnose", str(model_path), "--data", str(data_path), "--out", str(out), "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    result = json.loads(captured.out)
+    assert result["added"] == [] and result["model"] == str(model_path)
+    assert result["after"] == result["before"]
+    assert "nothing missing" in captured.err
+    assert not (out / "model_augmented.json").exists()
+
+
+def test_measured_data_realities(tmp_path, capsys):
+    frame = with_ambient_effect(lumped())
+    data_path, model_path = fit_model(tmp_path, frame, "base")
+    # a dead unused sensor (NaN) and a stuck one (constant) are left out with a note, noise is tolerated
+    noisy = frame.copy()
+    noisy["T_dead"] = np.nan
+    noisy["T_stuck"] = 25.0
+    noisy[TEMPS] += np.random.default_rng(3).normal(scale=0.05, size=(len(noisy), 4))
+    noisy_path = tmp_path / "noisy.csv"
+    noisy.to_csv(noisy_path, index=False)
+    capsys.readouterr()
+    assert main(["diagnose", str(model_path), "--data", str(noisy_path), "--out", str(tmp_path / "d1"),
+                 "--json", str(tmp_path / "d1.json")]) == 0
+    report = capsys.readouterr().out
+    result = json.loads((tmp_path / "d1.json").read_text())
+    assert result["added"][0]["column"] == "T_amb"
+    assert "column 'T_dead' left out" in report and "column 'T_stuck' left out: constant" in report
+
+    # a dead model input and a gap in the samples stop with one clear line
+    dead = frame.copy()
+    dead.loc[10:20, "T2"] = np.nan
+    dead_path = tmp_path / "dead.csv"
+    dead.to_csv(dead_path, index=False)
+    gap = frame.drop(index=range(100, 110))
+    gap_path = tmp_path / "gap.csv"
+    gap.to_csv(gap_path, index=False)
+    for path, message in [(dead_path, "model input 'T2' is not finite at row 11"), (gap_path, "sampling is not uniform")]:
+        capsys.readouterr()
+        assert main(["diagnose", str(model_path), "--data", str(path), "--out", str(tmp_path / "d2")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0]

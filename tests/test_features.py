@@ -1,0 +1,44 @@
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.errors import InputError
+from groupfit.features import Feature, derived_matrix, lowpass
+
+
+def test_lowpass_of_a_step_is_the_first_order_response_at_the_samples():
+    period, tau = 100.0, 1800.0
+    x = np.r_[0.0, np.ones(200)]
+    y = lowpass(x, tau, period)
+    k = np.arange(len(x))
+    # zero-order-hold discretisation of tau·dy/dt = x - y: exact at the samples
+    np.testing.assert_allclose(y[1:], 1.0 - np.exp(-k[1:] * period / tau), rtol=1e-12)
+    assert y[0] == 0.0
+
+
+def test_lowpass_starts_in_equilibrium_with_the_first_value():
+    y = lowpass(np.full(50, 21.5), 3600.0, 100.0)
+    np.testing.assert_allclose(y, 21.5)
+
+
+def test_derivative_delay_identity():
+    x = np.array([1.0, 2.0, 4.0, 7.0])
+    np.testing.assert_allclose(Feature("x", "derivative").compute(x, 1800.0), [0.0, 2.0, 4.0, 6.0])
+    np.testing.assert_allclose(Feature("x", "delay", delay_samples=2).compute(x, 100.0), [1.0, 1.0, 1.0, 2.0])
+    np.testing.assert_allclose(Feature("x").compute(x, 100.0), x)
+
+
+def test_names_round_trip_and_validation():
+    feature = Feature("T_amb", "lowpass", tau_s=7200.0)
+    assert feature.name == "T_amb~lp7200s" and feature.describe() == "low-pass τ = 2 h"
+    assert Feature.from_dict(feature.to_dict()) == feature
+    with pytest.raises(InputError, match="tau_s"):
+        Feature("T_amb", "lowpass")
+    with pytest.raises(InputError, match="choose one of"):
+        Feature("T_amb", "smooth")
+
+
+def test_derived_matrix_names_a_missing_column():
+    frame = pd.DataFrame({"a": [1.0, 2.0]})
+    with pytest.raises(InputError, match="column 'b'"):
+        derived_matrix([Feature("b")], frame, 100.0)
