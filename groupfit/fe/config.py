@@ -19,6 +19,7 @@ from groupfit.errors import InputError
 from .geometry import HousingGeometry, MeshResolution
 from .schedule import (PALMGREN_SPEED_EXPONENT, AmbientProfile,
                        EquilibriumRule, StepSchedule)
+from .unsensed import HEAT_INPUTS, UnsensedPart
 
 RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on",
                     "q_W_m2"}
@@ -92,6 +93,7 @@ class HeadstockScenario:
     candidates: str = "none"
     candidate_count: int = 0
     sources: tuple[HeatSource, ...] = ()
+    unsensed_part: UnsensedPart | None = None
 
 
 @dataclass(frozen=True)
@@ -370,6 +372,7 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
 
     sources = _parse_sources(top.get("sources", []), step_s,
                              set(sensors))
+    unsensed_part = _parse_unsensed_part(top.get("unsensed_part", None))
 
     return HeadstockScenario(
         geometry=geometry, resolution=resolution, material=material,
@@ -377,7 +380,7 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
         sampling_period_s=period, substeps=substeps,
         error_direction=tuple(c / norm for c in direction), sensors=sensors,
         candidates=candidates, candidate_count=candidate_count,
-        sources=tuple(sources), **extra)
+        sources=tuple(sources), unsensed_part=unsensed_part, **extra)
 
 
 def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
@@ -389,13 +392,34 @@ def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
         period_s=amb.number("period_s", 86400.0, positive=True),
         phase_s=amb.number("phase_s", 0.0),
         steps=_steps(amb, "steps", None),
+        offsets=_steps(amb, "offsets", None),
     )
     if kind == "steps":
         if profile.steps is None:
             raise _fail(amb.key("steps"), "is required when profile = \"steps\"")
         _check_alignment(profile.steps, amb.key("steps"), step_s)
+    if profile.offsets is not None:
+        _check_alignment(profile.offsets, amb.key("offsets"), step_s)
     amb.finish()
     return profile
+
+
+def _parse_unsensed_part(raw) -> UnsensedPart | None:
+    """``[unsensed_part]``: a lumped, unsensed part lagging the machine's heat
+    (see :mod:`groupfit.fe.unsensed`); absent means none."""
+    if raw is None:
+        return None
+    part = _Table(raw, "unsensed_part")
+    for key in ("tau_s", "gain_um_per_W"):
+        if key not in raw:
+            raise _fail(part.key(key), "is required in [unsensed_part]")
+    unsensed = UnsensedPart(
+        tau_s=part.number("tau_s", None, positive=True),
+        gain_um_per_W=part.number("gain_um_per_W", None),
+        heat=part.string("heat", "bearings", HEAT_INPUTS),
+    )
+    part.finish()
+    return unsensed
 
 
 def _parse_sensors(raw, geometry: HousingGeometry) -> dict:

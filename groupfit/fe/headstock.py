@@ -7,7 +7,9 @@ Heat conduction ``ρc ∂T/∂t = ∇·(λ∇T)`` in the housing with
 * extra heat sources as uniform fluxes on the boundary facets of their regions;
 * convection ``h (T − T_amb)`` on the outer faces and on the free bore surface;
 * a contact conductance ``h_mount (T − T_bed)`` on the mounting face, the bed
-  being held at the ambient temperature.
+  being held at the ambient temperature;
+* optionally, an unsensed slow part of the structure (``[unsensed_part]``, see
+  :mod:`groupfit.fe.unsensed`) whose first-order lag adds to the error only.
 
 Time integration is backward Euler with a fixed sub-step; the system matrix is
 factorised once. The mounting face is clamped; the thermal error is the
@@ -39,6 +41,7 @@ from .config import HeadstockScenario, Material, ThermalBoundary
 from .geometry import (BORE_FREE, FRONT_SEAT, MOUNT, OUTER, REAR_SEAT,
                        HousingMesh, boundary_facets_in_box, build_housing_mesh)
 from .schedule import bearing_heat_W
+from .unsensed import FirstOrderLag
 
 _UNIT = Functional(lambda w: 1.0 + 0.0 * w.x[0])
 
@@ -81,6 +84,9 @@ class ThermalModel:
         Conduction plus all surface exchange terms (W/K).
     ambient_load
         Load per kelvin of ambient (and bed) temperature (W/K).
+    bed_load
+        The mounting face's part of ``ambient_load``: heat into the bed is
+        ``bed_load @ (T − T_amb)``.
     flux_shapes
         For each heated boundary, the load vector of 1 W spread uniformly.
     """
@@ -111,6 +117,9 @@ class ThermalModel:
             conductance = conductance + h * asm(mass, fb)
             self.ambient_load += h * asm(unit_load, fb)
         self.conductance = conductance.tocsr()
+        # h_mount·∫φ_i dA: heat into the bed is bed_load·(T − T_amb)
+        self.bed_load = boundary.mount_conductance * asm(unit_load,
+                                                         self.facet_bases[MOUNT])
         self.flux_shapes = {name: self._unit_flux(self.facet_bases[name])
                             for name in (FRONT_SEAT, REAR_SEAT)}
 
@@ -147,6 +156,11 @@ class ThermalModel:
     def heat_in_W(self, name: str) -> float:
         """Power of a 1 W flux shape integrated back over its surface (check)."""
         return float(np.sum(self.flux_shapes[name]))
+
+    def bed_heat_W(self, temperature: np.ndarray, ambient_C: float) -> float:
+        """Heat flowing from the housing through the mounting face into the bed
+        (held at ``ambient_C``): ``h_mount ∫ (T − T_amb) dA``."""
+        return float(self.bed_load @ temperature - ambient_C * np.sum(self.bed_load))
 
     def heat_out_W(self, temperature: np.ndarray, ambient_C: float) -> dict[str, float]:
         """Heat leaving through each exchange boundary, integrated from ``T``."""
@@ -274,9 +288,14 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
     reference_C = sc.ambient.temperature(0.0)
     temperature = np.full(thermal.basis.N, reference_C)
     rows, errors = [], []
+    part = sc.unsensed_part
+    lag = FirstOrderLag(part, dt) if part is not None else None
 
     def record(k: int, t_condition: float):
-        errors.append(float(gain @ (temperature - reference_C)))
+        error = float(gain @ (temperature - reference_C))
+        if lag is not None:
+            error += lag.error_um
+        errors.append(error)
         speed = speed_at(t_condition)
         rows.append([k * period, *(probes @ temperature), sc.ambient.temperature(k * period),
                      errors[-1], speed, float(speed > 0)]
@@ -290,9 +309,13 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
         for k in range(1, max_samples + 1):
             for s in range(sc.substeps):
                 t0 = (k - 1) * period + s * dt
-                load = thermal.load(_heat_inputs(sc, speed_at(t0), t0),
-                                    sc.ambient.temperature(t0 + 0.5 * dt))
+                heat = _heat_inputs(sc, speed_at(t0), t0)
+                ambient_C = sc.ambient.temperature(t0 + 0.5 * dt)
+                load = thermal.load(heat, ambient_C)
                 temperature = factor.solve(capacity_rate @ temperature + load)
+                if lag is not None:
+                    lag.step(heat[FRONT_SEAT] + heat[REAR_SEAT] if part.heat == "bearings"
+                             else thermal.bed_heat_W(temperature, ambient_C))
             record(k, (k - 1) * period)
             bar.update(1)
             if holding and k > fixed_samples and sc.equilibrium.reached(

@@ -62,7 +62,9 @@ class AmbientProfile:
 
     ``kind`` is ``"constant"`` (``mean_C``), ``"sine"`` (a daily-type cycle
     ``mean_C + amplitude_C·sin(2π(t − phase_s)/period_s)``) or ``"steps"``
-    (a :class:`StepSchedule` of temperatures; the last holds).
+    (a :class:`StepSchedule` of temperatures; the last holds). ``offsets``,
+    when given, is a :class:`StepSchedule` of temperature offsets (K) added
+    to any of them: a hall heating switched on, a door left open.
     """
 
     kind: str = "constant"
@@ -71,14 +73,19 @@ class AmbientProfile:
     period_s: float = 86400.0
     phase_s: float = 0.0
     steps: StepSchedule | None = None
+    offsets: StepSchedule | None = None
 
     def temperature(self, t: float) -> float:
         if self.kind == "sine":
-            return self.mean_C + self.amplitude_C * math.sin(
+            base = self.mean_C + self.amplitude_C * math.sin(
                 2.0 * math.pi * (t - self.phase_s) / self.period_s)
-        if self.kind == "steps":
-            return self.steps.value_at(t)
-        return self.mean_C
+        elif self.kind == "steps":
+            base = self.steps.value_at(t)
+        else:
+            base = self.mean_C
+        if self.offsets is not None:
+            base += self.offsets.value_at(t)
+        return base
 
 
 def bearing_heat_W(heat_at_reference_W: float, speed_rpm: float,
