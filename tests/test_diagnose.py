@@ -28,8 +28,16 @@ def lumped(seed=0, n_samples=400, schedule=None, ambient_phase_h=0.0):
     return frame
 
 
-def with_ambient_effect(frame, gain=1.2, tau=3600.0):
+def sensor_error(frame, seed=2):
+    """An error the sensors explain completely, plus noise (the lumped network's own has an unsensed part)."""
     frame = frame.copy()
+    rng = np.random.default_rng(seed)
+    frame["error_um"] = frame[TEMPS].to_numpy() @ [0.8, 0.5, 1.1, 2.0] - 80.0 + rng.normal(scale=0.05, size=len(frame))
+    return frame
+
+
+def with_ambient_effect(frame, gain=1.2, tau=3600.0):
+    frame = sensor_error(frame)
     frame["error_um"] = frame["error_um"] + gain * lowpass(frame["T_amb"].to_numpy() - 20.0, tau, 100.0)
     return frame
 
@@ -46,15 +54,20 @@ def fit_model(tmp_path, frame, name, p=0):
 def test_blocked_cv_score_separates_signal_from_chance():
     rng = np.random.default_rng(0)
     f = np.cumsum(rng.normal(size=500))
-    assert blocked_cv_score(2.0 * f + 0.1 * rng.normal(size=500), f) > 0.95
+    ones = np.ones((500, 1))
+    assert blocked_cv_score(2.0 * f + 0.1 * rng.normal(size=500), f, ones) > 0.95
     unrelated = np.cumsum(rng.normal(size=500))
-    assert blocked_cv_score(rng.normal(size=500), unrelated) < 0.05
+    assert blocked_cv_score(rng.normal(size=500), unrelated, ones) < 0.05
 
 
-def test_ranking_finds_the_generating_transform():
+def test_ranking_finds_the_generating_transform_even_when_the_inputs_mimic_it():
     frame = lumped()
-    residual = 1.5 * lowpass(frame["spindle_on"].to_numpy(float), 3600.0, 100.0)
-    ranked = rank_candidates(residual, frame, candidate_features(["spindle_on", "T_amb"], ["T1"]), 100.0)
+    X = frame[["T1", "T4"]].to_numpy()
+    effect = lowpass(frame["spindle_on"].to_numpy(float), 3600.0, 100.0)
+    # T1 follows the same heat: an in-sample fit on T1 absorbs much of the effect
+    error = X @ [0.7, 1.3] + 1.5 * effect
+    design = np.column_stack([np.ones(len(X)), X])
+    ranked = rank_candidates(error, frame, candidate_features(["spindle_on", "T_amb"], ["T1"]), 100.0, design)
     assert ranked[0].feature == Feature("spindle_on", "lowpass", tau_s=3600.0)
     assert ranked[0].score == pytest.approx(1.0, abs=1e-9)
     assert ranked[0].coefficient == pytest.approx(1.5, rel=1e-9)
@@ -90,10 +103,7 @@ def test_missing_ambient_effect_is_found_and_judged_on_another_run(tmp_path):
 
 
 def test_nothing_missing_leaves_the_model_unchanged(tmp_path, capsys):
-    # the lumped network's error has an unsensed slow part; here the error is the sensors' own, plus noise
-    frame = lumped()
-    rng = np.random.default_rng(2)
-    frame["error_um"] = frame[TEMPS].to_numpy() @ [0.8, 0.5, 1.1, 2.0] - 80.0 + rng.normal(scale=0.05, size=len(frame))
+    frame = sensor_error(lumped())
     data_path, model_path = fit_model(tmp_path, frame, "clean")
     out = tmp_path / "diag"
     capsys.readouterr()

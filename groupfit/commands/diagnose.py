@@ -11,6 +11,7 @@ import numpy as np
 from groupfit.commands.common import check_output_dir, report_stream, write_json
 from groupfit.data import DEFAULT_TIME, Run, load_run
 from groupfit.diagnose import DiagnosisResult, diagnose
+from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.errors import InputError
 from groupfit.modelfile import load_model, save_model
 
@@ -23,6 +24,10 @@ def add_parser(verbs) -> None:
     parser.add_argument("--time", default=DEFAULT_TIME, metavar="COLUMN", help="time column (default time_s)")
     parser.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     parser.add_argument("--out", default="groupfit-out", metavar="DIR", help="folder for figures and the new model")
+    parser.add_argument("--min-score", type=float, default=MIN_SCORE, metavar="F",
+                        help=f"least out-of-sample share of the residual an effect must explain (default {MIN_SCORE})")
+    parser.add_argument("--min-effect", type=float, default=MIN_EFFECT_RMS_UM, metavar="UM",
+                        help=f"least residual RMS in µm an effect must remove (default {MIN_EFFECT_RMS_UM})")
     parser.set_defaults(handler=run_diagnose)
 
 
@@ -46,7 +51,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
     out_dir = check_output_dir(args.out)
     from groupfit.commands.compare import live_switching_rule
 
-    result = diagnose(model, data, validate, live_rule=live_switching_rule())
+    result = diagnose(
+        model, data, validate, live_rule=live_switching_rule(), min_score=args.min_score,
+        min_effect_rms_um=args.min_effect,
+    )
 
     model_path = Path(args.model)
     written = []
@@ -109,9 +117,9 @@ def diagnosis_report(result: DiagnosisResult, data: Run, validate: Run | None, w
     else:
         lines.append("nothing missing: no candidate explains a significant part of the residual; the model is unchanged")
     lines.append("")
-    lines.append(f"{'candidate':<24} {'transform':<28} {'score':>6} {'effect RMS µm':>14}")
+    lines.append(f"{'candidate':<24} {'transform':<28} {'score':>6} {'removes RMS µm':>15}")
     for c in result.candidates[:10]:
-        lines.append(f"{c.feature.column:<24} {c.feature.describe():<28} {c.score:>6.3f} {c.explained_rms_um:>14.3g}")
+        lines.append(f"{c.feature.column:<24} {c.feature.describe():<28} {c.score:>6.3f} {c.explained_rms_um:>15.3g}")
     lines.append("")
     for key in result.before:
         run = data if key == "data" else validate

@@ -7,11 +7,12 @@ unused sensors), as measured, low-passed over a grid of time constants
 model's own inputs. A column is left out, with the reason, when it is not
 numeric, has non-finite values, or is constant (a dead sensor).
 
-The score is the fraction of the residual a candidate explains in *blocked
+The score is the share of the model's error a candidate removes in *blocked
 cross-validation in time*: the run is cut into contiguous blocks, and each
-block is predicted from a regression fitted on the other blocks, with and
-without the candidate (the model's inputs in both). A candidate that only fits
-the stretch of the run it was fitted on scores near zero or below.
+block is predicted by the model's own regression (each group's inputs in its
+own columns) refitted on the other blocks, with and without the candidate as
+one more regressor. A candidate that only fits the stretch of the run it was
+fitted on scores near zero or below.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from groupfit.features import Feature
 
 TAUS_S = (600.0, 1200.0, 1800.0, 3600.0, 5400.0, 7200.0, 10800.0, 14400.0, 21600.0, 28800.0)
 DELAYS = (1, 3, 10)
-N_BLOCKS = 5
+N_BLOCKS = 10
 
 
 @dataclass(frozen=True)
@@ -34,7 +35,7 @@ class Candidate:
     score: float
     coefficient: float
     explained_rms_um: float
-    """RMS of the effect itself (coefficient × the centred feature), in µm."""
+    """RMS (µm) of the residual the candidate removes out of sample: √((SSE_without − SSE_with)/N)."""
 
     def to_dict(self) -> dict:
         return {
@@ -91,51 +92,51 @@ def blocked_cv_sse(target: np.ndarray, design: np.ndarray, n_blocks: int = N_BLO
     return sse
 
 
-def blocked_cv_score(residual: np.ndarray, feature: np.ndarray, inputs: np.ndarray | None = None) -> float:
-    """Out-of-sample share of the residual a feature explains beyond the model's own inputs.
-
-    Both ``residual ≈ α + X·δ`` and ``residual ≈ α + X·δ + β·feature`` are
-    scored in blocked cross-validation in time; the score is the fraction of
-    the first one's held-out error that the feature removes. Keeping the model
-    inputs X in both lets the feature's coefficient be estimated free of the
-    part the inputs had absorbed (Frisch–Waugh–Lovell), which matters when an
-    omitted effect is partly mimicked by the sensors.
-    """
-    base = np.ones((len(residual), 1)) if inputs is None else np.column_stack([np.ones(len(residual)), inputs])
-    reference = blocked_cv_sse(residual, base)
-    if reference <= 0:
-        return 0.0
-    return 1.0 - blocked_cv_sse(residual, np.column_stack([base, feature])) / reference
+def blocked_cv_score(target: np.ndarray, feature: np.ndarray, design: np.ndarray) -> float:
+    """Share of the held-out error of ``target ≈ design·β`` that adding ``feature`` removes."""
+    without = blocked_cv_sse(target, design)
+    with_feature = blocked_cv_sse(target, np.column_stack([design, feature]))
+    return 1.0 - with_feature / without if without > 0 else 0.0
 
 
 def rank_candidates(
-    residual: np.ndarray,
+    target: np.ndarray,
     frame: pd.DataFrame,
     features: list[Feature],
     period_s: float,
-    inputs: np.ndarray | None = None,
+    design: np.ndarray,
 ) -> list[Candidate]:
-    """Score every candidate on the rows where the residual is finite; best first.
+    """Score every candidate as one more regressor of the model's own design; best first.
 
-    ``inputs`` are the model's inputs on the same rows (see :func:`blocked_cv_score`).
+    Parameters
+    ----------
+    target : ndarray
+        The measured error.
+    design : ndarray
+        The model's regressors on the same samples, each group's inputs in
+        its own columns (see :func:`groupfit.diagnose.loop.group_design`).
+        Scoring the error rather than the in-sample residual matters: a
+        model fitted on the same run absorbs part of a missing effect into
+        its coefficients, and only an out-of-sample comparison of the model
+        with and without the candidate shows it.
     """
-    rows = np.isfinite(residual)
-    r = residual[rows]
-    X = None if inputs is None else np.asarray(inputs, dtype=float)[rows]
-    base = np.ones((len(r), 1)) if X is None else np.column_stack([np.ones(len(r)), X])
+    rows = np.isfinite(target) & np.isfinite(design).all(axis=1)
+    y, Z = target[rows], design[rows]
+    without = blocked_cv_sse(y, Z)
     ranked = []
     for feature in features:
         values = feature.compute(frame[feature.column].to_numpy(dtype=float), period_s)[rows]
         if np.ptp(values) == 0.0:
             continue
-        coef, *_ = np.linalg.lstsq(np.column_stack([base, values]), r, rcond=None)
-        effect = coef[-1] * (values - values.mean())
+        augmented = np.column_stack([Z, values])
+        coef, *_ = np.linalg.lstsq(augmented, y, rcond=None)
+        with_feature = blocked_cv_sse(y, augmented)
         ranked.append(
             Candidate(
                 feature=feature,
-                score=blocked_cv_score(r, values, X),
+                score=1.0 - with_feature / without if without > 0 else 0.0,
                 coefficient=float(coef[-1]),
-                explained_rms_um=float(np.sqrt(np.mean(effect**2))),
+                explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / len(y))),
             )
         )
     ranked.sort(key=lambda c: -c.score)

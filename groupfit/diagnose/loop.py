@@ -13,12 +13,13 @@ from groupfit.diagnose.candidates import Candidate, candidate_features, rank_can
 from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
+from groupfit.grouping import serving_group_index
 from groupfit.modelfile import error_metrics
 
 MIN_SCORE = 0.3
 """Least fraction of the residual variance, out of sample, that makes an effect significant."""
 MIN_EFFECT_RMS_UM = 0.1
-"""Least RMS (µm) of the effect's contribution: below it, nothing a compensation would notice."""
+"""Least residual RMS (µm) an effect must remove out of sample: below it, nothing a compensation would notice."""
 MAX_EFFECTS = 3
 
 
@@ -97,7 +98,8 @@ def diagnose(
     first_ranking: list[Candidate] | None = None
     tried = candidate_features(columns, measured_inputs)
     while len(added) < max_effects:
-        ranking = rank_candidates(current["data"], data.frame, tried, data.period, current_inputs)
+        design = group_design(current_model, current_inputs)
+        ranking = rank_candidates(data.error, data.frame, tried, data.period, design)
         if first_ranking is None:
             first_ranking = ranking
         if not ranking:
@@ -123,6 +125,18 @@ def diagnose(
         residuals_before=before,
         residuals_after=current,
     )
+
+
+def group_design(model: dict[str, Any], inputs: np.ndarray) -> np.ndarray:
+    """The model's regressors: each group's inputs (and intercept) in its own columns, groups by sample index."""
+    groups = serving_group_index(model["breaks"], int(model.get("n_samples", len(inputs))), model["n"], len(inputs))
+    block = np.column_stack([np.ones(len(inputs)), inputs]) if model["intercept"] else inputs
+    n_groups = len(model["breaks"]) + 1
+    design = np.zeros((len(inputs), n_groups * block.shape[1]))
+    for g in range(n_groups):
+        rows = groups == g
+        design[rows, g * block.shape[1] : (g + 1) * block.shape[1]] = block[rows]
+    return design
 
 
 def residual_checks(res: np.ndarray, time_s: np.ndarray) -> dict[str, Any]:

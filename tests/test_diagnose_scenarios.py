@@ -1,0 +1,56 @@
+"""The diagnosis on FE data sets with one undeclared effect each (configs/diag_*.toml)."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from groupfit.cli import main
+from groupfit.modelfile import load_model
+
+DATA = Path(__file__).resolve().parents[1] / "datasets"
+TEMPS = "T1,T2,T3,T4"
+EXPECTED = {
+    "ambient": {"T_amb"},
+    "source": {"src_zscrew_on"},
+    "lag": {"spindle_on", "speed_rpm"},  # a low-pass of a heat proxy
+}
+
+
+def run_diagnosis(tmp_path, scenario):
+    model_dir = tmp_path / "model"
+    assert main(["fit", "--data", str(DATA / f"diag_{scenario}_model.csv"), "--temps", TEMPS, "--p", "0",
+                 "--out", str(model_dir), "--quiet"]) == 0
+    out = tmp_path / "diagnose"
+    assert main(["diagnose", str(model_dir / "model.json"), "--data", str(DATA / f"diag_{scenario}_model.csv"),
+                 "--validate", str(DATA / f"diag_{scenario}_validate.csv"), "--out", str(out),
+                 "--json", str(tmp_path / "diagnose.json")]) == 0
+    return json.loads((tmp_path / "diagnose.json").read_text()), model_dir / "model.json"
+
+
+@pytest.mark.parametrize("scenario", sorted(EXPECTED))
+def test_the_undeclared_effect_is_named_and_validation_rms_falls_40_percent(tmp_path, capsys, scenario):
+    result, _ = run_diagnosis(tmp_path, scenario)
+    report = capsys.readouterr().out
+    assert result["added"], f"{scenario}: nothing found"
+    first = result["added"][0]
+    assert first["column"] in EXPECTED[scenario]
+    assert first["transform"] in ("lowpass", "identity", "delay")
+    assert result["candidates"][0]["column"] in EXPECTED[scenario]
+    before, after = result["before"]["validate"]["rms_um"], result["after"]["validate"]["rms_um"]
+    assert after <= 0.6 * before
+    assert "missing effect" in report
+    augmented = load_model(result["model"])
+    assert augmented["temps"][:4] == TEMPS.split(",") and augmented["derived_inputs"][0]["column"] == first["column"]
+
+
+def test_lag_scenario_finds_the_time_constant_of_the_unsensed_part(tmp_path):
+    result, _ = run_diagnosis(tmp_path, "lag")
+    # configs/diag_lag_*.toml: the unsensed part lags the bearing heat with tau = 6 h
+    assert result["added"][0]["tau_s"] == pytest.approx(6 * 3600.0, rel=0.35)
+
+
+def test_nothing_missing_on_the_clean_machine(tmp_path, capsys):
+    result, model_path = run_diagnosis(tmp_path, "none")
+    assert result["added"] == [] and result["model"] == str(model_path)
+    assert "nothing missing" in capsys.readouterr().out
