@@ -7,11 +7,14 @@ vector ``u_j = b_j − (j−1)·h``. The constraints become simply
 feasible by clipping it to that interval and sorting it: every individual the
 operators produce is repaired, never penalised.
 
-Operators suited to ordered integer vectors: uniform crossover or an
-arithmetic blend of the parents (then rounding), Gaussian integer shifts of
-single breaks with an occasional uniform reset, tournament selection, and
-elitism (the best individuals pass unchanged). The run stops when the best Rg
-has not improved for ``stall_generations`` generations.
+Operators suited to ordered integer vectors: uniform crossover, an arithmetic
+blend of the parents (then rounding), or children drawn from the union of the
+parents' breaks; Gaussian integer shifts of single breaks with an occasional
+uniform reset; tournament selection; and elitism (the best individuals pass
+unchanged). Every child then takes its best single-break shift within a small
+window (a Lamarckian step): Rg has narrow valleys around the changes of
+operating condition, and the step lets the population sit in them. The run
+stops when the best Rg has not improved for ``stall_generations`` generations.
 
 Fitness is evaluated for the whole population at once: the distinct ``(a, b)``
 segment pairs not yet seen are costed in one vectorised call and cached, since
@@ -100,25 +103,42 @@ def seeded_random(seed: int | None) -> Iterator[None]:
 
 
 class CachedObjective:
-    """Rg of break vectors, with every segment cost computed once."""
+    """Rg of break vectors, with every segment cost computed once.
+
+    Segment ``(a, b)`` is keyed ``a·(N+1) + b``; the cache is a sorted key
+    array and its values, so a whole batch is looked up with one
+    ``searchsorted`` and the missing segments are costed in one call.
+    """
 
     def __init__(self, cost: SegmentCost):
         self.cost = cost
-        self.cache: dict[tuple[int, int], float] = {}
+        self.keys = np.empty(0, dtype=np.int64)
+        self.values = np.empty(0)
         self.evaluations = 0
 
-    def totals(self, break_vectors: list[list[int]]) -> list[float]:
+    def totals(self, break_vectors) -> list[float]:
+        """Rg of each break vector (all of the same length)."""
+        if len(break_vectors) == 0:
+            return []
         n_samples = self.cost.n_samples
-        edges = [[0, *b, n_samples] for b in break_vectors]
-        missing = {
-            (e[j], e[j + 1]) for e in edges for j in range(len(e) - 1)
-        }.difference(self.cache)
-        if missing:
-            pairs = np.array(sorted(missing), dtype=np.int64)
-            values = self.cost.pair_costs(pairs[:, 0], pairs[:, 1])
-            self.cache.update(zip(map(tuple, pairs.tolist()), values.tolist()))
-        self.evaluations += len(break_vectors)
-        return [sum(self.cache[(e[j], e[j + 1])] for j in range(len(e) - 1)) for e in edges]
+        breaks = np.asarray(break_vectors, dtype=np.int64).reshape(len(break_vectors), -1)
+        edges = np.hstack(
+            [np.zeros((len(breaks), 1), dtype=np.int64), breaks, np.full((len(breaks), 1), n_samples, dtype=np.int64)]
+        )
+        keys = edges[:, :-1] * (n_samples + 1) + edges[:, 1:]
+        unique = np.unique(keys)
+        position = np.searchsorted(self.keys, unique)
+        known = position < len(self.keys)
+        known[known] = self.keys[position[known]] == unique[known]
+        missing = unique[~known]
+        if missing.size:
+            costs = self.cost.pair_costs(missing // (n_samples + 1), missing % (n_samples + 1))
+            merged = np.concatenate([self.keys, missing])
+            order = np.argsort(merged, kind="stable")
+            self.keys = merged[order]
+            self.values = np.concatenate([self.values, costs])[order]
+        self.evaluations += len(breaks)
+        return self.values[np.searchsorted(self.keys, keys)].sum(axis=1).tolist()
 
 
 class GapFreeEncoding:
@@ -161,9 +181,15 @@ class GeneticSearch:
         Individuals copied unchanged into the next generation.
     tournament_size : int
     polish : bool
-        Finish with a one-break-at-a-time local search.
+        Finish with a local search (see :func:`polish_breaks`).
     seed : int or None
         Seed of the run; the same seed gives the same result.
+    local_window : int
+        Every child takes the best single-break shift within ``±local_window``
+        samples before it joins the population (a Lamarckian step; 0: off).
+    union_crossover : bool
+        Also mate by drawing each child's breaks from the union of its
+        parents' breaks, which keeps breaks that sit well as building blocks.
     """
 
     def __init__(
@@ -177,7 +203,11 @@ class GeneticSearch:
         tournament_size: int = 3,
         polish: bool = True,
         seed: int | None = None,
+        local_window: int = 5,
+        union_crossover: bool = True,
     ):
+        self.local_window = local_window
+        self.union_crossover = union_crossover
         self.population_size = population_size
         self.max_generations = max_generations
         self.stall_generations = stall_generations
@@ -226,7 +256,12 @@ class GeneticSearch:
         sigma = max(1.0, 0.1 * span)
 
         def mate(a: Individual, b: Individual) -> tuple[Individual, Individual]:
-            if p > 1 and random.random() < 0.5:
+            draw = random.random()
+            if p > 1 and self.union_crossover and draw < 1 / 3:
+                pool = sorted(set(to_breaks(a)) | set(to_breaks(b)))
+                a[:] = encoding.from_breaks(sorted(random.sample(pool, p)))
+                b[:] = encoding.from_breaks(sorted(random.sample(pool, p)))
+            elif p > 1 and draw < 2 / 3:
                 tools.cxUniform(a, b, indpb=0.5)
             else:
                 weight = random.random()
@@ -244,6 +279,27 @@ class GeneticSearch:
                 scale = sigma if random.random() < 0.5 else 2.0
                 ind[gene] = ind[gene] + random.gauss(0.0, scale)
             return repair(ind)
+
+        def local_step(children: list[Individual]) -> None:
+            """One pass of windowed single-break shifts on every child (Lamarckian)."""
+            offers = []
+            for child in children:
+                breaks = to_breaks(child)
+                for j in range(p):
+                    first, last = shift_range(breaks, j, constraints)
+                    for b in range(max(first, breaks[j] - self.local_window), min(last, breaks[j] + self.local_window) + 1):
+                        if b != breaks[j]:
+                            offers.append((child, breaks[:j] + [b] + breaks[j + 1 :]))
+            values = objective.totals([trial for _, trial in offers])
+            best: dict[int, tuple[float, list[int]]] = {}
+            for (child, trial), value in zip(offers, values):
+                if value < best.get(id(child), (child.fitness.values[0], None))[0]:
+                    best[id(child)] = (value, trial)
+            for child in children:
+                if id(child) in best:
+                    value, trial = best[id(child)]
+                    child[:] = encoding.from_breaks(trial)
+                    child.fitness.values = (value,)
 
         history: list[float] = []
         evaluations_history: list[int] = []
@@ -271,6 +327,8 @@ class GeneticSearch:
                     if random.random() < self.mutation_prob:
                         mutate(child)
                 evaluate(children)
+                if self.local_window:
+                    local_step(children)
                 population = elite + children
                 leader = tools.selBest(population, 1)[0]
                 if leader.fitness.values[0] < best_value * (1 - 1e-12) - 1e-300:
@@ -353,27 +411,53 @@ def _beam_insert(
 
 
 def _shift_polish(
-    breaks: list[int], value: float, objective: CachedObjective, constraints: Constraints
+    breaks: list[int], value: float, objective: CachedObjective, constraints: Constraints, pair_window: int = 8
 ) -> tuple[list[int], float]:
+    """Shift single breaks, then neighbouring pairs within ``±pair_window``, until neither improves."""
     improved = True
     while improved:
         improved = False
-        for j in range(len(breaks)):
-            candidates = _shift_candidates(breaks, j, constraints)
-            if not candidates:
-                continue
-            values = objective.totals(candidates)
-            k = int(np.argmin(values))
-            if values[k] < value * (1 - 1e-12) - 1e-300:
-                breaks, value, improved = candidates[k], values[k], True
+        for move in (_shift_candidates, _pair_candidates):
+            for j in range(len(breaks) - (move is _pair_candidates)):
+                candidates = move(breaks, j, constraints) if move is _shift_candidates else move(
+                    breaks, j, constraints, pair_window
+                )
+                if not candidates:
+                    continue
+                values = objective.totals(candidates)
+                k = int(np.argmin(values))
+                if values[k] < value * (1 - 1e-12) - 1e-300:
+                    breaks, value, improved = candidates[k], values[k], True
+            if improved:
+                break
     return breaks, value
 
 
-def _shift_candidates(breaks: list[int], j: int, constraints: Constraints) -> list[list[int]]:
+def shift_range(breaks: list[int], j: int, constraints: Constraints) -> tuple[int, int]:
+    """Positions break j may take with the other breaks where they are."""
     left = breaks[j - 1] if j > 0 else 0
     right = breaks[j + 1] if j + 1 < len(breaks) else constraints.n_samples
-    first = max(left + constraints.min_size, constraints.lowest_break)
-    last = min(right - constraints.min_size, constraints.highest_break)
+    return (
+        max(left + constraints.min_size, constraints.lowest_break),
+        min(right - constraints.min_size, constraints.highest_break),
+    )
+
+
+def _pair_candidates(breaks: list[int], j: int, constraints: Constraints, window: int) -> list[list[int]]:
+    """Break vectors with breaks j and j+1 moved together, each by at most ``window`` samples."""
+    h = constraints.min_size
+    low, _ = shift_range(breaks, j, constraints)
+    _, high = shift_range(breaks, j + 1, constraints)
+    candidates = []
+    for first in range(max(low, breaks[j] - window), breaks[j] + window + 1):
+        for second in range(max(first + h, breaks[j + 1] - window), min(high, breaks[j + 1] + window) + 1):
+            if (first, second) != (breaks[j], breaks[j + 1]):
+                candidates.append(breaks[:j] + [first, second] + breaks[j + 2 :])
+    return candidates
+
+
+def _shift_candidates(breaks: list[int], j: int, constraints: Constraints) -> list[list[int]]:
+    first, last = shift_range(breaks, j, constraints)
     return [breaks[:j] + [b] + breaks[j + 1 :] for b in range(first, last + 1) if b != breaks[j]]
 
 
