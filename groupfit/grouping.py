@@ -1,6 +1,6 @@
 """Hard and soft groups of a modelling run, and the constraints on break points.
 
-Conventions (METHODS.md §1): samples are numbered 1…N. A hard break ``b`` is the
+Conventions (docs/methods.md §1): samples are numbered 1…N. A hard break ``b`` is the
 *last* sample of its hard group, so with breaks ``b_1 < … < b_p`` (``b_0 = 0``,
 ``b_{p+1} = N``) hard group j holds samples ``b_{j-1}+1 … b_j``. Soft group 1 is
 ``1 … b_1``; soft group j ≥ 2 is ``b_{j-1}-n+1 … b_j``: it starts n samples

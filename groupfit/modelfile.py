@@ -15,6 +15,7 @@ from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.grouping import hard_groups, soft_groups
 from groupfit.models.grouped import GroupedRegressor
+from groupfit.switching import rule_parameters, rule_section_problem
 
 FORMAT = "groupfit-model/1"
 REQUIRED = (
@@ -86,6 +87,18 @@ def model_to_dict(model: GroupedRegressor, run: Run, criterion: str | None = Non
             "criterion": criterion,
             "criterion_index": column,
             "criterion_series": [float(v) for v in run.temps[:, column]],
+            **rule_parameters(
+                {
+                    "temps": list(run.temp_names),
+                    "sampling_period_s": float(run.period),
+                    "breaks": list(model.breaks_),
+                    "n": int(model.n),
+                    "intercept": bool(model.fit_intercept),
+                    "coefficients": coefficients,
+                },
+                run.temps,
+                criterion_index=column,
+            ),
         },
         "training": {"run": run.name, **metrics},
     }
@@ -130,6 +143,9 @@ def load_model(path: str | Path) -> dict[str, Any]:
     n_groups = model["p"] + 1
     if len(model["breaks"]) != model["p"] or len(model["coefficients"]) != n_groups:
         raise InputError(f"{path}: 'breaks' and 'coefficients' do not match p = {model['p']}")
+    problem = rule_section_problem(model)
+    if problem:
+        raise InputError(f"{path}: {problem}")
     width = len(model["temps"]) + int(model["intercept"])
     for g, row in enumerate(model["coefficients"], start=1):
         if len(row) != width or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in row):

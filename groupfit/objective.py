@@ -1,6 +1,6 @@
 """The grouped-regression objective Rg and the cost of one soft group.
 
-Rg (METHODS.md §1, eq. 10/12) sums the residuals of every soft group and
+Rg (docs/methods.md §1, eq. 10/12) sums the residuals of every soft group and
 subtracts the residuals of each overlap computed with the *earlier* group's
 model, so every sample counts once, scored by the group that serves it. The
 contribution of one soft group therefore depends only on the hard breaks

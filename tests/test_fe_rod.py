@@ -1,4 +1,4 @@
-"""The FE spindle rod reproduces the closed-form AR(1) law of METHODS.md §2."""
+"""The FE spindle rod reproduces the closed-form AR(1) law of docs/methods.md §2."""
 
 import math
 import tomllib

@@ -27,7 +27,7 @@ RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on",
 
 @dataclass(frozen=True)
 class Material:
-    """Isotropic material; defaults are the headstock values of METHODS.md §1."""
+    """Isotropic material; defaults are the headstock values of docs/methods.md §1."""
 
     density: float = 7.8e3            # kg/m³
     heat_capacity: float = 502.4      # J/(kg·K)

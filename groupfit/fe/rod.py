@@ -1,4 +1,4 @@
-"""1-D spindle rod (METHODS.md §2 check case), finite elements on a line.
+"""1-D spindle rod (docs/methods.md §2 check case), finite elements on a line.
 
 ``ρc ∂θ/∂t = λ ∂²θ/∂x² − (2h/R)·θ`` for the temperature rise θ above ambient;
 the lateral convection of a rod of radius R becomes the volumetric sink

@@ -1,0 +1,51 @@
+"""``groupfit export``: the run-time switching rule for a controller or another runtime."""
+
+from __future__ import annotations
+
+import argparse
+
+from groupfit.commands.common import check_output_dir
+from groupfit.export import TARGETS, render, write
+from groupfit.modelfile import load_model
+
+
+def add_parser(verbs) -> None:
+    export = verbs.add_parser("export", help="write the run-time switching rule as C, Structured Text, JSON or a sheet")
+    export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit")
+    export.add_argument(
+        "--target", required=True, choices=(*TARGETS, "all"),
+        help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "
+        "sheet: controller sheet (text and JSON); all: every target",
+    )
+    export.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the exported files")
+    export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
+    export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
+    export.add_argument(
+        "--resolution-um", type=float, default=0.1, metavar="UM",
+        help="sheet: µm per count of an integer compensation register (default 0.1)",
+    )
+    export.add_argument(
+        "--counts-limit", type=int, default=30000, metavar="N",
+        help="sheet: largest magnitude of that register in counts (default 30000)",
+    )
+    export.set_defaults(handler=run_export)
+
+
+def run_export(args: argparse.Namespace) -> int:
+    model = load_model(args.model)
+    targets = TARGETS if args.target == "all" else (args.target,)
+    files: dict[str, str] = {}
+    for target in targets:
+        files.update(
+            render(
+                model, target, real=args.real, name=args.name,
+                resolution_um=args.resolution_um, counts_limit=args.counts_limit,
+            )
+        )
+    out_dir = check_output_dir(args.output)
+    written = write(files, out_dir)
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0
+
+
+__all__ = ["run_export"]

@@ -1,0 +1,229 @@
+"""``groupfit replay``: run the run-time switching rule over a recorded run, sample by sample."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from groupfit.commands.common import check_output_dir, report_stream, write_json
+from groupfit.data import load_run
+from groupfit.errors import InputError
+from groupfit.grouping import serving_group_index
+from groupfit.modelfile import load_model
+from groupfit.switching import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
+
+
+def add_parser(verbs) -> None:
+    replay = verbs.add_parser("replay", help="run the run-time switching rule over a recorded run")
+    replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit")
+    replay.add_argument(
+        "--data", required=True, metavar="CSV", help="the recorded run (with the model's temperature columns)"
+    )
+    replay.add_argument("--time", default="time_s", metavar="COLUMN", help="time column in seconds (default time_s)")
+    replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
+    replay.add_argument(
+        "--precision", choices=("double", "single"), default="double",
+        help="arithmetic of the rule: double, or single as a PLC REAL computes",
+    )
+    replay.add_argument(
+        "--resolution-um", type=float, metavar="UM",
+        help="also report the compensation in integer controller counts of this many µm (e.g. 0.1)",
+    )
+    replay.add_argument(
+        "--counts-limit", type=int, default=30000, metavar="N",
+        help="largest magnitude of those counts (default 30000)",
+    )
+    replay.add_argument("--json", metavar="FILE", help="write the per-sample result as JSON ('-' for stdout)")
+    replay.add_argument("--out", metavar="DIR", help="folder for replay.png (switch points against the offline breaks)")
+    replay.set_defaults(handler=run_replay)
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    model = load_model(args.model)
+    counts = None
+    if args.resolution_um is not None:
+        from groupfit.export.sheet import IntegerForm
+
+        counts = IntegerForm(args.resolution_um, args.counts_limit)
+    run = load_run(
+        args.data,
+        temps=model["temps"],
+        time=args.time,
+        error=args.error or model.get("error") or "error_um",
+        require_error=False,
+        allow_nonfinite=True,
+    )
+    try:
+        rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
+    except InputError as exc:
+        raise InputError(f"{run.source}: {exc}") from None
+    out_dir = check_output_dir(args.out) if args.out else None
+    replay = rule.replay(run.temps)
+    result = replay_result(model, rule.tables, run, replay, args.model, counts)
+    written = []
+    if out_dir is not None:
+        figure = out_dir / "replay.png"
+        plot_replay(run, rule.tables, replay, model, figure)
+        written.append(figure)
+    write_json(args.json, result)
+    print(replay_report(result, written), file=report_stream(args))
+    return 0
+
+
+def residuals(run, replay: Replay) -> np.ndarray | None:
+    """Measured minus predicted error; NaN where the error is missing or the rule was in sensor fault."""
+    if run.error is None:
+        return None
+    residual = run.error - replay.prediction_um
+    residual[(replay.fault & FAULT_SENSOR) != 0] = np.nan
+    residual[~np.isfinite(residual)] = np.nan
+    return residual
+
+
+def offline_groups(tables: RuleTables, model: dict[str, Any], n_samples: int) -> np.ndarray:
+    """1-based group the offline model serves at each sample index."""
+    n_model = int(model.get("n_samples", model["soft_groups"][-1][1]))
+    return serving_group_index(list(tables.breaks), n_model, tables.n, n_samples) + 1
+
+
+def replay_result(
+    model: dict[str, Any], tables: RuleTables, run, replay: Replay, model_path, counts=None
+) -> dict[str, Any]:
+    """The ``--json`` object: per-sample decisions plus a summary.
+
+    ``counts`` (an :class:`groupfit.export.sheet.IntegerForm`) adds each
+    sample's compensation in integer controller counts.
+    """
+    residual = residuals(run, replay)
+    switch_names = {0: None, 1: "criterion", 2: "forced"}
+    samples = []
+    for k in range(run.n_samples):
+        sample = {
+            "i": k + 1,
+            "time_s": float(run.time[k]),
+            "group": int(replay.group[k]),
+            "prediction_um": float(replay.prediction_um[k]),
+            "compensation_um": float(replay.compensation_um[k]),
+            "fault": int(replay.fault[k]),
+            "switch": switch_names[int(replay.switched[k])],
+        }
+        if counts is not None:
+            sample["compensation_counts"] = counts.counts(replay.compensation_um[k])
+        if residual is not None:
+            sample["residual_um"] = None if np.isnan(residual[k]) else float(residual[k])
+        samples.append(sample)
+    scored = residual[~np.isnan(residual)] if residual is not None else np.empty(0)
+    metrics = (
+        {
+            "rms_um": float(np.sqrt(np.mean(scored**2))),
+            "max_um": float(np.max(np.abs(scored))),
+            "R_um": float(np.sum(np.abs(scored))),
+        }
+        if scored.size
+        else {"rms_um": None, "max_um": None, "R_um": None}
+    )
+    offline = offline_groups(tables, model, run.n_samples)
+    return {
+        "model": str(model_path),
+        "run": run.source,
+        "n_samples": run.n_samples,
+        "sampling_period_s": run.period,
+        "samples": samples,
+        **metrics,
+        "scored_samples": int(scored.size),
+        "switches": replay.switch_samples(),
+        "offline_breaks": list(tables.breaks),
+        "offline_switch_samples": list(tables.window_first),
+        "windows": [[a, b] for a, b in zip(tables.window_first, tables.window_last)],
+        "samples_off_offline_group": int(np.sum(replay.group != offline)),
+        "faults": {
+            "held_samples": int(np.sum((replay.fault & FAULT_HELD) != 0)),
+            "sensor_fault_samples": int(np.sum((replay.fault & FAULT_SENSOR) != 0)),
+        },
+        "nonfinite_readings": int(np.sum(~np.isfinite(run.temps))),
+    }
+
+
+def replay_report(result: dict[str, Any], written: list[Path]) -> str:
+    """The human-readable summary printed by ``groupfit replay``."""
+    lines = [
+        f"run      {result['run']}: {result['n_samples']} samples every {result['sampling_period_s']:g} s",
+        "switches "
+        + (
+            ", ".join(
+                f"{s['from']}->{s['to']} at sample {s['i']}{' (forced)' if s['forced'] else ''}"
+                for s in result["switches"]
+            )
+            or "none"
+        ),
+        f"offline  switches at samples {result['offline_switch_samples']} (breaks {result['offline_breaks']}); "
+        f"{result['samples_off_offline_group']} sample(s) served by another group than offline",
+        f"faults   {result['faults']['held_samples']} sample(s) on held readings, "
+        f"{result['faults']['sensor_fault_samples']} in sensor fault (safe output)",
+    ]
+    if result["rms_um"] is not None:
+        lines.append(
+            f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm "
+            f"over {result['scored_samples']} sample(s)"
+        )
+    else:
+        lines.append("residual none (the run has no error column)")
+    if written:
+        lines.append("wrote    " + ", ".join(str(p) for p in written))
+    return "\n".join(lines)
+
+
+def plot_replay(run, tables: RuleTables, replay: Replay, model: dict[str, Any], path: Path) -> None:
+    """Error and prediction over time; below, the group in service against the offline grouping."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    hours = run.time / 3600.0
+    offline = offline_groups(tables, model, run.n_samples)
+    fig, (top, bottom) = plt.subplots(
+        2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
+    )
+    if run.error is not None:
+        top.plot(hours, run.error, color="black", lw=1.5, label="measured error")
+    shown = np.where((replay.fault & FAULT_SENSOR) != 0, np.nan, replay.prediction_um)
+    top.plot(hours, shown, color="tab:red", lw=1.1, ls="--", label="run-time prediction")
+    top.plot(hours, -replay.compensation_um, color="tab:green", lw=0.9, label="−compensation (clamped, rate-limited)")
+    faulty = np.flatnonzero(replay.fault)
+    if faulty.size:
+        top.plot(hours[faulty], np.zeros(faulty.size), "x", color="tab:orange", ms=4, label="fault")
+    top.set_ylabel("thermal error (µm)")
+    top.legend(loc="best", fontsize=8)
+    top.set_title(f"{run.name}: run-time switching (criterion {tables.criterion})")
+
+    bottom.step(hours, offline, where="post", color="tab:blue", lw=1.0, ls=":", label="offline group (by index)")
+    bottom.step(hours, replay.group, where="post", color="tab:red", lw=1.2, label="run-time group")
+    last = len(hours) - 1
+    for k, (first, final) in enumerate(zip(tables.window_first, tables.window_last)):
+        if first - 1 <= last:
+            bottom.axvspan(
+                hours[first - 1], hours[min(final - 1, last)], color="tab:blue", alpha=0.12,
+                label="switch window" if k == 0 else None,
+            )
+    for k, b in enumerate(tables.breaks):
+        if b - 1 <= last:
+            bottom.axvline(hours[b - 1], color="tab:blue", lw=0.8, label="offline break" if k == 0 else None)
+    labelled = set()
+    for s in replay.switch_samples():
+        kind = "forced switch" if s["forced"] else "criterion switch"
+        bottom.plot(hours[s["i"] - 1], s["to"], "v" if s["forced"] else "o", color="tab:red", ms=5,
+                    label=None if kind in labelled else kind)
+        labelled.add(kind)
+    bottom.set_yticks(range(1, tables.n_groups + 1))
+    bottom.set_ylabel("group")
+    bottom.set_xlabel("time (h)")
+    bottom.legend(loc="best", fontsize=8)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+__all__ = ["run_replay", "replay_result", "plot_replay"]

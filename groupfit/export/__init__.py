@@ -1,0 +1,70 @@
+"""Exported run-time routines: the switching rule for controllers and other runtimes.
+
+Every target renders the same :class:`groupfit.switching.RuleTables` and
+performs the operations of :class:`groupfit.switching.SwitchingRule` in the
+same order:
+
+* ``c``: ``groupfit_model.h`` / ``groupfit_model.c`` (C99, no heap, const tables);
+* ``st``: one IEC 61131-3 Structured Text FUNCTION_BLOCK (REAL or LREAL);
+* ``json``: the tables and rule parameters for any other runtime;
+* ``sheet``: how the output maps onto a controller (SINUMERIK and integer forms).
+
+:func:`render` returns ``{file name: text}`` without touching the disk;
+:func:`write` writes those files, each completely or not at all.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from groupfit.errors import InputError
+from groupfit.switching import RuleTables
+
+TARGETS = ("c", "st", "json", "sheet")
+
+
+def render(model: dict[str, Any], target: str, **options) -> dict[str, str]:
+    """The files of one export target, as ``{file name: text}``.
+
+    Options: ``real`` ("REAL" or "LREAL") and ``name`` (block name) for
+    ``st``; ``resolution_um`` and ``counts_limit`` for ``sheet``.
+    """
+    tables = RuleTables.from_model(model)
+    if target == "c":
+        from groupfit.export.c import render_c
+
+        return render_c(tables)
+    if target == "st":
+        from groupfit.export.st import render_st
+
+        return render_st(tables, real=options.get("real", "LREAL"), name=options.get("name", "FB_GroupfitComp"))
+    if target == "json":
+        from groupfit.export.json_table import render_json
+
+        return render_json(tables)
+    if target == "sheet":
+        from groupfit.export.sheet import render_sheet
+
+        return render_sheet(
+            tables,
+            resolution_um=options.get("resolution_um", 0.1),
+            counts_limit=options.get("counts_limit", 30000),
+        )
+    raise InputError(f"export target {target!r}: choose one of {', '.join(TARGETS)}")
+
+
+def write(files: dict[str, str], out_dir: str | Path) -> list[Path]:
+    """Write rendered files into ``out_dir``; return their paths."""
+    from groupfit.modelfile import atomic_write_text
+
+    out_dir = Path(out_dir)
+    written = []
+    for name, text in files.items():
+        path = out_dir / name
+        atomic_write_text(path, text)
+        written.append(path)
+    return written
+
+
+__all__ = ["TARGETS", "render", "write"]

@@ -1,0 +1,68 @@
+"""Number literals that read back to exactly the value the Python rule uses.
+
+Seventeen significant digits round-trip any IEEE double; nine round-trip any
+IEEE single, so a table written with these literals holds, after the C or PLC
+compiler has read it, the very numbers :class:`groupfit.switching.SwitchingRule`
+computes with.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def double_literal(value: float) -> str:
+    """A C / Structured Text literal of a double, exact on reading back."""
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"cannot write {value!r} as a literal")
+    return "%.17e" % value
+
+
+def single_literal(value: float) -> str:
+    """A decimal literal (no suffix) of ``value`` rounded to IEEE single, exact on reading back."""
+    single = np.float32(value)
+    if not np.isfinite(single):
+        raise ValueError(f"{value!r} does not fit a single-precision number")
+    return "%.9e" % float(single)
+
+
+def c_float_literal(value: float) -> str:
+    """A C ``float`` literal (``f`` suffix) of ``value`` rounded to single precision."""
+    return single_literal(value) + "f"
+
+
+def integer_literal(value: int) -> str:
+    return str(int(value))
+
+
+def shortest_literal(value: float, single: bool) -> str:
+    """The shortest decimal literal that reads back to ``value`` (as a double, or rounded to single).
+
+    Always has a decimal point, as IEC 61131-3 real literals need
+    (``1e-05`` becomes ``1.0e-05``). Shorter tables parse faster in tools that
+    read Structured Text character by character.
+    """
+    if single:
+        number = np.float32(value)
+        if not np.isfinite(number):
+            raise ValueError(f"{value!r} does not fit a single-precision number")
+        text = np.format_float_positional(number, unique=True, trim="0") if 1e-4 <= abs(number) < 1e7 or number == 0 \
+            else np.format_float_scientific(number, unique=True, trim="0")
+    else:
+        number = float(value)
+        if not math.isfinite(number):
+            raise ValueError(f"cannot write {value!r} as a literal")
+        text = repr(number)
+    mantissa, _, exponent = text.lower().partition("e")
+    if "." not in mantissa:
+        mantissa += ".0"
+    if mantissa.endswith("."):
+        mantissa += "0"
+    text = mantissa + (f"e{exponent}" if exponent else "")
+    exact = np.float32(float(text)) == number if single else float(text) == number
+    if not exact:  # never expected; the fixed-width forms are always exact
+        return single_literal(value) if single else double_literal(value)
+    return text

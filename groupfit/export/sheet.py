@@ -1,0 +1,186 @@
+"""Controller sheet: how the rule's output maps onto a machine's compensation.
+
+The rule hands the controller a compensation value ``C`` in µm: minus the
+predicted thermal error, clamped and rate-limited. This module converts it to
+the forms controllers take and writes a sheet (text and JSON) for the person
+commissioning the machine:
+
+* SINUMERIK temperature compensation, position-dependent form
+  ``ΔK = K0 + tanβ·(P − P0)``: SD43900 ``TEMP_COMP_ABS_VALUE`` = K0 in mm,
+  SD43910 ``TEMP_COMP_SLOPE`` = tanβ, SD43920 ``TEMP_COMP_REF_POSITION`` =
+  P0 in mm, enabled by the bits of MD32750 ``TEMP_COMP_TYPE``; MD32760
+  ``COMP_ADD_VELO_FACTOR`` spreads large changes over interpolation cycles.
+* Integer offsets in fixed units (e.g. 0.1 µm per count, saturating at
+  ±30 000 counts), as controllers with integer compensation registers take.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from decimal import ROUND_HALF_UP, Decimal
+
+from groupfit.errors import InputError
+from groupfit.modelfile import to_json
+from groupfit.switching import RuleTables
+
+UM_PER_MM = 1000.0
+
+MD32750_BITS = {
+    0: "position-independent temperature compensation (SD43900)",
+    1: "position-dependent temperature compensation (SD43910, SD43920)",
+    2: "temperature compensation in tool direction",
+}
+
+
+def sinumerik_abs_value_mm(compensation_um: float) -> float:
+    """SD43900 TEMP_COMP_ABS_VALUE (K0, mm) for a compensation value in µm."""
+    _require_finite(compensation_um)
+    return float(compensation_um) / UM_PER_MM
+
+
+def sinumerik_temp_comp_type(position_independent: bool = True, position_dependent: bool = False,
+                             tool_direction: bool = False) -> int:
+    """MD32750 TEMP_COMP_TYPE: bit 0, bit 1 and bit 2 as named."""
+    return int(position_independent) | (int(position_dependent) << 1) | (int(tool_direction) << 2)
+
+
+def sinumerik_total_um(k0_mm: float, slope: float, position_mm: float, ref_position_mm: float) -> float:
+    """The compensation SINUMERIK applies at position P: ``K0 + tanβ·(P − P0)``, in µm."""
+    return (k0_mm + slope * (position_mm - ref_position_mm)) * UM_PER_MM
+
+
+@dataclass(frozen=True)
+class IntegerForm:
+    """A fixed-point compensation register: ``counts = C / resolution``, saturating.
+
+    Attributes
+    ----------
+    resolution_um : float
+        µm per count (0.1 for a register in 0.1 µm).
+    limit : int
+        Largest magnitude the register holds (30 000: ±3 mm at 0.1 µm).
+    """
+
+    resolution_um: float = 0.1
+    limit: int = 30000
+
+    def __post_init__(self):
+        if not (math.isfinite(self.resolution_um) and self.resolution_um > 0):
+            raise InputError(f"integer resolution {self.resolution_um!r} µm must be a positive number")
+        if int(self.limit) != self.limit or self.limit < 1:
+            raise InputError(f"integer limit {self.limit!r} must be a whole number ≥ 1")
+
+    def counts(self, compensation_um: float) -> int:
+        """Counts for ``compensation_um``: nearest count, halves away from zero, saturated at ±limit.
+
+        The division is done on the decimal values as written (0.25 µm at
+        0.1 µm is exactly 2.5 counts, so 3), not on their binary approximations.
+        """
+        _require_finite(compensation_um)
+        exact = Decimal(repr(float(compensation_um))) / Decimal(repr(float(self.resolution_um)))
+        rounded = int(exact.quantize(Decimal(1), rounding=ROUND_HALF_UP))
+        return max(-self.limit, min(self.limit, rounded))
+
+    def um(self, counts: int) -> float:
+        """The compensation in µm a register value stands for."""
+        return float(Decimal(int(counts)) * Decimal(repr(float(self.resolution_um))))
+
+    @property
+    def range_um(self) -> float:
+        """Largest magnitude (µm) the register holds."""
+        return self.um(self.limit)
+
+
+def _require_finite(value: float) -> None:
+    if not math.isfinite(float(value)):
+        raise ValueError(f"compensation value {value!r} is not a finite number")
+
+
+def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -> dict:
+    """The sheet as a JSON-ready object."""
+    period = tables.sampling_period_s
+    clamp_counts = [integer.counts(tables.comp_min_um), integer.counts(tables.comp_max_um)]
+    saturates = max(abs(tables.comp_min_um), abs(tables.comp_max_um)) > integer.range_um
+    return {
+        "format": "groupfit-controller-sheet/1",
+        "output": {
+            "name": "compensation",
+            "unit": "um",
+            "definition": "C = -(predicted thermal error), clamped to [comp_min_um, comp_max_um], "
+            "then changed by at most rate_limit_um per sample",
+            "sign": "the thermal error is the displacement the model was fitted on (positive along the "
+            "axis as measured); C moves the axis the opposite way. If your error was measured with the "
+            "opposite sign, write -C. Check the sign on the machine with a small test value first.",
+            "comp_min_um": tables.comp_min_um,
+            "comp_max_um": tables.comp_max_um,
+            "rate_limit_um_per_sample": tables.rate_limit_um,
+            "rate_limit_um_per_s": tables.rate_limit_um / period,
+            "sampling_period_s": period,
+            "on_sensor_fault": "C ramps to 0 at the rate limit (no compensation)",
+        },
+        "sinumerik": {
+            "form": "dK = K0 + tanb * (P - P0)",
+            "MD32750_TEMP_COMP_TYPE": sinumerik_temp_comp_type(True, False, False),
+            "MD32750_bits": {str(bit): text for bit, text in MD32750_BITS.items()},
+            "MD32750_note": "bit 0 only: the grouped model is position-independent. Set bit 1 (value 3) "
+            "only when a position-dependent slope is also written.",
+            "SD43900_TEMP_COMP_ABS_VALUE": {"value": "C / 1000", "unit": "mm", "role": "K0"},
+            "SD43910_TEMP_COMP_SLOPE": {"value": 0.0, "unit": "1 (tan beta)", "role": "tanb"},
+            "SD43920_TEMP_COMP_REF_POSITION": {"value": 0.0, "unit": "mm", "role": "P0"},
+            "writing": "the PLC writes SD43900 once per sample (every "
+            f"{period:g} s) from the compensation block's output",
+            "MD32760_COMP_ADD_VELO_FACTOR": "the NC traverses a change of the compensation over several "
+            "interpolation cycles when it exceeds MD32760 x MD32000 MAX_AX_VELO per cycle; the rule's "
+            f"rate limit already bounds each change to {tables.rate_limit_um:g} um per sample",
+        },
+        "integer": {
+            "resolution_um": integer.resolution_um,
+            "limit_counts": integer.limit,
+            "range_um": integer.range_um,
+            "counts": "round(C / resolution_um), halves away from zero, saturated at +-limit_counts",
+            "clamp_counts": clamp_counts,
+            "rate_limit_counts_per_sample": integer.counts(tables.rate_limit_um),
+            "clamp_exceeds_register": saturates,
+        },
+    }
+
+
+def sheet_text(sheet: dict) -> str:
+    """The sheet for a person: units, sign, registers, limits."""
+    out, sin, integer = sheet["output"], sheet["sinumerik"], sheet["integer"]
+    lines = [
+        "groupfit controller sheet",
+        "=========================",
+        "",
+        "Output of the run-time rule",
+        f"  C = -(predicted thermal error) in um, clamped to [{out['comp_min_um']:g}, {out['comp_max_um']:g}] um,",
+        f"  changed by at most {out['rate_limit_um_per_sample']:g} um per sample "
+        f"({out['rate_limit_um_per_s']:.4g} um/s at {out['sampling_period_s']:g} s per sample).",
+        f"  Sign: {out['sign']}",
+        f"  Sensor fault: {out['on_sensor_fault']}.",
+        "",
+        "SINUMERIK temperature compensation (dK = K0 + tanb * (P - P0))",
+        f"  MD32750 TEMP_COMP_TYPE          = {sin['MD32750_TEMP_COMP_TYPE']}"
+        "   (bit 0 position-independent, bit 1 position-dependent, bit 2 tool direction)",
+        "  SD43900 TEMP_COMP_ABS_VALUE     = C / 1000   [mm]   (K0)",
+        "  SD43910 TEMP_COMP_SLOPE         = 0          [-]    (tanb: the model has no position term)",
+        "  SD43920 TEMP_COMP_REF_POSITION  = 0          [mm]   (P0)",
+        f"  {sin['writing']}.",
+        f"  MD32760 COMP_ADD_VELO_FACTOR: {sin['MD32760_COMP_ADD_VELO_FACTOR']}.",
+        "",
+        f"Integer register ({integer['resolution_um']:g} um per count, +-{integer['limit_counts']} counts "
+        f"= +-{integer['range_um']:g} um)",
+        f"  counts = {integer['counts']}",
+        f"  clamp in counts: [{integer['clamp_counts'][0]}, {integer['clamp_counts'][1]}]",
+        f"  rate limit: {integer['rate_limit_counts_per_sample']} counts per sample",
+    ]
+    if integer["clamp_exceeds_register"]:
+        lines.append("  WARNING: the clamp range exceeds the register; values beyond it saturate.")
+    return "\n".join(lines) + "\n"
+
+
+def render_sheet(tables: RuleTables, resolution_um: float = 0.1, counts_limit: int = 30000) -> dict[str, str]:
+    """``{"groupfit_sheet.txt": …, "groupfit_sheet.json": …}``."""
+    sheet = controller_sheet(tables, IntegerForm(resolution_um, counts_limit))
+    return {"groupfit_sheet.txt": sheet_text(sheet), "groupfit_sheet.json": to_json(sheet)}

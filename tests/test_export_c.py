@@ -1,0 +1,188 @@
+"""C99 export: strict compile, same decisions as the Python rule, no crash on any input."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from groupfit.export import render, write
+from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
+from groupfit.switching import RETURN_PERIOD_FAULT, SwitchingRule
+from test_switching_models import (
+    eight_sensor_model,
+    eight_sensor_validation,
+    fe_model,
+    fe_validation_runs,
+    streams_for,
+    synthetic_model,
+)
+
+pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+
+
+@pytest.fixture(scope="module")
+def drivers(tmp_path_factory):
+    """Build (and cache) a driver per model and build kind."""
+    built = {}
+
+    def get(label, model, kind="double"):
+        key = (label, kind)
+        if key not in built:
+            folder = tmp_path_factory.mktemp(f"c_{len(built)}")
+            write(render(model, "c"), folder)
+            if kind == "sanitized":
+                flags = ("-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all")
+                built[key] = build_driver(folder, folder / "driver", flags=flags)
+            else:
+                built[key] = build_driver(folder, folder / "driver", single=(kind == "single"))
+        return built[key]
+
+    return get
+
+
+def python_replay(model, temps, precision="double"):
+    rule = SwitchingRule(model, precision=precision)
+    rule.reset()
+    results = [rule.step(row) for row in temps]
+    return {
+        "code": np.array([r.code for r in results]),
+        "group": np.array([r.group for r in results]),
+        "fault": np.array([r.fault for r in results]),
+        "switched": np.array([r.switched for r in results]),
+        "prediction_um": np.array([r.prediction_um for r in results]),
+        "compensation_um": np.array([r.compensation_um for r in results]),
+    }
+
+
+def assert_same_decisions(c_out, py, tolerance=None):
+    assert np.array_equal(c_out.code, py["code"])
+    assert np.array_equal(c_out.group, py["group"])
+    assert np.array_equal(c_out.fault, py["fault"])
+    assert np.array_equal(c_out.switched, py["switched"])
+    if tolerance is None:  # bit for bit
+        assert c_out.prediction_um.tobytes() == py["prediction_um"].tobytes()
+        assert c_out.compensation_um.tobytes() == py["compensation_um"].tobytes()
+    else:
+        assert np.max(np.abs(c_out.prediction_um - py["prediction_um"])) <= tolerance
+        assert np.max(np.abs(c_out.compensation_um - py["compensation_um"])) <= tolerance
+
+
+def cases():
+    synthetic, run = synthetic_model()
+    eight, eight_run = eight_sensor_model()
+    flat, _ = synthetic_model(p=0)
+    return {
+        "synthetic p=3": (synthetic, streams_for(synthetic, run)),
+        "synthetic p=0": (flat, streams_for(flat, run)),
+        "8 temps p=6": (eight, {**streams_for(eight, eight_run), "other cycle": eight_sensor_validation().temps}),
+    }
+
+
+@pytest.mark.parametrize("label", ["synthetic p=3", "synthetic p=0", "8 temps p=6"])
+def test_double_build_makes_the_decisions_of_replay(drivers, label):
+    model, streams = cases()[label]
+    outputs = run_driver(drivers(label, model), list(streams.values()))
+    for temps, c_out in zip(streams.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps), tolerance=1e-9)
+
+
+@pytest.mark.parametrize("label", ["synthetic p=3", "8 temps p=6"])
+def test_single_precision_build_matches_the_float32_reference_bit_for_bit(drivers, label):
+    model, streams = cases()[label]
+    outputs = run_driver(drivers(label, model, "single"), list(streams.values()))
+    for temps, c_out in zip(streams.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps, "single"))
+
+
+def test_fe_data_sets_replay_identically(drivers):
+    model, run = fe_model()
+    streams = {**streams_for(model, run), **{r.name: r.temps for r in fe_validation_runs(model)}}
+    double = run_driver(drivers("fe", model), list(streams.values()))
+    single = run_driver(drivers("fe", model, "single"), list(streams.values()))
+    for temps, c_double, c_single in zip(streams.values(), double, single):
+        assert_same_decisions(c_double, python_replay(model, temps), tolerance=1e-9)
+        assert_same_decisions(c_single, python_replay(model, temps, "single"))
+
+
+def test_sanitized_build_runs_fault_streams_cleanly(drivers):
+    model, streams = cases()["8 temps p=6"]
+    executable = drivers("8 temps p=6", model, "sanitized")
+    assert b"__asan_init" in executable.read_bytes() and b"__ubsan" in executable.read_bytes()
+    outputs = run_driver(executable, list(streams.values()))
+    for temps, c_out in zip(streams.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps), tolerance=1e-9)
+
+
+SPECIAL = [np.nan, np.inf, -np.inf, 1e308, -1e308, 1e-308, -1e-308, 5e-324, 0.0, -0.0, 3.4e38, 1e39]
+
+
+@st.composite
+def hostile_stream(draw, n_temps):
+    length = draw(st.integers(1, 60))
+    base = draw(st.floats(0.0, 60.0))
+    rows = []
+    for _ in range(length):
+        row = []
+        for _ in range(n_temps):
+            if draw(st.booleans()):
+                row.append(draw(st.sampled_from(SPECIAL)))
+            else:
+                row.append(base + draw(st.floats(-5.0, 5.0)))
+        rows.append(row)
+    return np.array(rows, dtype=float)
+
+
+@pytest.fixture(scope="module")
+def hostile_setup(drivers):
+    model, _ = synthetic_model()
+    return model, drivers("synthetic p=3", model, "sanitized"), drivers("synthetic p=3", model, "single")
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(stream=hostile_stream(4))
+def test_nan_inf_huge_and_tiny_readings_never_crash_it(hostile_setup, stream):
+    model, sanitized, single = hostile_setup
+    (c_out,) = run_driver(sanitized, [stream])  # check=True: a sanitizer report fails the run
+    assert_same_decisions(c_out, python_replay(model, stream), tolerance=1e-9)
+    assert np.all(np.isfinite(c_out.prediction_um)) and np.all(np.isfinite(c_out.compensation_um))
+    (c_single,) = run_driver(single, [stream])
+    assert_same_decisions(c_single, python_replay(model, stream, "single"))
+
+
+def test_header_documents_the_api(tmp_path):
+    model, _ = eight_sensor_model()
+    files = render(model, "c")
+    header, source = files["groupfit_model.h"], files["groupfit_model.c"]
+    assert "#define GF_N_TEMPS 8" in header and "#define GF_N_GROUPS 7" in header
+    for m, name in enumerate(model["temps"]):
+        assert f"temps[{m}] = {name}" in header
+    assert "void gf_init(gf_state *s);" in header
+    assert "int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um);" in header
+    includes = re.findall(r"#include\s+[<\"]([^>\"]+)[>\"]", header + source)
+    assert includes == ["groupfit_model.h"]  # nothing but its own header: no library needed at all
+    assert not re.search(r"\b(malloc|calloc|realloc|free)\b", source)
+    assert re.findall(r"^static (?!const)", source, flags=re.M) == []  # tables are const, no hidden state
+    assert header.isascii() and source.isascii()
+
+
+def test_period_check(tmp_path):
+    model, _ = synthetic_model()
+    write(render(model, "c"), tmp_path)
+    (tmp_path / "check.c").write_text(
+        '#include <math.h>\n#include <stdio.h>\n#include "groupfit_model.h"\n'
+        'int main(void) { printf("%d %d %d %d\\n", gf_check_period(100.0), gf_check_period(100.9), '
+        "gf_check_period(102.0), gf_check_period(NAN)); return 0; }\n"
+    )
+    subprocess.run(
+        ["gcc", *STRICT_FLAGS, "-I", str(tmp_path), str(tmp_path / "check.c"),
+         str(tmp_path / "groupfit_model.c"), "-o", str(tmp_path / "check")],
+        check=True, capture_output=True, text=True,
+    )
+    out = subprocess.run([str(tmp_path / "check")], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["0", "0", str(RETURN_PERIOD_FAULT), str(RETURN_PERIOD_FAULT)]

@@ -1,0 +1,150 @@
+"""JSON table, controller sheet and the ``groupfit export`` command."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from groupfit.cli import main
+from groupfit.errors import InputError
+from groupfit.export import render
+from groupfit.export.sheet import (
+    IntegerForm,
+    controller_sheet,
+    sinumerik_abs_value_mm,
+    sinumerik_temp_comp_type,
+    sinumerik_total_um,
+)
+from groupfit.modelfile import save_model
+from groupfit.switching import RuleTables, SwitchingRule
+from test_switching_models import streams_for, synthetic_model
+
+
+def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
+    """A runtime written only from groupfit_runtime.json and its 'steps' (not from groupfit.switching)."""
+    hold, crit = table["hold_samples"], table["criterion_index"]
+    n_temps, n_groups = len(table["temps"]), len(table["coefficients"])
+    count, group, comp = 0, 1, 0.0
+    bad, last = [hold + 1] * n_temps, [0.0] * n_temps
+    out = []
+    for x in temps.tolist():
+        count = min(count + 1, table["count_max"])
+        for m in range(n_temps):
+            if table["temp_min_c"][m] <= x[m] <= table["temp_max_c"][m]:
+                last[m], bad[m] = x[m], 0
+            elif bad[m] <= hold:
+                bad[m] += 1
+        faulted = any(b > hold for b in bad)
+        held = any(0 < b <= hold for b in bad)
+        if group < n_groups:
+            first, final = table["windows"][group - 1]
+            d, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
+            if count >= final:
+                group += 1
+            elif count >= first and (
+                bad[crit] > hold or d == 0
+                or (d > 0 and last[crit] - threshold >= -table["margin_c"])
+                or (d < 0 and last[crit] - threshold <= table["margin_c"])
+            ):
+                group += 1
+        if faulted:
+            prediction = target = 0.0
+        else:
+            row = table["coefficients"][group - 1]
+            prediction = row[0]
+            for m in range(n_temps):
+                prediction = prediction + row[m + 1] * last[m]
+            target = -prediction
+        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
+        delta = max(min(target - comp, table["rate_limit_um"]), -table["rate_limit_um"])
+        comp = comp + delta
+        fault = held * table["fault_bits"]["held"] + faulted * table["fault_bits"]["sensor"]
+        out.append((table["sensor_fault_return"] if faulted else group, fault, prediction, comp))
+    return out
+
+
+def test_json_table_is_enough_to_rebuild_the_rule():
+    model, run = synthetic_model()
+    table = json.loads(render(model, "json")["groupfit_runtime.json"])
+    assert table["format"] == "groupfit-runtime/1" and table["temps"] == model["temps"]
+    rule = SwitchingRule(model)
+    for temps in streams_for(model, run).values():
+        rule.reset()
+        expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
+        assert run_from_table(table, temps) == expected
+
+
+@pytest.mark.parametrize("um, counts", [
+    (0.0, 0), (0.04, 0), (0.05, 1), (-0.05, -1), (0.15, 2), (0.25, 3), (-0.25, -3),
+    (12.34, 123), (-12.36, -124), (2999.96, 30000), (5000.0, 30000), (-1e9, -30000),
+])
+def test_counts_at_01_um_round_halves_away_from_zero_and_saturate(um, counts):
+    assert IntegerForm(0.1, 30000).counts(um) == counts
+
+
+def test_other_integer_forms_and_their_range():
+    whole = IntegerForm(resolution_um=1.0, limit=32767)
+    assert whole.counts(2.5) == 3 and whole.counts(-2.5) == -3 and whole.counts(40000.0) == 32767
+    assert IntegerForm().range_um == 3000.0 and IntegerForm().um(123) == 12.3
+    with pytest.raises(ValueError):
+        IntegerForm().counts(math.nan)
+    with pytest.raises(InputError):
+        IntegerForm(resolution_um=0.0)
+    with pytest.raises(InputError):
+        IntegerForm(limit=0)
+
+
+def test_sinumerik_conversions():
+    assert sinumerik_abs_value_mm(-12.5) == -0.0125
+    assert sinumerik_temp_comp_type() == 1
+    assert sinumerik_temp_comp_type(True, True) == 3 and sinumerik_temp_comp_type(False, False, True) == 4
+    # K0 = 0.010 mm, tanb = 2e-5, P0 = 100 mm: at P = 600 mm, 10 µm + 2e-5 * 500 mm = 20 µm
+    assert sinumerik_total_um(0.010, 2e-5, 600.0, 100.0) == pytest.approx(20.0)
+    with pytest.raises(ValueError):
+        sinumerik_abs_value_mm(math.inf)
+
+
+def test_sheet_states_units_sign_limits_and_registers():
+    model, _ = synthetic_model()
+    section = model["switching"]
+    sheet = controller_sheet(RuleTables.from_model(model))
+    assert sheet["sinumerik"]["MD32750_TEMP_COMP_TYPE"] == 1
+    assert sheet["sinumerik"]["SD43900_TEMP_COMP_ABS_VALUE"]["unit"] == "mm"
+    assert sheet["sinumerik"]["SD43910_TEMP_COMP_SLOPE"]["value"] == 0.0
+    assert sheet["output"]["rate_limit_um_per_sample"] == section["rate_limit_um"]
+    assert sheet["integer"]["clamp_counts"] == [round(section["comp_min_um"] * 10), round(section["comp_max_um"] * 10)]
+    text = render(model, "sheet")["groupfit_sheet.txt"]
+    for needle in ("MD32750", "SD43900", "SD43910", "SD43920", "MD32760", "C / 1000", "Sign:", "counts"):
+        assert needle in text
+    small = controller_sheet(RuleTables.from_model(model), IntegerForm(0.1, 100))
+    assert small["integer"]["clamp_exceeds_register"] is True
+
+
+def test_export_command_writes_every_target(tmp_path, capsys):
+    model, _ = synthetic_model()
+    save_model(model, tmp_path / "model.json")
+    out = tmp_path / "export"
+    assert main(["export", str(tmp_path / "model.json"), "--target", "all", "-o", str(out),
+                 "--real", "REAL", "--name", "FB_Spindle"]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted([
+        "groupfit_model.h", "groupfit_model.c", "FB_Spindle.st", "groupfit_runtime.json",
+        "groupfit_sheet.txt", "groupfit_sheet.json",
+    ])
+    assert "OF REAL" in (out / "FB_Spindle.st").read_text()
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_export_refuses_a_bad_block_name_and_writes_nothing(tmp_path, capsys):
+    model, _ = synthetic_model()
+    save_model(model, tmp_path / "model.json")
+    args = ["export", str(tmp_path / "model.json"), "--target", "st", "-o", str(tmp_path / "x"), "--name", "1 bad"]
+    status = main(args)
+    assert status == 2 and "block name" in capsys.readouterr().err and not (tmp_path / "x").exists()
+
+
+def test_export_of_a_missing_model_is_one_line(tmp_path, capsys):
+    assert main(["export", str(tmp_path / "none.json"), "--target", "c", "-o", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "model file not found" in err[0]

@@ -1,0 +1,147 @@
+"""``groupfit replay``: the rule sample by sample over a recorded run, as JSON and a figure."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.modelfile import save_model
+from groupfit.switching import FAULT_HELD, FAULT_SENSOR, SwitchingRule
+from test_switching_models import (
+    SYNTHETIC,
+    eight_sensor_model,
+    eight_sensor_validation,
+    fe_model,
+    fe_validation_runs,
+    synthetic_model,
+)
+
+
+@pytest.fixture()
+def model_path(tmp_path):
+    model, _ = synthetic_model()
+    path = tmp_path / "model.json"
+    save_model(model, path)
+    return path
+
+
+def replay(*args):
+    return main(["replay", *map(str, args)])
+
+
+def test_replay_json_has_the_spec_shape_and_the_residuals(tmp_path, model_path, capsys):
+    out = tmp_path / "fig"
+    assert replay(model_path, "--data", SYNTHETIC, "--json", tmp_path / "r.json", "--out", out) == 0
+    report = capsys.readouterr().out
+    result = json.loads((tmp_path / "r.json").read_text())
+    frame = pd.read_csv(SYNTHETIC)
+    assert len(result["samples"]) == len(frame)
+    first = result["samples"][0]
+    assert {"i", "group", "prediction_um", "fault"} <= set(first) and first["i"] == 1
+    assert {"residual_um", "compensation_um", "switch", "time_s"} <= set(first)
+    residual = np.array([s["residual_um"] for s in result["samples"]])
+    prediction = np.array([s["prediction_um"] for s in result["samples"]])
+    assert np.allclose(residual, frame["error_um"] - prediction, atol=1e-12)
+    assert result["rms_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-12)
+    model = json.loads(model_path.read_text())
+    assert result["rms_um"] == pytest.approx(model["training"]["rms_um"], rel=1e-9)  # the modelling run itself
+    assert result["offline_breaks"] == model["breaks"] and result["samples_off_offline_group"] == 0
+    assert [s["i"] for s in result["switches"]] == [w[0] for w in model["switching"]["windows"]]
+    assert (out / "replay.png").stat().st_size > 10_000
+    assert "switches" in report and "residual RMS" in report
+
+
+def test_nonfinite_readings_are_sensor_faults_not_errors(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC)
+    frame.loc[10:11, "T2"] = np.nan  # two samples: held
+    frame.loc[50:55, "T1"] = np.inf  # six samples: held three, then fault
+    frame.loc[80, "error_um"] = np.nan  # a missing error: no residual there
+    data = tmp_path / "faulty.csv"
+    frame.to_csv(data, index=False)
+    assert replay(model_path, "--data", data, "--json", tmp_path / "r.json") == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    faults = [s["fault"] for s in result["samples"]]
+    assert faults[10:12] == [FAULT_HELD, FAULT_HELD]
+    assert faults[50:56] == [FAULT_HELD] * 3 + [FAULT_SENSOR] * 3 and faults[56] == 0
+    assert all(s["residual_um"] is None for s in result["samples"][53:56])
+    assert result["samples"][80]["residual_um"] is None
+    assert result["scored_samples"] == len(frame) - 4
+    assert result["faults"] == {"held_samples": 5, "sensor_fault_samples": 3}
+    assert result["nonfinite_readings"] == 8
+
+
+def test_run_without_error_column_has_no_residual(tmp_path, model_path, capsys):
+    data = tmp_path / "no_error.csv"
+    pd.read_csv(SYNTHETIC).drop(columns="error_um").to_csv(data, index=False)
+    assert replay(model_path, "--data", data, "--json", "-") == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["rms_um"] is None and "residual_um" not in result["samples"][0]
+
+
+def test_other_sampling_period_is_refused_with_one_line(tmp_path, model_path, capsys):
+    frame = pd.read_csv(SYNTHETIC)
+    frame["time_s"] = frame["time_s"] * 0.6
+    data = tmp_path / "fast.csv"
+    frame.to_csv(data, index=False)
+    assert replay(model_path, "--data", data, "--json", tmp_path / "r.json", "--out", tmp_path / "fig") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fast.csv" in err[0] and "sampling period 60 s differs from the model's 100 s" in err[0]
+    assert not (tmp_path / "r.json").exists() and not (tmp_path / "fig").exists()
+
+
+def test_missing_temperature_column_is_refused(tmp_path, model_path, capsys):
+    data = tmp_path / "short.csv"
+    pd.read_csv(SYNTHETIC).drop(columns="T3").to_csv(data, index=False)
+    assert replay(model_path, "--data", data) == 2
+    assert "column 'T3' not found" in capsys.readouterr().err
+
+
+def test_missing_model_file_is_refused(tmp_path, capsys):
+    assert replay(tmp_path / "none.json", "--data", SYNTHETIC) == 2
+    assert "model file not found" in capsys.readouterr().err
+
+
+def test_compensation_in_controller_counts_when_asked(tmp_path, model_path):
+    assert replay(model_path, "--data", SYNTHETIC, "--resolution-um", "0.1", "--json", tmp_path / "r.json") == 0
+    samples = json.loads((tmp_path / "r.json").read_text())["samples"]
+    for s in samples[:50]:
+        magnitude = int(np.floor(abs(s["compensation_um"]) * 10 + 0.5))
+        assert s["compensation_counts"] == magnitude * np.sign(s["compensation_um"])
+
+
+def test_single_precision_replay(tmp_path, model_path):
+    assert replay(model_path, "--data", SYNTHETIC, "--precision", "single", "--json", tmp_path / "r.json") == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    predictions = [s["prediction_um"] for s in result["samples"]]
+    assert predictions == [float(np.float32(v)) for v in predictions]
+
+
+def test_other_duty_cycle_on_the_eight_sensor_model(tmp_path):
+    model, _ = eight_sensor_model()
+    save_model(model, tmp_path / "model.json")
+    run = eight_sensor_validation()
+    run.frame.to_csv(tmp_path / "other.csv", index=False)
+    assert replay(tmp_path / "model.json", "--data", tmp_path / "other.csv", "--json", tmp_path / "r.json") == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    assert [s["to"] for s in result["switches"]] == list(range(2, 8))
+    for s, (first, last) in zip(result["switches"], result["windows"]):
+        assert first <= s["i"] <= last
+    expected = SwitchingRule(model).replay(run.temps)
+    assert [s["group"] for s in result["samples"]] == expected.group.tolist()
+    assert result["rms_um"] is not None and result["faults"]["sensor_fault_samples"] == 0
+
+
+def test_fe_validation_runs_replay(tmp_path):
+    model, run = fe_model()
+    save_model(model, tmp_path / "model.json")
+    runs = fe_validation_runs(model)
+    if not runs:
+        pytest.skip("no FE validation data set in datasets/")
+    for validation in runs:
+        target = tmp_path / f"{validation.name}.json"
+        assert replay(tmp_path / "model.json", "--data", validation.source, "--json", target) == 0
+        result = json.loads(target.read_text())
+        assert len(result["samples"]) == validation.n_samples and result["rms_um"] > 0
+        assert [s["to"] for s in result["switches"]] == list(range(2, model["p"] + 2))

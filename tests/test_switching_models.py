@@ -1,0 +1,156 @@
+"""Models and input streams shared by the switching, replay and export tests.
+
+Importable from the other test modules (``from test_switching_models import …``);
+the tests at the bottom check the builders themselves.
+"""
+
+from __future__ import annotations
+
+import copy
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.data import Run, load_run
+from groupfit.modelfile import model_to_dict
+from groupfit.models import GroupedRegressor
+from groupfit.synthetic import simulate_lumped
+
+ROOT = Path(__file__).resolve().parents[1]
+DATASETS = ROOT / "datasets"
+SYNTHETIC = DATASETS / "synthetic_cycle.csv"
+FE_MODELLING = DATASETS / "paper_cycle.csv"
+FE_VALIDATION = (DATASETS / "validation_timing.csv", DATASETS / "validation_speed.csv")
+
+EIGHT_SENSORS = {
+    f"T{k + 1}": [tau, gain]
+    for k, (tau, gain) in enumerate(
+        [(300, 9.0), (500, 8.0), (900, 7.0), (1400, 6.0), (2200, 5.0), (3200, 4.5), (5000, 4.0), (7000, 3.5)]
+    )
+}
+
+
+def fit_model(run: Run, p: int, n: int = 3) -> dict:
+    estimator = GroupedRegressor(p=p, n=n, search="exact").fit(run.temps, run.error)
+    return model_to_dict(estimator, run)
+
+
+@lru_cache(maxsize=None)
+def _synthetic(p: int, n: int):
+    run = load_run(SYNTHETIC, temps=["T1", "T2", "T3", "T4"])
+    return fit_model(run, p, n), run
+
+
+def synthetic_model(p: int = 3, n: int = 3) -> tuple[dict, Run]:
+    """A grouped model fitted (exact search) on the shipped synthetic run, and that run."""
+    model, run = _synthetic(p, n)
+    return copy.deepcopy(model), run
+
+
+def lumped_frame(schedule=None, n_samples: int = 400, seed: int = 3) -> pd.DataFrame:
+    config = {"n_samples": n_samples, "sensors": EIGHT_SENSORS, "seed": seed}
+    if schedule is not None:
+        config["schedule"] = schedule
+    return simulate_lumped(config)
+
+
+@lru_cache(maxsize=None)
+def _eight():
+    run = load_run(lumped_frame(), temps=list(EIGHT_SENSORS), name="lumped8")
+    return fit_model(run, p=6), run
+
+
+def eight_sensor_model() -> tuple[dict, Run]:
+    """M = 8 temperatures, p = 6: the size the benchmark times."""
+    model, run = _eight()
+    return copy.deepcopy(model), run
+
+
+def eight_sensor_validation() -> Run:
+    """Another duty cycle on the same lumped machine (the model was not fitted on it)."""
+    schedule = [[2000, 1.0], [1500, 0.0], [6000, 1.0], [2500, 0.0], [3000, 0.7], [1000, 0.0], [30000, 1.0]]
+    return load_run(lumped_frame(schedule, seed=5), temps=list(EIGHT_SENSORS), name="lumped8-validation")
+
+
+@lru_cache(maxsize=None)
+def _fe():
+    run = load_run(FE_MODELLING)
+    return fit_model(run, p=4), run
+
+
+def fe_model() -> tuple[dict, Run]:
+    """Grouped model (p = 4) of the FE modelling run; skips when the data set is not there."""
+    if not FE_MODELLING.is_file():
+        pytest.skip(f"{FE_MODELLING.name} is not in datasets/")
+    model, run = _fe()
+    return copy.deepcopy(model), run
+
+
+def fe_validation_runs(model: dict) -> list[Run]:
+    return [load_run(path, temps=model["temps"]) for path in FE_VALIDATION if path.is_file()]
+
+
+def shifted(temps: np.ndarray, shift: int) -> np.ndarray:
+    """The same run recorded ``shift`` samples later (> 0: first row repeated in front) or earlier (< 0)."""
+    temps = np.asarray(temps, dtype=float)
+    if shift >= 0:
+        return np.vstack([np.repeat(temps[:1], shift, axis=0), temps])[: len(temps)]
+    return np.vstack([temps[-shift:], np.repeat(temps[-1:], -shift, axis=0)])
+
+
+def noisy(temps: np.ndarray, sigma: float = 0.05, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.asarray(temps, dtype=float) + sigma * rng.standard_normal(np.shape(temps))
+
+
+def fault_injected(temps: np.ndarray, hold: int, criterion: int, seed: int = 0) -> np.ndarray:
+    """Sensor faults of every kind: short NaN gaps (held), long ±inf runs (fault), huge, tiny, at the start."""
+    temps = np.array(temps, dtype=float)
+    n, k = temps.shape
+    rng = np.random.default_rng(seed)
+    temps[0, (criterion + 1) % k] = np.nan  # invalid before any good reading
+    temps[20 : 20 + hold, criterion] = np.nan  # held, criterion sensor
+    temps[40 : 40 + hold + 3, 0] = np.inf  # past K: sensor fault, then recovery
+    temps[70, k - 1] = -np.inf
+    temps[90, 1 % k] = 1e300
+    temps[91, 1 % k] = -1e300
+    temps[110, 0] = 1e-300  # finite but far below any valid range
+    temps[130 : 130 + 2 * hold + 2, criterion] = np.nan  # criterion in fault across later samples
+    for row in rng.choice(np.arange(150, n), size=min(12, max(n - 150, 0)), replace=False):
+        temps[row, rng.integers(k)] = rng.choice([np.nan, np.inf, -np.inf, 1e9, -273.0])
+    return temps
+
+
+def streams_for(model: dict, run: Run) -> dict[str, np.ndarray]:
+    """The replay streams every export is held to on one model."""
+    section = model["switching"]
+    n = int(model["n"])
+    return {
+        "modelling": run.temps,
+        "noise 0.05 C": noisy(run.temps, 0.05, seed=1),
+        f"late by {n}": shifted(run.temps, n),
+        f"early by {n}": shifted(run.temps, -n),
+        "faults": fault_injected(run.temps, section["hold_samples"], section["criterion_index"], seed=2),
+    }
+
+
+def test_eight_sensor_model_has_the_benchmark_size():
+    model, run = eight_sensor_model()
+    assert len(model["temps"]) == 8 and model["p"] == 6 and len(model["coefficients"]) == 7
+    assert run.n_samples == 400
+
+
+def test_shift_moves_rows_by_whole_samples():
+    temps = np.arange(12.0).reshape(6, 2)
+    assert np.array_equal(shifted(temps, 2)[2:], temps[:4]) and np.array_equal(shifted(temps, 2)[:2], temps[[0, 0]])
+    assert np.array_equal(shifted(temps, -2)[:4], temps[2:]) and np.array_equal(shifted(temps, -2)[4:], temps[[5, 5]])
+
+
+def test_fault_injection_covers_every_kind():
+    model, run = synthetic_model()
+    temps = fault_injected(run.temps, hold=3, criterion=0)
+    assert np.isnan(temps).any() and np.isposinf(temps).any() and np.isneginf(temps).any()
+    assert (np.abs(temps[np.isfinite(temps)]) > 1e6).any() and (np.abs(temps) < 1e-200).any()
