@@ -1,0 +1,111 @@
+"""``groupfit sweep``: run every combination of a study, locally or on a Dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from tqdm import tqdm
+
+from groupfit.commands.common import report_stream, write_json
+from groupfit.errors import InputError
+
+MAX_FAILURES_SHOWN = 5
+
+
+def add_parser(verbs) -> None:
+    sweep = verbs.add_parser("sweep", help="parameter sweep study on local processes or a Dask cluster")
+    sweep.add_argument("config", metavar="CONFIG", help="TOML sweep study (see docs/sweep.md)")
+    sweep.add_argument("--workers", type=int, metavar="K", help="local worker processes (default: all cores)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
+    sweep.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
+                       help="seconds to wait for the Dask scheduler (default 10)")
+    sweep.add_argument("--db", metavar="FILE", help="study database (SQLite; default [study] db or CONFIG-stem.sqlite)")
+    sweep.add_argument("--report", metavar="DIR", help="write a summary table and figures to DIR")
+    sweep.add_argument("--json", metavar="FILE", help="write counts and the database path as JSON ('-' for stdout)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(handler=run_sweep)
+
+
+def run_sweep(args: argparse.Namespace) -> int:
+    from groupfit.sweep.config import read_study
+    from groupfit.sweep.executors import DaskExecutor, LocalExecutor
+    from groupfit.sweep.store import StudyStore
+    from groupfit.sweep.study import run_study
+
+    study = read_study(args.config)
+    if not study.runs:
+        raise InputError(f"{args.config}: the study has no runs")
+    db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
+    report_dir = _report_dir(args.report)
+    if args.scheduler:
+        executor = DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
+    else:
+        executor = LocalExecutor(args.workers)
+    out = report_stream(args)
+    try:
+        with StudyStore(db) as store:
+            print(f"study {study.name} ({args.config}): {len(study.runs)} runs on {executor.describe()}", file=out,
+                  flush=True)
+            bar = tqdm(total=len(study.runs), desc="runs", unit="run", file=sys.stderr,
+                       disable=True if args.quiet else None)
+            try:
+                already = len(store.done_hashes(r.run_hash for r in study.runs))
+                bar.update(already)
+                outcome = run_study(study, store, executor, progress=bar.update)
+            finally:
+                bar.close()
+            written = []
+            if report_dir is not None:
+                from groupfit.sweep.report import write_report
+
+                rows = store.rows([r.run_hash for r in study.runs])
+                written = write_report(rows, report_dir, title=study.name)
+    finally:
+        executor.close()
+
+    print(
+        f"  done {outcome.done}, skipped {outcome.skipped} (done before), failed {outcome.failed}, "
+        f"in {outcome.seconds:.1f} s",
+        file=out,
+    )
+    print(f"  database {outcome.db}", file=out)
+    for run_hash, message in outcome.failures[:MAX_FAILURES_SHOWN]:
+        print(f"  failed {run_hash[:12]}: {message}", file=out)
+    if outcome.failed > MAX_FAILURES_SHOWN:
+        print(f"  … and {outcome.failed - MAX_FAILURES_SHOWN} more failed runs (status 'failed' in the database)",
+              file=out)
+    if written:
+        print("  report " + ", ".join(str(p) for p in written), file=out)
+    write_json(
+        args.json,
+        {
+            "db": str(outcome.db),
+            "study": study.name,
+            "config": str(args.config),
+            "executor": executor.name,
+            "total": outcome.total,
+            "done": outcome.done,
+            "skipped": outcome.skipped,
+            "failed": outcome.failed,
+            "seconds": outcome.seconds,
+            "failures": [{"run_hash": h, "error": m} for h, m in outcome.failures],
+            "report": [str(p) for p in written],
+        },
+    )
+    return 0
+
+
+def _report_dir(path: str | None) -> Path | None:
+    """The --report folder, created, or a clear error."""
+    if path is None:
+        return None
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--report {folder}: exists and is not a folder; choose another")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--report {folder}: cannot create the folder ({exc.strerror})") from None
+    return folder

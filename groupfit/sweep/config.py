@@ -1,0 +1,475 @@
+"""Read a sweep study (TOML) and expand it into one specification per run.
+
+A study file has up to four tables::
+
+    [study]
+    name = "paper-table-1"        # label stored with every run (default: file stem)
+    db = "paper_sweep.sqlite"     # study database, relative to this file (default:
+                                  #   <file stem>.sqlite in the working folder)
+    certify = "auto"              # GA runs also get the exact optimum: "auto" (when
+                                  #   cheap), true or false
+
+    [data]
+    paths = ["../datasets/synthetic_cycle.csv"]   # or path = "…"; relative to this file
+    time = "time_s"
+    error = "error_um"
+    temps = ["T1", "T2", "node_*"]   # candidate sensors: names or glob patterns
+                                     # (default: the columns named T<digit>…)
+
+    [grid]                        # one run per combination of these
+    p = {start = 0, stop = 4}     # a range (stop included, optional step) …
+    n = [3]                       # … a list …
+    c = 3.0                       # … or one value
+    objective = ["sae", "sse"]
+    intercept = [true]
+    search = ["exact", "ga"]
+    sensors = ["all", ["T1", "T2"], {select = "forward", k = 4}, {select = "lasso", k = 4}]
+
+    [ga]                          # settings of GA runs only (exact runs ignore them)
+    seed = {start = 0, stop = 9}
+    population_size = [60]
+    max_generations = [50, 300]
+    stall_generations = [30]
+    polish = [true]
+
+Every run is a plain, JSON-serialisable dictionary (:attr:`RunSpec.spec`) that
+holds everything its result depends on, including the SHA-256 of the data
+file's bytes; its hash (:attr:`RunSpec.run_hash`) identifies the run in the
+study database, so a changed data file is never mistaken for a run already
+done. Unknown tables or keys and values of the wrong type or range raise
+:class:`~groupfit.errors.InputError` naming the key.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import hashlib
+import itertools
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from groupfit.data import load_run
+from groupfit.errors import InputError
+from groupfit.objective import OBJECTIVES
+from groupfit.sweep.selection import SELECTION_DEFAULTS, SELECTION_METHODS
+
+SEARCHES = ("exact", "ga")
+TABLES = ("study", "data", "grid", "ga")
+STUDY_KEYS = ("name", "db", "certify")
+DATA_KEYS = ("path", "paths", "time", "error", "temps")
+GRID_DEFAULTS: dict[str, list[Any]] = {
+    "p": [3],
+    "n": [3],
+    "c": [3.0],
+    "objective": ["sae"],
+    "intercept": [True],
+    "search": ["exact"],
+    "sensors": ["all"],
+}
+GA_DEFAULTS: dict[str, list[Any]] = {
+    "seed": [0],
+    "population_size": [60],
+    "max_generations": [300],
+    "stall_generations": [30],
+    "polish": [True],
+}
+RANGE_KEYS = ("start", "stop", "step")
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """One data file of a study.
+
+    Attributes
+    ----------
+    name : str
+        The file stem.
+    path : Path
+        Absolute path.
+    sha256 : str
+        Hash of the file's bytes.
+    candidates : tuple of str
+        Candidate sensor columns, in file order.
+    n_samples : int
+    columns : tuple of str
+        Every column but time and error.
+    constant : frozenset of str
+        Columns with a single value (never picked by a pattern).
+    """
+
+    name: str
+    path: Path
+    sha256: str
+    candidates: tuple[str, ...]
+    n_samples: int
+    columns: tuple[str, ...] = field(repr=False, default=())
+    constant: frozenset[str] = field(repr=False, default=frozenset())
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a study.
+
+    Attributes
+    ----------
+    spec : dict
+        Everything the result depends on: ``data`` (sha256, time, error
+        columns), ``sensors`` (``{"names": […]}`` or a selection),
+        ``model`` (p, n, c, objective, intercept) and ``search`` (method and,
+        for the GA, its settings and seed).
+    path : str
+        The data file (not part of the hash: moving a file keeps its runs).
+    dataset : str
+        The data file's name, for tables.
+    run_hash : str
+        SHA-256 of the canonical JSON of ``spec``.
+    """
+
+    spec: dict
+    path: str
+    dataset: str
+    run_hash: str
+
+
+@dataclass
+class Study:
+    """A parsed study: its data sets and its runs, in grid order."""
+
+    name: str
+    source: Path
+    db: Path | None
+    datasets: list[Dataset]
+    runs: list[RunSpec]
+
+
+def canonical_json(obj: Any) -> str:
+    """JSON with sorted keys and no spaces: equal objects give equal text."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
+
+
+def spec_hash(spec: dict) -> str:
+    """The run's identity in the study database."""
+    return hashlib.sha256(canonical_json(spec).encode("ascii")).hexdigest()
+
+
+def file_sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def read_study(path: str | Path) -> Study:
+    """Read, check and expand a study file.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the key or value at fault.
+    """
+    path = Path(path)
+    label = str(path)
+    if not path.is_file():
+        raise InputError(f"{label}: sweep configuration not found")
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{label}: not valid TOML ({exc})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{label}: not a UTF-8 text file") from None
+    return study_from_dict(raw, path)
+
+
+def study_from_dict(raw: dict, path: Path) -> Study:
+    """Expand an already parsed study; relative paths are taken against ``path``'s folder."""
+    label = str(path)
+    base = path.resolve().parent
+    for table, values in raw.items():
+        if table not in TABLES:
+            raise InputError(f"{label}: unknown table [{table}]; the tables are {', '.join(TABLES)}")
+        if not isinstance(values, dict):
+            raise InputError(f"{label}: '{table}' must be a table ([{table}])")
+    study_table = _checked_table(raw, "study", STUDY_KEYS, label)
+    data_table = _checked_table(raw, "data", DATA_KEYS, label)
+    grid_table = _checked_table(raw, "grid", tuple(GRID_DEFAULTS), label)
+    ga_table = _checked_table(raw, "ga", tuple(GA_DEFAULTS), label)
+
+    name = _string(study_table.get("name", path.stem), "[study] name", label)
+    db = study_table.get("db")
+    db_path = (base / _string(db, "[study] db", label)).resolve() if db is not None else None
+    certify = study_table.get("certify", "auto")
+    if certify != "auto" and not isinstance(certify, bool):
+        raise InputError(f"{label}: [study] certify = {certify!r} must be \"auto\", true or false")
+
+    datasets = _datasets(data_table, base, label)
+    time_column = data_table.get("time", "time_s")
+    error_column = data_table.get("error", "error_um")
+    grid = {key: _dimension(grid_table, key, label, GRID_DEFAULTS[key]) for key in GRID_DEFAULTS}
+    ga = {key: _dimension(ga_table, key, label, GA_DEFAULTS[key]) for key in GA_DEFAULTS}
+
+    runs: list[RunSpec] = []
+    seen: set[str] = set()
+    for dataset in datasets:
+        data = {"sha256": dataset.sha256, "time": time_column, "error": error_column}
+        sensor_options = [_sensor_option(option, dataset, label) for option in grid["sensors"]]
+        for sensors, objective, intercept, n, c, p, search in itertools.product(
+            sensor_options, grid["objective"], grid["intercept"], grid["n"], grid["c"], grid["p"], grid["search"]
+        ):
+            model = {"p": p, "n": n, "c": float(c), "objective": objective, "intercept": intercept}
+            # with no break there is nothing to search: a GA run at p = 0 is the exact run
+            for search_spec in _search_specs("exact" if p == 0 else search, ga, certify):
+                spec = {"data": data, "sensors": sensors, "model": model, "search": search_spec}
+                run_hash = spec_hash(spec)
+                if run_hash in seen:
+                    continue
+                seen.add(run_hash)
+                runs.append(RunSpec(spec=json.loads(canonical_json(spec)), path=str(dataset.path),
+                                    dataset=dataset.name, run_hash=run_hash))
+    return Study(name=name, source=path, db=db_path, datasets=datasets, runs=runs)
+
+
+def _search_specs(method: str, ga: dict[str, list], certify) -> list[dict]:
+    if method == "exact":
+        return [{"method": "exact"}]
+    keys = ("population_size", "max_generations", "stall_generations", "polish", "seed")
+    return [
+        {"method": "ga", "certify": certify, **dict(zip(keys, values))}
+        for values in itertools.product(*(ga[key] for key in keys))
+    ]
+
+
+def _checked_table(raw: dict, table: str, keys: tuple[str, ...], label: str) -> dict:
+    values = raw.get(table, {})
+    for key in values:
+        if key not in keys:
+            raise InputError(f"{label}: unknown key '{key}' in [{table}]; known keys: {', '.join(keys)}")
+    return values
+
+
+def _string(value, what: str, label: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise InputError(f"{label}: {what} = {value!r} must be a non-empty string")
+    return value
+
+
+def _datasets(table: dict, base: Path, label: str) -> list[Dataset]:
+    if "path" in table and "paths" in table:
+        raise InputError(f"{label}: [data] has both 'path' and 'paths'; give one of them")
+    if "path" in table:
+        paths = [_string(table["path"], "[data] path", label)]
+    elif "paths" in table:
+        paths = table["paths"]
+        if not isinstance(paths, list) or not paths or not all(isinstance(p, str) and p for p in paths):
+            raise InputError(f"{label}: [data] paths must be a non-empty list of file names")
+    else:
+        raise InputError(f"{label}: no data: set [data] path = \"run.csv\" or paths = [\"a.csv\", \"b.csv\"]")
+    time_column = _string(table.get("time", "time_s"), "[data] time", label)
+    error_column = _string(table.get("error", "error_um"), "[data] error", label)
+    patterns = table.get("temps")
+    datasets = []
+    for entry in paths:
+        file = (base / entry).resolve()
+        if not file.is_file():
+            raise InputError(f"{label}: [data] data file {entry!r} not found (looked for {file})")
+        run = load_run(file, temps=[], time=time_column, error=error_column)
+        usable = tuple(c for c in run.frame.columns if c not in (time_column, error_column))
+        where = f"{label}: {file.name}"
+        constant = frozenset(_constant_columns(run.frame, usable))
+        candidates = _candidates(patterns, usable, constant, where)
+        load_run(file, temps=candidates, time=time_column, error=error_column)
+        datasets.append(Dataset(name=file.stem, path=file, sha256=file_sha256(file), candidates=tuple(candidates),
+                                n_samples=run.n_samples, columns=usable, constant=constant))
+    names = [d.name for d in datasets]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise InputError(f"{label}: [data] two data files are named '{duplicates[0]}'; rename one")
+    return datasets
+
+
+def _constant_columns(frame, columns) -> set[str]:
+    """Columns with a single value over the run (dead sensors, fixed settings)."""
+    constant = set()
+    for column in columns:
+        values = frame[column]
+        if values.nunique(dropna=True) <= 1:
+            constant.add(column)
+    return constant
+
+
+def _candidates(patterns, usable, constant, label) -> list[str]:
+    """Candidate sensor columns, in file order.
+
+    Explicit names must exist; glob patterns (``*``, ``?``, ``[…]``) and the
+    default (columns named ``T<digit>…``) leave out constant columns.
+    """
+    if patterns is None:
+        found = [c for c in usable if len(c) > 1 and c[0] in "Tt" and c[1].isdigit() and c not in constant]
+        if not found:
+            raise InputError(f"{label}: no temperature columns found; list them in [data] temps")
+        return found
+    if not isinstance(patterns, list) or not patterns or not all(isinstance(t, str) and t for t in patterns):
+        raise InputError(f"{label}: candidate sensors must be a non-empty list of column names or patterns")
+    chosen: set[str] = set()
+    for pattern in patterns:
+        if any(ch in pattern for ch in "*?["):
+            matches = [c for c in usable if fnmatch.fnmatchcase(c, pattern) and c not in constant]
+            if not matches:
+                raise InputError(f"{label}: sensor pattern {pattern!r} matches no (non-constant) column")
+        elif pattern in usable:
+            matches = [pattern]
+        else:
+            raise InputError(f"{label}: column '{pattern}' not found; the columns are {', '.join(usable)}")
+        chosen.update(matches)
+    return [c for c in usable if c in chosen]
+
+
+def _dimension(table: dict, key: str, label: str, default: list) -> list:
+    """The values of one sweep dimension: a list, a range table or a single value."""
+    what = f"[{'ga' if key in GA_DEFAULTS else 'grid'}] {key}"
+    if key not in table:
+        return list(default)
+    raw = table[key]
+    if key == "sensors":
+        options = raw if isinstance(raw, list) and not _is_name_list(raw) else [raw]
+        if isinstance(raw, list) and not raw:
+            raise InputError(f"{label}: {what} is empty; give at least one value")
+        return options
+    if isinstance(raw, dict):
+        values = _expand_range(raw, what, label)
+    elif isinstance(raw, list):
+        values = raw
+    else:
+        values = [raw]
+    if not values:
+        raise InputError(f"{label}: {what} is empty; give at least one value")
+    check = VALUE_CHECKS[key]
+    checked = [check(v, f"{what} value {v!r}", label) for v in values]
+    unique = []
+    for v in checked:
+        if v not in unique:
+            unique.append(v)
+    return unique
+
+
+def _is_name_list(raw: list) -> bool:
+    """``sensors = ["T1", "T2"]`` is one subset, unless its strings are options such as "all"."""
+    return bool(raw) and all(isinstance(v, str) for v in raw) and "all" not in raw
+
+
+def _expand_range(raw: dict, what: str, label: str) -> list:
+    for key in raw:
+        if key not in RANGE_KEYS:
+            raise InputError(f"{label}: {what}: unknown key '{key}' in a range; use start, stop and step")
+    if "start" not in raw or "stop" not in raw:
+        raise InputError(f"{label}: {what}: a range needs start and stop (stop is included)")
+    start, stop, step = raw["start"], raw["stop"], raw.get("step", 1)
+    for name, value in (("start", start), ("stop", stop), ("step", step)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise InputError(f"{label}: {what}: range {name} = {value!r} must be a number")
+    if step <= 0:
+        raise InputError(f"{label}: {what}: range step = {step!r} must be positive")
+    if stop < start:
+        raise InputError(f"{label}: {what}: range stop = {stop!r} is below start = {start!r}")
+    count = int(math.floor((stop - start) / step + 1e-9)) + 1
+    if all(isinstance(v, int) for v in (start, stop, step)):
+        return [start + i * step for i in range(count)]
+    return [round(start + i * step, 12) for i in range(count)]
+
+
+def _integer(minimum: int) -> Callable:
+    def check(value, what: str, label: str) -> int:
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise InputError(f"{label}: {what} must be a whole number ≥ {minimum}")
+        return value
+
+    return check
+
+
+def _number(value, what: str, label: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+        raise InputError(f"{label}: {what} must be a finite number ≥ 0")
+    return float(value)
+
+
+def _choice(choices: tuple[str, ...]) -> Callable:
+    def check(value, what: str, label: str) -> str:
+        if value not in choices:
+            raise InputError(f"{label}: {what}: choose one of {', '.join(choices)}")
+        return value
+
+    return check
+
+
+def _boolean(value, what: str, label: str) -> bool:
+    if not isinstance(value, bool):
+        raise InputError(f"{label}: {what} must be true or false")
+    return value
+
+
+VALUE_CHECKS: dict[str, Callable] = {
+    "p": _integer(0),
+    "n": _integer(0),
+    "c": _number,
+    "objective": _choice(OBJECTIVES),
+    "intercept": _boolean,
+    "search": _choice(SEARCHES),
+    "seed": _integer(0),
+    "population_size": _integer(2),
+    "max_generations": _integer(1),
+    "stall_generations": _integer(1),
+    "polish": _boolean,
+}
+
+
+def _sensor_option(option, dataset: Dataset, label: str) -> dict:
+    """One value of the sensors dimension, resolved for one data set."""
+    where = f"{label}: [grid] sensors"
+    if option == "all":
+        return {"names": list(dataset.candidates)}
+    if isinstance(option, list):
+        if not option or not all(isinstance(v, str) and v for v in option):
+            raise InputError(f"{where}: {option!r} must be a non-empty list of column names")
+        if len(set(option)) != len(option):
+            raise InputError(f"{where}: {option!r} names a column twice")
+        for name in option:
+            if name not in dataset.columns:
+                raise InputError(f"{where}: column '{name}' is not in {dataset.path.name}")
+        return {"names": list(option)}
+    if isinstance(option, dict):
+        return _selection_option(option, dataset, where)
+    raise InputError(
+        f"{where}: {option!r}: give \"all\", a list of column names such as [\"T1\", \"T2\"], "
+        "or a selection such as {select = \"forward\", k = 4}"
+    )
+
+
+def _selection_option(option: dict, dataset: Dataset, where: str) -> dict:
+    known = ("select", "k", "candidates", *SELECTION_DEFAULTS)
+    for key in option:
+        if key not in known:
+            raise InputError(f"{where}: unknown key '{key}' in a selection; known keys: {', '.join(known)}")
+    method = option.get("select")
+    if method not in SELECTION_METHODS:
+        raise InputError(f"{where}: select = {method!r}: choose one of {', '.join(SELECTION_METHODS)}")
+    k = option.get("k")
+    if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+        raise InputError(f"{where}: k = {k!r} must be a whole number ≥ 1 (sensors to pick)")
+    candidates = list(dataset.candidates)
+    if "candidates" in option:
+        candidates = _candidates(option["candidates"], dataset.columns, dataset.constant, where)
+    if k > len(candidates):
+        raise InputError(f"{where}: k = {k} but {dataset.path.name} has only {len(candidates)} candidate sensors")
+    selection = {"select": method, "k": k, "candidates": candidates}
+    for key, default in SELECTION_DEFAULTS.items():
+        value = option.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, type(default)):
+            raise InputError(f"{where}: {key} = {value!r} must be a {type(default).__name__}")
+        selection[key] = value
+    return selection

@@ -1,0 +1,201 @@
+"""Pick k sensors out of many candidate temperature columns.
+
+An FE model can write a temperature at every node, and a machine may carry
+more sensors than a compensation model should use. Three ways to choose k:
+
+``cluster``
+    Hierarchical clustering of the candidates on the distance ``1 − |r|``
+    (r the correlation between two columns; average linkage) into k
+    clusters; from each the member most correlated with the error.
+``forward``
+    Candidates correlated more than ``cluster_corr`` are merged into one
+    cluster first (they carry the same information), and one representative
+    of each is kept. Then forward selection: add, one at a time, the
+    representative that most lowers the cross-validated squared error of a
+    linear model, with folds in time order (each fold is predicted from the
+    samples before it, as in service).
+``lasso``
+    LassoCV on the standardised candidates (the same time-ordered folds);
+    the k largest coefficients at the chosen penalty, topped up, if fewer are
+    non-zero, in the order columns enter the lasso path.
+
+Every method is deterministic.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Sequence
+
+import numpy as np
+
+from groupfit.errors import InputError
+
+SELECTION_METHODS = ("forward", "lasso", "cluster")
+SELECTION_DEFAULTS = {"folds": 5, "cluster_corr": 0.98}
+"""Settings a selection may give: time-ordered CV folds; correlation above which ``forward`` merges columns."""
+
+
+def select_sensors(
+    X: np.ndarray,
+    y: np.ndarray,
+    names: Sequence[str],
+    method: str,
+    k: int,
+    *,
+    folds: int = 5,
+    cluster_corr: float = 0.98,
+) -> list[str]:
+    """Names of the k chosen columns of ``X``, best first.
+
+    Parameters
+    ----------
+    X : ndarray, shape (N, m)
+        Candidate temperatures in time order.
+    y : ndarray, shape (N,)
+        Thermal error.
+    names : sequence of str
+        Column names of X.
+    method : {"forward", "lasso", "cluster"}
+    k : int
+        Sensors to pick (1 ≤ k ≤ m).
+    folds : int
+        Time-ordered cross-validation folds (``forward`` and ``lasso``).
+    cluster_corr : float
+        ``forward`` treats columns correlated more than this as one.
+    """
+    X = np.asarray(X, dtype=float)
+    y = np.asarray(y, dtype=float).ravel()
+    names = list(names)
+    if X.ndim != 2 or X.shape[1] != len(names):
+        raise ValueError("X must be 2-D with one column per name")
+    if not 1 <= k <= len(names):
+        raise InputError(f"cannot pick k = {k} sensors out of {len(names)} candidates")
+    if method == "cluster":
+        chosen = cluster_selection(X, y, k)
+    elif method == "forward":
+        chosen = forward_selection(X, y, k, folds=folds, cluster_corr=cluster_corr)
+    elif method == "lasso":
+        chosen = lasso_selection(X, y, k, folds=folds)
+    else:
+        raise InputError(f"sensor selection {method!r}: choose one of {', '.join(SELECTION_METHODS)}")
+    return [names[i] for i in chosen]
+
+
+def correlation_distance(X: np.ndarray) -> np.ndarray:
+    """``1 − |r|`` between every pair of columns, a condensed distance vector."""
+    from scipy.spatial.distance import squareform
+
+    if X.shape[1] == 1:
+        return np.empty(0)
+    corr = np.corrcoef(X, rowvar=False)
+    distance = np.clip(1.0 - np.abs(corr), 0.0, None)
+    np.fill_diagonal(distance, 0.0)
+    return squareform((distance + distance.T) / 2, checks=False)
+
+
+def correlation_clusters(X: np.ndarray, *, n_clusters: int | None = None, min_corr: float | None = None) -> np.ndarray:
+    """Cluster label (1…) of each column: into ``n_clusters``, or merging above ``min_corr``."""
+    from scipy.cluster.hierarchy import fcluster, linkage
+
+    if X.shape[1] == 1:
+        return np.ones(1, dtype=int)
+    tree = linkage(correlation_distance(X), method="average")
+    if n_clusters is not None:
+        return fcluster(tree, t=n_clusters, criterion="maxclust")
+    return fcluster(tree, t=1.0 - float(min_corr), criterion="distance")
+
+
+def target_correlation(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """|r| between each column and the target (0 for a constant column)."""
+    Xc = X - X.mean(axis=0)
+    yc = y - y.mean()
+    norms = np.linalg.norm(Xc, axis=0) * np.linalg.norm(yc)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = np.abs(Xc.T @ yc) / norms
+    return np.where(norms > 0, r, 0.0)
+
+
+def cluster_representatives(X: np.ndarray, y: np.ndarray, labels: np.ndarray) -> list[int]:
+    """The column of each cluster most correlated with y, the strongest cluster first."""
+    strength = target_correlation(X, y)
+    best = {}
+    for column, label in enumerate(labels):
+        if label not in best or strength[column] > strength[best[label]]:
+            best[label] = column
+    return sorted(best.values(), key=lambda c: (-strength[c], c))
+
+
+def cluster_selection(X: np.ndarray, y: np.ndarray, k: int) -> list[int]:
+    """One column from each of k correlation clusters."""
+    chosen = cluster_representatives(X, y, correlation_clusters(X, n_clusters=k))[:k]
+    if len(chosen) < k:  # fewer clusters than asked (identical columns): top up by correlation
+        strength = target_correlation(X, y)
+        rest = [c for c in np.argsort(-strength, kind="stable") if c not in chosen]
+        chosen += [int(c) for c in rest[: k - len(chosen)]]
+    return chosen
+
+
+def time_series_folds(n_samples: int, folds: int):
+    """(train, test) index pairs, each test block after its training samples."""
+    from sklearn.model_selection import TimeSeriesSplit
+
+    folds = max(2, min(int(folds), n_samples // 4))
+    return list(TimeSeriesSplit(n_splits=folds).split(np.arange(n_samples)))
+
+
+def cv_error(X: np.ndarray, y: np.ndarray, splits) -> float:
+    """Mean squared error of a linear model with intercept over time-ordered test folds."""
+    A = np.column_stack([np.ones(len(X)), X])
+    squared, count = 0.0, 0
+    for train, test in splits:
+        coef, *_ = np.linalg.lstsq(A[train], y[train], rcond=None)
+        residual = y[test] - A[test] @ coef
+        squared += float(residual @ residual)
+        count += len(test)
+    return squared / count
+
+
+def forward_selection(
+    X: np.ndarray, y: np.ndarray, k: int, *, folds: int = 5, cluster_corr: float = 0.98
+) -> list[int]:
+    """Greedy forward selection on cluster representatives by time-ordered CV error."""
+    pool = cluster_representatives(X, y, correlation_clusters(X, min_corr=cluster_corr))
+    if len(pool) < k:
+        pool += [c for c in range(X.shape[1]) if c not in pool]
+    splits = time_series_folds(len(y), folds)
+    chosen: list[int] = []
+    while len(chosen) < k:
+        errors = [cv_error(X[:, chosen + [c]], y, splits) for c in pool]
+        best = pool[int(np.argmin(errors))]
+        chosen.append(best)
+        pool.remove(best)
+    return chosen
+
+
+def lasso_selection(X: np.ndarray, y: np.ndarray, k: int, *, folds: int = 5) -> list[int]:
+    """The k largest LassoCV coefficients (standardised columns), topped up by path entry order."""
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LassoCV, lasso_path
+
+    spread = X.std(axis=0)
+    Z = (X - X.mean(axis=0)) / np.where(spread > 0, spread, 1.0)
+    target = (y - y.mean()) / (y.std() or 1.0)
+    splits = time_series_folds(len(y), folds)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        lasso = LassoCV(cv=splits, max_iter=20_000, random_state=0).fit(Z, target)
+        magnitude = np.abs(lasso.coef_)
+        ranked = [int(c) for c in np.argsort(-magnitude, kind="stable") if magnitude[c] > 0]
+        if len(ranked) >= k:
+            return ranked[:k]
+        alphas, path, _ = lasso_path(Z, target, alphas=lasso.alphas_, max_iter=20_000)
+    order = np.argsort(-alphas, kind="stable")
+    active = np.abs(path[:, order]) > 0
+    entry = np.where(active.any(axis=1), active.argmax(axis=1), active.shape[1])
+    for c in np.lexsort((np.arange(len(entry)), entry)):
+        if len(ranked) == k:
+            break
+        if int(c) not in ranked:
+            ranked.append(int(c))
+    return ranked
