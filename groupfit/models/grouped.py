@@ -48,6 +48,11 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         GA settings (see :class:`groupfit.search.ga.GeneticSearch`).
     polish : bool
         Finish the GA with a local search.
+    local_window : int
+        GA: each child's best single-break shift within ± this many samples
+        (0: off).
+    union_crossover : bool
+        GA: also mate by drawing breaks from the union of the parents' breaks.
     certify : {"auto", True, False}
         Also run the exact search after the GA and report the gap; "auto"
         does so when it is cheap.
@@ -96,6 +101,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         max_generations: int = 300,
         stall_generations: int = 30,
         polish: bool = True,
+        local_window: int = 5,
+        union_crossover: bool = True,
         certify="auto",
         random_state: int | None = None,
         fixed_breaks: list[int] | None = None,
@@ -110,6 +117,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.max_generations = max_generations
         self.stall_generations = stall_generations
         self.polish = polish
+        self.local_window = local_window
+        self.union_crossover = union_crossover
         self.certify = certify
         self.random_state = random_state
         self.fixed_breaks = fixed_breaks
@@ -158,6 +167,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
                 stall_generations=self.stall_generations,
                 polish=self.polish,
                 seed=self.random_state,
+                local_window=self.local_window,
+                union_crossover=self.union_crossover,
             )
             reporter = None
             if progress is not None:
