@@ -15,7 +15,7 @@ from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.grouping import hard_groups, soft_groups
 from groupfit.models.grouped import GroupedRegressor
-from groupfit.switching import rule_parameters, rule_section_problem
+from groupfit.switching import SOURCE_RANGES_KEY, rule_parameters, rule_section_problem, source_ranges
 
 FORMAT = "groupfit-model/1"
 REQUIRED = (
@@ -99,6 +99,7 @@ def model_to_dict(model: GroupedRegressor, run: Run, criterion: str | None = Non
                 run.temps,
                 criterion_index=column,
             ),
+            SOURCE_RANGES_KEY: source_ranges(run.frame, exclude=(run.time_name, run.error_name)),
         },
         "training": {"run": run.name, **metrics},
     }

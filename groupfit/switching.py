@@ -12,8 +12,14 @@ their decisions are identical sample for sample.
 The rule, per sample (``docs/switching.md`` has the full account)
 -----------------------------------------------------------------
 State: current group ``g`` (1-based, starts at 1), sample count ``i``, the last
-good reading of every sensor and how many samples ago it was good, and the
+good reading of every sensor and how many samples ago it was good, the state
+of every derived input (low-pass output, previous value, delay line), and the
 compensation value last handed to the controller.
+
+The rule's *readings* (its raw inputs) are the model's measured inputs (the
+``temps`` that are not derived), then the source columns of its derived
+inputs (``derived_inputs``, :mod:`groupfit.features`) that are not among
+them, in order of first appearance in ``temps``.
 
 1. ``i ← i + 1`` (saturating at :data:`COUNT_MAX`).
 2. Every reading is *valid* when ``temp_min_c ≤ x ≤ temp_max_c`` (NaN and
@@ -22,6 +28,13 @@ compensation value last handed to the controller.
    bad samples in a row are *held* (fault bit 1, the output stays valid);
    more, or a bad reading before any good one, is a *sensor fault*
    (fault bit 2).
+   Every derived input is then computed from the last good value of its
+   source, with its own state, exactly as :class:`groupfit.features.Feature`
+   defines it: ``identity``; ``lowpass`` ``y = b·x + a·y`` (``a = e^{−Δt/τ}``,
+   ``b = 1 − a``, the state starts at the source's first good reading);
+   ``derivative`` ``(x − x_prev)·3600/Δt`` (0 at the first good reading);
+   ``delay`` ``x`` of ``d`` samples before (the first good reading before
+   that). A held source feeds its transform as if it were the reading.
 3. Switching from group g to g+1 (only while g < G) is possible only inside
    window g, ``first ≤ i ≤ last``: the ``n`` samples that soft groups g and
    g+1 share (the window's first sample is the one from which the offline
@@ -33,9 +46,9 @@ compensation value last handed to the controller.
    margin has direction 0 and switches at its first sample, as does any
    window while the criterion sensor is in sensor fault. One group per
    sample at most, never backwards.
-4. Prediction ``ŷ = c₀ + Σ c_m·x_m`` of the current group with the held
-   readings, accumulated in sensor order; under a sensor fault ``ŷ = 0``
-   (the safe output: no compensation).
+4. Prediction ``ŷ = c₀ + Σ c_m·x_m`` of the current group with the model's
+   inputs (held readings and derived inputs), accumulated in input order;
+   under a sensor fault ``ŷ = 0`` (the safe output: no compensation).
 5. Compensation: target ``−ŷ`` (0 under a sensor fault) clamped to
    ``[comp_min_um, comp_max_um]``, then moved from its previous value by at
    most ``rate_limit_um`` per sample. It starts at 0.
@@ -55,6 +68,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.features import Feature
 from groupfit.grouping import serving_group_index
 
 RULE_FORMAT = "groupfit-switch/1"
@@ -137,6 +151,15 @@ LEGACY_TEMP_RANGE_C = (-50.0, 200.0)
 """Valid range for sensors whose modelling range is unknown (model files without the rule keys)."""
 LEGACY_COMP_LIMIT_UM = 1000.0
 """Clamp and rate limit used when the modelling run's predictions are unknown."""
+LEGACY_SOURCE_RANGE = (-1.0e9, 1.0e9)
+"""Valid range of a source column whose modelling range the model file does not hold (any sane number)."""
+
+SOURCE_RANGES_KEY = "source_ranges"
+"""Key of the switching section holding the valid range of every other column of the modelling run."""
+MAX_DELAY_SAMPLES = 32767
+"""Longest delay line of a derived input (its position is a PLC INT)."""
+DERIVATIVE_SCALE_S = 3600.0
+"""A derivative is per hour: ``(x[k] − x[k−1])·3600/Δt``."""
 
 
 def switch_windows(breaks: Sequence[int], n: int) -> list[list[int]]:
@@ -279,6 +302,105 @@ def rule_parameters(
     }
 
 
+def source_valid_range(values) -> tuple[float, float] | None:
+    """Valid range of a column that may feed a derived input, from its modelling values.
+
+    Temperatures that are model inputs get ``±range_margin_c`` (°C); any
+    other column (an ambient temperature, a spindle speed in r/min, an on/off
+    signal) is judged on its own scale:
+
+    * a column whose modelling values are all 0 or 1 is an on/off signal:
+      valid exactly within ``[0, 1]``;
+    * any other column: its modelling range ``[lo, hi]`` widened on each
+      side by the larger of its span ``hi − lo`` and half its largest
+      magnitude ``max(|lo|, |hi|)/2`` (at least 1 unit), not below 0 when the
+      modelling run never went below 0, rounded outward to whole units (and
+      to a number exact in single precision). A speed run at 0 and 2000
+      r/min is valid within 0…4000 r/min; an ambient temperature of
+      19.5…23.8 °C within 7…36 °C.
+
+    Returns None for a column without a finite value.
+    """
+    array = np.asarray(values, dtype=float)
+    array = array[np.isfinite(array)]
+    if array.size == 0:
+        return None
+    low, high = float(array.min()), float(array.max())
+    if np.all((array == 0.0) | (array == 1.0)):
+        return 0.0, 1.0
+    largest = float(np.finfo(np.float32).max)
+    with np.errstate(over="ignore", invalid="ignore"):
+        margin = max(high - low, max(abs(low), abs(high)) / 2.0, 1.0)
+        bottom = float(np.floor(low - margin))
+        top = float(np.ceil(high + margin))
+    if low >= 0.0:
+        bottom = max(bottom, 0.0)
+    return _single_outward(min(max(bottom, -largest), largest), min(max(top, -largest), largest))
+
+
+def _single_outward(low: float, high: float) -> tuple[float, float]:
+    """``[low, high]`` widened to the nearest numbers that single precision holds exactly."""
+    low32, high32 = np.float32(low), np.float32(high)
+    if float(low32) > low:
+        low32 = np.nextafter(low32, np.float32(-np.inf))
+    if float(high32) < high:
+        high32 = np.nextafter(high32, np.float32(np.inf))
+    return float(low32), float(high32)
+
+
+def source_ranges(frame, exclude: Sequence[str | None] = ()) -> dict[str, list[float]]:
+    """Valid range (:func:`source_valid_range`) of every numeric column of a modelling run.
+
+    Stored in a model file's switching section (:data:`SOURCE_RANGES_KEY`):
+    a derived input added later (``groupfit diagnose``) may take any of these
+    columns as its source, and the rule needs its valid range.
+    """
+    import pandas as pd
+
+    ranges = {}
+    for column in frame.columns:
+        if column in exclude:
+            continue
+        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+        valid = source_valid_range(values)
+        if valid is not None:
+            ranges[str(column)] = [valid[0], valid[1]]
+    return ranges
+
+
+def derived_input_features(model: dict[str, Any]) -> dict[str, Feature]:
+    """The derived inputs the model uses, by input name (as :mod:`groupfit.diagnose.residual` finds them).
+
+    Raises InputError for an entry that does not describe a transform of
+    :mod:`groupfit.features`, whose ``name`` does not match its transform, or
+    whose delay is longer than :data:`MAX_DELAY_SAMPLES`.
+    """
+    entries = model.get("derived_inputs", [])
+    if not isinstance(entries, list):
+        raise InputError("'derived_inputs' must be a list")
+    features = {}
+    for k, entry in enumerate(entries):
+        where = f"derived_inputs[{k}]"
+        if not isinstance(entry, dict) or not isinstance(entry.get("column"), str):
+            raise InputError(f"{where} must be an object with a 'column' name")
+        tau = entry.get("tau_s")
+        if tau is not None and not _is_number(tau):
+            raise InputError(f"{where}: tau_s must be a finite number")
+        delay = entry.get("delay_samples", 0)
+        if not isinstance(delay, int) or isinstance(delay, bool):
+            raise InputError(f"{where}: delay_samples must be a whole number")
+        try:
+            feature = Feature.from_dict(entry)
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+        if "name" in entry and entry["name"] != feature.name:
+            raise InputError(f"{where}: name '{entry['name']}' does not match its transform ('{feature.name}')")
+        if feature.transform == "delay" and feature.delay_samples > MAX_DELAY_SAMPLES:
+            raise InputError(f"{where}: delay of {feature.delay_samples} samples; at most {MAX_DELAY_SAMPLES}")
+        features[feature.name] = feature
+    return {name: features[name] for name in model.get("temps", []) if name in features}
+
+
 def rule_section_problem(model: dict[str, Any]) -> str | None:
     """What is wrong with a model file's switching section, or None.
 
@@ -324,6 +446,22 @@ def rule_section_problem(model: dict[str, Any]) -> str | None:
     if "temp_min_c" in section and "temp_max_c" in section:
         if any(lo > hi for lo, hi in zip(section["temp_min_c"], section["temp_max_c"])):
             return "switching.temp_min_c must not exceed temp_max_c"
+    if SOURCE_RANGES_KEY in section:
+        ranges = section[SOURCE_RANGES_KEY]
+        if not isinstance(ranges, dict):
+            return f"switching.{SOURCE_RANGES_KEY} must be an object: column -> [min, max]"
+        for column, pair in ranges.items():
+            if not (isinstance(pair, list) and len(pair) == 2 and all(_is_number(v) for v in pair)
+                    and pair[0] <= pair[1]):
+                return f"switching.{SOURCE_RANGES_KEY}['{column}'] must be [min, max] with min <= max"
+    try:
+        derived = derived_input_features(model)
+    except InputError as exc:
+        return str(exc)
+    temps = model.get("temps", [])
+    if 0 <= index < n_temps and temps[index] in derived:
+        return (f"switching.criterion_index names the derived input '{temps[index]}'; "
+                "the switching criterion must be a measured input")
     return None
 
 
@@ -349,28 +487,93 @@ def complete_rule_section(model: dict[str, Any]) -> dict[str, Any]:
 
 
 @dataclass(frozen=True)
+class DerivedTable:
+    """One derived input as the run-time rule computes it.
+
+    Attributes
+    ----------
+    name, column, transform : str
+        As in the model file's ``derived_inputs`` (:class:`groupfit.features.Feature`).
+    reading : int
+        0-based index of the source column among the rule's readings.
+    input_index : int
+        0-based index of the derived input among the model's inputs.
+    tau_s : float or None
+        Low-pass time constant (s).
+    delay_samples : int
+        Length of a delay line (samples); 0 for the other transforms.
+    a, b : float
+        Low-pass coefficients ``a = e^{−Δt/τ}`` (computed as
+        :func:`groupfit.features.lowpass` does) and ``b = 1 − a``; 0 otherwise.
+    scale : float
+        Derivative factor ``3600/Δt`` (per hour); 0 otherwise.
+    """
+
+    name: str
+    column: str
+    transform: str
+    reading: int
+    input_index: int
+    tau_s: float | None
+    delay_samples: int
+    a: float
+    b: float
+    scale: float
+
+    def describe(self) -> str:
+        """Words for headers and sheets, ASCII only."""
+        if self.transform == "lowpass":
+            return f"low-pass of {self.column}, tau = {self.tau_s:g} s"
+        if self.transform == "derivative":
+            return f"time derivative of {self.column}, per hour"
+        if self.transform == "delay":
+            return f"{self.column} delayed by {self.delay_samples} sample(s)"
+        return f"{self.column} as read"
+
+
+@dataclass(frozen=True)
 class RuleTables:
     """Every number the run-time rule uses, in the form every target embeds.
 
     Built once from a model file object; the Python rule and every export
     read these same tables.
+
+    The rule's *readings* (``raw_names``) are what a caller passes per
+    sample: the model's measured inputs in model order, then the source
+    columns of its derived inputs that are not among them. The model's
+    *inputs* (``input_names``, one coefficient each) are those readings and
+    the derived inputs computed from them.
     """
 
-    temp_names: tuple[str, ...]
+    raw_names: tuple[str, ...]
+    """The readings, in the order the rule takes them."""
+    input_names: tuple[str, ...]
+    """The model's inputs (``temps`` of the model file), in coefficient order."""
+    input_reading: tuple[int, ...]
+    """Per model input: the 0-based reading it is, or −1 for a derived input."""
+    input_derived: tuple[int, ...]
+    """Per model input: the 0-based derived input it is, or −1 for a measured one."""
+    derived: tuple[DerivedTable, ...]
     criterion: str
     criterion_index: int
+    """0-based model input of the criterion (always a measured input)."""
+    criterion_reading: int
+    """0-based reading of the criterion."""
     sampling_period_s: float
     period_tolerance: float
     coefficients: np.ndarray = field(repr=False)
-    """(G, M+1): constant first, then one coefficient per temperature."""
+    """(G, M+1): constant first, then one coefficient per model input."""
     window_first: tuple[int, ...]
     window_last: tuple[int, ...]
     directions: tuple[int, ...]
     thresholds_c: tuple[float, ...]
     margin_c: float
     hold_samples: int
-    temp_min_c: tuple[float, ...]
-    temp_max_c: tuple[float, ...]
+    valid_min: tuple[float, ...]
+    """Per reading: the smallest valid value (°C for temperatures, the column's unit for sources)."""
+    valid_max: tuple[float, ...]
+    valid_origin: tuple[str, ...]
+    """Per reading: where its range comes from: ``"temperature"``, ``"source"`` or ``"fallback"``."""
     comp_min_um: float
     comp_max_um: float
     rate_limit_um: float
@@ -383,11 +586,64 @@ class RuleTables:
         section = complete_rule_section(model)
         coefficients = coefficient_matrix(model)
         windows = section["windows"]
+        input_names = tuple(model["temps"])
+        features = derived_input_features(model)
+        measured = [name for name in input_names if name not in features]
+        raw = list(measured)
+        for name in input_names:
+            if name in features and features[name].column not in raw:
+                raw.append(features[name].column)
+        period = float(model["sampling_period_s"])
+        derived = []
+        for name in input_names:
+            if name not in features:
+                continue
+            feature = features[name]
+            a = float(np.exp(-period / feature.tau_s)) if feature.transform == "lowpass" else 0.0
+            derived.append(
+                DerivedTable(
+                    name=name,
+                    column=feature.column,
+                    transform=feature.transform,
+                    reading=raw.index(feature.column),
+                    input_index=input_names.index(name),
+                    tau_s=float(feature.tau_s) if feature.transform == "lowpass" else None,
+                    delay_samples=int(feature.delay_samples) if feature.transform == "delay" else 0,
+                    a=a,
+                    b=float(1.0 - a) if feature.transform == "lowpass" else 0.0,
+                    scale=DERIVATIVE_SCALE_S / period if feature.transform == "derivative" else 0.0,
+                )
+            )
+        derived_index = {d.name: k for k, d in enumerate(derived)}
+        criterion_index = int(section["criterion_index"])
+        if input_names[criterion_index] in features:
+            raise InputError(
+                f"the switching criterion '{input_names[criterion_index]}' is a derived input; "
+                "it must be a measured input"
+            )
+        ranges = section.get(SOURCE_RANGES_KEY, {})
+        valid_min, valid_max, origin = [], [], []
+        for r, name in enumerate(raw):
+            if r < len(measured):
+                j = input_names.index(name)
+                low, high, where = section["temp_min_c"][j], section["temp_max_c"][j], "temperature"
+            elif name in ranges:
+                (low, high), where = ranges[name], "source"
+            else:
+                (low, high), where = LEGACY_SOURCE_RANGE, "fallback"
+            valid_min.append(float(low))
+            valid_max.append(float(high))
+            origin.append(where)
         return cls(
-            temp_names=tuple(model["temps"]),
+            raw_names=tuple(raw),
+            input_names=input_names,
+            input_reading=tuple(raw.index(n) if n not in features else -1 for n in input_names),
+            input_derived=tuple(derived_index.get(n, -1) for n in input_names),
+            derived=tuple(derived),
             criterion=str(section["criterion"]),
-            criterion_index=int(section["criterion_index"]),
-            sampling_period_s=float(model["sampling_period_s"]),
+            criterion_index=criterion_index,
+            criterion_reading=raw.index(input_names[criterion_index]),
+            sampling_period_s=period,
             period_tolerance=float(section["period_tolerance"]),
             coefficients=coefficients,
             window_first=tuple(int(w[0]) for w in windows),
@@ -396,8 +652,9 @@ class RuleTables:
             thresholds_c=tuple(float(v) for v in section["thresholds_c"]),
             margin_c=float(section["margin_c"]),
             hold_samples=int(section["hold_samples"]),
-            temp_min_c=tuple(float(v) for v in section["temp_min_c"]),
-            temp_max_c=tuple(float(v) for v in section["temp_max_c"]),
+            valid_min=tuple(valid_min),
+            valid_max=tuple(valid_max),
+            valid_origin=tuple(origin),
             comp_min_um=float(section["comp_min_um"]),
             comp_max_um=float(section["comp_max_um"]),
             rate_limit_um=float(section["rate_limit_um"]),
@@ -408,7 +665,44 @@ class RuleTables:
 
     @property
     def n_temps(self) -> int:
-        return len(self.temp_names)
+        """Number of readings per sample (the C routine's ``GF_N_TEMPS``)."""
+        return len(self.raw_names)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of model inputs (coefficients per group besides the constant)."""
+        return len(self.input_names)
+
+    @property
+    def n_measured(self) -> int:
+        """Readings that are model inputs themselves; the sources follow them."""
+        return sum(1 for r in self.input_reading if r >= 0)
+
+    @property
+    def source_names(self) -> tuple[str, ...]:
+        """Readings that only feed derived inputs."""
+        return self.raw_names[self.n_measured :]
+
+    @property
+    def temp_names(self) -> tuple[str, ...]:
+        """The readings (the name older callers use)."""
+        return self.raw_names
+
+    @property
+    def temp_min_c(self) -> tuple[float, ...]:
+        return self.valid_min
+
+    @property
+    def temp_max_c(self) -> tuple[float, ...]:
+        return self.valid_max
+
+    def uses_of(self, reading: int) -> list[str]:
+        """What a reading feeds: its own model input and/or the derived inputs computed from it."""
+        uses = []
+        if reading < self.n_measured:
+            uses.append(f"model input {self.input_reading.index(reading) + 1}")
+        uses.extend(f"source of derived input {d.name}" for d in self.derived if d.reading == reading)
+        return uses
 
     @property
     def n_groups(self) -> int:
@@ -512,30 +806,38 @@ class SwitchingRule:
         self._comp_max = real(t.comp_max_um)
         self._rate = real(t.rate_limit_um)
         self._zero = real(0.0)
+        self._lp_a = [real(d.a) for d in t.derived]
+        self._lp_b = [real(d.b) for d in t.derived]
+        self._scale = [real(d.scale) for d in t.derived]
         self.reset()
 
     def reset(self) -> None:
-        """Back to the first sample: group 1, no good readings yet, compensation 0."""
+        """Back to the first sample: group 1, no good readings yet, derived inputs not started, compensation 0."""
         t = self.tables
         self.count = 0
         self.group = 1
         self.bad = [t.hold_samples + 1] * t.n_temps
         self.last = [self._zero] * t.n_temps
         self.compensation = self._zero
+        self.started = [False] * len(t.derived)
+        self.memory = [self._zero] * len(t.derived)
+        self.derived = [self._zero] * len(t.derived)
+        self.lines = [[self._zero] * d.delay_samples for d in t.derived]
+        self.positions = [0] * len(t.derived)
 
     def step(self, temps: Sequence[float]) -> StepResult:
-        """Process one sample of temperatures (°C, in the model's input order)."""
+        """Process one sample of readings (the model's measured inputs, then the sources, see :attr:`tables`)."""
         t = self.tables
         if len(temps) != t.n_temps:
             raise InputError(
-                f"{len(temps)} temperatures given; the model takes {t.n_temps} ({', '.join(t.temp_names)})"
+                f"{len(temps)} readings given; the model takes {t.n_temps} ({', '.join(t.raw_names)})"
             )
         if self.count < COUNT_MAX:
             self.count += 1
         held = faulted = False
         for m in range(t.n_temps):
             reading = float(temps[m])
-            if reading >= t.temp_min_c[m] and reading <= t.temp_max_c[m]:
+            if reading >= t.valid_min[m] and reading <= t.valid_max[m]:
                 self.last[m] = self._real(reading)
                 self.bad[m] = 0
             elif self.bad[m] <= t.hold_samples:
@@ -544,6 +846,8 @@ class SwitchingRule:
                 faulted = True
             elif self.bad[m] > 0:
                 held = True
+        for k in range(len(t.derived)):
+            self._derive(k)
 
         switched = SWITCH_NONE
         if self.group < t.n_groups:
@@ -561,8 +865,10 @@ class SwitchingRule:
         else:
             row = self._coef[self.group - 1]
             prediction = row[0]
-            for m in range(t.n_temps):
-                prediction = prediction + row[m + 1] * self.last[m]
+            for j in range(t.n_inputs):
+                r = t.input_reading[j]
+                value = self.last[r] if r >= 0 else self.derived[t.input_derived[j]]
+                prediction = prediction + row[j + 1] * value
             target = -prediction
         if target > self._comp_max:
             target = self._comp_max
@@ -577,9 +883,48 @@ class SwitchingRule:
         fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0)
         return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
 
+    def _derive(self, k: int) -> None:
+        """Advance derived input ``k`` by one sample from its source's last good value."""
+        d = self.tables.derived[k]
+        x = self.last[d.reading]
+        if d.transform == "identity":
+            self.derived[k] = x
+            return
+        if not self.started[k] and self.bad[d.reading] == 0:
+            self.started[k] = True
+            if d.transform == "delay":
+                self.lines[k] = [x] * d.delay_samples
+                self.positions[k] = 0
+            else:
+                self.memory[k] = x
+        if not self.started[k]:
+            return
+        if d.transform == "lowpass":
+            self.memory[k] = self._lp_b[k] * x + self._lp_a[k] * self.memory[k]
+            self.derived[k] = self.memory[k]
+        elif d.transform == "derivative":
+            self.derived[k] = (x - self.memory[k]) * self._scale[k]
+            self.memory[k] = x
+        else:
+            line, position = self.lines[k], self.positions[k]
+            self.derived[k] = line[position]
+            line[position] = x
+            position += 1
+            if position >= d.delay_samples:
+                position = 0
+            self.positions[k] = position
+
+    def input_values(self) -> list[float]:
+        """The model's inputs at the last sample: held readings and derived inputs."""
+        t = self.tables
+        return [
+            float(self.last[r] if r >= 0 else self.derived[t.input_derived[j]])
+            for j, r in enumerate(t.input_reading)
+        ]
+
     def _criterion_passes(self, w: int) -> bool:
         t = self.tables
-        c = t.criterion_index
+        c = t.criterion_reading
         direction = t.directions[w]
         if self.bad[c] > t.hold_samples or direction == 0:
             return True
@@ -589,11 +934,12 @@ class SwitchingRule:
         return bool(difference <= self._margin)
 
     def replay(self, temps_matrix) -> Replay:
-        """Reset, then step through every row of an (N, k) temperature array."""
+        """Reset, then step through every row of an (N, k) array of readings."""
         temps_matrix = np.asarray(temps_matrix, dtype=float)
         if temps_matrix.ndim != 2 or temps_matrix.shape[1] != self.tables.n_temps:
             raise InputError(
-                f"temperatures of shape {temps_matrix.shape}: the model takes {self.tables.n_temps} columns"
+                f"readings of shape {temps_matrix.shape}: the model takes {self.tables.n_temps} columns "
+                f"({', '.join(self.tables.raw_names)})"
             )
         self.reset()
         n_samples = len(temps_matrix)
@@ -609,13 +955,31 @@ class SwitchingRule:
         return Replay(group, prediction, compensation, fault, switched)
 
 
-def replay_groups(model: dict[str, Any], temps) -> np.ndarray:
-    """0-based group the run-time rule serves at each row of ``temps`` (double precision).
+def replay_groups(model: dict[str, Any], inputs) -> np.ndarray:
+    """0-based group the run-time rule serves at each row of the model's inputs (double precision).
 
     For comparisons that score a grouped model on another run through the
-    rule a controller would run, rather than by sample index.
+    rule a controller would run, rather than by sample index. ``inputs`` is
+    the (N, M) matrix of the model's inputs, derived ones included (as
+    :func:`groupfit.diagnose.residual.model_inputs` computes them). The group
+    depends only on the sample count and the criterion, a measured input, so
+    the rule is replayed on the measured inputs, with every source column
+    that is not a model input held at a valid value.
     """
-    return SwitchingRule(model).replay(temps).group - 1
+    rule = SwitchingRule(model)
+    t = rule.tables
+    inputs = np.asarray(inputs, dtype=float)
+    if not t.derived:
+        return rule.replay(inputs).group - 1
+    if inputs.ndim != 2 or inputs.shape[1] != t.n_inputs:
+        raise InputError(f"model inputs of shape {inputs.shape}: the model has {t.n_inputs} inputs")
+    readings = np.empty((len(inputs), t.n_temps))
+    for j, r in enumerate(t.input_reading):
+        if r >= 0:
+            readings[:, r] = inputs[:, j]
+    for r in range(t.n_measured, t.n_temps):
+        readings[:, r] = t.valid_min[r]
+    return rule.replay(readings).group - 1
 
 
 def check_period(tables: RuleTables, period_s: float) -> None:
@@ -629,6 +993,7 @@ def check_period(tables: RuleTables, period_s: float) -> None:
 
 
 __all__ = [
+    "DerivedTable",
     "RuleSettings",
     "RuleTables",
     "Replay",
@@ -636,8 +1001,11 @@ __all__ = [
     "SwitchingRule",
     "check_period",
     "complete_rule_section",
+    "derived_input_features",
     "replay_groups",
     "rule_parameters",
     "rule_section_problem",
+    "source_ranges",
+    "source_valid_range",
     "switch_windows",
 ]

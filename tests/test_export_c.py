@@ -13,12 +13,16 @@ from hypothesis import strategies as st
 
 from groupfit.export import render, write
 from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
-from groupfit.switching import RETURN_PERIOD_FAULT, SwitchingRule
+from groupfit.switching import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 from test_switching_models import (
+    augmented_model,
+    augmented_validation,
+    derived_streams,
     eight_sensor_model,
     eight_sensor_validation,
     fe_model,
     fe_validation_runs,
+    readings,
     streams_for,
     synthetic_model,
 )
@@ -186,3 +190,64 @@ def test_period_check(tmp_path):
     )
     out = subprocess.run([str(tmp_path / "check")], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["0", "0", str(RETURN_PERIOD_FAULT), str(RETURN_PERIOD_FAULT)]
+
+
+# derived inputs ---------------------------------------------------------------
+
+DERIVED = ["lowpass p=0", "all kinds p=2", "on/off p=1"]
+
+
+def derived_case(label):
+    model, run = augmented_model(label)
+    streams = derived_streams(model, run)
+    streams["validation"] = readings(model, augmented_validation(label))
+    return model, streams
+
+
+@pytest.mark.parametrize("label", DERIVED)
+def test_derived_inputs_double_build_makes_the_decisions_of_replay(drivers, label):
+    model, streams = derived_case(label)
+    outputs = run_driver(drivers(label, model), list(streams.values()))
+    worst = 0.0
+    for temps, c_out in zip(streams.values(), outputs):
+        py = python_replay(model, temps)
+        assert_same_decisions(c_out, py, tolerance=1e-9)
+        worst = max(worst, float(np.max(np.abs(c_out.prediction_um - py["prediction_um"]))))
+    print(f"{label}: largest |C double - Python| = {worst:.3g} um")
+
+
+@pytest.mark.parametrize("label", DERIVED)
+def test_derived_inputs_single_build_matches_the_float32_reference_bit_for_bit(drivers, label):
+    model, streams = derived_case(label)
+    outputs = run_driver(drivers(label, model, "single"), list(streams.values()))
+    for temps, c_out in zip(streams.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps, "single"))
+
+
+def test_derived_inputs_sanitized_build_runs_fault_streams_cleanly(drivers):
+    model, streams = derived_case("all kinds p=2")
+    chosen = [streams["faults"], streams["source faults"]]
+    outputs = run_driver(drivers("all kinds p=2", model, "sanitized"), chosen)
+    for temps, c_out in zip(chosen, outputs):
+        assert_same_decisions(c_out, python_replay(model, temps), tolerance=1e-9)
+
+
+def test_header_documents_the_readings_and_the_derived_inputs():
+    model, _ = augmented_model("all kinds p=2")
+    tables = RuleTables.from_model(model)
+    header, source = render(model, "c").values()
+    assert "#define GF_N_TEMPS 7 " in header and "#define GF_N_INPUTS 9 " in header
+    assert "#define GF_N_DERIVED 5 " in header and "#define GF_DELAY_2 3 " in header
+    for r, name in enumerate(tables.raw_names):
+        assert f"temps[{r}] = {name}" in header
+    assert "temps[4] = T_amb  [7, 36]  (source of T_amb~lp1800s, T_amb~ddt)" in header
+    assert "int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um);" in header
+    assert "gf_real line_2[GF_DELAY_2];" in header
+    # the low-pass coefficient is a constant computed once, the same for every target
+    a = tables.derived[0].a
+    assert f"gf_lowpass_a_0 = GF_R({a:.17e}, {float(np.float32(a)):.9e}f);" in source
+    includes = re.findall(r"#include\s+[<\"]([^>\"]+)[>\"]", header + source)
+    assert includes == ["groupfit_model.h"]
+    assert re.findall(r"^static (?!const)", source, flags=re.M) == []
+    code = re.sub(r"/\*.*?\*/", "", source, flags=re.S)
+    assert not re.search(r"\b(malloc|calloc|realloc|free|exp)\s*\(", code)

@@ -18,15 +18,18 @@ from groupfit.export.sheet import (
 )
 from groupfit.modelfile import save_model
 from groupfit.switching import RuleTables, SwitchingRule
-from test_switching_models import streams_for, synthetic_model
+from test_switching_models import augmented_model, derived_streams, streams_for, synthetic_model
 
 
 def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
     """A runtime written only from groupfit_runtime.json and its 'steps' (not from groupfit.switching)."""
     hold, crit = table["hold_samples"], table["criterion_index"]
     n_temps, n_groups = len(table["temps"]), len(table["coefficients"])
+    derived = table["derived_inputs"]
     count, group, comp = 0, 1, 0.0
     bad, last = [hold + 1] * n_temps, [0.0] * n_temps
+    started, memory, value = [False] * len(derived), [0.0] * len(derived), [0.0] * len(derived)
+    line, pos = [[0.0] * d["delay_samples"] for d in derived], [0] * len(derived)
     out = []
     for x in temps.tolist():
         count = min(count + 1, table["count_max"])
@@ -37,6 +40,26 @@ def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
                 bad[m] += 1
         faulted = any(b > hold for b in bad)
         held = any(0 < b <= hold for b in bad)
+        for k, d in enumerate(derived):
+            v = last[d["reading"]]
+            if d["transform"] == "identity":
+                value[k] = v
+                continue
+            if not started[k] and bad[d["reading"]] == 0:
+                started[k] = True
+                if d["transform"] == "delay":
+                    line[k], pos[k] = [v] * d["delay_samples"], 0
+                else:
+                    memory[k] = v
+            if started[k]:
+                if d["transform"] == "lowpass":
+                    memory[k] = d["b"] * v + d["a"] * memory[k]
+                    value[k] = memory[k]
+                elif d["transform"] == "derivative":
+                    value[k], memory[k] = (v - memory[k]) * d["scale"], v
+                else:
+                    value[k], line[k][pos[k]] = line[k][pos[k]], v
+                    pos[k] = 0 if pos[k] + 1 == d["delay_samples"] else pos[k] + 1
         if group < n_groups:
             first, final = table["windows"][group - 1]
             d, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
@@ -53,8 +76,9 @@ def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
         else:
             row = table["coefficients"][group - 1]
             prediction = row[0]
-            for m in range(n_temps):
-                prediction = prediction + row[m + 1] * last[m]
+            for j, source in enumerate(table["inputs"]):
+                x_j = last[source["reading"]] if "reading" in source else value[source["derived"]]
+                prediction = prediction + row[j + 1] * x_j
             target = -prediction
         target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
         delta = max(min(target - comp, table["rate_limit_um"]), -table["rate_limit_um"])
@@ -73,6 +97,35 @@ def test_json_table_is_enough_to_rebuild_the_rule():
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
         assert run_from_table(table, temps) == expected
+
+
+@pytest.mark.parametrize("label", ["all kinds p=2", "on/off p=1"])
+def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
+    model, run = augmented_model(label)
+    table = json.loads(render(model, "json")["groupfit_runtime.json"])
+    tables = RuleTables.from_model(model)
+    assert table["format"] == "groupfit-runtime/2" and table["temps"] == list(tables.raw_names)
+    assert [d["name"] for d in table["derived_inputs"]] == [d["name"] for d in model["derived_inputs"]]
+    assert len(table["inputs"]) == len(model["temps"]) == len(table["coefficients"][0]) - 1
+    rule = SwitchingRule(model)
+    for temps in derived_streams(model, run).values():
+        rule.reset()
+        expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
+        assert run_from_table(table, temps) == expected
+
+
+def test_sheet_lists_the_readings_the_controller_must_provide():
+    model, _ = augmented_model("on/off p=1")
+    sheet = controller_sheet(RuleTables.from_model(model))
+    names = [r["name"] for r in sheet["readings"]]
+    assert names == ["T1", "T2", "T3", "T4", "src_zscrew_on", "spindle_on"]
+    on_off = sheet["readings"][4]
+    assert on_off["valid_min"] == 0.0 and on_off["valid_max"] == 1.0 and on_off["unit"] != "degC"
+    assert on_off["feeds"] == ["source of derived input src_zscrew_on~lp3600s"]
+    assert sheet["readings"][0]["criterion"] and sheet["readings"][0]["unit"] == "degC"
+    text = render(model, "sheet")["groupfit_sheet.txt"]
+    assert "Readings the controller passes every sample, in this order" in text
+    assert " 5. src_zscrew_on    valid 0 .. 1 " in text and "derived input spindle_on~delay10" in text
 
 
 @pytest.mark.parametrize("um, counts", [

@@ -7,10 +7,15 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
+from groupfit.diagnose.residual import predict
 from groupfit.modelfile import save_model
-from groupfit.switching import FAULT_HELD, FAULT_SENSOR, SwitchingRule
+from groupfit.switching import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 from test_switching_models import (
+    DIAG_AMBIENT,
+    DIAG_SOURCE,
     SYNTHETIC,
+    augmented_model,
+    augmented_validation,
     eight_sensor_model,
     eight_sensor_validation,
     fe_model,
@@ -145,3 +150,51 @@ def test_fe_validation_runs_replay(tmp_path):
         result = json.loads(target.read_text())
         assert len(result["samples"]) == validation.n_samples and result["rms_um"] > 0
         assert [s["to"] for s in result["switches"]] == list(range(2, model["p"] + 2))
+
+
+# derived inputs ---------------------------------------------------------------
+
+@pytest.mark.parametrize("label, which", [
+    ("lowpass p=0", "modelling"), ("lowpass p=0", "validation"), ("all kinds p=2", "modelling"),
+    ("on/off p=1", "validation"),
+])
+def test_models_with_derived_inputs_replay_from_the_source_columns(tmp_path, label, which):
+    model, run = augmented_model(label)
+    data = run if which == "modelling" else augmented_validation(label)
+    save_model(model, tmp_path / "model.json")
+    assert replay(tmp_path / "model.json", "--data", data.source, "--json", tmp_path / "r.json") == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    prediction = np.array([s["prediction_um"] for s in result["samples"]])
+    # the model's inputs as groupfit.features computes them, served by the rule's groups
+    assert np.max(np.abs(prediction - predict(model, data, live_rule=replay_groups))) <= 1e-9
+    assert result["faults"] == {"held_samples": 0, "sensor_fault_samples": 0}
+    if which == "modelling":  # the offline model itself
+        assert np.max(np.abs(prediction - predict(model, data))) <= 1e-9
+        assert result["samples_off_offline_group"] == 0
+        assert result["rms_um"] == pytest.approx(model["training"]["rms_um"], rel=1e-9)
+
+
+def test_missing_source_column_is_named_with_the_input_it_feeds(tmp_path, capsys):
+    model, _ = augmented_model("all kinds p=2")
+    save_model(model, tmp_path / "model.json")
+    data = tmp_path / "no_speed.csv"
+    pd.read_csv(DIAG_AMBIENT[1]).drop(columns="speed_rpm").to_csv(data, index=False)
+    assert replay(tmp_path / "model.json", "--data", data) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "column 'speed_rpm' not found" in err[0] and "speed_rpm~delay3" in err[0]
+
+
+def test_source_faults_and_a_constant_source_in_a_recorded_run(tmp_path):
+    model, _ = augmented_model("on/off p=1")
+    save_model(model, tmp_path / "model.json")
+    frame = pd.read_csv(DIAG_SOURCE[1])
+    frame["src_zscrew_on"] = 0  # never on in this run: a valid reading, not a dead sensor
+    frame.loc[10:11, "spindle_on"] = np.nan  # held
+    frame.loc[100:106, "spindle_on"] = 7  # out of range: held, then a sensor fault
+    frame.to_csv(tmp_path / "run.csv", index=False)
+    assert replay(tmp_path / "model.json", "--data", tmp_path / "run.csv", "--json", tmp_path / "r.json") == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    faults = [s["fault"] for s in result["samples"]]
+    assert faults[10:12] == [FAULT_HELD] * 2 and faults[100:107] == [FAULT_HELD] * 3 + [FAULT_SENSOR] * 4
+    assert result["nonfinite_readings"] == 2 and result["faults"]["sensor_fault_samples"] == 4
+    assert all(s["prediction_um"] == 0.0 for s in result["samples"][103:107])

@@ -15,8 +15,12 @@ import pandas as pd
 import pytest
 
 from groupfit.data import Run, load_run
+from groupfit.diagnose.augment import augment_model
+from groupfit.diagnose.residual import model_inputs
+from groupfit.features import Feature
 from groupfit.modelfile import model_to_dict
 from groupfit.models import GroupedRegressor
+from groupfit.switching import RuleTables
 from groupfit.synthetic import simulate_lumped
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -24,6 +28,8 @@ DATASETS = ROOT / "datasets"
 SYNTHETIC = DATASETS / "synthetic_cycle.csv"
 FE_MODELLING = DATASETS / "paper_cycle.csv"
 FE_VALIDATION = (DATASETS / "validation_timing.csv", DATASETS / "validation_speed.csv")
+DIAG_AMBIENT = (DATASETS / "diag_ambient_model.csv", DATASETS / "diag_ambient_validate.csv")
+DIAG_SOURCE = (DATASETS / "diag_source_model.csv", DATASETS / "diag_source_validate.csv")
 
 EIGHT_SENSORS = {
     f"T{k + 1}": [tau, gain]
@@ -91,6 +97,92 @@ def fe_model() -> tuple[dict, Run]:
 
 def fe_validation_runs(model: dict) -> list[Run]:
     return [load_run(path, temps=model["temps"]) for path in FE_VALIDATION if path.is_file()]
+
+
+AUGMENTED = {
+    # label: (data sets, fixed breaks (None: p = 0), derived inputs added one after another)
+    "lowpass p=0": (DIAG_AMBIENT, None, (Feature("T_amb", "lowpass", tau_s=1800.0),)),
+    "all kinds p=2": (
+        DIAG_AMBIENT,
+        [344, 528],
+        (
+            Feature("T_amb", "lowpass", tau_s=1800.0),
+            Feature("T_amb", "derivative"),
+            Feature("speed_rpm", "delay", delay_samples=3),
+            Feature("T5"),
+            Feature("T1", "lowpass", tau_s=600.0),
+        ),
+    ),
+    "on/off p=1": (
+        DIAG_SOURCE,
+        [300],
+        (Feature("src_zscrew_on", "lowpass", tau_s=3600.0), Feature("spindle_on", "delay", delay_samples=10)),
+    ),
+}
+"""Models with derived inputs, built as ``groupfit diagnose`` builds them (augment_model), p = 0 and p > 0."""
+
+
+@lru_cache(maxsize=None)
+def _augmented(label: str):
+    (modelling, validation), breaks, features = AUGMENTED[label]
+    run = load_run(modelling, temps=["T1", "T2", "T3", "T4"])
+    if breaks is None:
+        estimator = GroupedRegressor(p=0, n=3, search="exact").fit(run.temps, run.error)
+    else:
+        estimator = GroupedRegressor(n=3, fixed_breaks=breaks).fit(run.temps, run.error)
+    model = model_to_dict(estimator, run, criterion="T1")
+    for feature in features:
+        model = augment_model(model, run, model_inputs(model, run), feature)
+    return model, run, load_run(validation, temps=["T1", "T2", "T3", "T4"])
+
+
+def augmented_model(label: str) -> tuple[dict, Run]:
+    """A model with derived inputs (see :data:`AUGMENTED`) and its modelling run."""
+    model, run, _ = _augmented(label)
+    return copy.deepcopy(model), run
+
+
+def augmented_validation(label: str) -> Run:
+    return _augmented(label)[2]
+
+
+def readings(model: dict, run: Run) -> np.ndarray:
+    """The rule's readings of a run: measured inputs, then the source columns of the derived inputs."""
+    names = RuleTables.from_model(model).raw_names
+    return np.column_stack([run.frame[name].to_numpy(dtype=float) for name in names])
+
+
+def source_faults(raw: np.ndarray, tables: RuleTables) -> np.ndarray:
+    """Faults on every source of a derived input: before any good reading, held, in fault, out of range."""
+    raw = np.array(raw, dtype=float)
+    hold = tables.hold_samples
+    sources = sorted({d.reading for d in tables.derived})
+    for k, r in enumerate(sources):
+        start = 25 * k
+        raw[0, r] = np.nan if k == 0 else raw[0, r]  # the first source is invalid before any good reading
+        raw[start + 30 : start + 30 + hold, r] = np.nan  # held: its transform is fed the last good value
+        raw[start + 200 : start + 200 + hold + 4, r] = np.inf  # sensor fault, then recovery
+        raw[start + 300, r] = tables.valid_max[r] + 1.0  # out of range: held
+        raw[start + 301, r] = tables.valid_min[r] - 1.0
+    return raw
+
+
+def derived_streams(model: dict, run: Run) -> dict[str, np.ndarray]:
+    """The replay streams every export is held to on a model with derived inputs."""
+    tables = RuleTables.from_model(model)
+    raw = readings(model, run)
+    measured = tables.n_measured
+    noisy_raw = raw.copy()
+    noisy_raw[:, :measured] = noisy(raw[:, :measured], 0.05, seed=1)
+    n = int(model["n"])
+    return {
+        "modelling": raw,
+        "noise 0.05 C": noisy_raw,
+        f"late by {n}": shifted(raw, n),
+        f"early by {n}": shifted(raw, -n),
+        "faults": fault_injected(raw, tables.hold_samples, tables.criterion_reading, seed=2),
+        "source faults": source_faults(raw, tables),
+    }
 
 
 def shifted(temps: np.ndarray, shift: int) -> np.ndarray:

@@ -11,7 +11,7 @@ from groupfit.modelfile import load_model
 
 def add_parser(verbs) -> None:
     export = verbs.add_parser("export", help="write the run-time switching rule as C, Structured Text, JSON or a sheet")
-    export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit")
+    export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
     export.add_argument(
         "--target", required=True, choices=(*TARGETS, "all"),
         help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from groupfit.commands.common import check_output_dir, report_stream, write_json
-from groupfit.data import load_run
+from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.grouping import serving_group_index
 from groupfit.modelfile import load_model
@@ -18,9 +19,10 @@ from groupfit.switching import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, Swi
 
 def add_parser(verbs) -> None:
     replay = verbs.add_parser("replay", help="run the run-time switching rule over a recorded run")
-    replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit")
+    replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
     replay.add_argument(
-        "--data", required=True, metavar="CSV", help="the recorded run (with the model's temperature columns)"
+        "--data", required=True, metavar="CSV",
+        help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
     )
     replay.add_argument("--time", default="time_s", metavar="COLUMN", help="time column in seconds (default time_s)")
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
@@ -48,14 +50,8 @@ def run_replay(args: argparse.Namespace) -> int:
         from groupfit.export.sheet import IntegerForm
 
         counts = IntegerForm(args.resolution_um, args.counts_limit)
-    run = load_run(
-        args.data,
-        temps=model["temps"],
-        time=args.time,
-        error=args.error or model.get("error") or "error_um",
-        require_error=False,
-        allow_nonfinite=True,
-    )
+    tables = RuleTables.from_model(model)
+    run = load_readings(args.data, tables, time=args.time, error=args.error or model.get("error") or "error_um")
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
@@ -71,6 +67,32 @@ def run_replay(args: argparse.Namespace) -> int:
     write_json(args.json, result)
     print(replay_report(result, written), file=report_stream(args))
     return 0
+
+
+def load_readings(path, tables: RuleTables, *, time: str, error: str) -> Run:
+    """A recorded run with the rule's readings as its ``temps``: measured inputs, then sources.
+
+    The measured inputs load as ``groupfit fit`` loads temperatures; the
+    source columns of derived inputs (an ambient temperature, a speed, an
+    on/off signal) load as they are, non-finite values kept (the rule treats
+    them as faults), and a missing one is named with the inputs it feeds.
+    """
+    measured = list(tables.raw_names[: tables.n_measured])
+    run = load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True)
+    if not tables.source_names:
+        return run
+    columns = []
+    for r, name in enumerate(tables.raw_names[tables.n_measured :], start=tables.n_measured):
+        if name not in run.frame.columns:
+            fed = ", ".join(d.name for d in tables.derived if d.reading == r)
+            available = ", ".join(map(str, run.frame.columns))
+            raise InputError(
+                f"{run.source}: column '{name}' not found; the model computes its input(s) {fed} from it. "
+                f"The columns are: {available}"
+            )
+        columns.append(numeric_column(run.frame, name, run.source, allow_nonfinite=True))
+    readings = np.column_stack([run.temps, *columns])
+    return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
 
 
 def residuals(run, replay: Replay) -> np.ndarray | None:
@@ -226,4 +248,4 @@ def plot_replay(run, tables: RuleTables, replay: Replay, model: dict[str, Any], 
     plt.close(fig)
 
 
-__all__ = ["run_replay", "replay_result", "plot_replay"]
+__all__ = ["load_readings", "run_replay", "replay_result", "plot_replay"]

@@ -10,6 +10,14 @@ Bit-for-bit agreement with the Python rule assumes IEEE arithmetic without
 contraction of ``a + b*c`` into a fused multiply-add: gcc and clang in ISO
 mode (``-std=c99``) do not contract; in GNU mode add ``-ffp-contract=off``.
 Never build with ``-ffast-math`` (it breaks the NaN test).
+
+A model with derived inputs (``derived_inputs``, :mod:`groupfit.features`)
+takes the source columns of those inputs as further readings after its
+measured temperatures; the routine computes every derived input each sample,
+its state (low-pass output, previous value, fixed-size delay line) in
+``gf_state``. The low-pass coefficient ``a = e^{-dt/tau}`` is computed here and
+written as a constant, so no ``<math.h>`` is needed and every target uses the
+same number.
 """
 
 from __future__ import annotations
@@ -36,9 +44,10 @@ HEADER = Template(
  * Call gf_init() once, then gf_step() once per sample, every
  * GF_SAMPLING_PERIOD_S seconds (check the task period with gf_check_period()).
  *
- * Temperatures, in this order (degC):
+ * Readings temps[GF_N_TEMPS], in this order, with the range in which a reading
+ * is valid:
 $temp_lines *
- * Switching criterion: temps[GF_CRITERION] ($criterion).
+$input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
  *
  * gf_step() returns the 1-based group serving the sample, or
  * GF_RET_SENSOR_FAULT when a reading has been invalid (NaN, +-inf or outside
@@ -57,7 +66,9 @@ $temp_lines *
 #ifndef GROUPFIT_MODEL_H
 #define GROUPFIT_MODEL_H
 
-#define GF_N_TEMPS $n_temps
+#define GF_N_TEMPS $n_temps /* readings per sample */
+#define GF_N_INPUTS $n_inputs /* model inputs: one coefficient each */
+#define GF_N_DERIVED $n_derived /* derived inputs computed from the readings */
 #define GF_N_GROUPS $n_groups
 #define GF_N_WINDOWS $n_windows_declared /* $n_windows switch window(s); at least 1 entry */
 #define GF_CRITERION $criterion_index
@@ -65,7 +76,7 @@ $temp_lines *
 #define GF_SAMPLING_PERIOD_S $period
 #define GF_PERIOD_TOLERANCE_S $period_tolerance
 #define GF_COUNT_MAX ${count_max}L
-
+$delay_macros
 #define GF_FAULT_NONE 0
 #define GF_FAULT_HELD $fault_held
 #define GF_FAULT_SENSOR $fault_sensor
@@ -92,8 +103,8 @@ typedef struct {
     int fault;                  /* bit mask of the last sample: GF_FAULT_HELD, GF_FAULT_SENSOR */
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
-    gf_real last[GF_N_TEMPS];   /* last good reading per sensor, degC */
-    gf_real error_um;           /* last prediction, um */
+    gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
+$state_fields    gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */
 } gf_state;
 
@@ -118,11 +129,11 @@ SOURCE = Template(
 #define GF_R(d, f) d
 #endif
 
-/* Coefficients per group: constant, then one per temperature in header order (um, um/degC). */
-static const gf_real gf_coef[GF_N_GROUPS][GF_N_TEMPS + 1] = {
+/* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
+static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
 $coefficients
 };
-
+$derived_constants
 /* Switch window g (group g -> g+1): samples first..last; forced at last. */
 static const long gf_window_first[GF_N_WINDOWS] = { $window_first };
 static const long gf_window_last[GF_N_WINDOWS] = { $window_last };
@@ -134,7 +145,7 @@ $thresholds
 };
 static const gf_real gf_margin = $margin;
 
-/* Valid reading: temp_min <= x <= temp_max (degC); NaN and +-inf never are. */
+/* Valid reading: temp_min <= x <= temp_max (degC, a source in its own unit); NaN and +-inf never are. */
 static const double gf_temp_min[GF_N_TEMPS] = { $temp_min };
 static const double gf_temp_max[GF_N_TEMPS] = { $temp_max };
 
@@ -149,7 +160,7 @@ void gf_init(gf_state *s)
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
     }
-    s->error_um = 0;
+$init_derived    s->error_um = 0;
     s->comp_um = 0;
 }
 
@@ -165,7 +176,7 @@ int gf_check_period(double period_s)
 int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
 {
     int m;
-    int held = 0;
+$step_locals    int held = 0;
     int faulted = 0;
     gf_real prediction;
     gf_real target;
@@ -188,7 +199,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
             held = 1;
         }
     }
-
+$step_derived
     s->switched = 0;
     if (s->group < GF_N_GROUPS) {
         int w = s->group - 1;
@@ -216,11 +227,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         prediction = 0;
         target = 0;
     } else {
-        const gf_real *row = gf_coef[s->group - 1];
-        prediction = row[0];
-        for (m = 0; m < GF_N_TEMPS; m++) {
-            prediction = prediction + row[m + 1] * s->last[m];
-        }
+$dot_product
         target = -prediction;
     }
     if (target > GF_COMP_MAX_UM) {
@@ -261,22 +268,27 @@ def padded(values, fill) -> list:
 
 def render_c(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_model.h": …, "groupfit_model.c": …}`` of a model's rule tables."""
-    temp_lines = "".join(
-        f" *   temps[{m}] = {_ascii(name)}{'  (criterion)' if m == tables.criterion_index else ''}\n"
-        for m, name in enumerate(tables.temp_names)
-    )
     header = HEADER.substitute(
-        temp_lines=temp_lines,
+        temp_lines=reading_lines(tables),
+        input_lines=input_lines(tables),
         criterion=_ascii(tables.criterion),
         n_temps=tables.n_temps,
+        n_inputs=tables.n_inputs,
+        n_derived=len(tables.derived),
         n_groups=tables.n_groups,
         n_windows=tables.n_windows,
         n_windows_declared=max(1, tables.n_windows),
-        criterion_index=tables.criterion_index,
+        criterion_index=tables.criterion_reading,
         hold=tables.hold_samples,
         period=double_literal(tables.sampling_period_s),
         period_tolerance=double_literal(tables.period_tolerance_s),
         count_max=COUNT_MAX,
+        delay_macros="".join(
+            f"#define GF_DELAY_{k} {d.delay_samples} /* samples of delay of derived input {k} */\n"
+            for k, d in enumerate(tables.derived)
+            if d.transform == "delay"
+        ),
+        state_fields=state_fields(tables),
         fault_held=FAULT_HELD,
         fault_sensor=FAULT_SENSOR,
         ret_sensor=RETURN_SENSOR_FAULT,
@@ -294,17 +306,182 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         f"    /* group {g + 1} */ {{ " + ", ".join(real_literal(v) for v in row) + " }"
         for g, row in enumerate(tables.coefficients)
     )
+    has_delay = any(d.transform == "delay" for d in tables.derived)
     source = SOURCE.substitute(
         coefficients=coefficient_rows,
+        derived_constants=derived_constants(tables),
         window_first=", ".join(f"{v}L" for v in padded(tables.window_first, COUNT_MAX)),
         window_last=", ".join(f"{v}L" for v in padded(tables.window_last, COUNT_MAX)),
         directions=", ".join(str(v) for v in padded(tables.directions, 0)),
         thresholds=",\n".join(f"    {real_literal(v)}" for v in padded(tables.thresholds_c, 0.0)),
         margin=real_literal(tables.margin_c),
-        temp_min=", ".join(double_literal(v) for v in tables.temp_min_c),
-        temp_max=", ".join(double_literal(v) for v in tables.temp_max_c),
+        temp_min=", ".join(double_literal(v) for v in tables.valid_min),
+        temp_max=", ".join(double_literal(v) for v in tables.valid_max),
+        init_derived=init_derived(tables),
+        step_locals="    int j;\n" if has_delay else "",
+        step_derived=step_derived(tables),
+        dot_product=dot_product(tables),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
+
+
+def reading_lines(tables: RuleTables) -> str:
+    """Header lines: every reading, its valid range, unit and what it feeds."""
+    lines = []
+    for r, name in enumerate(tables.raw_names):
+        unit = " degC" if tables.valid_origin[r] == "temperature" else ""
+        notes = []
+        if r == tables.criterion_reading:
+            notes.append("criterion")
+        fed = [d.name for d in tables.derived if d.reading == r]
+        if fed:
+            notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))
+        note = f"  ({'; '.join(notes)})" if notes else ""
+        valid = f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]"
+        lines.append(f" *   temps[{r}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}\n")
+    if tables.source_names:
+        lines.append(" *   (temperatures in degC; a source in the unit of its column in the modelling data)\n")
+    return "".join(lines)
+
+
+def input_lines(tables: RuleTables) -> str:
+    """Header lines: the model inputs and how each derived input is computed (empty without derived inputs)."""
+    if not tables.derived:
+        return ""
+    lines = [" * Model inputs x[GF_N_INPUTS], one coefficient each, in this order:\n"]
+    for j, name in enumerate(tables.input_names):
+        r, k = tables.input_reading[j], tables.input_derived[j]
+        what = f"temps[{r}]" if r >= 0 else f"derived[{k}]"
+        lines.append(f" *   x[{j}] = {what}  ({_ascii(name)})\n")
+    lines.append(
+        " * Derived inputs, computed every sample from the last good value v of their\n"
+        " * source reading (a held value stands in for an invalid reading), starting at\n"
+        " * the source's first good reading after gf_init():\n"
+    )
+    for k, d in enumerate(tables.derived):
+        r = d.reading
+        if d.transform == "identity":
+            formula = f"v = temps[{r}]"
+        elif d.transform == "lowpass":
+            formula = "y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a"
+        elif d.transform == "derivative":
+            formula = "(v - v_previous) * 3600/dt per hour, 0 at the first sample"
+        else:
+            formula = f"v of {d.delay_samples} sample(s) before, the first v before that"
+        lines.append(f" *   derived[{k}] = {_ascii(d.name)}: {_ascii(d.describe())} (temps[{r}]):\n")
+        lines.append(f" *       {_ascii(formula)}\n")
+    lines.append(" *\n")
+    return "".join(lines)
+
+
+def state_fields(tables: RuleTables) -> str:
+    if not tables.derived:
+        return ""
+    fields = [
+        "    int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */\n",
+        "    gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */\n",
+        "    gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value */\n",
+    ]
+    for k, d in enumerate(tables.derived):
+        if d.transform == "delay":
+            fields.append(f"    gf_real line_{k}[GF_DELAY_{k}]; /* delay line of derived[{k}] */\n")
+            fields.append(f"    int pos_{k};                 /* its oldest entry */\n")
+    return "".join(fields)
+
+
+def derived_constants(tables: RuleTables) -> str:
+    lines = []
+    for k, d in enumerate(tables.derived):
+        if d.transform == "lowpass":
+            lines.append(f"/* derived[{k}], {_ascii(d.name)}: low-pass a = exp(-dt/tau), b = 1 - a. */\n")
+            lines.append(f"static const gf_real gf_lowpass_a_{k} = {real_literal(d.a)};\n")
+            lines.append(f"static const gf_real gf_lowpass_b_{k} = {real_literal(d.b)};\n")
+        elif d.transform == "derivative":
+            lines.append(f"/* derived[{k}], {_ascii(d.name)}: 3600 / dt (per hour). */\n")
+            lines.append(f"static const gf_real gf_derivative_scale_{k} = {real_literal(d.scale)};\n")
+    return ("\n" + "".join(lines)) if lines else ""
+
+
+def init_derived(tables: RuleTables) -> str:
+    lines = []
+    for k, d in enumerate(tables.derived):
+        lines.append(f"    s->started[{k}] = 0;\n    s->derived[{k}] = 0;\n    s->memory[{k}] = 0;\n")
+        if d.transform == "delay":
+            lines.append(f"    for (m = 0; m < GF_DELAY_{k}; m++) {{\n        s->line_{k}[m] = 0;\n    }}\n")
+            lines.append(f"    s->pos_{k} = 0;\n")
+    return "".join(lines)
+
+
+def step_derived(tables: RuleTables) -> str:
+    """The derived inputs' update, in the order of the other targets."""
+    blocks = []
+    for k, d in enumerate(tables.derived):
+        r = d.reading
+        v = f"s->last[{r}]"
+        head = f"\n    /* derived[{k}] = {_ascii(d.name)}: {_ascii(d.describe())} (temps[{r}]) */\n"
+        if d.transform == "identity":
+            blocks.append(head + f"    s->derived[{k}] = {v};\n")
+            continue
+        if d.transform == "delay":
+            start = (
+                f"        for (j = 0; j < GF_DELAY_{k}; j++) {{\n"
+                f"            s->line_{k}[j] = {v};\n"
+                "        }\n"
+                f"        s->pos_{k} = 0;\n"
+            )
+            update = (
+                f"        s->derived[{k}] = s->line_{k}[s->pos_{k}];\n"
+                f"        s->line_{k}[s->pos_{k}] = {v};\n"
+                f"        s->pos_{k}++;\n"
+                f"        if (s->pos_{k} >= GF_DELAY_{k}) {{\n"
+                f"            s->pos_{k} = 0;\n"
+                "        }\n"
+            )
+        else:
+            start = f"        s->memory[{k}] = {v};\n"
+            if d.transform == "lowpass":
+                update = (
+                    f"        s->memory[{k}] = gf_lowpass_b_{k} * {v} + gf_lowpass_a_{k} * s->memory[{k}];\n"
+                    f"        s->derived[{k}] = s->memory[{k}];\n"
+                )
+            else:
+                update = (
+                    f"        s->derived[{k}] = ({v} - s->memory[{k}]) * gf_derivative_scale_{k};\n"
+                    f"        s->memory[{k}] = {v};\n"
+                )
+        blocks.append(
+            head
+            + f"    if (!s->started[{k}] && s->bad[{r}] == 0) {{\n"
+            + f"        s->started[{k}] = 1;\n"
+            + start
+            + "    }\n"
+            + f"    if (s->started[{k}]) {{\n"
+            + update
+            + "    }\n"
+        )
+    return "".join(blocks)
+
+
+def dot_product(tables: RuleTables) -> str:
+    if not tables.derived:
+        return (
+            "        const gf_real *row = gf_coef[s->group - 1];\n"
+            "        prediction = row[0];\n"
+            "        for (m = 0; m < GF_N_INPUTS; m++) {\n"
+            "            prediction = prediction + row[m + 1] * s->last[m];\n"
+            "        }"
+        )
+    lines = ["        const gf_real *row = gf_coef[s->group - 1];\n", "        gf_real x[GF_N_INPUTS];\n"]
+    for j in range(tables.n_inputs):
+        r, k = tables.input_reading[j], tables.input_derived[j]
+        lines.append(f"        x[{j}] = " + (f"s->last[{r}];\n" if r >= 0 else f"s->derived[{k}];\n"))
+    lines.append(
+        "        prediction = row[0];\n"
+        "        for (m = 0; m < GF_N_INPUTS; m++) {\n"
+        "            prediction = prediction + row[m + 1] * x[m];\n"
+        "        }"
+    )
+    return "".join(lines)
 
 
 def _ascii(text: str) -> str:

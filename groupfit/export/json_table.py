@@ -3,6 +3,13 @@
 One file, ``groupfit_runtime.json``, holds every number the rule needs and
 the step written out in words; a runtime that performs those steps in that
 order (double precision) makes the decisions of ``groupfit replay``.
+
+A model with derived inputs is written as ``groupfit-runtime/2``: its
+``temps`` (the readings) end with the source columns of the derived inputs,
+``inputs`` says what each coefficient multiplies, and ``derived_inputs`` is
+the table of transforms. A runtime written for ``groupfit-runtime/1`` (no
+derived inputs) refuses it by its format instead of computing with the wrong
+inputs.
 """
 
 from __future__ import annotations
@@ -20,19 +27,28 @@ from groupfit.switching import (
 )
 
 RUNTIME_FORMAT = "groupfit-runtime/1"
+RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
 
 STEPS = (
     "count = min(count + 1, count_max); count starts at 0, group at 1, compensation at 0, "
     "and bad[m] at hold_samples + 1 (no good reading yet)",
-    "for every sensor m in order: if temp_min_c[m] <= x[m] <= temp_max_c[m] (false for NaN and +-inf) "
+    "for every reading m in order: if temp_min_c[m] <= x[m] <= temp_max_c[m] (false for NaN and +-inf) "
     "then last[m] = x[m], bad[m] = 0; else if bad[m] <= hold_samples then bad[m] += 1. "
     "faulted = some bad[m] > hold_samples; held = some 0 < bad[m] <= hold_samples",
+    "for every derived input k in order, with v = last[derived_inputs[k].reading]: identity: value[k] = v. "
+    "Otherwise, if not started[k] and bad[reading] == 0: started[k] = true and memory[k] = v (lowpass, "
+    "derivative) or every entry of line[k] (delay_samples long) = v and pos[k] = 0 (delay). Then, if "
+    "started[k]: lowpass: memory[k] = b * v + a * memory[k], value[k] = memory[k]; derivative: "
+    "value[k] = (v - memory[k]) * scale, memory[k] = v; delay: value[k] = line[k][pos[k]], "
+    "line[k][pos[k]] = v, pos[k] += 1, pos[k] = 0 when it reaches delay_samples. started, memory, value, "
+    "line and pos start at false / 0",
     "if group < number of groups, with window w = group (1-based): if count >= windows[w].last then "
     "group += 1 (forced); else if count >= windows[w].first and (bad[criterion] > hold_samples or "
     "directions[w] == 0 or (directions[w] > 0 and last[criterion] - thresholds_c[w] >= -margin_c) or "
     "(directions[w] < 0 and last[criterion] - thresholds_c[w] <= margin_c)) then group += 1",
-    "if faulted: prediction = 0, target = 0; else prediction = coefficients[group][0], then for m in order "
-    "prediction = prediction + coefficients[group][m + 1] * last[m]; target = -prediction",
+    "if faulted: prediction = 0, target = 0; else prediction = coefficients[group][0], then for every model "
+    "input j in order prediction = prediction + coefficients[group][j + 1] * x[j], where x[j] = "
+    "last[inputs[j].reading] or value[inputs[j].derived]; target = -prediction",
     "target = min(max(target, comp_min_um), comp_max_um) (upper bound first, then lower); "
     "delta = target - compensation limited to [-rate_limit_um, rate_limit_um]; compensation += delta",
     "output: group (or the sensor-fault return), prediction (um), compensation (um), "
@@ -42,23 +58,48 @@ STEPS = (
 
 def runtime_table(tables: RuleTables) -> dict:
     """The JSON object of :func:`render_json`."""
+    inputs = [
+        {"name": name, "reading": r} if r >= 0 else {"name": name, "derived": tables.input_derived[j]}
+        for j, (name, r) in enumerate(zip(tables.input_names, tables.input_reading))
+    ]
+    derived = [
+        {
+            "name": d.name,
+            "column": d.column,
+            "reading": d.reading,
+            "transform": d.transform,
+            "tau_s": d.tau_s,
+            "a": d.a,
+            "b": d.b,
+            "scale": d.scale,
+            "delay_samples": d.delay_samples,
+        }
+        for d in tables.derived
+    ]
     return {
-        "format": RUNTIME_FORMAT,
+        "format": RUNTIME_FORMAT_DERIVED if tables.derived else RUNTIME_FORMAT,
         "rule": RULE_FORMAT,
-        "temps": list(tables.temp_names),
+        "temps": list(tables.raw_names),
+        "temps_note": "the readings passed every sample, in this order: the measured model inputs (degC), "
+        "then the source columns of the derived inputs (in the unit of their column in the modelling data)",
+        "inputs": inputs,
+        "derived_inputs": derived,
+        "derived_inputs_note": "per derived input: its source 'reading' (index into temps); lowpass: "
+        "a = exp(-dt/tau_s), b = 1 - a; derivative: scale = 3600/dt (per hour); delay: delay_samples",
         "criterion": tables.criterion,
-        "criterion_index": tables.criterion_index,
+        "criterion_index": tables.criterion_reading,
         "sampling_period_s": tables.sampling_period_s,
         "period_tolerance_s": tables.period_tolerance_s,
         "coefficients": tables.coefficients.tolist(),
-        "coefficients_layout": "one row per group: constant (um), then um/degC per temperature in 'temps' order",
+        "coefficients_layout": "one row per group: constant (um), then one coefficient per entry of 'inputs' "
+        "(um per unit of the input)",
         "windows": [[first, last] for first, last in zip(tables.window_first, tables.window_last)],
         "directions": list(tables.directions),
         "thresholds_c": list(tables.thresholds_c),
         "margin_c": tables.margin_c,
         "hold_samples": tables.hold_samples,
-        "temp_min_c": list(tables.temp_min_c),
-        "temp_max_c": list(tables.temp_max_c),
+        "temp_min_c": list(tables.valid_min),
+        "temp_max_c": list(tables.valid_max),
         "comp_min_um": tables.comp_min_um,
         "comp_max_um": tables.comp_max_um,
         "rate_limit_um": tables.rate_limit_um,

@@ -97,6 +97,33 @@ def _require_finite(value: float) -> None:
         raise ValueError(f"compensation value {value!r} is not a finite number")
 
 
+def reading_list(tables: RuleTables) -> list[dict]:
+    """Every reading the controller passes per sample, in order: name, unit, valid range, what it feeds."""
+    readings = []
+    for r, name in enumerate(tables.raw_names):
+        temperature = tables.valid_origin[r] == "temperature"
+        readings.append(
+            {
+                "index": r + 1,
+                "name": name,
+                "unit": "degC" if temperature else f"as column '{name}' of the modelling data",
+                "valid_min": tables.valid_min[r],
+                "valid_max": tables.valid_max[r],
+                "range_rule": {
+                    "temperature": "switching.temp_min_c/temp_max_c of the model file (by default the "
+                    "modelling range +-15 degC, rounded outward)",
+                    "source": "switching.source_ranges of the model file (by default: a 0/1 signal [0, 1]; "
+                    "otherwise the modelling range widened by max(span, largest magnitude / 2, 1), not below 0 "
+                    "if it never was, rounded outward)",
+                    "fallback": "not in the model file (older file): any number within +-1e9",
+                }[tables.valid_origin[r]],
+                "criterion": r == tables.criterion_reading,
+                "feeds": tables.uses_of(r),
+            }
+        )
+    return readings
+
+
 def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -> dict:
     """The sheet as a JSON-ready object."""
     period = tables.sampling_period_s
@@ -104,6 +131,13 @@ def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -
     saturates = max(abs(tables.comp_min_um), abs(tables.comp_max_um)) > integer.range_um
     return {
         "format": "groupfit-controller-sheet/1",
+        "readings": reading_list(tables),
+        "derived_inputs": [
+            {"name": d.name, "computed_as": d.describe(), "from_reading": d.reading + 1} for d in tables.derived
+        ],
+        "on_invalid_reading": f"NaN, +-inf or a value outside its valid range: the last good value stands in "
+        f"for up to {tables.hold_samples} sample(s) (derived inputs keep being computed from it), then the "
+        "output is the safe output (no compensation) until the reading is valid again",
         "output": {
             "name": "compensation",
             "unit": "um",
@@ -152,6 +186,22 @@ def sheet_text(sheet: dict) -> str:
     lines = [
         "groupfit controller sheet",
         "=========================",
+        "",
+        "Readings the controller passes every sample, in this order",
+    ]
+    for reading in sheet["readings"]:
+        unit = " degC" if reading["unit"] == "degC" else ""
+        notes = (["switching criterion"] if reading["criterion"] else []) + reading["feeds"]
+        lines.append(
+            f"  {reading['index']:>2}. {reading['name']:<16} valid {reading['valid_min']:g} .. "
+            f"{reading['valid_max']:g}{unit}   ({'; '.join(notes)})"
+        )
+    if any(r["unit"] != "degC" for r in sheet["readings"]):
+        lines.append("  A source column is passed in the unit of its column in the modelling data (e.g. 0/1, r/min).")
+    for derived in sheet["derived_inputs"]:
+        lines.append(f"  derived input {derived['name']}: {derived['computed_as']}, by the routine itself")
+    lines += [
+        f"  Invalid reading: {sheet['on_invalid_reading']}.",
         "",
         "Output of the run-time rule",
         f"  C = -(predicted thermal error) in um, clamped to [{out['comp_min_um']:g}, {out['comp_max_um']:g}] um,",

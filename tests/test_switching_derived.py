@@ -1,0 +1,280 @@
+"""Derived inputs in the run-time rule: readings, recursions, faults, valid ranges, model files.
+
+The truths the rule is held to are independent of it: ``groupfit.features``
+(each transform of a column) and ``groupfit.diagnose.residual.predict`` (the
+model's offline prediction).
+"""
+
+import copy
+
+import numpy as np
+import pytest
+
+from groupfit.diagnose.residual import model_inputs, predict, residual
+from groupfit.errors import InputError
+from groupfit.features import Feature
+from groupfit.grouping import serving_group_index
+from groupfit.modelfile import load_model, save_model
+from groupfit.switching import (
+    FAULT_HELD,
+    FAULT_SENSOR,
+    LEGACY_SOURCE_RANGE,
+    RULE_KEYS,
+    SOURCE_RANGES_KEY,
+    RuleTables,
+    SwitchingRule,
+    replay_groups,
+    source_valid_range,
+)
+from test_switching_models import (
+    augmented_model,
+    augmented_validation,
+    readings,
+    shifted,
+    source_faults,
+)
+
+
+def step_all(rule: SwitchingRule, raw: np.ndarray):
+    """Results and model inputs (derived ones as the rule computed them) at every sample."""
+    rule.reset()
+    results, inputs = [], []
+    for row in raw:
+        results.append(rule.step(row))
+        inputs.append(rule.input_values())
+    return results, np.array(inputs)
+
+
+def held_series(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """A column as the rule sees it: an invalid value replaced by the last valid one (NaN before any)."""
+    out = np.array(values, dtype=float)
+    last = np.nan
+    for k, v in enumerate(out):
+        if low <= v <= high:
+            last = v
+        out[k] = last
+    return out
+
+
+def test_readings_are_the_measured_inputs_then_the_sources_in_order_of_first_appearance():
+    model, _ = augmented_model("all kinds p=2")
+    tables = RuleTables.from_model(model)
+    assert tables.input_names == ("T1", "T2", "T3", "T4", "T_amb~lp1800s", "T_amb~ddt", "speed_rpm~delay3", "T5",
+                                  "T1~lp600s")
+    assert tables.raw_names == ("T1", "T2", "T3", "T4", "T_amb", "speed_rpm", "T5")
+    assert [d.reading for d in tables.derived] == [4, 4, 5, 6, 0]  # T1~lp600s reads the measured T1
+    assert tables.input_reading == (0, 1, 2, 3, -1, -1, -1, -1, -1)
+    assert tables.input_derived == (-1, -1, -1, -1, 0, 1, 2, 3, 4)
+    assert tables.criterion_reading == 0 and tables.n_temps == 7 and tables.n_inputs == 9
+    assert tables.valid_origin == ("temperature",) * 4 + ("source",) * 3
+    period = model["sampling_period_s"]
+    lowpass = tables.derived[0]
+    assert lowpass.a == np.exp(-period / 1800.0) and lowpass.b == 1.0 - lowpass.a
+    assert tables.derived[1].scale == 3600.0 / period and tables.derived[2].delay_samples == 3
+
+
+@pytest.mark.parametrize("which", ["modelling", "validation"])
+def test_p0_rule_reproduces_the_offline_prediction(which):
+    model, run = augmented_model("lowpass p=0")
+    run = run if which == "modelling" else augmented_validation("lowpass p=0")
+    replay = SwitchingRule(model).replay(readings(model, run))
+    assert np.all(replay.fault == 0) and np.all(replay.group == 1)
+    assert np.max(np.abs(replay.prediction_um - predict(model, run))) <= 1e-9
+
+
+@pytest.mark.parametrize("label", ["all kinds p=2", "on/off p=1"])
+def test_every_transform_matches_groupfit_features_and_the_offline_model(label):
+    model, run = augmented_model(label)
+    rule = SwitchingRule(model)
+    results, inputs = step_all(rule, readings(model, run))
+    # every model input, derived ones included, bit for bit as groupfit.features computes it
+    assert np.array_equal(inputs, model_inputs(model, run))
+    groups = np.array([r.group for r in results])
+    offline = serving_group_index(model["breaks"], run.n_samples, model["n"]) + 1
+    assert np.array_equal(groups, offline) and len(set(groups)) == model["p"] + 1
+    prediction = np.array([r.prediction_um for r in results])
+    assert np.max(np.abs(prediction - predict(model, run))) <= 1e-9
+    assert np.sqrt(np.mean((run.error - prediction) ** 2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)
+
+
+def test_a_held_or_faulty_source_feeds_its_transform_with_the_last_good_value():
+    model, run = augmented_model("all kinds p=2")
+    tables = RuleTables.from_model(model)
+    raw = source_faults(readings(model, run), tables)
+    results, inputs = step_all(SwitchingRule(model), raw)
+    period = model["sampling_period_s"]
+    for d in tables.derived:
+        seen = held_series(raw[:, d.reading], tables.valid_min[d.reading], tables.valid_max[d.reading])
+        first = int(np.flatnonzero(np.isfinite(seen))[0])
+        feature = Feature(d.column, d.transform, d.tau_s, d.delay_samples)
+        expected = feature.compute(seen[first:], period)
+        assert np.array_equal(inputs[first:, d.input_index], expected), d.name
+    fault = np.array([r.fault for r in results])
+    hold = tables.hold_samples
+    assert fault[0] == FAULT_SENSOR and results[0].prediction_um == 0.0  # T_amb not valid yet
+    assert np.all(fault[30 : 30 + hold] == FAULT_HELD)  # T_amb held: output valid
+    assert np.all(fault[200 : 200 + hold] == FAULT_HELD)
+    assert np.all(fault[200 + hold : 200 + hold + 4] & FAULT_SENSOR)  # then a sensor fault: safe output
+    assert all(results[k].prediction_um == 0.0 for k in range(200 + hold, 200 + hold + 4))
+    assert fault[200 + hold + 4] == 0 or fault[200 + hold + 4] == FAULT_HELD  # recovered (speed may be held)
+    assert fault[300] & FAULT_HELD and fault[301] & FAULT_HELD  # out of range: held
+    # a valid output is the model with the rule's own inputs
+    coefficients = np.asarray(model["coefficients"])
+    for k in range(len(raw)):
+        if not fault[k] & FAULT_SENSOR:
+            row = coefficients[results[k].group - 1]
+            assert results[k].prediction_um == pytest.approx(row[0] + row[1:] @ inputs[k], abs=1e-9)
+
+
+def test_source_invalid_at_the_start_starts_its_transforms_at_its_first_good_reading():
+    model, run = augmented_model("lowpass p=0")
+    raw = readings(model, run)
+    raw[:5, 4] = np.nan  # T_amb missing for the first five samples
+    results, inputs = step_all(SwitchingRule(model), raw)
+    assert [r.fault for r in results[:6]] == [FAULT_SENSOR] * 5 + [0]
+    expected = Feature("T_amb", "lowpass", 1800.0).compute(raw[5:, 4], model["sampling_period_s"])
+    assert np.array_equal(inputs[5:, 4], expected)
+
+
+@pytest.mark.parametrize("values, expected", [
+    ([0, 1, 1, 0], (0.0, 1.0)),  # on/off signal
+    ([0, 0, 0], (0.0, 1.0)),  # an on/off signal that stayed off
+    ([0, 2000, 2000, 0], (0.0, 4000.0)),  # spindle speed, r/min: never below 0, up to twice the span
+    ([0, 8000], (0.0, 16000.0)),
+    ([19.5, 23.768], (7.0, 36.0)),  # ambient, degC: half its magnitude beyond the span
+    ([20.0, 20.0], (10.0, 30.0)),
+    ([-200.0, 300.0], (-700.0, 800.0)),  # an axis position: symmetric
+    ([0.2, 0.7], (0.0, 2.0)),  # at least one unit, not below 0
+    ([1e9, 3e9], (0.0, 5e9)),
+    ([np.nan, np.inf], None),
+])
+def test_valid_range_of_a_source_column(values, expected):
+    assert source_valid_range(values) == expected
+    if expected is not None:
+        assert all(float(np.float32(v)) == v for v in expected)  # exact in single precision
+
+
+def test_large_ranges_round_outward_to_single_precision():
+    low, high = source_valid_range([16_777_217.0, 16_777_219.0])
+    assert low <= 16_777_217.0 - 8_388_609.5 and high >= 16_777_219.0 + 8_388_609.5
+    assert float(np.float32(low)) == low and float(np.float32(high)) == high
+
+
+def test_on_off_and_speed_readings_are_judged_on_their_own_scale():
+    model, run = augmented_model("on/off p=1")
+    section = model["switching"][SOURCE_RANGES_KEY]
+    assert section["src_zscrew_on"] == [0.0, 1.0] and section["spindle_on"] == [0.0, 1.0]
+    assert section["speed_rpm"] == [0.0, 4000.0]
+    raw = readings(model, run)
+    raw[50, 4], raw[60, 4], raw[70, 5], raw[80, 4] = 2.0, -1.0, 0.5, 1.0
+    fault = SwitchingRule(model).replay(raw).fault
+    assert fault[50] == FAULT_HELD and fault[60] == FAULT_HELD  # 2 and -1 are no on/off values
+    assert fault[70] == 0 and fault[80] == 0
+
+
+def test_model_files_carry_the_source_ranges_and_reload_to_the_same_rule(tmp_path):
+    model, run = augmented_model("all kinds p=2")
+    assert set(model["switching"][SOURCE_RANGES_KEY]) >= {"T_amb", "speed_rpm", "spindle_on", "T5", "T6"}
+    assert "time_s" not in model["switching"][SOURCE_RANGES_KEY]
+    assert "error_um" not in model["switching"][SOURCE_RANGES_KEY]
+    save_model(model, tmp_path / "m.json")
+    loaded = load_model(tmp_path / "m.json")
+    raw = readings(model, run)
+    a, b = SwitchingRule(model).replay(raw), SwitchingRule(loaded).replay(raw)
+    assert a.prediction_um.tobytes() == b.prediction_um.tobytes()
+
+
+def test_older_files_without_source_ranges_or_rule_keys_still_load(tmp_path):
+    model, run = augmented_model("all kinds p=2")
+    raw = readings(model, run)
+    full = SwitchingRule(model).replay(raw)
+    del model["switching"][SOURCE_RANGES_KEY]
+    save_model(model, tmp_path / "old.json")
+    tables = RuleTables.from_model(load_model(tmp_path / "old.json"))
+    assert tables.valid_origin[4:] == ("fallback",) * 3
+    assert tables.valid_min[4:] == (LEGACY_SOURCE_RANGE[0],) * 3
+    assert np.array_equal(SwitchingRule(model).replay(raw).prediction_um, full.prediction_um)
+    for key in RULE_KEYS:
+        del model["switching"][key]
+    save_model(model, tmp_path / "older.json")
+    older = SwitchingRule(load_model(tmp_path / "older.json")).replay(raw)
+    assert np.array_equal(older.group, full.group)
+    assert np.max(np.abs(older.prediction_um - full.prediction_um)) <= 1e-9
+
+
+def test_a_model_without_derived_inputs_reads_its_temperatures_only():
+    model, run = augmented_model("lowpass p=0")
+    model = copy.deepcopy(model)
+    del model["derived_inputs"]
+    model["temps"][4] = "T5"  # now a plain measured input
+    tables = RuleTables.from_model(model)
+    assert tables.raw_names == tables.input_names and tables.derived == ()
+    assert tables.input_reading == tuple(range(5)) and tables.source_names == ()
+
+
+def break_name(model):
+    model["derived_inputs"][0]["name"] = "T_amb~lp60s"
+
+
+def break_transform(model):
+    model["derived_inputs"][0]["transform"] = "median"
+
+
+def break_tau(model):
+    model["derived_inputs"][0]["tau_s"] = -5.0
+
+
+def break_delay(model):
+    model["derived_inputs"][2]["delay_samples"] = 40000
+    model["derived_inputs"][2]["name"] = "speed_rpm~delay40000"
+    model["temps"][6] = "speed_rpm~delay40000"
+
+
+def break_criterion(model):
+    model["switching"]["criterion_index"] = 4
+
+
+def break_ranges(model):
+    model["switching"][SOURCE_RANGES_KEY]["T_amb"] = [30.0, 10.0]
+
+
+@pytest.mark.parametrize("breakage, message", [
+    (break_name, "does not match its transform"),
+    (break_transform, "transform 'median'"),
+    (break_tau, "tau_s > 0"),
+    (break_delay, "at most 32767"),
+    (break_criterion, "must be a measured input"),
+    (break_ranges, "source_ranges\\['T_amb'\\]"),
+])
+def test_broken_derived_inputs_are_refused_on_loading(tmp_path, breakage, message):
+    model, _ = augmented_model("all kinds p=2")
+    breakage(model)
+    save_model(model, tmp_path / "bad.json")
+    with pytest.raises(InputError, match=message):
+        load_model(tmp_path / "bad.json")
+
+
+@pytest.mark.parametrize("shift", [0, 2, -2])
+def test_replay_groups_takes_the_model_inputs_as_diagnose_passes_them(shift):
+    model, run = augmented_model("all kinds p=2")
+    inputs = shifted(model_inputs(model, run), shift)
+    raw = shifted(readings(model, run), shift)
+    assert np.array_equal(replay_groups(model, inputs), SwitchingRule(model).replay(raw).group - 1)
+    res = residual(model, run, live_rule=replay_groups)  # as groupfit diagnose scores with the live rule
+    assert np.all(np.isfinite(res))
+
+
+def test_single_precision_tracks_double_with_derived_inputs():
+    model, run = augmented_model("all kinds p=2")
+    raw = readings(model, run)
+    double = SwitchingRule(model).replay(raw)
+    single = SwitchingRule(model, precision="single").replay(raw)
+    assert np.array_equal(single.group, double.group)
+    assert np.max(np.abs(single.prediction_um - double.prediction_um)) < 1e-2
+    assert single.prediction_um.tolist() == [float(np.float32(v)) for v in single.prediction_um]
+
+
+def test_wrong_number_of_readings_names_them():
+    model, run = augmented_model("lowpass p=0")
+    with pytest.raises(InputError, match=r"the model takes 5 \(T1, T2, T3, T4, T_amb\)"):
+        SwitchingRule(model).step([20.0] * 4)
