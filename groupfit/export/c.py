@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from string import Template
 
-from groupfit.export.literals import c_float_literal, double_literal
+from groupfit.export.literals import c_float_literal, double_literal, reading_notes
 from groupfit.switching import (
     COUNT_MAX,
     FAULT_HELD,
@@ -327,18 +327,10 @@ def render_c(tables: RuleTables) -> dict[str, str]:
 
 def reading_lines(tables: RuleTables) -> str:
     """Header lines: every reading, its valid range, unit and what it feeds."""
-    lines = []
-    for r, name in enumerate(tables.raw_names):
-        unit = " degC" if tables.valid_origin[r] == "temperature" else ""
-        notes = []
-        if r == tables.criterion_reading:
-            notes.append("criterion")
-        fed = [d.name for d in tables.derived if d.reading == r]
-        if fed:
-            notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))
-        note = f"  ({'; '.join(notes)})" if notes else ""
-        valid = f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]"
-        lines.append(f" *   temps[{r}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}\n")
+    lines = [
+        f" *   temps[{r}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}\n"
+        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, "criterion"))
+    ]
     if tables.source_names:
         lines.append(" *   (temperatures in degC; a source in the unit of its column in the modelling data)\n")
     return "".join(lines)

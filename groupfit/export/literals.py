@@ -66,3 +66,17 @@ def shortest_literal(value: float, single: bool) -> str:
     if not exact:  # never expected; the fixed-width forms are always exact
         return single_literal(value) if single else double_literal(value)
     return text
+
+
+def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]]:
+    """What each reading is, for generated comments: ``(name, valid range, unit, note)`` in order."""
+    notes_per_reading = []
+    for r, name in enumerate(tables.raw_names):
+        unit = " degC" if tables.valid_origin[r] == "temperature" else ""
+        notes = [criterion_word] if r == tables.criterion_reading else []
+        fed = [d.name for d in tables.derived if d.reading == r]
+        if fed:
+            notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))
+        note = f"  ({'; '.join(notes)})" if notes else ""
+        notes_per_reading.append((name, f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]", unit, note))
+    return notes_per_reading

@@ -25,7 +25,7 @@ import re
 from string import Template
 
 from groupfit.errors import InputError
-from groupfit.export.literals import shortest_literal
+from groupfit.export.literals import reading_notes, shortest_literal
 from groupfit.switching import (
     COUNT_MAX,
     FAULT_HELD,
@@ -303,18 +303,10 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
 
 
 def reading_lines(tables: RuleTables) -> str:
-    lines = []
-    for r, name in enumerate(tables.raw_names):
-        unit = " degC" if tables.valid_origin[r] == "temperature" else ""
-        notes = []
-        if r == tables.criterion_reading:
-            notes.append("switching criterion")
-        fed = [d.name for d in tables.derived if d.reading == r]
-        if fed:
-            notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))
-        note = f"  ({'; '.join(notes)})" if notes else ""
-        valid = f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]"
-        lines.append(f"    Temps[{r + 1}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}")
+    lines = [
+        f"    Temps[{r + 1}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}"
+        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, "switching criterion"))
+    ]
     if tables.source_names:
         lines.append("    (temperatures in degC; a source in the unit of its column in the modelling data)")
     return "\n".join(lines)
