@@ -99,3 +99,19 @@ def test_bad_validation_file_is_one_line(tmp_path, capsys):
     assert main(["compare", "--quiet", "--validate", str(tmp_path / "nope.csv"), "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "nope.csv" in err[0]
+
+
+def test_ar1_structural_term_is_separated_from_the_recursion():
+    rng = np.random.default_rng(4)
+    heat = np.repeat(rng.choice([0.0, 2000.0], size=40), 8)
+    bed = 20.0 + np.cumsum(rng.normal(scale=0.05, size=len(heat)))
+    gain = 12.0  # µm/K, alpha·L of a 1.2 m bed
+    spindle = np.zeros(len(heat))
+    for k in range(1, len(heat)):
+        spindle[k] = 0.99 * spindle[k - 1] + (0.2 if heat[k] else 0.0)
+    error = spindle + gain * (bed - bed[0])
+    model = AR1Model(structural_gain=gain).fit(np.column_stack([heat, bed]), error)
+    assert model.c1_ == pytest.approx(0.99, rel=1e-9) and model.c2_[2000.0] == pytest.approx(0.2, rel=1e-8)
+    np.testing.assert_allclose(model.residuals_, 0.0, atol=1e-8)
+    # without the structural term the same data no longer follow an AR(1) law
+    assert np.sqrt(np.mean(AR1Model().fit(heat[:, None], error).residuals_ ** 2)) > 0.1
