@@ -142,7 +142,14 @@ def test_measured_data_realities(tmp_path, capsys):
     gap = frame.drop(index=range(100, 110))
     gap_path = tmp_path / "gap.csv"
     gap.to_csv(gap_path, index=False)
-    for path, message in [(dead_path, "model input 'T2' is not finite at row 11"), (gap_path, "sampling is not uniform")]:
+    slow = frame.assign(time_s=frame["time_s"] * 2)
+    slow_path = tmp_path / "slow.csv"
+    slow.to_csv(slow_path, index=False)
+    for path, message in [
+        (dead_path, "model input 'T2' is not finite at row 11"),
+        (gap_path, "sampling is not uniform"),
+        (slow_path, "sampled every 200 s but the model every 100 s"),
+    ]:
         capsys.readouterr()
         assert main(["diagnose", str(model_path), "--data", str(path), "--out", str(tmp_path / "d2")]) == 2
         err = capsys.readouterr().err.strip().splitlines()

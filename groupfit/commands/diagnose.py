@@ -35,6 +35,12 @@ def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
     run = load_run(path, temps=measured, time=time, error=model["error"], allow_nonfinite=True)
+    period = float(model["sampling_period_s"])
+    if abs(run.period - period) > 0.01 * period:
+        raise InputError(
+            f"{run.source}: sampled every {run.period:g} s but the model every {period:g} s; "
+            "resample the run to the model's period"
+        )
     bad = ~np.isfinite(run.error)
     if bad.any():
         raise InputError(

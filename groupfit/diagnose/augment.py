@@ -28,7 +28,7 @@ def augment_model(model: dict[str, Any], run: Run, inputs: np.ndarray, feature: 
     inputs : ndarray, shape (N, k)
         The model's current inputs on ``run`` (see :func:`groupfit.diagnose.residual.model_inputs`).
     """
-    values = feature.compute(run.frame[feature.column].to_numpy(dtype=float), run.period)
+    values = feature.compute(run.frame[feature.column].to_numpy(dtype=float), model["sampling_period_s"])
     X = np.column_stack([inputs, values])
     names = (*model["temps"], feature.name)
     estimator = GroupedRegressor(

@@ -99,7 +99,7 @@ def diagnose(
     tried = candidate_features(columns, measured_inputs)
     while len(added) < max_effects:
         design = group_design(current_model, current_inputs)
-        ranking = rank_candidates(data.error, data.frame, tried, data.period, design)
+        ranking = rank_candidates(data.error, data.frame, tried, model["sampling_period_s"], design)
         if first_ranking is None:
             first_ranking = ranking
         if not ranking:

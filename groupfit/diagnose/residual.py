@@ -19,12 +19,16 @@ def derived_features(model: dict[str, Any]) -> list[Feature]:
 
 
 def model_inputs(model: dict[str, Any], run: Run) -> np.ndarray:
-    """The model's input matrix on a run: measured columns and derived inputs, in the model's order."""
+    """The model's input matrix on a run: measured columns and derived inputs, in the model's order.
+
+    Derived inputs use the model's sampling period, as the run-time rule does
+    (a run's own period may differ from it by up to 1 %).
+    """
     derived = {f.name: f for f in derived_features(model)}
     columns = []
     for name in model["temps"]:
         if name in derived:
-            columns.append(derived_matrix([derived[name]], run.frame, run.period)[:, 0])
+            columns.append(derived_matrix([derived[name]], run.frame, model["sampling_period_s"])[:, 0])
         elif name in run.frame.columns:
             columns.append(run.frame[name].to_numpy(dtype=float))
         else:
