@@ -31,6 +31,8 @@ A study file has up to four tables::
     max_generations = [50, 300]
     stall_generations = [30]
     polish = [true]
+    local_window = [5]            # the Lamarckian shift window (0: off)
+    union_crossover = [true]
 
 Every run is a plain, JSON-serialisable dictionary (:attr:`RunSpec.spec`) that
 holds everything its result depends on, including the SHA-256 of the data
@@ -76,6 +78,8 @@ GA_DEFAULTS: dict[str, list[Any]] = {
     "max_generations": [300],
     "stall_generations": [30],
     "polish": [True],
+    "local_window": [5],
+    "union_crossover": [True],
 }
 RANGE_KEYS = ("start", "stop", "step")
 
@@ -236,7 +240,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
 def _search_specs(method: str, ga: dict[str, list], certify) -> list[dict]:
     if method == "exact":
         return [{"method": "exact"}]
-    keys = ("population_size", "max_generations", "stall_generations", "polish", "seed")
+    keys = ("population_size", "max_generations", "stall_generations", "polish", "local_window", "union_crossover", "seed")
     return [
         {"method": "ga", "certify": certify, **dict(zip(keys, values))}
         for values in itertools.product(*(ga[key] for key in keys))
@@ -425,6 +429,8 @@ VALUE_CHECKS: dict[str, Callable] = {
     "max_generations": _integer(1),
     "stall_generations": _integer(1),
     "polish": _boolean,
+    "local_window": _integer(0),
+    "union_crossover": _boolean,
 }
 
 

@@ -136,6 +136,8 @@ def estimator_for(spec: dict) -> GroupedRegressor:
             "max_generations": search["max_generations"],
             "stall_generations": search["stall_generations"],
             "polish": search["polish"],
+            "local_window": search.get("local_window", 5),
+            "union_crossover": search.get("union_crossover", True),
             "random_state": search["seed"],
         }
     return GroupedRegressor(
