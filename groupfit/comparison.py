@@ -49,6 +49,8 @@ class ComparisonSettings:
     structural_gain_um_per_K: float | None = None
     conditions: tuple[str, ...] = ("speed_rpm",)
     p_target: str | float | None = "20%"
+    ga: dict[str, Any] = field(default_factory=dict)
+    """GroupedRegressor settings of the GA (population_size, max_generations, …)."""
 
 
 @dataclass
@@ -164,6 +166,7 @@ def compare_models(
             fit_intercept=settings.fit_intercept,
             certify=False,
             random_state=settings.seed,
+            **settings.ga,
         ).fit(X, y)
         exact_value = path["objective"][p]
         grouped[p].search_["exact_objective"] = exact_value

@@ -52,6 +52,7 @@ def settings_from_config(config: dict) -> ComparisonSettings:
         structural_gain_um_per_K=table.get("structural_gain_um_per_K"),
         conditions=tuple(table["conditions"]),
         p_target=table.get("p_target"),
+        ga={key: config["search"][key] for key in ("population_size", "max_generations", "stall_generations", "polish")},
     )
 
 
