@@ -156,9 +156,11 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     model, run = fitted_model()
-    print(f"model: M = {len(model['temps'])} temperatures, p = {model['p']} breaks, "
-          f"{len(model['coefficients'])} groups; replaying {run.n_samples} samples, "
-          f"{args.samples} gf_step calls per repeat, median of {args.repeats} repeats")
+    print(
+        f"model: M = {len(model['temps'])} temperatures, p = {model['p']} breaks, "
+        f"{len(model['coefficients'])} groups; replaying {run.n_samples} samples, "
+        f"{args.samples} gf_step calls per repeat, median of {args.repeats} repeats"
+    )
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         write(render(model, "c"), folder)
@@ -167,8 +169,10 @@ def main(argv=None) -> int:
     header = ("build", "gf_step ns", "dot ns", "ratio", "state B", "tables B", "total B")
     print(f"{header[0]:8s} " + " ".join(f"{h:>{w}s}" for h, w in zip(header[1:], (11, 8, 6, 8, 9, 8))))
     for r in rows:
-        print(f"{r['precision']:8s} {r['step_ns']:11.1f} {r['dot_ns']:8.1f} {r['step_ns'] / r['dot_ns']:6.2f} "
-              f"{r['state_bytes']:8d} {r['table_bytes']:9d} {r['state_bytes'] + r['table_bytes']:8d}")
+        print(
+            f"{r['precision']:8s} {r['step_ns']:11.1f} {r['dot_ns']:8.1f} {r['step_ns'] / r['dot_ns']:6.2f} "
+            f"{r['state_bytes']:8d} {r['table_bytes']:9d} {r['state_bytes'] + r['table_bytes']:8d}"
+        )
     print(f"python reference rule: {python_ns_per_sample(model, run.temps):.0f} ns per sample")
     return 0
 

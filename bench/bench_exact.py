@@ -54,8 +54,10 @@ def main() -> None:
         breaks, _, seconds = run_exact(X, y)
         if N <= args.ruptures_max:
             reference, reference_seconds = run_ruptures(X, y)
-            print(f"{N:>6} {seconds:>11.3f} {reference_seconds:>11.2f} {reference_seconds / seconds:>7.0f}  "
-                  f"{str(reference == breaks):>11}  {breaks}")
+            print(
+                f"{N:>6} {seconds:>11.3f} {reference_seconds:>11.2f} {reference_seconds / seconds:>7.0f}  "
+                f"{str(reference == breaks):>11}  {breaks}"
+            )
         else:
             print(f"{N:>6} {seconds:>11.3f} {'-':>11} {'-':>7}  {'-':>11}  {breaks}")
     if args.large:

@@ -55,24 +55,32 @@ def run_case(mesh_name: str, full_run: bool) -> dict:
     heat = {FRONT_SEAT: scenario.bearings.front_W, REAR_SEAT: scenario.bearings.rear_W}
     ambient = scenario.ambient.mean_C
     steady = float(gain @ (thermal.steady_temperature(heat, ambient) - ambient))
-    result = {"mesh": mesh_name, "nodes": int(housing.mesh.nvertices),
-              "elastic_dofs": int(elastic.basis.N), "equilibrium_um": steady,
-              "steady_s": time.perf_counter() - start,
-              "steady_peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    result = {
+        "mesh": mesh_name,
+        "nodes": int(housing.mesh.nvertices),
+        "elastic_dofs": int(elastic.basis.N),
+        "equilibrium_um": steady,
+        "steady_s": time.perf_counter() - start,
+        "steady_peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
     del housing, thermal, elastic
     if full_run:
         start = time.perf_counter()
         frame = simulate_config(config, progress=False)
-        result.update(run_s=time.perf_counter() - start, samples=len(frame),
-                      max_error_um=float(frame["error_um"].max()),
-                      run_peak_MB=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+        result.update(
+            run_s=time.perf_counter() - start,
+            samples=len(frame),
+            max_error_um=float(frame["error_um"].max()),
+            run_peak_MB=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        )
     return result
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--full-refined", action="store_true",
-                        help="also run the whole paper cycle on the refined mesh")
+    parser.add_argument(
+        "--full-refined", action="store_true", help="also run the whole paper cycle on the refined mesh"
+    )
     parser.add_argument("--case", help=argparse.SUPPRESS)
     parser.add_argument("--full", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -87,20 +95,26 @@ def main() -> None:
         out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
         rows.append(json.loads(out.strip().splitlines()[-1]))
 
-    header = (f"{'mesh':8} {'nodes':>7} {'el.dofs':>8} {'E_eq um':>9} {'change':>7} "
-              f"{'steady s':>9} {'MB':>6} {'run s':>7} {'samples':>7} {'MB':>6}")
+    header = (
+        f"{'mesh':8} {'nodes':>7} {'el.dofs':>8} {'E_eq um':>9} {'change':>7} "
+        f"{'steady s':>9} {'MB':>6} {'run s':>7} {'samples':>7} {'MB':>6}"
+    )
     print(header)
     print("-" * len(header))
     previous = None
     for row in rows:
-        change = ("" if previous is None
-                  else f"{100 * (row['equilibrium_um'] - previous) / row['equilibrium_um']:+.2f}%")
+        change = "" if previous is None else f"{100 * (row['equilibrium_um'] - previous) / row['equilibrium_um']:+.2f}%"
         previous = row["equilibrium_um"]
-        run = (f"{row['run_s']:7.1f} {row['samples']:7d} {row['run_peak_MB']:6.0f}"
-               if "run_s" in row else f"{'-':>7} {'-':>7} {'-':>6}")
-        print(f"{row['mesh']:8} {row['nodes']:7d} {row['elastic_dofs']:8d} "
-              f"{row['equilibrium_um']:9.3f} {change:>7} {row['steady_s']:9.1f} "
-              f"{row['steady_peak_MB']:6.0f} {run}")
+        run = (
+            f"{row['run_s']:7.1f} {row['samples']:7d} {row['run_peak_MB']:6.0f}"
+            if "run_s" in row
+            else f"{'-':>7} {'-':>7} {'-':>6}"
+        )
+        print(
+            f"{row['mesh']:8} {row['nodes']:7d} {row['elastic_dofs']:8d} "
+            f"{row['equilibrium_um']:9.3f} {change:>7} {row['steady_s']:9.1f} "
+            f"{row['steady_peak_MB']:6.0f} {run}"
+        )
 
 
 if __name__ == "__main__":

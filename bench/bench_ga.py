@@ -52,7 +52,10 @@ def main() -> None:
     parser.add_argument("--pmax", type=int, default=6)
     parser.add_argument("--seeds", type=int, default=20)
     args = parser.parse_args()
-    print(f"{'run':<16} {'p':>2} {'within 0.1%':>11} {'evals med':>9} {'evals max':>9} {'run s med':>9} {'run s max':>9} {'worst gap %':>11}")
+    print(
+        f"{'run':<16} {'p':>2} {'within 0.1%':>11} {'evals med':>9} {'evals max':>9} "
+        f"{'run s med':>9} {'run s max':>9} {'worst gap %':>11}"
+    )
     for name, X, y in runs(args):
         constraints = Constraints.for_model(len(y), 3, 3.0, X.shape[1] + 1)
         exact = solve_exact(SegmentCost(X, y, n=3, objective=args.objective), constraints, args.pmax)
@@ -74,7 +77,8 @@ def main() -> None:
             print(
                 f"{name:<16} {p:>2} {hits:>8}/{args.seeds:<2} {med(evaluations):>9} "
                 f"{(max(evaluations) if evaluations else '-'):>9} "
-                f"{(np.median(seconds) if seconds else float('nan')):>9.2f} {(max(seconds) if seconds else float('nan')):>9.2f} "
+                f"{(np.median(seconds) if seconds else float('nan')):>9.2f} "
+                f"{(max(seconds) if seconds else float('nan')):>9.2f} "
                 f"{max(gaps):>11.3f}"
             )
 

@@ -59,8 +59,9 @@ def ga_seconds_per_generation(X, y, objective: str) -> tuple[float, float]:
     """(seconds per generation, seconds to build the prefix sums) of a fixed-length GA run."""
     cost, build = timed(SegmentCost, X, y, n=N_SOFT, objective=objective)
     constraints = Constraints.for_model(len(y), N_SOFT, C, cost.n_coef)
-    search = GeneticSearch(population_size=POPULATION, max_generations=GENERATIONS,
-                           stall_generations=GENERATIONS + 1, polish=False, seed=0)
+    search = GeneticSearch(
+        population_size=POPULATION, max_generations=GENERATIONS, stall_generations=GENERATIONS + 1, polish=False, seed=0
+    )
     result = search.run(cost, constraints, P)
     return result.seconds / result.generations, build
 
@@ -91,7 +92,10 @@ def fmt(value, digits=4) -> str:
 
 def part_n(sizes, exact_sse_max, exact_sae_max) -> None:
     print(f"Part 1: N at M = 5 (4 sensors + intercept), p = {P}, GA population {POPULATION}")
-    header = f"{'N':>7} {'prefix s':>9} {'prefix MB':>9} {'GA sse s/gen':>12} {'GA sae s/gen':>12} {'exact sse s':>11} {'exact sae s':>11}"
+    header = (
+        f"{'N':>7} {'prefix s':>9} {'prefix MB':>9} {'GA sse s/gen':>12} {'GA sae s/gen':>12} "
+        f"{'exact sse s':>11} {'exact sae s':>11}"
+    )
     print(header)
     columns = {k: [] for k in ("prefix", "ga_sse", "ga_sae", "exact_sse", "exact_sae")}
     for N in sizes:
@@ -102,16 +106,24 @@ def part_n(sizes, exact_sse_max, exact_sae_max) -> None:
         exact_sae = exact_seconds(X, y, "sae") if N <= exact_sae_max else None
         for key, value in zip(columns, (build, ga_sse, ga_sae, exact_sse, exact_sae)):
             columns[key].append(value)
-        print(f"{N:>7} {build:>9.4f} {prefix_megabytes(N, 5):>9.1f} {ga_sse:>12.4f} {ga_sae:>12.4f} "
-              f"{fmt(exact_sse):>11} {fmt(exact_sae):>11}", flush=True)
-    print(f"{'slope':>7} {exponent(sizes, columns['prefix'], 1000):>9} {'':>9} "
-          f"{exponent(sizes, columns['ga_sse'], 1000):>12} {exponent(sizes, columns['ga_sae'], 1000):>12} "
-          f"{exponent(sizes, columns['exact_sse'], 1000):>11} {exponent(sizes, columns['exact_sae'], 300):>11}")
+        print(
+            f"{N:>7} {build:>9.4f} {prefix_megabytes(N, 5):>9.1f} {ga_sse:>12.4f} {ga_sae:>12.4f} "
+            f"{fmt(exact_sse):>11} {fmt(exact_sae):>11}",
+            flush=True,
+        )
+    print(
+        f"{'slope':>7} {exponent(sizes, columns['prefix'], 1000):>9} {'':>9} "
+        f"{exponent(sizes, columns['ga_sse'], 1000):>12} {exponent(sizes, columns['ga_sae'], 1000):>12} "
+        f"{exponent(sizes, columns['exact_sse'], 1000):>11} {exponent(sizes, columns['exact_sae'], 300):>11}"
+    )
 
 
 def part_m(sensor_counts, n_samples, exact_n, exact_max_sensors) -> None:
     print(f"\nPart 2: sensors at N = {n_samples} (exact sse at N = {exact_n}), p = {P}")
-    print(f"{'sensors':>7} {'M':>3} {'prefix s':>9} {'prefix MB':>9} {'GA sse s/gen':>12} {'GA sae s/gen':>12} {'exact sse s':>11}")
+    print(
+        f"{'sensors':>7} {'M':>3} {'prefix s':>9} {'prefix MB':>9} {'GA sse s/gen':>12} {'GA sae s/gen':>12} "
+        f"{'exact sse s':>11}"
+    )
     columns = {k: [] for k in ("prefix", "ga_sse", "ga_sae", "exact_sse")}
     for k in sensor_counts:
         X, y = regime_data(n_samples, k)
@@ -123,11 +135,17 @@ def part_m(sensor_counts, n_samples, exact_n, exact_max_sensors) -> None:
             exact = exact_seconds(Xe, ye, "sse")
         for key, value in zip(columns, (build, ga_sse, ga_sae, exact)):
             columns[key].append(value)
-        print(f"{k:>7} {k + 1:>3} {build:>9.4f} {prefix_megabytes(n_samples, k + 1):>9.1f} {ga_sse:>12.4f} "
-              f"{ga_sae:>12.4f} {fmt(exact):>11}", flush=True)
+        print(
+            f"{k:>7} {k + 1:>3} {build:>9.4f} {prefix_megabytes(n_samples, k + 1):>9.1f} {ga_sse:>12.4f} "
+            f"{ga_sae:>12.4f} {fmt(exact):>11}",
+            flush=True,
+        )
     ms = [k + 1 for k in sensor_counts]
-    print(f"{'slope':>7} {'':>3} {exponent(ms, columns['prefix'], 9):>9} {'':>9} {exponent(ms, columns['ga_sse'], 9):>12} "
-          f"{exponent(ms, columns['ga_sae'], 9):>12} {exponent(ms, columns['exact_sse'], 9):>11}")
+    print(
+        f"{'slope':>7} {'':>3} {exponent(ms, columns['prefix'], 9):>9} {'':>9} "
+        f"{exponent(ms, columns['ga_sse'], 9):>12} "
+        f"{exponent(ms, columns['ga_sae'], 9):>12} {exponent(ms, columns['exact_sse'], 9):>11}"
+    )
 
 
 def main() -> None:
@@ -143,7 +161,12 @@ def main() -> None:
         sizes, sensors, m_samples, sse_max, sae_max = [300, 600, 1000, 3000, 10000], [4, 8, 16, 32], 3000, 3000, 600
     else:
         sizes, sensors, m_samples, sse_max, sae_max = (
-            [300, 600, 1000, 3000, 10000, 30000, 100000], [4, 8, 16, 32, 64], 10000, 10000, 1000)
+            [300, 600, 1000, 3000, 10000, 30000, 100000],
+            [4, 8, 16, 32, 64],
+            10000,
+            10000,
+            1000,
+        )
     part_n(args.sizes or sizes, args.exact_sse_max or sse_max, args.exact_sae_max or sae_max)
     part_m(args.sensors or sensors, args.m_samples or m_samples, 1000, 16 if args.quick else 32)
     if not args.quick:
@@ -152,8 +175,10 @@ def main() -> None:
 
 def corner(n_samples: int, n_sensors: int) -> None:
     """The largest case: only the GA is practical; prefix sums of (N+1)(M+1)(M+2)/2 doubles."""
-    print(f"\nPart 3: N = {n_samples}, {n_sensors} sensors (M = {n_sensors + 1}): "
-          f"prefix sums {prefix_megabytes(n_samples, n_sensors + 1) / 1e3:.2f} GB")
+    print(
+        f"\nPart 3: N = {n_samples}, {n_sensors} sensors (M = {n_sensors + 1}): "
+        f"prefix sums {prefix_megabytes(n_samples, n_sensors + 1) / 1e3:.2f} GB"
+    )
     X, y = regime_data(n_samples, n_sensors)
     for objective in ("sse", "sae"):
         per_generation, build = ga_seconds_per_generation(X, y, objective)

@@ -75,11 +75,16 @@ def main() -> None:
             for workers in (1, 2):
                 seconds, cores, results[workers] = timed_sweep(config, folder / f"w{workers}-{repeat}.sqlite", workers)
                 best[workers] = min(best[workers], seconds)
-                print(f"repeat {repeat + 1}: {workers} worker{'s' if workers > 1 else ''}: {seconds:.2f} s, "
-                      f"the workers got {cores:.2f} cores", flush=True)
+                print(
+                    f"repeat {repeat + 1}: {workers} worker{'s' if workers > 1 else ''}: {seconds:.2f} s, "
+                    f"the workers got {cores:.2f} cores",
+                    flush=True,
+                )
     same = results[1] == results[2]
-    print(f"\n{runs} runs on {args.data.name}: 1 worker {best[1]:.2f} s, 2 workers {best[2]:.2f} s, "
-          f"speed-up {best[1] / best[2]:.2f}x; same results: {same}")
+    print(
+        f"\n{runs} runs on {args.data.name}: 1 worker {best[1]:.2f} s, 2 workers {best[2]:.2f} s, "
+        f"speed-up {best[1] / best[2]:.2f}x; same results: {same}"
+    )
 
 
 if __name__ == "__main__":

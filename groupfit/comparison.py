@@ -98,7 +98,9 @@ def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
 
 def heat_column(run: Run, settings: ComparisonSettings) -> np.ndarray:
     if settings.heat not in run.frame.columns:
-        raise InputError(f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; set [compare] heat")
+        raise InputError(
+            f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; set [compare] heat"
+        )
     return run.frame[settings.heat].to_numpy(dtype=float)
 
 
@@ -153,7 +155,13 @@ def compare_models(
     ar1 = fit_ar1(modelling, settings)
 
     path = exact_path(
-        X, y, settings.pmax, n=settings.n, c=settings.c, objective=settings.objective, fit_intercept=settings.fit_intercept
+        X,
+        y,
+        settings.pmax,
+        n=settings.n,
+        c=settings.c,
+        objective=settings.objective,
+        fit_intercept=settings.fit_intercept,
     )
     pmax = len(path["breaks"]) - 1
     grouped: dict[int, GroupedRegressor] = {}
@@ -210,8 +218,14 @@ def compare_models(
             rows.append(row)
 
     selection = {
-        rule: choose_p(path["rss"], path["R"], modelling.n_samples, X.shape[1] + int(settings.fit_intercept), rule,
-                       settings.p_target if rule == "target" else None)
+        rule: choose_p(
+            path["rss"],
+            path["R"],
+            modelling.n_samples,
+            X.shape[1] + int(settings.fit_intercept),
+            rule,
+            settings.p_target if rule == "target" else None,
+        )
         for rule in ("bic", "target")
     }
     ar1_summary = {

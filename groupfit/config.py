@@ -103,7 +103,13 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "polish": True,
     },
     "output": {"dir": "groupfit-out"},
-    "compare": {"pmax": 4, "heat": "speed_rpm", "ar1_scaling": "heat_law", "conditions": ["speed_rpm"], "p_target": "20%"},
+    "compare": {
+        "pmax": 4,
+        "heat": "speed_rpm",
+        "ar1_scaling": "heat_law",
+        "conditions": ["speed_rpm"],
+        "p_target": "20%",
+    },
 }
 
 PATH_KEYS = {("data", "path"), ("data", "validate")}
@@ -137,7 +143,11 @@ def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
     for table, values in raw.items():
         for key, value in values.items():
             if (table, key) in PATH_KEYS:
-                value = [str((base / v).resolve()) for v in value] if isinstance(value, list) else str((base / value).resolve())
+                value = (
+                    [str((base / v).resolve()) for v in value]
+                    if isinstance(value, list)
+                    else str((base / value).resolve())
+                )
             config[table][key] = value
     return config
 

@@ -106,8 +106,7 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     if bad_text.any():
         row = int(np.flatnonzero(bad_text.to_numpy())[0])
         raise InputError(
-            f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; "
-            "fix or remove that row"
+            f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; fix or remove that row"
         )
     array = values.to_numpy(dtype=float)
     if not allow_nonfinite:
@@ -230,11 +229,7 @@ def load_run(
 def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:
     """Columns named like sensors (``T`` followed by a digit): ``T1``, ``T2_front`` …"""
     excluded = {e for e in exclude if e}
-    return [
-        c
-        for c in frame.columns
-        if c not in excluded and len(c) > 1 and c[0] in "Tt" and c[1].isdigit()
-    ]
+    return [c for c in frame.columns if c not in excluded and len(c) > 1 and c[0] in "Tt" and c[1].isdigit()]
 
 
 def split_names(text: str | None) -> list[str] | None:

@@ -67,11 +67,7 @@ class Constraints:
         if b.size == 0:
             return self.n_samples >= self.min_size
         edges = np.concatenate(([0], b, [self.n_samples]))
-        return bool(
-            np.all(np.diff(edges) >= self.min_size)
-            and b[0] > self.n
-            and b[-1] < self.n_samples
-        )
+        return bool(np.all(np.diff(edges) >= self.min_size) and b[0] > self.n and b[-1] < self.n_samples)
 
     def require(self, p: int, c: float, n_coef: int) -> None:
         """Raise a clear InputError when p breaks cannot fit."""
@@ -99,9 +95,7 @@ def hard_groups(breaks: Sequence[int], n_samples: int) -> list[tuple[int, int]]:
 def soft_groups(breaks: Sequence[int], n_samples: int, n: int) -> list[tuple[int, int]]:
     """Soft groups (the rows each coefficient vector is fitted on), 1-based inclusive."""
     edges = [0, *map(int, breaks), int(n_samples)]
-    return [
-        (1 if j == 0 else edges[j] - n + 1, edges[j + 1]) for j in range(len(edges) - 1)
-    ]
+    return [(1 if j == 0 else edges[j] - n + 1, edges[j + 1]) for j in range(len(edges) - 1)]
 
 
 def served_ranges(breaks: Sequence[int], n_samples: int, n: int) -> list[tuple[int, int]]:

@@ -275,9 +275,7 @@ def grouped_residuals(
     t = std.target(y)
     coefs = []
     residuals = np.empty(n_samples)
-    for (first, last), (s_first, s_last) in zip(
-        soft_groups(breaks, n_samples, n), served_ranges(breaks, n_samples, n)
-    ):
+    for (first, last), (s_first, s_last) in zip(soft_groups(breaks, n_samples, n), served_ranges(breaks, n_samples, n)):
         coef = min_norm_lstsq(A[first - 1 : last], t[first - 1 : last])
         residuals[s_first - 1 : s_last] = (t[s_first - 1 : s_last] - A[s_first - 1 : s_last] @ coef) * std.y_scale
         coefs.append(unstandardise(coef, std))

@@ -31,11 +31,17 @@ def plot_fit(
     top.plot(hours, predicted, color="tab:red", lw=1.2, ls="--", label="grouped model")
     for k, b in enumerate(breaks):
         for axis in (top, bottom):
-            axis.axvline(hours[b - 1], color="tab:blue", lw=1.0, label="hard break" if (k == 0 and axis is top) else None)
+            axis.axvline(
+                hours[b - 1], color="tab:blue", lw=1.0, label="hard break" if (k == 0 and axis is top) else None
+            )
     for k, (first, _) in enumerate(soft_groups[1:]):
         for axis in (top, bottom):
             axis.axvline(
-                hours[first - 1], color="tab:blue", lw=0.8, ls=":", label="soft break" if (k == 0 and axis is top) else None
+                hours[first - 1],
+                color="tab:blue",
+                lw=0.8,
+                ls=":",
+                label="soft break" if (k == 0 and axis is top) else None,
             )
     top.set_ylabel("thermal error (µm)")
     top.legend(loc="best", fontsize=8)
@@ -81,7 +87,9 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
 MODEL_STYLE = {"mlr": ("MLR", "tab:green", "-."), "ar1": ("AR(1) free run", "tab:orange", ":")}
 
 
-def plot_run_comparison(time_s, measured, predictions: dict, path: str | Path, title: str, grouped_shown=(1, 2, 4)) -> None:
+def plot_run_comparison(
+    time_s, measured, predictions: dict, path: str | Path, title: str, grouped_shown=(1, 2, 4)
+) -> None:
     """Measured vs predicted error of the compared models on one run, residuals below."""
     hours = np.asarray(time_s, dtype=float) / 3600.0
     fig, (top, bottom) = plt.subplots(

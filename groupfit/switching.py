@@ -451,8 +451,9 @@ def rule_section_problem(model: dict[str, Any]) -> str | None:
         if not isinstance(ranges, dict):
             return f"switching.{SOURCE_RANGES_KEY} must be an object: column -> [min, max]"
         for column, pair in ranges.items():
-            if not (isinstance(pair, list) and len(pair) == 2 and all(_is_number(v) for v in pair)
-                    and pair[0] <= pair[1]):
+            if not (
+                isinstance(pair, list) and len(pair) == 2 and all(_is_number(v) for v in pair) and pair[0] <= pair[1]
+            ):
                 return f"switching.{SOURCE_RANGES_KEY}['{column}'] must be [min, max] with min <= max"
     try:
         derived = derived_input_features(model)
@@ -460,8 +461,10 @@ def rule_section_problem(model: dict[str, Any]) -> str | None:
         return str(exc)
     temps = model.get("temps", [])
     if 0 <= index < n_temps and temps[index] in derived:
-        return (f"switching.criterion_index names the derived input '{temps[index]}'; "
-                "the switching criterion must be a measured input")
+        return (
+            f"switching.criterion_index names the derived input '{temps[index]}'; "
+            "the switching criterion must be a measured input"
+        )
     return None
 
 
@@ -829,9 +832,7 @@ class SwitchingRule:
         """Process one sample of readings (the model's measured inputs, then the sources, see :attr:`tables`)."""
         t = self.tables
         if len(temps) != t.n_temps:
-            raise InputError(
-                f"{len(temps)} readings given; the model takes {t.n_temps} ({', '.join(t.raw_names)})"
-            )
+            raise InputError(f"{len(temps)} readings given; the model takes {t.n_temps} ({', '.join(t.raw_names)})")
         if self.count < COUNT_MAX:
             self.count += 1
         held = faulted = False
@@ -918,8 +919,7 @@ class SwitchingRule:
         """The model's inputs at the last sample: held readings and derived inputs."""
         t = self.tables
         return [
-            float(self.last[r] if r >= 0 else self.derived[t.input_derived[j]])
-            for j, r in enumerate(t.input_reading)
+            float(self.last[r] if r >= 0 else self.derived[t.input_derived[j]]) for j, r in enumerate(t.input_reading)
         ]
 
     def _criterion_passes(self, w: int) -> bool:

@@ -13,8 +13,21 @@ from groupfit.modelfile import estimator_from_dict, load_model
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "datasets" / "synthetic_cycle.csv"
 SPEC_KEYS = {
-    "format", "sampling_period_s", "temps", "error", "intercept", "objective", "p", "n", "c",
-    "breaks", "soft_groups", "coefficients", "objective_value", "switching", "training",
+    "format",
+    "sampling_period_s",
+    "temps",
+    "error",
+    "intercept",
+    "objective",
+    "p",
+    "n",
+    "c",
+    "breaks",
+    "soft_groups",
+    "coefficients",
+    "objective_value",
+    "switching",
+    "training",
 }
 
 

@@ -76,8 +76,14 @@ def test_compare_json_has_one_row_per_model_and_run(comparison):
 
 def test_r_falls_with_p_with_diminishing_returns_on_the_modelling_run(comparison):
     _, result = comparison
-    R = [next(r["R_um"] for r in result["rows"] if r["run"] == "paper_cycle" and r["model"] in ("mlr", "grouped")
-              and r["p"] == p) for p in range(5)]
+    R = [
+        next(
+            r["R_um"]
+            for r in result["rows"]
+            if r["run"] == "paper_cycle" and r["model"] in ("mlr", "grouped") and r["p"] == p
+        )
+        for p in range(5)
+    ]
     assert all(b < a for a, b in zip(R, R[1:]))
     assert R[4] <= 0.5 * R[0]
     gains = [a - b for a, b in zip(R, R[1:])]

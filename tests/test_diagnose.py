@@ -1,7 +1,6 @@
 import json
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from groupfit.cli import main
@@ -46,8 +45,25 @@ def fit_model(tmp_path, frame, name, p=0):
     path = tmp_path / f"{name}.csv"
     frame.to_csv(path, index=False)
     out = tmp_path / f"{name}-model"
-    assert main(["fit", "--data", str(path), "--temps", ",".join(TEMPS), "--p", str(p), "--search", "exact",
-                 "--out", str(out), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                "--data",
+                str(path),
+                "--temps",
+                ",".join(TEMPS),
+                "--p",
+                str(p),
+                "--search",
+                "exact",
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     return path, out / "model.json"
 
 
@@ -127,8 +143,21 @@ def test_measured_data_realities(tmp_path, capsys):
     noisy_path = tmp_path / "noisy.csv"
     noisy.to_csv(noisy_path, index=False)
     capsys.readouterr()
-    assert main(["diagnose", str(model_path), "--data", str(noisy_path), "--out", str(tmp_path / "d1"),
-                 "--json", str(tmp_path / "d1.json")]) == 0
+    assert (
+        main(
+            [
+                "diagnose",
+                str(model_path),
+                "--data",
+                str(noisy_path),
+                "--out",
+                str(tmp_path / "d1"),
+                "--json",
+                str(tmp_path / "d1.json"),
+            ]
+        )
+        == 0
+    )
     report = capsys.readouterr().out
     result = json.loads((tmp_path / "d1.json").read_text())
     assert result["added"][0]["column"] == "T_amb"

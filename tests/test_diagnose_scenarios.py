@@ -19,12 +19,41 @@ EXPECTED = {
 
 def run_diagnosis(tmp_path, scenario):
     model_dir = tmp_path / "model"
-    assert main(["fit", "--data", str(DATA / f"diag_{scenario}_model.csv"), "--temps", TEMPS, "--p", "0",
-                 "--out", str(model_dir), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                "--data",
+                str(DATA / f"diag_{scenario}_model.csv"),
+                "--temps",
+                TEMPS,
+                "--p",
+                "0",
+                "--out",
+                str(model_dir),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     out = tmp_path / "diagnose"
-    assert main(["diagnose", str(model_dir / "model.json"), "--data", str(DATA / f"diag_{scenario}_model.csv"),
-                 "--validate", str(DATA / f"diag_{scenario}_validate.csv"), "--out", str(out),
-                 "--json", str(tmp_path / "diagnose.json")]) == 0
+    assert (
+        main(
+            [
+                "diagnose",
+                str(model_dir / "model.json"),
+                "--data",
+                str(DATA / f"diag_{scenario}_model.csv"),
+                "--validate",
+                str(DATA / f"diag_{scenario}_validate.csv"),
+                "--out",
+                str(out),
+                "--json",
+                str(tmp_path / "diagnose.json"),
+            ]
+        )
+        == 0
+    )
     return json.loads((tmp_path / "diagnose.json").read_text()), model_dir / "model.json"
 
 

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 import ruptures as rpt
+from conftest import brute_force_optimum
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import brute_force_optimum
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
 from groupfit.search.exact import solve_exact

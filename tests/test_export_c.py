@@ -10,10 +10,6 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from groupfit.export import render, write
-from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
-from groupfit.switching import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 from test_switching_models import (
     augmented_model,
     augmented_validation,
@@ -26,6 +22,10 @@ from test_switching_models import (
     streams_for,
     synthetic_model,
 )
+
+from groupfit.export import render, write
+from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
+from groupfit.switching import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
 
@@ -184,9 +184,19 @@ def test_period_check(tmp_path):
         "gf_check_period(102.0), gf_check_period(NAN)); return 0; }\n"
     )
     subprocess.run(
-        ["gcc", *STRICT_FLAGS, "-I", str(tmp_path), str(tmp_path / "check.c"),
-         str(tmp_path / "groupfit_model.c"), "-o", str(tmp_path / "check")],
-        check=True, capture_output=True, text=True,
+        [
+            "gcc",
+            *STRICT_FLAGS,
+            "-I",
+            str(tmp_path),
+            str(tmp_path / "check.c"),
+            str(tmp_path / "groupfit_model.c"),
+            "-o",
+            str(tmp_path / "check"),
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
     )
     out = subprocess.run([str(tmp_path / "check")], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["0", "0", str(RETURN_PERIOD_FAULT), str(RETURN_PERIOD_FAULT)]

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from test_switching_models import augmented_model, derived_streams, streams_for, synthetic_model
 
 from groupfit.cli import main
 from groupfit.errors import InputError
@@ -18,7 +19,6 @@ from groupfit.export.sheet import (
 )
 from groupfit.modelfile import save_model
 from groupfit.switching import RuleTables, SwitchingRule
-from test_switching_models import augmented_model, derived_streams, streams_for, synthetic_model
 
 
 def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
@@ -66,7 +66,8 @@ def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
             if count >= final:
                 group += 1
             elif count >= first and (
-                bad[crit] > hold or d == 0
+                bad[crit] > hold
+                or d == 0
                 or (d > 0 and last[crit] - threshold >= -table["margin_c"])
                 or (d < 0 and last[crit] - threshold <= table["margin_c"])
             ):
@@ -128,10 +129,23 @@ def test_sheet_lists_the_readings_the_controller_must_provide():
     assert " 5. src_zscrew_on    valid 0 .. 1 " in text and "derived input spindle_on~delay10" in text
 
 
-@pytest.mark.parametrize("um, counts", [
-    (0.0, 0), (0.04, 0), (0.05, 1), (-0.05, -1), (0.15, 2), (0.25, 3), (-0.25, -3),
-    (12.34, 123), (-12.36, -124), (2999.96, 30000), (5000.0, 30000), (-1e9, -30000),
-])
+@pytest.mark.parametrize(
+    "um, counts",
+    [
+        (0.0, 0),
+        (0.04, 0),
+        (0.05, 1),
+        (-0.05, -1),
+        (0.15, 2),
+        (0.25, 3),
+        (-0.25, -3),
+        (12.34, 123),
+        (-12.36, -124),
+        (2999.96, 30000),
+        (5000.0, 30000),
+        (-1e9, -30000),
+    ],
+)
 def test_counts_at_01_um_round_halves_away_from_zero_and_saturate(um, counts):
     assert IntegerForm(0.1, 30000).counts(um) == counts
 
@@ -178,13 +192,34 @@ def test_export_command_writes_every_target(tmp_path, capsys):
     model, _ = synthetic_model()
     save_model(model, tmp_path / "model.json")
     out = tmp_path / "export"
-    assert main(["export", str(tmp_path / "model.json"), "--target", "all", "-o", str(out),
-                 "--real", "REAL", "--name", "FB_Spindle"]) == 0
+    assert (
+        main(
+            [
+                "export",
+                str(tmp_path / "model.json"),
+                "--target",
+                "all",
+                "-o",
+                str(out),
+                "--real",
+                "REAL",
+                "--name",
+                "FB_Spindle",
+            ]
+        )
+        == 0
+    )
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted([
-        "groupfit_model.h", "groupfit_model.c", "FB_Spindle.st", "groupfit_runtime.json",
-        "groupfit_sheet.txt", "groupfit_sheet.json",
-    ])
+    assert names == sorted(
+        [
+            "groupfit_model.h",
+            "groupfit_model.c",
+            "FB_Spindle.st",
+            "groupfit_runtime.json",
+            "groupfit_sheet.txt",
+            "groupfit_sheet.json",
+        ]
+    )
     assert "OF REAL" in (out / "FB_Spindle.st").read_text()
     assert "wrote" in capsys.readouterr().out
 

@@ -19,10 +19,6 @@ blark_parse = pytest.importorskip("blark.parse")
 import blark.transform as tf  # noqa: E402
 import tree_sitter  # noqa: E402
 import tree_sitter_iec61131_3_st  # noqa: E402
-
-from groupfit.export import render, write  # noqa: E402
-from groupfit.export.harness import build_driver, run_driver  # noqa: E402
-from groupfit.switching import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
 from test_switching_models import (  # noqa: E402
     augmented_model,
     derived_streams,
@@ -30,6 +26,10 @@ from test_switching_models import (  # noqa: E402
     streams_for,
     synthetic_model,
 )
+
+from groupfit.export import render, write  # noqa: E402
+from groupfit.export.harness import build_driver, run_driver  # noqa: E402
+from groupfit.switching import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
 
 INTEGER_RANGES = {"INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1)}
 FLOATS = {"REAL": np.float32, "LREAL": np.float64}
@@ -262,8 +262,14 @@ class FunctionBlock:
             return left * right
         if op == "/":
             return left / right
-        comparisons = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal,
-                       "=": np.equal, "<>": np.not_equal}
+        comparisons = {
+            "<": np.less,
+            "<=": np.less_equal,
+            ">": np.greater,
+            ">=": np.greater_equal,
+            "=": np.equal,
+            "<>": np.not_equal,
+        }
         if op in comparisons:
             return bool(comparisons[op](left, right))
         raise STError(f"operator {op} not supported")
@@ -281,12 +287,14 @@ def run_block(source: str, streams, period_s: float, real: str) -> list[dict[str
             v = block.vars
             rows.append((v["Group"], v["Fault"], v["Switched"], float(v["ErrorUm"]), float(v["CompUm"])))
         code, fault, switched, prediction, compensation = map(np.array, zip(*rows))
-        outputs.append(dict(code=code, fault=fault, switched=switched, prediction_um=prediction,
-                            compensation_um=compensation))
+        outputs.append(
+            dict(code=code, fault=fault, switched=switched, prediction_um=prediction, compensation_um=compensation)
+        )
     return outputs
 
 
 # parsing ------------------------------------------------------------------
+
 
 def tree_sitter_errors(source: str) -> bool:
     parser = tree_sitter.Parser(tree_sitter.Language(tree_sitter_iec61131_3_st.language()))
@@ -312,9 +320,15 @@ def block_source(label: str, real: str) -> str:
     return text
 
 
-@pytest.mark.parametrize("label, real", [
-    ("synthetic p=3", "REAL"), ("synthetic p=3", "LREAL"), ("p=0", "REAL"), ("8 temps p=6", "REAL"),
-])
+@pytest.mark.parametrize(
+    "label, real",
+    [
+        ("synthetic p=3", "REAL"),
+        ("synthetic p=3", "LREAL"),
+        ("p=0", "REAL"),
+        ("8 temps p=6", "REAL"),
+    ],
+)
 def test_generated_blocks_parse_with_both_parsers(tmp_path, label, real):
     model = models()[label]
     files = render(model, "st", real=real)
@@ -355,6 +369,7 @@ def test_tree_sitter_rejects_more_broken_copies(breakage):
 
 
 # behaviour ------------------------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def single_driver(tmp_path_factory):
@@ -448,6 +463,7 @@ END_FUNCTION_BLOCK
 
 
 # derived inputs ---------------------------------------------------------------
+
 
 @lru_cache(maxsize=None)
 def derived_block(label: str, real: str) -> str:

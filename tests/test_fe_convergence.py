@@ -1,8 +1,7 @@
 """One uniform refinement changes the equilibrium thermal error by < 2 %."""
 
 from groupfit.fe.config import Material, ThermalBoundary
-from groupfit.fe.geometry import (FRONT_SEAT, REAR_SEAT, HousingGeometry,
-                                  MeshResolution, build_housing_mesh)
+from groupfit.fe.geometry import FRONT_SEAT, REAR_SEAT, HousingGeometry, MeshResolution, build_housing_mesh
 from groupfit.fe.headstock import ThermalModel, ThermoElasticModel, nose_error_gain
 
 

@@ -15,15 +15,18 @@ from groupfit.fe import parse_config, simulate_config
 
 ROOT = Path(__file__).resolve().parents[1]
 COARSE = {"circumferential": 24, "radial": 3, "axial_spacing_m": 0.07}
-BEARING_HEAT_W = 102.0 + 85.4      # at 2000 r/min
+BEARING_HEAT_W = 102.0 + 85.4  # at 2000 r/min
 TAU_S = 1800.0
 GAIN = 0.1
 
 
 def coarse(**tables):
-    return {"kind": "headstock", "mesh": dict(COARSE),
-            "time": {"schedule": [[3600, 2000.0]], "hold_until_equilibrium_rpm": False},
-            **tables}
+    return {
+        "kind": "headstock",
+        "mesh": dict(COARSE),
+        "time": {"schedule": [[3600, 2000.0]], "hold_until_equilibrium_rpm": False},
+        **tables,
+    }
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +35,7 @@ def plain():
 
 
 def test_unsensed_part_is_a_first_order_lag_of_the_bearing_heat(plain):
-    df = simulate_config(coarse(unsensed_part={"tau_s": TAU_S, "gain_um_per_W": GAIN}),
-                         progress=False)
+    df = simulate_config(coarse(unsensed_part={"tau_s": TAU_S, "gain_um_per_W": GAIN}), progress=False)
     added = (df["error_um"] - plain["error_um"]).to_numpy()
     t = df["time_s"].to_numpy()
     final = GAIN * BEARING_HEAT_W
@@ -47,29 +49,30 @@ def test_unsensed_part_is_a_first_order_lag_of_the_bearing_heat(plain):
 
 
 def test_zero_gain_gives_the_error_without_the_table(plain):
-    df = simulate_config(coarse(unsensed_part={"tau_s": TAU_S, "gain_um_per_W": 0.0}),
-                         progress=False)
+    df = simulate_config(coarse(unsensed_part={"tau_s": TAU_S, "gain_um_per_W": 0.0}), progress=False)
     pd.testing.assert_frame_equal(df, plain, check_exact=True)
 
 
 def test_unsensed_part_fed_by_the_bed_heat_lags_behind_the_housing(plain):
-    df = simulate_config(coarse(unsensed_part={"tau_s": TAU_S, "gain_um_per_W": GAIN,
-                                               "heat": "bed"}), progress=False)
+    df = simulate_config(coarse(unsensed_part={"tau_s": TAU_S, "gain_um_per_W": GAIN, "heat": "bed"}), progress=False)
     added = (df["error_um"] - plain["error_um"]).to_numpy()
     # the bed receives part of the bearing heat, later: below the bearing-fed lag
     assert added[0] == 0.0 and np.all(np.diff(added) > 0)
     assert added[-1] < 0.5 * GAIN * BEARING_HEAT_W * (1.0 - math.exp(-3600.0 / TAU_S))
 
 
-@pytest.mark.parametrize("table, key", [
-    ({"gain_um_per_W": 0.05}, "unsensed_part.tau_s"),
-    ({"tau_s": 3600.0}, "unsensed_part.gain_um_per_W"),
-    ({"tau_s": -3600.0, "gain_um_per_W": 0.05}, "unsensed_part.tau_s"),
-    ({"tau_s": 3600.0, "gain_um_per_W": "0.05"}, "unsensed_part.gain_um_per_W"),
-    ({"tau_s": 3600.0, "gain_um_per_W": 0.05, "heat": "oil"}, "unsensed_part.heat"),
-    ({"tau_s": 3600.0, "gain_um_per_W": 0.05, "tua_s": 1.0}, "unsensed_part.tua_s"),
-    (3600.0, "unsensed_part"),
-])
+@pytest.mark.parametrize(
+    "table, key",
+    [
+        ({"gain_um_per_W": 0.05}, "unsensed_part.tau_s"),
+        ({"tau_s": 3600.0}, "unsensed_part.gain_um_per_W"),
+        ({"tau_s": -3600.0, "gain_um_per_W": 0.05}, "unsensed_part.tau_s"),
+        ({"tau_s": 3600.0, "gain_um_per_W": "0.05"}, "unsensed_part.gain_um_per_W"),
+        ({"tau_s": 3600.0, "gain_um_per_W": 0.05, "heat": "oil"}, "unsensed_part.heat"),
+        ({"tau_s": 3600.0, "gain_um_per_W": 0.05, "tua_s": 1.0}, "unsensed_part.tua_s"),
+        (3600.0, "unsensed_part"),
+    ],
+)
 def test_unsensed_part_keys_are_validated(table, key):
     with pytest.raises(InputError) as info:
         parse_config({"kind": "headstock", "unsensed_part": table})
@@ -77,8 +80,13 @@ def test_unsensed_part_keys_are_validated(table, key):
 
 
 def test_ambient_offsets_add_a_step_to_the_cycle():
-    ambient = {"profile": "sine", "mean_C": 20.0, "amplitude_C": 2.0, "period_s": 7200.0,
-               "offsets": [[1000, 0.0], [100, 1.5]]}
+    ambient = {
+        "profile": "sine",
+        "mean_C": 20.0,
+        "amplitude_C": 2.0,
+        "period_s": 7200.0,
+        "offsets": [[1000, 0.0], [100, 1.5]],
+    }
     scenario = parse_config({"kind": "headstock", "ambient": ambient})
     for t in [0.0, 400.0, 999.0, 1000.0, 5000.0]:
         expected = 20.0 + 2.0 * math.sin(2 * math.pi * t / 7200.0) + (1.5 if t >= 1000 else 0)
@@ -127,9 +135,9 @@ def test_diagnosis_data_sets_match_their_configs(scenario, run):
     period = scenario_obj.sampling_period_s
     assert len(df) == round(scenario_obj.spindle.total_duration / period) + 1
     assert np.allclose(np.diff(df["time_s"]), period)
-    expected = (["time_s", "T1", "T2", "T3", "T4", "T5", "T6", "T_amb", "error_um",
-                 "speed_rpm", "spindle_on"]
-                + [f"src_{s.name}_on" for s in scenario_obj.sources])
+    expected = ["time_s", "T1", "T2", "T3", "T4", "T5", "T6", "T_amb", "error_um", "speed_rpm", "spindle_on"] + [
+        f"src_{s.name}_on" for s in scenario_obj.sources
+    ]
     assert list(df.columns) == expected
     # exactly one undeclared effect per scenario
     assert (df["T_amb"].nunique() > 1) == (scenario == "ambient")

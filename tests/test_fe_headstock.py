@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from groupfit.fe.config import Material, ThermalBoundary
-from groupfit.fe.geometry import (FRONT_SEAT, REAR_SEAT, HousingGeometry,
-                                  MeshResolution, build_housing_mesh)
+from groupfit.fe.geometry import FRONT_SEAT, REAR_SEAT, HousingGeometry, MeshResolution, build_housing_mesh
 from groupfit.fe.headstock import ThermalModel, ThermoElasticModel, nose_error_gain
 from groupfit.fe.schedule import bearing_heat_W
 
@@ -24,7 +23,7 @@ def models():
 def test_mesh_volume_and_seat_areas_match_the_drawing(models):
     housing, thermal, _ = models
     g = GEOMETRY
-    volume = g.width * g.height * g.length - np.pi * g.bore_radius ** 2 * g.length
+    volume = g.width * g.height * g.length - np.pi * g.bore_radius**2 * g.length
     assert thermal.basis.dx.sum() == pytest.approx(volume, rel=0.01)
     seat = np.pi * g.bore_diameter * (g.front_seat[1] - g.front_seat[0])
     assert thermal.area(thermal.facet_bases[FRONT_SEAT]) == pytest.approx(seat, rel=0.01)
@@ -49,8 +48,7 @@ def test_free_body_expands_by_alpha_length_delta_t(models):
     x, y, z = mesh.p
     tol = 1e-9
     # symmetry rollers on x = 0, y = 0 and z = 0 leave the body free to expand
-    fixed = np.concatenate([elastic.node_dofs(np.flatnonzero(abs(c) < tol), k)
-                            for k, c in enumerate((x, y, z))])
+    fixed = np.concatenate([elastic.node_dofs(np.flatnonzero(abs(c) < tol), k) for k, c in enumerate((x, y, z))])
     delta_t = 15.0
     u = elastic.displacement(np.full(thermal.basis.N, delta_t), fixed_dofs=fixed)
     ux, uy, uz = (u[elastic.basis.nodal_dofs[k]] for k in range(3))

@@ -41,9 +41,7 @@ def test_max_breaks_matches_enumeration(N, n, h):
     # with h >= 5 no more than 3 breaks fit in 24 samples, so p <= 4 covers every case
     constraints = Constraints(N, n, h)
     feasible = [
-        p
-        for p in range(0, 5)
-        if any(constraints.is_feasible(b) for b in itertools.combinations(range(1, N), p))
+        p for p in range(0, 5) if any(constraints.is_feasible(b) for b in itertools.combinations(range(1, N), p))
     ]
     assert constraints.max_breaks() == (max(feasible) if feasible else -1)
 

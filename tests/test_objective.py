@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
+from conftest import brute_force_rg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import brute_force_rg
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost, grouped_residuals, ldl_least_squares, packed_index, residual_sum
 

@@ -5,11 +5,6 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-
-from groupfit.cli import main
-from groupfit.diagnose.residual import predict
-from groupfit.modelfile import save_model
-from groupfit.switching import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 from test_switching_models import (
     DIAG_AMBIENT,
     DIAG_SOURCE,
@@ -22,6 +17,11 @@ from test_switching_models import (
     fe_validation_runs,
     synthetic_model,
 )
+
+from groupfit.cli import main
+from groupfit.diagnose.residual import predict
+from groupfit.modelfile import save_model
+from groupfit.switching import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 
 
 @pytest.fixture()
@@ -154,10 +154,16 @@ def test_fe_validation_runs_replay(tmp_path):
 
 # derived inputs ---------------------------------------------------------------
 
-@pytest.mark.parametrize("label, which", [
-    ("lowpass p=0", "modelling"), ("lowpass p=0", "validation"), ("all kinds p=2", "modelling"),
-    ("on/off p=1", "validation"),
-])
+
+@pytest.mark.parametrize(
+    "label, which",
+    [
+        ("lowpass p=0", "modelling"),
+        ("lowpass p=0", "validation"),
+        ("all kinds p=2", "modelling"),
+        ("on/off p=1", "validation"),
+    ],
+)
 def test_models_with_derived_inputs_replay_from_the_source_columns(tmp_path, label, which):
     model, run = augmented_model(label)
     data = run if which == "modelling" else augmented_validation(label)

@@ -24,8 +24,11 @@ def sweep(config, db, *extra):
 
 
 def test_sweep_records_one_row_per_run_and_a_second_sweep_skips_them(tmp_path, capsys):
-    config = write_study(tmp_path, 'p = {start = 0, stop = 3}\nsearch = ["exact", "ga"]\nobjective = ["sae", "sse"]',
-                         "seed = [0, 1]\nmax_generations = [30]")
+    config = write_study(
+        tmp_path,
+        'p = {start = 0, stop = 3}\nsearch = ["exact", "ga"]\nobjective = ["sae", "sse"]',
+        "seed = [0, 1]\nmax_generations = [30]",
+    )
     db = tmp_path / "study.sqlite"
     assert sweep(config, db, "--workers", "2", "--json", str(tmp_path / "first.json")) == 0
     first = json.loads((tmp_path / "first.json").read_text())
@@ -66,7 +69,9 @@ def test_failed_runs_are_recorded_not_fatal_and_tried_again(tmp_path, capsys):
         status = dict(connection.execute("SELECT p, status FROM runs").fetchall())
         message = connection.execute("SELECT error FROM runs WHERE p = 40").fetchone()[0]
     assert status == {1: "done", 40: "failed"} and "largest feasible p" in message
-    assert sweep(config, db, "--workers", "1", "--json", str(tmp_path / "r.json"), "--report", str(tmp_path / "rep")) == 0
+    assert (
+        sweep(config, db, "--workers", "1", "--json", str(tmp_path / "r.json"), "--report", str(tmp_path / "rep")) == 0
+    )
     again = json.loads((tmp_path / "r.json").read_text())
     failed_section = (tmp_path / "rep" / "summary.md").read_text().split("## Failed runs")[1]
     assert "| 40 |" in failed_section and "do not fit" in failed_section
@@ -76,12 +81,19 @@ def test_failed_runs_are_recorded_not_fatal_and_tried_again(tmp_path, capsys):
 
 
 def test_report_writes_tables_and_figures(tmp_path):
-    config = write_study(tmp_path, 'p = [0, 1, 2]\nsearch = ["exact", "ga"]\nn = [1, 3]',
-                         "seed = [0, 1]\nmax_generations = [5, 40]")
+    config = write_study(
+        tmp_path, 'p = [0, 1, 2]\nsearch = ["exact", "ga"]\nn = [1, 3]', "seed = [0, 1]\nmax_generations = [5, 40]"
+    )
     report = tmp_path / "report"
     assert sweep(config, tmp_path / "s.sqlite", "--workers", "2", "--report", str(report)) == 0
-    for name in ("runs.csv", "summary.csv", "summary.md", "objective_vs_p.png", "break_stability.png",
-                 "ga_success.png"):
+    for name in (
+        "runs.csv",
+        "summary.csv",
+        "summary.md",
+        "objective_vs_p.png",
+        "break_stability.png",
+        "ga_success.png",
+    ):
         assert (report / name).stat().st_size > 200, name
     text = (report / "summary.md").read_text()
     assert "## Objective against p" in text and "## GA success against budget" in text
@@ -90,8 +102,11 @@ def test_report_writes_tables_and_figures(tmp_path):
     summary = pd.read_csv(report / "summary.csv")
     assert len(summary) == 2 * 3  # (n) × (p)
     assert (summary["best_objective"] >= summary["exact_objective"] * (1 - 1e-9)).all()
-    success_rows = [line.split("|")[1:-1] for line in text.split("## GA success against budget")[1].splitlines()
-                    if line.startswith("| yes | 60 ")]
+    success_rows = [
+        line.split("|")[1:-1]
+        for line in text.split("## GA success against budget")[1].splitlines()
+        if line.startswith("| yes | 60 ")
+    ]
     assert sorted({int(cells[3]) for cells in success_rows}) == [300, 2400]  # population 60 × 5 and × 40
     assert {int(cells[4]) for cells in success_rows} == {1, 2}  # p = 0 has no GA runs
 
@@ -114,8 +129,19 @@ def test_bad_study_is_one_line_exit_2(tmp_path, capsys):
 def test_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys):
     pytest.importorskip("dask.distributed")
     config = write_study(tmp_path, "p = [1]")
-    status = main(["sweep", str(config), "--db", str(tmp_path / "s.sqlite"), "--quiet",
-                   "--scheduler", "tcp://127.0.0.1:9", "--connect-timeout", "1"])
+    status = main(
+        [
+            "sweep",
+            str(config),
+            "--db",
+            str(tmp_path / "s.sqlite"),
+            "--quiet",
+            "--scheduler",
+            "tcp://127.0.0.1:9",
+            "--connect-timeout",
+            "1",
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2
     assert len(err) == 1 and "cannot reach the Dask scheduler" in err[0] and "tcp://127.0.0.1:9" in err[0]

@@ -21,7 +21,11 @@ def data_line(path=DATA):
 
 
 def test_grid_expands_to_every_combination_and_ga_settings_only_for_ga(tmp_path):
-    study = read_study(write(tmp_path, data_line() + """
+    study = read_study(
+        write(
+            tmp_path,
+            data_line()
+            + """
 [grid]
 p = {start = 1, stop = 3}
 n = [1, 3]
@@ -29,7 +33,9 @@ search = ["exact", "ga"]
 [ga]
 seed = {start = 0, stop = 4, step = 2}
 max_generations = [20, 80]
-"""))
+""",
+        )
+    )
     exact = [r for r in study.runs if r.spec["search"]["method"] == "exact"]
     ga = [r for r in study.runs if r.spec["search"]["method"] == "ga"]
     assert len(exact) == 3 * 2
@@ -43,24 +49,36 @@ max_generations = [20, 80]
 
 
 def test_p_zero_ga_is_the_exact_run_and_appears_once(tmp_path):
-    study = read_study(write(tmp_path, data_line() + """
+    study = read_study(
+        write(
+            tmp_path,
+            data_line()
+            + """
 [grid]
 p = [0, 1]
 search = ["exact", "ga"]
 [ga]
 seed = [0, 1, 2]
-"""))
+""",
+        )
+    )
     at_zero = [r for r in study.runs if r.spec["model"]["p"] == 0]
     assert len(at_zero) == 1 and at_zero[0].spec["search"]["method"] == "exact"
     assert len(study.runs) == 1 + 1 + 3
 
 
 def test_float_ranges_scalars_and_defaults(tmp_path):
-    study = read_study(write(tmp_path, data_line() + """
+    study = read_study(
+        write(
+            tmp_path,
+            data_line()
+            + """
 [grid]
 c = {start = 2.0, stop = 3.0, step = 0.5}
 p = 2
-"""))
+""",
+        )
+    )
     assert [r.spec["model"]["c"] for r in study.runs] == [2.0, 2.5, 3.0]
     model = study.runs[0].spec["model"]
     assert model["p"] == 2 and model["n"] == 3 and model["objective"] == "sae" and model["intercept"] is True
@@ -90,29 +108,47 @@ def test_changed_data_changes_every_run_hash(tmp_path):
     assert len(before) == len(after) == 2 and not set(before) & set(after)
     moved = tmp_path / "moved.csv"
     shutil.copy(copy, moved)
-    assert [r.run_hash for r in read_study(write(tmp_path, data_line(moved) + "[grid]\np = [1, 2]\n", "m.toml")).runs] == after
+    assert [
+        r.run_hash for r in read_study(write(tmp_path, data_line(moved) + "[grid]\np = [1, 2]\n", "m.toml")).runs
+    ] == after
 
 
 def test_sensor_options_resolve_per_data_set(tmp_path):
-    study = read_study(write(tmp_path, data_line() + """
+    study = read_study(
+        write(
+            tmp_path,
+            data_line()
+            + """
 [grid]
 p = 1
 sensors = ["all", ["T1", "T3"], {select = "forward", k = 2}, {select = "lasso", k = 3, folds = 4}]
-"""))
+""",
+        )
+    )
     specs = [r.spec["sensors"] for r in study.runs]
     assert specs[0] == {"names": ["T1", "T2", "T3", "T4"]}
     assert specs[1] == {"names": ["T1", "T3"]}
-    assert specs[2] == {"select": "forward", "k": 2, "candidates": ["T1", "T2", "T3", "T4"], "folds": 5,
-                        "cluster_corr": 0.98}
+    assert specs[2] == {
+        "select": "forward",
+        "k": 2,
+        "candidates": ["T1", "T2", "T3", "T4"],
+        "folds": 5,
+        "cluster_corr": 0.98,
+    }
     assert specs[3]["folds"] == 4 and specs[3]["k"] == 3
 
 
 def test_single_name_list_is_one_subset_and_patterns_pick_candidates(tmp_path):
-    study = read_study(write(tmp_path, f'[data]\npath = "{DATA.as_posix()}"\ntemps = ["T[13]", "T4"]\n'
-                             '[grid]\np = 1\nsensors = ["T1", "T2"]\n'))
+    study = read_study(
+        write(
+            tmp_path,
+            f'[data]\npath = "{DATA.as_posix()}"\ntemps = ["T[13]", "T4"]\n[grid]\np = 1\nsensors = ["T1", "T2"]\n',
+        )
+    )
     assert [r.spec["sensors"] for r in study.runs] == [{"names": ["T1", "T2"]}]
-    study = read_study(write(tmp_path, f'[data]\npath = "{DATA.as_posix()}"\ntemps = ["T[13]", "T4"]\n'
-                             '[grid]\np = 1\n', "b.toml"))
+    study = read_study(
+        write(tmp_path, f'[data]\npath = "{DATA.as_posix()}"\ntemps = ["T[13]", "T4"]\n[grid]\np = 1\n', "b.toml")
+    )
     assert study.runs[0].spec["sensors"] == {"names": ["T1", "T3", "T4"]}
 
 
@@ -125,14 +161,14 @@ def test_single_name_list_is_one_subset_and_patterns_pick_candidates(tmp_path):
         ("[grid]\np = {start = 0, end = 3}\n", ["[grid] p", "unknown key 'end'"]),
         ("[grid]\np = {start = 3, stop = 1}\n", ["[grid] p", "below start"]),
         ("[grid]\np = [1, -1]\n", ["[grid] p", "-1"]),
-        ("[grid]\nobjective = [\"mae\"]\n", ["[grid] objective", "sae, sse"]),
-        ("[grid]\nsearch = \"pso\"\n", ["[grid] search"]),
-        ("[grid]\nsensors = [[\"T1\", \"T9\"]]\n", ["sensors", "'T9'"]),
-        ("[grid]\nsensors = [{select = \"magic\", k = 2}]\n", ["select = 'magic'"]),
-        ("[grid]\nsensors = [{select = \"lasso\", k = 9}]\n", ["k = 9", "4 candidate"]),
-        ("[grid]\nsensors = [{select = \"lasso\", k = 2, alpha = 1}]\n", ["unknown key 'alpha'"]),
+        ('[grid]\nobjective = ["mae"]\n', ["[grid] objective", "sae, sse"]),
+        ('[grid]\nsearch = "pso"\n', ["[grid] search"]),
+        ('[grid]\nsensors = [["T1", "T9"]]\n', ["sensors", "'T9'"]),
+        ('[grid]\nsensors = [{select = "magic", k = 2}]\n', ["select = 'magic'"]),
+        ('[grid]\nsensors = [{select = "lasso", k = 9}]\n', ["k = 9", "4 candidate"]),
+        ('[grid]\nsensors = [{select = "lasso", k = 2, alpha = 1}]\n', ["unknown key 'alpha'"]),
         ("[ga]\npopulation_size = [1]\n", ["[ga] population_size"]),
-        ("[study]\ncertify = \"maybe\"\n", ["certify"]),
+        ('[study]\ncertify = "maybe"\n', ["certify"]),
     ],
 )
 def test_bad_studies_name_the_key(tmp_path, body, words):

@@ -40,8 +40,19 @@ def test_dask_cluster_rows_equal_local_rows(tmp_path):
     assert main(["sweep", str(config), "--db", str(local_db), "--workers", "2", "--quiet"]) == 0
 
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-        status = main(["sweep", str(config), "--db", str(dask_db), "--scheduler", cluster.scheduler_address,
-                       "--quiet", "--json", str(tmp_path / "dask.json")])
+        status = main(
+            [
+                "sweep",
+                str(config),
+                "--db",
+                str(dask_db),
+                "--scheduler",
+                cluster.scheduler_address,
+                "--quiet",
+                "--json",
+                str(tmp_path / "dask.json"),
+            ]
+        )
         assert status == 0
         result = json.loads((tmp_path / "dask.json").read_text())
         assert result["executor"] == "dask" and result["failed"] == 0 and result["done"] == result["total"] == 10

@@ -30,15 +30,25 @@ def cycle():
 
 def test_ga_run_equals_a_direct_grouped_regressor_fit(tmp_path, cycle):
     X, y = cycle
-    study = study_of(tmp_path, 'p = [2, 3]\nsearch = "ga"\nobjective = ["sae", "sse"]',
-                     "seed = [4]\nmax_generations = [40]\npopulation_size = [30]")
+    study = study_of(
+        tmp_path,
+        'p = [2, 3]\nsearch = "ga"\nobjective = ["sae", "sse"]',
+        "seed = [4]\nmax_generations = [40]\npopulation_size = [30]",
+    )
     assert len(study.runs) == 4
     for run in study.runs:
         result = execute_run(run.spec, run.path)
         assert result["status"] == "done", result["error"]
         model = run.spec["model"]
-        direct = GroupedRegressor(p=model["p"], objective=model["objective"], search="ga", population_size=30,
-                                  max_generations=40, random_state=4, certify=False).fit(X, y)
+        direct = GroupedRegressor(
+            p=model["p"],
+            objective=model["objective"],
+            search="ga",
+            population_size=30,
+            max_generations=40,
+            random_state=4,
+            certify=False,
+        ).fit(X, y)
         assert result["breaks"] == direct.breaks_
         assert result["objective"] == pytest.approx(direct.objective_value_, rel=1e-12)
         expected = np.column_stack([direct.intercept_, direct.coef_])

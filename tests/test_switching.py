@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_switching_models import noisy, shifted, synthetic_model
 
 from groupfit.errors import InputError
 from groupfit.grouping import serving_group_index
@@ -24,7 +25,6 @@ from groupfit.switching import (
     rule_parameters,
     switch_windows,
 )
-from test_switching_models import noisy, shifted, synthetic_model
 
 N_TINY = 20
 
@@ -90,14 +90,17 @@ def test_windows_with_and_without_overlap():
     assert switch_windows([10], 1) == [[10, 10]]
 
 
-@pytest.mark.parametrize("shift, expected_sample, expected_kind", [
-    (0, 8, SWITCH_CRITERION),
-    (1, 9, SWITCH_CRITERION),
-    (2, 10, SWITCH_FORCED),
-    (3, 10, SWITCH_FORCED),
-    (-1, 8, SWITCH_CRITERION),
-    (-3, 8, SWITCH_CRITERION),
-])
+@pytest.mark.parametrize(
+    "shift, expected_sample, expected_kind",
+    [
+        (0, 8, SWITCH_CRITERION),
+        (1, 9, SWITCH_CRITERION),
+        (2, 10, SWITCH_FORCED),
+        (3, 10, SWITCH_FORCED),
+        (-1, 8, SWITCH_CRITERION),
+        (-3, 8, SWITCH_CRITERION),
+    ],
+)
 def test_switch_sample_of_a_shifted_run_by_hand(shift, expected_sample, expected_kind):
     replay = SwitchingRule(tiny_model()).replay(shifted(tiny_temps(), shift))
     switches = replay.switch_samples()
@@ -286,13 +289,16 @@ def full_windows(model):
     return switch_windows(model["breaks"], model["n"])
 
 
-@pytest.mark.parametrize("key, value, message", [
-    ("windows", [[5, 3]], "switching.windows"),
-    ("directions", [2, 0, 0], "switching.directions"),
-    ("temp_min_c", [0.0], "switching.temp_min_c must be a list of 4"),
-    ("rate_limit_um", 0.0, "switching.rate_limit_um must be positive"),
-    ("criterion_index", 9, "switching.criterion_index"),
-])
+@pytest.mark.parametrize(
+    "key, value, message",
+    [
+        ("windows", [[5, 3]], "switching.windows"),
+        ("directions", [2, 0, 0], "switching.directions"),
+        ("temp_min_c", [0.0], "switching.temp_min_c must be a list of 4"),
+        ("rate_limit_um", 0.0, "switching.rate_limit_um must be positive"),
+        ("criterion_index", 9, "switching.criterion_index"),
+    ],
+)
 def test_broken_rule_keys_are_refused_on_loading(tmp_path, key, value, message):
     model, _ = synthetic_model()
     model["switching"][key] = value
@@ -323,13 +329,21 @@ def model_and_stream(draw):
     series = np.cumsum(draw(st.lists(st.floats(-1, 1), min_size=length, max_size=length)))
     temps = np.column_stack([20 + series, np.linspace(20, 25, length)])
     model = tiny_model(temps=temps)
-    model.update(p=len(breaks), n=n, breaks=breaks, n_samples=length,
-                 coefficients=[[float(g), 1.0, -1.0] for g in range(len(breaks) + 1)])
+    model.update(
+        p=len(breaks),
+        n=n,
+        breaks=breaks,
+        n_samples=length,
+        coefficients=[[float(g), 1.0, -1.0] for g in range(len(breaks) + 1)],
+    )
     model["switching"].update(rule_parameters(model, temps, criterion_index=0))
     live = temps + np.asarray(draw(st.lists(st.floats(-3, 3), min_size=length, max_size=length)))[:, None]
     bad_rows = draw(st.lists(st.integers(0, length - 1), max_size=15))
-    values = draw(st.lists(st.sampled_from([np.nan, np.inf, -np.inf, 1e300, 1e-300]), min_size=len(bad_rows),
-                           max_size=len(bad_rows)))
+    values = draw(
+        st.lists(
+            st.sampled_from([np.nan, np.inf, -np.inf, 1e300, 1e-300]), min_size=len(bad_rows), max_size=len(bad_rows)
+        )
+    )
     for row, value in zip(bad_rows, values):
         live[row, 0] = value
     return model, live

@@ -9,6 +9,13 @@ import copy
 
 import numpy as np
 import pytest
+from test_switching_models import (
+    augmented_model,
+    augmented_validation,
+    readings,
+    shifted,
+    source_faults,
+)
 
 from groupfit.diagnose.residual import model_inputs, predict, residual
 from groupfit.errors import InputError
@@ -25,13 +32,6 @@ from groupfit.switching import (
     SwitchingRule,
     replay_groups,
     source_valid_range,
-)
-from test_switching_models import (
-    augmented_model,
-    augmented_validation,
-    readings,
-    shifted,
-    source_faults,
 )
 
 
@@ -59,8 +59,17 @@ def held_series(values: np.ndarray, low: float, high: float) -> np.ndarray:
 def test_readings_are_the_measured_inputs_then_the_sources_in_order_of_first_appearance():
     model, _ = augmented_model("all kinds p=2")
     tables = RuleTables.from_model(model)
-    assert tables.input_names == ("T1", "T2", "T3", "T4", "T_amb~lp1800s", "T_amb~ddt", "speed_rpm~delay3", "T5",
-                                  "T1~lp600s")
+    assert tables.input_names == (
+        "T1",
+        "T2",
+        "T3",
+        "T4",
+        "T_amb~lp1800s",
+        "T_amb~ddt",
+        "speed_rpm~delay3",
+        "T5",
+        "T1~lp600s",
+    )
     assert tables.raw_names == ("T1", "T2", "T3", "T4", "T_amb", "speed_rpm", "T5")
     assert [d.reading for d in tables.derived] == [4, 4, 5, 6, 0]  # T1~lp600s reads the measured T1
     assert tables.input_reading == (0, 1, 2, 3, -1, -1, -1, -1, -1)
@@ -136,18 +145,21 @@ def test_source_invalid_at_the_start_starts_its_transforms_at_its_first_good_rea
     assert np.array_equal(inputs[5:, 4], expected)
 
 
-@pytest.mark.parametrize("values, expected", [
-    ([0, 1, 1, 0], (0.0, 1.0)),  # on/off signal
-    ([0, 0, 0], (0.0, 1.0)),  # an on/off signal that stayed off
-    ([0, 2000, 2000, 0], (0.0, 4000.0)),  # spindle speed, r/min: never below 0, up to twice the span
-    ([0, 8000], (0.0, 16000.0)),
-    ([19.5, 23.768], (7.0, 36.0)),  # ambient, degC: half its magnitude beyond the span
-    ([20.0, 20.0], (10.0, 30.0)),
-    ([-200.0, 300.0], (-700.0, 800.0)),  # an axis position: symmetric
-    ([0.2, 0.7], (0.0, 2.0)),  # at least one unit, not below 0
-    ([1e9, 3e9], (0.0, 5e9)),
-    ([np.nan, np.inf], None),
-])
+@pytest.mark.parametrize(
+    "values, expected",
+    [
+        ([0, 1, 1, 0], (0.0, 1.0)),  # on/off signal
+        ([0, 0, 0], (0.0, 1.0)),  # an on/off signal that stayed off
+        ([0, 2000, 2000, 0], (0.0, 4000.0)),  # spindle speed, r/min: never below 0, up to twice the span
+        ([0, 8000], (0.0, 16000.0)),
+        ([19.5, 23.768], (7.0, 36.0)),  # ambient, degC: half its magnitude beyond the span
+        ([20.0, 20.0], (10.0, 30.0)),
+        ([-200.0, 300.0], (-700.0, 800.0)),  # an axis position: symmetric
+        ([0.2, 0.7], (0.0, 2.0)),  # at least one unit, not below 0
+        ([1e9, 3e9], (0.0, 5e9)),
+        ([np.nan, np.inf], None),
+    ],
+)
 def test_valid_range_of_a_source_column(values, expected):
     assert source_valid_range(values) == expected
     if expected is not None:
@@ -238,14 +250,17 @@ def break_ranges(model):
     model["switching"][SOURCE_RANGES_KEY]["T_amb"] = [30.0, 10.0]
 
 
-@pytest.mark.parametrize("breakage, message", [
-    (break_name, "does not match its transform"),
-    (break_transform, "transform 'median'"),
-    (break_tau, "tau_s > 0"),
-    (break_delay, "at most 32767"),
-    (break_criterion, "must be a measured input"),
-    (break_ranges, "source_ranges\\['T_amb'\\]"),
-])
+@pytest.mark.parametrize(
+    "breakage, message",
+    [
+        (break_name, "does not match its transform"),
+        (break_transform, "transform 'median'"),
+        (break_tau, "tau_s > 0"),
+        (break_delay, "at most 32767"),
+        (break_criterion, "must be a measured input"),
+        (break_ranges, "source_ranges\\['T_amb'\\]"),
+    ],
+)
 def test_broken_derived_inputs_are_refused_on_loading(tmp_path, breakage, message):
     model, _ = augmented_model("all kinds p=2")
     breakage(model)

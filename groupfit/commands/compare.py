@@ -23,7 +23,9 @@ MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
 
 def add_parser(verbs) -> None:
     compare = verbs.add_parser("compare", help="grouped p = 0…P vs global MLR vs physics AR(1) on all runs")
-    compare.add_argument("config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)")
+    compare.add_argument(
+        "config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)"
+    )
     add_data_options(compare)
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
@@ -52,7 +54,9 @@ def settings_from_config(config: dict) -> ComparisonSettings:
         structural_gain_um_per_K=table.get("structural_gain_um_per_K"),
         conditions=tuple(table["conditions"]),
         p_target=table.get("p_target"),
-        ga={key: config["search"][key] for key in ("population_size", "max_generations", "stall_generations", "polish")},
+        ga={
+            key: config["search"][key] for key in ("population_size", "max_generations", "stall_generations", "polish")
+        },
     )
 
 
@@ -118,7 +122,9 @@ def result_json(result: ComparisonResult) -> dict[str, Any]:
 def compare_report(result: ComparisonResult, written) -> str:
     """The comparison table and its notes, as printed."""
     modelling = result.runs[0]
-    keys = ["mlr", "ar1"] + sorted({f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:]))
+    keys = ["mlr", "ar1"] + sorted(
+        {f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:])
+    )
     index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
     header_runs = ["model".ljust(16)]
     header_cols = [" " * 16]
@@ -134,8 +140,11 @@ def compare_report(result: ComparisonResult, written) -> str:
             r = index[(key, run)]
             cells.append(f"{r['R_mm']:>8.4f}{r['R_um']:>9.2f}{r['rms_um']:>8.3f}{r['max_um']:>9.3f}")
         lines.append("  ".join(cells))
-    lines += ["", f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
-              f"{result.condition_changes}):"]
+    lines += [
+        "",
+        f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
+        f"{result.condition_changes}):",
+    ]
     for key in keys[2:]:
         r = index[(key, modelling)]
         pairs = ", ".join(f"{b} ({d})" for b, d in zip(r["breaks"], r["break_distance"]))
@@ -148,7 +157,9 @@ def compare_report(result: ComparisonResult, written) -> str:
         f"chooses p = {target['p'] if target['p'] is not None else 'none up to pmax'}"
     )
     stats = result.mlr_statistics
-    terms = ", ".join(f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"])
+    terms = ", ".join(
+        f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"]
+    )
     f_text = f"F = {stats['f_value']:.4g} (p = {stats['f_p_value']:.2g}), " if stats["f_value"] is not None else ""
     lines.append(f"MLR: {terms}; {f_text}R² = {stats['r_squared']:.5f}, σ = {stats['sigma_um']:.3g} µm")
     ar1 = result.ar1
@@ -156,7 +167,8 @@ def compare_report(result: ComparisonResult, written) -> str:
     lb = ar1["ljung_box"]
     lines.append(
         f"AR(1): C1 = {ar1['C1']:.5f}, {c2}; unseen levels by {ar1['scaling'].replace('_', ' ')}; "
-        f"free run from each run's first measured error; Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
+        f"free run from each run's first measured error; "
+        f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
     )
     lines.append(
         f"grouped models on validation runs: groups chosen by {result.validation_rule}; "

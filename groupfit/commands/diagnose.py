@@ -24,10 +24,20 @@ def add_parser(verbs) -> None:
     parser.add_argument("--time", default=DEFAULT_TIME, metavar="COLUMN", help="time column (default time_s)")
     parser.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     parser.add_argument("--out", default="groupfit-out", metavar="DIR", help="folder for figures and the new model")
-    parser.add_argument("--min-score", type=float, default=MIN_SCORE, metavar="F",
-                        help=f"least out-of-sample share of the residual an effect must explain (default {MIN_SCORE})")
-    parser.add_argument("--min-effect", type=float, default=MIN_EFFECT_RMS_UM, metavar="UM",
-                        help=f"least residual RMS in µm an effect must remove (default {MIN_EFFECT_RMS_UM})")
+    parser.add_argument(
+        "--min-score",
+        type=float,
+        default=MIN_SCORE,
+        metavar="F",
+        help=f"least out-of-sample share of the residual an effect must explain (default {MIN_SCORE})",
+    )
+    parser.add_argument(
+        "--min-effect",
+        type=float,
+        default=MIN_EFFECT_RMS_UM,
+        metavar="UM",
+        help=f"least residual RMS in µm an effect must remove (default {MIN_EFFECT_RMS_UM})",
+    )
     parser.set_defaults(handler=run_diagnose)
 
 
@@ -58,7 +68,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
     from groupfit.commands.compare import live_switching_rule
 
     result = diagnose(
-        model, data, validate, live_rule=live_switching_rule(), min_score=args.min_score,
+        model,
+        data,
+        validate,
+        live_rule=live_switching_rule(),
+        min_score=args.min_score,
         min_effect_rms_um=args.min_effect,
     )
 
@@ -111,8 +125,10 @@ def diagnosis_report(result: DiagnosisResult, data: Run, validate: Run | None, w
     judged = validate.name if validate is not None else data.name
     if result.added:
         for c in result.added:
-            lines.append(f"missing effect: {column_words(c.feature.column)}, {c.feature.describe()} "
-                         f"(explains {100 * c.score:.0f} % of the residual out of sample)")
+            lines.append(
+                f"missing effect: {column_words(c.feature.column)}, {c.feature.describe()} "
+                f"(explains {100 * c.score:.0f} % of the residual out of sample)"
+            )
         b, a = result.before[judge], result.after[judge]
         lines.append(
             f"{'validation' if validate is not None else 'measured'} run {judged}: RMS {b['rms_um']:.3g} → "
@@ -121,7 +137,9 @@ def diagnosis_report(result: DiagnosisResult, data: Run, validate: Run | None, w
         )
         lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
     else:
-        lines.append("nothing missing: no candidate explains a significant part of the residual; the model is unchanged")
+        lines.append(
+            "nothing missing: no candidate explains a significant part of the residual; the model is unchanged"
+        )
     lines.append("")
     lines.append(f"{'candidate':<24} {'transform':<28} {'score':>6} {'removes RMS µm':>15}")
     for c in result.candidates[:10]:
@@ -138,7 +156,8 @@ def diagnosis_report(result: DiagnosisResult, data: Run, validate: Run | None, w
     dr_b, dr_a = result.checks_before["drift"], result.checks_after["drift"]
     lines.append(
         f"residual on {data.name}: Ljung–Box Q({lb_b['lags']}) {lb_b['Q']:.0f} → {lb_a['Q']:.0f}; "
-        f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h (HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
+        f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
+        f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
     )
     lines += [f"note: {n}" for n in result.notes]
     lines.append("wrote   " + ", ".join(str(p) for p in written))

@@ -13,7 +13,9 @@ def add_parser(verbs) -> None:
     export = verbs.add_parser("export", help="write the run-time switching rule as C, Structured Text, JSON or a sheet")
     export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
     export.add_argument(
-        "--target", required=True, choices=(*TARGETS, "all"),
+        "--target",
+        required=True,
+        choices=(*TARGETS, "all"),
         help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "
         "sheet: controller sheet (text and JSON); all: every target",
     )
@@ -21,11 +23,17 @@ def add_parser(verbs) -> None:
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
     export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
     export.add_argument(
-        "--resolution-um", type=float, default=0.1, metavar="UM",
+        "--resolution-um",
+        type=float,
+        default=0.1,
+        metavar="UM",
         help="sheet: µm per count of an integer compensation register (default 0.1)",
     )
     export.add_argument(
-        "--counts-limit", type=int, default=30000, metavar="N",
+        "--counts-limit",
+        type=int,
+        default=30000,
+        metavar="N",
         help="sheet: largest magnitude of that register in counts (default 30000)",
     )
     export.set_defaults(handler=run_export)
@@ -38,8 +46,12 @@ def run_export(args: argparse.Namespace) -> int:
     for target in targets:
         files.update(
             render(
-                model, target, real=args.real, name=args.name,
-                resolution_um=args.resolution_um, counts_limit=args.counts_limit,
+                model,
+                target,
+                real=args.real,
+                name=args.name,
+                resolution_um=args.resolution_um,
+                counts_limit=args.counts_limit,
             )
         )
     out_dir = check_output_dir(args.output)

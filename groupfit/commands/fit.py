@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-
 from groupfit.commands.common import (
     StageProgress,
     add_data_options,
@@ -94,7 +93,8 @@ def run_fit(args: argparse.Namespace) -> int:
         estimator.breaks_,
         estimator.soft_groups_,
         figure_path,
-        title=f"{run.name}: grouped model, p = {estimator.p}, {estimator.objective} Rg = {estimator.objective_value_:.4g}",
+        title=f"{run.name}: grouped model, p = {len(estimator.breaks_)}, "
+        f"{estimator.objective} Rg = {estimator.objective_value_:.4g}",
     )
     result = {**model, "search": estimator.search_}
     if selection is not None:
@@ -142,7 +142,9 @@ def select_breaks(config: dict, run: Run) -> dict:
 
 
 def selection_summary(selection: dict) -> str:
-    table = ", ".join(f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"])))
+    table = ", ".join(
+        f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"]))
+    )
     rule = "smallest BIC" if selection["rule"] == "bic" else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
     return f"p auto  {rule}: p = {selection['p']}  ({table})"
 

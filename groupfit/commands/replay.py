@@ -21,21 +21,30 @@ def add_parser(verbs) -> None:
     replay = verbs.add_parser("replay", help="run the run-time switching rule over a recorded run")
     replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
     replay.add_argument(
-        "--data", required=True, metavar="CSV",
+        "--data",
+        required=True,
+        metavar="CSV",
         help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
     )
     replay.add_argument("--time", default="time_s", metavar="COLUMN", help="time column in seconds (default time_s)")
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
     replay.add_argument(
-        "--precision", choices=("double", "single"), default="double",
+        "--precision",
+        choices=("double", "single"),
+        default="double",
         help="arithmetic of the rule: double, or single as a PLC REAL computes",
     )
     replay.add_argument(
-        "--resolution-um", type=float, metavar="UM",
+        "--resolution-um",
+        type=float,
+        metavar="UM",
         help="also report the compensation in integer controller counts of this many µm (e.g. 0.1)",
     )
     replay.add_argument(
-        "--counts-limit", type=int, default=30000, metavar="N",
+        "--counts-limit",
+        type=int,
+        default=30000,
+        metavar="N",
         help="largest magnitude of those counts (default 30000)",
     )
     replay.add_argument("--json", metavar="FILE", help="write the per-sample result as JSON ('-' for stdout)")
@@ -228,7 +237,10 @@ def plot_replay(run, tables: RuleTables, replay: Replay, model: dict[str, Any], 
     for k, (first, final) in enumerate(zip(tables.window_first, tables.window_last)):
         if first - 1 <= last:
             bottom.axvspan(
-                hours[first - 1], hours[min(final - 1, last)], color="tab:blue", alpha=0.12,
+                hours[first - 1],
+                hours[min(final - 1, last)],
+                color="tab:blue",
+                alpha=0.12,
                 label="switch window" if k == 0 else None,
             )
     for k, b in enumerate(tables.breaks):
@@ -237,8 +249,14 @@ def plot_replay(run, tables: RuleTables, replay: Replay, model: dict[str, Any], 
     labelled = set()
     for s in replay.switch_samples():
         kind = "forced switch" if s["forced"] else "criterion switch"
-        bottom.plot(hours[s["i"] - 1], s["to"], "v" if s["forced"] else "o", color="tab:red", ms=5,
-                    label=None if kind in labelled else kind)
+        bottom.plot(
+            hours[s["i"] - 1],
+            s["to"],
+            "v" if s["forced"] else "o",
+            color="tab:red",
+            ms=5,
+            label=None if kind in labelled else kind,
+        )
         labelled.add(kind)
     bottom.set_yticks(range(1, tables.n_groups + 1))
     bottom.set_ylabel("group")

@@ -19,8 +19,13 @@ def add_parser(verbs) -> None:
     sweep.add_argument("config", metavar="CONFIG", help="TOML sweep study (see docs/sweep.md)")
     sweep.add_argument("--workers", type=int, metavar="K", help="local worker processes (default: all cores)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
-    sweep.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
-                       help="seconds to wait for the Dask scheduler (default 10)")
+    sweep.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=10.0,
+        metavar="SECONDS",
+        help="seconds to wait for the Dask scheduler (default 10)",
+    )
     sweep.add_argument("--db", metavar="FILE", help="study database (SQLite; default [study] db or CONFIG-stem.sqlite)")
     sweep.add_argument("--report", metavar="DIR", help="write a summary table and figures to DIR")
     sweep.add_argument("--json", metavar="FILE", help="write counts and the database path as JSON ('-' for stdout)")
@@ -46,10 +51,14 @@ def run_sweep(args: argparse.Namespace) -> int:
     out = report_stream(args)
     try:
         with StudyStore(db) as store:
-            print(f"study {study.name} ({args.config}): {len(study.runs)} runs on {executor.describe()}", file=out,
-                  flush=True)
-            bar = tqdm(total=len(study.runs), desc="runs", unit="run", file=sys.stderr,
-                       disable=True if args.quiet else None)
+            print(
+                f"study {study.name} ({args.config}): {len(study.runs)} runs on {executor.describe()}",
+                file=out,
+                flush=True,
+            )
+            bar = tqdm(
+                total=len(study.runs), desc="runs", unit="run", file=sys.stderr, disable=True if args.quiet else None
+            )
             try:
                 already = len(store.done_hashes(r.run_hash for r in study.runs))
                 bar.update(already)
@@ -74,8 +83,10 @@ def run_sweep(args: argparse.Namespace) -> int:
     for run_hash, message in outcome.failures[:MAX_FAILURES_SHOWN]:
         print(f"  failed {run_hash[:12]}: {message}", file=out)
     if outcome.failed > MAX_FAILURES_SHOWN:
-        print(f"  … and {outcome.failed - MAX_FAILURES_SHOWN} more failed runs (status 'failed' in the database)",
-              file=out)
+        print(
+            f"  … and {outcome.failed - MAX_FAILURES_SHOWN} more failed runs (status 'failed' in the database)",
+            file=out,
+        )
     if written:
         print("  report " + ", ".join(str(p) for p in written), file=out)
     write_json(

@@ -32,7 +32,10 @@ def augment_model(model: dict[str, Any], run: Run, inputs: np.ndarray, feature: 
     X = np.column_stack([inputs, values])
     names = (*model["temps"], feature.name)
     estimator = GroupedRegressor(
-        n=model["n"], c=model["c"], objective=model["objective"], fit_intercept=model["intercept"],
+        n=model["n"],
+        c=model["c"],
+        objective=model["objective"],
+        fit_intercept=model["intercept"],
         fixed_breaks=list(model["breaks"]),
     ).fit(X, run.error)
     augmented_run = replace(run, temps=X, temp_names=names)

@@ -49,8 +49,11 @@ def shortest_literal(value: float, single: bool) -> str:
         number = np.float32(value)
         if not np.isfinite(number):
             raise ValueError(f"{value!r} does not fit a single-precision number")
-        text = np.format_float_positional(number, unique=True, trim="0") if 1e-4 <= abs(number) < 1e7 or number == 0 \
+        text = (
+            np.format_float_positional(number, unique=True, trim="0")
+            if 1e-4 <= abs(number) < 1e7 or number == 0
             else np.format_float_scientific(number, unique=True, trim="0")
+        )
     else:
         number = float(value)
         if not math.isfinite(number):

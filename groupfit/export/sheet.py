@@ -39,8 +39,9 @@ def sinumerik_abs_value_mm(compensation_um: float) -> float:
     return float(compensation_um) / UM_PER_MM
 
 
-def sinumerik_temp_comp_type(position_independent: bool = True, position_dependent: bool = False,
-                             tool_direction: bool = False) -> int:
+def sinumerik_temp_comp_type(
+    position_independent: bool = True, position_dependent: bool = False, tool_direction: bool = False
+) -> int:
     """MD32750 TEMP_COMP_TYPE: bit 0, bit 1 and bit 2 as named."""
     return int(position_independent) | (int(position_dependent) << 1) | (int(tool_direction) << 2)
 

@@ -242,6 +242,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         raise InputError(f"Structured Text real type {real!r}: choose REAL or LREAL")
     if not IDENTIFIER.match(name):
         raise InputError(f"block name {name!r}: use letters, digits and '_' (a letter or '_' first, at most 64)")
+
     def literal(value: float) -> str:
         return shortest_literal(value, single=(real == "REAL"))
 
@@ -325,8 +326,10 @@ def input_lines(tables: RuleTables) -> str:
     for k, d in enumerate(tables.derived, start=1):
         lines.append(f"    derivedValue[{k}] = {_ascii(d.name)}: {_ascii(d.describe())} (Temps[{d.reading + 1}])")
         if d.transform == "lowpass":
-            lines.append(f"      y := LOWPASS_B_{k} * v + LOWPASS_A_{k} * y, y = v before its first call;"
-                         " A = exp(-dt/tau), B = 1 - A")
+            lines.append(
+                f"      y := LOWPASS_B_{k} * v + LOWPASS_A_{k} * y, y = v before its first call;"
+                " A = exp(-dt/tau), B = 1 - A"
+            )
         elif d.transform == "derivative":
             lines.append(f"      (v - previous v) * DERIVATIVE_SCALE_{k} (3600/dt: per hour), 0 at the first call")
         elif d.transform == "delay":

@@ -17,24 +17,22 @@ import numpy as np
 from groupfit.errors import InputError
 
 from .geometry import HousingGeometry, MeshResolution
-from .schedule import (PALMGREN_SPEED_EXPONENT, AmbientProfile,
-                       EquilibriumRule, StepSchedule)
+from .schedule import PALMGREN_SPEED_EXPONENT, AmbientProfile, EquilibriumRule, StepSchedule
 from .unsensed import HEAT_INPUTS, UnsensedPart
 
-RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on",
-                    "q_W_m2"}
+RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on", "q_W_m2"}
 
 
 @dataclass(frozen=True)
 class Material:
     """Isotropic material; defaults are the headstock values of docs/methods.md §1."""
 
-    density: float = 7.8e3            # kg/m³
-    heat_capacity: float = 502.4      # J/(kg·K)
-    conductivity: float = 46.4        # W/(m·K)
-    expansion: float = 1.06e-5        # 1/K
+    density: float = 7.8e3  # kg/m³
+    heat_capacity: float = 502.4  # J/(kg·K)
+    conductivity: float = 46.4  # W/(m·K)
+    expansion: float = 1.06e-5  # 1/K
     poisson: float = 0.3
-    young: float = 209e9              # Pa
+    young: float = 209e9  # Pa
 
 
 @dataclass(frozen=True)
@@ -81,8 +79,7 @@ class HeadstockScenario:
     boundary: ThermalBoundary = field(default_factory=ThermalBoundary)
     bearings: BearingHeat = field(default_factory=BearingHeat)
     ambient: AmbientProfile = field(default_factory=AmbientProfile)
-    spindle: StepSchedule = StepSchedule(((3000.0, 2000.0), (1000.0, 0.0),
-                                          (4000.0, 2000.0), (1000.0, 0.0)))
+    spindle: StepSchedule = StepSchedule(((3000.0, 2000.0), (1000.0, 0.0), (4000.0, 2000.0), (1000.0, 0.0)))
     hold_until_equilibrium_rpm: float | None = 2000.0
     equilibrium: EquilibriumRule = field(default_factory=EquilibriumRule)
     sampling_period_s: float = 100.0
@@ -109,19 +106,18 @@ class RodScenario:
     order: int = 2
     sampling_period_s: float = 30.0
     substeps: int = 3
-    flux: StepSchedule = StepSchedule(((14400.0, 2000.0), (5400.0, 0.0),
-                                       (14400.0, 3000.0), (52200.0, 0.0)))
+    flux: StepSchedule = StepSchedule(((14400.0, 2000.0), (5400.0, 0.0), (14400.0, 3000.0), (52200.0, 0.0)))
 
 
 # Sensors 2 mm under the outer surfaces, where thermocouples or PT100 probes
 # would be fitted on a real housing.
 DEFAULT_SENSORS = {
-    "T1": (0.20, 0.448, 0.45),   # top face, above the front bearing
-    "T2": (0.20, 0.448, 0.05),   # top face, above the rear bearing
-    "T3": (0.398, 0.30, 0.25),   # side face at axis height, mid-length
-    "T4": (0.30, 0.30, 0.498),   # front face beside the spindle nose
-    "T5": (0.20, 0.20, 0.002),   # rear face below the bore
-    "T6": (0.398, 0.02, 0.25),   # side face just above the mounting face
+    "T1": (0.20, 0.448, 0.45),  # top face, above the front bearing
+    "T2": (0.20, 0.448, 0.05),  # top face, above the rear bearing
+    "T3": (0.398, 0.30, 0.25),  # side face at axis height, mid-length
+    "T4": (0.30, 0.30, 0.498),  # front face beside the spindle nose
+    "T5": (0.20, 0.20, 0.002),  # rear face below the bore
+    "T6": (0.398, 0.02, 0.25),  # side face just above the mounting face
 }
 
 
@@ -146,8 +142,7 @@ class _Table:
 
     def number(self, key, default, *, positive=False, nonnegative=False):
         value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise _fail(self.key(key), f"expected a number, got {value!r}")
         if positive and value <= 0:
             raise _fail(self.key(key), f"must be positive, got {value!r}")
@@ -179,9 +174,11 @@ class _Table:
 
     def vector(self, key, default, length):
         value = self.get(key, default)
-        if (not isinstance(value, (list, tuple)) or len(value) != length
-                or any(isinstance(v, bool) or not isinstance(v, (int, float))
-                       for v in value)):
+        if (
+            not isinstance(value, (list, tuple))
+            or len(value) != length
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)
+        ):
             raise _fail(self.key(key), f"expected a list of {length} numbers, got {value!r}")
         return tuple(float(v) for v in value)
 
@@ -191,9 +188,10 @@ class _Table:
     def finish(self):
         unknown = sorted(set(self.data) - self.used)
         if unknown:
-            raise _fail(self.key(unknown[0]),
-                        "unknown key; check the spelling against "
-                        "configs/paper_cycle.toml or configs/rod_ar1.toml")
+            raise _fail(
+                self.key(unknown[0]),
+                "unknown key; check the spelling against configs/paper_cycle.toml or configs/rod_ar1.toml",
+            )
 
 
 def _steps(table: _Table, key: str, default, *, value_check=None) -> StepSchedule | None:
@@ -205,14 +203,15 @@ def _steps(table: _Table, key: str, default, *, value_check=None) -> StepSchedul
         raise _fail(name, "expected a non-empty list of [duration_s, value] pairs")
     steps = []
     for i, step in enumerate(raw):
-        if (not isinstance(step, (list, tuple)) or len(step) != 2
-                or any(isinstance(v, bool) or not isinstance(v, (int, float))
-                       or not math.isfinite(v) for v in step)):
+        if (
+            not isinstance(step, (list, tuple))
+            or len(step) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in step)
+        ):
             raise _fail(name, f"step {i + 1} must be [duration_s, value], got {step!r}")
         duration, value = float(step[0]), float(step[1])
         if duration <= 0:
-            raise _fail(name, f"step {i + 1} has duration {step[0]!r}; durations "
-                              "must be positive (seconds)")
+            raise _fail(name, f"step {i + 1} has duration {step[0]!r}; durations must be positive (seconds)")
         if value_check is not None:
             problem = value_check(value)
             if problem:
@@ -224,8 +223,11 @@ def _steps(table: _Table, key: str, default, *, value_check=None) -> StepSchedul
 def _check_alignment(schedule: StepSchedule, key: str, step_s: float):
     for duration, _ in schedule.steps:
         if abs(duration / step_s - round(duration / step_s)) > 1e-6:
-            raise _fail(key, f"duration {duration:g} s is not a multiple of the "
-                             f"time step {step_s:g} s (sampling_period_s / substeps)")
+            raise _fail(
+                key,
+                f"duration {duration:g} s is not a multiple of the "
+                f"time step {step_s:g} s (sampling_period_s / substeps)",
+            )
 
 
 def _non_negative(value):
@@ -247,7 +249,7 @@ def parse_config(config: dict) -> HeadstockScenario | RodScenario:
     top = _Table(config, "")
     kind = top.get("kind", "headstock")
     if kind not in ("headstock", "rod"):
-        raise _fail("kind", f"must be \"headstock\" or \"rod\", got {kind!r}")
+        raise _fail("kind", f'must be "headstock" or "rod", got {kind!r}')
     top.string("description", "")
     top.string("name", "")
     scenario = _parse_headstock(top) if kind == "headstock" else _parse_rod(top)
@@ -255,8 +257,7 @@ def parse_config(config: dict) -> HeadstockScenario | RodScenario:
     return scenario
 
 
-def _parse_time(top: _Table, default_period, default_substeps, default_steps,
-                value_check, *, headstock: bool):
+def _parse_time(top: _Table, default_period, default_substeps, default_steps, value_check, *, headstock: bool):
     time = top.sub("time")
     period = time.number("sampling_period_s", default_period, positive=True)
     substeps = time.integer("substeps", default_substeps)
@@ -268,16 +269,17 @@ def _parse_time(top: _Table, default_period, default_substeps, default_steps,
         if hold is False:
             hold = None
         elif isinstance(hold, bool) or not isinstance(hold, (int, float)) or hold < 0:
-            raise _fail(time.key("hold_until_equilibrium_rpm"),
-                        f"expected a non-negative speed in r/min or false, got {hold!r}")
+            raise _fail(
+                time.key("hold_until_equilibrium_rpm"), f"expected a non-negative speed in r/min or false, got {hold!r}"
+            )
         extra["hold_until_equilibrium_rpm"] = None if hold is None else float(hold)
         extra["max_duration_s"] = time.number("max_duration_s", 172800.0, positive=True)
         extra["equilibrium"] = EquilibriumRule(
             window_s=time.number("equilibrium_window_s", 3600.0, positive=True),
-            tolerance=time.number("equilibrium_tolerance", 0.005, positive=True))
+            tolerance=time.number("equilibrium_tolerance", 0.005, positive=True),
+        )
         if extra["max_duration_s"] < schedule.total_duration:
-            raise _fail(time.key("max_duration_s"),
-                        "is shorter than the schedule; raise it or shorten the schedule")
+            raise _fail(time.key("max_duration_s"), "is shorter than the schedule; raise it or shorten the schedule")
     time.finish()
     return period, substeps, schedule, extra
 
@@ -328,10 +330,8 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     b0 = ThermalBoundary()
     boundary = ThermalBoundary(
         convection=bnd.number("convection_W_m2K", b0.convection, nonnegative=True),
-        bore_convection=bnd.number("bore_convection_W_m2K", b0.bore_convection,
-                                   nonnegative=True),
-        mount_conductance=bnd.number("mount_conductance_W_m2K", b0.mount_conductance,
-                                     positive=True),
+        bore_convection=bnd.number("bore_convection_W_m2K", b0.bore_convection, nonnegative=True),
+        mount_conductance=bnd.number("mount_conductance_W_m2K", b0.mount_conductance, positive=True),
     )
     bnd.finish()
 
@@ -340,18 +340,16 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     bearings = BearingHeat(
         front_W=brg.number("front_heat_W", h0.front_W, nonnegative=True),
         rear_W=brg.number("rear_heat_W", h0.rear_W, nonnegative=True),
-        reference_speed_rpm=brg.number("reference_speed_rpm", h0.reference_speed_rpm,
-                                       positive=True),
+        reference_speed_rpm=brg.number("reference_speed_rpm", h0.reference_speed_rpm, positive=True),
         speed_exponent=brg.number("speed_exponent", h0.speed_exponent, nonnegative=True),
     )
     brg.finish()
 
     period, substeps, spindle, extra = _parse_time(
-        top, base.sampling_period_s, base.substeps,
-        [list(s) for s in base.spindle.steps], _non_negative, headstock=True)
+        top, base.sampling_period_s, base.substeps, [list(s) for s in base.spindle.steps], _non_negative, headstock=True
+    )
     step_s = period / substeps
-    if abs(extra["equilibrium"].window_s / period
-           - round(extra["equilibrium"].window_s / period)) > 1e-6:
+    if abs(extra["equilibrium"].window_s / period - round(extra["equilibrium"].window_s / period)) > 1e-6:
         raise _fail("time.equilibrium_window_s", "must be a multiple of sampling_period_s")
 
     ambient = _parse_ambient(top.sub("ambient"), step_s)
@@ -370,17 +368,27 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     candidate_count = cand.integer("max_count", 0, minimum=0)
     cand.finish()
 
-    sources = _parse_sources(top.get("sources", []), step_s,
-                             set(sensors))
+    sources = _parse_sources(top.get("sources", []), step_s, set(sensors))
     unsensed_part = _parse_unsensed_part(top.get("unsensed_part", None))
 
     return HeadstockScenario(
-        geometry=geometry, resolution=resolution, material=material,
-        boundary=boundary, bearings=bearings, ambient=ambient, spindle=spindle,
-        sampling_period_s=period, substeps=substeps,
-        error_direction=tuple(c / norm for c in direction), sensors=sensors,
-        candidates=candidates, candidate_count=candidate_count,
-        sources=tuple(sources), unsensed_part=unsensed_part, **extra)
+        geometry=geometry,
+        resolution=resolution,
+        material=material,
+        boundary=boundary,
+        bearings=bearings,
+        ambient=ambient,
+        spindle=spindle,
+        sampling_period_s=period,
+        substeps=substeps,
+        error_direction=tuple(c / norm for c in direction),
+        sensors=sensors,
+        candidates=candidates,
+        candidate_count=candidate_count,
+        sources=tuple(sources),
+        unsensed_part=unsensed_part,
+        **extra,
+    )
 
 
 def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
@@ -396,7 +404,7 @@ def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
     )
     if kind == "steps":
         if profile.steps is None:
-            raise _fail(amb.key("steps"), "is required when profile = \"steps\"")
+            raise _fail(amb.key("steps"), 'is required when profile = "steps"')
         _check_alignment(profile.steps, amb.key("steps"), step_s)
     if profile.offsets is not None:
         _check_alignment(profile.offsets, amb.key("offsets"), step_s)
@@ -434,13 +442,17 @@ def _parse_sensors(raw, geometry: HousingGeometry) -> dict:
         key = f"sensors.{name}"
         if name in RESERVED_COLUMNS or name.startswith(("node_", "src_")):
             raise _fail(key, "this name is reserved for another column; rename the sensor")
-        if (not isinstance(point, (list, tuple)) or len(point) != 3
-                or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in point)):
+        if (
+            not isinstance(point, (list, tuple))
+            or len(point) != 3
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in point)
+        ):
             raise _fail(key, f"expected [x_m, y_m, z_m], got {point!r}")
         xyz = tuple(float(v) for v in point)
         if not points_inside(geometry, np.array(xyz)[:, None])[0]:
-            raise _fail(key, f"point {xyz} is outside the housing material; "
-                             "move it inside the housing (not in the bore)")
+            raise _fail(
+                key, f"point {xyz} is outside the housing material; move it inside the housing (not in the bore)"
+            )
         sensors[name] = xyz
     return sensors
 
@@ -459,20 +471,31 @@ def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
         names.add(name)
         power = src.number("power_W", 0.0, nonnegative=True)
         region_raw = src.get("region_m", None)
-        if (not isinstance(region_raw, list) or len(region_raw) != 3
-                or any(not isinstance(r, list) or len(r) != 2
-                       or any(isinstance(v, bool) or not isinstance(v, (int, float))
-                              for v in r) or r[0] > r[1] for r in region_raw)):
-            raise _fail(src.key("region_m"),
-                        "expected [[x0, x1], [y0, y1], [z0, z1]] in metres with x0 <= x1 …")
+        if (
+            not isinstance(region_raw, list)
+            or len(region_raw) != 3
+            or any(
+                not isinstance(r, list)
+                or len(r) != 2
+                or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in r)
+                or r[0] > r[1]
+                for r in region_raw
+            )
+        ):
+            raise _fail(src.key("region_m"), "expected [[x0, x1], [y0, y1], [z0, z1]] in metres with x0 <= x1 …")
         schedule = _steps(src, "schedule", [[1.0, 1.0]], value_check=_on_off)
         if "schedule" in item:
             _check_alignment(schedule, src.key("schedule"), step_s)
         schedule = StepSchedule(schedule.steps, src.boolean("repeat", False))
         src.finish()
-        sources.append(HeatSource(name=name, power_W=power,
-                                  region=tuple(tuple(float(v) for v in r) for r in region_raw),
-                                  schedule=schedule))
+        sources.append(
+            HeatSource(
+                name=name,
+                power_W=power,
+                region=tuple(tuple(float(v) for v in r) for r in region_raw),
+                schedule=schedule,
+            )
+        )
     return sources
 
 
@@ -496,6 +519,6 @@ def _parse_rod(top: _Table) -> RodScenario:
         raise _fail("mesh.order", "must be 1 or 2")
     mesh.finish()
     period, substeps, flux, _ = _parse_time(
-        top, d.sampling_period_s, d.substeps, [list(s) for s in d.flux.steps],
-        None, headstock=False)
+        top, d.sampling_period_s, d.substeps, [list(s) for s in d.flux.steps], None, headstock=False
+    )
     return RodScenario(sampling_period_s=period, substeps=substeps, flux=flux, **values)

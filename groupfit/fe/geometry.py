@@ -65,11 +65,12 @@ class HousingGeometry:
         r = self.bore_radius
         xc, yc = self.axis_xy
         if not (r < yc and yc + r < self.height and r < xc):
-            out.append("the bore must lie inside the housing cross-section "
-                       "(axis_height ± bore_diameter/2 within 0…height and "
-                       "bore_diameter < width)")
-        for name, (z0, z1) in (("front_seat_m", self.front_seat),
-                               ("rear_seat_m", self.rear_seat)):
+            out.append(
+                "the bore must lie inside the housing cross-section "
+                "(axis_height ± bore_diameter/2 within 0…height and "
+                "bore_diameter < width)"
+            )
+        for name, (z0, z1) in (("front_seat_m", self.front_seat), ("rear_seat_m", self.rear_seat)):
             if not (0.0 <= z0 < z1 <= self.length):
                 out.append(f"{name} must satisfy 0 <= start < end <= length_m")
         if self.rear_seat[1] > self.front_seat[0]:
@@ -100,9 +101,8 @@ class MeshResolution:
     refinements: int = 0
 
     def effective(self) -> tuple[int, int, float]:
-        factor = 2 ** self.refinements
-        return (self.circumferential * factor, self.radial * factor,
-                self.axial_spacing / factor)
+        factor = 2**self.refinements
+        return (self.circumferential * factor, self.radial * factor, self.axial_spacing / factor)
 
 
 @dataclass
@@ -133,8 +133,7 @@ class HousingMesh:
         return np.sort(self.mesh.boundary_nodes())
 
 
-def _side_points(corners: np.ndarray, centre: np.ndarray,
-                 counts: list[int]) -> np.ndarray:
+def _side_points(corners: np.ndarray, centre: np.ndarray, counts: list[int]) -> np.ndarray:
     """Points on the rectangle, equally spaced in angle seen from the centre
     within each side, corners included (counterclockwise, last corner omitted)."""
     pts = []
@@ -159,8 +158,7 @@ def _cross_section(geo: HousingGeometry, n_circ: int, n_rad: int):
     """Node coordinates (n_rad + 1, n_circ, 2) of the O-grid section."""
     xc, yc = geo.axis_xy
     centre = np.array([xc, yc])
-    corners = np.array([[0.0, 0.0], [geo.width, 0.0],
-                        [geo.width, geo.height], [0.0, geo.height]])
+    corners = np.array([[0.0, 0.0], [geo.width, 0.0], [geo.width, geo.height], [0.0, geo.height]])
     spans = []
     for side in range(4):
         a, b = corners[side] - centre, corners[(side + 1) % 4] - centre
@@ -176,8 +174,7 @@ def _cross_section(geo: HousingGeometry, n_circ: int, n_rad: int):
 
 
 def _axial_planes(geo: HousingGeometry, spacing: float) -> np.ndarray:
-    breaks = sorted({0.0, geo.length, *geo.rear_seat, *geo.front_seat,
-                     geo.front_seat_mid_z})
+    breaks = sorted({0.0, geo.length, *geo.rear_seat, *geo.front_seat, geo.front_seat_mid_z})
     planes = [0.0]
     for z0, z1 in zip(breaks[:-1], breaks[1:]):
         n = max(1, math.ceil((z1 - z0) / spacing - 1e-9))
@@ -185,8 +182,7 @@ def _axial_planes(geo: HousingGeometry, spacing: float) -> np.ndarray:
     return np.array(planes)
 
 
-def build_housing_mesh(geo: HousingGeometry,
-                       resolution: MeshResolution | None = None) -> HousingMesh:
+def build_housing_mesh(geo: HousingGeometry, resolution: MeshResolution | None = None) -> HousingMesh:
     """Mesh the housing with hexahedra and mark its boundaries.
 
     Parameters
@@ -208,22 +204,27 @@ def build_housing_mesh(geo: HousingGeometry,
     per_plane = (n_rad + 1) * n_circ
 
     xy = section.reshape(-1, 2)
-    points = np.vstack([np.tile(xy[:, 0], n_z), np.tile(xy[:, 1], n_z),
-                        np.repeat(zs, per_plane)])
+    points = np.vstack([np.tile(xy[:, 0], n_z), np.tile(xy[:, 1], n_z), np.repeat(zs, per_plane)])
 
-    i, j, k = np.meshgrid(np.arange(n_circ), np.arange(n_rad),
-                          np.arange(n_z - 1), indexing="ij")
+    i, j, k = np.meshgrid(np.arange(n_circ), np.arange(n_rad), np.arange(n_z - 1), indexing="ij")
     i, j, k = i.ravel(), j.ravel(), k.ravel()
 
     def node(ii, jj, kk):
         return kk * per_plane + jj * n_circ + ii % n_circ
 
     # local vertex order of skfem's MeshHex1 with (a, b, c) = (around, out, z)
-    cells = np.vstack([
-        node(i, j, k), node(i, j, k + 1), node(i, j + 1, k),
-        node(i + 1, j, k), node(i, j + 1, k + 1), node(i + 1, j, k + 1),
-        node(i + 1, j + 1, k), node(i + 1, j + 1, k + 1),
-    ]).astype(np.int32)
+    cells = np.vstack(
+        [
+            node(i, j, k),
+            node(i, j, k + 1),
+            node(i, j + 1, k),
+            node(i + 1, j, k),
+            node(i, j + 1, k + 1),
+            node(i + 1, j, k + 1),
+            node(i + 1, j + 1, k),
+            node(i + 1, j + 1, k + 1),
+        ]
+    ).astype(np.int32)
     mesh = MeshHex(points, cells)
 
     xc, yc = geo.axis_xy
@@ -238,32 +239,37 @@ def build_housing_mesh(geo: HousingGeometry,
     def in_range(x, z_range):
         return (x[2] > z_range[0] - tol) & (x[2] < z_range[1] + tol)
 
-    mesh = mesh.with_boundaries({
-        MOUNT: lambda x: np.abs(x[1]) < tol,
-        FRONT_SEAT: lambda x: on_bore(x) & in_range(x, geo.front_seat),
-        REAR_SEAT: lambda x: on_bore(x) & in_range(x, geo.rear_seat),
-        BORE_FREE: lambda x: on_bore(x) & ~in_range(x, geo.front_seat)
-        & ~in_range(x, geo.rear_seat),
-        OUTER: lambda x: ~on_bore(x) & (np.abs(x[1]) >= tol),
-    })
+    mesh = mesh.with_boundaries(
+        {
+            MOUNT: lambda x: np.abs(x[1]) < tol,
+            FRONT_SEAT: lambda x: on_bore(x) & in_range(x, geo.front_seat),
+            REAR_SEAT: lambda x: on_bore(x) & in_range(x, geo.rear_seat),
+            BORE_FREE: lambda x: on_bore(x) & ~in_range(x, geo.front_seat) & ~in_range(x, geo.rear_seat),
+            OUTER: lambda x: ~on_bore(x) & (np.abs(x[1]) >= tol),
+        }
+    )
 
     k_nose = int(np.argmin(np.abs(zs - geo.front_seat_mid_z)))
     ring = section[0]
     chord = np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1)
     weights = 0.5 * (chord + np.roll(chord, 1))
     nose_nodes = node(np.arange(n_circ), 0, k_nose)
-    return HousingMesh(mesh=mesh, geometry=geo, nose_nodes=nose_nodes,
-                       nose_weights=weights / weights.sum())
+    return HousingMesh(mesh=mesh, geometry=geo, nose_nodes=nose_nodes, nose_weights=weights / weights.sum())
 
 
 def points_inside(geo: HousingGeometry, points: np.ndarray) -> np.ndarray:
     """True for points (3, n) inside the housing material (bore excluded)."""
     xc, yc = geo.axis_xy
     eps = 1e-12
-    return ((points[0] >= -eps) & (points[0] <= geo.width + eps)
-            & (points[1] >= -eps) & (points[1] <= geo.height + eps)
-            & (points[2] >= -eps) & (points[2] <= geo.length + eps)
-            & (np.hypot(points[0] - xc, points[1] - yc) >= geo.bore_radius))
+    return (
+        (points[0] >= -eps)
+        & (points[0] <= geo.width + eps)
+        & (points[1] >= -eps)
+        & (points[1] <= geo.height + eps)
+        & (points[2] >= -eps)
+        & (points[2] <= geo.length + eps)
+        & (np.hypot(points[0] - xc, points[1] - yc) >= geo.bore_radius)
+    )
 
 
 def boundary_facets_in_box(mesh: MeshHex, box: np.ndarray) -> np.ndarray:

@@ -28,8 +28,7 @@ import numpy as np
 import pandas as pd
 import scipy.sparse as sp
 from scipy.sparse.linalg import cg, splu
-from skfem import (Basis, BilinearForm, ElementHex1, ElementVector, FacetBasis,
-                   Functional, asm, condense, solve)
+from skfem import Basis, BilinearForm, ElementHex1, ElementVector, FacetBasis, Functional, asm, condense, solve
 from skfem.helpers import div
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 from skfem.models.poisson import laplace, mass, unit_load
@@ -38,8 +37,16 @@ from tqdm import tqdm
 from groupfit.errors import InputError
 
 from .config import HeadstockScenario, Material, ThermalBoundary
-from .geometry import (BORE_FREE, FRONT_SEAT, MOUNT, OUTER, REAR_SEAT,
-                       HousingMesh, boundary_facets_in_box, build_housing_mesh)
+from .geometry import (
+    BORE_FREE,
+    FRONT_SEAT,
+    MOUNT,
+    OUTER,
+    REAR_SEAT,
+    HousingMesh,
+    boundary_facets_in_box,
+    build_housing_mesh,
+)
 from .schedule import bearing_heat_W
 from .unsensed import FirstOrderLag
 
@@ -91,25 +98,28 @@ class ThermalModel:
         For each heated boundary, the load vector of 1 W spread uniformly.
     """
 
-    def __init__(self, housing: HousingMesh, material: Material,
-                 boundary: ThermalBoundary):
+    def __init__(self, housing: HousingMesh, material: Material, boundary: ThermalBoundary):
         self.housing = housing
         self.boundary = boundary
         mesh = housing.mesh
         self.basis = Basis(mesh, ElementHex1(), intorder=QUADRATURE_ORDER)
-        self.facet_bases = {name: FacetBasis(mesh, self.basis.elem, facets=facets,
-                                             intorder=QUADRATURE_ORDER)
-                            for name, facets in mesh.boundaries.items()}
-        self.exchange = {OUTER: boundary.convection,
-                         BORE_FREE: boundary.bore_convection,
-                         MOUNT: boundary.mount_conductance}
+        self.facet_bases = {
+            name: FacetBasis(mesh, self.basis.elem, facets=facets, intorder=QUADRATURE_ORDER)
+            for name, facets in mesh.boundaries.items()
+        }
+        self.exchange = {
+            OUTER: boundary.convection,
+            BORE_FREE: boundary.bore_convection,
+            MOUNT: boundary.mount_conductance,
+        }
 
         # Row-sum lumped capacity: keeps backward Euler free of the spurious
         # undershoot below the initial temperature that consistent mass gives
         # next to a suddenly heated surface.
         consistent = asm(mass, self.basis)
-        self.capacity = material.density * material.heat_capacity * sp.diags(
-            np.asarray(consistent.sum(axis=1)).ravel()).tocsr()
+        self.capacity = (
+            material.density * material.heat_capacity * sp.diags(np.asarray(consistent.sum(axis=1)).ravel()).tocsr()
+        )
         conductance = material.conductivity * asm(laplace, self.basis)
         self.ambient_load = np.zeros(self.basis.N)
         for name, h in self.exchange.items():
@@ -118,10 +128,8 @@ class ThermalModel:
             self.ambient_load += h * asm(unit_load, fb)
         self.conductance = conductance.tocsr()
         # h_mount·∫φ_i dA: heat into the bed is bed_load·(T − T_amb)
-        self.bed_load = boundary.mount_conductance * asm(unit_load,
-                                                         self.facet_bases[MOUNT])
-        self.flux_shapes = {name: self._unit_flux(self.facet_bases[name])
-                            for name in (FRONT_SEAT, REAR_SEAT)}
+        self.bed_load = boundary.mount_conductance * asm(unit_load, self.facet_bases[MOUNT])
+        self.flux_shapes = {name: self._unit_flux(self.facet_bases[name]) for name in (FRONT_SEAT, REAR_SEAT)}
 
     def area(self, facet_basis: FacetBasis) -> float:
         return float(asm(_UNIT, facet_basis))
@@ -133,11 +141,12 @@ class ThermalModel:
         """Register a 1 W uniform flux on the boundary facets inside ``box``."""
         facets = boundary_facets_in_box(self.housing.mesh, box)
         if len(facets) == 0:
-            raise InputError(f"config key '{config_key}': the region of source {name!r} "
-                             "contains no boundary face of the housing; move the box "
-                             "onto a face")
-        fb = FacetBasis(self.housing.mesh, self.basis.elem, facets=facets,
-                        intorder=QUADRATURE_ORDER)
+            raise InputError(
+                f"config key '{config_key}': the region of source {name!r} "
+                "contains no boundary face of the housing; move the box "
+                "onto a face"
+            )
+        fb = FacetBasis(self.housing.mesh, self.basis.elem, facets=facets, intorder=QUADRATURE_ORDER)
         self.facet_bases[f"src_{name}"] = fb
         self.flux_shapes[f"src_{name}"] = self._unit_flux(fb)
         return fb
@@ -192,15 +201,12 @@ class ThermoElasticModel:
     def node_dofs(self, nodes: np.ndarray, component: int) -> np.ndarray:
         return self.basis.nodal_dofs[component, nodes]
 
-    def displacement(self, delta_T: np.ndarray, fixed_dofs: np.ndarray | None = None
-                     ) -> np.ndarray:
+    def displacement(self, delta_T: np.ndarray, fixed_dofs: np.ndarray | None = None) -> np.ndarray:
         """Direct solve for the displacement field (m)."""
         fixed = self.clamped if fixed_dofs is None else fixed_dofs
-        return solve(*condense(self.stiffness, self.coupling @ delta_T, D=fixed),
-                     solver=solve_spd)
+        return solve(*condense(self.stiffness, self.coupling @ delta_T, D=fixed), solver=solve_spd)
 
-    def functional_weights(self, nodes: np.ndarray, weights: np.ndarray,
-                           direction) -> np.ndarray:
+    def functional_weights(self, nodes: np.ndarray, weights: np.ndarray, direction) -> np.ndarray:
         """Vector ``w`` with ``wᵀu`` = weighted mean displacement along ``direction``."""
         w = np.zeros(self.basis.N)
         for component, d in enumerate(direction):
@@ -213,8 +219,7 @@ class ThermoElasticModel:
         return self.coupling.T @ z
 
 
-def nose_error_gain(thermal: ThermalModel, elastic: ThermoElasticModel,
-                    direction) -> np.ndarray:
+def nose_error_gain(thermal: ThermalModel, elastic: ThermoElasticModel, direction) -> np.ndarray:
     """Gain ``g`` (µm/K per node) so that the error is ``g @ (T − T_ref)``."""
     housing = thermal.housing
     w = elastic.functional_weights(housing.nose_nodes, housing.nose_weights, direction)
@@ -228,15 +233,13 @@ def _sensor_matrix(basis: Basis, sensors: dict) -> sp.csr_matrix:
     try:
         return basis.probes(points).tocsr()
     except ValueError as exc:
-        raise InputError(f"config key 'sensors': a sensor point lies outside the "
-                         f"meshed housing ({exc})") from None
+        raise InputError(f"config key 'sensors': a sensor point lies outside the meshed housing ({exc})") from None
 
 
 def _candidate_nodes(housing: HousingMesh, which: str, max_count: int) -> np.ndarray:
     if which == "none":
         return np.zeros(0, dtype=int)
-    nodes = (housing.surface_nodes if which == "surface"
-             else np.arange(housing.mesh.nvertices))
+    nodes = housing.surface_nodes if which == "surface" else np.arange(housing.mesh.nvertices)
     if max_count and len(nodes) > max_count:
         pick = np.round(np.linspace(0, len(nodes) - 1, max_count)).astype(int)
         nodes = nodes[np.unique(pick)]
@@ -246,10 +249,10 @@ def _candidate_nodes(housing: HousingMesh, which: str, max_count: int) -> np.nda
 def _heat_inputs(sc: HeadstockScenario, speed_rpm: float, t: float) -> dict[str, float]:
     """Power (W) of every heated boundary at spindle speed ``speed_rpm`` and time ``t``."""
     b = sc.bearings
-    heat = {FRONT_SEAT: bearing_heat_W(b.front_W, speed_rpm, b.reference_speed_rpm,
-                                       b.speed_exponent),
-            REAR_SEAT: bearing_heat_W(b.rear_W, speed_rpm, b.reference_speed_rpm,
-                                      b.speed_exponent)}
+    heat = {
+        FRONT_SEAT: bearing_heat_W(b.front_W, speed_rpm, b.reference_speed_rpm, b.speed_exponent),
+        REAR_SEAT: bearing_heat_W(b.rear_W, speed_rpm, b.reference_speed_rpm, b.speed_exponent),
+    }
     for src in sc.sources:
         heat[f"src_{src.name}"] = src.power_W * src.schedule.value_at(t)
     return heat
@@ -265,8 +268,7 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
     thermal = ThermalModel(housing, sc.material, sc.boundary)
     for index, src in enumerate(sc.sources, start=1):
         thermal.add_source(src.name, np.array(src.region), f"sources[{index}].region_m")
-    gain = nose_error_gain(thermal, ThermoElasticModel(thermal.basis, sc.material),
-                           sc.error_direction)
+    gain = nose_error_gain(thermal, ThermoElasticModel(thermal.basis, sc.material), sc.error_direction)
     probes = _sensor_matrix(thermal.basis, sc.sensors)
     candidates = _candidate_nodes(housing, sc.candidates, sc.candidate_count)
 
@@ -297,15 +299,22 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
             error += lag.error_um
         errors.append(error)
         speed = speed_at(t_condition)
-        rows.append([k * period, *(probes @ temperature), sc.ambient.temperature(k * period),
-                     errors[-1], speed, float(speed > 0)]
-                    + [src.schedule.value_at(t_condition) for src in sc.sources]
-                    + list(temperature[candidates]))
+        rows.append(
+            [
+                k * period,
+                *(probes @ temperature),
+                sc.ambient.temperature(k * period),
+                errors[-1],
+                speed,
+                float(speed > 0),
+            ]
+            + [src.schedule.value_at(t_condition) for src in sc.sources]
+            + list(temperature[candidates])
+        )
 
     record(0, 0.0)
     reached = not holding
-    with tqdm(total=max_samples, disable=not progress, unit="sample",
-              desc="headstock") as bar:
+    with tqdm(total=max_samples, disable=not progress, unit="sample", desc="headstock") as bar:
         for k in range(1, max_samples + 1):
             for s in range(sc.substeps):
                 t0 = (k - 1) * period + s * dt
@@ -314,21 +323,28 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
                 load = thermal.load(heat, ambient_C)
                 temperature = factor.solve(capacity_rate @ temperature + load)
                 if lag is not None:
-                    lag.step(heat[FRONT_SEAT] + heat[REAR_SEAT] if part.heat == "bearings"
-                             else thermal.bed_heat_W(temperature, ambient_C))
+                    lag.step(
+                        heat[FRONT_SEAT] + heat[REAR_SEAT]
+                        if part.heat == "bearings"
+                        else thermal.bed_heat_W(temperature, ambient_C)
+                    )
             record(k, (k - 1) * period)
             bar.update(1)
-            if holding and k > fixed_samples and sc.equilibrium.reached(
-                    np.asarray(errors), fixed_samples, period):
+            if holding and k > fixed_samples and sc.equilibrium.reached(np.asarray(errors), fixed_samples, period):
                 reached = True
                 break
     if not reached:
-        warnings.warn(f"thermal equilibrium not reached within max_duration_s = "
-                      f"{sc.max_duration_s:g} s; the data set stops there", stacklevel=2)
+        warnings.warn(
+            f"thermal equilibrium not reached within max_duration_s = "
+            f"{sc.max_duration_s:g} s; the data set stops there",
+            stacklevel=2,
+        )
 
-    columns = (["time_s", *sc.sensors, "T_amb", "error_um", "speed_rpm", "spindle_on"]
-               + [f"src_{src.name}_on" for src in sc.sources]
-               + [f"node_{n}" for n in candidates])
+    columns = (
+        ["time_s", *sc.sensors, "T_amb", "error_um", "speed_rpm", "spindle_on"]
+        + [f"src_{src.name}_on" for src in sc.sources]
+        + [f"node_{n}" for n in candidates]
+    )
     frame = pd.DataFrame(rows, columns=columns)
     frame.attrs["equilibrium_reached"] = reached
     return frame

@@ -42,8 +42,7 @@ class RodModel:
         self.basis = Basis(mesh, element)
         m = asm(mass, self.basis)
         self.capacity = sc.density * sc.heat_capacity * m
-        self.conductance = (sc.conductivity * asm(laplace, self.basis)
-                            + 2.0 * sc.convection / sc.radius * m)
+        self.conductance = sc.conductivity * asm(laplace, self.basis) + 2.0 * sc.convection / sc.radius * m
         self.inflow = self.basis.point_source(np.array([0.0]))
         self.elongation_um = 1e6 * sc.expansion * asm(unit_load, self.basis)
 
@@ -61,8 +60,7 @@ def simulate_rod(sc: RodScenario, *, progress: bool = True) -> pd.DataFrame:
     flux = np.empty(n_samples + 1)
     error = np.empty(n_samples + 1)
     flux[0], error[0] = sc.flux.value_at(0.0), 0.0
-    for k in tqdm(range(1, n_samples + 1), disable=not progress, unit="sample",
-                  desc="rod"):
+    for k in tqdm(range(1, n_samples + 1), disable=not progress, unit="sample", desc="rod"):
         q = sc.flux.value_at(times[k - 1])
         for _ in range(sc.substeps):
             theta = factor.solve(capacity_rate @ theta + q * model.inflow)

@@ -36,7 +36,9 @@ def parse_target(target: str | float | None, r_at_zero: float) -> float | None:
                 return float(text[:-1]) / 100.0 * r_at_zero
             return float(text)
         except ValueError:
-            raise InputError(f"p target {target!r}: give µm (e.g. 5.0) or a percentage of R(p = 0) (e.g. 20%)") from None
+            raise InputError(
+                f"p target {target!r}: give µm (e.g. 5.0) or a percentage of R(p = 0) (e.g. 20%)"
+            ) from None
     return float(target)
 
 

@@ -287,7 +287,9 @@ class GeneticSearch:
                 breaks = to_breaks(child)
                 for j in range(p):
                     first, last = shift_range(breaks, j, constraints)
-                    for b in range(max(first, breaks[j] - self.local_window), min(last, breaks[j] + self.local_window) + 1):
+                    for b in range(
+                        max(first, breaks[j] - self.local_window), min(last, breaks[j] + self.local_window) + 1
+                    ):
                         if b != breaks[j]:
                             offers.append((child, breaks[:j] + [b] + breaks[j + 1 :]))
             values = objective.totals([trial for _, trial in offers])
@@ -305,8 +307,7 @@ class GeneticSearch:
         evaluations_history: list[int] = []
         with seeded_random(self.seed):
             population = [
-                repair(Individual(random.randint(low, high) for _ in range(p)))
-                for _ in range(self.population_size)
+                repair(Individual(random.randint(low, high) for _ in range(p))) for _ in range(self.population_size)
             ]
             evaluate(population)
             best = tools.selBest(population, 1)[0]
@@ -419,8 +420,10 @@ def _shift_polish(
         improved = False
         for move in (_shift_candidates, _pair_candidates):
             for j in range(len(breaks) - (move is _pair_candidates)):
-                candidates = move(breaks, j, constraints) if move is _shift_candidates else move(
-                    breaks, j, constraints, pair_window
+                candidates = (
+                    move(breaks, j, constraints)
+                    if move is _shift_candidates
+                    else move(breaks, j, constraints, pair_window)
                 )
                 if not candidates:
                     continue

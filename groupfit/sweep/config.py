@@ -208,7 +208,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     db_path = (base / _string(db, "[study] db", label)).resolve() if db is not None else None
     certify = study_table.get("certify", "auto")
     if certify != "auto" and not isinstance(certify, bool):
-        raise InputError(f"{label}: [study] certify = {certify!r} must be \"auto\", true or false")
+        raise InputError(f'{label}: [study] certify = {certify!r} must be "auto", true or false')
 
     datasets = _datasets(data_table, base, label)
     time_column = data_table.get("time", "time_s")
@@ -232,15 +232,29 @@ def study_from_dict(raw: dict, path: Path) -> Study:
                 if run_hash in seen:
                     continue
                 seen.add(run_hash)
-                runs.append(RunSpec(spec=json.loads(canonical_json(spec)), path=str(dataset.path),
-                                    dataset=dataset.name, run_hash=run_hash))
+                runs.append(
+                    RunSpec(
+                        spec=json.loads(canonical_json(spec)),
+                        path=str(dataset.path),
+                        dataset=dataset.name,
+                        run_hash=run_hash,
+                    )
+                )
     return Study(name=name, source=path, db=db_path, datasets=datasets, runs=runs)
 
 
 def _search_specs(method: str, ga: dict[str, list], certify) -> list[dict]:
     if method == "exact":
         return [{"method": "exact"}]
-    keys = ("population_size", "max_generations", "stall_generations", "polish", "local_window", "union_crossover", "seed")
+    keys = (
+        "population_size",
+        "max_generations",
+        "stall_generations",
+        "polish",
+        "local_window",
+        "union_crossover",
+        "seed",
+    )
     return [
         {"method": "ga", "certify": certify, **dict(zip(keys, values))}
         for values in itertools.product(*(ga[key] for key in keys))
@@ -271,7 +285,7 @@ def _datasets(table: dict, base: Path, label: str) -> list[Dataset]:
         if not isinstance(paths, list) or not paths or not all(isinstance(p, str) and p for p in paths):
             raise InputError(f"{label}: [data] paths must be a non-empty list of file names")
     else:
-        raise InputError(f"{label}: no data: set [data] path = \"run.csv\" or paths = [\"a.csv\", \"b.csv\"]")
+        raise InputError(f'{label}: no data: set [data] path = "run.csv" or paths = ["a.csv", "b.csv"]')
     time_column = _string(table.get("time", "time_s"), "[data] time", label)
     error_column = _string(table.get("error", "error_um"), "[data] error", label)
     patterns = table.get("temps")
@@ -286,8 +300,17 @@ def _datasets(table: dict, base: Path, label: str) -> list[Dataset]:
         constant = frozenset(_constant_columns(run.frame, usable))
         candidates = _candidates(patterns, usable, constant, where)
         load_run(file, temps=candidates, time=time_column, error=error_column)
-        datasets.append(Dataset(name=file.stem, path=file, sha256=file_sha256(file), candidates=tuple(candidates),
-                                n_samples=run.n_samples, columns=usable, constant=constant))
+        datasets.append(
+            Dataset(
+                name=file.stem,
+                path=file,
+                sha256=file_sha256(file),
+                candidates=tuple(candidates),
+                n_samples=run.n_samples,
+                columns=usable,
+                constant=constant,
+            )
+        )
     names = [d.name for d in datasets]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
@@ -451,8 +474,8 @@ def _sensor_option(option, dataset: Dataset, label: str) -> dict:
     if isinstance(option, dict):
         return _selection_option(option, dataset, where)
     raise InputError(
-        f"{where}: {option!r}: give \"all\", a list of column names such as [\"T1\", \"T2\"], "
-        "or a selection such as {select = \"forward\", k = 4}"
+        f'{where}: {option!r}: give "all", a list of column names such as ["T1", "T2"], '
+        'or a selection such as {select = "forward", k = 4}'
     )
 
 

@@ -117,7 +117,7 @@ class DaskExecutor:
             from dask.distributed import Client
         except ImportError:
             raise InputError(
-                "--scheduler needs Dask distributed: pip install \"groupfit[dask]\" (or \"dask[distributed]\")"
+                '--scheduler needs Dask distributed: pip install "groupfit[dask]" (or "dask[distributed]")'
             ) from None
         self.address = address
         check_address(address)

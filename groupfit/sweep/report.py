@@ -90,7 +90,9 @@ def runs_frame(rows: list[dict]) -> pd.DataFrame:
 def _fill_gaps_from_exact_runs(frame: pd.DataFrame) -> None:
     done = frame["status"] == "done"
     exact = frame[done & (frame["search"] == "exact")]
-    optimum = exact.groupby(["dataset", "sensors", "objective_kind", "intercept", "n", "c", "p"])["exact_objective"].min()
+    optimum = exact.groupby(["dataset", "sensors", "objective_kind", "intercept", "n", "c", "p"])[
+        "exact_objective"
+    ].min()
     for index in frame.index[done & (frame["search"] == "ga") & frame["gap_percent"].isna()]:
         row = frame.loc[index]
         key = (row["dataset"], row["sensors"], row["objective_kind"], row["intercept"], row["n"], row["c"], row["p"])
@@ -114,7 +116,9 @@ def summary_frame(runs: pd.DataFrame) -> pd.DataFrame:
                 "runs": len(group),
                 "best_objective": float(best["objective"]),
                 "best_breaks": best["breaks"],
-                "exact_objective": float(group["exact_objective"].min()) if group["exact_objective"].notna().any() else np.nan,
+                "exact_objective": float(group["exact_objective"].min())
+                if group["exact_objective"].notna().any()
+                else np.nan,
                 "ga_runs": len(ga),
                 "ga_within_0.1pct": int(judged["success"].astype(bool).sum()) if len(judged) else np.nan,
                 "ga_judged": len(judged),
@@ -193,27 +197,62 @@ def markdown_report(title: str, runs: pd.DataFrame, summary: pd.DataFrame, succe
     table = [header]
     for _, s in summary.iterrows():
         ok = f"{int(s['ga_within_0.1pct'])}/{int(s['ga_judged'])}" if s["ga_judged"] else "-"
-        table.append([
-            s["dataset"], s["sensor_set"], s["objective_kind"], str(s["n"]), f"{s['c']:g}", str(s["p"]),
-            f"{s['best_objective']:.6g}", "-" if np.isnan(s["exact_objective"]) else f"{s['exact_objective']:.6g}",
-            ok, str(s["distinct_breaks"]), f"{s['break_spread']:.1f}", s["best_breaks"],
-        ])
+        table.append(
+            [
+                s["dataset"],
+                s["sensor_set"],
+                s["objective_kind"],
+                str(s["n"]),
+                f"{s['c']:g}",
+                str(s["p"]),
+                f"{s['best_objective']:.6g}",
+                "-" if np.isnan(s["exact_objective"]) else f"{s['exact_objective']:.6g}",
+                ok,
+                str(s["distinct_breaks"]),
+                f"{s['break_spread']:.1f}",
+                s["best_breaks"],
+            ]
+        )
     lines += _markdown_table(table)
     if not success.empty:
-        lines += ["", "## GA success against budget", "",
-                  "Budget = population size × maximum generations (the GA may stop earlier on stagnation).", ""]
+        lines += [
+            "",
+            "## GA success against budget",
+            "",
+            "Budget = population size × maximum generations (the GA may stop earlier on stagnation).",
+            "",
+        ]
         table = [["polish", "population", "generations", "budget", "p", "runs", f"within {SUCCESS_PERCENT} %", "rate"]]
         for _, s in success.iterrows():
-            table.append(["yes" if s["polish"] else "no", str(int(s["population_size"])), str(int(s["max_generations"])), str(int(s["budget"])),
-                          str(int(s["p"])), str(int(s["runs"])), str(int(s["successes"])), f"{s['rate']:.0%}"])
+            table.append(
+                [
+                    "yes" if s["polish"] else "no",
+                    str(int(s["population_size"])),
+                    str(int(s["max_generations"])),
+                    str(int(s["budget"])),
+                    str(int(s["p"])),
+                    str(int(s["runs"])),
+                    str(int(s["successes"])),
+                    f"{s['rate']:.0%}",
+                ]
+            )
         lines += _markdown_table(table)
     failed = runs[runs["status"] == "failed"]
     if not failed.empty:
         lines += ["", "## Failed runs", ""]
         table = [["run", "data", "p", "n", "c", "search", "message"]]
         for _, f in failed.iterrows():
-            table.append([f["run_hash"][:12], f["dataset"], str(f["p"]), str(f["n"]), f"{f['c']:g}", f["search"],
-                          f["error"].replace("|", "/")])
+            table.append(
+                [
+                    f["run_hash"][:12],
+                    f["dataset"],
+                    str(f["p"]),
+                    str(f["n"]),
+                    f"{f['c']:g}",
+                    f["search"],
+                    f["error"].replace("|", "/"),
+                ]
+            )
         lines += _markdown_table(table)
     return "\n".join(lines) + "\n"
 
@@ -275,13 +314,25 @@ def plot_break_stability(runs: pd.DataFrame, path: Path) -> Path:
             positions = [b for text in at_p["breaks"] for b in json.loads(text)]
             values, counts = np.unique(positions, return_counts=True)
             share = counts / len(at_p)
-            axis.scatter(np.full(len(values), p), values, s=12 + 80 * share, alpha=0.6, color="tab:blue",
-                         label="found (size: share of runs)" if p == group["p"].min() else None)
+            axis.scatter(
+                np.full(len(values), p),
+                values,
+                s=12 + 80 * share,
+                alpha=0.6,
+                color="tab:blue",
+                label="found (size: share of runs)" if p == group["p"].min() else None,
+            )
             exact = at_p[at_p["search"] == "exact"]
             if not exact.empty:
                 optimum = json.loads(exact["breaks"].iloc[0])
-                axis.scatter(np.full(len(optimum), p), optimum, marker="x", s=50, color="tab:red",
-                             label="exact optimum" if p == group["p"].min() else None)
+                axis.scatter(
+                    np.full(len(optimum), p),
+                    optimum,
+                    marker="x",
+                    s=50,
+                    color="tab:red",
+                    label="exact optimum" if p == group["p"].min() else None,
+                )
         axis.legend(fontsize=7, loc="upper left")
         dataset, sensors, objective, _, n, c = key
         axis.set_title(f"{dataset}, {sensors}: {objective}, n={n}, c={c:g}", fontsize=9)

@@ -156,9 +156,7 @@ def cv_error(X: np.ndarray, y: np.ndarray, splits) -> float:
     return squared / count
 
 
-def forward_selection(
-    X: np.ndarray, y: np.ndarray, k: int, *, folds: int = 5, cluster_corr: float = 0.98
-) -> list[int]:
+def forward_selection(X: np.ndarray, y: np.ndarray, k: int, *, folds: int = 5, cluster_corr: float = 0.98) -> list[int]:
     """Greedy forward selection on cluster representatives by time-ordered CV error."""
     pool = cluster_representatives(X, y, correlation_clusters(X, min_corr=cluster_corr))
     if len(pool) < k:

@@ -182,9 +182,7 @@ class StudyStore:
         names = [name for name, _ in COLUMNS]
         placeholders = ", ".join(f":{name}" for name in names)
         with self.transaction():
-            self.connection.execute(
-                f"INSERT OR REPLACE INTO runs ({', '.join(names)}) VALUES ({placeholders})", row
-            )
+            self.connection.execute(f"INSERT OR REPLACE INTO runs ({', '.join(names)}) VALUES ({placeholders})", row)
 
     def rows(self, hashes: Iterable[str] | None = None) -> list[dict]:
         """Rows as dicts with JSON columns decoded (only ``hashes`` when given, in that order)."""
