@@ -172,6 +172,14 @@ def check_config(raw: dict, label: str) -> None:
                 raise InputError(f"{label}: [{table}] {key} must be a list of strings")
 
 
+GA_KEYS = ("population_size", "max_generations", "stall_generations", "polish")
+
+
+def ga_settings(config: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """The GA settings of the ``[search]`` table, as GroupedRegressor keyword arguments."""
+    return {key: config["search"][key] for key in GA_KEYS}
+
+
 def override(config: dict, table: str, key: str, value: Any) -> None:
     """Set a value from the command line when it was given."""
     if value is not None:

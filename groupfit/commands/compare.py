@@ -15,7 +15,7 @@ from groupfit.commands.common import (
     write_json,
 )
 from groupfit.comparison import ComparisonResult, ComparisonSettings, compare_models
-from groupfit.config import default_config_path, override
+from groupfit.config import default_config_path, ga_settings, override
 from groupfit.errors import InputError
 
 MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
@@ -54,9 +54,7 @@ def settings_from_config(config: dict) -> ComparisonSettings:
         structural_gain_um_per_K=table.get("structural_gain_um_per_K"),
         conditions=tuple(table["conditions"]),
         p_target=table.get("p_target"),
-        ga={
-            key: config["search"][key] for key in ("population_size", "max_generations", "stall_generations", "polish")
-        },
+        ga=ga_settings(config),
     )
 
 

@@ -14,7 +14,7 @@ from groupfit.commands.common import (
     report_stream,
     write_json,
 )
-from groupfit.config import default_config_path, override
+from groupfit.config import default_config_path, ga_settings, override
 from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.grouping import served_ranges
@@ -158,11 +158,8 @@ def estimator_from_config(config: dict) -> GroupedRegressor:
         objective=model["objective"],
         fit_intercept=model["intercept"],
         search=search["method"],
-        population_size=search["population_size"],
-        max_generations=search["max_generations"],
-        stall_generations=search["stall_generations"],
-        polish=search["polish"],
         random_state=search["seed"],
+        **ga_settings(config),
     )
 
 
