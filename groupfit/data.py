@@ -67,10 +67,22 @@ class Run:
         return len(self.time)
 
 
-def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
-    """Read a CSV file (or take a DataFrame) and return ``(frame, name, label)``.
+TABLE_SUFFIXES = {
+    ".csv": "CSV",
+    ".txt": "CSV",
+    ".xlsx": "Excel",
+    ".xlsm": "Excel",
+    ".xls": "Excel",
+    ".parquet": "Parquet",
+}
+"""File types a run is read from, by suffix (anything else is read as CSV)."""
 
-    ``label`` names the source in error messages.
+
+def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
+    """Read a run's table (CSV, Excel or Parquet, by suffix) or take a DataFrame; return ``(frame, name, label)``.
+
+    ``label`` names the source in error messages. An Excel workbook is read
+    from its first sheet, with the first row as the header.
     """
     if isinstance(source, pd.DataFrame):
         label = name or "DataFrame"
@@ -79,17 +91,28 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     label = str(path)
     if not path.is_file():
         raise InputError(f"{label}: data file not found; check the path given to --data")
+    kind = TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
     try:
-        frame = pd.read_csv(path, skipinitialspace=True)
+        frame = _read_by_kind(path, kind)
     except pd.errors.EmptyDataError:
         raise InputError(f"{label}: the file is empty; a header line and one row per sample are needed") from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+    except ImportError as exc:
+        raise InputError(f"{label}: reading {kind} files needs the package '{exc.name}'; pip install it") from None
+    except (pd.errors.ParserError, UnicodeDecodeError, ValueError, OSError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{label}: not a readable CSV table ({first})") from None
+        raise InputError(f"{label}: not a readable {kind} table ({first})") from None
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
     frame.columns = [str(c).strip() for c in frame.columns]
     return frame, (name or path.stem), label
+
+
+def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
+    if kind == "Excel":
+        return pd.read_excel(path, sheet_name=0)
+    if kind == "Parquet":
+        return pd.read_parquet(path)
+    return pd.read_csv(path, skipinitialspace=True)
 
 
 def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
@@ -223,6 +246,46 @@ def load_run(
         period=period,
         frame=frame,
         time_name=time,
+    )
+
+
+def join_runs(runs: Sequence[Run]) -> Run:
+    """Several runs of one machine laid end to end, as one run for a global model.
+
+    The runs must share the sampling period (within the tolerance) and the
+    input columns; time is renumbered to continue from run to run, so that a
+    global model (p = 0) can be fitted on all of them. ``Run.frame`` keeps every
+    column the runs share. A grouped model's breaks belong to one run: it is
+    not fitted on joined runs.
+    """
+    runs = list(runs)
+    if len(runs) == 1:
+        return runs[0]
+    first = runs[0]
+    for run in runs[1:]:
+        if run.temp_names != first.temp_names:
+            raise InputError(f"{run.source}: inputs {', '.join(run.temp_names)} differ from {first.source}'s")
+        if abs(run.period - first.period) > PERIOD_TOLERANCE * first.period:
+            raise InputError(
+                f"{run.source}: sampled every {run.period:g} s but {first.source} every {first.period:g} s; "
+                "resample the runs to one period"
+            )
+    if any(run.error is None for run in runs):
+        missing = next(run for run in runs if run.error is None)
+        raise InputError(f"{missing.source}: no error column; every joined run needs one")
+    n = sum(run.n_samples for run in runs)
+    shared = [c for c in first.frame.columns if all(c in run.frame.columns for run in runs)]
+    return Run(
+        name="+".join(run.name for run in runs),
+        source=", ".join(run.source for run in runs),
+        time=first.time[0] + first.period * np.arange(n),
+        temps=np.vstack([run.temps for run in runs]),
+        temp_names=first.temp_names,
+        error=np.concatenate([run.error for run in runs]),
+        error_name=first.error_name,
+        period=first.period,
+        frame=pd.concat([run.frame[shared] for run in runs], ignore_index=True),
+        time_name=first.time_name,
     )
 
 

@@ -139,30 +139,48 @@ def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequen
     plt.close(fig)
 
 
+def stacked_hours(runs) -> np.ndarray:
+    """Hours along several runs laid end to end (each run's own clock from its start)."""
+    hours, offset = [], 0.0
+    for run in runs:
+        hours.append(offset + (run.time - run.time[0]) / 3600.0)
+        offset = hours[-1][-1] + run.period / 3600.0
+    return np.concatenate(hours)
+
+
 def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
-    """Residual against the winning candidate, and the residual before/after on every run."""
+    """Residual against the winning candidate, and the residual before/after on every run (runs laid end to end)."""
+    runs = {key: [value] if not isinstance(value, (list, tuple)) else list(value) for key, value in runs.items()}
     fig, axes = plt.subplots(1 + len(runs), 1, figsize=(9, 3.2 * (1 + len(runs))), constrained_layout=True)
     data = runs["data"]
     shown = result.added[0] if result.added else (result.candidates[0] if result.candidates else None)
     top = axes[0]
     if shown is not None:
         feature = shown.feature
-        values = feature.compute(data.frame[feature.column].to_numpy(dtype=float), data.period)
+        values = np.concatenate(
+            [feature.compute(r.frame[feature.column].to_numpy(dtype=float), r.period) for r in data]
+        )
         residual = result.residuals_before["data"]
-        top.scatter(values, residual, s=6, c=data.time / 3600.0, cmap="viridis")
+        top.scatter(values, residual, s=6, c=stacked_hours(data), cmap="viridis")
         order = np.argsort(values)
-        fit = np.polyfit(values[np.isfinite(residual)], residual[np.isfinite(residual)], 1)
+        finite = np.isfinite(residual)
+        fit = np.polyfit(values[finite], residual[finite], 1)
         top.plot(values[order], np.polyval(fit, values[order]), color="tab:red", lw=1.2)
         verdict = "added" if result.added else "best candidate, not significant"
-        top.set_title(f"{data.name}: residual against {feature.column}, {feature.describe()} ({verdict})")
+        top.set_title(
+            f"{data[0].name}: residual against {feature.column}, {feature.describe()} ({verdict})", fontsize=9
+        )
         top.set_xlabel(feature.name)
     top.set_ylabel("residual before (µm)")
-    for axis, (key, run) in zip(axes[1:], runs.items()):
-        hours = run.time / 3600.0
-        axis.plot(hours, result.residuals_before[key], color="tab:gray", lw=1.0, label="before")
-        axis.plot(hours, result.residuals_after[key], color="tab:blue", lw=1.0, label="after")
+    for axis, (key, key_runs) in zip(axes[1:], runs.items()):
+        hours = stacked_hours(key_runs)
+        before, after = result.residuals_before[key], result.residuals_after[key]
+        rms = lambda r: float(np.sqrt(np.nanmean(r**2)))  # noqa: E731
+        axis.plot(hours, before, color="tab:gray", lw=1.0, label=f"before (RMS {rms(before):.3g} µm)")
+        axis.plot(hours, after, color="tab:blue", lw=1.0, label=f"after (RMS {rms(after):.3g} µm)")
         axis.axhline(0.0, color="black", lw=0.5)
-        axis.set_title(f"{run.name} ({'measured' if key == 'data' else 'validation'}): residual")
+        names = "+".join(r.name for r in key_runs)
+        axis.set_title(f"{names} ({'measured' if key == 'data' else 'validation'}): residual", fontsize=9)
         axis.set_ylabel("µm")
         axis.legend(fontsize=8)
     axes[-1].set_xlabel("time (h)")

@@ -7,7 +7,8 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import blocked_cv_score, candidate_features, rank_candidates
+from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
+from groupfit.diagnose.folds import Folds, make_folds
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
 from groupfit.grouping import soft_groups
@@ -67,26 +68,45 @@ def fit_model(tmp_path, frame, name, p=0):
     return path, out / "model.json"
 
 
-def test_blocked_cv_score_separates_signal_from_chance():
+def test_held_out_scorer_equals_a_least_squares_refit_on_every_fold():
     rng = np.random.default_rng(0)
-    f = np.cumsum(rng.normal(size=500))
-    ones = np.ones((500, 1))
-    assert blocked_cv_score(2.0 * f + 0.1 * rng.normal(size=500), f, ones) > 0.95
-    unrelated = np.cumsum(rng.normal(size=500))
-    assert blocked_cv_score(rng.normal(size=500), unrelated, ones) < 0.05
+    n = 300
+    design = np.column_stack([np.ones(n), np.cumsum(rng.normal(size=(n, 3)), axis=0)])
+    candidate = np.cumsum(rng.normal(size=n))
+    target = design @ [1.0, 0.5, -0.2, 0.3] + 0.8 * candidate + rng.normal(scale=0.5, size=n)
+    folds = Folds(np.repeat(np.arange(5), n // 5), "block")
+    scorer = HeldOutScorer(target, design, folds)
+    augmented = np.column_stack([design, candidate])
+    expected_base, expected_with = [], []
+    for train, test in folds.splits():
+        for matrix, out in ((design, expected_base), (augmented, expected_with)):
+            coef = np.linalg.lstsq(matrix[train], target[train], rcond=None)[0]
+            out.append(np.sum((target[test] - matrix[test] @ coef) ** 2))
+    np.testing.assert_allclose(scorer.base_sse, expected_base, rtol=1e-9)
+    np.testing.assert_allclose(scorer.fold_sse(candidate), expected_with, rtol=1e-9)
+    assert scorer.fold_sse(rng.normal(size=n)).sum() > scorer.base_sse.sum() * 0.99
 
 
 def test_ranking_finds_the_generating_transform_even_when_the_inputs_mimic_it():
     frame = lumped()
     X = frame[["T1", "T4"]].to_numpy()
-    effect = lowpass(frame["spindle_on"].to_numpy(float), 3600.0, 100.0)
+    effect = lowpass(frame["spindle_on"].to_numpy(float), 3600.0, 100.0, before=0.0)
     # T1 follows the same heat: an in-sample fit on T1 absorbs much of the effect
     error = X @ [0.7, 1.3] + 1.5 * effect
     design = np.column_stack([np.ones(len(X)), X])
-    ranked = rank_candidates(error, frame, candidate_features(["spindle_on", "T_amb"], ["T1"]), 100.0, design)
-    assert ranked[0].feature == Feature("spindle_on", "lowpass", tau_s=3600.0)
+    features = candidate_features(["spindle_on", "T_amb"], ["T1"], frame, operating=["spindle_on"])
+    folds = make_folds([frame], ["spindle_on", "T_amb"])
+    assert folds.kind == "condition"
+
+    def compute(feature):
+        return feature.compute(frame[feature.column].to_numpy(dtype=float), 100.0)
+
+    ranked = rank_candidates(error, features, compute, design, folds, X, own_inputs={"T1"})
+    assert ranked[0].feature == Feature("spindle_on", "lowpass", tau_s=3600.0, start="rest")
     assert ranked[0].score == pytest.approx(1.0, abs=1e-9)
     assert ranked[0].coefficient == pytest.approx(1.5, rel=1e-9)
+    assert ranked[0].folds_improved == 1.0 and not ranked[0].own_input
+    assert all(c.own_input for c in ranked if c.feature.column == "T1")
 
 
 def test_augmented_groups_are_least_squares_with_the_extra_input(tmp_path):

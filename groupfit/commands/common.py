@@ -10,14 +10,19 @@ from typing import Any
 from tqdm import tqdm
 
 from groupfit.config import override, read_config
-from groupfit.data import Run, load_run, split_names
+from groupfit.data import Run, join_runs, load_run, split_names
 from groupfit.errors import InputError
 from groupfit.modelfile import atomic_write_text, to_json
 
 
 def add_data_options(parser: argparse.ArgumentParser) -> None:
     """--data, --time, --temps, --error, shared by the verbs that read a run."""
-    parser.add_argument("--data", metavar="CSV", help="the run (CSV with a header, one row per sample)")
+    parser.add_argument(
+        "--data",
+        nargs="+",
+        metavar="RUN",
+        help="the run (CSV, XLSX or Parquet with a header, one row per sample); several runs of a global model (p = 0)",
+    )
     parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
     parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
@@ -26,7 +31,7 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
 def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:
     """The configuration file merged with --data, --time, --temps, --error."""
     config = read_config(config_path)
-    override(config, "data", "path", args.data)
+    override(config, "data", "path", args.data[0] if args.data and len(args.data) == 1 else args.data)
     override(config, "data", "time", args.time)
     override(config, "data", "temps", split_names(args.temps))
     override(config, "data", "error", args.error)
@@ -39,6 +44,10 @@ def load_configured_run(config: dict, path: str | None = None, **options) -> Run
     path = path or data.get("path")
     if not path:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    if isinstance(path, (list, tuple)):
+        return join_runs(
+            [load_run(p, temps=data.get("temps"), time=data["time"], error=data["error"], **options) for p in path]
+        )
     return load_run(path, temps=data.get("temps"), time=data["time"], error=data["error"], **options)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -11,16 +12,25 @@ import numpy as np
 from groupfit.commands.common import check_output_dir, report_stream, write_json
 from groupfit.data import DEFAULT_TIME, Run, load_run
 from groupfit.diagnose import DiagnosisResult, diagnose
-from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE
+from groupfit.diagnose.candidates import HEAT_EXPONENT
+from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, joint_name
 from groupfit.errors import InputError
 from groupfit.modelfile import load_model, save_model
+from groupfit.sweep.selection import SELECTION_METHODS
 
 
 def add_parser(verbs) -> None:
     parser = verbs.add_parser("diagnose", help="trace a model's residual on measured data to a missing effect")
     parser.add_argument("model", metavar="MODEL", help="model file (groupfit-model/1 JSON)")
-    parser.add_argument("--data", required=True, metavar="CSV", help="measured run: candidates are chosen on it")
-    parser.add_argument("--validate", metavar="CSV", help="another run, only to judge the result")
+    parser.add_argument(
+        "--data",
+        required=True,
+        nargs="+",
+        metavar="RUN",
+        help="measured run(s) (CSV, XLSX or Parquet): candidates are chosen on them; several runs are held out "
+        "one at a time",
+    )
+    parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     parser.add_argument("--time", default=DEFAULT_TIME, metavar="COLUMN", help="time column (default time_s)")
     parser.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     parser.add_argument("--out", default="groupfit-out", metavar="DIR", help="folder for figures and the new model")
@@ -38,7 +48,36 @@ def add_parser(verbs) -> None:
         metavar="UM",
         help=f"least residual RMS in µm an effect must remove (default {MIN_EFFECT_RMS_UM})",
     )
+    parser.add_argument(
+        "--heat-exponent",
+        type=heat_exponent,
+        default=HEAT_EXPONENT,
+        metavar="K|fit",
+        help="exponent k of the bearing-heat law (n/scale)^k for speed columns (default 5/3), or 'fit'",
+    )
+    parser.add_argument(
+        "--own-transforms",
+        action="store_true",
+        help="also try low-passes, derivatives and delays of the model's own inputs (under the every-fold test)",
+    )
+    parser.add_argument(
+        "--select",
+        choices=SELECTION_METHODS,
+        help="first re-select the model's inputs on held-out conditions (for a model that over-fits)",
+    )
     parser.set_defaults(handler=run_diagnose)
+
+
+def heat_exponent(text: str) -> float | str:
+    if text == "fit":
+        return text
+    try:
+        value = float(Fraction(text))
+    except (ValueError, ZeroDivisionError):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a number such as 5/3 or 1.67, or 'fit'") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: the exponent must be > 0")
+    return value
 
 
 def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
@@ -62,30 +101,40 @@ def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
 
 def run_diagnose(args: argparse.Namespace) -> int:
     model = load_model(args.model)
-    data = load_measured(args.data, model, args.time)
-    validate = load_measured(args.validate, model, args.time) if args.validate else None
+    data = [load_measured(path, model, args.time) for path in args.data]
+    validate = [load_measured(path, model, args.time) for path in args.validate or []]
     out_dir = check_output_dir(args.out)
     from groupfit.commands.compare import live_switching_rule
 
+    start = model
+    selection = None
+    if args.select:
+        from groupfit.diagnose.select import select_base_model
+
+        start, selection = select_base_model(model, data, args.select)
     result = diagnose(
-        model,
+        start,
         data,
-        validate,
+        validate or None,
         live_rule=live_switching_rule(),
         min_score=args.min_score,
         min_effect_rms_um=args.min_effect,
+        heat_exponent=args.heat_exponent,
+        own_transforms=args.own_transforms,
     )
+    if selection is not None:
+        result = with_original_baseline(result, model, data, validate, live_switching_rule(), selection)
 
     model_path = Path(args.model)
     written = []
-    if result.added:
+    if result.added or selection is not None:
         model_path = out_dir / "model_augmented.json"
         save_model(result.model, model_path)
         written.append(model_path)
     from groupfit.plots import plot_diagnosis
 
     figure = out_dir / "diagnose.png"
-    runs = {"data": data, **({"validate": validate} if validate is not None else {})}
+    runs = {"data": data, **({"validate": validate} if validate else {})}
     plot_diagnosis(result, runs, figure)
     written.append(figure)
 
@@ -94,12 +143,35 @@ def run_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
+def with_original_baseline(result, model, data, validate, live_rule, selection) -> DiagnosisResult:
+    """Report before/after against the model the user gave, not the re-selected one."""
+    from groupfit.diagnose.loop import metrics_of, stacked_residual
+
+    runs = {"data": data, **({"validate": validate} if validate else {})}
+    before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
+    result.residuals_before = before
+    result.before = {key: metrics_of(r) for key, r in before.items()}
+    result.selection = selection
+    result.notes.insert(
+        0,
+        f"inputs re-selected by {selection['method']} on held-out conditions: {', '.join(selection['inputs'])} "
+        f"(of {len(model['temps'])}); before/after compare with the model as given",
+    )
+    return result
+
+
 def result_json(result: DiagnosisResult, model_path: Path) -> dict[str, Any]:
     return {
         "candidates": [c.to_dict() for c in result.candidates],
         "added": [c.to_dict() for c in result.added],
+        "steps": [s.to_dict() for s in result.steps],
+        "refused": [r.to_dict() for r in result.refused],
+        "folds": result.folds,
+        "base_model": result.base_check,
+        "selection": getattr(result, "selection", None),
         "before": result.before,
         "after": result.after,
+        "improved": result.improved,
         "checks": {"before": result.checks_before, "after": result.checks_after},
         "notes": result.notes,
         "model": str(model_path),
@@ -119,43 +191,71 @@ def column_words(column: str) -> str:
     return f"column `{column}`"
 
 
-def diagnosis_report(result: DiagnosisResult, data: Run, validate: Run | None, written) -> str:
+def change_words(before: float, after: float) -> str:
+    """``RMS 11 → 4.4 µm (60 % lower)`` or ``(80 % higher)``."""
+    if before <= 0:
+        return f"{before:.3g} → {after:.3g} µm"
+    change = 100.0 * (after - before) / before
+    if abs(change) < 0.5:
+        words = "unchanged"
+    else:
+        words = f"{abs(change):.0f} % {'higher' if change > 0 else 'lower'}"
+    return f"{before:.3g} → {after:.3g} µm ({words})"
+
+
+def diagnosis_report(result: DiagnosisResult, data: list[Run], validate: list[Run], written) -> str:
     lines = []
-    judge = "validate" if validate is not None else "data"
-    judged = validate.name if validate is not None else data.name
+    judge = "validate" if validate else "data"
+    judged = joint_name(validate) if validate else joint_name(data)
+    b, a = result.before[judge], result.after[judge]
+    changed = bool(result.added) or getattr(result, "selection", None) is not None
+    if result.improved is False or (validate and changed and a["rms_um"] >= b["rms_um"]):
+        lines.append(
+            f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
+        )
     if result.added:
-        for c in result.added:
+        for step in result.steps:
+            c = step.candidate
+            better = f"{c.folds_improved * len(c.fold_ratios):.0f} of {len(c.fold_ratios)}"
+            held_out = change_words(step.held_out_rms_before, step.held_out_rms_after)
             lines.append(
                 f"missing effect: {column_words(c.feature.column)}, {c.feature.describe()} "
-                f"(explains {100 * c.score:.0f} % of the residual out of sample)"
+                f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
+                f"held-out RMS {held_out})"
             )
-        b, a = result.before[judge], result.after[judge]
         lines.append(
-            f"{'validation' if validate is not None else 'measured'} run {judged}: RMS {b['rms_um']:.3g} → "
-            f"{a['rms_um']:.3g} µm, max {b['max_um']:.3g} → {a['max_um']:.3g} µm "
-            f"({100 * (1 - a['rms_um'] / b['rms_um']):.0f} % lower RMS)"
+            f"{'validation' if validate else 'measured'} run {judged}: RMS {change_words(b['rms_um'], a['rms_um'])}, "
+            f"max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
         )
         lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
     else:
         lines.append(
-            "nothing missing: no candidate explains a significant part of the residual; the model is unchanged"
+            "nothing missing: no candidate explains a significant part of the held-out error; the model's effects "
+            "are unchanged"
+        )
+    lines.append(f"held out: {result.folds}")
+    for refusal in result.refused[:5]:
+        c = refusal.candidate
+        lines.append(f"refused: {c.feature.column} {c.feature.describe()} (score {c.score:.2f}): {refusal.reason}")
+    lines.append("")
+    lines.append(f"{'candidate':<24} {'transform':<40} {'score':>6} {'folds':>6} {'removes RMS µm':>15}")
+    for c in result.candidates[:10]:
+        lines.append(
+            f"{c.feature.column:<24} {c.feature.describe():<40} {c.score:>6.3f} "
+            f"{c.folds_improved * len(c.fold_ratios):>3.0f}/{len(c.fold_ratios):<2} {c.explained_rms_um:>15.3g}"
         )
     lines.append("")
-    lines.append(f"{'candidate':<24} {'transform':<28} {'score':>6} {'removes RMS µm':>15}")
-    for c in result.candidates[:10]:
-        lines.append(f"{c.feature.column:<24} {c.feature.describe():<28} {c.score:>6.3f} {c.explained_rms_um:>15.3g}")
-    lines.append("")
     for key in result.before:
-        run = data if key == "data" else validate
+        runs = data if key == "data" else validate
         b, a = result.before[key], result.after[key]
         lines.append(
-            f"{key:<9} {run.name}: RMS {b['rms_um']:.4g} → {a['rms_um']:.4g} µm, max {b['max_um']:.4g} → "
+            f"{key:<9} {joint_name(runs)}: RMS {change_words(b['rms_um'], a['rms_um'])}, max {b['max_um']:.4g} → "
             f"{a['max_um']:.4g} µm, R {b['R_um']:.4g} → {a['R_um']:.4g} µm"
         )
     lb_b, lb_a = result.checks_before["ljung_box"], result.checks_after["ljung_box"]
     dr_b, dr_a = result.checks_before["drift"], result.checks_after["drift"]
     lines.append(
-        f"residual on {data.name}: Ljung–Box Q({lb_b['lags']}) {lb_b['Q']:.0f} → {lb_a['Q']:.0f}; "
+        f"residual on {joint_name(data)}: Ljung–Box Q({lb_b['lags']}) {lb_b['Q']:.0f} → {lb_a['Q']:.0f}; "
         f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
         f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
     )

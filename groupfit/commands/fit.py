@@ -15,12 +15,13 @@ from groupfit.commands.common import (
     write_json,
 )
 from groupfit.config import default_config_path, ga_settings, override
-from groupfit.data import Run
+from groupfit.data import Run, join_runs
 from groupfit.errors import InputError
 from groupfit.grouping import served_ranges
 from groupfit.modelfile import model_to_dict, save_model
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
+from groupfit.sweep.selection import SELECTION_METHODS
 
 
 def add_parser(verbs) -> None:
@@ -38,6 +39,12 @@ def add_parser(verbs) -> None:
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
     fit.add_argument("--seed", type=int, help="seed of the genetic algorithm")
     fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
+    fit.add_argument(
+        "--select",
+        choices=SELECTION_METHODS,
+        help="choose the inputs among --temps on held-out conditions (forward, lasso or cluster)",
+    )
+    fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
     fit.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     fit.add_argument("--out", metavar="DIR", help="folder for model.json and fit.png")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -60,7 +67,23 @@ def run_fit(args: argparse.Namespace) -> int:
     override(config, "search", "seed", args.seed)
     override(config, "output", "dir", args.out)
 
-    run = load_configured_run(config)
+    paths = config["data"].get("path")
+    runs = (
+        [load_configured_run(config, p) for p in paths]
+        if isinstance(paths, (list, tuple))
+        else [load_configured_run(config)]
+    )
+    if len(runs) > 1 and config["model"]["p"] != 0:
+        raise InputError(
+            f"{len(runs)} runs given: several runs fit a global model, --p 0; a grouped model's "
+            "breaks belong to one run (fit it per run and operating condition)"
+        )
+    run = join_runs(runs)
+    input_selection = None
+    if args.select:
+        run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors)
+    elif args.sensors is not None:
+        raise InputError("--sensors K needs --select forward|lasso|cluster")
     criterion = config["model"].get("criterion")
     if criterion is not None and criterion not in run.temp_names:
         raise InputError(
@@ -99,12 +122,37 @@ def run_fit(args: argparse.Namespace) -> int:
     result = {**model, "search": estimator.search_}
     if selection is not None:
         result["p_selection"] = selection
+    if input_selection is not None:
+        result["input_selection"] = input_selection
     write_json(args.json, result)
     report = fit_report(estimator, run, model, [model_path, figure_path])
     if selection is not None:
         report = selection_summary(selection) + "\n" + report
+    if input_selection is not None:
+        report = (
+            f"inputs  {input_selection['method']} selection ({input_selection['folds']}): "
+            f"{', '.join(input_selection['inputs'])} of {input_selection['candidates']}\n" + report
+        )
     print(report, file=report_stream(args))
     return 0
+
+
+def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tuple[Run, dict]:
+    """The run restricted to the inputs ``method`` chooses, scored on held-out conditions or runs."""
+    from dataclasses import replace
+
+    from groupfit.diagnose.candidates import usable_columns
+    from groupfit.diagnose.folds import make_folds
+    from groupfit.sweep.selection import select_sensors
+
+    if k is not None and not 1 <= k <= len(run.temp_names):
+        raise InputError(f"--sensors {k}: choose 1 to {len(run.temp_names)} of the {len(run.temp_names)} inputs")
+    columns, _ = usable_columns(run.frame, {run.time_name, run.error_name, *run.temp_names})
+    folds = make_folds(frames, columns)
+    names = select_sensors(run.temps, run.error, run.temp_names, method, k, splits=folds.index_splits())
+    keep = [run.temp_names.index(name) for name in names]
+    selected = replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
+    return selected, {"method": method, "inputs": names, "candidates": len(run.temp_names), "folds": folds.describe()}
 
 
 def p_value(text: str) -> int | str:

@@ -10,9 +10,10 @@ whose ``derived_inputs`` say how to compute it from the data's columns.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
+import pandas as pd
 
 from groupfit.data import Run
 from groupfit.features import Feature
@@ -20,25 +21,49 @@ from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 
 
-def augment_model(model: dict[str, Any], run: Run, inputs: np.ndarray, feature: Feature) -> dict[str, Any]:
-    """The model refitted on ``run`` with ``feature`` as one more input.
+def augment_model(
+    model: dict[str, Any], runs: Run | Sequence[Run], inputs: np.ndarray | Sequence[np.ndarray], feature: Feature
+) -> dict[str, Any]:
+    """The model refitted on ``runs`` with ``feature`` as one more input.
 
     Parameters
     ----------
-    inputs : ndarray, shape (N, k)
-        The model's current inputs on ``run`` (see :func:`groupfit.diagnose.residual.model_inputs`).
+    runs : Run or sequence of Run
+        The modelling run, or several runs of a global model (p = 0), stacked.
+    inputs : ndarray, shape (N, k), or one per run
+        The model's current inputs on each run (see :func:`groupfit.diagnose.residual.model_inputs`).
     """
-    values = feature.compute(run.frame[feature.column].to_numpy(dtype=float), model["sampling_period_s"])
-    X = np.column_stack([inputs, values])
-    names = (*model["temps"], feature.name)
+    if isinstance(runs, Run):
+        runs, inputs = [runs], [inputs]
+    period = model["sampling_period_s"]
+    values = [feature.compute(run.frame[feature.column].to_numpy(dtype=float), period) for run in runs]
+    X = [np.column_stack([x, v]) for x, v in zip(inputs, values)]
+    derived = [*model.get("derived_inputs", []), feature.to_dict()]
+    return refit_model(model, runs, X, (*model["temps"], feature.name), derived)
+
+
+def refit_model(
+    model: dict[str, Any],
+    runs: Sequence[Run],
+    inputs: Sequence[np.ndarray],
+    names: Sequence[str],
+    derived_inputs: list[dict[str, Any]],
+) -> dict[str, Any]:
+    """The model's groups (hard breaks kept) refitted on other inputs, as a model file object."""
+    X = np.vstack(inputs)
+    error = np.concatenate([run.error for run in runs])
     estimator = GroupedRegressor(
         n=model["n"],
         c=model["c"],
         objective=model["objective"],
         fit_intercept=model["intercept"],
         fixed_breaks=list(model["breaks"]),
-    ).fit(X, run.error)
-    augmented_run = replace(run, temps=X, temp_names=names)
-    augmented = model_to_dict(estimator, augmented_run, criterion=model["switching"]["criterion"])
-    augmented["derived_inputs"] = [*model.get("derived_inputs", []), feature.to_dict()]
-    return augmented
+    ).fit(X, error)
+    time = np.arange(len(error)) * model["sampling_period_s"] + runs[0].time[0]
+    frame = pd.concat([run.frame for run in runs], ignore_index=True)
+    refitted_run = replace(runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame)
+    criterion = model["switching"]["criterion"]
+    refitted = model_to_dict(estimator, refitted_run, criterion=criterion if criterion in names else None)
+    if derived_inputs:
+        refitted["derived_inputs"] = derived_inputs
+    return refitted

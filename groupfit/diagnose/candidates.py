@@ -1,41 +1,78 @@
-"""Candidate explanations of a residual, and how much of it each explains out of sample.
+"""Candidate explanations of a residual, and how much of it each explains on held-out conditions.
 
 Candidates are every usable column the model does not use (ambient
-temperature, spindle speed, on/off of other heat sources, axis position,
-unused sensors), as measured, low-passed over a grid of time constants
-(thermal lag), differentiated and delayed, and the same transforms of the
-model's own inputs. A column is left out, with the reason, when it is not
-numeric, has non-finite values, or is constant (a dead sensor).
+temperature, spindle speed, on/off of other heat sources, unused sensors), as
+measured, low-passed over a grid of time constants (thermal lag),
+differentiated and delayed. A speed (an operating column with more than two
+levels) enters through the bearing-heat law ``(n / scale)^k`` (k = 5/3 by
+default, or fitted over :data:`FITTED_EXPONENTS`), as measured and
+low-passed. Lags of operating columns (speeds, on/off of heat sources) start
+from rest, lags of everything else from the first reading
+(:mod:`groupfit.features`). Transforms of the model's own inputs are tried
+only when asked for. A column is left out, with the
+reason, when it is not numeric, has non-finite values, is constant (a dead
+sensor) or is a displacement (another probe's error is not a cause the
+controller can read).
 
-The score is the share of the model's error a candidate removes in *blocked
-cross-validation in time*: the run is cut into contiguous blocks, and each
-block is predicted by the model's own regression (each group's inputs in its
-own columns) refitted on the other blocks, with and without the candidate as
-one more regressor. A candidate that only fits the stretch of the run it was
-fitted on scores near zero or below.
+The score is the share of the model's error a candidate removes on held-out
+folds that imitate a new run (:mod:`groupfit.diagnose.folds`): each fold is
+predicted by the model's own regression (each group's inputs in its own
+columns) refitted on the other folds, with and without the candidate as one
+more regressor. A candidate that only fits the conditions it was fitted on
+scores near zero or below.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import pandas as pd
 
+from groupfit.diagnose.folds import Folds
 from groupfit.features import Feature
 
 TAUS_S = (600.0, 1200.0, 1800.0, 3600.0, 5400.0, 7200.0, 10800.0, 14400.0, 21600.0, 28800.0)
 DELAYS = (1, 3, 10)
-N_BLOCKS = 10
+HEAT_EXPONENT = 5.0 / 3.0
+"""Bearing heat ∝ n^(5/3) (Palmgren's friction moment times speed), as the FE model uses."""
+FITTED_EXPONENTS = (1.0, 4.0 / 3.0, 5.0 / 3.0, 2.0)
+"""Exponents tried when the heat-law exponent is fitted (``heat_exponent="fit"``)."""
+DISPLACEMENT_SUFFIXES = ("_um", "_mm", "_µm")
+COLLINEAR_R = 0.95
+"""A candidate correlated this closely (|r|) with one of the model's inputs is *collinear* with it."""
 
 
 @dataclass(frozen=True)
 class Candidate:
+    """A feature and how it scored on the held-out folds."""
+
     feature: Feature
     score: float
+    """Share of the held-out squared error the candidate removes: 1 − SSE_with / SSE_without."""
     coefficient: float
     explained_rms_um: float
     """RMS (µm) of the residual the candidate removes out of sample: √((SSE_without − SSE_with)/N)."""
+    fold_sse: tuple[float, ...] = ()
+    """SSE_with on each held-out fold (µm²)."""
+    fold_ratios: tuple[float, ...] = ()
+    """SSE_with / SSE_without on each held-out fold."""
+    own_input: bool = False
+    """A transform of one of the model's own inputs."""
+    collinearity: float = 0.0
+    """Largest |r| between the candidate and one of the model's inputs."""
+
+    @property
+    def folds_improved(self) -> float:
+        """Share of the held-out folds on which the candidate lowers the error."""
+        ratios = np.asarray(self.fold_ratios)
+        return float(np.mean(ratios < 1.0)) if ratios.size else 0.0
+
+    def family(self) -> tuple:
+        """Candidates that differ only in their low-pass time constant."""
+        f = self.feature
+        return (f.column, f.transform, f.exponent, f.scale)
 
     def to_dict(self) -> dict:
         return {
@@ -43,11 +80,22 @@ class Candidate:
             "transform": self.feature.transform,
             "tau_s": self.feature.tau_s,
             "delay_samples": self.feature.delay_samples or None,
+            "exponent": self.feature.exponent,
+            "scale": self.feature.scale,
             "name": self.feature.name,
             "description": self.feature.describe(),
             "score": self.score,
             "explained_rms_um": self.explained_rms_um,
+            "folds_improved": self.folds_improved,
+            "fold_ratios": list(self.fold_ratios),
+            "own_input": self.own_input,
+            "collinearity": self.collinearity,
         }
+
+
+def is_displacement(column: str) -> bool:
+    lowered = column.lower()
+    return lowered.endswith(DISPLACEMENT_SUFFIXES) or lowered.startswith(("disp", "error"))
 
 
 def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], list[str]]:
@@ -55,6 +103,9 @@ def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], l
     usable, notes = [], []
     for column in frame.columns:
         if column in exclude:
+            continue
+        if is_displacement(column):
+            notes.append(f"column '{column}' left out: a displacement, not a cause the controller can read")
             continue
         values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
         bad = int((~np.isfinite(values)).sum())
@@ -69,49 +120,138 @@ def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], l
     return usable, notes
 
 
-def candidate_features(columns: list[str], model_inputs: list[str]) -> list[Feature]:
-    """The transforms tried: measured value (columns only), low-pass, derivative, delay."""
+def heat_law_scale(values: np.ndarray) -> float:
+    """A round reference for the power stage: 1000 for speeds in the thousands of r/min."""
+    top = float(np.max(np.abs(values)))
+    return float(10.0 ** np.floor(np.log10(top))) if top > 0 else 1.0
+
+
+def candidate_features(
+    columns: list[str],
+    model_inputs: list[str],
+    frame: pd.DataFrame,
+    operating: Sequence[str] = (),
+    heat_exponent: float | str = HEAT_EXPONENT,
+) -> list[Feature]:
+    """The transforms tried.
+
+    Every column: as measured (unused columns only), low-pass over
+    :data:`TAUS_S`, derivative, delays; lags of ``operating`` columns start
+    from rest. A speed among ``operating`` (see :func:`speed_like`) enters
+    through the heat law instead of linearly, as measured and low-passed;
+    ``heat_exponent="fit"`` tries :data:`FITTED_EXPONENTS` (1 is the column
+    itself) instead of one exponent.
+    """
+    speeds = speed_like(frame, operating)
+    exponents = FITTED_EXPONENTS if heat_exponent == "fit" else (float(heat_exponent),)
     features = []
     for column in [*columns, *model_inputs]:
+        start = "rest" if column in operating else "steady"
+        if column in speeds:
+            for k in exponents:
+                power = {} if k == 1.0 else {"exponent": k, "scale": heat_law_scale(frame[column].to_numpy(float))}
+                features.append(Feature(column, **power))
+                features.extend(Feature(column, "lowpass", tau_s=tau, start=start, **power) for tau in TAUS_S)
+            continue
         if column in columns:
             features.append(Feature(column))
-        features.extend(Feature(column, "lowpass", tau_s=tau) for tau in TAUS_S)
+        features.extend(Feature(column, "lowpass", tau_s=tau, start=start) for tau in TAUS_S)
         features.append(Feature(column, "derivative"))
-        features.extend(Feature(column, "delay", delay_samples=d) for d in DELAYS)
+        features.extend(Feature(column, "delay", delay_samples=d, start=start) for d in DELAYS)
     return features
 
 
-def blocked_cv_sse(target: np.ndarray, design: np.ndarray, n_blocks: int = N_BLOCKS) -> float:
-    """Squared error of ``target ≈ design·β`` on held-out contiguous blocks of time."""
-    edges = np.linspace(0, len(target), n_blocks + 1).astype(int)
-    sse = 0.0
-    for first, last in zip(edges[:-1], edges[1:]):
-        train = np.r_[0:first, last : len(target)]
-        coef, *_ = np.linalg.lstsq(design[train], target[train], rcond=None)
-        sse += float(np.sum((target[first:last] - design[first:last] @ coef) ** 2))
-    return sse
+def speed_like(frame: pd.DataFrame, operating: Sequence[str]) -> list[str]:
+    """Operating columns that set a level (more than two values, none negative): a speed, a feed."""
+    out = []
+    for column in operating:
+        values = frame[column].to_numpy(dtype=float)
+        if len(np.unique(values)) > 2 and values.min() >= 0:
+            out.append(column)
+    return out
 
 
-def blocked_cv_score(target: np.ndarray, feature: np.ndarray, design: np.ndarray) -> float:
-    """Share of the held-out error of ``target ≈ design·β`` that adding ``feature`` removes."""
-    without = blocked_cv_sse(target, design)
-    with_feature = blocked_cv_sse(target, np.column_stack([design, feature]))
-    return 1.0 - with_feature / without if without > 0 else 0.0
+class HeldOutScorer:
+    """Held-out squared error of ``target ≈ design·β`` with one more regressor, fold by fold.
+
+    Each fold's fit on the other folds is computed once; a candidate column
+    then costs one projection per fold (the Frisch–Waugh–Lovell update of
+    the coefficients), not a new least-squares problem. The projections use
+    the pseudo-inverse of each fold's Gram matrix of the norm-scaled design,
+    so a design that loses rank on a fold (a group absent from it) still has
+    a defined, minimum-norm answer.
+    """
+
+    def __init__(self, target: np.ndarray, design: np.ndarray, folds: Folds):
+        from scipy.linalg import pinvh
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1, user_api="blas"):  # products this small only lose to thread hand-offs
+            self._fit(target, design, folds, pinvh)
+
+    def _fit(self, target, design, folds, pinvh) -> None:
+        self.target = target
+        norms = np.linalg.norm(design, axis=0)
+        self.design = design / np.where(norms > 0, norms, 1.0)
+        everything = np.ones(len(target), dtype=bool)
+        self.splits = [*folds.splits(), (everything, np.zeros_like(everything))]
+        self.fits = []
+        for train, _ in self.splits:
+            Z = self.design[train]
+            gram_inverse = pinvh(Z.T @ Z, atol=0.0, rtol=1e-13)
+            coef = gram_inverse @ (Z.T @ target[train])
+            self.fits.append((gram_inverse, coef, target[train] - Z @ coef))
+        self.base_sse = np.array(
+            [
+                float(np.sum((target[test] - self.design[test] @ coef) ** 2))
+                for (_, test), (_, coef, _) in zip(self.splits[:-1], self.fits[:-1])
+            ]
+        )
+
+    def _update(self, values: np.ndarray, fold: int) -> tuple[float, np.ndarray]:
+        """Coefficient of ``values`` fitted with the design on the fold's training rows, and its design part."""
+        train, _ = self.splits[fold]
+        gram_inverse, _, residual = self.fits[fold]
+        v_coef = gram_inverse @ (self.design[train].T @ values[train])
+        v_res = values[train] - self.design[train] @ v_coef
+        denom = float(v_res @ v_res)
+        if denom <= 1e-12 * max(1.0, float(values[train] @ values[train])):
+            return 0.0, v_coef
+        return float(v_res @ residual) / denom, v_coef
+
+    def fold_sse(self, values: np.ndarray) -> np.ndarray:
+        """Held-out SSE per fold with ``values`` as one more regressor."""
+        sse = np.empty(len(self.splits) - 1)
+        for f, (_, test) in enumerate(self.splits[:-1]):
+            gamma, v_coef = self._update(values, f)
+            coef = self.fits[f][1]
+            design = self.design[test]
+            error = self.target[test] - design @ coef - gamma * (values[test] - design @ v_coef)
+            sse[f] = float(error @ error)
+        return sse
+
+    def coefficient(self, values: np.ndarray) -> float:
+        """The candidate's coefficient fitted with the design on all samples."""
+        return self._update(values, len(self.splits) - 1)[0]
 
 
 def rank_candidates(
     target: np.ndarray,
-    frame: pd.DataFrame,
     features: list[Feature],
-    period_s: float,
+    compute,
     design: np.ndarray,
+    folds: Folds,
+    inputs: np.ndarray | None = None,
+    own_inputs: set[str] = frozenset(),
 ) -> list[Candidate]:
     """Score every candidate as one more regressor of the model's own design; best first.
 
     Parameters
     ----------
     target : ndarray
-        The measured error.
+        The measured error, all runs stacked.
+    compute : callable
+        ``compute(feature) -> ndarray``: the candidate's values on the same samples.
     design : ndarray
         The model's regressors on the same samples, each group's inputs in
         its own columns (see :func:`groupfit.diagnose.loop.group_design`).
@@ -119,25 +259,51 @@ def rank_candidates(
         model fitted on the same run absorbs part of a missing effect into
         its coefficients, and only an out-of-sample comparison of the model
         with and without the candidate shows it.
+    folds : Folds
+        The held-out folds.
+    inputs : ndarray, optional
+        The model's inputs on the same samples, for the collinearity of each candidate.
+    own_inputs : set of str
+        The model's input columns: their transforms are marked ``own_input``.
     """
-    rows = np.isfinite(target) & np.isfinite(design).all(axis=1)
-    y, Z = target[rows], design[rows]
-    without = blocked_cv_sse(y, Z)
+    scorer = HeldOutScorer(target, design, folds)
+    without = float(scorer.base_sse.sum())
+    n = len(target)
     ranked = []
     for feature in features:
-        values = feature.compute(frame[feature.column].to_numpy(dtype=float), period_s)[rows]
+        values = compute(feature)
         if np.ptp(values) == 0.0:
             continue
-        augmented = np.column_stack([Z, values])
-        coef, *_ = np.linalg.lstsq(augmented, y, rcond=None)
-        with_feature = blocked_cv_sse(y, augmented)
+        sse = scorer.fold_sse(values)
+        with_feature = float(sse.sum())
         ranked.append(
             Candidate(
                 feature=feature,
                 score=1.0 - with_feature / without if without > 0 else 0.0,
-                coefficient=float(coef[-1]),
-                explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / len(y))),
+                coefficient=scorer.coefficient(values),
+                explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / n)),
+                fold_sse=tuple(float(v) for v in sse),
+                fold_ratios=tuple(float(r) for r in sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)),
+                own_input=feature.column in own_inputs,
+                collinearity=largest_correlation(values, inputs),
             )
         )
     ranked.sort(key=lambda c: -c.score)
     return ranked
+
+
+def largest_correlation(values: np.ndarray, inputs: np.ndarray | None) -> float:
+    """Largest |r| between ``values`` and a column of ``inputs`` (0 without inputs)."""
+    if inputs is None or inputs.shape[1] == 0:
+        return 0.0
+    centred = inputs - inputs.mean(axis=0)
+    v = values - values.mean()
+    norms = np.linalg.norm(centred, axis=0) * np.linalg.norm(v)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = np.abs(centred.T @ v) / norms
+    return float(np.nanmax(np.where(norms > 0, r, 0.0)))
+
+
+def base_fold_sse(target: np.ndarray, design: np.ndarray, folds: Folds) -> np.ndarray:
+    """Held-out SSE per fold of the model's own regression (no candidate)."""
+    return HeldOutScorer(target, design, folds).base_sse

@@ -1,26 +1,92 @@
-"""The diagnosis loop: rank candidates, add the best while it is significant, report before/after."""
+"""The diagnosis loop: rank candidates on held-out conditions, add the best while it holds, report before/after.
+
+Acceptance imitates the next run. A candidate is added only when, on folds
+that are whole operating conditions or whole runs
+(:mod:`groupfit.diagnose.folds`), it removes at least ``min_score`` of the
+model's held-out squared error and at least ``min_effect_rms_um`` of RMS, and
+lowers the error on more than half of the folds. Stricter tests apply where
+a chance fit is most tempting:
+
+* transforms of the model's own inputs (a low-pass of a sensor the model
+  already reads) are refused unless asked for (``own_transforms=True``, then
+  the every-fold test below): they re-weight information the model has, which
+  fits the modelling conditions and rarely the next run;
+* candidates nearly a copy of one of the model's inputs (|r| ≥ 0.95) must remove
+  twice ``min_score``: most of what they add, the model could already say;
+* every effect after the first must lower the error on *every* held-out fold:
+  a second effect explains what is left of a smaller residual, where a fit to
+  one condition is easiest to mistake for an effect.
+
+Among low-passes of the same column that pass, the shortest time constant
+whose held-out error is within one standard error of the best one's is taken
+(the one-standard-error rule of cross-validation, the standard error from
+the spread of the fold-by-fold differences): a longer lag than the data need
+turns an effect into a trend of the modelling run, which the next run does
+not share, and depends more on how the run started.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
+import pandas as pd
 
 from groupfit.data import Run
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import Candidate, candidate_features, rank_candidates, usable_columns
+from groupfit.diagnose.candidates import (
+    COLLINEAR_R,
+    HEAT_EXPONENT,
+    Candidate,
+    base_fold_sse,
+    candidate_features,
+    rank_candidates,
+    usable_columns,
+)
 from groupfit.diagnose.checks import drift, ljung_box
+from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.grouping import serving_group_index
 from groupfit.modelfile import error_metrics
 
 MIN_SCORE = 0.3
-"""Least fraction of the residual variance, out of sample, that makes an effect significant."""
+"""Least share of the held-out squared error that makes an effect significant."""
 MIN_EFFECT_RMS_UM = 0.1
 """Least residual RMS (µm) an effect must remove out of sample: below it, nothing a compensation would notice."""
+MIN_FOLDS_IMPROVED = 0.5
+"""Share of held-out folds an effect must improve (more than this); the strict test asks for all of them."""
+OVERFIT_RATIO = 3.0
+"""The base model is called over-fitted when its held-out RMS exceeds its in-sample RMS by this factor."""
 MAX_EFFECTS = 3
+
+
+@dataclass
+class Step:
+    """One accepted effect and what it did on the held-out folds."""
+
+    candidate: Candidate
+    held_out_rms_before: float
+    held_out_rms_after: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            **self.candidate.to_dict(),
+            "held_out_rms_before_um": self.held_out_rms_before,
+            "held_out_rms_after_um": self.held_out_rms_after,
+        }
+
+
+@dataclass
+class Refusal:
+    """A candidate that scored well enough but failed the test it faced."""
+
+    candidate: Candidate
+    reason: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**self.candidate.to_dict(), "reason": self.reason}
 
 
 @dataclass
@@ -37,6 +103,17 @@ class DiagnosisResult:
     checks_after: dict[str, Any] = field(default_factory=dict)
     residuals_before: dict[str, np.ndarray] = field(default_factory=dict)
     residuals_after: dict[str, np.ndarray] = field(default_factory=dict)
+    steps: list[Step] = field(default_factory=list)
+    refused: list[Refusal] = field(default_factory=list)
+    folds: str = ""
+    base_check: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def improved(self) -> bool | None:
+        """Whether the validation run got better; None without one (or when nothing was added)."""
+        if "validate" not in self.before or not self.added:
+            return None
+        return self.after["validate"]["rms_um"] < self.before["validate"]["rms_um"]
 
 
 def check_inputs(model: dict[str, Any], run: Run, inputs: np.ndarray) -> list[str]:
@@ -65,54 +142,109 @@ def metrics_of(res: np.ndarray) -> dict[str, float]:
     return error_metrics(res[np.isfinite(res)])
 
 
+def as_runs(runs: Run | Sequence[Run] | None) -> list[Run]:
+    if runs is None:
+        return []
+    return [runs] if isinstance(runs, Run) else list(runs)
+
+
+def joint_name(runs: list[Run]) -> str:
+    return runs[0].name if len(runs) == 1 else "+".join(r.name for r in runs)
+
+
 def diagnose(
     model: dict[str, Any],
-    data: Run,
-    validate: Run | None = None,
+    data: Run | Sequence[Run],
+    validate: Run | Sequence[Run] | None = None,
     live_rule: LiveRule | None = None,
     min_score: float = MIN_SCORE,
     min_effect_rms_um: float = MIN_EFFECT_RMS_UM,
     max_effects: int = MAX_EFFECTS,
+    heat_exponent: float | str = HEAT_EXPONENT,
+    own_transforms: bool = False,
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
-    Candidates are chosen on ``data`` only, by blocked cross-validation in
-    time; ``validate`` is never used to choose, only to report.
+    Candidates are chosen on ``data`` only, by held-out folds that are whole
+    operating conditions (one run) or whole runs (several); ``validate`` is
+    never used to choose, only to report.
     """
-    inputs = model_inputs(model, data)
-    notes = check_inputs(model, data, inputs)
-    if validate is not None:
-        notes += check_inputs(model, validate, model_inputs(model, validate))
-    base_columns = {data.time_name, model["error"]}
+    data_runs, validate_runs = as_runs(data), as_runs(validate)
+    if len(data_runs) > 1 and model["p"] > 0:
+        raise InputError(
+            f"{len(data_runs)} modelling runs given for a grouped model (p = {model['p']}): its breaks belong to "
+            "one run; diagnose a grouped model on one run, or a global model (p = 0) on several"
+        )
+    period = float(model["sampling_period_s"])
+    inputs = [model_inputs(model, run) for run in data_runs]
+    notes = [n for run, x in zip(data_runs, inputs) for n in check_inputs(model, run, x)]
+    for run in validate_runs:
+        notes += check_inputs(model, run, model_inputs(model, run))
+    base_columns = {data_runs[0].time_name, model["error"]}
     derived_sources = {d["column"] for d in model.get("derived_inputs", [])}
     used = set(model["temps"]) | derived_sources
-    columns, column_notes = usable_columns(data.frame, exclude=base_columns | used)
+    columns, column_notes = common_usable_columns(data_runs, base_columns | used)
     notes += column_notes
-    measured_inputs = [t for t in model["temps"] if t in data.frame.columns]
+    measured_inputs = [t for t in model["temps"] if all(t in r.frame.columns for r in data_runs)]
+    stacked_frame = pd.concat([r.frame[columns] for r in data_runs], ignore_index=True)
+    operating = operating_columns(stacked_frame, columns) if columns else []
+    folds = make_folds([r.frame for r in data_runs], columns)
+    if folds.n_folds < 2:
+        raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
 
-    runs = {"data": data, **({"validate": validate} if validate is not None else {})}
-    before = {key: residual(model, run, live_rule) for key, run in runs.items()}
+    target = np.concatenate([r.error for r in data_runs])
+    runs = {"data": data_runs, **({"validate": validate_runs} if validate_runs else {})}
+    before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     current_model, current_inputs = model, inputs
     current = dict(before)
+    base_check = overfit_check(target, stacked_design(model, inputs), folds)
+    if base_check["overfitted"]:
+        notes.append(
+            f"the model over-fits: held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
+            f"{base_check['in_sample_rms_um']:.3g} µm in sample ({folds.describe()}); effects found on it are "
+            "unreliable: start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
+        )
+
+    def compute(feature):
+        return np.concatenate(
+            [feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in data_runs]
+        )
+
+    if not own_transforms:
+        notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
+    tried = candidate_features(
+        columns,
+        measured_inputs if own_transforms else [],
+        stacked_frame,
+        operating,
+        heat_exponent,
+    )
     added: list[Candidate] = []
+    steps: list[Step] = []
+    refused: list[Refusal] = []
     first_ranking: list[Candidate] | None = None
-    tried = candidate_features(columns, measured_inputs)
-    while len(added) < max_effects:
-        design = group_design(current_model, current_inputs)
-        ranking = rank_candidates(data.error, data.frame, tried, model["sampling_period_s"], design)
+    while len(added) < max_effects and tried:
+        design = stacked_design(current_model, current_inputs)
+        ranking = rank_candidates(
+            target, tried, compute, design, folds, np.vstack(current_inputs), own_inputs=set(measured_inputs)
+        )
         if first_ranking is None:
             first_ranking = ranking
-        if not ranking:
+        held_out_before = float(np.sqrt(base_fold_sse(target, design, folds).sum() / len(target)))
+        best, step_refusals = choose(ranking, min_score, min_effect_rms_um, bool(added), own_transforms)
+        refused += step_refusals
+        if best is None:
             break
-        best = ranking[0]
-        if best.score < min_score or best.explained_rms_um < min_effect_rms_um:
-            break
-        current_model = augment_model(current_model, data, current_inputs, best.feature)
-        current_inputs = model_inputs(current_model, data)
-        current = {key: residual(current_model, run, live_rule) for key, run in runs.items()}
+        current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
+        current_inputs = [model_inputs(current_model, run) for run in data_runs]
+        current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
+        after_sse = base_fold_sse(target, stacked_design(current_model, current_inputs), folds)
+        held_out_after = float(np.sqrt(after_sse.sum() / len(target)))
         added.append(best)
+        steps.append(Step(best, held_out_before, held_out_after))
         tried = [f for f in tried if f.column != best.feature.column]
 
+    time = np.arange(len(target)) * period
     return DiagnosisResult(
         candidates=first_ranking or [],
         added=added,
@@ -120,11 +252,101 @@ def diagnose(
         after={key: metrics_of(r) for key, r in current.items()},
         model=current_model,
         notes=notes,
-        checks_before=residual_checks(before["data"], data.time),
-        checks_after=residual_checks(current["data"], data.time),
+        checks_before=residual_checks(before["data"], time),
+        checks_after=residual_checks(current["data"], time),
         residuals_before=before,
         residuals_after=current,
+        steps=steps,
+        refused=refused,
+        folds=folds.describe(),
+        base_check=base_check,
     )
+
+
+def choose(
+    ranking: list[Candidate], min_score: float, min_effect_rms_um: float, further: bool, own_transforms: bool = False
+) -> tuple[Candidate | None, list[Refusal]]:
+    """The best candidate that passes its test (the shortest adequate low-pass of its family), and the refusals."""
+    refusals = []
+    for candidate in ranking:
+        if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
+            break
+        reason = failed_test(candidate, min_score, further, own_transforms)
+        if reason:
+            refusals.append(Refusal(candidate, reason))
+            continue
+        family = [
+            c
+            for c in ranking
+            if c.family() == candidate.family()
+            and c.score >= min_score
+            and failed_test(c, min_score, further, own_transforms) is None
+        ]
+        return shortest_adequate_lag(candidate, family), refusals
+    return None, refusals
+
+
+def failed_test(candidate: Candidate, min_score: float, further: bool, own_transforms: bool = False) -> str | None:
+    """Why the candidate fails the test it faces, or None."""
+    n_folds = len(candidate.fold_ratios)
+    improved = int(round(candidate.folds_improved * n_folds))
+    if candidate.own_input and not own_transforms:
+        return "a transform of the model's own input: refused (it re-weights what the model already reads)"
+    if candidate.own_input or further:
+        if improved < n_folds:
+            why = "a transform of the model's own input" if candidate.own_input else "a further effect"
+            return f"{why} must lower the error on every held-out fold; it lowers it on {improved} of {n_folds}"
+    if candidate.collinearity >= COLLINEAR_R and candidate.score < 2.0 * min_score:
+        return (
+            f"collinear with a model input (|r| {candidate.collinearity:.2f}): it must remove "
+            f"{200 * min_score:.0f} % of the held-out error"
+        )
+    if candidate.folds_improved <= MIN_FOLDS_IMPROVED:
+        return f"lowers the error on only {improved} of {n_folds} held-out folds"
+    return None
+
+
+def shortest_adequate_lag(best: Candidate, family: list[Candidate]) -> Candidate:
+    """The shortest low-pass of ``family`` whose held-out error is within one standard error of ``best``'s."""
+    if best.feature.transform != "lowpass":
+        return best
+    adequate = [best]
+    for candidate in family:
+        difference = np.subtract(candidate.fold_sse, best.fold_sse)
+        standard_error = np.sqrt(len(difference)) * np.std(difference, ddof=1) if len(difference) > 1 else 0.0
+        if difference.sum() <= standard_error:
+            adequate.append(candidate)
+    return min(adequate, key=lambda c: c.feature.tau_s)
+
+
+def common_usable_columns(runs: list[Run], exclude: set[str]) -> tuple[list[str], list[str]]:
+    """Columns present in every run and usable over all of them together."""
+    common = [c for c in runs[0].frame.columns if all(c in run.frame.columns for run in runs[1:])]
+    notes = [f"column '{c}' left out: missing on some of the runs" for c in runs[0].frame.columns if c not in common]
+    stacked = pd.concat([run.frame[common] for run in runs], ignore_index=True)
+    columns, more_notes = usable_columns(stacked, exclude)
+    return columns, notes + more_notes
+
+
+def stacked_residual(model: dict[str, Any], runs: list[Run], live_rule: LiveRule | None) -> np.ndarray:
+    return np.concatenate([residual(model, run, live_rule) for run in runs])
+
+
+def stacked_design(model: dict[str, Any], inputs: list[np.ndarray]) -> np.ndarray:
+    return np.vstack([group_design(model, x) for x in inputs])
+
+
+def overfit_check(target: np.ndarray, design: np.ndarray, folds: Folds) -> dict[str, Any]:
+    """The model's own regression: in-sample RMS against held-out RMS on the folds."""
+    coef, *_ = np.linalg.lstsq(design, target, rcond=None)
+    in_sample = float(np.sqrt(np.mean((target - design @ coef) ** 2)))
+    held_out = float(np.sqrt(base_fold_sse(target, design, folds).sum() / len(target)))
+    return {
+        "in_sample_rms_um": in_sample,
+        "held_out_rms_um": held_out,
+        "folds": folds.describe(),
+        "overfitted": bool(held_out > OVERFIT_RATIO * max(in_sample, 1e-12)),
+    }
 
 
 def group_design(model: dict[str, Any], inputs: np.ndarray) -> np.ndarray:

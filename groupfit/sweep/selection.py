@@ -19,7 +19,13 @@ more sensors than a compensation model should use. Three ways to choose k:
     the k largest coefficients at the chosen penalty, topped up, if fewer are
     non-zero, in the order columns enter the lasso path.
 
-Every method is deterministic.
+Every method is deterministic. Given ``splits`` (held-out folds such as whole
+operating conditions or whole runs) instead of the time-ordered folds, the
+methods score on them; ``k=None`` then chooses the number of sensors too:
+``forward`` stops when one more sensor lowers the held-out error by less than
+:data:`MIN_GAIN`, ``lasso`` keeps the columns non-zero at the cross-validated
+penalty, ``cluster`` takes the smallest k whose held-out error is within
+:data:`MIN_GAIN` of the best k's.
 """
 
 from __future__ import annotations
@@ -33,6 +39,8 @@ from groupfit.errors import InputError
 
 SELECTION_METHODS = ("forward", "lasso", "cluster")
 SELECTION_DEFAULTS = {"folds": 5, "cluster_corr": 0.98}
+MIN_GAIN = 0.02
+"""With k chosen automatically, a sensor is added while it lowers the held-out squared error by this share."""
 """Settings a selection may give: time-ordered CV folds; correlation above which ``forward`` merges columns."""
 
 
@@ -41,10 +49,11 @@ def select_sensors(
     y: np.ndarray,
     names: Sequence[str],
     method: str,
-    k: int,
+    k: int | None,
     *,
     folds: int = 5,
     cluster_corr: float = 0.98,
+    splits=None,
 ) -> list[str]:
     """Names of the k chosen columns of ``X``, best first.
 
@@ -57,26 +66,29 @@ def select_sensors(
     names : sequence of str
         Column names of X.
     method : {"forward", "lasso", "cluster"}
-    k : int
-        Sensors to pick (1 ≤ k ≤ m).
+    k : int or None
+        Sensors to pick (1 ≤ k ≤ m); None chooses k on the held-out folds.
     folds : int
-        Time-ordered cross-validation folds (``forward`` and ``lasso``).
+        Time-ordered cross-validation folds (``forward`` and ``lasso``), when no ``splits`` are given.
     cluster_corr : float
         ``forward`` treats columns correlated more than this as one.
+    splits : list of (train, test) index arrays, optional
+        Held-out folds to score on instead of the time-ordered ones.
     """
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float).ravel()
     names = list(names)
     if X.ndim != 2 or X.shape[1] != len(names):
         raise ValueError("X must be 2-D with one column per name")
-    if not 1 <= k <= len(names):
+    if k is not None and not 1 <= k <= len(names):
         raise InputError(f"cannot pick k = {k} sensors out of {len(names)} candidates")
+    splits = splits if splits is not None else time_series_folds(len(y), folds)
     if method == "cluster":
-        chosen = cluster_selection(X, y, k)
+        chosen = cluster_selection(X, y, k) if k is not None else auto_cluster_selection(X, y, splits)
     elif method == "forward":
-        chosen = forward_selection(X, y, k, folds=folds, cluster_corr=cluster_corr)
+        chosen = forward_selection(X, y, k, splits=splits, cluster_corr=cluster_corr)
     elif method == "lasso":
-        chosen = lasso_selection(X, y, k, folds=folds)
+        chosen = lasso_selection(X, y, k, splits=splits)
     else:
         raise InputError(f"sensor selection {method!r}: choose one of {', '.join(SELECTION_METHODS)}")
     return [names[i] for i in chosen]
@@ -145,7 +157,7 @@ def time_series_folds(n_samples: int, folds: int):
 
 
 def cv_error(X: np.ndarray, y: np.ndarray, splits) -> float:
-    """Mean squared error of a linear model with intercept over time-ordered test folds."""
+    """Mean squared error of a linear model with intercept over held-out test folds (index arrays)."""
     A = np.column_stack([np.ones(len(X)), X])
     squared, count = 0.0, 0
     for train, test in splits:
@@ -156,35 +168,48 @@ def cv_error(X: np.ndarray, y: np.ndarray, splits) -> float:
     return squared / count
 
 
-def forward_selection(X: np.ndarray, y: np.ndarray, k: int, *, folds: int = 5, cluster_corr: float = 0.98) -> list[int]:
-    """Greedy forward selection on cluster representatives by time-ordered CV error."""
+def auto_cluster_selection(X: np.ndarray, y: np.ndarray, splits) -> list[int]:
+    """Cluster selection with the smallest k whose held-out error is within MIN_GAIN of the best k's."""
+    options = [cluster_selection(X, y, k) for k in range(1, X.shape[1] + 1)]
+    errors = np.array([cv_error(X[:, chosen], y, splits) for chosen in options])
+    return options[int(np.flatnonzero(errors <= errors.min() * (1.0 + MIN_GAIN))[0])]
+
+
+def forward_selection(X: np.ndarray, y: np.ndarray, k: int | None, *, splits, cluster_corr: float = 0.98) -> list[int]:
+    """Greedy forward selection on cluster representatives by held-out error; k None stops on MIN_GAIN."""
     pool = cluster_representatives(X, y, correlation_clusters(X, min_corr=cluster_corr))
-    if len(pool) < k:
+    if k is not None and len(pool) < k:
         pool += [c for c in range(X.shape[1]) if c not in pool]
-    splits = time_series_folds(len(y), folds)
     chosen: list[int] = []
-    while len(chosen) < k:
+    current = cv_error(np.empty((len(y), 0)), y, splits)
+    while pool and (k is None or len(chosen) < k):
         errors = [cv_error(X[:, chosen + [c]], y, splits) for c in pool]
-        best = pool[int(np.argmin(errors))]
-        chosen.append(best)
-        pool.remove(best)
+        best = int(np.argmin(errors))
+        if k is None and chosen and errors[best] > current * (1.0 - MIN_GAIN):
+            break
+        current = errors[best]
+        chosen.append(pool.pop(best))
     return chosen
 
 
-def lasso_selection(X: np.ndarray, y: np.ndarray, k: int, *, folds: int = 5) -> list[int]:
-    """The k largest LassoCV coefficients (standardised columns), topped up by path entry order."""
+def lasso_selection(X: np.ndarray, y: np.ndarray, k: int | None, *, splits) -> list[int]:
+    """The k largest LassoCV coefficients (standardised columns), topped up by path entry order.
+
+    With k None: every column non-zero at the cross-validated penalty.
+    """
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.linear_model import LassoCV, lasso_path
 
     spread = X.std(axis=0)
     Z = (X - X.mean(axis=0)) / np.where(spread > 0, spread, 1.0)
     target = (y - y.mean()) / (y.std() or 1.0)
-    splits = time_series_folds(len(y), folds)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         lasso = LassoCV(cv=splits, max_iter=20_000, random_state=0).fit(Z, target)
         magnitude = np.abs(lasso.coef_)
         ranked = [int(c) for c in np.argsort(-magnitude, kind="stable") if magnitude[c] > 0]
+        if k is None:
+            return ranked or [int(np.argmax(target_correlation(X, y)))]
         if len(ranked) >= k:
             return ranked[:k]
         alphas, path, _ = lasso_path(Z, target, alphas=lasso.alphas_, max_iter=20_000)

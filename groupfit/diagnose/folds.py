@@ -1,0 +1,141 @@
+"""Held-out folds that imitate the next run: one operating condition, or one run, at a time.
+
+A candidate effect is worth adding only if it predicts data the model has
+not seen *under another condition*. Contiguous blocks cut at arbitrary times
+leave both sides of a block under the same condition, so a term that only
+fits the modelling run's history (a slow drift, a long low-pass that tracks
+the run's trend) scores as well as a real effect. The folds here are whole
+operating segments:
+
+* three or more runs given: each run is a fold (leave-one-run-out);
+* one or two runs with operating columns (spindle speed, on/off of a heat source:
+  piecewise-constant columns with few levels): each stretch between two
+  changes of any of them is a fold (leave-one-condition-out), a stretch
+  shorter than :data:`MIN_FOLD_FRACTION` of the run joined to the one before,
+  one longer than ``1 /`` :data:`FALLBACK_BLOCKS` of the run cut into equal
+  pieces (a long equilibrium phase would otherwise leave too little to
+  train on);
+  (a run's start begins a new stretch);
+* otherwise two runs are two folds, and one run is cut into
+  :data:`FALLBACK_BLOCKS` contiguous blocks of time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+MAX_LEVELS = 20
+"""An operating column takes at most this many distinct values."""
+MAX_CHANGE_FRACTION = 0.02
+"""…and changes value on at most this share of its samples (a setting, not a measurement)."""
+MIN_FOLD_FRACTION = 0.03
+"""A condition segment shorter than this share of the run is joined to the one before."""
+MIN_FOLDS = 3
+MIN_RUNS = 3
+"""Leave-one-run-out needs at least this many runs; with fewer, conditions inside the runs are held out."""
+FALLBACK_BLOCKS = 6
+
+
+@dataclass(frozen=True)
+class Folds:
+    """A fold label per sample and what the folds are."""
+
+    labels: np.ndarray
+    kind: str
+    """``"run"``, ``"condition"`` or ``"block"``."""
+    columns: tuple[str, ...] = ()
+    """The operating columns the conditions were read from (kind ``"condition"``)."""
+
+    @property
+    def n_folds(self) -> int:
+        return len(np.unique(self.labels))
+
+    def describe(self) -> str:
+        if self.kind == "run":
+            return f"leave-one-run-out over {self.n_folds} runs"
+        if self.kind == "condition":
+            return f"leave-one-condition-out over {self.n_folds} operating segments (from {', '.join(self.columns)})"
+        return f"{self.n_folds} contiguous blocks of time (no operating column to cut conditions from)"
+
+    def splits(self, rows: np.ndarray | None = None):
+        """``(train, test)`` boolean masks, one pair per fold, restricted to ``rows``."""
+        rows = np.ones(len(self.labels), dtype=bool) if rows is None else rows
+        for label in np.unique(self.labels[rows]):
+            test = rows & (self.labels == label)
+            yield rows & ~test, test
+
+    def index_splits(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``(train, test)`` sample indices, one pair per fold (the scikit-learn ``cv`` form)."""
+        return [(np.flatnonzero(train), np.flatnonzero(test)) for train, test in self.splits()]
+
+
+def operating_columns(frame: pd.DataFrame, candidates: list[str]) -> list[str]:
+    """Columns among ``candidates`` that look like operating settings: piecewise constant, few levels."""
+    found = []
+    for column in candidates:
+        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+        if not np.isfinite(values).all() or np.ptp(values) == 0.0:
+            continue
+        changes = int(np.count_nonzero(np.diff(values)))
+        if len(np.unique(values)) <= MAX_LEVELS and changes <= MAX_CHANGE_FRACTION * len(values):
+            found.append(column)
+    return found
+
+
+def condition_segments(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
+    """Segment label per sample: a new segment wherever any operating column changes."""
+    n = len(frame)
+    change = np.zeros(n, dtype=bool)
+    for column in columns:
+        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+        change[1:] |= np.diff(values) != 0
+    starts = np.flatnonzero(change)
+    min_length = max(2, int(np.ceil(MIN_FOLD_FRACTION * n)))
+    kept = [0]
+    for start in starts:
+        if start - kept[-1] >= min_length:
+            kept.append(int(start))
+    if n - kept[-1] < min_length and len(kept) > 1:
+        kept.pop()
+    longest = int(np.ceil(n / FALLBACK_BLOCKS))
+    starts = []
+    for start, end in zip(kept, [*kept[1:], n]):
+        pieces = int(np.ceil((end - start) / longest))
+        starts.extend(np.linspace(start, end, pieces + 1).astype(int)[:-1].tolist())
+    labels = np.zeros(n, dtype=int)
+    for label, start in enumerate(starts):
+        labels[start:] = label
+    return labels
+
+
+def block_labels(n: int, n_blocks: int = FALLBACK_BLOCKS) -> np.ndarray:
+    edges = np.linspace(0, n, n_blocks + 1).astype(int)
+    labels = np.zeros(n, dtype=int)
+    for label, start in enumerate(edges[:-1]):
+        labels[start:] = label
+    return labels
+
+
+def make_folds(frames: list[pd.DataFrame], candidate_columns: list[str]) -> Folds:
+    """Folds over the samples of ``frames`` (stacked in order): by run, by condition, or by block."""
+    lengths = [len(f) for f in frames]
+    by_run = np.repeat(np.arange(len(frames)), lengths)
+    if len(frames) >= MIN_RUNS:
+        return Folds(by_run, "run")
+    columns = [c for c in candidate_columns if all(c in f.columns for f in frames)]
+    columns = operating_columns(pd.concat([f[columns] for f in frames], ignore_index=True), columns)
+    if columns:
+        offset, labels = 0, []
+        for frame in frames:
+            segment = condition_segments(frame, columns)
+            labels.append(segment + offset)
+            offset += int(segment.max()) + 1
+        labels = np.concatenate(labels)
+        if len(np.unique(labels)) >= MIN_FOLDS:
+            return Folds(labels, "condition", tuple(columns))
+    if len(frames) == 2:
+        return Folds(by_run, "run")
+    return Folds(block_labels(len(frames[0])), "block")

@@ -1,0 +1,39 @@
+"""Start a diagnosis from a selected model: the model's inputs re-chosen on held-out conditions.
+
+A model with many collinear sensors fits its modelling run closely and the
+next run badly; on it, even an out-of-sample score of a candidate effect is
+unreliable, because every refit moves all the collinear coefficients. Choosing
+the inputs first, by the same held-out folds the diagnosis uses (whole
+conditions or whole runs), gives it a base that generalises.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from groupfit.data import Run
+from groupfit.diagnose.augment import refit_model
+from groupfit.diagnose.candidates import usable_columns
+from groupfit.diagnose.folds import make_folds
+from groupfit.diagnose.residual import model_inputs
+from groupfit.errors import InputError
+from groupfit.sweep.selection import select_sensors
+
+
+def select_base_model(model: dict[str, Any], runs: Sequence[Run], method: str) -> tuple[dict[str, Any], dict]:
+    """The model refitted on the inputs chosen by ``method``; and what was chosen."""
+    derived = {d["name"] for d in model.get("derived_inputs", [])}
+    if derived:
+        raise InputError("--select re-chooses measured inputs; this model already has derived inputs: select first")
+    inputs = [model_inputs(model, run) for run in runs]
+    X = np.vstack(inputs)
+    y = np.concatenate([run.error for run in runs])
+    exclude = {runs[0].time_name, model["error"], *model["temps"]}
+    columns, _ = usable_columns(runs[0].frame, exclude)
+    folds = make_folds([run.frame for run in runs], columns)
+    names = select_sensors(X, y, model["temps"], method, None, splits=folds.index_splits())
+    keep = [model["temps"].index(name) for name in names]
+    selected = refit_model(model, list(runs), [x[:, keep] for x in inputs], names, [])
+    return selected, {"method": method, "inputs": names, "folds": folds.describe()}
