@@ -74,7 +74,8 @@ def main(argv=None) -> int:
     frame = pd.read_csv(MEASURED)
     out = Path(args.figure_dir)
     out.mkdir(parents=True, exist_ok=True)
-    header = f"{'held out':<26} {'RMS µm':>8} {'after':>8} {'change':>9}  {'verdict':<9} effects added (chosen on the other blocks)"
+    columns = f"{'held out':<26} {'RMS µm':>8} {'after':>8} {'change':>9}  {'verdict':<9}"
+    header = columns + " effects added (chosen on the other blocks)"
     for start in ("16 sensors", "forward-selected"):
         print(f"\nbase model: MLR on {start}")
         print(header)
