@@ -38,8 +38,17 @@ def test_identify_writes_the_ballscrew_model_file(model_file):
 
 def test_predict_reidentifies_a_new_source_and_reports_the_papers_metrics(model_file, tmp_path, capsys):
     status, out, err = run_cli(
-        ["screw", "predict", str(model_file), "--data", str(DATA / "screw_C.csv"), "--json", "-", "--out",
-         str(tmp_path)],
+        [
+            "screw",
+            "predict",
+            str(model_file),
+            "--data",
+            str(DATA / "screw_C.csv"),
+            "--json",
+            "-",
+            "--out",
+            str(tmp_path),
+        ],
         capsys,
     )
     assert status == 0, err
@@ -59,8 +68,17 @@ def test_predict_uses_a_stored_source(model_file, capsys):
 
 def test_compare_rows_for_screw_and_mlr(tmp_path, capsys):
     status, out, err = run_cli(
-        ["screw", "compare", str(DATA / "screw_H.csv"), "--validate", str(DATA / "screw_B.csv"), "--json",
-         str(tmp_path / "c.json"), "--out", str(tmp_path)],
+        [
+            "screw",
+            "compare",
+            str(DATA / "screw_H.csv"),
+            "--validate",
+            str(DATA / "screw_B.csv"),
+            "--json",
+            str(tmp_path / "c.json"),
+            "--out",
+            str(tmp_path),
+        ],
         capsys,
     )
     assert status == 0, err
@@ -107,9 +125,7 @@ def test_new_source_shorter_than_t_r_is_refused(tmp_path, capsys):
 
 def test_a_run_without_position_named_sensors_is_refused(tmp_path, capsys):
     out = tmp_path / "out"
-    line = _expect_input_error(
-        ["screw", "identify", str(DATA / "paper_cycle.csv"), "--out", str(out)], capsys, out
-    )
+    line = _expect_input_error(["screw", "identify", str(DATA / "paper_cycle.csv"), "--out", str(out)], capsys, out)
     assert "T<mm>mm" in line
 
 

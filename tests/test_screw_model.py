@@ -77,7 +77,7 @@ def test_steady_fit_recovers_h_from_the_fe_fin():
 def test_thermal_error_is_the_integral_of_the_rise():
     lam, x0, am = 8.7, 0.07, 11.5e-6
     for t, alpha in [(50.0, 1e-5), (900.0, 3e-5), (7200.0, 5e-5)]:
-        reference = quad(lambda s: am * temperature_rise(s, t, 12.0, 0.1, lam, alpha, x0), 0.0, 0.16)[0]
+        reference = quad(lambda s, t=t, alpha=alpha: am * temperature_rise(s, t, 12.0, 0.1, lam, alpha, x0), 0, 0.16)[0]
         assert thermal_error(0.16, t, 12.0, 0.1, lam, alpha, am, x0) == pytest.approx(1e6 * reference, rel=1e-7)
     assert thermal_error(0.0, 100.0, 12.0, 0.1, lam, 1e-5, am) == 0.0
 

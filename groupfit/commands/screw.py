@@ -40,8 +40,10 @@ def add_parser(verbs) -> None:
     predict.add_argument("model", metavar="MODEL", help="ball-screw model file (screw identify)")
     predict.add_argument("--data", required=True, metavar="CSV", help="the run")
     predict.add_argument(
-        "--source", metavar="NAME", help="use this source's C1, C2 (default: the run's name if the model has it, "
-        "else re-identified from the run's first t_r seconds)"
+        "--source",
+        metavar="NAME",
+        help="use this source's C1, C2 (default: the run's name if the model has it, "
+        "else re-identified from the run's first t_r seconds)",
     )
     predict.add_argument("--probe-x", type=float, metavar="M", help="probe position when the run has no probe_x_m")
     predict.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-' for stdout)")
@@ -62,11 +64,18 @@ def _model_options(parser) -> None:
     parser.add_argument("--conductivity", type=float, default=45.0, metavar="W_MK", help="k (default 45)")
     parser.add_argument("--expansion", type=float, default=11.5e-6, metavar="1_K", help="a_m (default 11.5e-6)")
     parser.add_argument(
-        "--offset", default="fit", metavar="M|fit",
+        "--offset",
+        default="fit",
+        metavar="M|fit",
         help="source offset x0 in m, or 'fit' (default); 0 is the paper's formula as printed",
     )
-    parser.add_argument("--transient-fraction", type=float, default=0.8, metavar="F",
-                        help="α′(t) enters the linear fit while τ0 < F × its steady value (default 0.8)")
+    parser.add_argument(
+        "--transient-fraction",
+        type=float,
+        default=0.8,
+        metavar="F",
+        help="α′(t) enters the linear fit while τ0 < F × its steady value (default 0.8)",
+    )
     parser.add_argument("--tr", type=float, default=400.0, metavar="S", help="t_r for new sources (default 400 s)")
 
 
@@ -249,7 +258,10 @@ def run_compare(args: argparse.Namespace) -> int:
         pred = result.predictions[run.name]
         role = "identification" if run is runs[0] else "validation"
         written += _figures(
-            out_dir, run, pred["rises"], {"screw model": pred["error"], "MLR (same sensors)": pred["mlr"]},
+            out_dir,
+            run,
+            pred["rises"],
+            {"screw model": pred["error"], "MLR (same sensors)": pred["mlr"]},
             f"{run.name} ({role})",
         )
     model_path = out_dir / "screw_model.json"
@@ -284,9 +296,7 @@ def compare_report(result, runs, written) -> str:
         screw, mlr = index[("screw", run.name)], index[("mlr", run.name)]
         entry = model.sources_[run.name]
         paper = screw.paper
-        paper_text = (
-            f"{paper['max_temp_K_scaled']:.2f} K / {paper['max_um_scaled']:.2f} µm" if paper else "-"
-        )
+        paper_text = f"{paper['max_temp_K_scaled']:.2f} K / {paper['max_um_scaled']:.2f} µm" if paper else "-"
         lines.append(
             f"{run.name:<12}{'identification' if i == 0 else 'validation':<15}{entry['C1']:>7.2f}{entry['C2']:>7.2f}"
             f"  {screw.max_temp_K:>11.2f} K{screw.max_temp_after_tr_K:>8.2f} K{screw.max_um:>8.2f}{screw.rms_um:>7.2f}"

@@ -244,7 +244,9 @@ def _parse_source(src: _Table, screw: Screw) -> Source:
     if kind == "fixed":
         fraction = src.number("into_screw", d.into_screw, positive=True)
         if fraction > 1:
-            raise _fail(src.key("into_screw"), f"is the fraction of power_W entering the screw (0 to 1), got {fraction}")
+            raise _fail(
+                src.key("into_screw"), f"is the fraction of power_W entering the screw (0 to 1), got {fraction}"
+            )
         x = src.number("x_m", 0.0, nonnegative=True)
         if x > screw.length:
             raise _fail(src.key("x_m"), f"{x:g} m is beyond the screw's end ({screw.length:g} m)")
@@ -538,7 +540,9 @@ def simulate_axisymmetric(
     mesh = MeshQuad.init_tensor(np.linspace(0.0, L, axial + 1), np.linspace(0.0, R, radial + 1))
     element = ElementQuad1()
     basis = Basis(mesh, element, intorder=3)
-    surface = FacetBasis(mesh, element, facets=mesh.facets_satisfying(lambda x: (x[1] > R * (1 - 1e-9)) | (x[0] > L * (1 - 1e-9))))
+    surface = FacetBasis(
+        mesh, element, facets=mesh.facets_satisfying(lambda x: (x[1] > R * (1 - 1e-9)) | (x[0] > L * (1 - 1e-9)))
+    )
     end = FacetBasis(mesh, element, facets=mesh.facets_satisfying(lambda x: x[0] < 1e-12 * L))
 
     @BilinearForm

@@ -129,7 +129,11 @@ def _error_metrics(predicted, measured) -> dict[str, float]:
     if predicted is None or measured is None:
         return {"max_um": float("nan"), "rms_um": float("nan"), "R_um": float("nan")}
     e = np.asarray(predicted) - np.asarray(measured)
-    return {"max_um": float(np.max(np.abs(e))), "rms_um": float(np.sqrt(np.mean(e**2))), "R_um": float(np.sum(np.abs(e)))}
+    return {
+        "max_um": float(np.max(np.abs(e))),
+        "rms_um": float(np.sqrt(np.mean(e**2))),
+        "R_um": float(np.sum(np.abs(e))),
+    }
 
 
 @dataclass
@@ -145,8 +149,13 @@ def compare_screw(model: BallScrewModel, identification: ScrewRun, validation: l
     validation run's first t_r seconds, and score the screw model and an MLR (fitted on the
     identification run, the same sensors as inputs) on every run."""
     if not hasattr(model, "lambda_"):
-        model.fit(identification.rises, identification.time, identification.positions, identification.name,
-                  label=identification.source)
+        model.fit(
+            identification.rises,
+            identification.time,
+            identification.positions,
+            identification.name,
+            label=identification.source,
+        )
     for run in validation:
         model.fit_source(run.rises, run.time, run.positions, run.name, label=run.source)
     mlr = MLR().fit(identification.run.temps, identification.error)

@@ -53,7 +53,9 @@ def fit_steady_profile(profile: np.ndarray, positions: np.ndarray) -> tuple[floa
     costs = [linear(np.exp(g))[1] for g in grid]
     best = int(np.argmin(costs))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, len(grid) - 1)]
-    result = minimize_scalar(lambda g: linear(np.exp(g))[1], bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
+    result = minimize_scalar(
+        lambda g: linear(np.exp(g))[1], bounds=(lo, hi), method="bounded", options={"xatol": 1e-10}
+    )
     lam = float(np.exp(result.x))
     (c1, c2), cost = linear(lam)
     return lam, float(c1), float(c2), float(np.sqrt(cost / len(profile)))
