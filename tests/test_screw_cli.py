@@ -135,3 +135,9 @@ def test_predict_refuses_a_grouped_model_file(tmp_path, capsys):
         ["screw", "predict", str(tmp_path / "m.json"), "--data", str(DATA / "screw_A.csv")], capsys, tmp_path / "x"
     )
     assert "ball-screw model" in line
+
+
+def test_a_moving_nut_run_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    line = _expect_input_error(["screw", "identify", str(DATA / "screw_nut.csv"), "--out", str(out)], capsys, out)
+    assert "nut_x_m" in line

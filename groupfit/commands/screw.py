@@ -119,11 +119,22 @@ def _load_runs(paths, **options):
     from groupfit.screw.runs import load_screw_run
 
     runs = [load_screw_run(p, **options) for p in paths]
+    for run in runs:
+        refuse_moving_source(run)
     names = [r.name for r in runs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise InputError(f"two runs are named '{dup[0]}' (the file stem names the source); rename one")
     return runs
+
+
+def refuse_moving_source(run) -> None:
+    """The seed's model covers one heat source at a fixed place; a moving nut is not that."""
+    if "nut_x_m" in run.run.frame.columns:
+        raise InputError(
+            f"{run.source}: the heat source moves (column nut_x_m); the ball-screw model of seed 003 covers "
+            "one source at a fixed place (x measured from it)"
+        )
 
 
 # ----------------------------------------------------------------- identify
@@ -167,6 +178,7 @@ def run_predict(args: argparse.Namespace) -> int:
 
     model = load_model(args.model)
     run = load_screw_run(args.data, probe_x=args.probe_x)
+    refuse_moving_source(run)
     source = args.source
     if source is not None and source not in model.sources_:
         raise InputError(f"--source {source}: not in {args.model}; it has {', '.join(model.sources_)}")
