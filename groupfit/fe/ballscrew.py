@@ -167,6 +167,14 @@ RESERVED = {"time_s", "error_um", "probe_x_m", "power_W", "nut_x_m", "screw_rpm"
 
 def parse_ballscrew(top: _Table) -> BallScrewScenario:
     """Read the tables of a ``kind = "ballscrew"`` scenario (``configs/screw_H.toml``)."""
+    try:
+        return _parse_ballscrew(top)
+    except InputError as exc:
+        text = str(exc).replace("configs/paper_cycle.toml or configs/rod_ar1.toml", "configs/screw_H.toml")
+        raise InputError(text) from None
+
+
+def _parse_ballscrew(top: _Table) -> BallScrewScenario:
     d = Screw()
     s = top.sub("screw")
     screw = Screw(
