@@ -76,7 +76,8 @@ def score(label: str, runs: dict, offset) -> None:
     a0, a1 = model.alpha_prime_
     print(
         f"\n{label}, x0 {'fitted' if offset == 'fit' else '= ' + str(offset)}: h = {model.h_:.3f} W/(m²·K) "
-        f"(FE 17.2, paper 17.2), α′ = {a0 * 1e5:.3f} + {a1 * 1e5:.4f}·τ0 (1e-5 m²/s), x0 = {1e3 * model.source_offset_:.1f} mm"
+        f"(FE 17.2, paper 17.2), α′ = {a0 * 1e5:.3f} + {a1 * 1e5:.4f}·τ0 (1e-5 m²/s), "
+        f"x0 = {1e3 * model.source_offset_:.1f} mm"
     )
     print(f"{'run':<9}{'C1':>7}{'C2':>7}{'max ΔT':>9}{'after t_r':>11}{'max |e|':>9}{'MLR':>7}   paper scaled ΔT / e")
     index = {(s.model, s.run): s for s in result.scores}
