@@ -144,3 +144,16 @@ def test_noise_is_seeded_and_quantised():
     assert np.allclose(temps * 100, np.round(temps * 100), atol=1e-6)
     raw["noise"]["seed"] = 99
     assert not simulate_config(raw, progress=False)["T40mm"].equals(first["T40mm"])
+
+
+def test_displacements_at_further_positions():
+    raw = config("screw_H")
+    raw["time"]["duration_s"] = 600.0
+    raw.pop("noise")
+    raw["probe"]["displacements_m"] = [0.16, 0.3]
+    df = simulate_config(raw, progress=False)
+    assert np.allclose(df["u160mm_um"], df["error_um"])
+    assert (df["u300mm_um"] >= df["u160mm_um"]).all()  # the free end moves most
+    raw["probe"]["displacements_m"] = [0.4]
+    with pytest.raises(InputError, match="probe.displacements_m"):
+        parse_config(raw)

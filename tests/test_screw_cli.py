@@ -61,9 +61,16 @@ def test_predict_reidentifies_a_new_source_and_reports_the_papers_metrics(model_
     assert (tmp_path / "screw_rises_screw_C.png").is_file() and (tmp_path / "screw_error_screw_C.png").is_file()
 
 
-def test_predict_uses_a_stored_source(model_file, capsys):
-    status, out, _ = run_cli(["screw", "predict", str(model_file), "--data", str(DATA / "screw_A.csv")], capsys)
+def test_predict_uses_a_stored_source_and_gives_the_field_anywhere(model_file, tmp_path, capsys):
+    args = ["screw", "predict", str(model_file), "--data", str(DATA / "screw_A.csv"), "--at", "0.16,0.25"]
+    status, out, _ = run_cli([*args, "--json", str(tmp_path / "p.json")], capsys)
     assert status == 0 and "from the model" in out
+    result = json.loads((tmp_path / "p.json").read_text())
+    field = result["field"]
+    assert field["x_m"] == [0.16, 0.25]
+    assert [row[0] for row in field["error_um"]] == pytest.approx(result["predicted_error_um"], abs=1e-9)
+    assert field["error_um"][-1][1] > field["error_um"][-1][0] > 0
+    assert len(field["rise_K"]) == len(result["time_s"])
 
 
 def test_compare_rows_for_screw_and_mlr(tmp_path, capsys):

@@ -46,6 +46,9 @@ def add_parser(verbs) -> None:
         "else re-identified from the run's first t_r seconds)",
     )
     predict.add_argument("--probe-x", type=float, metavar="M", help="probe position when the run has no probe_x_m")
+    predict.add_argument(
+        "--at", metavar="X,Y,…", help="also predict the rise and the error at these positions (m from the source)"
+    )
     predict.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-' for stdout)")
     predict.add_argument("--out", metavar="DIR", help="folder for the figures")
     predict.set_defaults(handler=run_predict)
@@ -188,6 +191,7 @@ def run_predict(args: argparse.Namespace) -> int:
         if source not in model.sources_:
             model.fit_source(run.rises, run.time, run.positions, source=source, label=run.source)
             reidentified = True
+    at = _positions(args.at)
     out_dir = check_output_dir(args.out) if args.out else None
     score, rises, error = score_screw(model, run, source)
     written = []
@@ -210,9 +214,28 @@ def run_predict(args: argparse.Namespace) -> int:
         "measured_error_um": None if run.error is None else run.error.tolist(),
         "predicted_error_um": None if error is None else error.tolist(),
     }
+    if at is not None:
+        tau0 = model.reference_rise(run.rises, run.positions, run.source)
+        result["field"] = {
+            "x_m": at.tolist(),
+            "rise_K": model.predict(run.time, at, tau0, source).tolist(),
+            "error_um": np.column_stack([model.predict_error(run.time, x, tau0, source) for x in at]).tolist(),
+        }
     write_json(args.json, _finite(result))
     print(predict_report(score, source, reidentified, model, written), file=report_stream(args))
     return 0
+
+
+def _positions(text: str | None):
+    if text is None:
+        return None
+    try:
+        values = np.array([float(v) for v in text.split(",") if v.strip()])
+    except ValueError:
+        raise InputError(f"--at {text!r}: give positions in metres, comma separated") from None
+    if not values.size or np.any(values < 0) or not np.all(np.isfinite(values)):
+        raise InputError(f"--at {text!r}: give non-negative positions in metres, comma separated")
+    return values
 
 
 def predict_report(score, source, reidentified, model, written) -> str:

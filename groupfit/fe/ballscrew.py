@@ -154,6 +154,7 @@ class BallScrewScenario:
     sensors: dict = field(default_factory=dict)
     probe: float | str = 0.16  # metres, or "nut"
     noise: Noise = field(default_factory=Noise)
+    displacements: tuple[float, ...] = ()  # further positions whose exact displacement is written (u<mm>mm_um)
 
 
 PAPER_SENSORS = {f"T{20 * i}mm": 0.02 * i for i in range(8)}
@@ -220,6 +221,16 @@ def _parse_ballscrew(top: _Table) -> BallScrewScenario:
         probe = probe_table.number("x_m", 0.16, nonnegative=True)
         if probe > screw.length:
             raise _fail("probe.x_m", f"{probe:g} m is beyond the screw's end ({screw.length:g} m)")
+    raw_extra = probe_table.get("displacements_m", [])
+    if (
+        not isinstance(raw_extra, list)
+        or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= screw.length for v in raw_extra)
+        or len(set(raw_extra)) != len(raw_extra)
+    ):
+        raise _fail(
+            "probe.displacements_m", f"expected a list of distinct positions within the screw (m), got {raw_extra!r}"
+        )
+    displacements = tuple(float(v) for v in raw_extra)
     probe_table.finish()
 
     n = top.sub("noise")
@@ -242,6 +253,7 @@ def _parse_ballscrew(top: _Table) -> BallScrewScenario:
         sensors=sensors,
         probe=probe,
         noise=noise,
+        displacements=displacements,
     )
 
 
@@ -477,7 +489,10 @@ def solve_field(sc: BallScrewScenario, *, progress: bool = False):
 
 def simulate_ballscrew(sc: BallScrewScenario, *, progress: bool = True) -> pd.DataFrame:
     """Run the scenario; columns ``time_s``, the sensors (°C), ``error_um``,
-    ``probe_x_m``, ``power_W`` and, for a nut, ``nut_x_m`` and ``screw_rpm``."""
+    ``probe_x_m``, ``power_W``, for a nut ``nut_x_m`` and ``screw_rpm``, and
+    the exact (noise-free) displacement ``u<mm>mm_um`` at every position of
+    ``[probe] displacements_m`` (``u300mm_um`` at the free end of a 0.3 m screw
+    is its elongation)."""
     model, times, theta, power, nut_x, speed = solve_field(sc, progress=progress)
     names = list(sc.sensors)
     temps = sc.ambient_C + theta @ model.probes([sc.sensors[n] for n in names]).T
@@ -493,6 +508,9 @@ def simulate_ballscrew(sc: BallScrewScenario, *, progress: bool = True) -> pd.Da
     columns.update({"error_um": error, "probe_x_m": probe_x, "power_W": power})
     if nut_x is not None:
         columns.update({"nut_x_m": nut_x, "screw_rpm": 60.0 * speed / sc.screw.lead})
+    if sc.displacements:
+        exact = theta @ model.displacement_weights(sc.displacements).T
+        columns.update({f"u{1000 * x:g}mm_um": exact[:, j] for j, x in enumerate(sc.displacements)})
     return pd.DataFrame(columns)
 
 
