@@ -165,12 +165,22 @@ def identify_report(model, path) -> str:
         f"α′ = {a0 * 1e5:.3f} + {a1 * 1e5:.4f}·τ0  (10⁻⁵ m²/s; τ0 the rise at x = {1000 * model.reference_x_:g} mm; "
         f"transient residual {ident['transient_rms_K']:.3g} K rms)",
         f"source offset x0 = {1000 * model.source_offset_:.1f} mm",
+        "α′(t) as the paper's Table 1 (t ks: α′ 10⁻⁵ m²/s, τ0 K; * = in the linear fit): " + _alpha_rows(model),
         "source            C1        C2   from",
     ]
     for name, entry in model.sources_.items():
         lines.append(f"{name:<14}{entry['C1']:>8.3f}  {entry['C2']:>8.3f}   {entry['method']}")
     lines.append(f"wrote   {path}")
     return "\n".join(lines)
+
+
+def _alpha_rows(model) -> str:
+    wanted = (100.0, 500.0, 1000.0, 1500.0, 2000.0, 3000.0, 4000.0, 5000.0, 7000.0)
+    rows = [r for r in model.alpha_table_ if any(abs(r["t_s"] - t) < 1e-6 for t in wanted)]
+    return "; ".join(
+        f"{r['t_s'] / 1000:g}: {r['alpha_prime_m2_s'] * 1e5:.3g}, {r['tau0_K']:.1f}{'*' if r['used'] else ''}"
+        for r in rows
+    )
 
 
 # ------------------------------------------------------------------ predict
