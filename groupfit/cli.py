@@ -22,7 +22,7 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
-VERBS = ("fit", "compare", "diagnose", "simulate", "sweep", "replay", "export")
+VERBS = ("fit", "compare", "diagnose", "simulate", "sweep", "replay", "export", "screw")
 """Each verb is a module of :mod:`groupfit.commands` with ``add_parser(verbs)``."""
 
 

@@ -47,7 +47,10 @@ def run_simulate(args: argparse.Namespace) -> int:
         raise InputError(f"{args.config}: {exc}") from None
     output = Path(args.output)
     atomic_write_text(output, frame.to_csv(index=False, float_format="%.7g", lineterminator="\n"))
-    from groupfit.plots import plot_dataset
+    if config.get("kind") == "ballscrew":
+        from groupfit.screw.plots import plot_screw_dataset as plot_dataset
+    else:
+        from groupfit.plots import plot_dataset
 
     figure = output.with_suffix(".png")
     plot_dataset(frame, figure, title=output.stem)

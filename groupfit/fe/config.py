@@ -1,8 +1,10 @@
 """Parse and validate FE scenario configurations (TOML tables as dicts).
 
-Two scenario kinds: ``kind = "headstock"`` (the default; 3-D housing, see
+Three scenario kinds: ``kind = "headstock"`` (the default; 3-D housing, see
 ``configs/paper_cycle.toml`` for every key with its default) and
-``kind = "rod"`` (1-D spindle rod, ``configs/rod_ar1.toml``). Every key is
+``kind = "rod"`` (1-D spindle rod, ``configs/rod_ar1.toml``); ``kind =
+"ballscrew"`` (a feed-axis ball screw, ``configs/screw_H.toml``, parsed in
+:mod:`groupfit.fe.ballscrew`). Every key is
 optional; unknown keys, wrong types and impossible values raise
 :class:`groupfit.errors.InputError` with the key's dotted name.
 """
@@ -238,7 +240,7 @@ def _on_off(value):
     return None if value in (0.0, 1.0) else f"value must be 0 (off) or 1 (on), got {value:g}"
 
 
-def parse_config(config: dict) -> HeadstockScenario | RodScenario:
+def parse_config(config: dict):
     """Validate a parsed TOML scenario and return its scenario object.
 
     Raises
@@ -248,11 +250,16 @@ def parse_config(config: dict) -> HeadstockScenario | RodScenario:
     """
     top = _Table(config, "")
     kind = top.get("kind", "headstock")
-    if kind not in ("headstock", "rod"):
-        raise _fail("kind", f'must be "headstock" or "rod", got {kind!r}')
+    if kind not in ("headstock", "rod", "ballscrew"):
+        raise _fail("kind", f'must be "headstock", "rod" or "ballscrew", got {kind!r}')
     top.string("description", "")
     top.string("name", "")
-    scenario = _parse_headstock(top) if kind == "headstock" else _parse_rod(top)
+    if kind == "ballscrew":
+        from .ballscrew import parse_ballscrew
+
+        scenario = parse_ballscrew(top)
+    else:
+        scenario = _parse_headstock(top) if kind == "headstock" else _parse_rod(top)
     top.finish()
     return scenario
 

@@ -1,0 +1,300 @@
+"""The analytic ball-screw model of seed 003 and its estimator.
+
+Temperature rise at a distance x from the heat source (eq. 7 of the paper)::
+
+    Γ(x, t) = (C1·e^(−λx) + C2·e^(λx)) · [1 − erf((x + x0) / (2·√(α′(τ0)·t)))],
+    λ = √(2h / (k·R0)),   α′(τ0) = a0 + a1·τ0,
+
+the first factor the steady profile of a fin with convection h (eq. 5), the
+second the erf solution of the heat equation without convection behind a
+source whose temperature is held (eq. 3), with the diffusivity replaced by a
+coefficient α′ that follows a reference rise τ0 measured at the source.
+``x0`` is the distance from the effective source to the sensor at x = 0 (the
+*reading* of docs/ballscrew.md; x0 = 0 is the paper's formula as printed).
+Thermal error of a screw fixed at x = 0 (eq. 9)::
+
+    E(x, t) = ∫₀ˣ a_m·Γ(ξ, t) dξ.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.special import erfc
+
+from groupfit.errors import InputError
+
+ALPHA_FLOOR = 1e-9
+"""Smallest α′ (m²/s) the model uses: the linear law may cross zero for small τ0."""
+
+_GAUSS = np.polynomial.legendre.leggauss(16)
+_PANELS = 16
+
+
+def fin_parameter(h: float, conductivity: float, radius: float) -> float:
+    """λ = √(2h/(k·R0)) (1/m)."""
+    return math.sqrt(2.0 * h / (conductivity * radius))
+
+
+def convection_from_fin_parameter(lam: float, conductivity: float, radius: float) -> float:
+    """h = λ²·k·R0/2 (W/(m²·K)), the inverse of :func:`fin_parameter`."""
+    return lam * lam * conductivity * radius / 2.0
+
+
+def steady_profile(x, c1: float, c2: float, lam: float) -> np.ndarray:
+    """Steady rise C1·e^(−λx) + C2·e^(λx) (eq. 5)."""
+    x = np.asarray(x, dtype=float)
+    return c1 * np.exp(-lam * x) + c2 * np.exp(lam * x)
+
+
+def transient_factor(x, t, alpha, x0: float = 0.0) -> np.ndarray:
+    """1 − erf((x + x0)/(2√(α t))), broadcast over x, t and α; 0 at t ≤ 0."""
+    x, t, alpha = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, t, alpha)))
+    out = np.zeros(x.shape)
+    live = t > 0
+    out[live] = erfc((x[live] + x0) / (2.0 * np.sqrt(np.maximum(alpha[live], ALPHA_FLOOR) * t[live])))
+    return out
+
+
+def temperature_rise(x, t, c1: float, c2: float, lam: float, alpha, x0: float = 0.0) -> np.ndarray:
+    """Γ(x, t) of eq. 7, broadcast over ``x``, ``t`` and ``alpha`` (K)."""
+    return steady_profile(x, c1, c2, lam) * transient_factor(x, t, alpha, x0)
+
+
+def thermal_error(x, t, c1: float, c2: float, lam: float, alpha, expansion: float, x0: float = 0.0) -> np.ndarray:
+    """E(x, t) = ∫₀ˣ a_m·Γ(ξ, t) dξ in µm (eq. 9), one value per sample.
+
+    ``x``, ``t`` and ``alpha`` are per-sample arrays (or scalars) of one
+    shape; the integral is composite Gauss–Legendre (16 panels of 16 points).
+    """
+    x, t, alpha = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, t, alpha)))
+    nodes, weights = _GAUSS
+    edges = np.linspace(0.0, 1.0, _PANELS + 1)
+    u = ((edges[:-1, None] + edges[1:, None]) / 2 + (nodes[None, :] / 2) * np.diff(edges)[:, None]).ravel()
+    w = ((weights[None, :] / 2) * np.diff(edges)[:, None]).ravel()
+    flat_x, flat_t, flat_a = x.ravel(), t.ravel(), alpha.ravel()
+    xi = flat_x[:, None] * u[None, :]
+    gamma = temperature_rise(xi, flat_t[:, None], c1, c2, lam, flat_a[:, None], x0)
+    return (1e6 * expansion * flat_x * (gamma @ w)).reshape(x.shape)
+
+
+class BallScrewModel:
+    """Seed 003's ball-screw temperature field and thermal error, identified as the paper does.
+
+    Parameters
+    ----------
+    diameter : float
+        Screw diameter 2R0 (m) of the equivalent cylinder (the paper: the pitch diameter).
+    conductivity : float
+        Thermal conductivity k (W/(m·K)), known (the paper takes it from a handbook).
+    expansion : float
+        Mean linear expansion coefficient a_m (1/K).
+    source_offset : "fit" or float
+        x0 (m): ``"fit"`` identifies it with α′ on the identification run;
+        a number fixes it (0 is the formula as printed in the paper).
+    transient_fraction : float
+        α′(t) values enter the linear fit α′(τ0) while τ0 is below this
+        fraction of its steady value (the transient; near the steady state α′
+        is not determined and grows without bound).
+    alpha_step_s : float
+        Spacing of the times at which α′(t) is identified (the paper's table: 500 s).
+    identification_time_s : float
+        t_r: C1 and C2 of a new source come from its first t_r seconds (paper: 400 s).
+    smooth_s : float
+        Width of the moving average applied to the identification data
+        (the paper filters its temperatures before identifying).
+    steady_window_s : float
+        The steady profile is the mean of the last ``steady_window_s`` of the run.
+    min_sensors : int
+        Sensors needed on the identification run (three unknowns h, C1, C2).
+
+    Attributes
+    ----------
+    h_ : float
+        Convection coefficient (W/(m²·K)).
+    lambda_ : float
+        Fin parameter λ (1/m).
+    alpha_prime_ : tuple of float
+        ``(a0, a1)``: α′ = a0 + a1·τ0, in m²/s and m²/(s·K).
+    alpha_table_ : list of dict
+        The α′(t) identified at each time: ``t_s``, ``alpha_prime_m2_s``, ``tau0_K``, ``used``.
+    source_offset_ : float
+        x0 (m).
+    reference_x_ : float
+        Position of the reference sensor (the one nearest the source) whose rise is τ0.
+    sources_ : dict
+        ``{name: {"C1": …, "C2": …, "method": …}}``.
+    identification_ : dict
+        Residuals of the identification steps (K).
+    """
+
+    def __init__(
+        self,
+        diameter: float = 0.02,
+        conductivity: float = 45.0,
+        expansion: float = 11.5e-6,
+        source_offset: str | float = "fit",
+        transient_fraction: float = 0.8,
+        alpha_step_s: float = 100.0,
+        identification_time_s: float = 400.0,
+        smooth_s: float = 30.0,
+        steady_window_s: float = 300.0,
+        min_sensors: int = 4,
+    ):
+        self.diameter = diameter
+        self.conductivity = conductivity
+        self.expansion = expansion
+        self.source_offset = source_offset
+        self.transient_fraction = transient_fraction
+        self.alpha_step_s = alpha_step_s
+        self.identification_time_s = identification_time_s
+        self.smooth_s = smooth_s
+        self.steady_window_s = steady_window_s
+        self.min_sensors = min_sensors
+
+    # ------------------------------------------------------------- fitting
+    def fit(self, rises, time, positions, source: str = "H", label: str = "run") -> "BallScrewModel":
+        """Identify h, (C1, C2) of ``source`` and α′(τ0) on one heating run.
+
+        Parameters
+        ----------
+        rises : array, shape (N, k)
+            Temperature rises above ambient (K), sensors in order of ``positions``.
+        time : array, shape (N,)
+            Seconds from the start of heating.
+        positions : array, shape (k,)
+            Sensor distances from the source (m), increasing; the first is the reference.
+        source : str
+            Name of the heat source.
+        label : str
+            The run's name for messages.
+        """
+        from . import identify
+
+        rises, time, positions = _check_arrays(rises, time, positions)
+        radius = self.diameter / 2.0
+        fit = identify.identify_first_source(
+            rises,
+            time,
+            positions,
+            conductivity=self.conductivity,
+            radius=radius,
+            source_offset=self.source_offset,
+            transient_fraction=self.transient_fraction,
+            alpha_step_s=self.alpha_step_s,
+            smooth_s=self.smooth_s,
+            steady_window_s=self.steady_window_s,
+            min_sensors=self.min_sensors,
+            label=label,
+        )
+        self.lambda_ = fit["lambda"]
+        self.h_ = convection_from_fin_parameter(self.lambda_, self.conductivity, radius)
+        self.alpha_prime_ = fit["alpha_law"]
+        self.alpha_table_ = fit["alpha_table"]
+        self.source_offset_ = fit["source_offset"]
+        self.reference_x_ = float(positions[0])
+        self.sources_ = {source: {"C1": fit["C1"], "C2": fit["C2"], "method": "steady profile", "run": label}}
+        self.identification_ = fit["residuals"]
+        return self
+
+    def fit_source(self, rises, time, positions, source: str, label: str = "run") -> tuple[float, float]:
+        """Identify C1 and C2 of a new source from the first t_r seconds of two sensors
+        (the reference and the farthest), h and α′(τ0) kept; store them under ``source``."""
+        from . import identify
+
+        self._check_fitted()
+        rises, time, positions = _check_arrays(rises, time, positions)
+        tau0 = self.reference_rise(rises, positions, label)
+        c1, c2, rms = identify.refit_source(
+            rises,
+            time,
+            positions,
+            tau0,
+            lam=self.lambda_,
+            alpha=self.alpha,
+            source_offset=self.source_offset_,
+            identification_time_s=self.identification_time_s,
+            label=label,
+        )
+        self.sources_[source] = {
+            "C1": c1,
+            "C2": c2,
+            "method": f"first {self.identification_time_s:g} s",
+            "run": label,
+            "rms_K": rms,
+        }
+        return c1, c2
+
+    # ---------------------------------------------------------- prediction
+    def alpha(self, tau0) -> np.ndarray:
+        """α′(τ0) = a0 + a1·τ0 (m²/s), never below :data:`ALPHA_FLOOR`."""
+        self._check_fitted()
+        a0, a1 = self.alpha_prime_
+        return np.maximum(a0 + a1 * np.asarray(tau0, dtype=float), ALPHA_FLOOR)
+
+    def reference_rise(self, rises, positions, label: str = "run") -> np.ndarray:
+        """τ0: the measured rise at the reference sensor's position."""
+        positions = np.asarray(positions, dtype=float)
+        match = np.flatnonzero(np.abs(positions - self.reference_x_) <= 1e-6)
+        if not match.size:
+            raise InputError(
+                f"{label}: no sensor at the reference position x = {1000 * self.reference_x_:g} mm "
+                f"(column T{1000 * self.reference_x_:g}mm); the model's α′ follows the rise measured there"
+            )
+        return np.asarray(rises, dtype=float)[:, match[0]]
+
+    def predict(self, time, positions, tau0, source: str) -> np.ndarray:
+        """Temperature rises Γ (K), shape (len(time), len(positions))."""
+        c1, c2 = self._source(source)
+        time = np.asarray(time, dtype=float)[:, None]
+        alpha = self.alpha(tau0)[:, None]
+        x = np.asarray(positions, dtype=float)[None, :]
+        return temperature_rise(x, time, c1, c2, self.lambda_, alpha, self.source_offset_)
+
+    def predict_error(self, time, x, tau0, source: str) -> np.ndarray:
+        """Thermal error E (µm) at position(s) ``x`` (scalar or one per sample)."""
+        c1, c2 = self._source(source)
+        time = np.asarray(time, dtype=float)
+        x = np.broadcast_to(np.asarray(x, dtype=float), time.shape)
+        return thermal_error(x, time, c1, c2, self.lambda_, self.alpha(tau0), self.expansion, self.source_offset_)
+
+    # ------------------------------------------------------------- helpers
+    def _source(self, source: str) -> tuple[float, float]:
+        self._check_fitted()
+        if source not in self.sources_:
+            raise InputError(f"no heat source '{source}' in the model; it has {', '.join(self.sources_)}")
+        entry = self.sources_[source]
+        return float(entry["C1"]), float(entry["C2"])
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "lambda_"):
+            raise RuntimeError("BallScrewModel is not fitted; call fit first")
+
+    def get_params(self, deep: bool = True) -> dict:
+        return {
+            name: getattr(self, name)
+            for name in (
+                "diameter",
+                "conductivity",
+                "expansion",
+                "source_offset",
+                "transient_fraction",
+                "alpha_step_s",
+                "identification_time_s",
+                "smooth_s",
+                "steady_window_s",
+                "min_sensors",
+            )
+        }
+
+
+def _check_arrays(rises, time, positions):
+    rises = np.asarray(rises, dtype=float)
+    time = np.asarray(time, dtype=float)
+    positions = np.asarray(positions, dtype=float)
+    if rises.ndim != 2 or rises.shape != (len(time), len(positions)):
+        raise ValueError(f"rises must have shape (len(time), len(positions)), got {rises.shape}")
+    if np.any(np.diff(positions) <= 0):
+        raise ValueError("positions must be strictly increasing")
+    return rises, time, positions

@@ -1,0 +1,128 @@
+"""Read a ball-screw run: sensor positions from the column names, rises above ambient.
+
+A screw run is an ordinary groupfit run (``time_s``, temperatures in °C,
+``error_um``) whose temperature columns carry their distance from the heat
+source in millimetres, ``T<mm>mm`` (``T0mm``, ``T20mm`` … ``T140mm``), and
+whose ``probe_x_m`` column gives the position (m) of the displacement probe
+(the interferometer) at each sample. The ambient temperature is the
+``T_amb`` column when there is one, else the mean of the sensors at the first
+sample (a run starts at ambient, as in the paper).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from groupfit.data import Run, load_run
+from groupfit.errors import InputError
+
+SENSOR_NAME = re.compile(r"^T(\d+(?:\.\d+)?)mm$")
+PROBE_COLUMN = "probe_x_m"
+
+
+@dataclass(frozen=True)
+class ScrewRun:
+    """One screw run, sensors sorted by their distance from the source.
+
+    Attributes
+    ----------
+    name : str
+    source : str
+        Where the run came from (for messages).
+    time : ndarray, shape (N,)
+    names : tuple of str
+        Sensor columns.
+    positions : ndarray, shape (k,)
+        Sensor distances from the heat source (m).
+    rises : ndarray, shape (N, k)
+        Temperature rises above ambient (K).
+    ambient : float
+        Ambient temperature (°C).
+    error : ndarray, shape (N,) or None
+        Measured thermal error at the probe (µm).
+    probe_x : ndarray, shape (N,) or None
+        Probe position (m) at each sample.
+    run : Run
+    """
+
+    name: str
+    source: str
+    time: np.ndarray
+    names: tuple[str, ...]
+    positions: np.ndarray
+    rises: np.ndarray
+    ambient: float
+    error: np.ndarray | None
+    probe_x: np.ndarray | None
+    run: Run
+
+    @property
+    def duration(self) -> float:
+        return float(self.time[-1] - self.time[0])
+
+
+def sensor_positions(columns) -> dict[str, float]:
+    """``{column: x_m}`` for every column named ``T<mm>mm``."""
+    return {c: float(m.group(1)) / 1000.0 for c in columns if (m := SENSOR_NAME.match(str(c)))}
+
+
+def load_screw_run(source, *, probe_x: float | None = None, require_error: bool = False, name=None) -> ScrewRun:
+    """Load and check a screw run.
+
+    Parameters
+    ----------
+    source : path or DataFrame
+    probe_x : float, optional
+        Probe position (m) when the run has no ``probe_x_m`` column.
+    require_error : bool
+        Refuse a run without ``error_um``.
+
+    Raises
+    ------
+    InputError
+        No ``T<mm>mm`` columns, two sensors at one position, a bad value.
+    """
+    from groupfit.data import read_table
+
+    frame, run_name, label = read_table(source, name)
+    positions = sensor_positions(frame.columns)
+    if not positions:
+        raise InputError(
+            f"{label}: no sensor columns named T<mm>mm (e.g. T0mm, T20mm: the distance from the heat source in mm)"
+        )
+    order = sorted(positions, key=positions.get)
+    xs = np.array([positions[c] for c in order])
+    if np.any(np.diff(xs) == 0):
+        dup = order[int(np.flatnonzero(np.diff(xs) == 0)[0]) + 1]
+        raise InputError(f"{label}: column '{dup}' is at the same position as another sensor")
+    run = load_run(frame, temps=order, require_error=require_error, name=run_name)
+    run = Run(**{**run.__dict__, "source": label})
+    ambient = float(frame["T_amb"].iloc[0]) if "T_amb" in frame.columns else float(np.mean(run.temps[0]))
+    if PROBE_COLUMN in frame.columns:
+        from groupfit.data import numeric_column
+
+        probe = numeric_column(frame, PROBE_COLUMN, label, allow_nonfinite=False)
+    elif probe_x is not None:
+        probe = np.full(run.n_samples, float(probe_x))
+    else:
+        probe = None
+    return ScrewRun(
+        name=run_name,
+        source=label,
+        time=run.time - run.time[0],
+        names=tuple(order),
+        positions=xs,
+        rises=run.temps - ambient,
+        ambient=ambient,
+        error=run.error,
+        probe_x=probe,
+        run=run,
+    )
+
+
+def run_label(path) -> str:
+    return Path(str(path)).stem

@@ -1,0 +1,150 @@
+"""``groupfit screw identify | predict | compare`` and their bad-input messages."""
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "datasets"
+
+
+def run_cli(args, capsys):
+    status = main(args)
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.fixture(scope="module")
+def model_file(tmp_path_factory):
+    out = tmp_path_factory.mktemp("screw")
+    assert main(["screw", "identify", str(DATA / "screw_H.csv"), str(DATA / "screw_A.csv"), "--out", str(out)]) == 0
+    return out / "screw_model.json"
+
+
+def test_identify_writes_the_ballscrew_model_file(model_file):
+    data = json.loads(model_file.read_text())
+    assert data["kind"] == "ballscrew"
+    assert data["h_W_m2K"] == pytest.approx(17.2, rel=0.1)
+    assert set(data["alpha_prime"]) >= {"a0_m2_s", "a1_m2_sK", "table"}
+    names = [s["name"] for s in data["sources"]]
+    assert names == ["screw_H", "screw_A"]
+    assert all(isinstance(s["C1"], float) and isinstance(s["C2"], float) for s in data["sources"])
+    assert data["sources"][1]["method"] == "first 400 s"
+
+
+def test_predict_reidentifies_a_new_source_and_reports_the_papers_metrics(model_file, tmp_path, capsys):
+    status, out, err = run_cli(
+        [
+            "screw",
+            "predict",
+            str(model_file),
+            "--data",
+            str(DATA / "screw_C.csv"),
+            "--json",
+            "-",
+            "--out",
+            str(tmp_path),
+        ],
+        capsys,
+    )
+    assert status == 0, err
+    result = json.loads(out)
+    assert result["source"] == "screw_C" and result["reidentified"] is True
+    assert result["paper"]["paper_source"] == "C"
+    assert len(result["predicted_error_um"]) == len(result["time_s"]) == 1441
+    assert result["metrics"]["max_um"] < result["paper"]["max_um_scaled"]
+    assert "max temperature error" in err
+    assert (tmp_path / "screw_rises_screw_C.png").is_file() and (tmp_path / "screw_error_screw_C.png").is_file()
+
+
+def test_predict_uses_a_stored_source_and_gives_the_field_anywhere(model_file, tmp_path, capsys):
+    args = ["screw", "predict", str(model_file), "--data", str(DATA / "screw_A.csv"), "--at", "0.16,0.25"]
+    status, out, _ = run_cli([*args, "--json", str(tmp_path / "p.json")], capsys)
+    assert status == 0 and "from the model" in out
+    result = json.loads((tmp_path / "p.json").read_text())
+    field = result["field"]
+    assert field["x_m"] == [0.16, 0.25]
+    assert [row[0] for row in field["error_um"]] == pytest.approx(result["predicted_error_um"], abs=1e-9)
+    assert field["error_um"][-1][1] > field["error_um"][-1][0] > 0
+    assert len(field["rise_K"]) == len(result["time_s"])
+
+
+def test_compare_rows_for_screw_and_mlr(tmp_path, capsys):
+    status, out, err = run_cli(
+        [
+            "screw",
+            "compare",
+            str(DATA / "screw_H.csv"),
+            "--validate",
+            str(DATA / "screw_B.csv"),
+            "--json",
+            str(tmp_path / "c.json"),
+            "--out",
+            str(tmp_path),
+        ],
+        capsys,
+    )
+    assert status == 0, err
+    result = json.loads((tmp_path / "c.json").read_text())
+    assert result["runs"] == ["screw_H", "screw_B"]
+    assert {(r["model"], r["run"]) for r in result["rows"]} == {
+        (m, r) for m in ("screw", "mlr") for r in ("screw_H", "screw_B")
+    }
+    assert "paper 0.6 + 0.08·τ0" in out
+
+
+def _expect_input_error(args, capsys, folder):
+    status, out, err = run_cli(args, capsys)
+    assert status == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("groupfit screw: error:")
+    assert not folder.exists() or not any(folder.iterdir())
+    return lines[0]
+
+
+def test_too_few_sensors_is_refused(tmp_path, capsys):
+    frame = pd.read_csv(DATA / "screw_H.csv")[["time_s", "T0mm", "T60mm", "T140mm", "error_um", "probe_x_m"]]
+    frame.to_csv(tmp_path / "three.csv", index=False)
+    out = tmp_path / "out"
+    line = _expect_input_error(["screw", "identify", str(tmp_path / "three.csv"), "--out", str(out)], capsys, out)
+    assert "3 temperature sensor(s)" in line and "at least 4" in line
+
+
+def test_run_too_short_to_identify_is_refused(tmp_path, capsys):
+    pd.read_csv(DATA / "screw_H.csv").iloc[:181].to_csv(tmp_path / "short.csv", index=False)  # 15 min
+    out = tmp_path / "out"
+    line = _expect_input_error(["screw", "identify", str(tmp_path / "short.csv"), "--out", str(out)], capsys, out)
+    assert "steady" in line
+
+
+def test_new_source_shorter_than_t_r_is_refused(tmp_path, capsys):
+    pd.read_csv(DATA / "screw_B.csv").iloc[:40].to_csv(tmp_path / "brief.csv", index=False)  # 195 s
+    out = tmp_path / "out"
+    line = _expect_input_error(
+        ["screw", "identify", str(DATA / "screw_H.csv"), str(tmp_path / "brief.csv"), "--out", str(out)], capsys, out
+    )
+    assert "first 400 s" in line
+
+
+def test_a_run_without_position_named_sensors_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    line = _expect_input_error(["screw", "identify", str(DATA / "paper_cycle.csv"), "--out", str(out)], capsys, out)
+    assert "T<mm>mm" in line
+
+
+def test_predict_refuses_a_grouped_model_file(tmp_path, capsys):
+    (tmp_path / "m.json").write_text(json.dumps({"format": "groupfit-model/1"}))
+    line = _expect_input_error(
+        ["screw", "predict", str(tmp_path / "m.json"), "--data", str(DATA / "screw_A.csv")], capsys, tmp_path / "x"
+    )
+    assert "ball-screw model" in line
+
+
+def test_a_moving_nut_run_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    line = _expect_input_error(["screw", "identify", str(DATA / "screw_nut.csv"), "--out", str(out)], capsys, out)
+    assert "nut_x_m" in line
