@@ -54,6 +54,7 @@ from pathlib import Path
 from typing import Any
 
 from groupfit.errors import InputError
+from groupfit.search.base import GA_DEFAULTS
 
 SCHEMA: dict[str, dict[str, tuple[type, ...]]] = {
     "data": {"path": (str,), "time": (str,), "temps": (list,), "error": (str,), "validate": (list,)},
@@ -97,10 +98,10 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "search": {
         "method": "ga",
         "seed": 0,
-        "population_size": 60,
-        "max_generations": 300,
-        "stall_generations": 30,
-        "polish": True,
+        "population_size": GA_DEFAULTS.population_size,
+        "max_generations": GA_DEFAULTS.max_generations,
+        "stall_generations": GA_DEFAULTS.stall_generations,
+        "polish": GA_DEFAULTS.polish,
     },
     "output": {"dir": "groupfit-out"},
     "compare": {
@@ -170,14 +171,6 @@ def check_config(raw: dict, label: str) -> None:
                 raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
             if types == (list,) and not all(isinstance(v, str) for v in value):
                 raise InputError(f"{label}: [{table}] {key} must be a list of strings")
-
-
-GA_KEYS = ("population_size", "max_generations", "stall_generations", "polish")
-
-
-def ga_settings(config: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    """The GA settings of the ``[search]`` table, as GroupedRegressor keyword arguments."""
-    return {key: config["search"][key] for key in GA_KEYS}
 
 
 def override(config: dict, table: str, key: str, value: Any) -> None:

@@ -1,13 +1,14 @@
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import blocked_cv_score, candidate_features, rank_candidates
+from groupfit.diagnose.candidates import candidate_features, rank_candidates
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
 from groupfit.grouping import soft_groups
@@ -71,9 +72,12 @@ def test_blocked_cv_score_separates_signal_from_chance():
     rng = np.random.default_rng(0)
     f = np.cumsum(rng.normal(size=500))
     ones = np.ones((500, 1))
-    assert blocked_cv_score(2.0 * f + 0.1 * rng.normal(size=500), f, ones) > 0.95
-    unrelated = np.cumsum(rng.normal(size=500))
-    assert blocked_cv_score(rng.normal(size=500), unrelated, ones) < 0.05
+    frame = pd.DataFrame({"f": f})
+    (signal,) = rank_candidates(2.0 * f + 0.1 * rng.normal(size=500), frame, [Feature("f")], 100.0, ones)
+    assert signal.score > 0.95
+    frame = pd.DataFrame({"f": np.cumsum(rng.normal(size=500))})
+    (chance,) = rank_candidates(rng.normal(size=500), frame, [Feature("f")], 100.0, ones)
+    assert chance.score < 0.05
 
 
 def test_ranking_finds_the_generating_transform_even_when_the_inputs_mimic_it():

@@ -25,7 +25,7 @@ from test_switching_models import (
 
 from groupfit.export import render, write
 from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
-from groupfit.switching import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
+from groupfit.runtime import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
 

@@ -29,7 +29,7 @@ from test_switching_models import (  # noqa: E402
 
 from groupfit.export import render, write  # noqa: E402
 from groupfit.export.harness import build_driver, run_driver  # noqa: E402
-from groupfit.switching import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
+from groupfit.runtime import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
 
 INTEGER_RANGES = {"INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1)}
 FLOATS = {"REAL": np.float32, "LREAL": np.float64}

@@ -12,7 +12,7 @@ from tqdm import tqdm
 from groupfit.config import override, read_config
 from groupfit.data import Run, load_run, split_names
 from groupfit.errors import InputError
-from groupfit.modelfile import atomic_write_text, to_json
+from groupfit.io import atomic_write_text, to_json
 
 
 def add_data_options(parser: argparse.ArgumentParser) -> None:

@@ -65,13 +65,13 @@ def run_diagnose(args: argparse.Namespace) -> int:
     data = load_measured(args.data, model, args.time)
     validate = load_measured(args.validate, model, args.time) if args.validate else None
     out_dir = check_output_dir(args.out)
-    from groupfit.commands.compare import live_switching_rule
+    from groupfit.runtime import replay_groups
 
     result = diagnose(
         model,
         data,
         validate,
-        live_rule=live_switching_rule(),
+        live_rule=replay_groups,
         min_score=args.min_score,
         min_effect_rms_um=args.min_effect,
     )

@@ -6,7 +6,7 @@ import argparse
 
 from groupfit.commands.common import check_output_dir
 from groupfit.export import TARGETS, render, write
-from groupfit.modelfile import load_model
+from groupfit.model import ModelFile
 
 
 def add_parser(verbs) -> None:
@@ -40,7 +40,7 @@ def add_parser(verbs) -> None:
 
 
 def run_export(args: argparse.Namespace) -> int:
-    model = load_model(args.model)
+    model = ModelFile.load(args.model)
     targets = TARGETS if args.target == "all" else (args.target,)
     files: dict[str, str] = {}
     for target in targets:

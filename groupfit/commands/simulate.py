@@ -7,7 +7,7 @@ import tomllib
 from pathlib import Path
 
 from groupfit.errors import InputError
-from groupfit.modelfile import atomic_write_text
+from groupfit.io import atomic_write_text
 
 
 def read_scenario(path: str | Path) -> dict:

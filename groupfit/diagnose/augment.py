@@ -16,29 +16,29 @@ import numpy as np
 
 from groupfit.data import Run
 from groupfit.features import Feature
-from groupfit.modelfile import model_to_dict
+from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
 
-def augment_model(model: dict[str, Any], run: Run, inputs: np.ndarray, feature: Feature) -> dict[str, Any]:
-    """The model refitted on ``run`` with ``feature`` as one more input.
+def augment_model(model: ModelFile | dict[str, Any], run: Run, inputs: np.ndarray, feature: Feature) -> dict[str, Any]:
+    """The model refitted on ``run`` with ``feature`` as one more input (a model file object).
 
     Parameters
     ----------
     inputs : ndarray, shape (N, k)
-        The model's current inputs on ``run`` (see :func:`groupfit.diagnose.residual.model_inputs`).
+        The model's current inputs on ``run`` (see :meth:`groupfit.model.ModelFile.inputs`).
     """
-    values = feature.compute(run.frame[feature.column].to_numpy(dtype=float), model["sampling_period_s"])
+    model = ModelFile.coerce(model)
+    values = feature.compute(run.frame[feature.column].to_numpy(dtype=float), model.sampling_period_s)
     X = np.column_stack([inputs, values])
-    names = (*model["temps"], feature.name)
+    names = (*model.temps, feature.name)
     estimator = GroupedRegressor(
-        n=model["n"],
-        c=model["c"],
-        objective=model["objective"],
-        fit_intercept=model["intercept"],
-        fixed_breaks=list(model["breaks"]),
+        n=model.n,
+        c=model.c,
+        objective=model.objective,
+        fit_intercept=model.intercept,
+        fixed_breaks=list(model.breaks),
     ).fit(X, run.error)
     augmented_run = replace(run, temps=X, temp_names=names)
-    augmented = model_to_dict(estimator, augmented_run, criterion=model["switching"]["criterion"])
-    augmented["derived_inputs"] = [*model.get("derived_inputs", []), feature.to_dict()]
-    return augmented
+    augmented = estimator.to_model_file(augmented_run, criterion=model.switching.criterion)
+    return augmented.replace(derived_inputs=(*(model.derived_inputs or ()), feature)).to_dict()

@@ -92,13 +92,6 @@ def blocked_cv_sse(target: np.ndarray, design: np.ndarray, n_blocks: int = N_BLO
     return sse
 
 
-def blocked_cv_score(target: np.ndarray, feature: np.ndarray, design: np.ndarray) -> float:
-    """Share of the held-out error of ``target ≈ design·β`` that adding ``feature`` removes."""
-    without = blocked_cv_sse(target, design)
-    with_feature = blocked_cv_sse(target, np.column_stack([design, feature]))
-    return 1.0 - with_feature / without if without > 0 else 0.0
-
-
 def rank_candidates(
     target: np.ndarray,
     frame: pd.DataFrame,

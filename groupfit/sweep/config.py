@@ -57,6 +57,7 @@ from typing import Any, Callable
 from groupfit.data import load_run
 from groupfit.errors import InputError
 from groupfit.objective import OBJECTIVES
+from groupfit.search.base import GASettings
 from groupfit.sweep.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 
 SEARCHES = ("exact", "ga")
@@ -72,14 +73,9 @@ GRID_DEFAULTS: dict[str, list[Any]] = {
     "search": ["exact"],
     "sensors": ["all"],
 }
-GA_DEFAULTS: dict[str, list[Any]] = {
+GA_GRID_DEFAULTS: dict[str, list[Any]] = {
     "seed": [0],
-    "population_size": [60],
-    "max_generations": [300],
-    "stall_generations": [30],
-    "polish": [True],
-    "local_window": [5],
-    "union_crossover": [True],
+    **{key: [value] for key, value in GASettings().as_dict().items()},
 }
 RANGE_KEYS = ("start", "stop", "step")
 
@@ -201,7 +197,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     study_table = _checked_table(raw, "study", STUDY_KEYS, label)
     data_table = _checked_table(raw, "data", DATA_KEYS, label)
     grid_table = _checked_table(raw, "grid", tuple(GRID_DEFAULTS), label)
-    ga_table = _checked_table(raw, "ga", tuple(GA_DEFAULTS), label)
+    ga_table = _checked_table(raw, "ga", tuple(GA_GRID_DEFAULTS), label)
 
     name = _string(study_table.get("name", path.stem), "[study] name", label)
     db = study_table.get("db")
@@ -214,7 +210,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     time_column = data_table.get("time", "time_s")
     error_column = data_table.get("error", "error_um")
     grid = {key: _dimension(grid_table, key, label, GRID_DEFAULTS[key]) for key in GRID_DEFAULTS}
-    ga = {key: _dimension(ga_table, key, label, GA_DEFAULTS[key]) for key in GA_DEFAULTS}
+    ga = {key: _dimension(ga_table, key, label, GA_GRID_DEFAULTS[key]) for key in GA_GRID_DEFAULTS}
 
     runs: list[RunSpec] = []
     seen: set[str] = set()
@@ -357,7 +353,7 @@ def _candidates(patterns, usable, constant, label) -> list[str]:
 
 def _dimension(table: dict, key: str, label: str, default: list) -> list:
     """The values of one sweep dimension: a list, a range table or a single value."""
-    what = f"[{'ga' if key in GA_DEFAULTS else 'grid'}] {key}"
+    what = f"[{'ga' if key in GA_GRID_DEFAULTS else 'grid'}] {key}"
     if key not in table:
         return list(default)
     raw = table[key]

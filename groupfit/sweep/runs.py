@@ -30,6 +30,7 @@ from groupfit.errors import InputError
 from groupfit.grouping import Constraints
 from groupfit.models.grouped import CERTIFY_PAIR_LIMIT, GroupedRegressor
 from groupfit.objective import SegmentCost
+from groupfit.search.base import SearchSettings
 from groupfit.search.exact import ExactResult, solve_exact
 from groupfit.sweep.config import canonical_json
 from groupfit.sweep.selection import select_sensors
@@ -128,27 +129,14 @@ def fit_run(spec: dict, run: Run, sensors: list[str], timings: dict[str, float])
 
 def estimator_for(spec: dict) -> GroupedRegressor:
     """The GroupedRegressor a run specification describes (no automatic certification)."""
-    model, search = spec["model"], spec["search"]
-    settings = {}
-    if search["method"] == "ga":
-        settings = {
-            "population_size": search["population_size"],
-            "max_generations": search["max_generations"],
-            "stall_generations": search["stall_generations"],
-            "polish": search["polish"],
-            "local_window": search.get("local_window", 5),
-            "union_crossover": search.get("union_crossover", True),
-            "random_state": search["seed"],
-        }
-    return GroupedRegressor(
+    model = spec["model"]
+    return GroupedRegressor.from_settings(
         p=model["p"],
         n=model["n"],
         c=model["c"],
         objective=model["objective"],
         fit_intercept=model["intercept"],
-        search=search["method"],
-        certify=False,
-        **settings,
+        search=SearchSettings.from_mapping(spec["search"]).replace(certify=False),
     )
 
 
