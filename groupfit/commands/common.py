@@ -23,6 +23,33 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
 
 
+def add_out_option(
+    parser: argparse.ArgumentParser,
+    help: str,
+    *,
+    metavar: str = "DIR",
+    default: str | None = None,
+    required: bool = False,
+    aliases: tuple[str, ...] = ("-o", "--output"),
+) -> None:
+    """``--out``: where a verb writes its files; the older spellings (``-o``, ``--output``, ``--report``) stay
+    hidden aliases."""
+    parser.add_argument("--out", dest="out", metavar=metavar, default=default, help=help)
+    if aliases:
+        parser.add_argument(*aliases, dest="out", metavar=metavar, help=argparse.SUPPRESS)
+    if required:
+        parser.set_defaults(out_required=True)
+
+
+def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
+    """``--json FILE``: the machine-readable result, ``-`` for stdout."""
+    parser.add_argument("--json", metavar="FILE", help=f"write {what} as JSON ('-' for stdout)")
+
+
+def add_quiet_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
 def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:
     """The configuration file merged with --data, --time, --temps, --error."""
     config = read_config(config_path)

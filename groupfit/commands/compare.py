@@ -7,6 +7,9 @@ import argparse
 from groupfit.commands.common import (
     StageProgress,
     add_data_options,
+    add_json_option,
+    add_out_option,
+    add_quiet_option,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
@@ -20,7 +23,7 @@ from groupfit.runtime import replay_groups
 
 
 def add_parser(verbs) -> None:
-    compare = verbs.add_parser("compare", help="grouped p = 0…P vs global MLR vs physics AR(1) on all runs")
+    compare = verbs.add_parser("compare")
     compare.add_argument(
         "config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)"
     )
@@ -28,9 +31,9 @@ def add_parser(verbs) -> None:
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
     compare.add_argument("--seed", type=int, help="seed of the genetic algorithm")
-    compare.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
-    compare.add_argument("--out", metavar="DIR", help="folder for the figures")
-    compare.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_json_option(compare)
+    add_out_option(compare, "folder for the figures")
+    add_quiet_option(compare)
     compare.set_defaults(handler=run_compare)
 
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from groupfit.commands.common import check_output_dir
+from groupfit.commands.common import add_out_option, check_output_dir
 from groupfit.export import TARGETS, render, write
 from groupfit.model import ModelFile
 
 
 def add_parser(verbs) -> None:
-    export = verbs.add_parser("export", help="write the run-time switching rule as C, Structured Text, JSON or a sheet")
+    export = verbs.add_parser("export")
     export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
     export.add_argument(
         "--target",
@@ -19,7 +19,7 @@ def add_parser(verbs) -> None:
         help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "
         "sheet: controller sheet (text and JSON); all: every target",
     )
-    export.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the exported files")
+    add_out_option(export, "folder for the exported files (required)", required=True)
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
     export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
     export.add_argument(
@@ -54,7 +54,7 @@ def run_export(args: argparse.Namespace) -> int:
                 counts_limit=args.counts_limit,
             )
         )
-    out_dir = check_output_dir(args.output)
+    out_dir = check_output_dir(args.out)
     written = write(files, out_dir)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0

@@ -7,6 +7,9 @@ import argparse
 from groupfit.commands.common import (
     StageProgress,
     add_data_options,
+    add_json_option,
+    add_out_option,
+    add_quiet_option,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
@@ -22,7 +25,7 @@ from groupfit.models.select_p import choose_p, exact_path
 
 
 def add_parser(verbs) -> None:
-    fit = verbs.add_parser("fit", help="optimise hard breaks, fit soft-group coefficients, save the model")
+    fit = verbs.add_parser("fit")
     fit.add_argument("config", nargs="?", metavar="CONFIG", help="TOML run configuration")
     add_data_options(fit)
     fit.add_argument("--p", type=p_value, help="number of hard break points, or 'auto'")
@@ -36,9 +39,9 @@ def add_parser(verbs) -> None:
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
     fit.add_argument("--seed", type=int, help="seed of the genetic algorithm")
     fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
-    fit.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
-    fit.add_argument("--out", metavar="DIR", help="folder for model.json and fit.png")
-    fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_json_option(fit)
+    add_out_option(fit, "folder for model.json and fit.png")
+    add_quiet_option(fit)
     fit.set_defaults(handler=run_fit)
 
 

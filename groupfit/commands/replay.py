@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_output_dir, report_stream, write_json
+from groupfit.commands.common import add_json_option, add_out_option, check_output_dir, report_stream, write_json
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics
@@ -19,7 +19,7 @@ from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, Switc
 
 
 def add_parser(verbs) -> None:
-    replay = verbs.add_parser("replay", help="run the run-time switching rule over a recorded run")
+    replay = verbs.add_parser("replay")
     replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
     replay.add_argument(
         "--data",
@@ -48,8 +48,8 @@ def add_parser(verbs) -> None:
         metavar="N",
         help="largest magnitude of those counts (default 30000)",
     )
-    replay.add_argument("--json", metavar="FILE", help="write the per-sample result as JSON ('-' for stdout)")
-    replay.add_argument("--out", metavar="DIR", help="folder for replay.png (switch points against the offline breaks)")
+    add_json_option(replay, "the per-sample result")
+    add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
 
 

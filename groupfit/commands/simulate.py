@@ -6,6 +6,7 @@ import argparse
 import tomllib
 from pathlib import Path
 
+from groupfit.commands.common import add_out_option, add_quiet_option
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text
 
@@ -32,10 +33,10 @@ def simulate_scenario(config: dict, progress: bool):
 
 
 def add_parser(verbs) -> None:
-    simulate = verbs.add_parser("simulate", help="generate a data set (finite elements or a lumped model)")
+    simulate = verbs.add_parser("simulate")
     simulate.add_argument("config", metavar="CONFIG", help="TOML scenario configuration")
-    simulate.add_argument("-o", "--output", required=True, metavar="CSV", help="data set to write")
-    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_out_option(simulate, "data set to write (required)", metavar="CSV", required=True)
+    add_quiet_option(simulate)
     simulate.set_defaults(handler=run_simulate)
 
 
@@ -45,7 +46,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         frame = simulate_scenario(config, progress=not args.quiet)
     except InputError as exc:
         raise InputError(f"{args.config}: {exc}") from None
-    output = Path(args.output)
+    output = Path(args.out)
     atomic_write_text(output, frame.to_csv(index=False, float_format="%.7g", lineterminator="\n"))
     from groupfit.plots import plot_dataset
 
