@@ -116,10 +116,23 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 PATH_KEYS = {("data", "path"), ("data", "validate")}
 
 
+PACKAGED_DEFAULT = Path(__file__).resolve().parent / "_data" / "configs" / "default.toml"
+"""The default configuration as installed with the package, next to the data sets it names."""
+
+
 def default_config_path() -> Path | None:
-    """``configs/default.toml`` in the working folder, else in the source tree, else None."""
-    for root in (Path.cwd(), Path(__file__).resolve().parents[1]):
-        candidate = root / "configs" / "default.toml"
+    """``configs/default.toml`` in the working folder, else in the source tree, else the packaged copy.
+
+    The packaged copy (``groupfit/_data/``: the default configuration and the
+    data sets it names) makes ``groupfit fit`` and ``groupfit compare`` work
+    from any folder after a plain ``pip install``; in a source checkout it
+    links to ``configs/`` and ``datasets/``.
+    """
+    for candidate in (
+        Path.cwd() / "configs" / "default.toml",
+        Path(__file__).resolve().parents[1] / "configs" / "default.toml",
+        PACKAGED_DEFAULT,
+    ):
         if candidate.is_file():
             return candidate
     return None

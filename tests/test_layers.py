@@ -103,3 +103,14 @@ def test_out_is_the_one_name_for_outputs_and_old_spellings_still_work(tmp_path, 
     with pytest.raises(SystemExit) as exit_info:
         main(["export", str(model), "--target", "json"])
     assert exit_info.value.code == 2 and "--out" in capsys.readouterr().err
+
+
+def test_the_packaged_default_configuration_names_packaged_data():
+    from pathlib import Path
+
+    from groupfit.config import PACKAGED_DEFAULT, read_config
+
+    config = read_config(PACKAGED_DEFAULT)  # in a checkout the packaged files link to configs/ and datasets/
+    names = [Path(path).name for path in [config["data"]["path"], *config["data"]["validate"]]]
+    assert names == ["paper_cycle.csv", "validation_speed.csv", "validation_timing.csv"]
+    assert all((PACKAGED_DEFAULT.parents[1] / "datasets" / name).is_file() for name in names)
