@@ -104,6 +104,7 @@ def test_single_precision_build_matches_the_float32_reference_bit_for_bit(driver
         assert_same_decisions(c_out, python_replay(model, temps, "single"))
 
 
+@pytest.mark.slow
 def test_fe_data_sets_replay_identically(drivers):
     model, run = fe_model()
     streams = {**streams_for(model, run), **{r.name: r.temps for r in fe_validation_runs(model)}}
