@@ -49,48 +49,78 @@ the wrong type, are errors that name the key.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-from groupfit.errors import InputError
 from groupfit.search.base import GA_DEFAULTS
+from groupfit.tomlconfig import Table, check_tables, read_toml
 
-SCHEMA: dict[str, dict[str, tuple[type, ...]]] = {
-    "data": {"path": (str,), "time": (str,), "temps": (list,), "error": (str,), "validate": (list,)},
+
+def _whole(table: Table, key: str) -> int:
+    return table.integer(key, minimum=None)
+
+
+def _number(table: Table, key: str) -> int | float:
+    table.number(key)
+    return table.data[key]
+
+
+def _whole_or_auto(table: Table, key: str) -> int | str:
+    value = table.get(key)
+    if value != "auto" and (isinstance(value, bool) or not isinstance(value, int)):
+        raise table.fail(key, f'expected a whole number or "auto", got {value!r}')
+    return value
+
+
+def _target(table: Table, key: str) -> str | int | float:
+    value = table.get(key)
+    if not isinstance(value, str):
+        table.number(key)
+    return value
+
+
+SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
+    "data": {
+        "path": Table.string,
+        "time": Table.string,
+        "temps": Table.strings,
+        "error": Table.string,
+        "validate": Table.strings,
+    },
     "model": {
-        "p": (int, str),
-        "pmax": (int,),
-        "p_rule": (str,),
-        "p_target": (str, int, float),
-        "n": (int,),
-        "c": (int, float),
-        "objective": (str,),
-        "intercept": (bool,),
-        "criterion": (str,),
+        "p": _whole_or_auto,
+        "pmax": _whole,
+        "p_rule": Table.string,
+        "p_target": _target,
+        "n": _whole,
+        "c": _number,
+        "objective": Table.string,
+        "intercept": Table.boolean,
+        "criterion": Table.string,
     },
     "search": {
-        "method": (str,),
-        "seed": (int,),
-        "population_size": (int,),
-        "max_generations": (int,),
-        "stall_generations": (int,),
-        "polish": (bool,),
+        "method": Table.string,
+        "seed": _whole,
+        "population_size": _whole,
+        "max_generations": _whole,
+        "stall_generations": _whole,
+        "polish": Table.boolean,
     },
-    "output": {"dir": (str,)},
+    "output": {"dir": Table.string},
     "compare": {
-        "pmax": (int,),
-        "heat": (str,),
-        "ar1_scaling": (str,),
-        "heat_exponent": (int, float),
-        "rise_sensor": (str,),
-        "rise_window_s": (int, float),
-        "structural_sensor": (str,),
-        "structural_gain_um_per_K": (int, float),
-        "conditions": (list,),
-        "p_target": (str, int, float),
+        "pmax": _whole,
+        "heat": Table.string,
+        "ar1_scaling": Table.string,
+        "heat_exponent": _number,
+        "rise_sensor": Table.string,
+        "rise_window_s": _number,
+        "structural_sensor": Table.string,
+        "structural_gain_um_per_K": _number,
+        "conditions": Table.strings,
+        "p_target": _target,
     },
 }
+"""Every table and key of a run configuration, with the reader that checks its value."""
 
 DEFAULTS: dict[str, dict[str, Any]] = {
     "data": {"time": "time_s", "error": "error_um", "validate": []},
@@ -144,17 +174,9 @@ def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
     if path is None:
         return config
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: configuration file not found")
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: not valid TOML ({exc})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file") from None
-    check_config(raw, str(path))
+    raw = read_toml(path, "configuration file")
     base = path.resolve().parent
-    for table, values in raw.items():
+    for table, values in check_config(raw, str(path)).items():
         for key, value in values.items():
             if (table, key) in PATH_KEYS:
                 value = (
@@ -166,24 +188,15 @@ def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
     return config
 
 
-def check_config(raw: dict, label: str) -> None:
-    """Raise InputError naming the first unknown table or key, or wrongly typed value."""
-    for table, values in raw.items():
-        if table not in SCHEMA:
-            raise InputError(f"{label}: unknown table [{table}]; the tables are {', '.join(SCHEMA)}")
-        if not isinstance(values, dict):
-            raise InputError(f"{label}: '{table}' must be a table ([{table}])")
-        for key, value in values.items():
-            if key not in SCHEMA[table]:
-                known = ", ".join(SCHEMA[table])
-                raise InputError(f"{label}: unknown key '{key}' in [{table}]; known keys: {known}")
-            types = SCHEMA[table][key]
-            if isinstance(value, bool) and bool not in types:
-                raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
-            if not isinstance(value, types):
-                raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
-            if types == (list,) and not all(isinstance(v, str) for v in value):
-                raise InputError(f"{label}: [{table}] {key} must be a list of strings")
+def check_config(raw: dict, label: str) -> dict[str, dict[str, Any]]:
+    """The checked tables; InputError naming the first unknown table or key, or wrongly typed value."""
+    check_tables(raw, SCHEMA, label)
+    checked = {}
+    for name, values in raw.items():
+        table = Table(values, name, label)
+        checked[name] = {key: read(table, key) for key, read in SCHEMA[name].items() if key in table}
+        table.finish(f"known keys: {', '.join(SCHEMA[name])}")
+    return checked
 
 
 def override(config: dict, table: str, key: str, value: Any) -> None:

@@ -3,22 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import tomllib
 from pathlib import Path
 
 from groupfit.commands.common import add_out_option, add_quiet_option
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text
+from groupfit.tomlconfig import read_toml
 
 
 def read_scenario(path: str | Path) -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: scenario configuration not found")
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: not valid TOML ({exc})") from None
+    return read_toml(path, "scenario configuration")
 
 
 def simulate_scenario(config: dict, progress: bool):
