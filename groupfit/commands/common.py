@@ -23,6 +23,10 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
 
 
+def add_model_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
+
+
 def add_out_option(
     parser: argparse.ArgumentParser,
     help: str,

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-from groupfit.commands.common import add_out_option, check_output_dir
+from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
 from groupfit.export import TARGETS, render, write
 from groupfit.model import ModelFile
 
 
 def add_parser(verbs) -> None:
     export = verbs.add_parser("export")
-    export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
+    add_model_argument(export)
     export.add_argument(
         "--target",
         required=True,

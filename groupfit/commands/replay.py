@@ -10,7 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import add_json_option, add_out_option, check_output_dir, report_stream, write_json
+from groupfit.commands.common import (
+    add_json_option,
+    add_model_argument,
+    add_out_option,
+    check_output_dir,
+    report_stream,
+    write_json,
+)
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics
@@ -20,7 +27,7 @@ from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, Switc
 
 def add_parser(verbs) -> None:
     replay = verbs.add_parser("replay")
-    replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
+    add_model_argument(replay)
     replay.add_argument(
         "--data",
         required=True,

@@ -145,14 +145,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
     @property
     def ga_settings(self) -> GASettings:
         """The GA settings among the parameters."""
-        return GASettings(
-            population_size=self.population_size,
-            max_generations=self.max_generations,
-            stall_generations=self.stall_generations,
-            polish=self.polish,
-            local_window=self.local_window,
-            union_crossover=self.union_crossover,
-        )
+        return GASettings(**{name: getattr(self, name) for name in GA_DEFAULTS.as_dict()})
 
     @classmethod
     def from_settings(
@@ -180,7 +173,12 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
 
     @classmethod
     def from_config(cls, config: Mapping[str, Mapping[str, Any]], **search_changes) -> "GroupedRegressor":
-        """The estimator of a run configuration's ``[model]`` and ``[search]`` tables (:mod:`groupfit.config`)."""
+        """The estimator of a configuration's ``model`` and ``search`` tables.
+
+        A run configuration (:mod:`groupfit.config`) or a sweep's run
+        specification (:mod:`groupfit.sweep.config`); ``search_changes``
+        override :class:`~groupfit.search.base.SearchSettings` fields (e.g. ``certify=False``).
+        """
         model = config["model"]
         return cls.from_settings(
             p=model["p"],

@@ -30,7 +30,6 @@ from groupfit.errors import InputError
 from groupfit.grouping import Constraints
 from groupfit.models.grouped import CERTIFY_PAIR_LIMIT, GroupedRegressor
 from groupfit.objective import SegmentCost
-from groupfit.search.base import SearchSettings
 from groupfit.search.exact import ExactResult, solve_exact
 from groupfit.sweep.config import canonical_json
 from groupfit.sweep.selection import select_sensors
@@ -129,15 +128,7 @@ def fit_run(spec: dict, run: Run, sensors: list[str], timings: dict[str, float])
 
 def estimator_for(spec: dict) -> GroupedRegressor:
     """The GroupedRegressor a run specification describes (no automatic certification)."""
-    model = spec["model"]
-    return GroupedRegressor.from_settings(
-        p=model["p"],
-        n=model["n"],
-        c=model["c"],
-        objective=model["objective"],
-        fit_intercept=model["intercept"],
-        search=SearchSettings.from_mapping(spec["search"]).replace(certify=False),
-    )
+    return GroupedRegressor.from_config(spec, certify=False)
 
 
 def wants_reference(certify, n_samples: int, objective: str) -> bool:
