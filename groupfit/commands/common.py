@@ -23,6 +23,14 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
 
 
+def add_run_options(parser: argparse.ArgumentParser) -> None:
+    """CONFIG (a TOML run configuration, default configs/default.toml) and the data options."""
+    parser.add_argument(
+        "config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)"
+    )
+    add_data_options(parser)
+
+
 def add_model_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
 

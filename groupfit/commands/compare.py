@@ -6,10 +6,10 @@ import argparse
 
 from groupfit.commands.common import (
     StageProgress,
-    add_data_options,
     add_json_option,
     add_out_option,
     add_quiet_option,
+    add_run_options,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
@@ -24,10 +24,7 @@ from groupfit.runtime import replay_groups
 
 def add_parser(verbs) -> None:
     compare = verbs.add_parser("compare")
-    compare.add_argument(
-        "config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)"
-    )
-    add_data_options(compare)
+    add_run_options(compare)
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
     compare.add_argument("--seed", type=int, help="seed of the genetic algorithm")

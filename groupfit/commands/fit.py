@@ -6,10 +6,10 @@ import argparse
 
 from groupfit.commands.common import (
     StageProgress,
-    add_data_options,
     add_json_option,
     add_out_option,
     add_quiet_option,
+    add_run_options,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
@@ -26,8 +26,7 @@ from groupfit.models.select_p import choose_p, exact_path
 
 def add_parser(verbs) -> None:
     fit = verbs.add_parser("fit")
-    fit.add_argument("config", nargs="?", metavar="CONFIG", help="TOML run configuration")
-    add_data_options(fit)
+    add_run_options(fit)
     fit.add_argument("--p", type=p_value, help="number of hard break points, or 'auto'")
     fit.add_argument("--pmax", type=int, help="largest p tried by --p auto (default 6)")
     fit.add_argument("--p-rule", choices=("bic", "target"), help="how --p auto chooses (default bic)")
