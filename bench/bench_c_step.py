@@ -28,9 +28,8 @@ import numpy as np
 
 from groupfit.data import load_run
 from groupfit.export import render, write
-from groupfit.modelfile import model_to_dict
 from groupfit.models import GroupedRegressor
-from groupfit.switching import SwitchingRule
+from groupfit.runtime import SwitchingRule
 from groupfit.synthetic import simulate_lumped
 
 SENSORS = {
@@ -111,7 +110,7 @@ def fitted_model():
     frame = simulate_lumped({"n_samples": 400, "sensors": SENSORS, "seed": 3})
     run = load_run(frame, temps=list(SENSORS), name="lumped8")
     estimator = GroupedRegressor(p=6, search="exact").fit(run.temps, run.error)
-    return model_to_dict(estimator, run), run
+    return estimator.to_model_file(run), run
 
 
 def rodata_bytes(obj: Path) -> int:
@@ -157,8 +156,8 @@ def main(argv=None) -> int:
 
     model, run = fitted_model()
     print(
-        f"model: M = {len(model['temps'])} temperatures, p = {model['p']} breaks, "
-        f"{len(model['coefficients'])} groups; replaying {run.n_samples} samples, "
+        f"model: M = {len(model.temps)} temperatures, p = {model.p} breaks, "
+        f"{model.n_groups} groups; replaying {run.n_samples} samples, "
         f"{args.samples} gf_step calls per repeat, median of {args.repeats} repeats"
     )
     with tempfile.TemporaryDirectory() as tmp:

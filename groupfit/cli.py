@@ -22,22 +22,38 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
-VERBS = ("fit", "compare", "diagnose", "simulate", "sweep", "replay", "export", "screw")
-"""Each verb is a module of :mod:`groupfit.commands` with ``add_parser(verbs)``."""
+VERBS = {
+    "fit": "optimise hard breaks, fit soft-group coefficients, save the model",
+    "compare": "grouped p = 0…P vs global MLR vs physics AR(1) on all runs",
+    "diagnose": "trace a model's residual on measured data to a missing effect",
+    "simulate": "generate a data set (finite elements or a lumped model)",
+    "sweep": "parameter sweep study on local processes or a Dask cluster",
+    "replay": "run the run-time switching rule over a recorded run",
+    "export": "write the run-time switching rule as C, Structured Text, JSON or a sheet",
+    "screw": "ball-screw temperature-field model: identify, predict, compare",
+}
+"""Each verb is a module of :mod:`groupfit.commands` with ``add_parser(verbs)``; the text is its line in --help."""
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; only the verb named in ``argv`` is imported (``groupfit --help`` imports none)."""
     parser = OneLineParser(prog="groupfit", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     verbs = parser.add_subparsers(dest="verb", required=True, parser_class=OneLineParser, metavar="VERB")
-    for verb in VERBS:
-        importlib.import_module(f"groupfit.commands.{verb}").add_parser(verbs)
+    chosen = _chosen_verb(sys.argv[1:] if argv is None else argv)
+    for verb, text in VERBS.items():
+        if verb == chosen:
+            importlib.import_module(f"groupfit.commands.{verb}").add_parser(verbs)
+        else:
+            verbs.add_parser(verb, help=text)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
+    if getattr(args, "out_required", False) and args.out is None:
+        parser.error(f"{args.verb}: the following argument is required: --out")
     try:
         return int(args.handler(args) or 0)
     except InputError as exc:
@@ -49,6 +65,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"groupfit {args.verb}: interrupted", file=sys.stderr)
         return 130
+
+
+def _chosen_verb(argv: Sequence[str]) -> str | None:
+    """The first word that is not an option, when it names a verb."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in VERBS else None
+    return None
 
 
 def _version() -> str:

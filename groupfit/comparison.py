@@ -8,7 +8,7 @@ predicted without any refitting or tuning:
   levels scaled by the heat law or the early-rise ratio;
 * grouped p = 1…P: on the modelling run each sample is served by its group
   (by sample index); on other runs the run-time switching rule
-  (:mod:`groupfit.switching`) chooses the group from the live criterion
+  (:mod:`groupfit.runtime`) chooses the group from the live criterion
   temperature when it is available, else the groups are applied by sample
   index, and the table says which.
 """
@@ -23,11 +23,15 @@ import pandas as pd
 
 from groupfit.data import Run
 from groupfit.errors import InputError
-from groupfit.modelfile import error_metrics, model_to_dict
+from groupfit.metrics import error_metrics
+from groupfit.model import ModelFile, grouped_prediction
 from groupfit.models.ar1 import AR1Model, early_rise
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.mlr import MLR
 from groupfit.models.select_p import choose_p, exact_path
+from groupfit.search.base import SearchSettings
+
+MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
 
 
 @dataclass
@@ -39,7 +43,6 @@ class ComparisonSettings:
     c: float = 3.0
     objective: str = "sae"
     fit_intercept: bool = True
-    seed: int = 0
     heat: str = "speed_rpm"
     ar1_scaling: str = "heat_law"
     heat_exponent: float = 5 / 3
@@ -49,8 +52,30 @@ class ComparisonSettings:
     structural_gain_um_per_K: float | None = None
     conditions: tuple[str, ...] = ("speed_rpm",)
     p_target: str | float | None = "20%"
-    ga: dict[str, Any] = field(default_factory=dict)
-    """GroupedRegressor settings of the GA (population_size, max_generations, …)."""
+    search: SearchSettings = SearchSettings()
+    """Seed and GA settings of the grouped models (always the GA, never certified one by one)."""
+
+    @classmethod
+    def from_config(cls, config: dict) -> "ComparisonSettings":
+        """The ``[model]``, ``[search]`` and ``[compare]`` tables of a run configuration."""
+        model, table = config["model"], config["compare"]
+        return cls(
+            pmax=table["pmax"],
+            n=model["n"],
+            c=float(model["c"]),
+            objective=model["objective"],
+            fit_intercept=model["intercept"],
+            heat=table["heat"],
+            ar1_scaling=table["ar1_scaling"],
+            heat_exponent=float(table.get("heat_exponent", 5 / 3)),
+            rise_sensor=table.get("rise_sensor"),
+            rise_window_s=float(table.get("rise_window_s", 6000.0)),
+            structural_sensor=table.get("structural_sensor"),
+            structural_gain_um_per_K=table.get("structural_gain_um_per_K"),
+            conditions=tuple(table["conditions"]),
+            p_target=table.get("p_target"),
+            search=SearchSettings.from_mapping(config["search"]),
+        )
 
 
 @dataclass
@@ -64,8 +89,26 @@ class ComparisonResult:
     ar1: dict[str, Any]
     break_stability: list[dict[str, Any]]
     condition_changes: list[int]
-    grouped_models: dict[int, dict[str, Any]] = field(default_factory=dict)
+    grouped_models: dict[int, ModelFile] = field(default_factory=dict)
     validation_rule: str = "sample index"
+
+    def to_json(self) -> dict[str, Any]:
+        """The machine-readable result (``compare --json``)."""
+        return {
+            "runs": self.runs,
+            "rows": self.rows,
+            "p_selection": self.selection,
+            "exact_path": {k: self.path[k] for k in ("breaks", "objective", "R", "rss")},
+            "break_stability": self.break_stability,
+            "condition_changes": self.condition_changes,
+            "mlr_statistics": self.mlr_statistics,
+            "ar1": self.ar1,
+            "validation_grouping": self.validation_rule,
+        }
+
+    def summary(self) -> str:
+        """The comparison table and its notes, as ``groupfit compare`` prints them."""
+        return comparison_summary(self)
 
 
 def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
@@ -126,7 +169,7 @@ def compare_models(
     modelling: Run,
     validation: list[Run],
     settings: ComparisonSettings,
-    live_rule: Callable[[dict, np.ndarray], np.ndarray] | None = None,
+    live_rule: Callable[[ModelFile, np.ndarray], np.ndarray] | None = None,
     progress: Callable[[str, float], None] | None = None,
 ) -> ComparisonResult:
     """Fit every model on ``modelling`` and score it on every run.
@@ -134,7 +177,7 @@ def compare_models(
     Parameters
     ----------
     live_rule : callable, optional
-        ``live_rule(model_dict, temps) -> group index per sample (0-based)``;
+        ``live_rule(model, inputs) -> group index per sample (0-based)``;
         when given, grouped models serve validation runs through it.
     """
     for run in validation:
@@ -165,16 +208,15 @@ def compare_models(
     )
     pmax = len(path["breaks"]) - 1
     grouped: dict[int, GroupedRegressor] = {}
+    search = settings.search.replace(method="ga", certify=False)
     for p in range(1, pmax + 1):
-        grouped[p] = GroupedRegressor(
+        grouped[p] = GroupedRegressor.from_settings(
             p=p,
             n=settings.n,
             c=settings.c,
             objective=settings.objective,
             fit_intercept=settings.fit_intercept,
-            certify=False,
-            random_state=settings.seed,
-            **settings.ga,
+            search=search,
         ).fit(X, y)
         exact_value = path["objective"][p]
         grouped[p].search_["exact_objective"] = exact_value
@@ -182,7 +224,7 @@ def compare_models(
         grouped[p].search_["gap_percent"] = 100.0 * (grouped[p].search_["search_objective"] - exact_value) / exact_value
         if progress is not None:
             progress("grouped", p / pmax)
-    model_dicts = {p: model_to_dict(model, modelling) for p, model in grouped.items()}
+    model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
 
     changes = condition_changes(modelling, settings.conditions)
     rows: list[dict[str, Any]] = []
@@ -202,8 +244,8 @@ def compare_models(
             if is_modelling or live_rule is None:
                 preds[f"grouped{p}"] = model.predict(run.temps)
             else:
-                groups = live_rule(model_dicts[p], run.temps)
-                preds[f"grouped{p}"] = model.intercept_[groups] + np.einsum("ij,ij->i", run.temps, model.coef_[groups])
+                groups = live_rule(model_files[p], run.temps)
+                preds[f"grouped{p}"] = grouped_prediction(model.intercept_, model.coef_, run.temps, groups)
         predictions[run.name] = preds
         for key, prediction in preds.items():
             metrics = error_metrics(run.error - prediction)
@@ -245,7 +287,7 @@ def compare_models(
         ar1=ar1_summary,
         break_stability=break_stability(path["breaks"]),
         condition_changes=changes,
-        grouped_models=model_dicts,
+        grouped_models=model_files,
         validation_rule="run-time switching" if live_rule is not None else "sample index",
     )
 
@@ -254,3 +296,61 @@ def _column(run: Run, name: str) -> np.ndarray:
     if name not in run.frame.columns:
         raise InputError(f"{run.source}: rise sensor '{name}' not found; set [compare] rise_sensor")
     return run.frame[name].to_numpy(dtype=float)
+
+
+def comparison_summary(result: ComparisonResult) -> str:
+    """The comparison table and its notes, as ``groupfit compare`` prints them."""
+    modelling = result.runs[0]
+    keys = ["mlr", "ar1"] + sorted(
+        {f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:])
+    )
+    index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
+    header_runs = ["model".ljust(16)]
+    header_cols = [" " * 16]
+    for i, run in enumerate(result.runs):
+        label = f"{run} ({'modelling' if i == 0 else 'validation'})"
+        header_runs.append(label[:34].center(34))
+        header_cols.append(f"{'R mm':>8}{'R µm':>9}{'RMS':>8}{'max|e|':>9}")
+    lines = ["  ".join(header_runs), "  ".join(header_cols)]
+    for key in keys:
+        name = MODEL_LABELS.get(key, f"grouped p = {key[7:]}")
+        cells = [name.ljust(16)]
+        for run in result.runs:
+            r = index[(key, run)]
+            cells.append(f"{r['R_mm']:>8.4f}{r['R_um']:>9.2f}{r['rms_um']:>8.3f}{r['max_um']:>9.3f}")
+        lines.append("  ".join(cells))
+    lines += [
+        "",
+        f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
+        f"{result.condition_changes}):",
+    ]
+    for key in keys[2:]:
+        r = index[(key, modelling)]
+        pairs = ", ".join(f"{b} ({d})" for b, d in zip(r["breaks"], r["break_distance"]))
+        lines.append(f"  p = {r['p']}: {pairs}")
+    stability = ", ".join(f"p {s['from_p']}→{s['to_p']}: {s['max_shift']}" for s in result.break_stability)
+    lines.append(f"break stability (largest move of an existing break when p grows, samples): {stability or '-'}")
+    bic, target = result.selection["bic"], result.selection["target"]
+    lines.append(
+        f"how many breaks: BIC chooses p = {bic['p']}; the target rule (R <= {target['target_um']:.4g} µm) "
+        f"chooses p = {target['p'] if target['p'] is not None else 'none up to pmax'}"
+    )
+    stats = result.mlr_statistics
+    terms = ", ".join(
+        f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"]
+    )
+    f_text = f"F = {stats['f_value']:.4g} (p = {stats['f_p_value']:.2g}), " if stats["f_value"] is not None else ""
+    lines.append(f"MLR: {terms}; {f_text}R² = {stats['r_squared']:.5f}, σ = {stats['sigma_um']:.3g} µm")
+    ar1 = result.ar1
+    c2 = ", ".join(f"C2({level}) = {value:.4g} µm" for level, value in ar1["C2"].items())
+    lb = ar1["ljung_box"]
+    lines.append(
+        f"AR(1): C1 = {ar1['C1']:.5f}, {c2}; unseen levels by {ar1['scaling'].replace('_', ' ')}; "
+        f"free run from each run's first measured error; "
+        f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
+    )
+    lines.append(
+        f"grouped models on validation runs: groups chosen by {result.validation_rule}; "
+        "they are fitted to the modelling run's condition and are not retuned."
+    )
+    return "\n".join(lines)

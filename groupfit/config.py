@@ -49,47 +49,78 @@ the wrong type, are errors that name the key.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-from groupfit.errors import InputError
+from groupfit.search.base import GA_DEFAULTS
+from groupfit.tomlconfig import Table, check_tables, read_toml
 
-SCHEMA: dict[str, dict[str, tuple[type, ...]]] = {
-    "data": {"path": (str,), "time": (str,), "temps": (list,), "error": (str,), "validate": (list,)},
+
+def _whole(table: Table, key: str) -> int:
+    return table.integer(key, minimum=None)
+
+
+def _number(table: Table, key: str) -> int | float:
+    table.number(key)
+    return table.data[key]
+
+
+def _whole_or_auto(table: Table, key: str) -> int | str:
+    value = table.get(key)
+    if value != "auto" and (isinstance(value, bool) or not isinstance(value, int)):
+        raise table.fail(key, f'expected a whole number or "auto", got {value!r}')
+    return value
+
+
+def _target(table: Table, key: str) -> str | int | float:
+    value = table.get(key)
+    if not isinstance(value, str):
+        table.number(key)
+    return value
+
+
+SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
+    "data": {
+        "path": Table.string,
+        "time": Table.string,
+        "temps": Table.strings,
+        "error": Table.string,
+        "validate": Table.strings,
+    },
     "model": {
-        "p": (int, str),
-        "pmax": (int,),
-        "p_rule": (str,),
-        "p_target": (str, int, float),
-        "n": (int,),
-        "c": (int, float),
-        "objective": (str,),
-        "intercept": (bool,),
-        "criterion": (str,),
+        "p": _whole_or_auto,
+        "pmax": _whole,
+        "p_rule": Table.string,
+        "p_target": _target,
+        "n": _whole,
+        "c": _number,
+        "objective": Table.string,
+        "intercept": Table.boolean,
+        "criterion": Table.string,
     },
     "search": {
-        "method": (str,),
-        "seed": (int,),
-        "population_size": (int,),
-        "max_generations": (int,),
-        "stall_generations": (int,),
-        "polish": (bool,),
+        "method": Table.string,
+        "seed": _whole,
+        "population_size": _whole,
+        "max_generations": _whole,
+        "stall_generations": _whole,
+        "polish": Table.boolean,
     },
-    "output": {"dir": (str,)},
+    "output": {"dir": Table.string},
     "compare": {
-        "pmax": (int,),
-        "heat": (str,),
-        "ar1_scaling": (str,),
-        "heat_exponent": (int, float),
-        "rise_sensor": (str,),
-        "rise_window_s": (int, float),
-        "structural_sensor": (str,),
-        "structural_gain_um_per_K": (int, float),
-        "conditions": (list,),
-        "p_target": (str, int, float),
+        "pmax": _whole,
+        "heat": Table.string,
+        "ar1_scaling": Table.string,
+        "heat_exponent": _number,
+        "rise_sensor": Table.string,
+        "rise_window_s": _number,
+        "structural_sensor": Table.string,
+        "structural_gain_um_per_K": _number,
+        "conditions": Table.strings,
+        "p_target": _target,
     },
 }
+"""Every table and key of a run configuration, with the reader that checks its value."""
 
 DEFAULTS: dict[str, dict[str, Any]] = {
     "data": {"time": "time_s", "error": "error_um", "validate": []},
@@ -97,10 +128,10 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "search": {
         "method": "ga",
         "seed": 0,
-        "population_size": 60,
-        "max_generations": 300,
-        "stall_generations": 30,
-        "polish": True,
+        "population_size": GA_DEFAULTS.population_size,
+        "max_generations": GA_DEFAULTS.max_generations,
+        "stall_generations": GA_DEFAULTS.stall_generations,
+        "polish": GA_DEFAULTS.polish,
     },
     "output": {"dir": "groupfit-out"},
     "compare": {
@@ -115,10 +146,23 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 PATH_KEYS = {("data", "path"), ("data", "validate")}
 
 
+PACKAGED_DEFAULT = Path(__file__).resolve().parent / "_data" / "configs" / "default.toml"
+"""The default configuration as installed with the package, next to the data sets it names."""
+
+
 def default_config_path() -> Path | None:
-    """``configs/default.toml`` in the working folder, else in the source tree, else None."""
-    for root in (Path.cwd(), Path(__file__).resolve().parents[1]):
-        candidate = root / "configs" / "default.toml"
+    """``configs/default.toml`` in the working folder, else in the source tree, else the packaged copy.
+
+    The packaged copy (``groupfit/_data/``: the default configuration and the
+    data sets it names) makes ``groupfit fit`` and ``groupfit compare`` work
+    from any folder after a plain ``pip install``; in a source checkout it
+    links to ``configs/`` and ``datasets/``.
+    """
+    for candidate in (
+        Path.cwd() / "configs" / "default.toml",
+        Path(__file__).resolve().parents[1] / "configs" / "default.toml",
+        PACKAGED_DEFAULT,
+    ):
         if candidate.is_file():
             return candidate
     return None
@@ -130,17 +174,9 @@ def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
     if path is None:
         return config
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: configuration file not found")
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: not valid TOML ({exc})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file") from None
-    check_config(raw, str(path))
+    raw = read_toml(path, "configuration file")
     base = path.resolve().parent
-    for table, values in raw.items():
+    for table, values in check_config(raw, str(path)).items():
         for key, value in values.items():
             if (table, key) in PATH_KEYS:
                 value = (
@@ -152,32 +188,15 @@ def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
     return config
 
 
-def check_config(raw: dict, label: str) -> None:
-    """Raise InputError naming the first unknown table or key, or wrongly typed value."""
-    for table, values in raw.items():
-        if table not in SCHEMA:
-            raise InputError(f"{label}: unknown table [{table}]; the tables are {', '.join(SCHEMA)}")
-        if not isinstance(values, dict):
-            raise InputError(f"{label}: '{table}' must be a table ([{table}])")
-        for key, value in values.items():
-            if key not in SCHEMA[table]:
-                known = ", ".join(SCHEMA[table])
-                raise InputError(f"{label}: unknown key '{key}' in [{table}]; known keys: {known}")
-            types = SCHEMA[table][key]
-            if isinstance(value, bool) and bool not in types:
-                raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
-            if not isinstance(value, types):
-                raise InputError(f"{label}: [{table}] {key} = {value!r} must be a {types[0].__name__}")
-            if types == (list,) and not all(isinstance(v, str) for v in value):
-                raise InputError(f"{label}: [{table}] {key} must be a list of strings")
-
-
-GA_KEYS = ("population_size", "max_generations", "stall_generations", "polish")
-
-
-def ga_settings(config: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    """The GA settings of the ``[search]`` table, as GroupedRegressor keyword arguments."""
-    return {key: config["search"][key] for key in GA_KEYS}
+def check_config(raw: dict, label: str) -> dict[str, dict[str, Any]]:
+    """The checked tables; InputError naming the first unknown table or key, or wrongly typed value."""
+    check_tables(raw, SCHEMA, label)
+    checked = {}
+    for name, values in raw.items():
+        table = Table(values, name, label)
+        checked[name] = {key: read(table, key) for key, read in SCHEMA[name].items() if key in table}
+        table.finish(f"known keys: {', '.join(SCHEMA[name])}")
+    return checked
 
 
 def override(config: dict, table: str, key: str, value: Any) -> None:

@@ -185,12 +185,12 @@ class SegmentCost:
         self._gram_prefix = np.concatenate([np.zeros((len(rows), 1)), np.cumsum(products, axis=0).T], axis=1)
         self.evaluations = 0
 
-    def fit_rows(self, a: np.ndarray) -> np.ndarray:
+    def soft_group_first(self, a: np.ndarray) -> np.ndarray:
         """First sample (1-based) of the soft group that follows hard break ``a``."""
         a = np.asarray(a)
         return np.where(a == 0, 1, a - self.n + 1)
 
-    def scored_last(self, b: np.ndarray) -> np.ndarray:
+    def served_last(self, b: np.ndarray) -> np.ndarray:
         """Last sample (1-based) the group ending at hard break ``b`` is scored on."""
         b = np.asarray(b)
         return np.where(b == self.n_samples, b, b - self.n)
@@ -206,14 +206,14 @@ class SegmentCost:
         if a.size == 0:
             return np.empty(0)
         self.evaluations += a.size
-        lo = self.fit_rows(a)
+        lo = self.soft_group_first(a)
         gram = np.take(self._gram_prefix, b, axis=1) - np.take(self._gram_prefix, lo - 1, axis=1)
         needs_coef = self.objective == "sae" or self.n > 0
         coef, sse_fit = ldl_least_squares(gram, coefficients=needs_coef)
         if self.objective == "sse":
             cost = sse_fit - self._overlap_sse(b, coef)
             return np.maximum(cost, 0.0) * self.standardiser.y_scale**2
-        return self._sae(lo, self.scored_last(b), coef) * self.standardiser.y_scale
+        return self._sae(lo, self.served_last(b), coef) * self.standardiser.y_scale
 
     def _overlap_sse(self, b: np.ndarray, coef: np.ndarray) -> np.ndarray:
         """Squared residuals of each fit on the n samples its successor serves."""

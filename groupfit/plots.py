@@ -5,11 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+
+def _subplots(*grid, figsize, constrained_layout: bool = True, **options):
+    """A figure of its own (no pyplot, no global backend) and its axes."""
+    fig = Figure(figsize=figsize, layout="constrained" if constrained_layout else None)
+    return fig, fig.subplots(*grid, **options)
 
 
 def plot_fit(
@@ -24,7 +27,7 @@ def plot_fit(
     """Measured vs predicted error over time, hard and soft breaks marked, residual panel below."""
     hours = np.asarray(time_s, dtype=float) / 3600.0
     residual = np.asarray(measured) - np.asarray(predicted)
-    fig, (top, bottom) = plt.subplots(
+    fig, (top, bottom) = _subplots(
         2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]}, constrained_layout=True
     )
     top.plot(hours, measured, color="black", lw=1.6, label="measured")
@@ -51,7 +54,6 @@ def plot_fit(
     bottom.set_ylabel("residual (µm)")
     bottom.set_xlabel("time (h)")
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def plot_dataset(frame, path: str | Path, title: str = "") -> None:
@@ -64,7 +66,7 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
     hours = frame["time_s"].to_numpy(dtype=float) / 3600.0
     skip = {"time_s", "error_um", "speed_rpm", "spindle_on", "q_W_m2"}
     temps = [c for c in frame.columns if c not in skip and not c.startswith(("node_", "src_"))]
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    fig, (top, bottom) = _subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
     if temps:
         for column in temps[:12]:
             top.plot(hours, frame[column], label=column, linestyle="--" if column == "T_amb" else "-")
@@ -81,7 +83,6 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
     for axis in (top, bottom):
         axis.grid(alpha=0.3)
     fig.savefig(Path(path), dpi=120)
-    plt.close(fig)
 
 
 MODEL_STYLE = {"mlr": ("MLR", "tab:green", "-."), "ar1": ("AR(1) free run", "tab:orange", ":")}
@@ -92,7 +93,7 @@ def plot_run_comparison(
 ) -> None:
     """Measured vs predicted error of the compared models on one run, residuals below."""
     hours = np.asarray(time_s, dtype=float) / 3600.0
-    fig, (top, bottom) = plt.subplots(
+    fig, (top, bottom) = _subplots(
         2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
     )
     top.plot(hours, measured, color="black", lw=2.0, label="measured")
@@ -114,12 +115,11 @@ def plot_run_comparison(
     bottom.set_ylabel("residual (µm)")
     bottom.set_xlabel("time (h)")
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequence[str], path: str | Path) -> None:
     """The paper's R (µm) against p: the certified optimum and each run's grouped models, MLR and AR(1) marked."""
-    fig, axis = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    fig, axis = _subplots(figsize=(7, 4.5), constrained_layout=True)
     axis.plot(range(len(path_R)), path_R, "k-o", lw=1.6, label=f"{runs[0]}: exact optimum")
     markers = "sD^v"
     for i, run in enumerate(runs):
@@ -136,7 +136,6 @@ def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequen
     axis.set_ylabel("R = Σ|e| (µm)")
     axis.legend(fontsize=7)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def stacked_hours(runs) -> np.ndarray:
@@ -151,7 +150,7 @@ def stacked_hours(runs) -> np.ndarray:
 def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
     """Residual against the winning candidate, and the residual before/after on every run (runs laid end to end)."""
     runs = {key: [value] if not isinstance(value, (list, tuple)) else list(value) for key, value in runs.items()}
-    fig, axes = plt.subplots(1 + len(runs), 1, figsize=(9, 3.2 * (1 + len(runs))), constrained_layout=True)
+    fig, axes = _subplots(1 + len(runs), 1, figsize=(9, 3.2 * (1 + len(runs))), constrained_layout=True)
     data = runs["data"]
     shown = result.added[0] if result.added else (result.candidates[0] if result.candidates else None)
     top = axes[0]
@@ -185,4 +184,3 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
         axis.legend(fontsize=8)
     axes[-1].set_xlabel("time (h)")
     fig.savefig(path, dpi=110)
-    plt.close(fig)

@@ -17,6 +17,7 @@ from groupfit.search.exact import solve_exact
     objective=st.sampled_from(["sae", "sse"]),
     fit_intercept=st.booleans(),
 )
+@pytest.mark.slow
 def test_exact_solver_agrees_with_enumeration(seed, n, objective, fit_intercept):
     rng = np.random.default_rng(seed)
     N = 30

@@ -25,7 +25,7 @@ from test_switching_models import (
 
 from groupfit.export import render, write
 from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
-from groupfit.switching import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
+from groupfit.runtime import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
 
@@ -104,6 +104,7 @@ def test_single_precision_build_matches_the_float32_reference_bit_for_bit(driver
         assert_same_decisions(c_out, python_replay(model, temps, "single"))
 
 
+@pytest.mark.slow
 def test_fe_data_sets_replay_identically(drivers):
     model, run = fe_model()
     streams = {**streams_for(model, run), **{r.name: r.temps for r in fe_validation_runs(model)}}

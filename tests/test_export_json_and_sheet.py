@@ -18,7 +18,7 @@ from groupfit.export.sheet import (
     sinumerik_total_um,
 )
 from groupfit.modelfile import save_model
-from groupfit.switching import RuleTables, SwitchingRule
+from groupfit.runtime import RuleTables, SwitchingRule
 
 
 def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:

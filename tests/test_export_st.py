@@ -29,7 +29,7 @@ from test_switching_models import (  # noqa: E402
 
 from groupfit.export import render, write  # noqa: E402
 from groupfit.export.harness import build_driver, run_driver  # noqa: E402
-from groupfit.switching import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
+from groupfit.runtime import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
 
 INTEGER_RANGES = {"INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1)}
 FLOATS = {"REAL": np.float32, "LREAL": np.float64}
@@ -329,6 +329,7 @@ def block_source(label: str, real: str) -> str:
         ("8 temps p=6", "REAL"),
     ],
 )
+@pytest.mark.slow
 def test_generated_blocks_parse_with_both_parsers(tmp_path, label, real):
     model = models()[label]
     files = render(model, "st", real=real)
@@ -353,6 +354,7 @@ MORE_BREAKAGES = {
 
 
 @pytest.mark.parametrize("breakage", sorted(BREAKAGES))
+@pytest.mark.slow
 def test_broken_copies_fail_both_parsers(breakage):
     text = block_source("p=0", "REAL")
     broken = BREAKAGES[breakage](text)
@@ -472,6 +474,7 @@ def derived_block(label: str, real: str) -> str:
 
 
 @pytest.mark.parametrize("label, real", [("all kinds p=2", "REAL"), ("on/off p=1", "LREAL")])
+@pytest.mark.slow
 def test_blocks_with_derived_inputs_parse_with_both_parsers(label, real):
     text = derived_block(label, real)
     assert text.isascii() and "derivedValue" in text and "LOWPASS_A_1" in text

@@ -1,5 +1,7 @@
 """One uniform refinement changes the equilibrium thermal error by < 2 %."""
 
+import pytest
+
 from groupfit.fe.config import Material, ThermalBoundary
 from groupfit.fe.geometry import FRONT_SEAT, REAR_SEAT, HousingGeometry, MeshResolution, build_housing_mesh
 from groupfit.fe.headstock import ThermalModel, ThermoElasticModel, nose_error_gain
@@ -14,6 +16,7 @@ def equilibrium_error_um(resolution):
     return float(gain @ (temperature - 20.0))
 
 
+@pytest.mark.slow
 def test_refinement_changes_equilibrium_error_by_less_than_two_percent():
     coarse = equilibrium_error_um(MeshResolution(24, 3, 0.07))
     fine = equilibrium_error_um(MeshResolution(24, 3, 0.07, refinements=1))

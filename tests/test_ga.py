@@ -34,6 +34,7 @@ def small_cycle():
     return frame[["T1", "T2", "T3", "T4"]].to_numpy(), frame["error_um"].to_numpy()
 
 
+@pytest.mark.slow
 def test_ga_reaches_the_exact_optimum_in_19_of_20_seeds():
     X, y = small_cycle()
     constraints = Constraints.for_model(len(y), 3, 3.0, 5)

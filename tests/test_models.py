@@ -73,3 +73,33 @@ def test_estimator_api_conventions(lumped_run):
     assert not hasattr(clone(model), "breaks_")
     no_intercept = GroupedRegressor(p=1, fit_intercept=False, search="exact").fit(X, y)
     assert np.all(no_intercept.intercept_ == 0.0) and no_intercept.n_coef == 4
+
+
+ORDER_DEPENDENT = "a grouped model serves row i with the group of sample i: its prediction follows the time order"
+
+
+@pytest.mark.parametrize(
+    "estimator, expected_failures",
+    [
+        (MLR(), {}),
+        (GroupedRegressor(p=0, c=0.0), {}),
+        (
+            GroupedRegressor(p=1, n=0, c=0.0, random_state=0),
+            {
+                "check_methods_sample_order_invariance": ORDER_DEPENDENT,
+                "check_methods_subset_invariance": ORDER_DEPENDENT,
+            },
+        ),
+    ],
+    ids=["MLR", "grouped p=0", "grouped p=1"],
+)
+@pytest.mark.slow
+def test_estimators_pass_scikit_learns_checks(estimator, expected_failures):
+    import sklearn
+    from sklearn.utils.estimator_checks import check_estimator
+
+    if tuple(int(v) for v in sklearn.__version__.split(".")[:2]) < (1, 6):
+        pytest.skip("expected_failed_checks needs scikit-learn 1.6")
+    results = check_estimator(estimator, on_fail=None, expected_failed_checks=expected_failures)
+    failed = [r["check_name"] for r in results if r["status"] == "failed"]
+    assert failed == []

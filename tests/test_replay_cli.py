@@ -21,7 +21,7 @@ from test_switching_models import (
 from groupfit.cli import main
 from groupfit.diagnose.residual import predict
 from groupfit.modelfile import save_model
-from groupfit.switching import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
+from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 
 
 @pytest.fixture()

@@ -33,6 +33,7 @@ def rows_by_hash(db):
         return {row["run_hash"]: row for row in store.rows()}
 
 
+@pytest.mark.slow
 def test_dask_cluster_rows_equal_local_rows(tmp_path):
     config = tmp_path / "study.toml"
     config.write_text(STUDY.format(data=DATA.as_posix()), encoding="utf-8")

@@ -54,6 +54,7 @@ def rows_by_hash(db):
         return {row["run_hash"]: row for row in store.rows()}
 
 
+@pytest.mark.slow
 def test_killed_sweep_resumes_with_nothing_lost_and_nothing_duplicated(tmp_path):
     config = tmp_path / "many.toml"
     config.write_text(MANY_SHORT_RUNS.format(data=DATA.as_posix()), encoding="utf-8")

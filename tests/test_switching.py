@@ -11,7 +11,7 @@ from test_switching_models import noisy, shifted, synthetic_model
 from groupfit.errors import InputError
 from groupfit.grouping import serving_group_index
 from groupfit.modelfile import load_model, save_model
-from groupfit.switching import (
+from groupfit.runtime import (
     FAULT_HELD,
     FAULT_SENSOR,
     RETURN_SENSOR_FAULT,

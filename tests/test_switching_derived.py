@@ -22,7 +22,7 @@ from groupfit.errors import InputError
 from groupfit.features import Feature
 from groupfit.grouping import serving_group_index
 from groupfit.modelfile import load_model, save_model
-from groupfit.switching import (
+from groupfit.runtime import (
     FAULT_HELD,
     FAULT_SENSOR,
     LEGACY_SOURCE_RANGE,

@@ -20,7 +20,7 @@ from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature
 from groupfit.modelfile import model_to_dict
 from groupfit.models import GroupedRegressor
-from groupfit.switching import RuleTables
+from groupfit.runtime import RuleTables
 from groupfit.synthetic import simulate_lumped
 
 ROOT = Path(__file__).resolve().parents[1]

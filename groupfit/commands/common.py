@@ -12,7 +12,7 @@ from tqdm import tqdm
 from groupfit.config import override, read_config
 from groupfit.data import Run, join_runs, load_run, split_names
 from groupfit.errors import InputError
-from groupfit.modelfile import atomic_write_text, to_json
+from groupfit.io import atomic_write_text, to_json
 
 
 def add_data_options(parser: argparse.ArgumentParser) -> None:
@@ -26,6 +26,45 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
     parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
+
+
+def add_run_options(parser: argparse.ArgumentParser) -> None:
+    """CONFIG (a TOML run configuration, default configs/default.toml) and the data options."""
+    parser.add_argument(
+        "config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)"
+    )
+    add_data_options(parser)
+
+
+def add_model_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
+
+
+def add_out_option(
+    parser: argparse.ArgumentParser,
+    help: str,
+    *,
+    metavar: str = "DIR",
+    default: str | None = None,
+    required: bool = False,
+    aliases: tuple[str, ...] = ("-o", "--output"),
+) -> None:
+    """``--out``: where a verb writes its files; the older spellings (``-o``, ``--output``, ``--report``) stay
+    hidden aliases."""
+    parser.add_argument("--out", dest="out", metavar=metavar, default=default, help=help)
+    if aliases:
+        parser.add_argument(*aliases, dest="out", metavar=metavar, help=argparse.SUPPRESS)
+    if required:
+        parser.set_defaults(out_required=True)
+
+
+def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
+    """``--json FILE``: the machine-readable result, ``-`` for stdout."""
+    parser.add_argument("--json", metavar="FILE", help=f"write {what} as JSON ('-' for stdout)")
+
+
+def add_quiet_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:

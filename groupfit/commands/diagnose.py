@@ -104,7 +104,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     data = [load_measured(path, model, args.time) for path in args.data]
     validate = [load_measured(path, model, args.time) for path in args.validate or []]
     out_dir = check_output_dir(args.out)
-    from groupfit.commands.compare import live_switching_rule
+    from groupfit.runtime import replay_groups
 
     start = model
     selection = None
@@ -116,14 +116,14 @@ def run_diagnose(args: argparse.Namespace) -> int:
         start,
         data,
         validate or None,
-        live_rule=live_switching_rule(),
+        live_rule=replay_groups,
         min_score=args.min_score,
         min_effect_rms_um=args.min_effect,
         heat_exponent=args.heat_exponent,
         own_transforms=args.own_transforms,
     )
     if selection is not None:
-        result = with_original_baseline(result, model, data, validate, live_switching_rule(), selection)
+        result = with_original_baseline(result, model, data, validate, replay_groups, selection)
 
     model_path = Path(args.model)
     written = []

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-from groupfit.commands.common import check_output_dir
+from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
 from groupfit.export import TARGETS, render, write
-from groupfit.modelfile import load_model
+from groupfit.model import ModelFile
 
 
 def add_parser(verbs) -> None:
-    export = verbs.add_parser("export", help="write the run-time switching rule as C, Structured Text, JSON or a sheet")
-    export.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
+    export = verbs.add_parser("export")
+    add_model_argument(export)
     export.add_argument(
         "--target",
         required=True,
@@ -19,7 +19,7 @@ def add_parser(verbs) -> None:
         help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "
         "sheet: controller sheet (text and JSON); all: every target",
     )
-    export.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the exported files")
+    add_out_option(export, "folder for the exported files (required)", required=True)
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
     export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
     export.add_argument(
@@ -40,7 +40,7 @@ def add_parser(verbs) -> None:
 
 
 def run_export(args: argparse.Namespace) -> int:
-    model = load_model(args.model)
+    model = ModelFile.load(args.model)
     targets = TARGETS if args.target == "all" else (args.target,)
     files: dict[str, str] = {}
     for target in targets:
@@ -54,7 +54,7 @@ def run_export(args: argparse.Namespace) -> int:
                 counts_limit=args.counts_limit,
             )
         )
-    out_dir = check_output_dir(args.output)
+    out_dir = check_output_dir(args.out)
     written = write(files, out_dir)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0

@@ -3,31 +3,31 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from groupfit.commands.common import (
     StageProgress,
-    add_data_options,
+    add_json_option,
+    add_out_option,
+    add_quiet_option,
+    add_run_options,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
     report_stream,
     write_json,
 )
-from groupfit.config import default_config_path, ga_settings, override
+from groupfit.config import default_config_path, override
 from groupfit.data import Run, join_runs
 from groupfit.errors import InputError
-from groupfit.grouping import served_ranges
-from groupfit.modelfile import model_to_dict, save_model
+from groupfit.fitting import FitResult
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.sweep.selection import SELECTION_METHODS
 
 
 def add_parser(verbs) -> None:
-    fit = verbs.add_parser("fit", help="optimise hard breaks, fit soft-group coefficients, save the model")
-    fit.add_argument("config", nargs="?", metavar="CONFIG", help="TOML run configuration")
-    add_data_options(fit)
+    fit = verbs.add_parser("fit")
+    add_run_options(fit)
     fit.add_argument("--p", type=p_value, help="number of hard break points, or 'auto'")
     fit.add_argument("--pmax", type=int, help="largest p tried by --p auto (default 6)")
     fit.add_argument("--p-rule", choices=("bic", "target"), help="how --p auto chooses (default bic)")
@@ -45,9 +45,9 @@ def add_parser(verbs) -> None:
         help="choose the inputs among --temps on held-out conditions (forward, lasso or cluster)",
     )
     fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
-    fit.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
-    fit.add_argument("--out", metavar="DIR", help="folder for model.json and fit.png")
-    fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_json_option(fit)
+    add_out_option(fit, "folder for model.json and fit.png")
+    add_quiet_option(fit)
     fit.set_defaults(handler=run_fit)
 
 
@@ -95,20 +95,20 @@ def run_fit(args: argparse.Namespace) -> int:
         config["model"]["p"] = selection["p"]
     elif not isinstance(config["model"]["p"], int):
         raise InputError(f"p = {config['model']['p']!r}: give a whole number or 'auto'")
-    estimator = estimator_from_config(config)
+    estimator = GroupedRegressor.from_config(config)
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
     try:
         estimator.fit(run.temps, run.error, progress=progress)
     finally:
         progress.close()
-    model = model_to_dict(estimator, run, criterion)
+    result = FitResult(estimator, run, estimator.to_model_file(run, criterion), selection, input_selection)
 
     from groupfit.plots import plot_fit
 
     model_path = out_dir / "model.json"
     figure_path = out_dir / "fit.png"
-    save_model(model, model_path)
+    result.model.save(model_path)
     plot_fit(
         run.time,
         run.error,
@@ -119,21 +119,9 @@ def run_fit(args: argparse.Namespace) -> int:
         title=f"{run.name}: grouped model, p = {len(estimator.breaks_)}, "
         f"{estimator.objective} Rg = {estimator.objective_value_:.4g}",
     )
-    result = {**model, "search": estimator.search_}
-    if selection is not None:
-        result["p_selection"] = selection
-    if input_selection is not None:
-        result["input_selection"] = input_selection
-    write_json(args.json, result)
-    report = fit_report(estimator, run, model, [model_path, figure_path])
-    if selection is not None:
-        report = selection_summary(selection) + "\n" + report
-    if input_selection is not None:
-        report = (
-            f"inputs  {input_selection['method']} selection ({input_selection['folds']}): "
-            f"{', '.join(input_selection['inputs'])} of {input_selection['candidates']}\n" + report
-        )
-    print(report, file=report_stream(args))
+    write_json(args.json, result.to_json())
+    written = ", ".join(str(p) for p in [model_path, figure_path])
+    print(result.summary() + "\nwrote   " + written, file=report_stream(args))
     return 0
 
 
@@ -189,83 +177,4 @@ def select_breaks(config: dict, run: Run) -> dict:
     return selection
 
 
-def selection_summary(selection: dict) -> str:
-    table = ", ".join(
-        f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"]))
-    )
-    rule = "smallest BIC" if selection["rule"] == "bic" else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
-    return f"p auto  {rule}: p = {selection['p']}  ({table})"
-
-
-def estimator_from_config(config: dict) -> GroupedRegressor:
-    model, search = config["model"], config["search"]
-    return GroupedRegressor(
-        p=model["p"],
-        n=model["n"],
-        c=float(model["c"]),
-        objective=model["objective"],
-        fit_intercept=model["intercept"],
-        search=search["method"],
-        random_state=search["seed"],
-        **ga_settings(config),
-    )
-
-
-def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list[Path]) -> str:
-    """The human-readable table printed by ``groupfit fit``."""
-    unit = "µm" if estimator.objective == "sae" else "µm²"
-    search = estimator.search_
-    lines = [
-        f"run     {run.source}: N = {run.n_samples} samples every {run.period:g} s; "
-        f"inputs {', '.join(run.temp_names)} -> {run.error_name}",
-        f"model   p = {estimator.p}, n = {estimator.n}, c = {estimator.c:g}, M = {estimator.n_coef} "
-        f"({'with' if estimator.fit_intercept else 'no'} intercept), objective {estimator.objective}, "
-        f"hard groups > {estimator.c * estimator.n_coef:g} samples",
-        "search  " + search_summary(search, unit),
-        "",
-    ]
-    names = (["const"] if estimator.fit_intercept else []) + list(run.temp_names)
-    header = ["group", "hard", "soft", "serves"] + names + [f"R ({unit})"]
-    served = served_ranges(estimator.breaks_, estimator.n_samples_fit_, estimator.n)
-    rows = []
-    for g, (hard, soft, serve) in enumerate(zip(estimator.hard_groups_, estimator.soft_groups_, served)):
-        coefficients = model["coefficients"][g]
-        rows.append(
-            [str(g + 1), _span(hard), _span(soft), _span(serve)]
-            + [f"{v:.5g}" for v in coefficients]
-            + [f"{estimator.group_objective_[g]:.4f}"]
-        )
-    widths = [max(len(r[i]) for r in [header] + rows) for i in range(len(header))]
-    for row in [header] + rows:
-        lines.append("  ".join(cell.rjust(width) for cell, width in zip(row, widths)))
-    metrics = model["training"]
-    lines += [
-        "",
-        f"breaks  {estimator.breaks_}   Rg = {estimator.objective_value_:.6g} {unit}   "
-        f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
-        f"switch  criterion sensor {model['switching']['criterion']}",
-        "wrote   " + ", ".join(str(p) for p in written),
-    ]
-    return "\n".join(lines)
-
-
-def search_summary(search: dict, unit: str) -> str:
-    if search["method"] == "exact":
-        return f"exact (dynamic programming): {search['evaluations']} segment costs, {search['seconds']:.2f} s"
-    text = (
-        f"ga (DEAP, seed {search['seed']}): {search['generations']} generations ({search['stopped']}), "
-        f"{search['evaluations']} evaluations, {search['seconds']:.2f} s"
-    )
-    if "gap_percent" in search:
-        text += (
-            f"; exact optimum {search['exact_objective']:.6g} {unit} at {search['exact_breaks']}, "
-            f"GA gap {search['gap_percent']:.3g} %"
-        )
-    return text
-
-
-def _span(pair) -> str:
-    return f"{pair[0]}-{pair[1]}"
-
-
-__all__ = ["run_fit", "estimator_from_config", "fit_report"]
+__all__ = ["run_fit", "select_breaks"]

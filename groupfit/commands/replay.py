@@ -4,22 +4,30 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_output_dir, report_stream, write_json
+from groupfit.commands.common import (
+    add_json_option,
+    add_model_argument,
+    add_out_option,
+    check_output_dir,
+    report_stream,
+    write_json,
+)
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
-from groupfit.grouping import serving_group_index
-from groupfit.modelfile import load_model
-from groupfit.switching import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
+from groupfit.metrics import error_metrics
+from groupfit.model import ModelFile
+from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 
 
 def add_parser(verbs) -> None:
-    replay = verbs.add_parser("replay", help="run the run-time switching rule over a recorded run")
-    replay.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
+    replay = verbs.add_parser("replay")
+    add_model_argument(replay)
     replay.add_argument(
         "--data",
         required=True,
@@ -47,35 +55,49 @@ def add_parser(verbs) -> None:
         metavar="N",
         help="largest magnitude of those counts (default 30000)",
     )
-    replay.add_argument("--json", metavar="FILE", help="write the per-sample result as JSON ('-' for stdout)")
-    replay.add_argument("--out", metavar="DIR", help="folder for replay.png (switch points against the offline breaks)")
+    add_json_option(replay, "the per-sample result")
+    add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    model = load_model(args.model)
+    model = ModelFile.load(args.model)
     counts = None
     if args.resolution_um is not None:
         from groupfit.export.sheet import IntegerForm
 
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
-    run = load_readings(args.data, tables, time=args.time, error=args.error or model.get("error") or "error_um")
+    run = load_readings(args.data, tables, time=args.time, error=args.error or model.error or "error_um")
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
         raise InputError(f"{run.source}: {exc}") from None
     out_dir = check_output_dir(args.out) if args.out else None
     replay = rule.replay(run.temps)
-    result = replay_result(model, rule.tables, run, replay, args.model, counts)
+    result = ReplayResult(replay_result(model, rule.tables, run, replay, args.model, counts))
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"
         plot_replay(run, rule.tables, replay, model, figure)
         written.append(figure)
-    write_json(args.json, result)
-    print(replay_report(result, written), file=report_stream(args))
+    write_json(args.json, result.to_json())
+    lines = [result.summary()] + (["wrote    " + ", ".join(str(p) for p in written)] if written else [])
+    print("\n".join(lines), file=report_stream(args))
     return 0
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """A replayed run: the ``--json`` object and the summary ``groupfit replay`` prints."""
+
+    data: dict[str, Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return self.data
+
+    def summary(self) -> str:
+        return replay_report(self.data)
 
 
 def load_readings(path, tables: RuleTables, *, time: str, error: str) -> Run:
@@ -114,15 +136,12 @@ def residuals(run, replay: Replay) -> np.ndarray | None:
     return residual
 
 
-def offline_groups(tables: RuleTables, model: dict[str, Any], n_samples: int) -> np.ndarray:
+def offline_groups(model: ModelFile, n_samples: int) -> np.ndarray:
     """1-based group the offline model serves at each sample index."""
-    n_model = int(model.get("n_samples", model["soft_groups"][-1][1]))
-    return serving_group_index(list(tables.breaks), n_model, tables.n, n_samples) + 1
+    return model.serving_groups(n_samples) + 1
 
 
-def replay_result(
-    model: dict[str, Any], tables: RuleTables, run, replay: Replay, model_path, counts=None
-) -> dict[str, Any]:
+def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, model_path, counts=None) -> dict[str, Any]:
     """The ``--json`` object: per-sample decisions plus a summary.
 
     ``counts`` (an :class:`groupfit.export.sheet.IntegerForm`) adds each
@@ -148,15 +167,11 @@ def replay_result(
         samples.append(sample)
     scored = residual[~np.isnan(residual)] if residual is not None else np.empty(0)
     metrics = (
-        {
-            "rms_um": float(np.sqrt(np.mean(scored**2))),
-            "max_um": float(np.max(np.abs(scored))),
-            "R_um": float(np.sum(np.abs(scored))),
-        }
+        {key: error_metrics(scored)[key] for key in ("rms_um", "max_um", "R_um")}
         if scored.size
         else {"rms_um": None, "max_um": None, "R_um": None}
     )
-    offline = offline_groups(tables, model, run.n_samples)
+    offline = offline_groups(model, run.n_samples)
     return {
         "model": str(model_path),
         "run": run.source,
@@ -178,8 +193,8 @@ def replay_result(
     }
 
 
-def replay_report(result: dict[str, Any], written: list[Path]) -> str:
-    """The human-readable summary printed by ``groupfit replay``."""
+def replay_report(result: dict[str, Any]) -> str:
+    """The human-readable summary printed by ``groupfit replay`` (without the files it wrote)."""
     lines = [
         f"run      {result['run']}: {result['n_samples']} samples every {result['sampling_period_s']:g} s",
         "switches "
@@ -202,23 +217,17 @@ def replay_report(result: dict[str, Any], written: list[Path]) -> str:
         )
     else:
         lines.append("residual none (the run has no error column)")
-    if written:
-        lines.append("wrote    " + ", ".join(str(p) for p in written))
     return "\n".join(lines)
 
 
-def plot_replay(run, tables: RuleTables, replay: Replay, model: dict[str, Any], path: Path) -> None:
+def plot_replay(run, tables: RuleTables, replay: Replay, model: ModelFile, path: Path) -> None:
     """Error and prediction over time; below, the group in service against the offline grouping."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     hours = run.time / 3600.0
-    offline = offline_groups(tables, model, run.n_samples)
-    fig, (top, bottom) = plt.subplots(
-        2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
-    )
+    offline = offline_groups(model, run.n_samples)
+    fig = Figure(figsize=(9, 6), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1.6]})
     if run.error is not None:
         top.plot(hours, run.error, color="black", lw=1.5, label="measured error")
     shown = np.where((replay.fault & FAULT_SENSOR) != 0, np.nan, replay.prediction_um)
@@ -263,7 +272,6 @@ def plot_replay(run, tables: RuleTables, replay: Replay, model: dict[str, Any], 
     bottom.set_xlabel("time (h)")
     bottom.legend(loc="best", fontsize=8)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
-__all__ = ["load_readings", "run_replay", "replay_result", "plot_replay"]
+__all__ = ["ReplayResult", "load_readings", "run_replay", "replay_result", "plot_replay"]

@@ -3,21 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import tomllib
 from pathlib import Path
 
+from groupfit.commands.common import add_out_option, add_quiet_option
 from groupfit.errors import InputError
-from groupfit.modelfile import atomic_write_text
+from groupfit.io import atomic_write_text
+from groupfit.tomlconfig import read_toml
 
 
 def read_scenario(path: str | Path) -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: scenario configuration not found")
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: not valid TOML ({exc})") from None
+    return read_toml(path, "scenario configuration")
 
 
 def simulate_scenario(config: dict, progress: bool):
@@ -32,10 +27,10 @@ def simulate_scenario(config: dict, progress: bool):
 
 
 def add_parser(verbs) -> None:
-    simulate = verbs.add_parser("simulate", help="generate a data set (finite elements or a lumped model)")
+    simulate = verbs.add_parser("simulate")
     simulate.add_argument("config", metavar="CONFIG", help="TOML scenario configuration")
-    simulate.add_argument("-o", "--output", required=True, metavar="CSV", help="data set to write")
-    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_out_option(simulate, "data set to write (required)", metavar="CSV", required=True)
+    add_quiet_option(simulate)
     simulate.set_defaults(handler=run_simulate)
 
 
@@ -45,7 +40,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         frame = simulate_scenario(config, progress=not args.quiet)
     except InputError as exc:
         raise InputError(f"{args.config}: {exc}") from None
-    output = Path(args.output)
+    output = Path(args.out)
     atomic_write_text(output, frame.to_csv(index=False, float_format="%.7g", lineterminator="\n"))
     if config.get("kind") == "ballscrew":
         from groupfit.screw.plots import plot_screw_dataset as plot_dataset

@@ -8,14 +8,21 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from groupfit.commands.common import report_stream, write_json
+from groupfit.commands.common import (
+    add_json_option,
+    add_out_option,
+    add_quiet_option,
+    check_output_dir,
+    report_stream,
+    write_json,
+)
 from groupfit.errors import InputError
 
 MAX_FAILURES_SHOWN = 5
 
 
 def add_parser(verbs) -> None:
-    sweep = verbs.add_parser("sweep", help="parameter sweep study on local processes or a Dask cluster")
+    sweep = verbs.add_parser("sweep")
     sweep.add_argument("config", metavar="CONFIG", help="TOML sweep study (see docs/sweep.md)")
     sweep.add_argument("--workers", type=int, metavar="K", help="local worker processes (default: all cores)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
@@ -27,9 +34,9 @@ def add_parser(verbs) -> None:
         help="seconds to wait for the Dask scheduler (default 10)",
     )
     sweep.add_argument("--db", metavar="FILE", help="study database (SQLite; default [study] db or CONFIG-stem.sqlite)")
-    sweep.add_argument("--report", metavar="DIR", help="write a summary table and figures to DIR")
-    sweep.add_argument("--json", metavar="FILE", help="write counts and the database path as JSON ('-' for stdout)")
-    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_out_option(sweep, "write a summary table and figures to DIR", aliases=("--report",))
+    add_json_option(sweep, "counts and the database path")
+    add_quiet_option(sweep)
     sweep.set_defaults(handler=run_sweep)
 
 
@@ -43,7 +50,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
-    report_dir = _report_dir(args.report)
+    report_dir = check_output_dir(args.out) if args.out else None
     if args.scheduler:
         executor = DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
     else:
@@ -106,17 +113,3 @@ def run_sweep(args: argparse.Namespace) -> int:
         },
     )
     return 0
-
-
-def _report_dir(path: str | None) -> Path | None:
-    """The --report folder, created, or a clear error."""
-    if path is None:
-        return None
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"--report {folder}: exists and is not a folder; choose another")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"--report {folder}: cannot create the folder ({exc.strerror})") from None
-    return folder

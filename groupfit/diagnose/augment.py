@@ -17,53 +17,55 @@ import pandas as pd
 
 from groupfit.data import Run
 from groupfit.features import Feature
-from groupfit.modelfile import model_to_dict
+from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
 
 def augment_model(
-    model: dict[str, Any], runs: Run | Sequence[Run], inputs: np.ndarray | Sequence[np.ndarray], feature: Feature
+    model: ModelFile | dict[str, Any],
+    runs: Run | Sequence[Run],
+    inputs: np.ndarray | Sequence[np.ndarray],
+    feature: Feature,
 ) -> dict[str, Any]:
-    """The model refitted on ``runs`` with ``feature`` as one more input.
+    """The model refitted on ``runs`` with ``feature`` as one more input (a model file object).
 
     Parameters
     ----------
     runs : Run or sequence of Run
         The modelling run, or several runs of a global model (p = 0), stacked.
     inputs : ndarray, shape (N, k), or one per run
-        The model's current inputs on each run (see :func:`groupfit.diagnose.residual.model_inputs`).
+        The model's current inputs on each run (see :meth:`groupfit.model.ModelFile.inputs`).
     """
+    model = ModelFile.coerce(model)
     if isinstance(runs, Run):
         runs, inputs = [runs], [inputs]
-    period = model["sampling_period_s"]
-    values = [feature.compute(run.frame[feature.column].to_numpy(dtype=float), period) for run in runs]
+    values = [feature.compute(run.frame[feature.column].to_numpy(dtype=float), model.sampling_period_s) for run in runs]
     X = [np.column_stack([x, v]) for x, v in zip(inputs, values)]
-    derived = [*model.get("derived_inputs", []), feature.to_dict()]
-    return refit_model(model, runs, X, (*model["temps"], feature.name), derived)
+    derived = (*(model.derived_inputs or ()), feature)
+    return refit_model(model, runs, X, (*model.temps, feature.name), derived)
 
 
 def refit_model(
-    model: dict[str, Any],
+    model: ModelFile | dict[str, Any],
     runs: Sequence[Run],
     inputs: Sequence[np.ndarray],
     names: Sequence[str],
-    derived_inputs: list[dict[str, Any]],
+    derived_inputs: Sequence[Feature],
 ) -> dict[str, Any]:
     """The model's groups (hard breaks kept) refitted on other inputs, as a model file object."""
+    model = ModelFile.coerce(model)
     X = np.vstack(inputs)
     error = np.concatenate([run.error for run in runs])
     estimator = GroupedRegressor(
-        n=model["n"],
-        c=model["c"],
-        objective=model["objective"],
-        fit_intercept=model["intercept"],
-        fixed_breaks=list(model["breaks"]),
+        n=model.n,
+        c=model.c,
+        objective=model.objective,
+        fit_intercept=model.intercept,
+        fixed_breaks=list(model.breaks),
     ).fit(X, error)
-    time = np.arange(len(error)) * model["sampling_period_s"] + runs[0].time[0]
+    time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
     frame = pd.concat([run.frame for run in runs], ignore_index=True)
     refitted_run = replace(runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame)
-    criterion = model["switching"]["criterion"]
-    refitted = model_to_dict(estimator, refitted_run, criterion=criterion if criterion in names else None)
-    if derived_inputs:
-        refitted["derived_inputs"] = derived_inputs
-    return refitted
+    criterion = model.switching.criterion
+    refitted = estimator.to_model_file(refitted_run, criterion=criterion if criterion in names else None)
+    return refitted.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()

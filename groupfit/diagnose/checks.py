@@ -4,13 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from groupfit.metrics import ljung_box
 
-def ljung_box(residual: np.ndarray, lags: int = 10) -> dict[str, float]:
-    """Ljung–Box Q of the residual's autocorrelations up to ``lags`` (statsmodels); white when p is large."""
-    from statsmodels.stats.diagnostic import acorr_ljungbox
-
-    table = acorr_ljungbox(np.asarray(residual, dtype=float), lags=[lags])
-    return {"lags": lags, "Q": float(table["lb_stat"].iloc[0]), "p_value": float(table["lb_pvalue"].iloc[0])}
+__all__ = ["drift", "ljung_box"]
 
 
 def drift(residual: np.ndarray, time_s: np.ndarray) -> dict[str, float]:

@@ -2,51 +2,39 @@
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
 from groupfit.data import Run
 from groupfit.errors import InputError
-from groupfit.features import Feature, derived_matrix
-from groupfit.modelfile import estimator_from_dict
+from groupfit.features import Feature
+from groupfit.model import ModelFile
 
-LiveRule = Callable[[dict, np.ndarray], np.ndarray]
-
-
-def derived_features(model: dict[str, Any]) -> list[Feature]:
-    return [Feature.from_dict(d) for d in model.get("derived_inputs", [])]
+LiveRule = Callable[[ModelFile, np.ndarray], np.ndarray]
+ModelLike = ModelFile | Mapping[str, Any]
 
 
-def model_inputs(model: dict[str, Any], run: Run) -> np.ndarray:
-    """The model's input matrix on a run: measured columns and derived inputs, in the model's order.
-
-    Derived inputs use the model's sampling period, as the run-time rule does
-    (a run's own period may differ from it by up to 1 %).
-    """
-    derived = {f.name: f for f in derived_features(model)}
-    columns = []
-    for name in model["temps"]:
-        if name in derived:
-            columns.append(derived_matrix([derived[name]], run.frame, model["sampling_period_s"])[:, 0])
-        elif name in run.frame.columns:
-            columns.append(run.frame[name].to_numpy(dtype=float))
-        else:
-            raise InputError(f"{run.source}: column '{name}' that the model uses is missing")
-    return np.column_stack(columns)
+def derived_features(model: ModelLike) -> list[Feature]:
+    return list(ModelFile.coerce(model).derived_inputs or ())
 
 
-def predict(model: dict[str, Any], run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
+def model_inputs(model: ModelLike, run: Run) -> np.ndarray:
+    """The model's input matrix on a run: measured columns and derived inputs, in the model's order."""
+    return ModelFile.coerce(model).inputs(run.frame, run.source)
+
+
+def predict(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
     """Predicted error: groups by the run-time rule when given, else by sample index."""
-    X = model_inputs(model, run)
-    estimator = estimator_from_dict(model)
+    model = ModelFile.coerce(model)
+    X = model.inputs(run.frame, run.source)
     if live_rule is None:
-        return estimator.predict(np.nan_to_num(X)) + np.where(np.isfinite(X).all(axis=1), 0.0, np.nan)
-    groups = live_rule(model, X)
-    return estimator.intercept_[groups] + np.einsum("ij,ij->i", X, estimator.coef_[groups])
+        return model.predict(np.nan_to_num(X)) + np.where(np.isfinite(X).all(axis=1), 0.0, np.nan)
+    return model.predict(X, live_rule(model, X))
 
 
-def residual(model: dict[str, Any], run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
+def residual(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
+    model = ModelFile.coerce(model)
     if run.error is None:
-        raise InputError(f"{run.source}: the run has no error column '{model['error']}'; diagnose needs it")
+        raise InputError(f"{run.source}: the run has no error column '{model.error}'; diagnose needs it")
     return run.error - predict(model, run, live_rule)

@@ -1,7 +1,7 @@
 """Exported run-time routines: the switching rule for controllers and other runtimes.
 
-Every target renders the same :class:`groupfit.switching.RuleTables` and
-performs the operations of :class:`groupfit.switching.SwitchingRule` in the
+Every target renders the same :class:`groupfit.runtime.RuleTables` and
+performs the operations of :class:`groupfit.runtime.SwitchingRule` in the
 same order:
 
 * ``c``: ``groupfit_model.h`` / ``groupfit_model.c`` (C99, no heap, const tables);
@@ -16,15 +16,16 @@ same order:
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from groupfit.errors import InputError
-from groupfit.switching import RuleTables
+from groupfit.model import ModelFile
+from groupfit.runtime import RuleTables
 
 TARGETS = ("c", "st", "json", "sheet")
 
 
-def render(model: dict[str, Any], target: str, **options) -> dict[str, str]:
+def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict[str, str]:
     """The files of one export target, as ``{file name: text}``.
 
     Options: ``real`` ("REAL" or "LREAL") and ``name`` (block name) for
@@ -56,7 +57,7 @@ def render(model: dict[str, Any], target: str, **options) -> dict[str, str]:
 
 def write(files: dict[str, str], out_dir: str | Path) -> list[Path]:
     """Write rendered files into ``out_dir``; return their paths."""
-    from groupfit.modelfile import atomic_write_text
+    from groupfit.io import atomic_write_text
 
     out_dir = Path(out_dir)
     written = []

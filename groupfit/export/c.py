@@ -4,7 +4,7 @@ Standard library only, no heap, every table ``static const``, the state in a
 struct the caller owns. Compile with ``-DGF_USE_FLOAT`` for single precision
 (the arithmetic a PLC's REAL performs); the tables carry both a double and a
 single-precision literal of every number, so either build holds exactly the
-values :class:`groupfit.switching.SwitchingRule` computes with.
+values :class:`groupfit.runtime.SwitchingRule` computes with.
 
 Bit-for-bit agreement with the Python rule assumes IEEE arithmetic without
 contraction of ``a + b*c`` into a fused multiply-add: gcc and clang in ISO
@@ -25,7 +25,7 @@ from __future__ import annotations
 from string import Template
 
 from groupfit.export.literals import c_float_literal, double_literal, reading_notes
-from groupfit.switching import (
+from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
     FAULT_SENSOR,

@@ -106,9 +106,9 @@ def build_driver(
 def stream_text(streams: Sequence[np.ndarray]) -> str:
     """Driver input: each (N, k) array after a ``reset`` line, values as exact hexadecimal floats."""
     lines = []
-    for temps in streams:
+    for readings in streams:
         lines.append("reset")
-        for row in np.asarray(temps, dtype=float):
+        for row in np.asarray(readings, dtype=float):
             lines.append(" ".join(_number(v) for v in row))
     return "\n".join(lines) + "\n"
 
@@ -129,9 +129,9 @@ def run_driver(executable: str | Path, streams: Sequence[np.ndarray], timeout: f
     )
     rows = [line.split() for line in result.stdout.splitlines()]
     outputs, start = [], 0
-    for temps in streams:
-        chunk = rows[start : start + len(temps)]
-        start += len(temps)
+    for readings in streams:
+        chunk = rows[start : start + len(readings)]
+        start += len(readings)
         outputs.append(
             DriverOutput(
                 code=np.array([int(r[0]) for r in chunk]),

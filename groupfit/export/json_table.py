@@ -14,8 +14,8 @@ inputs.
 
 from __future__ import annotations
 
-from groupfit.modelfile import to_json
-from groupfit.switching import (
+from groupfit.io import to_json
+from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
     FAULT_SENSOR,

@@ -2,7 +2,7 @@
 
 Seventeen significant digits round-trip any IEEE double; nine round-trip any
 IEEE single, so a table written with these literals holds, after the C or PLC
-compiler has read it, the very numbers :class:`groupfit.switching.SwitchingRule`
+compiler has read it, the very numbers :class:`groupfit.runtime.SwitchingRule`
 computes with.
 """
 

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 
 from groupfit.errors import InputError
-from groupfit.modelfile import to_json
-from groupfit.switching import RuleTables
+from groupfit.io import to_json
+from groupfit.runtime import RuleTables
 
 UM_PER_MM = 1000.0
 

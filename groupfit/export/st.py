@@ -1,6 +1,6 @@
 """IEC 61131-3 Structured Text export: one FUNCTION_BLOCK, tables as constant arrays.
 
-The block performs the operations of :class:`groupfit.switching.SwitchingRule`
+The block performs the operations of :class:`groupfit.runtime.SwitchingRule`
 in the same order, in REAL (single precision, bit for bit the C build with
 ``GF_USE_FLOAT``) or LREAL (double precision). Called once per sample by a
 task whose period is the model's; it checks that period itself (input
@@ -26,7 +26,7 @@ from string import Template
 
 from groupfit.errors import InputError
 from groupfit.export.literals import reading_notes, shortest_literal
-from groupfit.switching import (
+from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
     FAULT_PERIOD,

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.tomlconfig import Table
 
 from .geometry import HousingGeometry, MeshResolution
 from .schedule import PALMGREN_SPEED_EXPONENT, AmbientProfile, EquilibriumRule, StepSchedule
@@ -127,73 +128,11 @@ def _fail(key: str, what: str) -> InputError:
     return InputError(f"config key '{key}': {what}")
 
 
-class _Table:
-    """Typed access to one config table that remembers which keys were read."""
+class _Table(Table):
+    """A scenario table: an unknown key points to the shipped scenarios for the spelling."""
 
-    def __init__(self, data, name: str):
-        if not isinstance(data, dict):
-            raise _fail(name, "must be a table ([section])")
-        self.data, self.name, self.used = data, name, set()
-
-    def key(self, key: str) -> str:
-        return f"{self.name}.{key}" if self.name else key
-
-    def get(self, key, default):
-        self.used.add(key)
-        return self.data.get(key, default)
-
-    def number(self, key, default, *, positive=False, nonnegative=False):
-        value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise _fail(self.key(key), f"expected a number, got {value!r}")
-        if positive and value <= 0:
-            raise _fail(self.key(key), f"must be positive, got {value!r}")
-        if nonnegative and value < 0:
-            raise _fail(self.key(key), f"must not be negative, got {value!r}")
-        return float(value)
-
-    def integer(self, key, default, *, minimum=1):
-        value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise _fail(self.key(key), f"expected an integer, got {value!r}")
-        if value < minimum:
-            raise _fail(self.key(key), f"must be at least {minimum}, got {value}")
-        return int(value)
-
-    def string(self, key, default, choices=None):
-        value = self.get(key, default)
-        if not isinstance(value, str):
-            raise _fail(self.key(key), f"expected a string, got {value!r}")
-        if choices is not None and value not in choices:
-            raise _fail(self.key(key), f"must be one of {', '.join(choices)}, got {value!r}")
-        return value
-
-    def boolean(self, key, default):
-        value = self.get(key, default)
-        if not isinstance(value, bool):
-            raise _fail(self.key(key), f"expected true or false, got {value!r}")
-        return value
-
-    def vector(self, key, default, length):
-        value = self.get(key, default)
-        if (
-            not isinstance(value, (list, tuple))
-            or len(value) != length
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)
-        ):
-            raise _fail(self.key(key), f"expected a list of {length} numbers, got {value!r}")
-        return tuple(float(v) for v in value)
-
-    def sub(self, key) -> "_Table":
-        return _Table(self.get(key, {}), self.key(key))
-
-    def finish(self):
-        unknown = sorted(set(self.data) - self.used)
-        if unknown:
-            raise _fail(
-                self.key(unknown[0]),
-                "unknown key; check the spelling against configs/paper_cycle.toml or configs/rod_ar1.toml",
-            )
+    def finish(self, hint: str | None = None) -> None:
+        super().finish(hint or "check the spelling against configs/paper_cycle.toml or configs/rod_ar1.toml")
 
 
 def _steps(table: _Table, key: str, default, *, value_check=None) -> StepSchedule | None:

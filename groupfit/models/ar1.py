@@ -26,6 +26,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_array, check_is_fitted
 
 from groupfit.errors import InputError
+from groupfit.metrics import ljung_box
 
 SCALINGS = ("heat_law", "rise")
 
@@ -139,9 +140,6 @@ class AR1Model(RegressorMixin, BaseEstimator):
         return remainder + structural
 
     def ljung_box(self, lags: int = 10) -> dict[str, float]:
-        """Ljung–Box whiteness test of the one-step residuals (statsmodels)."""
-        from statsmodels.stats.diagnostic import acorr_ljungbox
-
+        """Ljung–Box whiteness test of the one-step residuals (:func:`groupfit.metrics.ljung_box`)."""
         check_is_fitted(self, "one_step_residuals_")
-        table = acorr_ljungbox(self.one_step_residuals_, lags=[lags])
-        return {"lags": lags, "Q": float(table["lb_stat"].iloc[0]), "p_value": float(table["lb_pvalue"].iloc[0])}
+        return ljung_box(self.one_step_residuals_, lags)

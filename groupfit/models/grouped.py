@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.utils.validation import check_array, check_is_fitted
+from sklearn.utils.validation import check_array, check_is_fitted, column_or_1d
 
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints, hard_groups, serving_group_index, soft_groups
+from groupfit.metrics import error_metrics
+from groupfit.model import ModelFile, Switching, grouped_prediction
 from groupfit.objective import OBJECTIVES, SegmentCost, grouped_residuals, residual_sum
+from groupfit.search.base import GA_DEFAULTS, METHODS, GASettings, SearchSettings
 from groupfit.search.exact import solve_exact
-from groupfit.search.ga import GeneticSearch
 
-SEARCHES = ("ga", "exact")
+SEARCHES = METHODS
+DEFAULT_SEARCH = SearchSettings()
 CERTIFY_PAIR_LIMIT = {"sse": 5_000_000, "sae": 200_000}
 """Largest number of segment pairs (≈ N²/2) for which a GA result is certified automatically."""
 
@@ -87,6 +90,16 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
     n_features_in_ : int
     feature_names_in_ : ndarray of str
         Present when X had column names.
+
+    Notes
+    -----
+    scikit-learn's ``check_estimator`` passes (tests/test_models.py) with
+    ``c = 0``: its test data (10 to 50 samples) is too short for the default
+    spacing c = 3, and an infeasible p is refused rather than quietly fitted
+    with fewer breaks (no p = 0 fallback). With p ≥ 1 two checks are declared
+    as expected failures through ``expected_failed_checks``: the sample-order
+    and subset invariance of ``predict``, since row i is served by the group
+    that serves sample i of the run (prediction follows the time order).
     """
 
     def __init__(
@@ -97,12 +110,12 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         objective: str = "sae",
         fit_intercept: bool = True,
         search: str = "ga",
-        population_size: int = 60,
-        max_generations: int = 300,
-        stall_generations: int = 30,
-        polish: bool = True,
-        local_window: int = 5,
-        union_crossover: bool = True,
+        population_size: int = GA_DEFAULTS.population_size,
+        max_generations: int = GA_DEFAULTS.max_generations,
+        stall_generations: int = GA_DEFAULTS.stall_generations,
+        polish: bool = GA_DEFAULTS.polish,
+        local_window: int = GA_DEFAULTS.local_window,
+        union_crossover: bool = GA_DEFAULTS.union_crossover,
         certify="auto",
         random_state: int | None = None,
         fixed_breaks: list[int] | None = None,
@@ -129,13 +142,60 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "n_features_in_")
         return self.n_features_in_ + int(self.fit_intercept)
 
+    @property
+    def ga_settings(self) -> GASettings:
+        """The GA settings among the parameters."""
+        return GASettings(**{name: getattr(self, name) for name in GA_DEFAULTS.as_dict()})
+
+    @classmethod
+    def from_settings(
+        cls,
+        *,
+        p: int,
+        n: int = 3,
+        c: float = 3.0,
+        objective: str = "sae",
+        fit_intercept: bool = True,
+        search: SearchSettings = DEFAULT_SEARCH,
+    ) -> "GroupedRegressor":
+        """The estimator of a model and search setting: the one path from settings to an estimator."""
+        return cls(
+            p=p,
+            n=n,
+            c=float(c),
+            objective=objective,
+            fit_intercept=fit_intercept,
+            search=search.method,
+            certify=search.certify,
+            random_state=search.seed,
+            **search.ga.as_dict(),
+        )
+
+    @classmethod
+    def from_config(cls, config: Mapping[str, Mapping[str, Any]], **search_changes) -> "GroupedRegressor":
+        """The estimator of a configuration's ``model`` and ``search`` tables.
+
+        A run configuration (:mod:`groupfit.config`) or a sweep's run
+        specification (:mod:`groupfit.sweep.config`); ``search_changes``
+        override :class:`~groupfit.search.base.SearchSettings` fields (e.g. ``certify=False``).
+        """
+        model = config["model"]
+        return cls.from_settings(
+            p=model["p"],
+            n=model["n"],
+            c=model["c"],
+            objective=model["objective"],
+            fit_intercept=model["intercept"],
+            search=SearchSettings.from_mapping(config["search"]).replace(**search_changes),
+        )
+
     def fit(self, X, y, progress: Callable[[str, float], None] | None = None):
         """Find the hard breaks and fit every soft group.
 
         Parameters
         ----------
         X : array-like, shape (n_samples, n_features)
-            Temperatures, one row per sample in time order.
+            The model's inputs (temperature readings, derived inputs), one row per sample in time order.
         y : array-like, shape (n_samples,)
             Thermal error.
         progress : callable, optional
@@ -144,8 +204,10 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self._check_parameters()
         if hasattr(X, "columns"):
             self.feature_names_in_ = np.asarray([str(c) for c in X.columns], dtype=object)
+        if y is None:
+            raise ValueError(f"{type(self).__name__} requires y to be passed, but the target y is None")
         X = check_array(X, ensure_min_samples=2)
-        y = check_array(y, ensure_2d=False, dtype=float).ravel()
+        y = column_or_1d(check_array(y, ensure_2d=False, dtype=float), warn=True)
         if len(y) != len(X):
             raise InputError(f"X has {len(X)} rows but y has {len(y)}")
         self.n_features_in_ = X.shape[1]
@@ -157,33 +219,17 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
 
         cost = SegmentCost(X, y, n=self.n, objective=self.objective, fit_intercept=self.fit_intercept)
         if self.search == "exact" or self.p == 0:
-            exact = solve_exact(cost, constraints, self.p, progress=_stage(progress, "exact"))
-            breaks, search_value = exact.breaks[self.p], exact.objective[self.p]
-            info = {"method": "exact", "evaluations": exact.evaluations, "seconds": exact.seconds}
+            result = solve_exact(cost, constraints, self.p, progress=_stage(progress, "exact")).for_p(self.p)
         else:
-            ga = GeneticSearch(
-                population_size=self.population_size,
-                max_generations=self.max_generations,
-                stall_generations=self.stall_generations,
-                polish=self.polish,
-                seed=self.random_state,
-                local_window=self.local_window,
-                union_crossover=self.union_crossover,
-            )
+            from groupfit.search.ga import GeneticSearch
+
+            ga = GeneticSearch.from_settings(self.ga_settings, seed=self.random_state)
             reporter = None
             if progress is not None:
                 reporter = lambda generation, best: progress("ga", generation / self.max_generations)  # noqa: E731
             result = ga.run(cost, constraints, self.p, progress=reporter)
-            breaks, search_value = result.breaks, result.objective
-            info = {
-                "method": "ga",
-                "seed": self.random_state,
-                "evaluations": result.evaluations,
-                "segment_costs": result.segment_costs,
-                "generations": result.generations,
-                "stopped": result.stopped,
-                "seconds": result.seconds,
-            }
+        breaks, search_value, info = result.breaks, result.objective, result.info()
+        if result.method == "ga":
             if self._should_certify(n_samples):
                 exact = solve_exact(cost, constraints, self.p, progress=_stage(progress, "exact"))
                 best = exact.objective[self.p]
@@ -235,14 +281,86 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         Row i of X is served by the group that serves sample i of the
         modelling run (rows past its end by the last group). The run-time
         switching logic, which decides from live temperatures, is
-        :mod:`groupfit.switching`.
+        :mod:`groupfit.runtime`.
         """
         check_is_fitted(self, "breaks_")
         X = check_array(X)
         if X.shape[1] != self.n_features_in_:
-            raise InputError(f"X has {X.shape[1]} temperature columns; the model was fitted on {self.n_features_in_}")
-        group = self.serving_groups(len(X))
-        return self.intercept_[group] + np.einsum("ij,ij->i", X, self.coef_[group])
+            raise InputError(
+                f"X has {X.shape[1]} features, but {type(self).__name__} is expecting {self.n_features_in_} "
+                "features as input (one per model input)"
+            )
+        return grouped_prediction(self.intercept_, self.coef_, X, self.serving_groups(len(X)))
+
+    def to_model_file(self, run, criterion: str | None = None) -> ModelFile:
+        """The model file of this model, fitted on ``run`` (a :class:`groupfit.data.Run`).
+
+        ``criterion``: the switching criterion sensor (default: the input that
+        moves most over the run, :func:`default_criterion`).
+        """
+        from groupfit.runtime.rule import rule_parameters, source_ranges
+
+        check_is_fitted(self, "breaks_")
+        criterion = criterion or default_criterion(run)
+        if criterion not in run.temp_names:
+            raise InputError(
+                f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
+            )
+        column = run.temp_names.index(criterion)
+        coefficients = [
+            ([float(b0)] if self.fit_intercept else []) + [float(v) for v in slopes]
+            for b0, slopes in zip(self.intercept_, self.coef_)
+        ]
+        metrics = error_metrics(self.residuals_)
+        metrics["sse_um2"] = float(np.sum(self.residuals_**2))
+        switching = Switching(
+            criterion=criterion,
+            criterion_index=column,
+            criterion_series=tuple(float(v) for v in run.temps[:, column]),
+        )
+        model = ModelFile(
+            sampling_period_s=float(run.period),
+            temps=tuple(run.temp_names),
+            error=run.error_name,
+            intercept=bool(self.fit_intercept),
+            objective=self.objective,
+            p=len(self.breaks_),
+            n=int(self.n),
+            c=float(self.c),
+            n_samples=int(self.n_samples_fit_),
+            breaks=tuple(self.breaks_),
+            hard_groups=tuple(tuple(g) for g in self.hard_groups_),
+            soft_groups=tuple(tuple(g) for g in self.soft_groups_),
+            coefficients=tuple(tuple(row) for row in coefficients),
+            objective_value=float(self.objective_value_),
+            group_objective=tuple(float(v) for v in self.group_objective_),
+            switching=switching,
+            training={"run": run.name, **metrics},
+        )
+        rule = rule_parameters(model, run.temps, criterion_index=column)
+        ranges = source_ranges(run.frame, exclude=(run.time_name, run.error_name))
+        switching = switching.with_rule(rule)
+        return model.replace(switching=switching.with_rule({"source_ranges": ranges}))
+
+    @classmethod
+    def from_model_file(cls, model: ModelFile | Mapping[str, Any]) -> "GroupedRegressor":
+        """A fitted estimator with the model file's groups and coefficients (no residuals or search details)."""
+        model = ModelFile.coerce(model)
+        estimator = cls(p=model.p, n=model.n, c=model.c, objective=model.objective, fit_intercept=model.intercept)
+        coefficients = np.asarray(model.coefficients, dtype=float)
+        n_samples = model.n_samples_fit
+        estimator.breaks_ = [int(b) for b in model.breaks]
+        estimator.n_samples_fit_ = n_samples
+        estimator.hard_groups_ = hard_groups(estimator.breaks_, n_samples)
+        estimator.soft_groups_ = soft_groups(estimator.breaks_, n_samples, model.n)
+        if model.intercept:
+            estimator.intercept_, estimator.coef_ = coefficients[:, 0], coefficients[:, 1:]
+        else:
+            estimator.intercept_, estimator.coef_ = np.zeros(len(coefficients)), coefficients
+        estimator.n_features_in_ = len(model.temps)
+        estimator.feature_names_in_ = np.asarray(model.temps, dtype=object)
+        estimator.objective_value_ = float(model.objective_value)
+        return estimator
 
     def _check_parameters(self) -> None:
         if self.objective not in OBJECTIVES:
@@ -260,6 +378,12 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         if self.certify == "auto":
             return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[self.objective]
         return bool(self.certify)
+
+
+def default_criterion(run) -> str:
+    """The input that moves most over the run: the clearest record of the thermal state."""
+    spans = np.ptp(run.temps, axis=0)
+    return run.temp_names[int(np.argmax(spans))]
 
 
 def _stage(progress, stage: str):

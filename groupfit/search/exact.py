@@ -19,6 +19,7 @@ import numpy as np
 
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
+from groupfit.search.base import SearchResult
 
 GRAM_FLOATS_PER_BATCH = 500_000
 
@@ -43,6 +44,16 @@ class ExactResult:
     evaluations: int = 0
     seconds: float = 0.0
 
+    def for_p(self, p: int) -> SearchResult:
+        """The optimum for ``p`` breaks in the form every search answers in."""
+        return SearchResult(
+            method="exact",
+            breaks=self.breaks[p],
+            objective=self.objective[p],
+            evaluations=self.evaluations,
+            seconds=self.seconds,
+        )
+
 
 def solve_exact(cost: SegmentCost, constraints: Constraints, pmax: int, progress=None) -> ExactResult:
     """Globally optimal breaks for every p in 0…pmax.
@@ -60,7 +71,7 @@ def solve_exact(cost: SegmentCost, constraints: Constraints, pmax: int, progress
     start = _time.perf_counter()
     evaluations_before = cost.evaluations
     n_samples = constraints.n_samples
-    h = constraints.min_size
+    min_size = constraints.min_size
     pmax = min(pmax, constraints.max_breaks())
     result = ExactResult()
     if pmax < 0:
@@ -81,7 +92,7 @@ def solve_exact(cost: SegmentCost, constraints: Constraints, pmax: int, progress
     batch = max(1, pairs_per_batch // max(1, n_samples))
     for first in range(0, len(starts), batch):
         chunk = starts[first : first + batch]
-        row_a, row_b = _feasible_pairs(chunk, h, end_ok, n_samples)
+        row_a, row_b = _feasible_pairs(chunk, min_size, end_ok, n_samples)
         costs = np.full((len(chunk), n_samples + 1), np.inf)
         costs[row_a, row_b] = cost.pair_costs(chunk[row_a], row_b)
         for i, a in enumerate(chunk):
@@ -116,12 +127,12 @@ def solve_exact(cost: SegmentCost, constraints: Constraints, pmax: int, progress
     return result
 
 
-def _feasible_pairs(chunk: np.ndarray, h: int, end_ok: np.ndarray, n_samples: int):
+def _feasible_pairs(chunk: np.ndarray, min_size: int, end_ok: np.ndarray, n_samples: int):
     """Row index into ``chunk`` and end position b of every feasible (a, b) pair."""
     ends = np.flatnonzero(end_ok)
     rows, cols = [], []
     for i, a in enumerate(chunk):
-        b = ends[ends >= a + h]
+        b = ends[ends >= a + min_size]
         rows.append(np.full(len(b), i))
         cols.append(b)
     return np.concatenate(rows), np.concatenate(cols)

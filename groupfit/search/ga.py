@@ -1,9 +1,9 @@
 """Genetic-algorithm break-point search (DEAP), as in the paper.
 
-Encoding. A break vector ``b_1 < … < b_p`` with hard groups of at least ``h``
-samples and ``lowest ≤ b_1``, ``b_p ≤ highest`` is stored as the gaps-free
-vector ``u_j = b_j − (j−1)·h``. The constraints become simply
-``lowest ≤ u_1 ≤ … ≤ u_p ≤ highest − (p−1)·h``, so *any* integer vector is made
+Encoding. A break vector ``b_1 < … < b_p`` with hard groups of at least
+``min_size`` samples and ``lowest ≤ b_1``, ``b_p ≤ highest`` is stored as the gaps-free
+vector ``u_j = b_j − (j−1)·min_size``. The constraints become simply
+``lowest ≤ u_1 ≤ … ≤ u_p ≤ highest − (p−1)·min_size``, so *any* integer vector is made
 feasible by clipping it to that interval and sorting it: every individual the
 operators produce is repaired, never penalised.
 
@@ -40,43 +40,38 @@ from deap import base, tools
 
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
+from groupfit.search.base import GA_DEFAULTS, GASettings, SearchResult
 
 
-@dataclass
-class GAResult:
-    """Outcome of one GA run.
+@dataclass(kw_only=True)
+class GAResult(SearchResult):
+    """Outcome of one GA run (a :class:`~groupfit.search.base.SearchResult`).
 
     Attributes
     ----------
-    breaks : list of int
-    objective : float
-        Rg of ``breaks``.
     evaluations : int
         Break vectors whose fitness was evaluated (population members and
         local-search candidates).
     segment_costs : int
         Distinct soft-group costs computed.
     generations : int
-    seconds : float
     stopped : str
         ``"stagnation"`` or ``"max_generations"``.
     history : list of float
         Best Rg after each generation.
     evaluations_history : list of int
         Evaluations made by the end of each generation.
-    seed : int or None
     """
 
-    breaks: list[int]
-    objective: float
-    evaluations: int
+    method: str = "ga"
     segment_costs: int
     generations: int
-    seconds: float
     stopped: str
     history: list[float] = field(default_factory=list)
     evaluations_history: list[int] = field(default_factory=list)
-    seed: int | None = None
+
+    def details(self) -> dict:
+        return {"segment_costs": self.segment_costs, "generations": self.generations, "stopped": self.stopped}
 
 
 class BreakFitness(base.Fitness):
@@ -142,7 +137,7 @@ class CachedObjective:
 
 
 class GapFreeEncoding:
-    """Break vectors as gap-free coordinates ``u_j = b_j − (j−1)·h``.
+    """Break vectors as gap-free coordinates ``u_j = b_j − (j−1)·min_size``.
 
     Feasible break vectors correspond one to one to non-decreasing integer
     vectors in ``[low, high]``; :meth:`repair` maps any real vector there.
@@ -194,17 +189,17 @@ class GeneticSearch:
 
     def __init__(
         self,
-        population_size: int = 60,
-        max_generations: int = 300,
-        stall_generations: int = 30,
+        population_size: int = GA_DEFAULTS.population_size,
+        max_generations: int = GA_DEFAULTS.max_generations,
+        stall_generations: int = GA_DEFAULTS.stall_generations,
         crossover_prob: float = 0.8,
         mutation_prob: float = 0.4,
         elite: int = 2,
         tournament_size: int = 3,
-        polish: bool = True,
+        polish: bool = GA_DEFAULTS.polish,
         seed: int | None = None,
-        local_window: int = 5,
-        union_crossover: bool = True,
+        local_window: int = GA_DEFAULTS.local_window,
+        union_crossover: bool = GA_DEFAULTS.union_crossover,
     ):
         self.local_window = local_window
         self.union_crossover = union_crossover
@@ -217,6 +212,10 @@ class GeneticSearch:
         self.tournament_size = tournament_size
         self.polish = polish
         self.seed = seed
+
+    @classmethod
+    def from_settings(cls, settings: GASettings, seed: int | None = None) -> "GeneticSearch":
+        return cls(seed=seed, **settings.as_dict())
 
     def run(
         self,
@@ -448,12 +447,12 @@ def shift_range(breaks: list[int], j: int, constraints: Constraints) -> tuple[in
 
 def _pair_candidates(breaks: list[int], j: int, constraints: Constraints, window: int) -> list[list[int]]:
     """Break vectors with breaks j and j+1 moved together, each by at most ``window`` samples."""
-    h = constraints.min_size
+    min_size = constraints.min_size
     low, _ = shift_range(breaks, j, constraints)
     _, high = shift_range(breaks, j + 1, constraints)
     candidates = []
     for first in range(max(low, breaks[j] - window), breaks[j] + window + 1):
-        for second in range(max(first + h, breaks[j + 1] - window), min(high, breaks[j + 1] + window) + 1):
+        for second in range(max(first + min_size, breaks[j + 1] - window), min(high, breaks[j + 1] + window) + 1):
             if (first, second) != (breaks[j], breaks[j + 1]):
                 candidates.append(breaks[:j] + [first, second] + breaks[j + 2 :])
     return candidates

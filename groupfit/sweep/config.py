@@ -49,7 +49,6 @@ import hashlib
 import itertools
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -57,7 +56,9 @@ from typing import Any, Callable
 from groupfit.data import load_run
 from groupfit.errors import InputError
 from groupfit.objective import OBJECTIVES
+from groupfit.search.base import GASettings
 from groupfit.sweep.selection import SELECTION_DEFAULTS, SELECTION_METHODS
+from groupfit.tomlconfig import Table, check_tables, read_toml
 
 SEARCHES = ("exact", "ga")
 TABLES = ("study", "data", "grid", "ga")
@@ -72,14 +73,9 @@ GRID_DEFAULTS: dict[str, list[Any]] = {
     "search": ["exact"],
     "sensors": ["all"],
 }
-GA_DEFAULTS: dict[str, list[Any]] = {
+GA_GRID_DEFAULTS: dict[str, list[Any]] = {
     "seed": [0],
-    "population_size": [60],
-    "max_generations": [300],
-    "stall_generations": [30],
-    "polish": [True],
-    "local_window": [5],
-    "union_crossover": [True],
+    **{key: [value] for key, value in GASettings().as_dict().items()},
 }
 RANGE_KEYS = ("start", "stop", "step")
 
@@ -177,15 +173,7 @@ def read_study(path: str | Path) -> Study:
         Naming the file and the key or value at fault.
     """
     path = Path(path)
-    label = str(path)
-    if not path.is_file():
-        raise InputError(f"{label}: sweep configuration not found")
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{label}: not valid TOML ({exc})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{label}: not a UTF-8 text file") from None
+    raw = read_toml(path, "sweep configuration")
     return study_from_dict(raw, path)
 
 
@@ -193,15 +181,11 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     """Expand an already parsed study; relative paths are taken against ``path``'s folder."""
     label = str(path)
     base = path.resolve().parent
-    for table, values in raw.items():
-        if table not in TABLES:
-            raise InputError(f"{label}: unknown table [{table}]; the tables are {', '.join(TABLES)}")
-        if not isinstance(values, dict):
-            raise InputError(f"{label}: '{table}' must be a table ([{table}])")
+    check_tables(raw, TABLES, label)
     study_table = _checked_table(raw, "study", STUDY_KEYS, label)
     data_table = _checked_table(raw, "data", DATA_KEYS, label)
     grid_table = _checked_table(raw, "grid", tuple(GRID_DEFAULTS), label)
-    ga_table = _checked_table(raw, "ga", tuple(GA_DEFAULTS), label)
+    ga_table = _checked_table(raw, "ga", tuple(GA_GRID_DEFAULTS), label)
 
     name = _string(study_table.get("name", path.stem), "[study] name", label)
     db = study_table.get("db")
@@ -214,7 +198,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     time_column = data_table.get("time", "time_s")
     error_column = data_table.get("error", "error_um")
     grid = {key: _dimension(grid_table, key, label, GRID_DEFAULTS[key]) for key in GRID_DEFAULTS}
-    ga = {key: _dimension(ga_table, key, label, GA_DEFAULTS[key]) for key in GA_DEFAULTS}
+    ga = {key: _dimension(ga_table, key, label, GA_GRID_DEFAULTS[key]) for key in GA_GRID_DEFAULTS}
 
     runs: list[RunSpec] = []
     seen: set[str] = set()
@@ -246,15 +230,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
 def _search_specs(method: str, ga: dict[str, list], certify) -> list[dict]:
     if method == "exact":
         return [{"method": "exact"}]
-    keys = (
-        "population_size",
-        "max_generations",
-        "stall_generations",
-        "polish",
-        "local_window",
-        "union_crossover",
-        "seed",
-    )
+    keys = (*GASettings().as_dict(), "seed")
     return [
         {"method": "ga", "certify": certify, **dict(zip(keys, values))}
         for values in itertools.product(*(ga[key] for key in keys))
@@ -262,11 +238,11 @@ def _search_specs(method: str, ga: dict[str, list], certify) -> list[dict]:
 
 
 def _checked_table(raw: dict, table: str, keys: tuple[str, ...], label: str) -> dict:
-    values = raw.get(table, {})
-    for key in values:
-        if key not in keys:
-            raise InputError(f"{label}: unknown key '{key}' in [{table}]; known keys: {', '.join(keys)}")
-    return values
+    checked = Table(raw.get(table, {}), table, label)
+    for key in keys:
+        checked.get(key)
+    checked.finish(f"known keys: {', '.join(keys)}")
+    return checked.data
 
 
 def _string(value, what: str, label: str) -> str:
@@ -357,7 +333,7 @@ def _candidates(patterns, usable, constant, label) -> list[str]:
 
 def _dimension(table: dict, key: str, label: str, default: list) -> list:
     """The values of one sweep dimension: a list, a range table or a single value."""
-    what = f"[{'ga' if key in GA_DEFAULTS else 'grid'}] {key}"
+    what = f"[{'ga' if key in GA_GRID_DEFAULTS else 'grid'}] {key}"
     if key not in table:
         return list(default)
     raw = table[key]

@@ -263,29 +263,23 @@ def _markdown_table(rows: list[list[str]]) -> list[str]:
     return out
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _panels(count: int):
-    plt = _pyplot()
+    """A figure of its own (no pyplot, no global backend) with ``count`` panels."""
+    from matplotlib.figure import Figure
+
     columns = min(count, 3)
     rows = int(np.ceil(count / columns))
-    fig, axes = plt.subplots(rows, columns, figsize=(4.6 * columns, 3.6 * rows), squeeze=False, constrained_layout=True)
+    fig = Figure(figsize=(4.6 * columns, 3.6 * rows), layout="constrained")
+    axes = fig.subplots(rows, columns, squeeze=False)
     for axis in axes.flat[count:]:
         axis.set_visible(False)
-    return plt, fig, list(axes.flat)
+    return fig, list(axes.flat)
 
 
 def plot_objective_vs_p(summary: pd.DataFrame, path: Path) -> Path:
     """Best Rg against p per (n, c) and sensor set; one panel per data set and objective."""
     panels = list(summary.groupby(["dataset", "objective_kind"], sort=True))[:MAX_PANELS]
-    plt, fig, axes = _panels(len(panels))
+    fig, axes = _panels(len(panels))
     for axis, ((dataset, objective), group) in zip(axes, panels):
         for (sensors, n, c, intercept), line in group.groupby(["sensor_set", "n", "c", "intercept"], sort=True):
             line = line.sort_values("p")
@@ -300,7 +294,6 @@ def plot_objective_vs_p(summary: pd.DataFrame, path: Path) -> Path:
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 
@@ -308,7 +301,7 @@ def plot_break_stability(runs: pd.DataFrame, path: Path) -> Path:
     """Break positions found for each p, over seeds and budgets; dot size = share of runs."""
     done = runs[(runs["status"] == "done") & (runs["p"] > 0)]
     panels = list(done.groupby(SETTING, sort=True))[:MAX_PANELS]
-    plt, fig, axes = _panels(max(1, len(panels)))
+    fig, axes = _panels(max(1, len(panels)))
     for axis, (key, group) in zip(axes, panels):
         for p, at_p in group.groupby("p"):
             positions = [b for text in at_p["breaks"] for b in json.loads(text)]
@@ -341,14 +334,13 @@ def plot_break_stability(runs: pd.DataFrame, path: Path) -> Path:
         axis.xaxis.get_major_locator().set_params(integer=True)
         axis.grid(alpha=0.3)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 
 def plot_success(success: pd.DataFrame, path: Path) -> Path:
     """GA success rate against nominal budget, one line per p and one over all p; a panel per polish setting."""
     panels = list(success.groupby("polish", sort=True))
-    plt, fig, axes = _panels(len(panels))
+    fig, axes = _panels(len(panels))
     for axis, (polish, group) in zip(axes, panels):
         for p, line in group.groupby("p"):
             by_budget = line.groupby("budget")[["successes", "runs"]].sum()
@@ -363,5 +355,4 @@ def plot_success(success: pd.DataFrame, path: Path) -> Path:
         axis.grid(alpha=0.3)
         axis.legend(fontsize=8)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path

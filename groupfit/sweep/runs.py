@@ -128,28 +128,7 @@ def fit_run(spec: dict, run: Run, sensors: list[str], timings: dict[str, float])
 
 def estimator_for(spec: dict) -> GroupedRegressor:
     """The GroupedRegressor a run specification describes (no automatic certification)."""
-    model, search = spec["model"], spec["search"]
-    settings = {}
-    if search["method"] == "ga":
-        settings = {
-            "population_size": search["population_size"],
-            "max_generations": search["max_generations"],
-            "stall_generations": search["stall_generations"],
-            "polish": search["polish"],
-            "local_window": search.get("local_window", 5),
-            "union_crossover": search.get("union_crossover", True),
-            "random_state": search["seed"],
-        }
-    return GroupedRegressor(
-        p=model["p"],
-        n=model["n"],
-        c=model["c"],
-        objective=model["objective"],
-        fit_intercept=model["intercept"],
-        search=search["method"],
-        certify=False,
-        **settings,
-    )
+    return GroupedRegressor.from_config(spec, certify=False)
 
 
 def wants_reference(certify, n_samples: int, objective: str) -> bool:

@@ -1,0 +1,112 @@
+"""What ``groupfit fit`` found, as an object: the estimator, its model file, and the printed summary."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from groupfit.data import Run
+from groupfit.grouping import served_ranges
+from groupfit.model import ModelFile
+from groupfit.models.grouped import GroupedRegressor
+
+
+@dataclass
+class FitResult:
+    """A grouped model fitted on a run.
+
+    ``selection``: how ``--p auto`` chose p (:func:`groupfit.models.select_p.choose_p`), when it did;
+    ``input_selection``: how ``--select`` chose the inputs, when it did.
+    """
+
+    estimator: GroupedRegressor
+    run: Run
+    model: ModelFile
+    selection: dict[str, Any] | None = None
+    input_selection: dict[str, Any] | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
+        result = {**self.model.to_dict(), "search": self.estimator.search_}
+        if self.selection is not None:
+            result["p_selection"] = self.selection
+        if self.input_selection is not None:
+            result["input_selection"] = self.input_selection
+        return result
+
+    def summary(self) -> str:
+        """Breaks, groups, coefficients and residuals, as ``groupfit fit`` prints them."""
+        report = fit_report(self.estimator, self.run, self.model)
+        if self.selection is not None:
+            report = selection_summary(self.selection) + "\n" + report
+        if self.input_selection is not None:
+            chosen = self.input_selection
+            report = (
+                f"inputs  {chosen['method']} selection ({chosen['folds']}): "
+                f"{', '.join(chosen['inputs'])} of {chosen['candidates']}\n" + report
+            )
+        return report
+
+
+def selection_summary(selection: dict) -> str:
+    table = ", ".join(
+        f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"]))
+    )
+    rule = "smallest BIC" if selection["rule"] == "bic" else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
+    return f"p auto  {rule}: p = {selection['p']}  ({table})"
+
+
+def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile) -> str:
+    """The table ``groupfit fit`` prints (without the files it wrote)."""
+    unit = "µm" if estimator.objective == "sae" else "µm²"
+    search = estimator.search_
+    lines = [
+        f"run     {run.source}: N = {run.n_samples} samples every {run.period:g} s; "
+        f"inputs {', '.join(run.temp_names)} -> {run.error_name}",
+        f"model   p = {estimator.p}, n = {estimator.n}, c = {estimator.c:g}, M = {estimator.n_coef} "
+        f"({'with' if estimator.fit_intercept else 'no'} intercept), objective {estimator.objective}, "
+        f"hard groups > {estimator.c * estimator.n_coef:g} samples",
+        "search  " + search_summary(search, unit),
+        "",
+    ]
+    names = (["const"] if estimator.fit_intercept else []) + list(run.temp_names)
+    header = ["group", "hard", "soft", "serves"] + names + [f"R ({unit})"]
+    served = served_ranges(estimator.breaks_, estimator.n_samples_fit_, estimator.n)
+    rows = []
+    for g, (hard, soft, serve) in enumerate(zip(estimator.hard_groups_, estimator.soft_groups_, served)):
+        coefficients = model.coefficients[g]
+        rows.append(
+            [str(g + 1), _span(hard), _span(soft), _span(serve)]
+            + [f"{v:.5g}" for v in coefficients]
+            + [f"{estimator.group_objective_[g]:.4f}"]
+        )
+    widths = [max(len(r[i]) for r in [header] + rows) for i in range(len(header))]
+    for row in [header] + rows:
+        lines.append("  ".join(cell.rjust(width) for cell, width in zip(row, widths)))
+    metrics = model.training
+    lines += [
+        "",
+        f"breaks  {estimator.breaks_}   Rg = {estimator.objective_value_:.6g} {unit}   "
+        f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
+        f"switch  criterion sensor {model.switching.criterion}",
+    ]
+    return "\n".join(lines)
+
+
+def search_summary(search: dict, unit: str) -> str:
+    if search["method"] == "exact":
+        return f"exact (dynamic programming): {search['evaluations']} segment costs, {search['seconds']:.2f} s"
+    text = (
+        f"ga (DEAP, seed {search['seed']}): {search['generations']} generations ({search['stopped']}), "
+        f"{search['evaluations']} evaluations, {search['seconds']:.2f} s"
+    )
+    if "gap_percent" in search:
+        text += (
+            f"; exact optimum {search['exact_objective']:.6g} {unit} at {search['exact_breaks']}, "
+            f"GA gap {search['gap_percent']:.3g} %"
+        )
+    return text
+
+
+def _span(pair) -> str:
+    return f"{pair[0]}-{pair[1]}"

@@ -1,0 +1,293 @@
+"""The run-time rule, sample by sample: the reference interpreter every export agrees with."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from groupfit.errors import InputError
+from groupfit.model import ModelFile
+from groupfit.runtime.rule import (
+    COUNT_MAX,
+    FAULT_HELD,
+    FAULT_SENSOR,
+    RETURN_SENSOR_FAULT,
+    SWITCH_CRITERION,
+    SWITCH_FORCED,
+    SWITCH_NONE,
+)
+from groupfit.runtime.tables import RuleTables
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """What the rule decides for one sample.
+
+    Attributes
+    ----------
+    group : int
+        1-based group serving this sample (tracked through faults too).
+    prediction_um : float
+        Predicted thermal error (0 under a sensor fault).
+    compensation_um : float
+        Value for the controller: −prediction, clamped and rate-limited.
+    fault : int
+        Bit mask: :data:`FAULT_HELD` (1), :data:`FAULT_SENSOR` (2).
+    switched : int
+        0, or :data:`SWITCH_CRITERION` / :data:`SWITCH_FORCED` when the group
+        advanced at this sample.
+    """
+
+    group: int
+    prediction_um: float
+    compensation_um: float
+    fault: int
+    switched: int = SWITCH_NONE
+
+    @property
+    def code(self) -> int:
+        """What the exported step routines return: the group, or :data:`RETURN_SENSOR_FAULT`."""
+        return RETURN_SENSOR_FAULT if self.fault & FAULT_SENSOR else self.group
+
+
+@dataclass(frozen=True)
+class Replay:
+    """A run replayed sample by sample (arrays of length N)."""
+
+    group: np.ndarray
+    prediction_um: np.ndarray
+    compensation_um: np.ndarray
+    fault: np.ndarray
+    switched: np.ndarray
+
+    def switch_samples(self) -> list[dict[str, int | bool]]:
+        """Every switch: 1-based sample, groups before and after, whether it was forced."""
+        out = []
+        for i in np.flatnonzero(self.switched):
+            out.append(
+                {
+                    "i": int(i) + 1,
+                    "from": int(self.group[i]) - 1,
+                    "to": int(self.group[i]),
+                    "forced": bool(self.switched[i] == SWITCH_FORCED),
+                }
+            )
+        return out
+
+
+class SwitchingRule:
+    """The run-time rule: one call of :meth:`step` per sample.
+
+    Parameters
+    ----------
+    model : ModelFile or model file object
+    precision : {"double", "single"}
+        Double, or IEEE single precision computed operation for operation as
+        the C build with ``GF_USE_FLOAT`` and a PLC's REAL compute it.
+    period_s : float, optional
+        The live run's sampling period; refused (InputError) when it differs
+        from the model's by more than ``period_tolerance``.
+    """
+
+    def __init__(
+        self, model: ModelFile | Mapping[str, Any], *, precision: str = "double", period_s: float | None = None
+    ):
+        if precision not in ("double", "single"):
+            raise ValueError(f"precision must be 'double' or 'single', got {precision!r}")
+        self.tables = RuleTables.from_model(model)
+        self.precision = precision
+        if period_s is not None:
+            check_period(self.tables, period_s)
+        real = np.float32 if precision == "single" else float
+        t = self.tables
+        self._real = real
+        self._coef = [[real(v) for v in row] for row in t.coefficients]
+        self._threshold = [real(v) for v in t.thresholds_c]
+        self._margin = real(t.margin_c)
+        self._comp_min = real(t.comp_min_um)
+        self._comp_max = real(t.comp_max_um)
+        self._rate = real(t.rate_limit_um)
+        self._zero = real(0.0)
+        self._lp_a = [real(d.a) for d in t.derived]
+        self._lp_b = [real(d.b) for d in t.derived]
+        self._scale = [real(d.scale) for d in t.derived]
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the first sample: group 1, no good readings yet, derived inputs not started, compensation 0."""
+        t = self.tables
+        self.count = 0
+        self.group = 1
+        self.bad = [t.hold_samples + 1] * t.n_temps
+        self.last = [self._zero] * t.n_temps
+        self.compensation = self._zero
+        self.started = [False] * len(t.derived)
+        self.memory = [self._zero] * len(t.derived)
+        self.derived = [self._zero] * len(t.derived)
+        self.lines = [[self._zero] * d.delay_samples for d in t.derived]
+        self.positions = [0] * len(t.derived)
+
+    def step(self, readings: Sequence[float]) -> StepResult:
+        """Process one sample of readings (the model's measured inputs, then the sources, see :attr:`tables`)."""
+        t = self.tables
+        if len(readings) != t.n_temps:
+            raise InputError(f"{len(readings)} readings given; the model takes {t.n_temps} ({', '.join(t.raw_names)})")
+        if self.count < COUNT_MAX:
+            self.count += 1
+        held = faulted = False
+        for m in range(t.n_temps):
+            reading = float(readings[m])
+            if reading >= t.valid_min[m] and reading <= t.valid_max[m]:
+                self.last[m] = self._real(reading)
+                self.bad[m] = 0
+            elif self.bad[m] <= t.hold_samples:
+                self.bad[m] += 1
+            if self.bad[m] > t.hold_samples:
+                faulted = True
+            elif self.bad[m] > 0:
+                held = True
+        for k in range(len(t.derived)):
+            self._derive(k)
+
+        switched = SWITCH_NONE
+        if self.group < t.n_groups:
+            w = self.group - 1
+            if self.count >= t.window_last[w]:
+                self.group += 1
+                switched = SWITCH_FORCED
+            elif self.count >= t.window_first[w] and self._criterion_passes(w):
+                self.group += 1
+                switched = SWITCH_CRITERION
+
+        if faulted:
+            prediction = self._zero
+            target = self._zero
+        else:
+            row = self._coef[self.group - 1]
+            prediction = row[0]
+            for j in range(t.n_inputs):
+                r = t.input_reading[j]
+                value = self.last[r] if r >= 0 else self.derived[t.input_derived[j]]
+                prediction = prediction + row[j + 1] * value
+            target = -prediction
+        if target > self._comp_max:
+            target = self._comp_max
+        if target < self._comp_min:
+            target = self._comp_min
+        delta = target - self.compensation
+        if delta > self._rate:
+            delta = self._rate
+        if delta < -self._rate:
+            delta = -self._rate
+        self.compensation = self.compensation + delta
+        fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0)
+        return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
+
+    def _derive(self, k: int) -> None:
+        """Advance derived input ``k`` by one sample from its source's last good value."""
+        d = self.tables.derived[k]
+        x = self.last[d.reading]
+        if d.transform == "identity":
+            self.derived[k] = x
+            return
+        if not self.started[k] and self.bad[d.reading] == 0:
+            self.started[k] = True
+            if d.transform == "delay":
+                self.lines[k] = [x] * d.delay_samples
+                self.positions[k] = 0
+            else:
+                self.memory[k] = x
+        if not self.started[k]:
+            return
+        if d.transform == "lowpass":
+            self.memory[k] = self._lp_b[k] * x + self._lp_a[k] * self.memory[k]
+            self.derived[k] = self.memory[k]
+        elif d.transform == "derivative":
+            self.derived[k] = (x - self.memory[k]) * self._scale[k]
+            self.memory[k] = x
+        else:
+            line, position = self.lines[k], self.positions[k]
+            self.derived[k] = line[position]
+            line[position] = x
+            position += 1
+            if position >= d.delay_samples:
+                position = 0
+            self.positions[k] = position
+
+    def input_values(self) -> list[float]:
+        """The model's inputs at the last sample: held readings and derived inputs."""
+        t = self.tables
+        return [
+            float(self.last[r] if r >= 0 else self.derived[t.input_derived[j]]) for j, r in enumerate(t.input_reading)
+        ]
+
+    def _criterion_passes(self, w: int) -> bool:
+        t = self.tables
+        c = t.criterion_reading
+        direction = t.directions[w]
+        if self.bad[c] > t.hold_samples or direction == 0:
+            return True
+        difference = self.last[c] - self._threshold[w]
+        if direction > 0:
+            return bool(difference >= -self._margin)
+        return bool(difference <= self._margin)
+
+    def replay(self, readings) -> Replay:
+        """Reset, then step through every row of an (N, k) array of readings."""
+        readings = np.asarray(readings, dtype=float)
+        if readings.ndim != 2 or readings.shape[1] != self.tables.n_temps:
+            raise InputError(
+                f"readings of shape {readings.shape}: the model takes {self.tables.n_temps} columns "
+                f"({', '.join(self.tables.raw_names)})"
+            )
+        self.reset()
+        n_samples = len(readings)
+        group = np.empty(n_samples, dtype=int)
+        fault = np.empty(n_samples, dtype=int)
+        switched = np.empty(n_samples, dtype=int)
+        prediction = np.empty(n_samples)
+        compensation = np.empty(n_samples)
+        for i, row in enumerate(readings.tolist()):
+            result = self.step(row)
+            group[i], fault[i], switched[i] = result.group, result.fault, result.switched
+            prediction[i], compensation[i] = result.prediction_um, result.compensation_um
+        return Replay(group, prediction, compensation, fault, switched)
+
+
+def replay_groups(model: ModelFile | Mapping[str, Any], inputs) -> np.ndarray:
+    """0-based group the run-time rule serves at each row of the model's inputs (double precision).
+
+    For comparisons that score a grouped model on another run through the
+    rule a controller would run, rather than by sample index. ``inputs`` is
+    the (N, M) matrix of the model's inputs, derived ones included (as
+    ModelFile.inputs computes them). The group
+    depends only on the sample count and the criterion, a measured input, so
+    the rule is replayed on the measured inputs, with every source column
+    that is not a model input held at a valid value.
+    """
+    rule = SwitchingRule(model)
+    t = rule.tables
+    inputs = np.asarray(inputs, dtype=float)
+    if not t.derived:
+        return rule.replay(inputs).group - 1
+    if inputs.ndim != 2 or inputs.shape[1] != t.n_inputs:
+        raise InputError(f"model inputs of shape {inputs.shape}: the model has {t.n_inputs} inputs")
+    readings = np.empty((len(inputs), t.n_temps))
+    for j, r in enumerate(t.input_reading):
+        if r >= 0:
+            readings[:, r] = inputs[:, j]
+    for r in range(t.n_measured, t.n_temps):
+        readings[:, r] = t.valid_min[r]
+    return rule.replay(readings).group - 1
+
+
+def check_period(tables: RuleTables, period_s: float) -> None:
+    """Refuse a live sampling period that differs from the model's."""
+    if not (abs(period_s - tables.sampling_period_s) <= tables.period_tolerance_s):
+        raise InputError(
+            f"sampling period {period_s:g} s differs from the model's {tables.sampling_period_s:g} s "
+            f"(tolerance {100 * tables.period_tolerance:g} %): the rule counts samples, so resample the run "
+            "to the model's period or fit a model at this period"
+        )

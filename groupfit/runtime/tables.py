@@ -1,0 +1,232 @@
+"""The run-time rule's tables: every number the rule uses, in the form every target embeds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from groupfit.errors import InputError
+from groupfit.model import ModelFile
+from groupfit.runtime.rule import DERIVATIVE_SCALE_S, LEGACY_SOURCE_RANGE, complete_rule_section
+
+
+@dataclass(frozen=True)
+class DerivedTable:
+    """One derived input as the run-time rule computes it.
+
+    Attributes
+    ----------
+    name, column, transform : str
+        As in the model file's ``derived_inputs`` (:class:`groupfit.features.Feature`).
+    reading : int
+        0-based index of the source column among the rule's readings.
+    input_index : int
+        0-based index of the derived input among the model's inputs.
+    tau_s : float or None
+        Low-pass time constant (s).
+    delay_samples : int
+        Length of a delay line (samples); 0 for the other transforms.
+    a, b : float
+        Low-pass coefficients ``a = e^{−Δt/τ}`` (computed as
+        :func:`groupfit.features.lowpass` does) and ``b = 1 − a``; 0 otherwise.
+    scale : float
+        Derivative factor ``3600/Δt`` (per hour); 0 otherwise.
+    """
+
+    name: str
+    column: str
+    transform: str
+    reading: int
+    input_index: int
+    tau_s: float | None
+    delay_samples: int
+    a: float
+    b: float
+    scale: float
+
+    def describe(self) -> str:
+        """Words for headers and sheets, ASCII only."""
+        if self.transform == "lowpass":
+            return f"low-pass of {self.column}, tau = {self.tau_s:g} s"
+        if self.transform == "derivative":
+            return f"time derivative of {self.column}, per hour"
+        if self.transform == "delay":
+            return f"{self.column} delayed by {self.delay_samples} sample(s)"
+        return f"{self.column} as read"
+
+
+@dataclass(frozen=True)
+class RuleTables:
+    """Every number the run-time rule uses, in the form every target embeds.
+
+    Built once from a model file object; the Python rule and every export
+    read these same tables.
+
+    The rule's *readings* (``raw_names``) are what a caller passes per
+    sample: the model's measured inputs in model order, then the source
+    columns of its derived inputs that are not among them. The model's
+    *inputs* (``input_names``, one coefficient each) are those readings and
+    the derived inputs computed from them.
+    """
+
+    raw_names: tuple[str, ...]
+    """The readings, in the order the rule takes them."""
+    input_names: tuple[str, ...]
+    """The model's inputs (``temps`` of the model file), in coefficient order."""
+    input_reading: tuple[int, ...]
+    """Per model input: the 0-based reading it is, or −1 for a derived input."""
+    input_derived: tuple[int, ...]
+    """Per model input: the 0-based derived input it is, or −1 for a measured one."""
+    derived: tuple[DerivedTable, ...]
+    criterion: str
+    criterion_index: int
+    """0-based model input of the criterion (always a measured input)."""
+    criterion_reading: int
+    """0-based reading of the criterion."""
+    sampling_period_s: float
+    period_tolerance: float
+    coefficients: np.ndarray = field(repr=False)
+    """(G, M+1): constant first, then one coefficient per model input."""
+    window_first: tuple[int, ...]
+    window_last: tuple[int, ...]
+    directions: tuple[int, ...]
+    thresholds_c: tuple[float, ...]
+    margin_c: float
+    hold_samples: int
+    valid_min: tuple[float, ...]
+    """Per reading: the smallest valid value (°C for temperatures, the column's unit for sources)."""
+    valid_max: tuple[float, ...]
+    valid_origin: tuple[str, ...]
+    """Per reading: where its range comes from: ``"temperature"``, ``"source"`` or ``"fallback"``."""
+    comp_min_um: float
+    comp_max_um: float
+    rate_limit_um: float
+    breaks: tuple[int, ...]
+    n: int
+    error_name: str | None
+
+    @classmethod
+    def from_model(cls, model: ModelFile | Mapping[str, Any]) -> "RuleTables":
+        model = ModelFile.coerce(model)
+        section = complete_rule_section(model)
+        coefficients = model.coefficient_matrix()
+        windows = section.windows
+        input_names = tuple(model.temps)
+        features = model.derived
+        measured = [name for name in input_names if name not in features]
+        raw = list(measured)
+        for name in input_names:
+            if name in features and features[name].column not in raw:
+                raw.append(features[name].column)
+        period = float(model.sampling_period_s)
+        derived = []
+        for name in input_names:
+            if name not in features:
+                continue
+            feature = features[name]
+            a = float(np.exp(-period / feature.tau_s)) if feature.transform == "lowpass" else 0.0
+            derived.append(
+                DerivedTable(
+                    name=name,
+                    column=feature.column,
+                    transform=feature.transform,
+                    reading=raw.index(feature.column),
+                    input_index=input_names.index(name),
+                    tau_s=float(feature.tau_s) if feature.transform == "lowpass" else None,
+                    delay_samples=int(feature.delay_samples) if feature.transform == "delay" else 0,
+                    a=a,
+                    b=float(1.0 - a) if feature.transform == "lowpass" else 0.0,
+                    scale=DERIVATIVE_SCALE_S / period if feature.transform == "derivative" else 0.0,
+                )
+            )
+        derived_index = {d.name: k for k, d in enumerate(derived)}
+        criterion_index = int(section.criterion_index)
+        if input_names[criterion_index] in features:
+            raise InputError(
+                f"the switching criterion '{input_names[criterion_index]}' is a derived input; "
+                "it must be a measured input"
+            )
+        ranges = section.source_ranges or {}
+        valid_min, valid_max, origin = [], [], []
+        for r, name in enumerate(raw):
+            if r < len(measured):
+                j = input_names.index(name)
+                low, high, where = section.temp_min_c[j], section.temp_max_c[j], "temperature"
+            elif name in ranges:
+                (low, high), where = ranges[name], "source"
+            else:
+                (low, high), where = LEGACY_SOURCE_RANGE, "fallback"
+            valid_min.append(float(low))
+            valid_max.append(float(high))
+            origin.append(where)
+        return cls(
+            raw_names=tuple(raw),
+            input_names=input_names,
+            input_reading=tuple(raw.index(n) if n not in features else -1 for n in input_names),
+            input_derived=tuple(derived_index.get(n, -1) for n in input_names),
+            derived=tuple(derived),
+            criterion=str(section.criterion),
+            criterion_index=criterion_index,
+            criterion_reading=raw.index(input_names[criterion_index]),
+            sampling_period_s=period,
+            period_tolerance=float(section.period_tolerance),
+            coefficients=coefficients,
+            window_first=tuple(int(w[0]) for w in windows),
+            window_last=tuple(int(w[1]) for w in windows),
+            directions=tuple(int(d) for d in section.directions),
+            thresholds_c=tuple(float(v) for v in section.thresholds_c),
+            margin_c=float(section.margin_c),
+            hold_samples=int(section.hold_samples),
+            valid_min=tuple(valid_min),
+            valid_max=tuple(valid_max),
+            valid_origin=tuple(origin),
+            comp_min_um=float(section.comp_min_um),
+            comp_max_um=float(section.comp_max_um),
+            rate_limit_um=float(section.rate_limit_um),
+            breaks=tuple(int(b) for b in model.breaks),
+            n=int(model.n),
+            error_name=model.error,
+        )
+
+    @property
+    def n_temps(self) -> int:
+        """Number of readings per sample (the C routine's ``GF_N_TEMPS``)."""
+        return len(self.raw_names)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of model inputs (coefficients per group besides the constant)."""
+        return len(self.input_names)
+
+    @property
+    def n_measured(self) -> int:
+        """Readings that are model inputs themselves; the sources follow them."""
+        return sum(1 for r in self.input_reading if r >= 0)
+
+    @property
+    def source_names(self) -> tuple[str, ...]:
+        """Readings that only feed derived inputs."""
+        return self.raw_names[self.n_measured :]
+
+    def uses_of(self, reading: int) -> list[str]:
+        """What a reading feeds: its own model input and/or the derived inputs computed from it."""
+        uses = []
+        if reading < self.n_measured:
+            uses.append(f"model input {self.input_reading.index(reading) + 1}")
+        uses.extend(f"source of derived input {d.name}" for d in self.derived if d.reading == reading)
+        return uses
+
+    @property
+    def n_groups(self) -> int:
+        return len(self.coefficients)
+
+    @property
+    def n_windows(self) -> int:
+        return len(self.window_first)
+
+    @property
+    def period_tolerance_s(self) -> float:
+        """Largest accepted difference between the live and the model's sampling period (s)."""
+        return self.period_tolerance * self.sampling_period_s
