@@ -20,8 +20,12 @@ def plot_fit(
     soft_groups: Sequence[Sequence[int]],
     path: str | Path,
     title: str = "",
+    break_intervals=None,
 ) -> None:
-    """Measured vs predicted error over time, hard and soft breaks marked, residual panel below."""
+    """Measured vs predicted error over time, hard and soft breaks marked, residual panel below.
+
+    ``break_intervals`` (BreakInterval objects) are drawn as shaded bands around their breaks.
+    """
     hours = np.asarray(time_s, dtype=float) / 3600.0
     residual = np.asarray(measured) - np.asarray(predicted)
     fig, (top, bottom) = plt.subplots(
@@ -42,6 +46,12 @@ def plot_fit(
                 lw=0.8,
                 ls=":",
                 label="soft break" if (k == 0 and axis is top) else None,
+            )
+    for k, interval in enumerate(i for i in (break_intervals or []) if i.lower is not None):
+        for axis in (top, bottom):
+            label = f"{100 * interval.level:g} % break interval ({interval.method})" if k == 0 and axis is top else None
+            axis.axvspan(
+                hours[interval.lower - 1], hours[interval.upper - 1], color="tab:blue", alpha=0.15, label=label
             )
     top.set_ylabel("thermal error (µm)")
     top.legend(loc="best", fontsize=8)

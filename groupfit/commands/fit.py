@@ -18,6 +18,7 @@ from groupfit.config import default_config_path, ga_settings, override
 from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.grouping import served_ranges
+from groupfit.inference.cli import add_interval_options, intervals_from_args
 from groupfit.modelfile import model_to_dict, save_model
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
@@ -41,6 +42,7 @@ def add_parser(verbs) -> None:
     fit.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     fit.add_argument("--out", metavar="DIR", help="folder for model.json and fit.png")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_interval_options(fit)
     fit.set_defaults(handler=run_fit)
 
 
@@ -77,6 +79,7 @@ def run_fit(args: argparse.Namespace) -> int:
     progress = StageProgress(enabled=not args.quiet)
     try:
         estimator.fit(run.temps, run.error, progress=progress)
+        intervals = intervals_from_args(args, estimator, run.temps, run.error, config["search"]["seed"], progress)
     finally:
         progress.close()
     model = model_to_dict(estimator, run, criterion)
@@ -95,12 +98,13 @@ def run_fit(args: argparse.Namespace) -> int:
         figure_path,
         title=f"{run.name}: grouped model, p = {len(estimator.breaks_)}, "
         f"{estimator.objective} Rg = {estimator.objective_value_:.4g}",
+        break_intervals=intervals.intervals,
     )
-    result = {**model, "search": estimator.search_}
+    result = {**model, "search": estimator.search_, "break_intervals": intervals.to_json()}
     if selection is not None:
         result["p_selection"] = selection
     write_json(args.json, result)
-    report = fit_report(estimator, run, model, [model_path, figure_path])
+    report = fit_report(estimator, run, model, [model_path, figure_path], intervals)
     if selection is not None:
         report = selection_summary(selection) + "\n" + report
     print(report, file=report_stream(args))
@@ -163,7 +167,7 @@ def estimator_from_config(config: dict) -> GroupedRegressor:
     )
 
 
-def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list[Path]) -> str:
+def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list[Path], intervals=None) -> str:
     """The human-readable table printed by ``groupfit fit``."""
     unit = "µm" if estimator.objective == "sae" else "µm²"
     search = estimator.search_
@@ -187,6 +191,10 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list
             + [f"{v:.5g}" for v in coefficients]
             + [f"{estimator.group_objective_[g]:.4f}"]
         )
+    if intervals is not None:
+        header.insert(2, f"break {100 * intervals.level:g} % CI")
+        for g, row in enumerate(rows):
+            row.insert(2, intervals.text_for(estimator.breaks_[g]) if g < len(estimator.breaks_) else "")
     widths = [max(len(r[i]) for r in [header] + rows) for i in range(len(header))]
     for row in [header] + rows:
         lines.append("  ".join(cell.rjust(width) for cell, width in zip(row, widths)))
@@ -196,6 +204,7 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list
         f"breaks  {estimator.breaks_}   Rg = {estimator.objective_value_:.6g} {unit}   "
         f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
         f"switch  criterion sensor {model['switching']['criterion']}",
+        *([f"breaks  {100 * intervals.level:g} % intervals: {intervals.detail}"] if intervals is not None else []),
         "wrote   " + ", ".join(str(p) for p in written),
     ]
     return "\n".join(lines)

@@ -222,6 +222,9 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
+        from groupfit.inference.prediction import group_interval_stats
+
+        self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept)
         return self
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
@@ -229,20 +232,30 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "breaks_")
         return serving_group_index(self.breaks_, self.n_samples_fit_, self.n, n_samples)
 
-    def predict(self, X) -> np.ndarray:
+    def predict(self, X, return_interval: bool = False, level: float | None = None, alpha: float | None = None):
         """Predict the error of a run sampled like the modelling run, by sample index.
 
         Row i of X is served by the group that serves sample i of the
         modelling run (rows past its end by the last group). The run-time
         switching logic, which decides from live temperatures, is
         :mod:`groupfit.switching`.
+
+        With ``return_interval=True`` returns ``(prediction, lower, upper)``:
+        the serving group's OLS prediction interval at ``level`` (default
+        0.95; or give ``alpha = 1 − level``), see
+        :mod:`groupfit.inference.prediction`.
         """
         check_is_fitted(self, "breaks_")
         X = check_array(X)
         if X.shape[1] != self.n_features_in_:
             raise InputError(f"X has {X.shape[1]} temperature columns; the model was fitted on {self.n_features_in_}")
         group = self.serving_groups(len(X))
-        return self.intercept_[group] + np.einsum("ij,ij->i", X, self.coef_[group])
+        prediction = self.intercept_[group] + np.einsum("ij,ij->i", X, self.coef_[group])
+        if not return_interval:
+            return prediction
+        from groupfit.inference.prediction import estimator_bounds
+
+        return (prediction, *estimator_bounds(self, X, group, prediction, level=level, alpha=alpha))
 
     def _check_parameters(self) -> None:
         if self.objective not in OBJECTIVES:
