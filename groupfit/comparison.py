@@ -51,6 +51,8 @@ class ComparisonSettings:
     p_target: str | float | None = "20%"
     ga: dict[str, Any] = field(default_factory=dict)
     """GroupedRegressor settings of the GA (population_size, max_generations, …)."""
+    intervals: dict[str, Any] = field(default_factory=dict)
+    """Break-interval options (:func:`groupfit.inference.break_intervals` keywords: method, level, …)."""
 
 
 @dataclass
@@ -66,6 +68,10 @@ class ComparisonResult:
     condition_changes: list[int]
     grouped_models: dict[int, dict[str, Any]] = field(default_factory=dict)
     validation_rule: str = "sample index"
+    break_intervals: dict[int, Any] = field(default_factory=dict)
+    """Per p, a :class:`groupfit.inference.BreakIntervalReport` of the grouped model's breaks."""
+    bands: dict[str, dict[str, tuple]] = field(default_factory=dict)
+    """Per run and model key, the (lower, upper) prediction band of MLR and grouped models."""
 
 
 def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
@@ -183,6 +189,15 @@ def compare_models(
         if progress is not None:
             progress("grouped", p / pmax)
     model_dicts = {p: model_to_dict(model, modelling) for p, model in grouped.items()}
+    from groupfit.inference import break_intervals
+    from groupfit.inference.cli import AUTO_BUDGET_S
+    from groupfit.inference.prediction import band_for
+
+    intervals = {
+        p: break_intervals(model, X, y, seed=settings.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)
+        for p, model in grouped.items()
+    }
+    bands: dict[str, dict[str, tuple]] = {}
 
     changes = condition_changes(modelling, settings.conditions)
     rows: list[dict[str, Any]] = []
@@ -198,12 +213,15 @@ def compare_models(
                 _column(modelling, sensor), modelling.period, settings.rise_window_s
             )
         preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=run.error[0], rise_ratio=rise_ratio)
+        bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
         for p, model in grouped.items():
+            groups = None
             if is_modelling or live_rule is None:
                 preds[f"grouped{p}"] = model.predict(run.temps)
             else:
                 groups = live_rule(model_dicts[p], run.temps)
                 preds[f"grouped{p}"] = model.intercept_[groups] + np.einsum("ij,ij->i", run.temps, model.coef_[groups])
+            bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
         predictions[run.name] = preds
         for key, prediction in preds.items():
             metrics = error_metrics(run.error - prediction)
@@ -247,6 +265,8 @@ def compare_models(
         condition_changes=changes,
         grouped_models=model_dicts,
         validation_rule="run-time switching" if live_rule is not None else "sample index",
+        break_intervals=intervals,
+        bands=bands,
     )
 
 

@@ -15,7 +15,7 @@ from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
 from groupfit.inference import break_intervals
-from groupfit.inference.bootstrap import basic_intervals, block_resample, bootstrap_break_intervals
+from groupfit.inference.bootstrap import block_resample, bootstrap_break_intervals, percentile_intervals
 from groupfit.inference.break_intervals import argmax_cdf, argmax_quantile, bai_intervals
 from groupfit.models import GroupedRegressor
 from groupfit.objective import SegmentCost
@@ -116,12 +116,16 @@ def test_bootstrap_is_deterministic_and_contains_the_estimate():
     assert not np.array_equal(first.replicates, other.replicates)
 
 
-def test_basic_interval_reflects_the_shifts_and_keeps_the_estimate():
+def test_percentile_interval_takes_outer_order_statistics_and_keeps_the_estimate():
     replicates = np.array([[50]] * 10 + [[52]] * 80 + [[56]] * 10)
-    (interval,) = basic_intervals([52], replicates, 0.7, 100)
+    (interval,) = percentile_intervals([52], replicates, 0.7, 100)
     assert (interval.lower, interval.upper) == (52, 52)
-    (interval,) = basic_intervals([52], replicates, 0.9, 100)
-    assert (interval.lower, interval.upper) == (48, 54)  # b̂ − 4 … b̂ + 2: the shifts mirrored
+    (interval,) = percentile_intervals([52], replicates, 0.9, 100)
+    assert (interval.lower, interval.upper) == (50, 56)
+    (interval,) = percentile_intervals([49], replicates, 0.7, 100)  # widened to hold the estimate
+    assert (interval.lower, interval.upper) == (49, 52)
+    (interval,) = percentile_intervals([3], np.array([[1], [2], [99]]), 0.99, 100)
+    assert (interval.lower, interval.upper) == (1, 99)
 
 
 def test_block_resample_keeps_blocks_of_consecutive_residuals():

@@ -17,6 +17,7 @@ from groupfit.commands.common import (
 from groupfit.comparison import ComparisonResult, ComparisonSettings, compare_models
 from groupfit.config import default_config_path, ga_settings, override
 from groupfit.errors import InputError
+from groupfit.inference.cli import add_interval_options, interval_notes, interval_settings
 
 MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
 
@@ -33,6 +34,7 @@ def add_parser(verbs) -> None:
     compare.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     compare.add_argument("--out", metavar="DIR", help="folder for the figures")
     compare.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_interval_options(compare)
     compare.set_defaults(handler=run_compare)
 
 
@@ -65,6 +67,7 @@ def run_compare(args: argparse.Namespace) -> int:
     override(config, "search", "seed", args.seed)
     override(config, "output", "dir", args.out)
     settings = settings_from_config(config)
+    settings.intervals = interval_settings(args)
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
@@ -83,7 +86,14 @@ def run_compare(args: argparse.Namespace) -> int:
     for run in [modelling, *validation]:
         figure = out_dir / f"compare_{run.name}.png"
         role = "modelling run" if run is modelling else f"validation run, grouped by {result.validation_rule}"
-        plot_run_comparison(run.time, run.error, result.predictions[run.name], figure, f"{run.name} ({role})")
+        plot_run_comparison(
+            run.time,
+            run.error,
+            result.predictions[run.name],
+            figure,
+            f"{run.name} ({role})",
+            bands=result.bands[run.name],
+        )
         written.append(figure)
     figure = out_dir / "R_against_p.png"
     plot_r_against_p(result.path["R"], result.rows, result.runs, figure)
@@ -114,6 +124,7 @@ def result_json(result: ComparisonResult) -> dict[str, Any]:
         "mlr_statistics": result.mlr_statistics,
         "ar1": result.ar1,
         "validation_grouping": result.validation_rule,
+        "break_intervals": {str(p): report.to_json() for p, report in result.break_intervals.items()},
     }
 
 
@@ -145,8 +156,11 @@ def compare_report(result: ComparisonResult, written) -> str:
     ]
     for key in keys[2:]:
         r = index[(key, modelling)]
-        pairs = ", ".join(f"{b} ({d})" for b, d in zip(r["breaks"], r["break_distance"]))
+        report = result.break_intervals.get(r["p"])
+        cis = [f" {report.text_for(b)}" if report is not None and report.intervals else "" for b in r["breaks"]]
+        pairs = ", ".join(f"{b}{ci} ({d})" for b, ci, d in zip(r["breaks"], cis, r["break_distance"]))
         lines.append(f"  p = {r['p']}: {pairs}")
+    lines += interval_notes(result.break_intervals)
     stability = ", ".join(f"p {s['from_p']}→{s['to_p']}: {s['max_shift']}" for s in result.break_stability)
     lines.append(f"break stability (largest move of an existing break when p grows, samples): {stability or '-'}")
     bic, target = result.selection["bic"], result.selection["target"]

@@ -36,13 +36,25 @@ class BreakIntervalReport:
     method : str
         ``"bai"``, ``"bootstrap"`` or ``"none"``.
     detail : str
-        One line for the printed report (variant, replicates, or why none).
+        How they were obtained (variant, replicates), or why there are none.
+    level : float
+    seconds : float or None
+        Time the bootstrap took, or would have taken when it was skipped.
     """
 
     intervals: list[BreakInterval] = field(default_factory=list)
     method: str = "none"
     detail: str = ""
     level: float = 0.95
+    seconds: float | None = None
+
+    def summary(self) -> str:
+        """One line for a printed report."""
+        if self.seconds is None:
+            return self.detail
+        if not self.intervals:
+            return f"{self.detail} (it would take about {self.seconds:.0f} s)"
+        return f"{self.detail}, {self.seconds:.1f} s"
 
     def to_json(self) -> list[dict]:
         return [interval.to_dict() for interval in self.intervals]
@@ -143,16 +155,17 @@ def break_intervals(
         )
     except BootstrapTooSlow as slow:
         return BreakIntervalReport(
-            detail=f"not computed: the bootstrap ({n_boot} refits) would take about {slow.projected_s:.0f} s; "
-            "ask for it with --intervals bootstrap (or use --objective sse --n 0 for Bai's intervals)",
+            detail=f"not computed: ask for the bootstrap ({n_boot} refits) with --intervals bootstrap; "
+            "Bai's intervals need the sse objective and n = 0",
             level=level,
+            seconds=slow.projected_s,
         )
     seconds = time.perf_counter() - started
     detail = (
         f"residual block bootstrap, {n_boot} refits ({result.search} search), blocks of {result.block} samples, "
-        f"seed {seed}, {seconds:.1f} s"
+        f"seed {seed}"
     )
-    return BreakIntervalReport(result.intervals, "bootstrap", detail, level)
+    return BreakIntervalReport(result.intervals, "bootstrap", detail, level, seconds)
 
 
 def _clip(interval: BreakInterval, n_samples: int) -> BreakInterval:

@@ -15,10 +15,20 @@ break estimates is approximated by resampling:
    the exact dynamic programme where it is cheap (the limits of
    :data:`groupfit.models.grouped.CERTIFY_PAIR_LIMIT`), the genetic algorithm
    otherwise;
-4. the interval of break j is the basic bootstrap interval
-   ``[b̂ − q_{1−α/2}, b̂ − q_{α/2}]`` of the shifts d* = b̂*_j − b̂_j (the
-   bootstrap's image of b̂ − b₀, as Bai's interval is built from the law of
-   b̂ − b₀), widened when needed so that it contains b̂ and clipped to 1…N−1.
+4. the interval of break j is the percentile interval
+   ``[q_{α/2}, q_{1−α/2}]`` of the replicates b̂*_j (lower and upper order
+   statistics, so it never shrinks below the sample's quantiles), widened
+   when needed so that it contains b̂, within 1…N−1.
+
+Why the percentile and not the basic interval ``[b̂ − q_{1−α/2}(d*),
+b̂ − q_{α/2}(d*)]`` of the shifts d* = b̂* − b̂: with a fixed break size the
+estimate stays O(1) samples from the truth, and where it lands depends on the
+regressors around the break (a stretch where the change of coefficients
+hardly shows in x·δ leaves the criterion flat). The bootstrap keeps those
+regressors, so its replicates spread over the same flat stretch — towards the
+true break; mirroring them (basic interval) points the wrong way. On the
+synthetic benchmark (``bench/bench_break_intervals.py``) the basic interval
+covered 86–88 % and the percentile interval 95–97 % at the 95 % level.
 
 Everything is seeded (numpy's PCG64 for the draws, the GA from the same
 seed sequence), so a run is reproducible.
@@ -185,20 +195,21 @@ def bootstrap_break_intervals(
     finally:
         if bar is not None:
             bar.close()
-    intervals = basic_intervals(breaks, replicates, level, n_samples)
+    intervals = percentile_intervals(breaks, replicates, level, n_samples)
     return BootstrapResult(intervals, replicates, search, block, seed)
 
 
-def basic_intervals(breaks: Sequence[int], replicates: np.ndarray, level: float, n_samples: int) -> list[BreakInterval]:
-    """Basic bootstrap intervals ``[b̂ − q_{1−α/2}(d*), b̂ − q_{α/2}(d*)]``, containing b̂, within 1…N−1."""
+def percentile_intervals(
+    breaks: Sequence[int], replicates: np.ndarray, level: float, n_samples: int
+) -> list[BreakInterval]:
+    """Percentile intervals ``[q_{α/2}, q_{1−α/2}]`` of the replicates, containing b̂, within 1…N−1."""
     a2 = (1.0 - level) / 2.0
     result = []
     for j, brk in enumerate(breaks):
-        shifts = replicates[:, j] - brk
-        low_shift = float(np.quantile(shifts, a2, method="lower"))
-        high_shift = float(np.quantile(shifts, 1.0 - a2, method="higher"))
-        lower = max(1, min(brk, int(brk - high_shift)))
-        upper = min(n_samples - 1, max(brk, int(brk - low_shift)))
+        low = int(np.quantile(replicates[:, j], a2, method="lower"))
+        high = int(np.quantile(replicates[:, j], 1.0 - a2, method="higher"))
+        lower = max(1, min(int(brk), low))
+        upper = min(n_samples - 1, max(int(brk), high))
         result.append(BreakInterval(int(brk), lower, upper, level, "bootstrap"))
     return result
 

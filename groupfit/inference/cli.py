@@ -44,3 +44,33 @@ def intervals_from_args(args: argparse.Namespace, estimator, X, y, seed, progres
         budget_s=AUTO_BUDGET_S,
         progress=progress if progress is not None else False,
     )
+
+
+def interval_settings(args: argparse.Namespace) -> dict:
+    """The options as :func:`groupfit.inference.break_intervals` keywords (``compare``)."""
+    return {
+        "method": args.intervals,
+        "level": args.level,
+        "het": not args.homoskedastic,
+        "n_boot": args.bootstrap,
+        "block": args.block,
+    }
+
+
+def interval_notes(reports: dict) -> list[str]:
+    """One line per distinct way the break intervals of ``compare`` were obtained (or not)."""
+    groups: dict[str, list] = {}
+    for p, report in reports.items():
+        groups.setdefault(f"{100 * report.level:g} % break intervals: {report.detail}", []).append((p, report))
+    lines = []
+    for text, members in groups.items():
+        ps = ", ".join(str(p) for p, _ in members)
+        seconds = [r.seconds for _, r in members if r.seconds is not None]
+        if seconds and not members[0][1].intervals:
+            text += f" (p = {ps}; they would take about {sum(seconds):.0f} s)"
+        elif seconds:
+            text += f" (p = {ps}; {sum(seconds):.1f} s)"
+        else:
+            text += f" (p = {ps})"
+        lines.append(text)
+    return lines

@@ -135,3 +135,12 @@ def estimator_bounds(estimator, X, groups, prediction, level=None, alpha=None) -
             "refit it on its modelling run to get intervals"
         )
     return prediction_bounds(interval_stats, X, groups, prediction, resolve_level(level, alpha))
+
+
+def band_for(estimator, X, prediction, groups=None, level: float = 0.95) -> tuple[np.ndarray, np.ndarray] | None:
+    """Prediction band of a run served by ``groups`` (default: by sample index); None without statistics."""
+    if getattr(estimator, "interval_stats_", None) is None:
+        return None
+    if groups is None:
+        groups = estimator.serving_groups(len(np.asarray(X)))
+    return prediction_bounds(estimator.interval_stats_, X, groups, prediction, level)
