@@ -163,3 +163,23 @@ def test_fit_bootstrap_option(tmp_path, capsys):
     result = json.loads(printed[: printed.rindex("}") + 1])
     (interval,) = result["break_intervals"]
     assert interval["method"] == "bootstrap" and interval["lower"] <= interval["break"] <= interval["upper"]
+
+
+def test_rule_of_thumb_flags_overlapping_and_wide_intervals():
+    from groupfit.inference import weak_breaks
+    from groupfit.inference.break_intervals import BreakInterval
+
+    frame, y = example("nile")
+    rows = [r for r in EXAMPLES["nile"]["intervals"] if r["m"] == 4 and r["het"]]
+    intervals = bai_intervals(frame.to_numpy(), y, [r["break"] for r in rows])
+    weak = weak_breaks(intervals, len(y))
+    assert 28 not in weak  # the Aswan dam: [25, 31], clear of everything
+    # 45 [4, 121] and 68 [43, 107] overlap narrower neighbours; 83 [58, 95] spans more than its 15- and 17-year groups
+    assert set(weak) == {45, 68, 83} and "overlaps" in weak[45] and "overlaps" in weak[68] and "spans" in weak[83]
+    rows = [r for r in EXAMPLES["nile"]["intervals"] if r["m"] == 2 and r["het"]]
+    two = bai_intervals(frame.to_numpy(), y, [r["break"] for r in rows])
+    assert list(weak_breaks(two, len(y))) == [83]  # [33, 130] over a last group of 17 years
+    lone = [BreakInterval(50, 30, 70, 0.95, "bai")]
+    assert "spans" in weak_breaks(lone, 100)[50]
+    assert weak_breaks([BreakInterval(50, 45, 55, 0.95, "bai")], 100) == {}
+    assert weak_breaks([BreakInterval(50, None, None, 0.95, "bai")], 100) == {}

@@ -204,7 +204,11 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: dict, written: list
         f"breaks  {estimator.breaks_}   Rg = {estimator.objective_value_:.6g} {unit}   "
         f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
         f"switch  criterion sensor {model['switching']['criterion']}",
-        *([f"breaks  {100 * intervals.level:g} % intervals: {intervals.summary()}"] if intervals is not None else []),
+        *(
+            [f"breaks  {100 * intervals.level:g} % intervals: {intervals.summary(run.n_samples)}"]
+            if intervals is not None
+            else []
+        ),
         "wrote   " + ", ".join(str(p) for p in written),
     ]
     return "\n".join(lines)

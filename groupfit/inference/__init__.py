@@ -48,13 +48,19 @@ class BreakIntervalReport:
     level: float = 0.95
     seconds: float | None = None
 
-    def summary(self) -> str:
-        """One line for a printed report."""
+    def summary(self, n_samples: int | None = None) -> str:
+        """One line for a printed report; with ``n_samples``, the breaks :func:`weak_breaks` flags."""
         if self.seconds is None:
-            return self.detail
-        if not self.intervals:
-            return f"{self.detail} (it would take about {self.seconds:.0f} s)"
-        return f"{self.detail}, {self.seconds:.1f} s"
+            text = self.detail
+        elif not self.intervals:
+            text = f"{self.detail} (it would take about {self.seconds:.0f} s)"
+        else:
+            text = f"{self.detail}, {self.seconds:.1f} s"
+        if n_samples is not None:
+            weak = weak_breaks(self.intervals, n_samples)
+            if weak:
+                text += "; weak: " + "; ".join(f"break {b} ({why})" for b, why in weak.items())
+        return text
 
     def to_json(self) -> list[dict]:
         return [interval.to_dict() for interval in self.intervals]
@@ -168,6 +174,36 @@ def break_intervals(
     return BreakIntervalReport(result.intervals, "bootstrap", detail, level, seconds)
 
 
+def weak_breaks(intervals: list[BreakInterval], n_samples: int, share: float = 0.5) -> dict[int, str]:
+    """Breaks the rule of thumb of ``docs/intervals.md`` calls not worth keeping, with the reason.
+
+    * When the intervals of two neighbouring breaks overlap, the data cannot
+      tell the two apart: the break with the wider interval is flagged.
+    * A break whose interval spans more than ``share`` of the shorter of the
+      two hard groups it separates is hardly placed by the data.
+
+    Breaks without an interval are not judged.
+    """
+    edges = [0, *(i.brk for i in intervals), n_samples]
+    weak: dict[int, str] = {}
+
+    def width(interval: BreakInterval) -> int:
+        return interval.upper - interval.lower + 1
+
+    for left, right in zip(intervals[:-1], intervals[1:]):
+        if left.lower is None or right.lower is None or left.upper < right.lower:
+            continue
+        wider, other = (left, right) if width(left) >= width(right) else (right, left)
+        weak.setdefault(wider.brk, f"its interval overlaps that of break {other.brk}, which is narrower")
+    for j, interval in enumerate(intervals):
+        if interval.lower is None or interval.brk in weak:
+            continue
+        shorter = min(edges[j + 1] - edges[j], edges[j + 2] - edges[j + 1])
+        if width(interval) > share * shorter:
+            weak[interval.brk] = f"its interval spans more than {share:.0%} of the shorter group beside it"
+    return dict(sorted(weak.items()))
+
+
 def _clip(interval: BreakInterval, n_samples: int) -> BreakInterval:
     if interval.lower is None:
         return interval
@@ -176,4 +212,4 @@ def _clip(interval: BreakInterval, n_samples: int) -> BreakInterval:
     return BreakInterval(interval.brk, lower, upper, interval.level, interval.method)
 
 
-__all__ = ["BreakInterval", "BreakIntervalReport", "bai_intervals", "break_intervals", "bai_applies"]
+__all__ = ["BreakInterval", "BreakIntervalReport", "bai_intervals", "break_intervals", "bai_applies", "weak_breaks"]
