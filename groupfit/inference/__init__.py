@@ -122,6 +122,10 @@ def break_intervals(
         raise InputError(f"interval method {method!r}: choose one of {', '.join(METHODS)}")
     if not 0.0 < level < 1.0:
         raise InputError(f"level = {level:g} must lie strictly between 0 and 1")
+    if n_boot < 1:
+        raise InputError(f"--bootstrap {n_boot}: the bootstrap needs at least 1 refit")
+    if block is not None and block < 1:
+        raise InputError(f"--block {block}: bootstrap blocks hold at least 1 sample")
     breaks = list(estimator.breaks_)
     if method == "none" or not breaks:
         return BreakIntervalReport(detail="not computed" if method == "none" else "no breaks", level=level)
