@@ -183,3 +183,25 @@ def test_rule_of_thumb_flags_overlapping_and_wide_intervals():
     assert "spans" in weak_breaks(lone, 100)[50]
     assert weak_breaks([BreakInterval(50, 45, 55, 0.95, "bai")], 100) == {}
     assert weak_breaks([BreakInterval(50, None, None, 0.95, "bai")], 100) == {}
+
+
+def test_compare_prints_intervals_next_to_the_breaks_and_writes_bands(tmp_path, capsys):
+    """compare with the sse objective and n = 0: Bai's intervals for every p, bands in the figures."""
+    config = (ROOT / "configs" / "default.toml").read_text()
+    config = config.replace('"../datasets/', f'"{ROOT.as_posix()}/datasets/')
+    config = config.replace("n = 3\n", "n = 0\n").replace('objective = "sae"', 'objective = "sse"')
+    path = tmp_path / "sse0.toml"
+    path.write_text(config)
+    out = tmp_path / "out"
+    assert main(["compare", str(path), "--pmax", "2", "--quiet", "--out", str(out), "--json", str(out / "c.json")]) == 0
+    report = capsys.readouterr().out
+    result = json.loads((out / "c.json").read_text())
+    assert set(result["break_intervals"]) == {"1", "2"}
+    for p, intervals in result["break_intervals"].items():
+        row = next(r for r in result["rows"] if r["model"] == "grouped" and r["p"] == int(p))
+        assert [i["break"] for i in intervals] == row["breaks"]
+        assert all(i["method"] == "bai" for i in intervals)
+        first = intervals[0]
+        assert f"{first['break']} [{first['lower']}, {first['upper']}]" in report
+    assert "break intervals: Bai (1997)" in report
+    assert (out / "compare_paper_cycle.png").stat().st_size > 10_000
