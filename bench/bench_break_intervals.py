@@ -15,7 +15,7 @@ a model with soft offset n switches service at b − n, so its true hard break
 is b0 = s0 + n (the script also reports coverage of s0 and the mean shift
 b̂ − s0, to show that).
 
-    python bench/bench_break_intervals.py                 # 200 replications, B = 199 (a few minutes)
+    python bench/bench_break_intervals.py                 # 200 replications, B = 199 (about 10 minutes)
     python bench/bench_break_intervals.py --reps 20 --boot 99   # quick look
 """
 
