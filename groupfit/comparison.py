@@ -54,6 +54,8 @@ class ComparisonSettings:
     p_target: str | float | None = "20%"
     search: SearchSettings = SearchSettings()
     """Seed and GA settings of the grouped models (always the GA, never certified one by one)."""
+    intervals: dict[str, Any] = field(default_factory=dict)
+    """Break-interval options (:func:`groupfit.inference.break_intervals` keywords: method, level, …)."""
 
     @classmethod
     def from_config(cls, config: dict) -> "ComparisonSettings":
@@ -91,6 +93,10 @@ class ComparisonResult:
     condition_changes: list[int]
     grouped_models: dict[int, ModelFile] = field(default_factory=dict)
     validation_rule: str = "sample index"
+    break_intervals: dict[int, Any] = field(default_factory=dict)
+    """Per p, a :class:`groupfit.inference.BreakIntervalReport` of the grouped model's breaks."""
+    bands: dict[str, dict[str, tuple]] = field(default_factory=dict)
+    """Per run and model key, the (lower, upper) prediction band of MLR and grouped models."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -104,6 +110,7 @@ class ComparisonResult:
             "mlr_statistics": self.mlr_statistics,
             "ar1": self.ar1,
             "validation_grouping": self.validation_rule,
+            "break_intervals": {str(p): report.to_json() for p, report in self.break_intervals.items()},
         }
 
     def summary(self) -> str:
@@ -225,6 +232,15 @@ def compare_models(
         if progress is not None:
             progress("grouped", p / pmax)
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
+    from groupfit.inference import break_intervals
+    from groupfit.inference.cli import AUTO_BUDGET_S
+    from groupfit.inference.prediction import band_for
+
+    intervals = {
+        p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)
+        for p, model in grouped.items()
+    }
+    bands: dict[str, dict[str, tuple]] = {}
 
     changes = condition_changes(modelling, settings.conditions)
     rows: list[dict[str, Any]] = []
@@ -240,12 +256,15 @@ def compare_models(
                 _column(modelling, sensor), modelling.period, settings.rise_window_s
             )
         preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=run.error[0], rise_ratio=rise_ratio)
+        bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
         for p, model in grouped.items():
+            groups = None
             if is_modelling or live_rule is None:
                 preds[f"grouped{p}"] = model.predict(run.temps)
             else:
                 groups = live_rule(model_files[p], run.temps)
                 preds[f"grouped{p}"] = grouped_prediction(model.intercept_, model.coef_, run.temps, groups)
+            bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
         predictions[run.name] = preds
         for key, prediction in preds.items():
             metrics = error_metrics(run.error - prediction)
@@ -289,6 +308,8 @@ def compare_models(
         condition_changes=changes,
         grouped_models=model_files,
         validation_rule="run-time switching" if live_rule is not None else "sample index",
+        break_intervals=intervals,
+        bands=bands,
     )
 
 
@@ -326,8 +347,13 @@ def comparison_summary(result: ComparisonResult) -> str:
     ]
     for key in keys[2:]:
         r = index[(key, modelling)]
-        pairs = ", ".join(f"{b} ({d})" for b, d in zip(r["breaks"], r["break_distance"]))
+        report = result.break_intervals.get(r["p"])
+        cis = [f" {report.text_for(b)}" if report is not None and report.intervals else "" for b in r["breaks"]]
+        pairs = ", ".join(f"{b}{ci} ({d})" for b, ci, d in zip(r["breaks"], cis, r["break_distance"]))
         lines.append(f"  p = {r['p']}: {pairs}")
+    from groupfit.inference.cli import interval_notes
+
+    lines += interval_notes(result.break_intervals)
     stability = ", ".join(f"p {s['from_p']}→{s['to_p']}: {s['max_shift']}" for s in result.break_stability)
     lines.append(f"break stability (largest move of an existing break when p grows, samples): {stability or '-'}")
     bic, target = result.selection["bic"], result.selection["target"]

@@ -24,10 +24,14 @@ class FitResult:
     model: ModelFile
     selection: dict[str, Any] | None = None
     input_selection: dict[str, Any] | None = None
+    intervals: Any = None
+    """The breaks' confidence intervals (a :class:`groupfit.inference.BreakIntervalReport`), when computed."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
         result = {**self.model.to_dict(), "search": self.estimator.search_}
+        if self.intervals is not None:
+            result["break_intervals"] = self.intervals.to_json()
         if self.selection is not None:
             result["p_selection"] = self.selection
         if self.input_selection is not None:
@@ -36,7 +40,7 @@ class FitResult:
 
     def summary(self) -> str:
         """Breaks, groups, coefficients and residuals, as ``groupfit fit`` prints them."""
-        report = fit_report(self.estimator, self.run, self.model)
+        report = fit_report(self.estimator, self.run, self.model, self.intervals)
         if self.selection is not None:
             report = selection_summary(self.selection) + "\n" + report
         if self.input_selection is not None:
@@ -56,7 +60,7 @@ def selection_summary(selection: dict) -> str:
     return f"p auto  {rule}: p = {selection['p']}  ({table})"
 
 
-def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile) -> str:
+def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile, intervals=None) -> str:
     """The table ``groupfit fit`` prints (without the files it wrote)."""
     unit = "µm" if estimator.objective == "sae" else "µm²"
     search = estimator.search_
@@ -80,6 +84,10 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile) -> str:
             + [f"{v:.5g}" for v in coefficients]
             + [f"{estimator.group_objective_[g]:.4f}"]
         )
+    if intervals is not None:
+        header.insert(2, f"break {100 * intervals.level:g} % CI")
+        for g, row in enumerate(rows):
+            row.insert(2, intervals.text_for(estimator.breaks_[g]) if g < len(estimator.breaks_) else "")
     widths = [max(len(r[i]) for r in [header] + rows) for i in range(len(header))]
     for row in [header] + rows:
         lines.append("  ".join(cell.rjust(width) for cell, width in zip(row, widths)))
@@ -90,6 +98,8 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile) -> str:
         f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
         f"switch  criterion sensor {model.switching.criterion}",
     ]
+    if intervals is not None:
+        lines.append(f"breaks  {100 * intervals.level:g} % intervals: {intervals.summary(run.n_samples)}")
     return "\n".join(lines)
 
 

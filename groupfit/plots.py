@@ -23,8 +23,12 @@ def plot_fit(
     soft_groups: Sequence[Sequence[int]],
     path: str | Path,
     title: str = "",
+    break_intervals=None,
 ) -> None:
-    """Measured vs predicted error over time, hard and soft breaks marked, residual panel below."""
+    """Measured vs predicted error over time, hard and soft breaks marked, residual panel below.
+
+    ``break_intervals`` (BreakInterval objects) are drawn as shaded bands around their breaks.
+    """
     hours = np.asarray(time_s, dtype=float) / 3600.0
     residual = np.asarray(measured) - np.asarray(predicted)
     fig, (top, bottom) = _subplots(
@@ -45,6 +49,12 @@ def plot_fit(
                 lw=0.8,
                 ls=":",
                 label="soft break" if (k == 0 and axis is top) else None,
+            )
+    for k, interval in enumerate(i for i in (break_intervals or []) if i.lower is not None):
+        for axis in (top, bottom):
+            label = f"{100 * interval.level:g} % break interval ({interval.method})" if k == 0 and axis is top else None
+            axis.axvspan(
+                hours[interval.lower - 1], hours[interval.upper - 1], color="tab:blue", alpha=0.15, label=label
             )
     top.set_ylabel("thermal error (µm)")
     top.legend(loc="best", fontsize=8)
@@ -89,9 +99,12 @@ MODEL_STYLE = {"mlr": ("MLR", "tab:green", "-."), "ar1": ("AR(1) free run", "tab
 
 
 def plot_run_comparison(
-    time_s, measured, predictions: dict, path: str | Path, title: str, grouped_shown=(1, 2, 4)
+    time_s, measured, predictions: dict, path: str | Path, title: str, grouped_shown=(1, 2, 4), bands=None
 ) -> None:
-    """Measured vs predicted error of the compared models on one run, residuals below."""
+    """Measured vs predicted error of the compared models on one run, residuals below.
+
+    ``bands`` maps a model key to its (lower, upper) prediction band, shaded in the model's colour.
+    """
     hours = np.asarray(time_s, dtype=float) / 3600.0
     fig, (top, bottom) = _subplots(
         2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
@@ -107,8 +120,14 @@ def plot_run_comparison(
         else:
             label, color, style = f"grouped p = {key[7:]}", next(grouped_colors), "--"
         top.plot(hours, predictions[key], color=color, ls=style, lw=1.3, label=label)
+        if bands and bands.get(key) is not None:
+            lower, upper = (np.asarray(end) - predictions[key] for end in bands[key])
+            top.fill_between(hours, predictions[key] + lower, predictions[key] + upper, color=color, alpha=0.12, lw=0)
+            bottom.fill_between(hours, lower, upper, color=color, alpha=0.12, lw=0)
         bottom.plot(hours, np.asarray(measured) - predictions[key], color=color, ls=style, lw=1.0)
     bottom.axhline(0.0, color="black", lw=0.6)
+    if bands:
+        bottom.set_title("shaded: 95 % prediction bands, centred on each model's prediction", fontsize=8)
     top.set_ylabel("thermal error (µm)")
     top.legend(fontsize=8, loc="best")
     top.set_title(title)

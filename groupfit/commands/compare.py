@@ -19,6 +19,7 @@ from groupfit.commands.common import (
 from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
 from groupfit.errors import InputError
+from groupfit.inference.cli import add_interval_options, interval_settings
 from groupfit.runtime import replay_groups
 
 
@@ -31,6 +32,7 @@ def add_parser(verbs) -> None:
     add_json_option(compare)
     add_out_option(compare, "folder for the figures")
     add_quiet_option(compare)
+    add_interval_options(compare)
     compare.set_defaults(handler=run_compare)
 
 
@@ -41,6 +43,7 @@ def run_compare(args: argparse.Namespace) -> int:
     override(config, "search", "seed", args.seed)
     override(config, "output", "dir", args.out)
     settings = ComparisonSettings.from_config(config)
+    settings.intervals = interval_settings(args)
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
@@ -59,7 +62,14 @@ def run_compare(args: argparse.Namespace) -> int:
     for run in [modelling, *validation]:
         figure = out_dir / f"compare_{run.name}.png"
         role = "modelling run" if run is modelling else f"validation run, grouped by {result.validation_rule}"
-        plot_run_comparison(run.time, run.error, result.predictions[run.name], figure, f"{run.name} ({role})")
+        plot_run_comparison(
+            run.time,
+            run.error,
+            result.predictions[run.name],
+            figure,
+            f"{run.name} ({role})",
+            bands=result.bands[run.name],
+        )
         written.append(figure)
     figure = out_dir / "R_against_p.png"
     plot_r_against_p(result.path["R"], result.rows, result.runs, figure)

@@ -20,6 +20,7 @@ from groupfit.config import default_config_path, override
 from groupfit.data import Run, join_runs
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
+from groupfit.inference.cli import add_interval_options, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.sweep.selection import SELECTION_METHODS
@@ -48,6 +49,7 @@ def add_parser(verbs) -> None:
     add_json_option(fit)
     add_out_option(fit, "folder for model.json and fit.png")
     add_quiet_option(fit)
+    add_interval_options(fit)
     fit.set_defaults(handler=run_fit)
 
 
@@ -100,9 +102,10 @@ def run_fit(args: argparse.Namespace) -> int:
     progress = StageProgress(enabled=not args.quiet)
     try:
         estimator.fit(run.temps, run.error, progress=progress)
+        intervals = intervals_from_args(args, estimator, run.temps, run.error, config["search"]["seed"], progress)
     finally:
         progress.close()
-    result = FitResult(estimator, run, estimator.to_model_file(run, criterion), selection, input_selection)
+    result = FitResult(estimator, run, estimator.to_model_file(run, criterion), selection, input_selection, intervals)
 
     from groupfit.plots import plot_fit
 
@@ -118,6 +121,7 @@ def run_fit(args: argparse.Namespace) -> int:
         figure_path,
         title=f"{run.name}: grouped model, p = {len(estimator.breaks_)}, "
         f"{estimator.objective} Rg = {estimator.objective_value_:.4g}",
+        break_intervals=intervals.intervals,
     )
     write_json(args.json, result.to_json())
     written = ", ".join(str(p) for p in [model_path, figure_path])

@@ -268,6 +268,9 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
+        from groupfit.inference.prediction import group_interval_stats
+
+        self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept)
         return self
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
@@ -275,13 +278,18 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "breaks_")
         return serving_group_index(self.breaks_, self.n_samples_fit_, self.n, n_samples)
 
-    def predict(self, X) -> np.ndarray:
+    def predict(self, X, return_interval: bool = False, level: float | None = None, alpha: float | None = None):
         """Predict the error of a run sampled like the modelling run, by sample index.
 
         Row i of X is served by the group that serves sample i of the
         modelling run (rows past its end by the last group). The run-time
         switching logic, which decides from live temperatures, is
         :mod:`groupfit.runtime`.
+
+        With ``return_interval=True`` returns ``(prediction, lower, upper)``:
+        the serving group's OLS prediction interval at ``level`` (default
+        0.95; or give ``alpha = 1 − level``), see
+        :mod:`groupfit.inference.prediction`.
         """
         check_is_fitted(self, "breaks_")
         X = check_array(X)
@@ -290,7 +298,13 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
                 f"X has {X.shape[1]} features, but {type(self).__name__} is expecting {self.n_features_in_} "
                 "features as input (one per model input)"
             )
-        return grouped_prediction(self.intercept_, self.coef_, X, self.serving_groups(len(X)))
+        group = self.serving_groups(len(X))
+        prediction = grouped_prediction(self.intercept_, self.coef_, X, group)
+        if not return_interval:
+            return prediction
+        from groupfit.inference.prediction import estimator_bounds
+
+        return (prediction, *estimator_bounds(self, X, group, prediction, level=level, alpha=alpha))
 
     def to_model_file(self, run, criterion: str | None = None) -> ModelFile:
         """The model file of this model, fitted on ``run`` (a :class:`groupfit.data.Run`).
