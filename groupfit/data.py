@@ -24,6 +24,16 @@ PERIOD_TOLERANCE = 0.01
 DEFAULT_TIME = "time_s"
 DEFAULT_ERROR = "error_um"
 
+TEMP_RANGE_C = (-50.0, 200.0)
+"""Plausible temperature readings (°C) of a machine tool's sensors; anything outside is refused.
+
+Wider than any machine shop (coolant, bearings and motors stay well inside
+it) and narrower than the overflow values a broken logger writes (1e300, a
+missing sensor read as −273 or 850 °C). ``--range-temp LOW,HIGH`` widens it.
+"""
+ERROR_LIMIT_UM = 1.0e5
+"""Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` widens it."""
+
 
 @dataclass(frozen=True)
 class Run:
@@ -86,6 +96,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     """
     if isinstance(source, pd.DataFrame):
         label = name or "DataFrame"
+        _check_unique_columns(list(source.columns), label)
         return source.reset_index(drop=True), (name or "data"), label
     path = Path(source)
     label = str(path)
@@ -103,8 +114,35 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: not a readable {kind} table ({first})") from None
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
+    header = _raw_header(path, kind) if kind != "Parquet" else list(frame.columns)
+    if header is None or len(header) != frame.shape[1]:
+        header = list(frame.columns)
+    _check_unique_columns(header, label)
     frame.columns = [str(c).strip() for c in frame.columns]
     return frame, (name or path.stem), label
+
+
+def _raw_header(path: Path, kind: str) -> list[str] | None:
+    """The header as written in the file (pandas renames a repeated ``T1`` to ``T1.1`` on reading)."""
+    try:
+        if kind == "Excel":
+            return [str(c) for c in pd.read_excel(path, sheet_name=0, header=None, nrows=1).iloc[0].tolist()]
+        return [str(c) for c in pd.read_csv(path, header=None, nrows=1, skipinitialspace=True, dtype=str).iloc[0]]
+    except (ValueError, OSError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
+        return None
+
+
+def _check_unique_columns(header, label: str) -> None:
+    """Refuse a header that names a column twice, naming both positions (1-based)."""
+    seen: dict[str, int] = {}
+    for position, name in enumerate(header, start=1):
+        name = str(name).strip()
+        if name in seen:
+            raise InputError(
+                f"{label}: column '{name}' appears twice (columns {seen[name]} and {position}); "
+                "rename one so that every column name is unique"
+            )
+        seen[name] = position
 
 
 def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
@@ -145,6 +183,46 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     return array
 
 
+def check_range(
+    values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
+) -> None:
+    """Refuse the first reading outside ``bounds`` (a physically impossible value), naming row and column."""
+    low, high = bounds
+    outside = np.flatnonzero((values < low) | (values > high))
+    if outside.size:
+        row = int(outside[0])
+        raise InputError(
+            f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "
+            f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, or widen the range with {option}"
+        )
+
+
+def parse_temp_range(text: str | None) -> tuple[float, float] | None:
+    """``--range-temp LOW,HIGH`` (°C)."""
+    if text is None:
+        return None
+    try:
+        low, high = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(f"--range-temp {text!r}: give LOW,HIGH in °C, e.g. -50,200") from None
+    if not (np.isfinite(low) and np.isfinite(high) and low < high):
+        raise InputError(f"--range-temp {text!r}: LOW and HIGH must be finite with LOW < HIGH")
+    return low, high
+
+
+def parse_error_limit(text: str | None) -> float | None:
+    """``--range-error MAX`` (µm)."""
+    if text is None:
+        return None
+    try:
+        limit = float(text)
+    except ValueError:
+        raise InputError(f"--range-error {text!r}: give the largest plausible |error| in µm, e.g. 1e5") from None
+    if not (np.isfinite(limit) and limit > 0):
+        raise InputError(f"--range-error {text!r}: must be a finite number > 0")
+    return limit
+
+
 def check_time(time: np.ndarray, label: str, column: str) -> float:
     """Check that ``time`` is strictly increasing and uniformly sampled; return the period."""
     if len(time) < 2:
@@ -178,6 +256,8 @@ def load_run(
     require_error: bool = True,
     allow_nonfinite: bool = False,
     name: str | None = None,
+    temp_range: tuple[float, float] | None = TEMP_RANGE_C,
+    error_limit: float | None = ERROR_LIMIT_UM,
 ) -> Run:
     """Read and validate a run.
 
@@ -200,6 +280,13 @@ def load_run(
         (the run-time switching logic treats them as sensor faults).
     name : str, optional
         Name of the run (default: the file stem).
+    temp_range : (low, high) or None
+        Plausible temperature readings in °C (default :data:`TEMP_RANGE_C`);
+        a reading outside is refused with its row and column. None: no check.
+    error_limit : float or None
+        Largest plausible ``|error|`` in µm (default :data:`ERROR_LIMIT_UM`).
+        With ``allow_nonfinite`` neither range is checked: the run-time rule
+        treats implausible readings as sensor faults, as it does NaN.
 
     Raises
     ------
@@ -213,7 +300,10 @@ def load_run(
     if temps is None:
         temps = default_temperature_columns(frame, exclude=(time, error))
         if not temps:
-            raise InputError(f"{label}: no temperature columns found; name them with --temps A,B,C")
+            raise InputError(
+                f"{label}: no temperature columns found (named T1, T2 …); name the inputs with --temps A,B,C. "
+                f"The columns are: {', '.join(map(str, frame.columns))}"
+            )
     temps = list(temps)
     duplicates = sorted({t for t in temps if temps.count(t) > 1})
     if duplicates:
@@ -234,6 +324,12 @@ def load_run(
     error_values = None
     if error is not None and (require_error or error in frame.columns):
         error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite)
+    if not allow_nonfinite:
+        if temp_range is not None:
+            for j, t in enumerate(temps):
+                check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp LOW,HIGH")
+        if error_limit is not None and error_values is not None:
+            check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
 
     return Run(
         name=run_name,

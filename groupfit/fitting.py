@@ -57,7 +57,14 @@ def selection_summary(selection: dict) -> str:
         f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"]))
     )
     rule = "smallest BIC" if selection["rule"] == "bic" else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
-    return f"p auto  {rule}: p = {selection['p']}  ({table})"
+    line = f"p auto  {rule}: p = {selection['p']}  ({table})"
+    largest = len(selection["R_um"]) - 1
+    if largest > 0 and selection["p"] == largest:
+        line += (
+            f"\nnote    p = {largest} is the largest p tried (the edge of the range): a larger p may fit better; "
+            "raise --pmax to look further"
+        )
+    return line
 
 
 def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile, intervals=None) -> str:

@@ -20,11 +20,18 @@ import numpy as np
 from groupfit.errors import InputError
 
 
-def min_group_size(c: float, n_coef: int) -> int:
-    """Smallest allowed hard-group size: more than ``c·M`` samples."""
-    if c < 0:
-        raise InputError(f"spacing coefficient c = {c:g} must not be negative")
-    return int(math.floor(c * n_coef + 1e-12)) + 1
+def min_group_size(c: float, n_coef: int, n: int = 0) -> int:
+    """Smallest allowed hard-group size: more than ``c·M`` samples, and whatever c, more than ``M``.
+
+    Every group stays over-determined (more samples than coefficients) even
+    with ``c < 1``: with ``c = 0`` a group of M samples would be interpolated
+    exactly and its residual would mean nothing. The group must also be longer
+    than the soft offset ``n``, or the next soft group would reach back past
+    its start.
+    """
+    if not math.isfinite(c) or c < 0:
+        raise InputError(f"spacing coefficient c = {c:g} must be a finite number ≥ 0")
+    return max(int(math.floor(c * n_coef + 1e-12)) + 1, n_coef + 1, n + 1)
 
 
 @dataclass(frozen=True)
@@ -44,7 +51,7 @@ class Constraints:
     def for_model(cls, n_samples: int, n: int, c: float, n_coef: int) -> "Constraints":
         if n < 0:
             raise InputError(f"soft offset n = {n} must not be negative")
-        return cls(n_samples=int(n_samples), n=int(n), min_size=min_group_size(c, n_coef))
+        return cls(n_samples=int(n_samples), n=int(n), min_size=min_group_size(c, n_coef, int(n)))
 
     @property
     def lowest_break(self) -> int:
@@ -81,8 +88,8 @@ class Constraints:
                 hint = f"the largest feasible p is {largest}"
             raise InputError(
                 f"p = {p} breaks do not fit N = {self.n_samples} samples with c = {c:g}, "
-                f"M = {n_coef} (each hard group needs more than c·M = {c * n_coef:g} samples) "
-                f"and n = {self.n}: {hint}"
+                f"M = {n_coef} and n = {self.n} (each hard group needs at least {self.min_size} samples: "
+                f"more than c·M = {c * n_coef:g}, than M and than n): {hint}"
             )
 
 

@@ -1,28 +1,178 @@
-"""Writing results: a file written completely or not at all, and the JSON form of results."""
+"""Writing results: a file written completely or not at all, and the JSON form of results.
+
+Every file groupfit writes goes through :func:`atomic_write_text` (or
+:func:`atomic_write_files` for a set of files that belong together, or
+:func:`atomic_output` for a writer that wants a path, such as a figure): the
+text goes to a temporary file in the target's folder, which is then renamed
+over the target, so a reader never sees a half-written file. Files get the
+mode a plain ``open`` would give them (``0o666`` less the umask), not the
+``0o600`` of a temporary file. :func:`check_output_file` and
+:func:`check_output_dir` check a target before any work starts, without
+creating anything.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator, Mapping
+
+from groupfit.errors import InputError
+
+
+def _file_mode() -> int:
+    """``0o666`` less the process umask: the mode ``open(path, "w")`` creates files with."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or type(exc).__name__
+
+
+def _creatable(path: Path) -> tuple[Path | None, str | None]:
+    """The nearest existing ancestor of ``path`` and, when ``path`` cannot be created below it, why."""
+    ancestor = path.absolute()
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        return ancestor, f"{ancestor} is not a folder"
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        return ancestor, f"{ancestor} is not writable"
+    return ancestor, None
+
+
+def check_output_dir(path: str | Path, option: str = "--out") -> Path:
+    """Check before any work that files can be written into the folder ``path``; one line when not.
+
+    The folder must be a writable folder, or not exist yet below a writable
+    one (it is created when the first file is written, so a refused run
+    leaves nothing behind).
+    """
+    path = Path(path)
+    if path.exists():
+        if not path.is_dir():
+            raise InputError(f"{path}: output path exists and is not a folder; choose another {option}")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise InputError(f"{path}: the output folder is not writable; choose another {option}")
+        return path
+    _, why = _creatable(path)
+    if why:
+        raise InputError(f"{path}: cannot create the output folder ({why}); choose another {option}")
+    return path
+
+
+def check_output_file(path: str | Path, option: str) -> Path:
+    """Check before any work that a file can be written at ``path``; one line naming the path when not.
+
+    An existing target must be a file (it is replaced); its folder must be
+    writable, or not exist yet below a writable folder.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; {option} needs a file name")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise InputError(f"{path}: the file is read-only; choose another {option}")
+    folder = path.parent
+    if folder.exists():
+        if not folder.is_dir():
+            raise InputError(f"{path}: {folder} is not a folder; choose another {option}")
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise InputError(f"{path}: the folder {folder} is not writable; choose another {option}")
+        return path
+    _, why = _creatable(folder)
+    if why:
+        raise InputError(f"{path}: cannot create its folder {folder} ({why}); choose another {option}")
+    return path
+
+
+def _temporary_for(path: Path) -> Path:
+    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(handle)
+    return Path(temporary)
+
+
+def _write_failed(path: Path, exc: OSError) -> InputError:
+    return InputError(f"{path}: cannot write ({_reason(exc)}); nothing was written there")
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write a file completely or not at all."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    """Write a file completely or not at all, with the umask's mode."""
+    atomic_write_files({Path(path): text})
+
+
+def atomic_write_files(files: Mapping[str | Path, str]) -> list[Path]:
+    """Write several files all or none: every temporary file first, then the renames.
+
+    When a temporary file cannot be written, none of the targets is touched.
+    The renames themselves do not fail in practice (same folder, checked
+    writable); should one fail, the files already renamed are left as they are
+    (complete files), the rest untouched.
+    """
+    mode = _file_mode()
+    staged: list[tuple[Path, Path]] = []
     try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(temporary, path)
+        for target, text in files.items():
+            target = Path(target)
+            try:
+                target.parent.mkdir(parents=True, exist_ok=True)
+                temporary = _temporary_for(target)
+            except OSError as exc:
+                raise _write_failed(target, exc) from None
+            staged.append((temporary, target))
+            try:
+                with open(temporary, "w", encoding="utf-8") as stream:
+                    stream.write(text)
+                os.chmod(temporary, mode)
+            except OSError as exc:
+                raise _write_failed(target, exc) from None
+        for temporary, target in staged:
+            try:
+                os.replace(temporary, target)
+            except OSError as exc:
+                raise _write_failed(target, exc) from None
     except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        for temporary, _ in staged:
+            temporary.unlink(missing_ok=True)
         raise
+    return [target for _, target in staged]
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | Path) -> Iterator[Path]:
+    """A temporary path to write ``path`` through (e.g. ``figure.savefig``), renamed over it on success.
+
+    The temporary name keeps the target's suffix, so writers that choose a
+    format by suffix still do.
+    """
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}")
+        os.close(handle)
+    except OSError as exc:
+        raise _write_failed(path, exc) from None
+    temporary = Path(name)
+    try:
+        yield temporary
+        os.chmod(temporary, _file_mode())
+        os.replace(temporary, path)
+    except OSError as exc:
+        raise _write_failed(path, exc) from None
+    finally:
+        temporary.unlink(missing_ok=True)
 
 
 def to_json(obj: Any) -> str:
     """Indented JSON with a final newline; NaN and infinities are refused."""
     return json.dumps(obj, indent=2, allow_nan=False) + "\n"
+
+
+def save_figure(figure, path: str | Path, **options) -> None:
+    """``figure.savefig(path, **options)``, written completely or not at all."""
+    with atomic_output(path) as temporary:
+        figure.savefig(temporary, **options)

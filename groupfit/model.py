@@ -30,7 +30,7 @@ import numpy as np
 
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
-from groupfit.grouping import serving_group_index
+from groupfit.grouping import hard_groups, serving_group_index, soft_groups
 from groupfit.io import atomic_write_text, to_json
 
 FORMAT = "groupfit-model/1"
@@ -170,7 +170,15 @@ class ModelFile:
         return cls.from_dict(data, source=path)
 
     def save(self, path: str | Path) -> None:
-        atomic_write_text(path, to_json(self.to_dict()))
+        """Write the model file (checked first: an invalid model is never written)."""
+        atomic_write_text(path, to_json(self.checked().to_dict()))
+
+    def checked(self) -> "ModelFile":
+        """This model, after the checks of :func:`model_problem` on its file object; InputError otherwise."""
+        problem = model_problem(json.loads(to_json(self.to_dict())))
+        if problem:
+            raise InputError(f"invalid model: {problem}")
+        return self
 
     @classmethod
     def coerce(cls, model: "ModelFile | Mapping[str, Any]") -> "ModelFile":
@@ -265,23 +273,152 @@ REQUIRED = ("format",) + tuple(
 """Keys every model file holds: ``format`` and the fields without a default."""
 
 
+COEFFICIENT_LIMIT = 1.0e12
+"""Largest magnitude of a coefficient a model file may hold.
+
+Physical coefficients are µm per °C (or per unit of a derived input) and stay
+far below 1e6. The bound keeps every product the run-time rule forms finite in
+the controller's arithmetic: a valid reading is at most 1e9 in magnitude
+(:data:`groupfit.runtime.LEGACY_SOURCE_RANGE`), so a term is at most 1e21 and a
+sum of even thousands of terms stays below 1e25, far from single precision's
+3.4e38 (a PLC REAL). A coefficient such as 1e308 would overflow to infinity in
+double precision already; anything above 1e12 is a corrupted file, not a model.
+"""
+
+
 def model_problem(model: Any) -> str | None:
-    """What is wrong with a model file object, or None (the checks of :meth:`ModelFile.from_dict`)."""
+    """What is wrong with a model file object, or None (the checks of :meth:`ModelFile.from_dict`).
+
+    Every invariant the run-time rule and the exported routines rely on:
+    the keys and their types, breaks strictly increasing within (n, N),
+    every hard group over-determined (more samples than coefficients) and
+    longer than the soft offset n, hard and soft groups equal to what the
+    breaks give, finite coefficients of at most :data:`COEFFICIENT_LIMIT` in
+    magnitude, unique input names, and a switching section that agrees with
+    the breaks (windows and thresholds recomputed and compared).
+    """
     if not isinstance(model, Mapping) or model.get("format") != FORMAT:
         return f"not a {FORMAT} model file (missing or different 'format')"
     missing = [key for key in REQUIRED if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"
+    for check in (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem):
+        problem = check(model)
+        if problem:
+            return problem
+    return None
+
+
+def _is_whole(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _scalar_problem(model: Mapping[str, Any]) -> str | None:
+    period = model["sampling_period_s"]
+    if not _is_number(period) or period <= 0:
+        return f"sampling_period_s = {period!r}: must be a finite number of seconds > 0"
+    if model["objective"] not in ("sae", "sse"):
+        return f"objective = {model['objective']!r}: must be 'sae' or 'sse'"
+    if not isinstance(model["intercept"], bool):
+        return f"intercept = {model['intercept']!r}: must be true or false"
+    if model["error"] is not None and not isinstance(model["error"], str):
+        return f"error = {model['error']!r}: must be a column name or null"
+    if not _is_whole(model["p"]) or model["p"] < 0:
+        return f"p = {model['p']!r}: must be a whole number ≥ 0"
+    if not _is_whole(model["n"]) or model["n"] < 0:
+        return f"n = {model['n']!r}: must be a whole number ≥ 0"
+    if not _is_number(model["c"]) or model["c"] < 0:
+        return f"c = {model['c']!r}: must be a finite number ≥ 0"
+    if not _is_number(model["objective_value"]) or model["objective_value"] < 0:
+        return f"objective_value = {model['objective_value']!r}: must be a finite number ≥ 0"
+    n_samples = model.get("n_samples")
+    if n_samples is not None and (not _is_whole(n_samples) or n_samples < 1):
+        return f"n_samples = {n_samples!r}: must be a whole number ≥ 1"
+    training = model.get("training")
+    if training is not None and not isinstance(training, Mapping):
+        return "'training' must be an object"
+    return None
+
+
+def _inputs_problem(model: Mapping[str, Any]) -> str | None:
+    temps = model["temps"]
+    if not isinstance(temps, list) or not temps:
+        return "'temps' must be a non-empty list of input names"
+    for k, name in enumerate(temps):
+        if not isinstance(name, str) or not name.strip():
+            return f"temps[{k}] = {name!r}: input names must be non-empty strings"
+        if name in temps[:k]:
+            return f"temps: input '{name}' is listed twice (positions {temps.index(name) + 1} and {k + 1})"
+    return None
+
+
+def _groups_problem(model: Mapping[str, Any]) -> str | None:
+    p, n, breaks = model["p"], model["n"], model["breaks"]
+    if not isinstance(breaks, list) or not all(_is_whole(b) for b in breaks):
+        return "'breaks' must be a list of whole sample numbers"
+    if len(breaks) != p:
+        return f"'breaks' holds {len(breaks)} break(s) but p = {p}"
+    soft = model["soft_groups"]
+    if not isinstance(soft, list) or not all(
+        isinstance(g, list) and len(g) == 2 and all(_is_whole(v) for v in g) for g in soft
+    ):
+        return "'soft_groups' must be a list of [first, last] sample pairs"
+    if len(soft) != p + 1:
+        return f"'soft_groups' holds {len(soft)} group(s) but p = {p} breaks make {p + 1}"
+    n_samples = model.get("n_samples")
+    if n_samples is None:
+        n_samples = soft[-1][1]
+    if not _is_whole(n_samples) or n_samples < 1:
+        return f"the last soft group ends at sample {n_samples!r}; it must be ≥ 1"
+    if any(b2 <= b1 for b1, b2 in zip(breaks, breaks[1:])):
+        return f"breaks {breaks} must be strictly increasing"
+    if breaks and not (n < breaks[0] and breaks[-1] < n_samples):
+        return f"breaks {breaks} must lie strictly between n = {n} and N = {n_samples}"
+    n_coef = len(model["temps"]) + int(model["intercept"]) if isinstance(model["temps"], list) else 0
+    hard = hard_groups(breaks, n_samples)
+    for j, (first, last) in enumerate(hard, start=1):
+        size = last - first + 1
+        if size <= n_coef:
+            return (
+                f"hard group {j} (samples {first}…{last}) holds {size} sample(s); every group needs more "
+                f"than its M = {n_coef} coefficients"
+            )
+        if j <= p and size <= n:
+            return (
+                f"hard group {j} (samples {first}…{last}) holds {size} sample(s); "
+                f"the soft offset n = {n} must be smaller"
+            )
+    stored_hard = model.get("hard_groups")
+    if stored_hard is not None and stored_hard != [list(g) for g in hard]:
+        return f"'hard_groups' {stored_hard} do not match breaks {breaks} and N = {n_samples}"
+    expected_soft = [list(g) for g in soft_groups(breaks, n_samples, n)]
+    if soft != expected_soft:
+        return f"'soft_groups' {soft} do not match breaks {breaks}, n = {n} and N = {n_samples} ({expected_soft})"
+    group_objective = model.get("group_objective")
+    if group_objective is not None and (
+        not isinstance(group_objective, list)
+        or len(group_objective) != p + 1
+        or not all(_is_number(v) for v in group_objective)
+    ):
+        return f"'group_objective' must be a list of {p + 1} finite numbers"
+    return None
+
+
+def _coefficients_problem(model: Mapping[str, Any]) -> str | None:
+    coefficients = model["coefficients"]
     n_groups = model["p"] + 1
-    if len(model["breaks"]) != model["p"] or len(model["coefficients"]) != n_groups:
-        return f"'breaks' and 'coefficients' do not match p = {model['p']}"
-    problem = rule_section_problem(model)
-    if problem:
-        return problem
+    if not isinstance(coefficients, list) or len(coefficients) != n_groups:
+        return f"'breaks' and 'coefficients' do not match p = {model['p']} (one coefficient list per group)"
     width = len(model["temps"]) + int(model["intercept"])
-    for g, row in enumerate(model["coefficients"], start=1):
-        if len(row) != width or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in row):
+    for g, row in enumerate(coefficients, start=1):
+        if not isinstance(row, list) or len(row) != width or not all(_is_number(v) for v in row):
             return f"coefficients of group {g} must be {width} finite numbers"
+        largest = max(abs(v) for v in row)
+        if largest > COEFFICIENT_LIMIT:
+            return (
+                f"coefficients of group {g}: {largest:g} exceeds the limit of {COEFFICIENT_LIMIT:g} in magnitude "
+                "(a corrupted file; no thermal model has such a coefficient)"
+            )
     return None
 
 
@@ -314,7 +451,7 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
         return "switching.directions must hold -1, 0 or 1"
     if "windows" in section:
         for w in section["windows"]:
-            if not (isinstance(w, list) and len(w) == 2 and all(isinstance(v, int) for v in w) and 1 <= w[0] <= w[1]):
+            if not (isinstance(w, list) and len(w) == 2 and all(_is_whole(v) for v in w) and 1 <= w[0] <= w[1]):
                 return "switching.windows must be [first, last] sample pairs with 1 ≤ first ≤ last"
     for key in ("noise_c", "margin_c", "comp_min_um", "comp_max_um", "rate_limit_um", "period_tolerance"):
         if key in section and not _is_number(section[key]):
@@ -325,8 +462,12 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
         return "switching.rate_limit_um must be positive"
     if "comp_min_um" in section and "comp_max_um" in section and section["comp_min_um"] > section["comp_max_um"]:
         return "switching.comp_min_um must not exceed comp_max_um"
-    if "hold_samples" in section and (not isinstance(section["hold_samples"], int) or section["hold_samples"] < 0):
+    if "hold_samples" in section and (not _is_whole(section["hold_samples"]) or section["hold_samples"] < 0):
         return "switching.hold_samples must be a whole number ≥ 0"
+    if "period_tolerance" in section and not 0 < section["period_tolerance"] < 1:
+        return "switching.period_tolerance must lie between 0 and 1 (a fraction of the period)"
+    if "noise_c" in section and section["noise_c"] < 0:
+        return "switching.noise_c must not be negative"
     if "temp_min_c" in section and "temp_max_c" in section:
         if any(lo > hi for lo, hi in zip(section["temp_min_c"], section["temp_max_c"])):
             return "switching.temp_min_c must not exceed temp_max_c"
@@ -349,6 +490,40 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
             f"switching.criterion_index names the derived input '{temps[index]}'; "
             "the switching criterion must be a measured input"
         )
+    return _switching_agrees(model, section)
+
+
+def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> str | None:
+    """Whether the derived parts of the switching section agree with the breaks (recomputed and compared).
+
+    The windows are what :func:`groupfit.runtime.switch_windows` gives for the
+    breaks and n; each threshold is the criterion series at its window's
+    first sample; the criterion's name is the input it indexes.
+    """
+    temps, breaks, n = model.get("temps"), model.get("breaks"), model.get("n")
+    if not (isinstance(temps, list) and isinstance(breaks, list) and _is_whole(n)):
+        return None
+    index = section.get("criterion_index", 0)
+    criterion = section.get("criterion")
+    if criterion is not None and not isinstance(criterion, str):
+        return "switching.criterion must be an input name"
+    if criterion is not None and criterion != temps[index]:
+        return f"switching.criterion '{criterion}' is not input {index} ('{temps[index]}') named by criterion_index"
+    windows = [[int(b) - n + 1, max(int(b), int(b) - n + 1)] for b in breaks]
+    if "windows" in section and section["windows"] != windows:
+        return f"switching.windows {section['windows']} do not match breaks {breaks} and n = {n} ({windows})"
+    series = section.get("criterion_series")
+    if series is not None:
+        if any(first > len(series) for first, _ in windows):
+            return f"switching.criterion_series holds {len(series)} samples; the breaks {breaks} need more"
+        if "thresholds_c" in section:
+            for k, (first, _) in enumerate(windows):
+                expected = float(series[first - 1])
+                if not math.isclose(section["thresholds_c"][k], expected, rel_tol=1e-9, abs_tol=1e-9):
+                    return (
+                        f"switching.thresholds_c[{k}] = {section['thresholds_c'][k]!r} is not the criterion at "
+                        f"sample {first} ({expected!r})"
+                    )
     return None
 
 
@@ -437,6 +612,7 @@ def as_model_file(model: ModelFile | Mapping[str, Any]) -> ModelFile:
 
 
 __all__ = [
+    "COEFFICIENT_LIMIT",
     "FORMAT",
     "MAX_DELAY_SAMPLES",
     "ModelFile",

@@ -22,7 +22,7 @@ def load_model(path: str | Path) -> dict[str, Any]:
 
 def save_model(model: ModelFile | Mapping[str, Any], path: str | Path) -> None:
     """Write a model (a model file object is written as given, unchecked)."""
-    atomic_write_text(path, to_json(model.to_dict() if isinstance(model, ModelFile) else model))
+    atomic_write_text(path, to_json(model.checked().to_dict() if isinstance(model, ModelFile) else model))
 
 
 def model_to_dict(model, run, criterion: str | None = None) -> dict[str, Any]:

@@ -8,6 +8,8 @@ from typing import Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
+from groupfit.io import save_figure
+
 
 def _subplots(*grid, figsize, constrained_layout: bool = True, **options):
     """A figure of its own (no pyplot, no global backend) and its axes."""
@@ -63,7 +65,7 @@ def plot_fit(
     bottom.axhline(0.0, color="black", lw=0.6)
     bottom.set_ylabel("residual (µm)")
     bottom.set_xlabel("time (h)")
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_dataset(frame, path: str | Path, title: str = "") -> None:
@@ -92,7 +94,7 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
     bottom.set_xlabel("time (h)")
     for axis in (top, bottom):
         axis.grid(alpha=0.3)
-    fig.savefig(Path(path), dpi=120)
+    save_figure(fig, Path(path), dpi=120)
 
 
 MODEL_STYLE = {"mlr": ("MLR", "tab:green", "-."), "ar1": ("AR(1) free run", "tab:orange", ":")}
@@ -133,7 +135,7 @@ def plot_run_comparison(
     top.set_title(title)
     bottom.set_ylabel("residual (µm)")
     bottom.set_xlabel("time (h)")
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequence[str], path: str | Path) -> None:
@@ -154,7 +156,7 @@ def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequen
     axis.set_xlabel("hard break points p")
     axis.set_ylabel("R = Σ|e| (µm)")
     axis.legend(fontsize=7)
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
 
 
 def stacked_hours(runs) -> np.ndarray:
@@ -202,4 +204,4 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
         axis.set_ylabel("µm")
         axis.legend(fontsize=8)
     axes[-1].set_xlabel("time (h)")
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)

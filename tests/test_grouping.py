@@ -29,10 +29,16 @@ def test_serving_index_matches_served_ranges_and_extends_past_the_run():
     assert index.tolist() == expected
 
 
-@pytest.mark.parametrize("c, M, size", [(3, 5, 16), (3.0, 4, 13), (2.5, 5, 13), (2.4, 5, 13), (0, 3, 1), (1.25, 4, 6)])
+@pytest.mark.parametrize("c, M, size", [(3, 5, 16), (3.0, 4, 13), (2.5, 5, 13), (2.4, 5, 13), (1.25, 4, 6)])
 def test_min_group_size_is_strictly_more_than_c_times_M(c, M, size):
     assert min_group_size(c, M) == size
     assert size > c * M and size - 1 <= c * M
+
+
+@pytest.mark.parametrize("c, M, n, size", [(0, 3, 0, 4), (0.5, 5, 0, 6), (0, 1, 0, 2), (3, 5, 20, 21), (3, 5, 15, 16)])
+def test_every_group_stays_over_determined_and_longer_than_n_whatever_c(c, M, n, size):
+    assert min_group_size(c, M, n) == size
+    assert size > M and size > n
 
 
 @settings(max_examples=80, deadline=None)

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from test_switching_models import noisy, shifted, synthetic_model
 
 from groupfit.errors import InputError
-from groupfit.grouping import serving_group_index
+from groupfit.grouping import hard_groups, serving_group_index, soft_groups
 from groupfit.modelfile import load_model, save_model
 from groupfit.runtime import (
     FAULT_HELD,
@@ -324,7 +324,9 @@ def test_settings_change_the_derived_parameters():
 def model_and_stream(draw):
     n = draw(st.integers(0, 6))
     n_breaks = draw(st.integers(0, 4))
-    breaks = sorted(draw(st.lists(st.integers(n + 1, 60), min_size=n_breaks, max_size=n_breaks, unique=True)))
+    # every hard group longer than n and than its M = 3 coefficients, as a valid model file has them
+    gaps = draw(st.lists(st.integers(max(n, 3) + 1, 15), min_size=n_breaks, max_size=n_breaks))
+    breaks = [int(b) for b in np.cumsum(gaps)]
     length = 70
     series = np.cumsum(draw(st.lists(st.floats(-1, 1), min_size=length, max_size=length)))
     temps = np.column_stack([20 + series, np.linspace(20, 25, length)])
@@ -334,8 +336,11 @@ def model_and_stream(draw):
         n=n,
         breaks=breaks,
         n_samples=length,
+        hard_groups=[list(g) for g in hard_groups(breaks, length)],
+        soft_groups=[list(g) for g in soft_groups(breaks, length, n)],
         coefficients=[[float(g), 1.0, -1.0] for g in range(len(breaks) + 1)],
     )
+    model["switching"]["criterion_series"] = [float(v) for v in temps[:, 0]]
     model["switching"].update(rule_parameters(model, temps, criterion_index=0))
     live = temps + np.asarray(draw(st.lists(st.floats(-3, 3), min_size=length, max_size=length)))[:, None]
     bad_rows = draw(st.lists(st.integers(0, length - 1), max_size=15))

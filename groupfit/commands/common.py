@@ -10,9 +10,19 @@ from typing import Any
 from tqdm import tqdm
 
 from groupfit.config import override, read_config
-from groupfit.data import Run, join_runs, load_run, split_names
+from groupfit.data import (
+    ERROR_LIMIT_UM,
+    TEMP_RANGE_C,
+    Run,
+    join_runs,
+    load_run,
+    parse_error_limit,
+    parse_temp_range,
+    split_names,
+)
 from groupfit.errors import InputError
-from groupfit.io import atomic_write_text, to_json
+from groupfit.io import atomic_write_text, check_output_file, to_json
+from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 
 
 def add_data_options(parser: argparse.ArgumentParser) -> None:
@@ -26,6 +36,16 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
     parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
+    parser.add_argument(
+        "--range-temp",
+        metavar="LOW,HIGH",
+        help="plausible temperature readings in °C (default -50,200); a reading outside is refused",
+    )
+    parser.add_argument(
+        "--range-error",
+        metavar="MAX",
+        help="largest plausible |thermal error| in µm (default 1e5); a larger value is refused",
+    )
 
 
 def add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -70,10 +90,17 @@ def add_quiet_option(parser: argparse.ArgumentParser) -> None:
 def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:
     """The configuration file merged with --data, --time, --temps, --error."""
     config = read_config(config_path)
+    if args.data and getattr(args, "config", None) is None:
+        # a run given on the command line does not inherit the default configuration's runs and columns:
+        # its inputs are --temps, else its own sensor columns; it is validated only on --validate runs
+        config["data"].pop("temps", None)
+        config["data"]["validate"] = []
     override(config, "data", "path", args.data[0] if args.data and len(args.data) == 1 else args.data)
     override(config, "data", "time", args.time)
     override(config, "data", "temps", split_names(args.temps))
     override(config, "data", "error", args.error)
+    override(config, "data", "temp_range", parse_temp_range(getattr(args, "range_temp", None)))
+    override(config, "data", "error_limit", parse_error_limit(getattr(args, "range_error", None)))
     return config
 
 
@@ -83,6 +110,8 @@ def load_configured_run(config: dict, path: str | None = None, **options) -> Run
     path = path or data.get("path")
     if not path:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    options.setdefault("temp_range", data.get("temp_range", TEMP_RANGE_C))
+    options.setdefault("error_limit", data.get("error_limit", ERROR_LIMIT_UM))
     if isinstance(path, (list, tuple)):
         return join_runs(
             [load_run(p, temps=data.get("temps"), time=data["time"], error=data["error"], **options) for p in path]
@@ -90,32 +119,33 @@ def load_configured_run(config: dict, path: str | None = None, **options) -> Run
     return load_run(path, temps=data.get("temps"), time=data["time"], error=data["error"], **options)
 
 
-def write_json(target: str | None, obj: Any) -> None:
-    """Write a JSON result to a file, or to stdout for '-'."""
+def write_json(target: str | None, obj: Any) -> Path | None:
+    """Write a JSON result to a file, or to stdout for '-'; return the file written (None for stdout or none)."""
     if target is None:
-        return
+        return None
     text = to_json(obj)
     if target == "-":
         sys.stdout.write(text)
-    else:
-        atomic_write_text(target, text)
+        return None
+    atomic_write_text(target, text)
+    return Path(target)
+
+
+def check_json_target(args: argparse.Namespace) -> None:
+    """Check before any work that ``--json FILE`` can be written (its folder exists or can be made, writable)."""
+    target = getattr(args, "json", None)
+    if target is not None and target != "-":
+        check_output_file(target, "--json")
+
+
+def wrote_line(paths) -> str:
+    """The files a verb wrote, comma separated (None entries left out)."""
+    return ", ".join(str(p) for p in paths if p is not None)
 
 
 def report_stream(args: argparse.Namespace):
     """Where the human-readable report goes: stderr when JSON goes to stdout."""
     return sys.stderr if getattr(args, "json", None) == "-" else sys.stdout
-
-
-def check_output_dir(path: str | Path) -> Path:
-    """Create the output folder or say why it cannot be."""
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise InputError(f"{path}: output path exists and is not a folder; choose another --out")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot create the output folder ({exc.strerror})") from None
-    return path
 
 
 class StageProgress:

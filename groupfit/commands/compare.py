@@ -10,11 +10,13 @@ from groupfit.commands.common import (
     add_out_option,
     add_quiet_option,
     add_run_options,
+    check_json_target,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
     report_stream,
     write_json,
+    wrote_line,
 )
 from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
@@ -42,6 +44,10 @@ def run_compare(args: argparse.Namespace) -> int:
     override(config, "compare", "pmax", args.pmax)
     override(config, "search", "seed", args.seed)
     override(config, "output", "dir", args.out)
+    if config["compare"]["pmax"] < 0:
+        raise InputError(f"--pmax {config['compare']['pmax']}: the largest p compared must be 0 or more")
+    check_json_target(args)
+    check_output_dir(config["output"]["dir"])
     settings = ComparisonSettings.from_config(config)
     settings.intervals = interval_settings(args)
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
@@ -75,6 +81,6 @@ def run_compare(args: argparse.Namespace) -> int:
     plot_r_against_p(result.path["R"], result.rows, result.runs, figure)
     written.append(figure)
 
-    write_json(args.json, result.to_json())
-    print(result.summary() + "\nwrote   " + ", ".join(str(p) for p in written), file=report_stream(args))
+    written.append(write_json(args.json, result.to_json()))
+    print(result.summary() + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0

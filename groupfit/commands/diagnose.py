@@ -9,12 +9,13 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_output_dir, report_stream, write_json
+from groupfit.commands.common import check_json_target, check_output_dir, report_stream, write_json
 from groupfit.data import DEFAULT_TIME, Run, load_run
 from groupfit.diagnose import DiagnosisResult, diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, joint_name
 from groupfit.errors import InputError
+from groupfit.model import ModelFile
 from groupfit.modelfile import load_model, save_model
 from groupfit.sweep.selection import SELECTION_METHODS
 
@@ -104,6 +105,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     data = [load_measured(path, model, args.time) for path in args.data]
     validate = [load_measured(path, model, args.time) for path in args.validate or []]
     out_dir = check_output_dir(args.out)
+    check_json_target(args)
     from groupfit.runtime import replay_groups
 
     start = model
@@ -129,7 +131,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     written = []
     if result.added or selection is not None:
         model_path = out_dir / "model_augmented.json"
-        save_model(result.model, model_path)
+        save_model(ModelFile.coerce(result.model), model_path)  # checked: an invalid model is never written
         written.append(model_path)
     from groupfit.plots import plot_diagnosis
 
@@ -138,7 +140,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
     plot_diagnosis(result, runs, figure)
     written.append(figure)
 
-    write_json(args.json, result_json(result, model_path))
+    json_path = write_json(args.json, result_json(result, model_path))
+    if json_path is not None:
+        written.append(json_path)
     print(diagnosis_report(result, data, validate, written), file=report_stream(args))
     return 0
 

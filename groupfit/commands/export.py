@@ -41,6 +41,7 @@ def add_parser(verbs) -> None:
 
 def run_export(args: argparse.Namespace) -> int:
     model = ModelFile.load(args.model)
+    out_dir = check_output_dir(args.out)
     targets = TARGETS if args.target == "all" else (args.target,)
     files: dict[str, str] = {}
     for target in targets:
@@ -54,7 +55,6 @@ def run_export(args: argparse.Namespace) -> int:
                 counts_limit=args.counts_limit,
             )
         )
-    out_dir = check_output_dir(args.out)
     written = write(files, out_dir)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0

@@ -10,11 +10,13 @@ from groupfit.commands.common import (
     add_out_option,
     add_quiet_option,
     add_run_options,
+    check_json_target,
     check_output_dir,
     config_with_data_options,
     load_configured_run,
     report_stream,
     write_json,
+    wrote_line,
 )
 from groupfit.config import default_config_path, override
 from groupfit.data import Run, join_runs
@@ -68,6 +70,8 @@ def run_fit(args: argparse.Namespace) -> int:
     override(config, "search", "method", args.search)
     override(config, "search", "seed", args.seed)
     override(config, "output", "dir", args.out)
+    check_json_target(args)
+    check_output_dir(config["output"]["dir"])
 
     paths = config["data"].get("path")
     runs = (
@@ -92,6 +96,8 @@ def run_fit(args: argparse.Namespace) -> int:
             f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
         )
     selection = None
+    if config["model"]["p"] == "auto" and config["model"]["pmax"] < 0:
+        raise InputError(f"--pmax {config['model']['pmax']}: the largest p tried must be 0 or more")
     if config["model"]["p"] == "auto":
         selection = select_breaks(config, run)
         config["model"]["p"] = selection["p"]
@@ -123,8 +129,8 @@ def run_fit(args: argparse.Namespace) -> int:
         f"{estimator.objective} Rg = {estimator.objective_value_:.4g}",
         break_intervals=intervals.intervals,
     )
-    write_json(args.json, result.to_json())
-    written = ", ".join(str(p) for p in [model_path, figure_path])
+    json_path = write_json(args.json, result.to_json())
+    written = wrote_line([model_path, figure_path, json_path])
     print(result.summary() + "\nwrote   " + written, file=report_stream(args))
     return 0
 

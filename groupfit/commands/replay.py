@@ -14,12 +14,15 @@ from groupfit.commands.common import (
     add_json_option,
     add_model_argument,
     add_out_option,
+    check_json_target,
     check_output_dir,
     report_stream,
     write_json,
+    wrote_line,
 )
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
+from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile
 from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
@@ -62,6 +65,8 @@ def add_parser(verbs) -> None:
 
 def run_replay(args: argparse.Namespace) -> int:
     model = ModelFile.load(args.model)
+    check_json_target(args)
+    out_dir = check_output_dir(args.out) if args.out else None
     counts = None
     if args.resolution_um is not None:
         from groupfit.export.sheet import IntegerForm
@@ -73,7 +78,6 @@ def run_replay(args: argparse.Namespace) -> int:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
         raise InputError(f"{run.source}: {exc}") from None
-    out_dir = check_output_dir(args.out) if args.out else None
     replay = rule.replay(run.temps)
     result = ReplayResult(replay_result(model, rule.tables, run, replay, args.model, counts))
     written = []
@@ -81,8 +85,8 @@ def run_replay(args: argparse.Namespace) -> int:
         figure = out_dir / "replay.png"
         plot_replay(run, rule.tables, replay, model, figure)
         written.append(figure)
-    write_json(args.json, result.to_json())
-    lines = [result.summary()] + (["wrote    " + ", ".join(str(p) for p in written)] if written else [])
+    written.append(write_json(args.json, result.to_json()))
+    lines = [result.summary()] + (["wrote    " + wrote_line(written)] if any(written) else [])
     print("\n".join(lines), file=report_stream(args))
     return 0
 
@@ -271,7 +275,7 @@ def plot_replay(run, tables: RuleTables, replay: Replay, model: ModelFile, path:
     bottom.set_ylabel("group")
     bottom.set_xlabel("time (h)")
     bottom.legend(loc="best", fontsize=8)
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
 
 
 __all__ = ["ReplayResult", "load_readings", "run_replay", "replay_result", "plot_replay"]

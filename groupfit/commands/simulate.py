@@ -7,7 +7,7 @@ from pathlib import Path
 
 from groupfit.commands.common import add_out_option, add_quiet_option
 from groupfit.errors import InputError
-from groupfit.io import atomic_write_text
+from groupfit.io import atomic_write_text, check_output_file
 from groupfit.tomlconfig import read_toml
 
 
@@ -36,11 +36,11 @@ def add_parser(verbs) -> None:
 
 def run_simulate(args: argparse.Namespace) -> int:
     config = read_scenario(args.config)
+    output = check_output_file(args.out, "--out")
     try:
         frame = simulate_scenario(config, progress=not args.quiet)
     except InputError as exc:
         raise InputError(f"{args.config}: {exc}") from None
-    output = Path(args.out)
     atomic_write_text(output, frame.to_csv(index=False, float_format="%.7g", lineterminator="\n"))
     if config.get("kind") == "ballscrew":
         from groupfit.screw.plots import plot_screw_dataset as plot_dataset

@@ -10,7 +10,7 @@ same order:
 * ``sheet``: how the output maps onto a controller (SINUMERIK and integer forms).
 
 :func:`render` returns ``{file name: text}`` without touching the disk;
-:func:`write` writes those files, each completely or not at all.
+:func:`write` writes those files, all of them or none.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
     Options: ``real`` ("REAL" or "LREAL") and ``name`` (block name) for
     ``st``; ``resolution_um`` and ``counts_limit`` for ``sheet``.
     """
-    tables = RuleTables.from_model(model)
+    tables = RuleTables.from_model(ModelFile.coerce(model).checked())
     if target == "c":
         from groupfit.export.c import render_c
 
@@ -57,15 +57,10 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
 
 def write(files: dict[str, str], out_dir: str | Path) -> list[Path]:
     """Write rendered files into ``out_dir``; return their paths."""
-    from groupfit.io import atomic_write_text
+    from groupfit.io import atomic_write_files
 
     out_dir = Path(out_dir)
-    written = []
-    for name, text in files.items():
-        path = out_dir / name
-        atomic_write_text(path, text)
-        written.append(path)
-    return written
+    return atomic_write_files({out_dir / name: text for name, text in files.items()})
 
 
 __all__ = ["TARGETS", "render", "write"]

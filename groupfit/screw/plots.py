@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from groupfit.io import save_figure
+
 from .runs import sensor_positions
 
 CONDITION_COLUMNS = ("time_s", "error_um", "probe_x_m", "power_W", "nut_x_m", "screw_rpm", "T_amb")
@@ -28,7 +30,7 @@ def plot_screw_dataset(frame, path: str | Path, title: str = "") -> None:
     bottom.set_xlabel("time (h)")
     for axis in (top, bottom):
         axis.grid(alpha=0.3)
-    fig.savefig(Path(path), dpi=110)
+    save_figure(fig, Path(path), dpi=110)
 
 
 def plot_rises(time_s, positions, measured, predicted, path: str | Path, title: str = "") -> None:
@@ -50,7 +52,7 @@ def plot_rises(time_s, positions, measured, predicted, path: str | Path, title: 
         axis.set_xlabel("time (h)")
         axis.grid(alpha=0.3)
     fig.suptitle(title)
-    fig.savefig(Path(path), dpi=110)
+    save_figure(fig, Path(path), dpi=110)
 
 
 def plot_error(time_s, measured, predictions: dict, path: str | Path, title: str = "") -> None:
@@ -72,4 +74,4 @@ def plot_error(time_s, measured, predictions: dict, path: str | Path, title: str
     bottom.set_xlabel("time (h)")
     for axis in (top, bottom):
         axis.grid(alpha=0.3)
-    fig.savefig(Path(path), dpi=110)
+    save_figure(fig, Path(path), dpi=110)

@@ -30,6 +30,8 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.io import atomic_write_files, save_figure
+
 SUCCESS_PERCENT = 0.1
 """A GA run succeeds when its Rg is within this many percent of the exact optimum."""
 SETTING = ["dataset", "sensor_set", "objective_kind", "intercept", "n", "c"]
@@ -158,19 +160,17 @@ def write_report(rows: list[dict], folder: str | Path, title: str = "study") -> 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     runs = runs_frame(rows)
-    written = []
     if runs.empty:
-        path = folder / "summary.md"
-        path.write_text(f"# {title}\n\nNo runs recorded.\n", encoding="utf-8")
-        return [path]
-    runs.to_csv(folder / "runs.csv", index=False)
-    written.append(folder / "runs.csv")
+        return atomic_write_files({folder / "summary.md": f"# {title}\n\nNo runs recorded.\n"})
     summary = summary_frame(runs)
     success = success_frame(runs)
-    summary.to_csv(folder / "summary.csv", index=False)
-    written.append(folder / "summary.csv")
-    (folder / "summary.md").write_text(markdown_report(title, runs, summary, success), encoding="utf-8")
-    written.append(folder / "summary.md")
+    written = atomic_write_files(
+        {
+            folder / "runs.csv": runs.to_csv(index=False),
+            folder / "summary.csv": summary.to_csv(index=False),
+            folder / "summary.md": markdown_report(title, runs, summary, success),
+        }
+    )
     if not summary.empty:
         written.append(plot_objective_vs_p(summary, folder / "objective_vs_p.png"))
         written.append(plot_break_stability(runs, folder / "break_stability.png"))
@@ -293,7 +293,7 @@ def plot_objective_vs_p(summary: pd.DataFrame, path: Path) -> Path:
         axis.xaxis.get_major_locator().set_params(integer=True)
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -333,7 +333,7 @@ def plot_break_stability(runs: pd.DataFrame, path: Path) -> Path:
         axis.set_ylabel("break position (sample)")
         axis.xaxis.get_major_locator().set_params(integer=True)
         axis.grid(alpha=0.3)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -354,5 +354,5 @@ def plot_success(success: pd.DataFrame, path: Path) -> Path:
         axis.set_ylabel(f"share within {SUCCESS_PERCENT} % of exact")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     return path
