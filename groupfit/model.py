@@ -273,6 +273,9 @@ REQUIRED = ("format",) + tuple(
 """Keys every model file holds: ``format`` and the fields without a default."""
 
 
+MAX_MARGIN_C = 50.0
+"""Largest criterion noise or margin (°C) a model file may hold: a wider margin would ignore the criterion."""
+
 COEFFICIENT_LIMIT = 1.0e12
 """Largest magnitude of a coefficient a model file may hold.
 
@@ -284,6 +287,31 @@ sum of even thousands of terms stays below 1e25, far from single precision's
 3.4e38 (a PLC REAL). A coefficient such as 1e308 would overflow to infinity in
 double precision already; anything above 1e12 is a corrupted file, not a model.
 """
+
+
+RULE_LIMIT = 1.0e9
+"""Largest magnitude of a number of the switching rule (thresholds, valid ranges, clamp and rate limit).
+
+The same bound as any reading's valid range (:data:`groupfit.runtime.LEGACY_SOURCE_RANGE`):
+exact enough and far inside single precision, which the exported routines may compute in.
+"""
+
+
+def _nonfinite(value: Any, where: str) -> str | None:
+    """The place of the first NaN or infinity anywhere in a JSON value, or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return where
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            found = _nonfinite(item, f"{where}.{key}" if where else str(key))
+            if found:
+                return found
+    elif isinstance(value, list):
+        for k, item in enumerate(value):
+            found = _nonfinite(item, f"{where}[{k}]")
+            if found:
+                return found
+    return None
 
 
 def model_problem(model: Any) -> str | None:
@@ -302,6 +330,9 @@ def model_problem(model: Any) -> str | None:
     missing = [key for key in REQUIRED if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"
+    where = _nonfinite(dict(model), "")
+    if where:
+        return f"{where} is not a finite number (NaN and infinities have no place in a model file)"
     for check in (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem):
         problem = check(model)
         if problem:
@@ -315,7 +346,7 @@ def _is_whole(value) -> bool:
 
 def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     period = model["sampling_period_s"]
-    if not _is_number(period) or period <= 0:
+    if not _is_number(period) or not 0 < period <= RULE_LIMIT:
         return f"sampling_period_s = {period!r}: must be a finite number of seconds > 0"
     if model["objective"] not in ("sae", "sse"):
         return f"objective = {model['objective']!r}: must be 'sae' or 'sse'"
@@ -447,17 +478,25 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
     for key in ("thresholds_c", "temp_min_c", "temp_max_c"):
         if key in section and not all(_is_number(v) for v in section[key]):
             return f"switching.{key} must hold finite numbers"
-    if "directions" in section and not all(v in (-1, 0, 1) for v in section["directions"]):
+    if "directions" in section and not all(_is_whole(v) and v in (-1, 0, 1) for v in section["directions"]):
         return "switching.directions must hold -1, 0 or 1"
     if "windows" in section:
         for w in section["windows"]:
             if not (isinstance(w, list) and len(w) == 2 and all(_is_whole(v) for v in w) and 1 <= w[0] <= w[1]):
                 return "switching.windows must be [first, last] sample pairs with 1 ≤ first ≤ last"
+    if "rule" in section and section["rule"] != "groupfit-switch/1":
+        return f"switching.rule = {section['rule']!r}: this version knows 'groupfit-switch/1'"
     for key in ("noise_c", "margin_c", "comp_min_um", "comp_max_um", "rate_limit_um", "period_tolerance"):
         if key in section and not _is_number(section[key]):
             return f"switching.{key} must be a finite number"
-    if "margin_c" in section and section["margin_c"] < 0:
-        return "switching.margin_c must not be negative"
+    for key in ("thresholds_c", "temp_min_c", "temp_max_c", "comp_min_um", "comp_max_um", "rate_limit_um"):
+        values = section.get(key)
+        values = values if isinstance(values, list) else [values] if values is not None else []
+        if any(abs(v) > RULE_LIMIT for v in values):
+            return f"switching.{key} exceeds {RULE_LIMIT:g} in magnitude"
+    for key in ("noise_c", "margin_c"):
+        if key in section and not 0 <= section[key] <= MAX_MARGIN_C:
+            return f"switching.{key} = {section[key]!r}: must lie between 0 and {MAX_MARGIN_C:g} °C"
     if "rate_limit_um" in section and section["rate_limit_um"] <= 0:
         return "switching.rate_limit_um must be positive"
     if "comp_min_um" in section and "comp_max_um" in section and section["comp_min_um"] > section["comp_max_um"]:
@@ -466,8 +505,6 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
         return "switching.hold_samples must be a whole number ≥ 0"
     if "period_tolerance" in section and not 0 < section["period_tolerance"] < 1:
         return "switching.period_tolerance must lie between 0 and 1 (a fraction of the period)"
-    if "noise_c" in section and section["noise_c"] < 0:
-        return "switching.noise_c must not be negative"
     if "temp_min_c" in section and "temp_max_c" in section:
         if any(lo > hi for lo, hi in zip(section["temp_min_c"], section["temp_max_c"])):
             return "switching.temp_min_c must not exceed temp_max_c"
@@ -477,7 +514,10 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
             return f"switching.{SOURCE_RANGES_KEY} must be an object: column -> [min, max]"
         for column, pair in ranges.items():
             if not (
-                isinstance(pair, list) and len(pair) == 2 and all(_is_number(v) for v in pair) and pair[0] <= pair[1]
+                isinstance(pair, list)
+                and len(pair) == 2
+                and all(_is_number(v) and abs(v) <= RULE_LIMIT for v in pair)
+                and pair[0] <= pair[1]
             ):
                 return f"switching.{SOURCE_RANGES_KEY}['{column}'] must be [min, max] with min <= max"
     try:
@@ -516,6 +556,15 @@ def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> s
     if series is not None:
         if any(first > len(series) for first, _ in windows):
             return f"switching.criterion_series holds {len(series)} samples; the breaks {breaks} need more"
+        if "directions" in section and "margin_c" in section:
+            for k, (first, last) in enumerate(windows):
+                change = float(series[min(last, len(series)) - 1] - series[max(first - 2, 0)])
+                expected = 0 if abs(change) <= section["margin_c"] else (1 if change > 0 else -1)
+                if section["directions"][k] != expected:
+                    return (
+                        f"switching.directions[{k}] = {section['directions'][k]!r} does not match the criterion "
+                        f"series over window {k + 1} (expected {expected})"
+                    )
         if "thresholds_c" in section:
             for k, (first, _) in enumerate(windows):
                 expected = float(series[first - 1])
@@ -614,6 +663,7 @@ def as_model_file(model: ModelFile | Mapping[str, Any]) -> ModelFile:
 __all__ = [
     "COEFFICIENT_LIMIT",
     "FORMAT",
+    "RULE_LIMIT",
     "MAX_DELAY_SAMPLES",
     "ModelFile",
     "REQUIRED",
