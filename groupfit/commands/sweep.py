@@ -12,11 +12,13 @@ from groupfit.commands.common import (
     add_json_option,
     add_out_option,
     add_quiet_option,
+    check_json_target,
     check_output_dir,
     report_stream,
     write_json,
 )
 from groupfit.errors import InputError
+from groupfit.io import check_output_file
 
 MAX_FAILURES_SHOWN = 5
 
@@ -41,7 +43,7 @@ def add_parser(verbs) -> None:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from groupfit.sweep.config import read_study
+    from groupfit.sweep.config import feasibility, read_study
     from groupfit.sweep.executors import DaskExecutor, LocalExecutor
     from groupfit.sweep.store import StudyStore
     from groupfit.sweep.study import run_study
@@ -49,8 +51,18 @@ def run_sweep(args: argparse.Namespace) -> int:
     study = read_study(args.config)
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")
+    feasible, infeasible = feasibility(study)
+    if not feasible:
+        raise InputError(
+            f"{args.config}: none of the {len(study.runs)} runs can fit its breaks ({infeasible[0][1]}); "
+            "lower p, n or c in [grid], or use fewer sensors"
+        )
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers {args.workers}: give 1 or more worker processes")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
+    check_output_file(db, "--db")
     report_dir = check_output_dir(args.out) if args.out else None
+    check_json_target(args)
     if args.scheduler:
         executor = DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
     else:
@@ -63,6 +75,13 @@ def run_sweep(args: argparse.Namespace) -> int:
                 file=out,
                 flush=True,
             )
+            if infeasible:
+                print(
+                    f"  {len(feasible)} run(s) will fit; {len(infeasible)} cannot fit their breaks and will be "
+                    f"recorded as failed (first: {infeasible[0][1]})",
+                    file=out,
+                    flush=True,
+                )
             bar = tqdm(
                 total=len(study.runs), desc="runs", unit="run", file=sys.stderr, disable=True if args.quiet else None
             )

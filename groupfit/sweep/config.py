@@ -478,3 +478,33 @@ def _selection_option(option: dict, dataset: Dataset, where: str) -> dict:
             raise InputError(f"{where}: {key} = {value!r} must be a {type(default).__name__}")
         selection[key] = value
     return selection
+
+
+def infeasible_reason(run: RunSpec, n_samples: int) -> str | None:
+    """Why a run cannot fit its p breaks (the constraints of its n, c and inputs), or None when it can."""
+    from groupfit.grouping import Constraints
+
+    model, sensors = run.spec["model"], run.spec["sensors"]
+    n_inputs = len(sensors["names"]) if "names" in sensors else int(sensors["k"])
+    n_coef = n_inputs + int(model["intercept"])
+    constraints = Constraints.for_model(n_samples, model["n"], model["c"], n_coef)
+    largest = constraints.max_breaks()
+    if model["p"] <= largest:
+        return None
+    return (
+        f"p = {model['p']} with n = {model['n']}, c = {model['c']:g}, M = {n_coef} on {run.dataset} "
+        f"(N = {n_samples}): at most p = {largest} fits"
+    )
+
+
+def feasibility(study: Study) -> tuple[list[RunSpec], list[tuple[RunSpec, str]]]:
+    """The study's runs that can fit their breaks, and those that cannot with the reason."""
+    sizes = {str(d.path): d.n_samples for d in study.datasets}
+    feasible, infeasible = [], []
+    for run in study.runs:
+        reason = infeasible_reason(run, sizes[run.path])
+        if reason is None:
+            feasible.append(run)
+        else:
+            infeasible.append((run, reason))
+    return feasible, infeasible

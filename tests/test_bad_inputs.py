@@ -1,0 +1,521 @@
+"""Bad and hostile inputs through the command line, each in its own process.
+
+Every case runs ``python -m groupfit …`` in a subprocess and must end with
+exit status 2, exactly one line on stderr naming what is wrong (no
+traceback), and no file written or changed. The cases are grouped by kind:
+data, parameters, model files, outputs, configs, sweep
+(``test_the_table_covers_every_kind`` prints the counts).
+
+The processes run two at a time (``WORKERS``); the table takes about a
+minute and a half on two cores, so it is marked ``slow``. The fast lane runs
+the same table in process (``groupfit.cli.main``), which checks the same
+status, line and files without the interpreter start-up.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import shutil
+import subprocess
+import sys
+from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from test_switching_models import SYNTHETIC, synthetic_model
+
+WORKERS = 2
+KINDS = ("data", "parameters", "model files", "outputs", "configs", "sweep")
+ROOT_USER = hasattr(os, "geteuid") and os.geteuid() == 0
+"""The superuser writes into read-only folders: those cases are skipped for it."""
+
+
+@dataclass(frozen=True)
+class Case:
+    kind: str
+    label: str
+    argv: tuple[str, ...]
+    """Arguments after ``python -m groupfit``; ``{in}`` is the shared input folder, ``{out}`` the case's own."""
+    expect: str
+    """A fragment the stderr line must hold."""
+    needs_permissions: bool = False
+    """The case relies on a read-only path (skipped for the superuser)."""
+    prepare: str | None = None
+    """Something to create in the case's folder before the run: 'file', 'readonly-dir', 'readonly-file'."""
+
+
+def fit(*args):
+    return ("fit", "--quiet", "--out", "{out}/result", *args)
+
+
+def data_fit(name, *args):
+    return fit("--data", f"{{in}}/{name}", "--temps", "T1,T2,T3,T4", "--p", "1", *args)
+
+
+CASES = [
+    # ------------------------------------------------------------------ data
+    Case("data", "duplicate column name", data_fit("duplicate.csv"), "appears twice (columns 2 and 4)"),
+    Case(
+        "data",
+        "duplicate column, compare",
+        ("compare", "--quiet", "--data", "{in}/duplicate.csv", "--temps", "T1,T2", "--out", "{out}/r"),
+        "appears twice",
+    ),
+    Case(
+        "data",
+        "duplicate column, replay",
+        ("replay", "{in}/model.json", "--data", "{in}/duplicate.csv"),
+        "appears twice",
+    ),
+    Case("data", "temperature of 1e300", data_fit("hot.csv"), "row 51, column 'T2'"),
+    Case("data", "temperature of -273 °C", data_fit("cold.csv"), "row 11, column 'T1'"),
+    Case("data", "error of 1e300", data_fit("huge_error.csv"), "row 21, column 'error_um'"),
+    Case(
+        "data",
+        "temperature above a narrowed range",
+        data_fit("good.csv", "--range-temp", "0,25"),
+        "outside the plausible range 0…25",
+    ),
+    Case("data", "error above a narrowed limit", data_fit("good.csv", "--range-error", "1"), "--range-error"),
+    Case("data", "--range-temp not two numbers", data_fit("good.csv", "--range-temp", "abc"), "--range-temp"),
+    Case("data", "--range-temp reversed", data_fit("good.csv", "--range-temp", "200,-50"), "LOW < HIGH"),
+    Case("data", "--range-error negative", data_fit("good.csv", "--range-error", "-5"), "--range-error"),
+    Case("data", "empty file", data_fit("empty.csv"), "empty"),
+    Case("data", "header without rows", data_fit("header_only.csv"), "no rows"),
+    Case("data", "time going backwards", data_fit("backwards.csv"), "not strictly increasing"),
+    Case("data", "NaN temperature", data_fit("nan.csv"), "row 6, column 'T3'"),
+    Case("data", "missing temperature column", data_fit("good.csv", "--temps", "T1,T9"), "column 'T9' not found"),
+    Case(
+        "data",
+        "no sensor columns and no --temps",
+        fit("--data", "{in}/no_sensors.csv", "--p", "1"),
+        "The columns are: time_s, a, b, error_um",
+    ),
+    Case("data", "constant temperature", data_fit("constant.csv"), "is constant"),
+    Case("data", "data file not found", data_fit("missing.csv"), "not found"),
+    # ------------------------------------------------------------------ parameters
+    Case("parameters", "--pmax -1 with --p auto", data_fit("good.csv", "--p", "auto", "--pmax", "-1"), "--pmax -1"),
+    Case(
+        "parameters",
+        "compare --pmax -1",
+        ("compare", "--quiet", "--data", "{in}/good.csv", "--temps", "T1,T2", "--pmax", "-1", "--out", "{out}/r"),
+        "--pmax -1",
+    ),
+    Case("parameters", "--p -1", data_fit("good.csv", "--p", "-1"), "p = -1"),
+    Case("parameters", "--p not a number", data_fit("good.csv", "--p", "three"), "invalid p"),
+    Case("parameters", "--c negative", data_fit("good.csv", "--c", "-1"), "c = -1"),
+    Case("parameters", "--c nan", data_fit("good.csv", "--c", "nan"), "c = nan"),
+    Case(
+        "parameters",
+        "--c 0 with p = 200 (groups not over-determined)",
+        data_fit("good.csv", "--c", "0", "--n", "0", "--p", "200", "--search", "exact"),
+        "largest feasible p is 49",
+    ),
+    Case(
+        "parameters",
+        "--n larger than a hard group",
+        data_fit("good.csv", "--n", "200", "--p", "3"),
+        "at least 201 samples",
+    ),
+    Case("parameters", "--n negative", data_fit("good.csv", "--n", "-1"), "n = -1"),
+    Case("parameters", "--objective unknown", data_fit("good.csv", "--objective", "mad"), "invalid choice"),
+    Case("parameters", "--search unknown", data_fit("good.csv", "--search", "anneal"), "invalid choice"),
+    Case("parameters", "--criterion not an input", data_fit("good.csv", "--criterion", "T7"), "criterion 'T7'"),
+    Case("parameters", "--sensors without --select", data_fit("good.csv", "--sensors", "2"), "--select"),
+    Case(
+        "parameters",
+        "replay with a faster sampled run",
+        ("replay", "{in}/model.json", "--data", "{in}/fast.csv", "--json", "{out}/r.json"),
+        "sampling period",
+    ),
+    # ------------------------------------------------------------------ model files (replay and export)
+    *[
+        Case("model files", f"{label} ({verb})", argv, expect)
+        for label, name, expect in [
+            ("breaks out of order", "breaks_order.json", "strictly increasing"),
+            ("equal breaks", "breaks_equal.json", "strictly increasing"),
+            ("break beyond N", "breaks_beyond.json", "strictly between"),
+            ("negative n", "n_negative.json", "n = -1"),
+            ("n larger than a hard group", "n_large.json", "n = 200"),
+            ("windows reversed", "windows_reversed.json", "switching.windows"),
+            ("negative sampling period", "period_negative.json", "sampling_period_s"),
+            ("zero sampling period", "period_zero.json", "sampling_period_s"),
+            ("p as a string", "p_string.json", "p = '3'"),
+            ("breaks a bare integer", "breaks_int.json", "'breaks' must be a list"),
+            ("coefficient 1e308", "coefficient_huge.json", "exceeds the limit"),
+            ("non-string input name", "temps_number.json", "temps[1]"),
+            ("repeated input name", "temps_repeated.json", "listed twice"),
+            ("threshold not the criterion's", "threshold.json", "thresholds_c[0]"),
+            ("truncated file", "truncated.json", "not a JSON model file"),
+            ("foreign JSON", "foreign.json", "not a groupfit-model/1"),
+        ]
+        for verb, argv in [
+            ("replay", ("replay", f"{{in}}/{name}", "--data", "{in}/good.csv", "--json", "{out}/r.json")),
+            ("export", ("export", f"{{in}}/{name}", "--target", "all", "--out", "{out}/exported")),
+        ]
+    ],
+    Case(
+        "model files",
+        "model file not found",
+        ("export", "{in}/nothing.json", "--target", "c", "--out", "{out}/e"),
+        "model file not found",
+    ),
+    # ------------------------------------------------------------------ outputs
+    Case(
+        "outputs",
+        "fit --out is a file",
+        fit("--data", "{in}/good.csv", "--temps", "T1,T2", "--p", "1", "--out", "{out}/file"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "fit --json inside a file",
+        data_fit("good.csv", "--json", "{out}/file/r.json"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case("outputs", "fit --json is a folder", data_fit("good.csv", "--json", "{out}"), "needs a file name"),
+    Case(
+        "outputs",
+        "compare --out is a file",
+        ("compare", "--quiet", "--data", "{in}/good.csv", "--temps", "T1,T2", "--out", "{out}/file"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "compare --json inside a file",
+        (
+            "compare",
+            "--quiet",
+            "--data",
+            "{in}/good.csv",
+            "--temps",
+            "T1,T2",
+            "--json",
+            "{out}/file/c.json",
+            "--out",
+            "{out}/r",
+        ),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "replay --json inside a file",
+        ("replay", "{in}/model.json", "--data", "{in}/good.csv", "--json", "{out}/file/deeper/r.json"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "replay --out is a file",
+        ("replay", "{in}/model.json", "--data", "{in}/good.csv", "--out", "{out}/file"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "export --out is a file",
+        ("export", "{in}/model.json", "--target", "all", "--out", "{out}/file"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case("outputs", "simulate -o is a folder", ("simulate", "{in}/lumped.toml", "-o", "{out}"), "needs a file name"),
+    Case(
+        "outputs",
+        "simulate -o inside a file",
+        ("simulate", "{in}/lumped.toml", "-o", "{out}/file/run.csv"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "sweep --out inside a file",
+        ("sweep", "{in}/sweep_ok.toml", "--db", "{out}/s.sqlite", "--out", "{out}/file/report", "--quiet"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "sweep --db inside a file",
+        ("sweep", "{in}/sweep_ok.toml", "--db", "{out}/file/s.sqlite", "--quiet"),
+        "not a folder",
+        prepare="file",
+    ),
+    Case(
+        "outputs",
+        "sweep --json is a folder",
+        ("sweep", "{in}/sweep_ok.toml", "--db", "{out}/s.sqlite", "--json", "{out}", "--quiet"),
+        "needs a file name",
+    ),
+    Case(
+        "outputs",
+        "diagnose --json is a folder",
+        ("diagnose", "{in}/model.json", "--data", "{in}/good.csv", "--json", "{out}", "--out", "{out}/d"),
+        "needs a file name",
+    ),
+    Case(
+        "outputs",
+        "read-only --out folder",
+        data_fit("good.csv", "--out", "{out}/readonly"),
+        "not writable",
+        needs_permissions=True,
+        prepare="readonly-dir",
+    ),
+    Case(
+        "outputs",
+        "read-only --json file",
+        data_fit("good.csv", "--json", "{out}/readonly.json"),
+        "read-only",
+        needs_permissions=True,
+        prepare="readonly-file",
+    ),
+    Case(
+        "outputs",
+        "export into a read-only folder",
+        ("export", "{in}/model.json", "--target", "all", "--out", "{out}/readonly"),
+        "not writable",
+        needs_permissions=True,
+        prepare="readonly-dir",
+    ),
+    # ------------------------------------------------------------------ configs
+    Case("configs", "unknown key", ("fit", "{in}/unknown_key.toml", "--quiet", "--out", "{out}/r"), "colour"),
+    Case("configs", "unknown table", ("fit", "{in}/unknown_table.toml", "--quiet", "--out", "{out}/r"), "plot"),
+    Case("configs", "value of the wrong type", ("fit", "{in}/wrong_type.toml", "--quiet", "--out", "{out}/r"), "p"),
+    Case("configs", "not TOML", ("fit", "{in}/not_toml.toml", "--quiet", "--out", "{out}/r"), "not_toml.toml"),
+    Case("configs", "configuration not found", ("fit", "{in}/none.toml", "--quiet", "--out", "{out}/r"), "none.toml"),
+    Case(
+        "configs",
+        "data file of the config missing",
+        ("fit", "{in}/missing_data.toml", "--quiet", "--out", "{out}/r"),
+        "not found",
+    ),
+    Case(
+        "configs",
+        "negative pmax in the config",
+        ("compare", "{in}/pmax_negative.toml", "--quiet", "--out", "{out}/r"),
+        "--pmax -1",
+    ),
+    Case(
+        "configs",
+        "simulate scenario with an unknown key",
+        ("simulate", "{in}/scenario_unknown.toml", "-o", "{out}/run.csv"),
+        "scenario_unknown.toml",
+    ),
+    # ------------------------------------------------------------------ sweep
+    Case(
+        "sweep",
+        "every run infeasible",
+        ("sweep", "{in}/sweep_infeasible.toml", "--db", "{out}/s.sqlite", "--quiet"),
+        "none of the 1 runs can fit",
+    ),
+    Case(
+        "sweep",
+        "unknown key in the grid",
+        ("sweep", "{in}/sweep_unknown.toml", "--db", "{out}/s.sqlite", "--quiet"),
+        "sweep_unknown.toml",
+    ),
+    Case(
+        "sweep",
+        "sensor not in the data",
+        ("sweep", "{in}/sweep_sensor.toml", "--db", "{out}/s.sqlite", "--quiet"),
+        "T9",
+    ),
+    Case(
+        "sweep", "study not found", ("sweep", "{in}/nothing.toml", "--db", "{out}/s.sqlite", "--quiet"), "nothing.toml"
+    ),
+    Case(
+        "sweep",
+        "--workers 0",
+        ("sweep", "{in}/sweep_ok.toml", "--db", "{out}/s.sqlite", "--workers", "0", "--quiet"),
+        "--workers 0",
+    ),
+]
+
+
+def _write_inputs(folder: Path) -> None:
+    good = pd.read_csv(SYNTHETIC)
+    good.to_csv(folder / "good.csv", index=False)
+    text = (folder / "good.csv").read_text().splitlines()
+    header = text[0].split(",")
+    header[3] = "T1"  # time_s,T1,T2,T1,…: pandas would read the second T1 as T1.1
+    (folder / "duplicate.csv").write_text("\n".join([",".join(header), *text[1:]]) + "\n")
+
+    def changed(name, column, row, value):
+        frame = good.copy()
+        frame[column] = frame[column].astype(float)
+        frame.loc[row, column] = value
+        frame.to_csv(folder / name, index=False)
+
+    changed("hot.csv", "T2", 50, 1e300)
+    changed("cold.csv", "T1", 10, -273.0)
+    changed("huge_error.csv", "error_um", 20, 1e300)
+    changed("nan.csv", "T3", 5, float("nan"))
+    changed("backwards.csv", "time_s", 30, 100.0)
+    good.assign(T4=21.0).to_csv(folder / "constant.csv", index=False)
+    good.assign(time_s=good["time_s"] * 0.6).to_csv(folder / "fast.csv", index=False)
+    pd.DataFrame({"time_s": good["time_s"], "a": good["T1"], "b": good["T2"], "error_um": good["error_um"]}).to_csv(
+        folder / "no_sensors.csv", index=False
+    )
+    (folder / "empty.csv").write_text("")
+    (folder / "header_only.csv").write_text(text[0] + "\n")
+
+    model, _ = synthetic_model(p=3, n=3)
+    (folder / "model.json").write_text(json.dumps(model))
+    b = model["breaks"]
+    mutations = {
+        "breaks_order": lambda m: m.update(breaks=[b[1], b[0], b[2]]),
+        "breaks_equal": lambda m: m.update(breaks=[b[0], b[0], b[2]]),
+        "breaks_beyond": lambda m: m.update(breaks=[b[0], b[1], 400]),
+        "n_negative": lambda m: m.update(n=-1),
+        "n_large": lambda m: m.update(n=200),
+        "windows_reversed": lambda m: m["switching"].update(windows=[w[::-1] for w in m["switching"]["windows"]]),
+        "period_negative": lambda m: m.update(sampling_period_s=-100.0),
+        "period_zero": lambda m: m.update(sampling_period_s=0),
+        "p_string": lambda m: m.update(p="3"),
+        "breaks_int": lambda m: m.update(breaks=93),
+        "coefficient_huge": lambda m: m["coefficients"][1].__setitem__(2, 1e308),
+        "temps_number": lambda m: m["temps"].__setitem__(1, 7),
+        "temps_repeated": lambda m: m["temps"].__setitem__(1, "T1"),
+        "threshold": lambda m: m["switching"]["thresholds_c"].__setitem__(0, 99.0),
+    }
+    for name, mutate in mutations.items():
+        mutated = copy.deepcopy(model)
+        mutate(mutated)
+        (folder / f"{name}.json").write_text(json.dumps(mutated))
+    (folder / "truncated.json").write_text(json.dumps(model)[:500])
+    (folder / "foreign.json").write_text(json.dumps({"name": "a model", "coefficients": [1, 2]}))
+
+    data = f'path = "{(folder / "good.csv").as_posix()}"'
+    configs = {
+        "unknown_key.toml": f"[data]\n{data}\n[model]\ncolour = 'red'\n",
+        "unknown_table.toml": f"[data]\n{data}\n[plot]\ndpi = 90\n",
+        "wrong_type.toml": f"[data]\n{data}\n[model]\np = 'three'\n",
+        "not_toml.toml": "[data\npath = \n",
+        "missing_data.toml": '[data]\npath = "nowhere.csv"\ntemps = ["T1"]\n',
+        "pmax_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\npmax = -1\n',
+        "scenario_unknown.toml": 'kind = "lumped"\nwobble = 3\n',
+        "lumped.toml": 'kind = "lumped"\n',
+        "sweep_ok.toml": f"[data]\n{data}\n[grid]\np = [1]\n",
+        "sweep_infeasible.toml": f"[data]\n{data}\n[grid]\np = [200]\n",
+        "sweep_unknown.toml": f"[data]\n{data}\n[grid]\np = [1]\nlayers = [2]\n",
+        "sweep_sensor.toml": f'[data]\n{data}\n[grid]\np = [1]\nsensors = [["T1", "T9"]]\n',
+    }
+    for name, text in configs.items():
+        (folder / name).write_text(text)
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
+    return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime_ns) for p in folder.rglob("*")}
+
+
+def _prepare(folder: Path, what: str | None) -> None:
+    if what == "file":
+        (folder / "file").write_text("not a folder\n")
+    elif what == "readonly-dir":
+        (folder / "readonly").mkdir()
+        (folder / "readonly").chmod(0o555)
+    elif what == "readonly-file":
+        (folder / "readonly.json").write_text("{}\n")
+        (folder / "readonly.json").chmod(0o444)
+
+
+def _run(case: Case, inputs: Path, folder: Path) -> dict:
+    folder.mkdir()
+    _prepare(folder, case.prepare)
+    argv = [a.replace("{in}", str(inputs)).replace("{out}", str(folder)) for a in case.argv]
+    before, inputs_before = _snapshot(folder), _snapshot(inputs)
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    done = subprocess.run(
+        [sys.executable, "-m", "groupfit", *argv], cwd=folder, env=env, capture_output=True, text=True, timeout=300
+    )
+    return {
+        "status": done.returncode,
+        "stderr": done.stderr,
+        "changed": sorted(set(_snapshot(folder).items()) ^ set(before.items()))
+        + sorted(set(_snapshot(inputs).items()) ^ set(inputs_before.items())),
+    }
+
+
+@pytest.fixture(scope="module")
+def outcomes(tmp_path_factory):
+    """Every case run once, two processes at a time."""
+    root = tmp_path_factory.mktemp("bad_inputs")
+    inputs = root / "inputs"
+    inputs.mkdir()
+    _write_inputs(inputs)
+    runnable = [c for c in CASES if not (c.needs_permissions and ROOT_USER)]
+    with ThreadPoolExecutor(WORKERS) as pool:
+        futures = {c.label: pool.submit(_run, c, inputs, root / f"case{k}") for k, c in enumerate(runnable)}
+        results = {label: future.result() for label, future in futures.items()}
+    for path in root.rglob("readonly*"):
+        path.chmod(0o755)
+    yield results
+    shutil.rmtree(root, ignore_errors=True)
+
+
+def _check(case: Case, outcome: dict) -> None:
+    lines = outcome["stderr"].strip().splitlines()
+    assert outcome["status"] == 2, outcome["stderr"][-2000:]
+    assert len(lines) == 1, outcome["stderr"][-2000:]
+    assert "Traceback" not in outcome["stderr"]
+    assert case.expect in lines[0], lines[0]
+    assert outcome["changed"] == [], outcome["changed"]
+
+
+IDS = [f"{c.kind}: {c.label}" for c in CASES]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", CASES, ids=IDS)
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(outcomes, case):
+    if case.needs_permissions and ROOT_USER:
+        pytest.skip("the superuser writes into read-only paths")
+    _check(case, outcomes[case.label])
+
+
+@pytest.fixture(scope="module")
+def shared_inputs(tmp_path_factory):
+    inputs = tmp_path_factory.mktemp("bad_inputs_in_process")
+    _write_inputs(inputs)
+    return inputs
+
+
+@pytest.mark.parametrize("case", CASES, ids=IDS)
+def test_bad_input_in_process(shared_inputs, tmp_path, capsys, case):
+    """The same table through ``main`` in this process (the fast lane's copy of the subprocess table)."""
+    from groupfit.cli import main
+
+    if case.needs_permissions and ROOT_USER:
+        pytest.skip("the superuser writes into read-only paths")
+    folder = tmp_path / "case"
+    folder.mkdir()
+    _prepare(folder, case.prepare)
+    argv = [a.replace("{in}", str(shared_inputs)).replace("{out}", str(folder)) for a in case.argv]
+    before, inputs_before = _snapshot(folder), _snapshot(shared_inputs)
+    capsys.readouterr()
+    try:
+        status = main(argv)
+    except SystemExit as exc:  # argparse usage errors
+        status = exc.code
+    finally:
+        for path in folder.rglob("readonly*"):
+            path.chmod(0o755)
+    changed = sorted(set(_snapshot(folder).items()) ^ set(before.items())) + sorted(
+        set(_snapshot(shared_inputs).items()) ^ set(inputs_before.items())
+    )
+    _check(case, {"status": status, "stderr": capsys.readouterr().err, "changed": changed})
+
+
+def test_the_table_covers_every_kind(capsys):
+    counts = Counter(c.kind for c in CASES)
+    assert set(counts) == set(KINDS) and len({c.label for c in CASES}) == len(CASES)
+    with capsys.disabled():
+        print("\nbad-input cases by kind: " + ", ".join(f"{kind} {counts[kind]}" for kind in KINDS))
