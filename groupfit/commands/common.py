@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -148,20 +149,96 @@ def report_stream(args: argparse.Namespace):
     return sys.stderr if getattr(args, "json", None) == "-" else sys.stdout
 
 
-class StageProgress:
-    """A tqdm bar per named stage, driven by ``(stage, fraction)`` callbacks."""
+EXACT_BUDGET_SECONDS = 15 * 60.0
+"""Longest exact search a verb starts without --no-budget."""
+EXACT_BUDGET_BYTES = 4e9
+"""Largest estimated memory of an exact search a verb starts without --no-budget."""
 
-    def __init__(self, enabled: bool):
+
+def add_budget_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--no-budget",
+        action="store_true",
+        help="run an exact search even when its estimated time or memory exceeds the budget (15 min, 4 GB)",
+    )
+
+
+def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objective: str, pmax: int, what: str) -> None:
+    """Refuse, before it starts, an exact search estimated to exceed the budget; one line saying what to do."""
+    from groupfit.search.exact import estimate_exact_cost, format_seconds
+
+    if getattr(args, "no_budget", False):
+        return
+    cost = estimate_exact_cost(run.n_samples, n_coef, objective, pmax)
+    if cost.seconds <= EXACT_BUDGET_SECONDS and cost.bytes <= EXACT_BUDGET_BYTES:
+        return
+    hints = []
+    if objective == "sae":
+        sse = estimate_exact_cost(run.n_samples, n_coef, "sse", pmax)
+        hints.append(f"--objective sse ({sse.describe()})")
+    hints.append("--search ga --p P (the genetic algorithm)")
+    step = 2
+    while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
+        step *= 2
+    hints.append(f"or keep every {step}th row of the run")
+    raise InputError(
+        f"{run.source}: {what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "
+        f"{cost.describe()}, over the budget of {format_seconds(EXACT_BUDGET_SECONDS)} and "
+        f"{EXACT_BUDGET_BYTES / 1e9:g} GB: use {', '.join(hints)}; --no-budget runs it anyway"
+    )
+
+
+def _within_budget(cost) -> bool:
+    return cost.seconds <= EXACT_BUDGET_SECONDS and cost.bytes <= EXACT_BUDGET_BYTES
+
+
+class StageProgress:
+    """A tqdm bar per named stage, driven by ``(stage, fraction)`` callbacks.
+
+    When stderr is not a terminal (a log file, a CI job) there is no bar:
+    one line per stage is logged instead each time the stage passes another
+    ``LOG_STEP`` of its work, or every ``LOG_SECONDS`` while it is running;
+    a stage done within ``QUIET_SECONDS`` logs nothing.
+    """
+
+    LOG_STEP = 0.1
+    LOG_SECONDS = 5.0
+    QUIET_SECONDS = 2.0
+
+    def __init__(self, enabled: bool, stream=None):
         self.enabled = enabled
+        self.stream = stream or sys.stderr
         self.bars: dict[str, tqdm] = {}
+        self.logged: dict[str, tuple[float, float]] = {}
+        self.stage_start: dict[str, float] = {}
+        isatty = getattr(self.stream, "isatty", None)
+        self.terminal = bool(isatty and isatty())
 
     def __call__(self, stage: str, fraction: float) -> None:
         if not self.enabled:
             return
+        fraction = min(max(fraction, 0.0), 1.0)
+        if not self.terminal:
+            self._log(stage, fraction)
+            return
         bar = self.bars.get(stage)
         if bar is None:
-            bar = self.bars[stage] = tqdm(total=1000, desc=stage, leave=False, file=sys.stderr, disable=None)
-        bar.update(max(0, int(round(1000 * min(fraction, 1.0))) - bar.n))
+            bar = self.bars[stage] = tqdm(total=1000, desc=stage, leave=False, file=self.stream)
+        bar.update(max(0, int(round(1000 * fraction)) - bar.n))
+
+    def _log(self, stage: str, fraction: float) -> None:
+        now = time.monotonic()
+        first_seen = self.stage_start.setdefault(stage, now)
+        if now - first_seen < self.QUIET_SECONDS:
+            return  # a quick stage logs nothing
+        last_fraction, last_time = self.logged.get(stage, (-1.0, first_seen))
+        if last_fraction >= 1.0:
+            return
+        crossed = int(fraction / self.LOG_STEP) > int(max(last_fraction, 0.0) / self.LOG_STEP) or last_fraction < 0
+        if crossed or (now - last_time >= self.LOG_SECONDS and fraction > last_fraction):
+            elapsed = now - first_seen
+            print(f"progress {stage}: {100 * fraction:.0f} % after {elapsed:.0f} s", file=self.stream, flush=True)
+            self.logged[stage] = (fraction, now)
 
     def close(self) -> None:
         for bar in self.bars.values():

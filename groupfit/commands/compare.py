@@ -6,10 +6,12 @@ import argparse
 
 from groupfit.commands.common import (
     StageProgress,
+    add_budget_option,
     add_json_option,
     add_out_option,
     add_quiet_option,
     add_run_options,
+    check_exact_budget,
     check_json_target,
     check_output_dir,
     config_with_data_options,
@@ -34,6 +36,7 @@ def add_parser(verbs) -> None:
     add_json_option(compare)
     add_out_option(compare, "folder for the figures")
     add_quiet_option(compare)
+    add_budget_option(compare)
     add_interval_options(compare)
     compare.set_defaults(handler=run_compare)
 
@@ -55,6 +58,8 @@ def run_compare(args: argparse.Namespace) -> int:
 
     modelling = load_configured_run(config)
     validation = [load_configured_run(config, path) for path in config["data"]["validate"]]
+    n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
+    check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
     try:

@@ -6,10 +6,12 @@ import argparse
 
 from groupfit.commands.common import (
     StageProgress,
+    add_budget_option,
     add_json_option,
     add_out_option,
     add_quiet_option,
     add_run_options,
+    check_exact_budget,
     check_json_target,
     check_output_dir,
     config_with_data_options,
@@ -51,6 +53,7 @@ def add_parser(verbs) -> None:
     add_json_option(fit)
     add_out_option(fit, "folder for model.json and fit.png")
     add_quiet_option(fit)
+    add_budget_option(fit)
     add_interval_options(fit)
     fit.set_defaults(handler=run_fit)
 
@@ -95,6 +98,13 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(
             f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
         )
+    n_coef = run.temps.shape[1] + int(config["model"]["intercept"])
+    if config["model"]["p"] == "auto":
+        check_exact_budget(
+            args, run, n_coef, config["model"]["objective"], max(config["model"]["pmax"], 0), "--p auto's exact path"
+        )
+    elif config["search"]["method"] == "exact" and isinstance(config["model"]["p"], int):
+        check_exact_budget(args, run, n_coef, config["model"]["objective"], config["model"]["p"], "the exact search")
     selection = None
     if config["model"]["p"] == "auto" and config["model"]["pmax"] < 0:
         raise InputError(f"--pmax {config['model']['pmax']}: the largest p tried must be 0 or more")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, Callable, Mapping
 
 import numpy as np
@@ -226,8 +227,10 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             ga = GeneticSearch.from_settings(self.ga_settings, seed=self.random_state)
             reporter = None
             if progress is not None:
-                reporter = lambda generation, best: progress("ga", generation / self.max_generations)  # noqa: E731
+                reporter = _ga_reporter(progress, self.max_generations, self.stall_generations)
             result = ga.run(cost, constraints, self.p, progress=reporter)
+            if progress is not None:
+                progress("ga", 1.0)
         breaks, search_value, info = result.breaks, result.objective, result.info()
         if result.method == "ga":
             if self._should_certify(n_samples):
@@ -398,6 +401,26 @@ def default_criterion(run) -> str:
     """The input that moves most over the run: the clearest record of the thermal state."""
     spans = np.ptp(run.temps, axis=0)
     return run.temp_names[int(np.argmax(spans))]
+
+
+def _ga_reporter(progress, max_generations: int, stall_generations: int):
+    """``progress("ga", fraction)`` per generation, the fraction of the run's likely length.
+
+    The GA stops after ``stall_generations`` without improvement, usually long
+    before ``max_generations``: the fraction is measured against the earlier
+    of the two stops, so the bar keeps moving instead of waiting at
+    generation / max_generations (and never goes back).
+    """
+    state = {"best": math.inf, "improved": 0, "shown": 0.0}
+
+    def report(generation: int, best: float) -> None:
+        if best < state["best"]:
+            state["best"], state["improved"] = best, generation
+        end = min(max_generations, state["improved"] + stall_generations)
+        state["shown"] = max(state["shown"], min(1.0, generation / max(end, 1)))
+        progress("ga", state["shown"])
+
+    return report
 
 
 def _stage(progress, stage: str):
