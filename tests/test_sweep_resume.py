@@ -105,3 +105,29 @@ def test_killed_sweep_resumes_with_nothing_lost_and_nothing_duplicated(tmp_path)
         assert resumed_rows[run_hash]["breaks"] == row["breaks"]
         assert resumed_rows[run_hash]["objective"] == pytest.approx(row["objective"], rel=1e-12)
         np.testing.assert_allclose(resumed_rows[run_hash]["coefficients"], row["coefficients"], rtol=1e-9)
+
+
+def test_two_sweeps_on_one_database_share_the_runs(tmp_path):
+    """Started together, two sweeps claim runs from the database: every run executes once."""
+    config = tmp_path / "shared.toml"
+    config.write_text(MANY_SHORT_RUNS.format(data=DATA.as_posix()), encoding="utf-8")
+    total = len(read_study(config).runs)
+    db = tmp_path / "shared.sqlite"
+    reports = [tmp_path / f"sweep{k}.json" for k in range(2)]
+    commands = [
+        [sys.executable, "-m", "groupfit", "sweep", str(config), "--db", str(db), "--workers", "1", "--quiet"]
+        + ["--json", str(report)]
+        for report in reports
+    ]
+    sweeps = [subprocess.Popen(c, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) for c in commands]
+    for sweep in sweeps:
+        assert sweep.wait(timeout=300) == 0, sweep.stderr.read().decode()
+        sweep.stderr.close()
+    results = [json.loads(report.read_text()) for report in reports]
+    executed = sum(r["done"] + r["failed"] for r in results)
+    assert executed == total, results  # no run twice (before: up to 2 × total)
+    for r in results:
+        assert r["skipped"] + r["done"] + r["failed"] + r["elsewhere"] == total
+    with sqlite3.connect(db) as connection:
+        assert connection.execute("SELECT COUNT(*) FROM runs WHERE status = 'done'").fetchone()[0] == total
+        assert connection.execute("SELECT COUNT(*) FROM claims").fetchone()[0] == 0

@@ -105,6 +105,8 @@ def run_sweep(args: argparse.Namespace) -> int:
         f"in {outcome.seconds:.1f} s",
         file=out,
     )
+    if outcome.elsewhere:
+        print(f"  {outcome.elsewhere} run(s) taken by another sweep on the same database", file=out)
     print(f"  database {outcome.db}", file=out)
     for run_hash, message in outcome.failures[:MAX_FAILURES_SHOWN]:
         print(f"  failed {run_hash[:12]}: {message}", file=out)
@@ -126,6 +128,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             "done": outcome.done,
             "skipped": outcome.skipped,
             "failed": outcome.failed,
+            "elsewhere": outcome.elsewhere,
             "seconds": outcome.seconds,
             "failures": [{"run_hash": h, "error": m} for h, m in outcome.failures],
             "report": [str(p) for p in written],

@@ -31,7 +31,15 @@ Schema (table ``runs``; JSON columns hold JSON text)::
     finished_at     TEXT               UTC, ISO 8601
     groupfit_version TEXT
 
-Only the process that runs the study writes. A row is written when its run
+Concurrent sweeps on one database share the work through the table
+``claims`` (``run_hash`` PRIMARY KEY, ``owner`` host:pid, ``expires`` Unix
+time): a sweep claims a batch of runs that are neither done nor claimed by
+another live sweep (:meth:`StudyStore.claim`, one ``BEGIN IMMEDIATE``
+transaction), runs them, and drops each claim when it records the run. A
+claim lapses when its lease expires or, on the same host, when its owner
+process is gone, so a killed sweep never blocks its runs.
+
+Only the processes that run the study write. A row is written when its run
 has finished, in its own transaction (``INSERT OR REPLACE`` on the hash), in
 WAL mode: a study killed at any moment keeps every finished run, loses at most
 the runs in flight, and never holds a run twice. A run counts as done only
@@ -42,7 +50,10 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import os
+import socket
 import sqlite3
+import time
 from pathlib import Path
 from typing import Iterable
 
@@ -119,6 +130,9 @@ class StudyStore:
         with self.transaction():
             self.connection.execute(f"CREATE TABLE IF NOT EXISTS runs (\n    {columns}\n)")
             self.connection.execute("CREATE INDEX IF NOT EXISTS runs_by_study ON runs (study, status)")
+            self.connection.execute(
+                "CREATE TABLE IF NOT EXISTS claims (run_hash TEXT PRIMARY KEY, owner TEXT, expires REAL)"
+            )
             self.connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
 
     def transaction(self):
@@ -138,6 +152,46 @@ class StudyStore:
         rows = self.connection.execute("SELECT run_hash FROM runs WHERE status = 'done'").fetchall()
         done = {row[0] for row in rows}
         return done if hashes is None else done.intersection(hashes)
+
+    def claim(self, hashes: Iterable[str], owner: str, lease_s: float, limit: int) -> list[str]:
+        """Claim up to ``limit`` of ``hashes`` (in order) that are not done and not claimed by another live sweep.
+
+        Claims held by ``owner`` are renewed and returned first.
+        """
+        now = time.time()
+        with self.transaction():
+            done = {row[0] for row in self.connection.execute("SELECT run_hash FROM runs WHERE status = 'done'")}
+            claims = {
+                row[0]: (row[1], row[2])
+                for row in self.connection.execute("SELECT run_hash, owner, expires FROM claims")
+            }
+            chosen = []
+            for run_hash in hashes:
+                if len(chosen) >= limit:
+                    break
+                if run_hash in done:
+                    continue
+                holder = claims.get(run_hash)
+                if holder is not None and holder[0] != owner and holder[1] > now and _owner_alive(holder[0]):
+                    continue
+                chosen.append(run_hash)
+            self.connection.executemany(
+                "INSERT OR REPLACE INTO claims (run_hash, owner, expires) VALUES (?, ?, ?)",
+                [(run_hash, owner, now + lease_s) for run_hash in chosen],
+            )
+        return chosen
+
+    def claimed_elsewhere(self, hashes: Iterable[str], owner: str) -> set[str]:
+        """Those of ``hashes`` that another live sweep holds a claim on."""
+        now = time.time()
+        rows = self.connection.execute("SELECT run_hash, owner, expires FROM claims").fetchall()
+        held = {h for h, who, expires in rows if who != owner and expires > now and _owner_alive(who)}
+        return held.intersection(hashes)
+
+    def release(self, owner: str) -> None:
+        """Drop every claim ``owner`` still holds (runs it did not get to)."""
+        with self.transaction():
+            self.connection.execute("DELETE FROM claims WHERE owner = ?", (owner,))
 
     def record(self, run: RunSpec, result: dict, study: str) -> None:
         """Write one finished run (done or failed) in its own transaction."""
@@ -183,6 +237,7 @@ class StudyStore:
         placeholders = ", ".join(f":{name}" for name in names)
         with self.transaction():
             self.connection.execute(f"INSERT OR REPLACE INTO runs ({', '.join(names)}) VALUES ({placeholders})", row)
+            self.connection.execute("DELETE FROM claims WHERE run_hash = ?", (run.run_hash,))
 
     def rows(self, hashes: Iterable[str] | None = None) -> list[dict]:
         """Rows as dicts with JSON columns decoded (only ``hashes`` when given, in that order)."""
@@ -199,6 +254,25 @@ class StudyStore:
         if hashes is None:
             return list(rows.values())
         return [rows[h] for h in hashes if h in rows]
+
+
+def claim_owner() -> str:
+    """This process as a claim owner: ``host:pid``."""
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def _owner_alive(owner: str) -> bool:
+    """Whether a claim's owner may still be running (always true for another host: its lease decides)."""
+    host, _, pid = owner.rpartition(":")
+    if host != socket.gethostname() or not pid.isdigit():
+        return True
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 class _Transaction:
