@@ -208,3 +208,29 @@ def test_fit_select_keeps_the_sensors_that_carry_the_error(tmp_path, capsys):
     result = json.loads(capsys.readouterr().out)
     assert sorted(result["input_selection"]["inputs"]) == ["T1", "T3"]
     assert result["temps"] == result["input_selection"]["inputs"]
+
+
+def test_diagnose_can_start_from_re_selected_inputs(tmp_path, capsys):
+    rng = np.random.default_rng(6)
+    frame = ambient_run(2, n_samples=600)
+    for k in range(5, 9):  # sensors that see only noise: a base model that over-fits on them
+        frame[f"T{k}"] = 20.0 + rng.normal(scale=0.05, size=len(frame))
+    path = tmp_path / "run.csv"
+    frame.to_csv(path, index=False)
+    temps = ",".join(f"T{k}" for k in range(1, 9))
+    model_dir = tmp_path / "model"
+    assert main(["fit", "--data", str(path), "--temps", temps, "--p", "0", "--quiet", "--out", str(model_dir)]) == 0
+    capsys.readouterr()
+    args = ["diagnose", str(model_dir / "model.json"), "--data", str(path), "--select", "forward"]
+    assert main([*args, "--out", str(tmp_path / "d"), "--json", str(tmp_path / "d.json")]) == 0
+    report = capsys.readouterr().out.splitlines()
+    result = json.loads((tmp_path / "d.json").read_text())
+    chosen = result["selection"]["inputs"]
+    assert report[0].startswith("inputs re-selected by forward") and set(chosen) <= set(TEMPS)
+    augmented = json.loads((tmp_path / "d" / "model_augmented.json").read_text())
+    assert augmented["temps"][: len(chosen)] == chosen
+    assert result["added"][0]["column"] == "T_amb"
+    # before is the model as given (eight inputs), whatever was re-selected
+    assert result["before"]["data"]["rms_um"] == pytest.approx(
+        json.loads((model_dir / "model.json").read_text())["training"]["rms_um"]
+    )

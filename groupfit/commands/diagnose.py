@@ -145,18 +145,14 @@ def run_diagnose(args: argparse.Namespace) -> int:
 
 def with_original_baseline(result, model, data, validate, live_rule, selection) -> DiagnosisResult:
     """Report before/after against the model the user gave, not the re-selected one."""
-    from groupfit.diagnose.loop import metrics_of, stacked_residual
+    from groupfit.diagnose.loop import metrics_of, residual_checks, stacked_residual
 
     runs = {"data": data, **({"validate": validate} if validate else {})}
     before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     result.residuals_before = before
     result.before = {key: metrics_of(r) for key, r in before.items()}
-    result.selection = selection
-    result.notes.insert(
-        0,
-        f"inputs re-selected by {selection['method']} on held-out conditions: {', '.join(selection['inputs'])} "
-        f"(of {len(model['temps'])}); before/after compare with the model as given",
-    )
+    result.checks_before = residual_checks(before["data"], np.arange(len(before["data"])) * data[0].period)
+    result.selection = {**selection, "of": len(model["temps"])}
     return result
 
 
@@ -213,6 +209,12 @@ def diagnosis_report(result: DiagnosisResult, data: list[Run], validate: list[Ru
         lines.append(
             f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
         )
+    selection = getattr(result, "selection", None)
+    if selection is not None:
+        lines.append(
+            f"inputs re-selected by {selection['method']} on held-out conditions: {', '.join(selection['inputs'])} "
+            f"({len(selection['inputs'])} of {selection['of']}); before/after compare with the model as given"
+        )
     if result.added:
         for step in result.steps:
             c = step.candidate
@@ -229,10 +231,7 @@ def diagnosis_report(result: DiagnosisResult, data: list[Run], validate: list[Ru
         )
         lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
     else:
-        lines.append(
-            "nothing missing: no candidate explains a significant part of the held-out error; the model's effects "
-            "are unchanged"
-        )
+        lines.append("nothing missing: no candidate explains a significant part of the held-out error; no effect added")
     lines.append(f"held out: {result.folds}")
     for refusal in result.refused[:5]:
         c = refusal.candidate
