@@ -234,3 +234,14 @@ def test_diagnose_can_start_from_re_selected_inputs(tmp_path, capsys):
     assert result["before"]["data"]["rms_um"] == pytest.approx(
         json.loads((model_dir / "model.json").read_text())["training"]["rms_um"]
     )
+
+
+def test_compare_takes_one_modelling_run(tmp_path, capsys):
+    paths = []
+    for k in range(2):
+        paths.append(tmp_path / f"day{k}.csv")
+        ambient_run(k, n_samples=200).to_csv(paths[-1], index=False)
+    assert main(["compare", "--data", *map(str, paths), "--temps", "T1,T2", "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compare fits grouped models, whose breaks belong to one run" in err[0]
+    assert not (tmp_path / "c").exists()
