@@ -225,6 +225,9 @@ def diagnosis_report(result: DiagnosisResult, data: list[Run], validate: list[Ru
                 f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
                 f"held-out RMS {held_out})"
             )
+            if step.alternatives:
+                others = "; ".join(f"{a.feature.column} {a.feature.describe()}" for a in step.alternatives[:3])
+                lines.append(f"  as well explained (within one standard error) by: {others}")
         lines.append(
             f"{'validation' if validate else 'measured'} run {judged}: RMS {change_words(b['rms_um'], a['rms_um'])}, "
             f"max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
