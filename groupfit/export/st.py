@@ -17,6 +17,16 @@ A model with derived inputs takes the source columns of those inputs as
 further elements of ``Temps`` after its measured temperatures; the block
 computes every derived input each sample with its own state (low-pass output,
 previous value, fixed-size delay line), as the C routine does.
+
+A power stage ``(|v| / scale)^exponent`` is written with ``EXPT`` and ``ABS``
+in LREAL, whatever the block's real type: a REAL block widens the last good
+value with ``TO_LREAL`` and rounds the power with ``TO_REAL`` once, as the C
+float build and :class:`groupfit.runtime.SwitchingRule` do. Its bit-for-bit
+agreement with them then rests on the PLC's ``EXPT`` rounding as the C
+library's ``pow`` does, and not being replaced by multiplications for a whole
+exponent (IEC 61131-3 does not specify the rounding of EXPT);
+an ``EXPT`` that differs in the last bit of the LREAL changes the rounded
+REAL only rarely.
 """
 
 from __future__ import annotations
@@ -269,7 +279,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         derived_vars=derived_vars(tables, real),
         derived_constants=derived_constants(tables, real, literal),
         reset_derived=reset_derived(tables),
-        step_derived=step_derived(tables),
+        step_derived=step_derived(tables, real),
         criterion_number=tables.criterion_reading + 1,
         hold=tables.hold_samples,
         count_max=COUNT_MAX,
@@ -325,15 +335,21 @@ def input_lines(tables: RuleTables) -> str:
     lines.append("  reading after Reset:")
     for k, d in enumerate(tables.derived, start=1):
         lines.append(f"    derivedValue[{k}] = {_ascii(d.name)}: {_ascii(d.describe())} (Temps[{d.reading + 1}])")
-        if d.transform == "lowpass":
+        if d.has_power:
             lines.append(
-                f"      y := LOWPASS_B_{k} * v + LOWPASS_A_{k} * y, y = v before its first call;"
+                f"      v := EXPT(ABS(x) / POWER_SCALE_{k}, POWER_EXPONENT_{k}) of the last good value x, in LREAL"
+            )
+        if d.transform == "lowpass":
+            before = "0" if d.from_rest else "v"
+            lines.append(
+                f"      y := LOWPASS_B_{k} * v + LOWPASS_A_{k} * y, y = {before} before its first call;"
                 " A = exp(-dt/tau), B = 1 - A"
             )
         elif d.transform == "derivative":
             lines.append(f"      (v - previous v) * DERIVATIVE_SCALE_{k} (3600/dt: per hour), 0 at the first call")
         elif d.transform == "delay":
-            lines.append(f"      v of DELAY_{k} calls before, the first v before that")
+            first = "0" if d.from_rest else "the first v"
+            lines.append(f"      v of DELAY_{k} calls before, {first} before that")
     return "\n".join(lines) + "\n\n"
 
 
@@ -358,6 +374,8 @@ def derived_vars(tables: RuleTables, real: str) -> str:
             lines.append(f"    delayPos{k} : INT := 0;")
     if any(d.transform == "delay" for d in tables.derived):
         lines.append("    j : INT;")
+    if any(d.has_power for d in tables.derived):
+        lines.append(f"    sourceValue : {real};")
     return "\n".join(lines) + "\n"
 
 
@@ -366,6 +384,9 @@ def derived_constants(tables: RuleTables, real: str, literal) -> str:
     if tables.derived:
         lines.append(f"    N_DERIVED : INT := {len(tables.derived)};")
     for k, d in enumerate(tables.derived, start=1):
+        if d.has_power:
+            lines.append(f"    POWER_SCALE_{k} : LREAL := {shortest_literal(d.power_scale, single=False)};")
+            lines.append(f"    POWER_EXPONENT_{k} : LREAL := {shortest_literal(d.exponent, single=False)};")
         if d.transform == "lowpass":
             lines.append(f"    LOWPASS_A_{k} : {real} := {literal(d.a)};")
             lines.append(f"    LOWPASS_B_{k} : {real} := {literal(d.b)};")
@@ -397,13 +418,21 @@ def reset_derived(tables: RuleTables) -> str:
     return "\n".join(lines) + "\n"
 
 
-def step_derived(tables: RuleTables) -> str:
+def step_derived(tables: RuleTables, real: str = "LREAL") -> str:
     """The derived inputs' update, in the order of the other targets."""
     blocks = []
     for k, d in enumerate(tables.derived, start=1):
         r = d.reading + 1
         v = f"lastGood[{r}]"
         lines = ["", f"    (* derivedValue[{k}] = {_ascii(d.name)}: {_ascii(d.describe())} (Temps[{r}]) *)"]
+        if d.has_power:
+            power = f"EXPT(ABS({v}) / POWER_SCALE_{k}, POWER_EXPONENT_{k})"
+            if real == "REAL":
+                power = f"TO_REAL(EXPT(ABS(TO_LREAL({v})) / POWER_SCALE_{k}, POWER_EXPONENT_{k}))"
+            lines.append("    (* its power stage, in LREAL whatever the block's real type, rounded once *)")
+            lines.append(f"    sourceValue := {power};")
+            v = "sourceValue"
+        initial = "0.0" if d.from_rest else v
         if d.transform == "identity":
             lines.append(f"    derivedValue[{k}] := {v};")
             blocks.append("\n".join(lines))
@@ -411,7 +440,7 @@ def step_derived(tables: RuleTables) -> str:
         if d.transform == "delay":
             start = [
                 f"            FOR j := 0 TO DELAY_{k} - 1 DO",
-                f"                delayLine{k}[j] := {v};",
+                f"                delayLine{k}[j] := {initial};",
                 "            END_FOR;",
                 f"            delayPos{k} := 0;",
             ]
@@ -424,7 +453,7 @@ def step_derived(tables: RuleTables) -> str:
                 "        END_IF;",
             ]
         else:
-            start = [f"            derivedMemory[{k}] := {v};"]
+            start = [f"            derivedMemory[{k}] := {initial};"]
             if d.transform == "lowpass":
                 update = [
                     f"        derivedMemory[{k}] := LOWPASS_B_{k} * {v} + LOWPASS_A_{k} * derivedMemory[{k}];",
