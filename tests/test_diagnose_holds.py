@@ -8,13 +8,13 @@ import pytest
 from test_diagnose import TEMPS, lumped, sensor_error
 
 from groupfit.cli import main
-from groupfit.commands.diagnose import change_words
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import candidate_features, rank_candidates
 from groupfit.diagnose.folds import Folds, block_labels, make_folds
 from groupfit.diagnose.loop import metrics_of, stacked_design, stacked_residual
+from groupfit.diagnose.report import change_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import lowpass
 from groupfit.modelfile import model_to_dict

@@ -116,6 +116,34 @@ class DiagnosisResult:
     refused: list[Refusal] = field(default_factory=list)
     folds: str = ""
     base_check: dict[str, Any] = field(default_factory=dict)
+    run_names: dict[str, str] = field(default_factory=dict)
+    """Names of the modelling run(s) (``"data"``) and the validation run(s) (``"validate"``)."""
+    selection: dict[str, Any] | None = None
+    """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
+
+    def summary(self) -> str:
+        """The report, as ``groupfit diagnose`` prints it."""
+        from groupfit.diagnose.report import diagnosis_summary
+
+        return diagnosis_summary(self)
+
+    def to_json(self, model_path: str | None = None) -> dict[str, Any]:
+        """The machine-readable result (``diagnose --json``); ``model`` is the model file to use."""
+        return {
+            "candidates": [c.to_dict() for c in self.candidates],
+            "added": [c.to_dict() for c in self.added],
+            "steps": [s.to_dict() for s in self.steps],
+            "refused": [r.to_dict() for r in self.refused],
+            "folds": self.folds,
+            "base_model": self.base_check,
+            "selection": self.selection,
+            "before": self.before,
+            "after": self.after,
+            "improved": self.improved,
+            "checks": {"before": self.checks_before, "after": self.checks_after},
+            "notes": self.notes,
+            "model": None if model_path is None else str(model_path),
+        }
 
     @property
     def improved(self) -> bool | None:
@@ -272,6 +300,7 @@ def diagnose(
         refused=refused,
         folds=folds.describe(),
         base_check=base_check,
+        run_names={key: joint_name(rs) for key, rs in runs.items()},
     )
 
 

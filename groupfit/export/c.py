@@ -57,6 +57,8 @@ HEADER = Template(
  *
  * Call gf_init() once, then gf_step() once per sample, every
  * GF_SAMPLING_PERIOD_S seconds (check the task period with gf_check_period()).
+ * The rule, step by step: docs/switching.md of groupfit (the JSON export's
+ * "steps" say the same); this file performs those steps in that order.
  *
  * Readings temps[GF_N_TEMPS], in this order, with the range in which a reading
  * is valid:
