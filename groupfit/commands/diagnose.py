@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_output_dir, report_stream, write_json
+from groupfit.commands.common import add_json_option, add_out_option, check_output_dir, report_stream, write_json
 from groupfit.data import DEFAULT_TIME, Run, load_run
 from groupfit.diagnose import DiagnosisResult, diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
@@ -32,8 +32,8 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     parser.add_argument("--time", default=DEFAULT_TIME, metavar="COLUMN", help="time column (default time_s)")
-    parser.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
-    parser.add_argument("--out", default="groupfit-out", metavar="DIR", help="folder for figures and the new model")
+    add_json_option(parser)
+    add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
         "--min-score",
         type=float,
