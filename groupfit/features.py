@@ -140,7 +140,11 @@ class Feature:
 
 
 def power_stage(x: np.ndarray, scale: float, exponent: float) -> np.ndarray:
-    """``(|x| / scale)^exponent``, element by element (the C library's ``pow``)."""
+    """``(|x| / scale)^exponent``, element by element.
+
+    numpy's ``power`` may differ from the C library's ``pow`` in the last bit;
+    the run-time rule and its exports use ``pow`` (:mod:`groupfit.runtime`).
+    """
     return np.power(np.abs(np.asarray(x, dtype=float)) / scale, exponent)
 
 

@@ -29,7 +29,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from groupfit.errors import InputError
-from groupfit.features import Feature, derived_matrix
+from groupfit.features import STARTS, Feature, derived_matrix
 from groupfit.grouping import hard_groups, serving_group_index, soft_groups
 from groupfit.io import atomic_write_text, to_json
 
@@ -330,13 +330,13 @@ def model_problem(model: Any) -> str | None:
     missing = [key for key in REQUIRED if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"
-    where = _nonfinite(dict(model), "")
-    if where:
-        return f"{where} is not a finite number (NaN and infinities have no place in a model file)"
     for check in (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem):
         problem = check(model)
         if problem:
             return problem
+    where = _nonfinite(dict(model), "")
+    if where:
+        return f"{where} is not a finite number (NaN and infinities have no place in a model file)"
     return None
 
 
@@ -580,7 +580,10 @@ def _parse_derived(entries: Any) -> list[Feature]:
     """The ``derived_inputs`` entries as Features; InputError for one that does not describe a transform.
 
     An entry's ``name`` must match its transform, and a delay be at most
-    :data:`MAX_DELAY_SAMPLES` samples.
+    :data:`MAX_DELAY_SAMPLES` samples. A power stage (``exponent`` and
+    ``scale``, both finite and > 0) is optional, as is ``start`` (``"steady"``,
+    the default, or ``"rest"``): entries written before these keys existed
+    load unchanged.
     """
     if not isinstance(entries, list):
         raise InputError("'derived_inputs' must be a list")
@@ -595,6 +598,15 @@ def _parse_derived(entries: Any) -> list[Feature]:
         delay = entry.get("delay_samples", 0)
         if not isinstance(delay, int) or isinstance(delay, bool):
             raise InputError(f"{where}: delay_samples must be a whole number")
+        for key in ("exponent", "scale"):
+            value = entry.get(key)
+            if value is not None and not (_is_number(value) and value > 0):
+                raise InputError(f"{where}: {key} must be a finite number > 0, not {value!r}")
+        if (entry.get("exponent") is None) != (entry.get("scale") is None):
+            raise InputError(f"{where}: a power stage needs both 'exponent' and 'scale' (or neither)")
+        start = entry.get("start", "steady")
+        if start not in STARTS:
+            raise InputError(f"{where}: start {start!r} must be one of {', '.join(STARTS)}")
         try:
             feature = Feature.from_dict(entry)
         except InputError as exc:

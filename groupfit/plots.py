@@ -188,7 +188,8 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
         top.plot(values[order], np.polyval(fit, values[order]), color="tab:red", lw=1.2)
         verdict = "added" if result.added else "best candidate, not significant"
         top.set_title(
-            f"{data[0].name}: residual against {feature.column}, {feature.describe()} ({verdict})", fontsize=9
+            f"{'+'.join(r.name for r in data)}: residual against {feature.column}, {feature.describe()} ({verdict})",
+            fontsize=9,
         )
         top.set_xlabel(feature.name)
     top.set_ylabel("residual before (µm)")

@@ -8,13 +8,13 @@ import pytest
 from test_diagnose import TEMPS, lumped, sensor_error
 
 from groupfit.cli import main
-from groupfit.commands.diagnose import change_words
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import candidate_features, rank_candidates
 from groupfit.diagnose.folds import Folds, block_labels, make_folds
 from groupfit.diagnose.loop import metrics_of, stacked_design, stacked_residual
+from groupfit.diagnose.report import change_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import lowpass
 from groupfit.modelfile import model_to_dict
@@ -208,3 +208,40 @@ def test_fit_select_keeps_the_sensors_that_carry_the_error(tmp_path, capsys):
     result = json.loads(capsys.readouterr().out)
     assert sorted(result["input_selection"]["inputs"]) == ["T1", "T3"]
     assert result["temps"] == result["input_selection"]["inputs"]
+
+
+def test_diagnose_can_start_from_re_selected_inputs(tmp_path, capsys):
+    rng = np.random.default_rng(6)
+    frame = ambient_run(2, n_samples=600)
+    for k in range(5, 9):  # sensors that see only noise: a base model that over-fits on them
+        frame[f"T{k}"] = 20.0 + rng.normal(scale=0.05, size=len(frame))
+    path = tmp_path / "run.csv"
+    frame.to_csv(path, index=False)
+    temps = ",".join(f"T{k}" for k in range(1, 9))
+    model_dir = tmp_path / "model"
+    assert main(["fit", "--data", str(path), "--temps", temps, "--p", "0", "--quiet", "--out", str(model_dir)]) == 0
+    capsys.readouterr()
+    args = ["diagnose", str(model_dir / "model.json"), "--data", str(path), "--select", "forward"]
+    assert main([*args, "--out", str(tmp_path / "d"), "--json", str(tmp_path / "d.json")]) == 0
+    report = capsys.readouterr().out.splitlines()
+    result = json.loads((tmp_path / "d.json").read_text())
+    chosen = result["selection"]["inputs"]
+    assert report[0].startswith("inputs re-selected by forward") and set(chosen) <= set(TEMPS)
+    augmented = json.loads((tmp_path / "d" / "model_augmented.json").read_text())
+    assert augmented["temps"][: len(chosen)] == chosen
+    assert result["added"][0]["column"] == "T_amb"
+    # before is the model as given (eight inputs), whatever was re-selected
+    assert result["before"]["data"]["rms_um"] == pytest.approx(
+        json.loads((model_dir / "model.json").read_text())["training"]["rms_um"]
+    )
+
+
+def test_compare_takes_one_modelling_run(tmp_path, capsys):
+    paths = []
+    for k in range(2):
+        paths.append(tmp_path / f"day{k}.csv")
+        ambient_run(k, n_samples=200).to_csv(paths[-1], index=False)
+    assert main(["compare", "--data", *map(str, paths), "--temps", "T1,T2", "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compare fits grouped models, whose breaks belong to one run" in err[0]
+    assert not (tmp_path / "c").exists()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import math
 import re
 import shutil
 import subprocess
@@ -18,6 +20,7 @@ from test_switching_models import (
     eight_sensor_validation,
     fe_model,
     fe_validation_runs,
+    heat_law_runs,
     readings,
     streams_for,
     synthetic_model,
@@ -25,6 +28,7 @@ from test_switching_models import (
 
 from groupfit.export import render, write
 from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
+from groupfit.features import Feature
 from groupfit.runtime import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
@@ -262,3 +266,133 @@ def test_header_documents_the_readings_and_the_derived_inputs():
     assert re.findall(r"^static (?!const)", source, flags=re.M) == []
     code = re.sub(r"/\*.*?\*/", "", source, flags=re.S)
     assert not re.search(r"\b(malloc|calloc|realloc|free|exp)\s*\(", code)
+
+
+# power stage and start from rest ------------------------------------------------
+
+HEAT = "heat law p=2"
+
+
+def heat_law_streams(model):
+    """The derived streams, the validation run, and the speed invalid before its first good reading."""
+    _, streams = derived_case(HEAT)
+    tables = RuleTables.from_model(model)
+    r = tables.raw_names.index("speed_rpm")
+    late_start = streams["modelling"].copy()
+    late_start[:6, r] = [np.nan, -1.0, np.inf, 1e12, -np.inf, np.nan]
+    streams["speed faulty at the start"] = late_start
+    huge = streams["validation"].copy()
+    huge[100:110, r] = [1e308, -1e308, 5e-324, 0.0, -0.0, 3.4e38, 1e39, np.nan, 1e-300, 12000.0]
+    streams["huge and tiny speeds"] = huge
+    return streams
+
+
+def test_heat_law_and_rest_start_double_build_is_the_python_rule_bit_for_bit(drivers):
+    model, _ = augmented_model(HEAT)
+    streams = heat_law_streams(model)
+    outputs = run_driver(drivers(HEAT, model), list(streams.values()))
+    samples = 0
+    for temps, c_out in zip(streams.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps))  # %a: every bit
+        samples += len(temps)
+    assert set(streams) >= {"modelling", "validation", "faults", "source faults", "speed faulty at the start"}
+    print(f"{HEAT}: {len(streams)} streams, {samples} samples bit for bit (double)")
+
+
+def test_heat_law_and_rest_start_float_build_is_the_float32_rule_bit_for_bit(drivers):
+    model, _ = augmented_model(HEAT)
+    streams = heat_law_streams(model)
+    outputs = run_driver(drivers(HEAT, model, "single"), list(streams.values()))
+    for temps, c_out in zip(streams.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps, "single"))
+
+
+def test_heat_law_sanitized_build_runs_fault_streams_cleanly(drivers):
+    model, _ = augmented_model(HEAT)
+    streams = heat_law_streams(model)
+    chosen = [streams[k] for k in ("faults", "source faults", "speed faulty at the start", "huge and tiny speeds")]
+    outputs = run_driver(drivers(HEAT, model, "sanitized"), chosen)
+    for temps, c_out in zip(chosen, outputs):
+        assert_same_decisions(c_out, python_replay(model, temps))
+
+
+@pytest.fixture(scope="module")
+def heat_law_setup(drivers):
+    model, _ = augmented_model(HEAT)
+    return model, drivers(HEAT, model, "sanitized"), drivers(HEAT, model, "single")
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(stream=hostile_stream(6))
+def test_hostile_readings_of_a_heat_law_source_never_crash_it(heat_law_setup, stream):
+    model, sanitized, single = heat_law_setup
+    with np.errstate(over="ignore"):
+        stream[:, 4] = np.where(np.isfinite(stream[:, 4]), np.abs(stream[:, 4]) * 100.0, stream[:, 4])  # a speed
+    (c_out,) = run_driver(sanitized, [stream])
+    assert_same_decisions(c_out, python_replay(model, stream))
+    assert np.all(np.isfinite(c_out.prediction_um)) and np.all(np.isfinite(c_out.compensation_um))
+    (c_single,) = run_driver(single, [stream])
+    assert_same_decisions(c_single, python_replay(model, stream, "single"))
+
+
+def test_power_stage_uses_math_h_in_double_and_rest_starts_at_zero():
+    model, _ = augmented_model(HEAT)
+    header, source = render(model, "c").values()
+    includes = re.findall(r"#include\s+[<\"]([^>\"]+)[>\"]", header + source)
+    assert includes == ["math.h", "groupfit_model.h"]  # the C standard library, nothing else
+    assert "static const double gf_power_scale_0 = 1.00000000000000000e+03;" in source
+    assert f"static const volatile double gf_power_exponent_0 = {5 / 3:.17e};" in source
+    assert "v = (gf_real)pow(fabs((double)s->last[4]) / gf_power_scale_0, gf_power_exponent_0);" in source
+    code = re.sub(r"/\*.*?\*/", "", source, flags=re.S)
+    assert len(re.findall(r"\bpow\(", code)) == 3 and not re.search(r"\b(powf|fabsf|exp)\s*\(", code)
+    assert "s->memory[0] = 0;\n    }" in code  # the heat-law low-pass starts from rest
+    assert "s->line_2[j] = 0;" in code and "s->memory[3] = v;" in code  # delay from rest; steady low-pass
+    assert "derived[2] = T_amb~delay3r: T_amb delayed by 3 sample(s), from rest" in header
+    assert header.isascii() and source.isascii()
+    # a model without a power stage still needs no library at all
+    plain = render(augmented_model("all kinds p=2")[0], "c")["groupfit_model.c"]
+    assert "#include <math.h>" not in plain and "pow(" not in plain
+
+
+def test_heat_law_scenario_starts_at_speed():
+    modelling, validation = heat_law_runs()
+    assert modelling["speed_rpm"].iloc[0] > 0 and validation["speed_rpm"].iloc[0] > 0
+    assert modelling["speed_rpm"].nunique() > 3
+
+
+def exposing_power(model: dict, k: int, exponent: float) -> dict:
+    """The model with derived input ``k``'s exponent changed, predicting that input itself (every other coefficient 0).
+
+    Its prediction is then the power stage's value bit for bit, so a last-bit
+    difference in the power is not lost in the dot product.
+    """
+    model = copy.deepcopy(model)
+    entry = model["derived_inputs"][k]
+    old = entry["name"]
+    entry["exponent"] = exponent
+    entry["name"] = Feature.from_dict(entry).name
+    j = model["temps"].index(old)
+    model["temps"][j] = entry["name"]
+    width = len(model["coefficients"][0])
+    model["coefficients"] = [[1.0 if m == j + 1 else 0.0 for m in range(width)] for _ in model["coefficients"]]
+    model["switching"]["comp_min_um"], model["switching"]["comp_max_um"] = -1e6, 1e6
+    return model
+
+
+@pytest.mark.parametrize("exponent", [2.0, 4 / 3])
+def test_a_constant_exponent_is_not_folded_into_multiplications(tmp_path, exponent):
+    """gcc -O2 turns pow(x, 2.0) into x*x, which differs from the C library's pow in the last bit of ~0.1 %
+    of squares; the exponent is a volatile constant, so every build calls pow as the Python rule does."""
+    model = exposing_power(augmented_model(HEAT)[0], 1, exponent)
+    raw = readings(model, augmented_validation(HEAT))
+    rng = np.random.default_rng(7)
+    stream = raw[rng.integers(0, len(raw), 20000)]
+    stream[:, 4] = rng.uniform(0.0, 12000.0, len(stream))  # speeds that are no round numbers
+    write(render(model, "c"), tmp_path)
+    for single in (False, True):
+        executable = build_driver(tmp_path, tmp_path / f"driver_{single}", single=single)
+        (c_out,) = run_driver(executable, [stream])
+        py = python_replay(model, stream, "single" if single else "double")
+        assert_same_decisions(c_out, py)
+    expected = [math.pow(v / 1000.0, exponent) for v in stream[:, 4]]
+    assert python_replay(model, stream)["prediction_um"].tolist() == expected  # the prediction is the power itself

@@ -10,6 +10,7 @@ from test_switching_models import augmented_model, derived_streams, streams_for,
 from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.export import render
+from groupfit.export.json_table import STEPS
 from groupfit.export.sheet import (
     IntegerForm,
     controller_sheet,
@@ -42,15 +43,18 @@ def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
         held = any(0 < b <= hold for b in bad)
         for k, d in enumerate(derived):
             v = last[d["reading"]]
+            if d.get("exponent") is not None:  # format /3: the power stage, in double precision
+                v = math.pow(abs(v) / d["power_scale"], d["exponent"])
             if d["transform"] == "identity":
                 value[k] = v
                 continue
             if not started[k] and bad[d["reading"]] == 0:
                 started[k] = True
+                s = 0.0 if d.get("start") == "rest" else v
                 if d["transform"] == "delay":
-                    line[k], pos[k] = [v] * d["delay_samples"], 0
+                    line[k], pos[k] = [s] * d["delay_samples"], 0
                 else:
-                    memory[k] = v
+                    memory[k] = s
             if started[k]:
                 if d["transform"] == "lowpass":
                     memory[k] = d["b"] * v + d["a"] * memory[k]
@@ -113,6 +117,42 @@ def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
         assert run_from_table(table, temps) == expected
+
+
+def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_rebuild_the_rule():
+    model, run = augmented_model("heat law p=2")
+    table = json.loads(render(model, "json")["groupfit_runtime.json"])
+    assert table["format"] == "groupfit-runtime/3"  # a runtime for /2 refuses it instead of computing wrongly
+    first, identity, delay, steady = table["derived_inputs"]
+    assert first["exponent"] == 5 / 3 and first["power_scale"] == 1000.0 and first["start"] == "rest"
+    assert identity["start"] == "steady" and identity["exponent"] == 5 / 3
+    assert delay["exponent"] is None and delay["power_scale"] is None and delay["start"] == "rest"
+    assert steady["start"] == "steady" and steady["scale"] == 0.0  # 'scale' stays the derivative's factor
+    assert "pow(abs(v) / power_scale, exponent)" in table["steps"][2] and "'rest'" in table["steps"][2]
+    assert table["steps"][:2] == list(STEPS[:2]) and table["steps"][3:] == list(STEPS[3:])
+    rule = SwitchingRule(model)
+    for temps in derived_streams(model, run).values():
+        rule.reset()
+        expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
+        assert run_from_table(table, temps) == expected
+
+
+def test_models_without_power_or_rest_keep_their_json_format_and_steps():
+    for label, fmt in [("all kinds p=2", "groupfit-runtime/2"), ("on/off p=1", "groupfit-runtime/2")]:
+        table = json.loads(render(augmented_model(label)[0], "json")["groupfit_runtime.json"])
+        assert table["format"] == fmt and table["steps"] == list(STEPS)
+        assert all("exponent" not in d and "start" not in d for d in table["derived_inputs"])
+
+
+def test_sheet_describes_the_power_stage_and_the_start():
+    model, _ = augmented_model("heat law p=2")
+    text = render(model, "sheet")["groupfit_sheet.txt"]
+    assert (
+        "derived input (speed_rpm/1000)^1.667~lp1800sr: low-pass of (|speed_rpm| / 1000)^1.66667, tau = 1800 s, "
+        "from rest, by the routine itself"
+    ) in text
+    assert "derived input (speed_rpm/1000)^1.667: (|speed_rpm| / 1000)^1.66667 (heat law)" in text
+    assert " 5. speed_rpm        valid 0 .. 12000 " in text and text.isascii()
 
 
 def test_sheet_lists_the_readings_the_controller_must_provide():

@@ -5,10 +5,14 @@ a small evaluator over blark's syntax tree (below): REAL arithmetic in IEEE
 single precision, LREAL in double, integers range-checked, both operands of
 AND / OR always evaluated (ST does not short-circuit), and every array index
 bounds-checked, so an unguarded index fails the test instead of passing by luck.
+An LREAL is never narrowed to REAL implicitly (only ``TO_REAL`` rounds it, as a
+strict IEC 61131-3 compiler requires); ``EXPT`` of LREALs is the C library's
+``pow`` (:func:`math.pow`), with the errors IEC 61131-3 defines for it.
 """
 
 from __future__ import annotations
 
+import math
 import shutil
 from functools import lru_cache
 
@@ -29,7 +33,7 @@ from test_switching_models import (  # noqa: E402
 
 from groupfit.export import render, write  # noqa: E402
 from groupfit.export.harness import build_driver, run_driver  # noqa: E402
-from groupfit.runtime import FAULT_PERIOD, RETURN_PERIOD_FAULT, SwitchingRule  # noqa: E402
+from groupfit.runtime import FAULT_PERIOD, RETURN_PERIOD_FAULT, RETURN_SENSOR_FAULT, SwitchingRule  # noqa: E402
 
 INTEGER_RANGES = {"INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1)}
 FLOATS = {"REAL": np.float32, "LREAL": np.float64}
@@ -66,6 +70,8 @@ def convert(value, base: str):
     if base in FLOATS:
         if isinstance(value, bool):
             raise STError("BOOL assigned to a real")
+        if base == "REAL" and isinstance(value, np.float64):
+            raise STError("LREAL assigned to REAL (narrowing needs TO_REAL)")
         return FLOATS[base](value)
     if base in INTEGER_RANGES:
         if isinstance(value, (float, np.floating)):
@@ -240,6 +246,12 @@ class FunctionBlock:
             arguments = [self.evaluate(p.value) for p in node.parameters]
             if name == "ABS" and len(arguments) == 1:
                 return abs(arguments[0])
+            if name in ("TO_REAL", "TO_LREAL") and len(arguments) == 1:
+                if not isinstance(arguments[0], (float, np.floating)):
+                    raise STError(f"{name} of a {type(arguments[0]).__name__}")
+                return FLOATS[name[3:]](arguments[0])  # IEEE rounding to nearest
+            if name == "EXPT" and len(arguments) == 2:
+                return expt(*arguments)
             raise STError(f"function {name} not supported")
         raise STError(f"expression {type(node).__name__} not supported")
 
@@ -273,6 +285,21 @@ class FunctionBlock:
         if op in comparisons:
             return bool(comparisons[op](left, right))
         raise STError(f"operator {op} not supported")
+
+
+def expt(base, exponent):
+    """IEC 61131-3 EXPT(IN1, IN2) = IN1 ** IN2, of the type of IN1; the evaluator knows it for LREAL IN1 only.
+
+    An error when IN1 < 0 and IN2 is not a whole number, or IN1 = 0 and IN2 <= 0
+    (the standard's error conditions); otherwise the C library's ``pow``.
+    """
+    if not isinstance(base, np.float64):
+        raise STError(f"EXPT of a {type(base).__name__}: the export raises LREALs only")
+    if isinstance(exponent, np.float32) or not isinstance(exponent, (int, float, np.float64)):
+        raise STError(f"EXPT exponent of type {type(exponent).__name__}")
+    if (base < 0 and float(exponent) != int(exponent)) or (base == 0 and exponent <= 0):
+        raise STError(f"EXPT({float(base)!r}, {float(exponent)!r}) is an error in IEC 61131-3")
+    return np.float64(math.pow(float(base), float(exponent)))
 
 
 def run_block(source: str, streams, period_s: float, real: str) -> list[dict[str, np.ndarray]]:
@@ -523,3 +550,97 @@ def test_reset_restarts_the_derived_inputs():
         block.call(Temps=[np.float64(v) for v in row], SamplePeriodS=100.0, Reset=(k == 0))
         again.append(float(block.vars["ErrorUm"]))
     assert again == first and block.vars["delayPos2"] == 40 % 10
+
+
+# power stage and start from rest ------------------------------------------------
+
+
+def heat_law_streams():
+    model, run = augmented_model("heat law p=2")
+    streams = derived_streams(model, run)
+    r = 4  # speed_rpm, the source of the power stages
+    late_start = streams["modelling"].copy()
+    late_start[:6, r] = [np.nan, -1.0, np.inf, 1e12, -np.inf, np.nan]
+    streams["speed faulty at the start"] = late_start
+    return model, streams
+
+
+@pytest.mark.parametrize("real", ["REAL", "LREAL"])
+def test_heat_law_blocks_parse_with_both_parsers(real):
+    text = derived_block("heat law p=2", real)
+    assert text.isascii() and "EXPT(ABS(" in text and "POWER_EXPONENT_1 : LREAL := 1.6666666666666667;" in text
+    if real == "REAL":
+        assert "sourceValue := TO_REAL(EXPT(ABS(TO_LREAL(lastGood[5])) / POWER_SCALE_1, POWER_EXPONENT_1));" in text
+    else:
+        assert "sourceValue := EXPT(ABS(lastGood[5]) / POWER_SCALE_1, POWER_EXPONENT_1);" in text
+    assert "derivedMemory[1] := 0.0;" in text and "delayLine3[j] := 0.0;" in text  # from rest
+    assert "derivedMemory[4] := sourceValue;" in text  # steady
+    assert blark_accepts(text), f"blark rejects the heat-law {real} block"
+    assert not tree_sitter_errors(text), f"tree-sitter rejects the heat-law {real} block"
+
+
+def test_real_heat_law_block_matches_the_single_precision_c_build_bit_for_bit(single_driver):
+    model, streams = heat_law_streams()
+    streams = as_single(list(streams.values()))
+    st_out = run_block(derived_block("heat law p=2", "REAL"), streams, model["sampling_period_s"], "REAL")
+    c_out = run_driver(single_driver("heat law", model), streams)
+    for temps, st_stream, c_stream in zip(streams, st_out, c_out):
+        assert np.array_equal(st_stream["code"], c_stream.code)
+        assert np.array_equal(st_stream["fault"], c_stream.fault)
+        assert np.array_equal(st_stream["switched"], c_stream.switched)
+        assert st_stream["prediction_um"].tobytes() == c_stream.prediction_um.tobytes()
+        assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
+        single = SwitchingRule(model, precision="single").replay(temps)  # and the float32 Python rule
+        assert st_stream["prediction_um"].tobytes() == single.prediction_um.tobytes()
+
+
+def test_lreal_heat_law_block_is_the_python_rule_bit_for_bit():
+    model, streams = heat_law_streams()
+    rule = SwitchingRule(model)
+    chosen = [streams[k] for k in ("modelling", "source faults", "speed faulty at the start")]
+    outputs = run_block(derived_block("heat law p=2", "LREAL"), chosen, model["sampling_period_s"], "LREAL")
+    for temps, out in zip(chosen, outputs):
+        replay = rule.replay(temps)
+        assert out["code"].tolist() == [RETURN_SENSOR_FAULT if f & 2 else g for g, f in zip(replay.group, replay.fault)]
+        assert out["fault"].tolist() == replay.fault.tolist()
+        assert out["switched"].tolist() == replay.switched.tolist()
+        assert out["prediction_um"].tobytes() == replay.prediction_um.tobytes()
+        assert out["compensation_um"].tobytes() == replay.compensation_um.tobytes()
+
+
+PROBE = """FUNCTION_BLOCK FB_Probe
+VAR_INPUT
+    x : LREAL;
+    k : LREAL;
+END_VAR
+VAR_OUTPUT
+    y : LREAL;
+    r : REAL;
+END_VAR
+VAR CONSTANT
+    SCALE : LREAL := 1000.0;
+END_VAR
+$body
+END_FUNCTION_BLOCK
+"""
+
+
+def probe(body: str) -> FunctionBlock:
+    return FunctionBlock(PROBE.replace("$body", body))
+
+
+def test_evaluator_knows_expt_abs_and_the_conversions_as_iec_61131_3_defines_them():
+    block = probe("y := EXPT(ABS(x) / SCALE, k);\nr := TO_REAL(y);")
+    block.call(x=-2500.0, k=5 / 3)
+    assert block.vars["y"] == math.pow(2.5, 5 / 3) and type(block.vars["y"]) is np.float64
+    assert block.vars["r"] == np.float32(math.pow(2.5, 5 / 3)) and type(block.vars["r"]) is np.float32
+    block.call(x=0.0, k=2.0)
+    assert block.vars["y"] == 0.0
+    with pytest.raises(STError, match="is an error"):
+        probe("y := EXPT(x, k);").call(x=-2.0, k=0.5)  # a negative base needs a whole exponent
+    with pytest.raises(STError, match="is an error"):
+        probe("y := EXPT(x, k);").call(x=0.0, k=-1.0)
+    with pytest.raises(STError, match="narrowing needs TO_REAL"):
+        probe("r := x;").call(x=1.0, k=1.0)  # no implicit LREAL -> REAL
+    with pytest.raises(STError, match="EXPT of a float32"):
+        probe("r := EXPT(TO_REAL(x), TO_REAL(k));").call(x=2.0, k=2.0)

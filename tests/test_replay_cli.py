@@ -15,6 +15,7 @@ from test_switching_models import (
     eight_sensor_validation,
     fe_model,
     fe_validation_runs,
+    heat_law_runs,
     synthetic_model,
 )
 
@@ -204,3 +205,29 @@ def test_source_faults_and_a_constant_source_in_a_recorded_run(tmp_path):
     assert faults[10:12] == [FAULT_HELD] * 2 and faults[100:107] == [FAULT_HELD] * 3 + [FAULT_SENSOR] * 4
     assert result["nonfinite_readings"] == 2 and result["faults"]["sensor_fault_samples"] == 4
     assert all(s["prediction_um"] == 0.0 for s in result["samples"][103:107])
+
+
+def test_a_heat_law_effect_found_by_diagnose_replays_with_the_rms_diagnose_reports(tmp_path, capsys):
+    """fit (p = 0), diagnose, replay: the bearing-heat law of a speed, low-passed from rest, end to end."""
+    modelling, validation = heat_law_runs()  # speeds at several levels, at speed from a cold start
+    data, check = tmp_path / "model.csv", tmp_path / "validate.csv"
+    modelling.to_csv(data, index=False)
+    validation.to_csv(check, index=False)
+    fit = ["fit", "--data", data, "--temps", "T1,T2,T3,T4", "--p", "0", "--out", tmp_path / "m", "--quiet"]
+    assert main([str(v) for v in fit]) == 0
+    diagnose = ["diagnose", tmp_path / "m" / "model.json", "--data", data, "--validate", check]
+    assert main([str(v) for v in [*diagnose, "--out", tmp_path / "d", "--json", tmp_path / "d.json"]]) == 0
+    result = json.loads((tmp_path / "d.json").read_text())
+    added = result["added"][0]
+    assert (added["column"], added["transform"], added["tau_s"]) == ("speed_rpm", "lowpass", 1800.0)
+    augmented = json.loads((tmp_path / "d" / "model_augmented.json").read_text())
+    (entry,) = augmented["derived_inputs"]
+    assert entry["name"] == "(speed_rpm/1000)^1.667~lp1800sr" and entry["start"] == "rest"
+    for run, key in [(data, "data"), (check, "validate")]:
+        out = tmp_path / f"replay_{key}.json"
+        assert replay(tmp_path / "d" / "model_augmented.json", "--data", run, "--json", out) == 0
+        replayed = json.loads(out.read_text())
+        assert replayed["scored_samples"] == len(modelling)
+        assert replayed["rms_um"] == pytest.approx(result["after"][key]["rms_um"], rel=1e-9, abs=1e-12)
+        assert replayed["rms_um"] < 0.05  # the effect is removed: the error left is the 0.02 um noise
+    capsys.readouterr()

@@ -6,10 +6,13 @@ model's offline prediction).
 """
 
 import copy
+import json
+import math
 
 import numpy as np
 import pytest
 from test_switching_models import (
+    HEAT_LAW,
     augmented_model,
     augmented_validation,
     readings,
@@ -21,6 +24,7 @@ from groupfit.diagnose.residual import model_inputs, predict, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature
 from groupfit.grouping import serving_group_index
+from groupfit.model import ModelFile
 from groupfit.modelfile import load_model, save_model
 from groupfit.runtime import (
     FAULT_HELD,
@@ -106,18 +110,28 @@ def test_every_transform_matches_groupfit_features_and_the_offline_model(label):
     assert np.sqrt(np.mean((run.error - prediction) ** 2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)
 
 
-def test_a_held_or_faulty_source_feeds_its_transform_with_the_last_good_value():
-    model, run = augmented_model("all kinds p=2")
+def assert_as_computed(actual: np.ndarray, expected: np.ndarray, feature: Feature, name: str) -> None:
+    """Bit for bit; a power stage within 1e-14 relative (Feature.compute takes numpy's power, the rule the C pow)."""
+    if feature.exponent is None:
+        assert np.array_equal(actual, expected), name
+    else:
+        assert np.allclose(actual, expected, rtol=1e-14, atol=0.0), name
+
+
+@pytest.mark.parametrize("label", ["all kinds p=2", "heat law p=2"])
+def test_a_held_or_faulty_source_feeds_its_transform_with_the_last_good_value(label):
+    model, run = augmented_model(label)
     tables = RuleTables.from_model(model)
+    features = ModelFile.coerce(model).derived
     raw = source_faults(readings(model, run), tables)
     results, inputs = step_all(SwitchingRule(model), raw)
     period = model["sampling_period_s"]
     for d in tables.derived:
         seen = held_series(raw[:, d.reading], tables.valid_min[d.reading], tables.valid_max[d.reading])
         first = int(np.flatnonzero(np.isfinite(seen))[0])
-        feature = Feature(d.column, d.transform, d.tau_s, d.delay_samples)
-        expected = feature.compute(seen[first:], period)
-        assert np.array_equal(inputs[first:, d.input_index], expected), d.name
+        # the transform starts at the source's first good reading (from 0 when it starts from rest)
+        expected = features[d.name].compute(seen[first:], period)
+        assert_as_computed(inputs[first:, d.input_index], expected, features[d.name], d.name)
     fault = np.array([r.fault for r in results])
     hold = tables.hold_samples
     assert fault[0] == FAULT_SENSOR and results[0].prediction_um == 0.0  # T_amb not valid yet
@@ -143,6 +157,79 @@ def test_source_invalid_at_the_start_starts_its_transforms_at_its_first_good_rea
     assert [r.fault for r in results[:6]] == [FAULT_SENSOR] * 5 + [0]
     expected = Feature("T_amb", "lowpass", 1800.0).compute(raw[5:, 4], model["sampling_period_s"])
     assert np.array_equal(inputs[5:, 4], expected)
+
+
+def test_heat_law_source_invalid_at_the_start_starts_from_rest_at_its_first_good_reading():
+    model, run = augmented_model("heat law p=2")
+    tables = RuleTables.from_model(model)
+    r = tables.raw_names.index("speed_rpm")
+    raw = readings(model, run)
+    raw[:4, r] = [np.nan, -1.0, np.inf, 1e12]  # the speed is not valid before sample 5
+    results, inputs = step_all(SwitchingRule(model), raw)
+    assert [r.fault for r in results[:5]] == [FAULT_SENSOR] * 4 + [0]
+    speed = raw[4:, r]
+    assert speed[0] > 0  # the machine is at speed at its first good reading
+    lowpass = tables.derived[0]
+    assert lowpass.name == HEAT_LAW.name and lowpass.from_rest
+    expected = HEAT_LAW.compute(speed, model["sampling_period_s"])
+    assert np.allclose(inputs[4:, 4], expected, rtol=1e-14, atol=0.0)
+    assert inputs[4, 4] == lowpass.b * math.pow(speed[0] / 1000.0, 5.0 / 3.0)  # b*x from a zero state
+    steady = Feature("speed_rpm", "lowpass", tau_s=1800.0, exponent=5 / 3, scale=1000.0)
+    assert abs(inputs[4, 4] - steady.compute(speed, model["sampling_period_s"])[0]) > 0.1  # the start matters here
+
+
+@pytest.mark.parametrize("which", ["modelling", "validation"])
+def test_heat_law_and_rest_start_replay_as_the_offline_model(which):
+    model, run = augmented_model("heat law p=2")
+    run = run if which == "modelling" else augmented_validation("heat law p=2")
+    names = [d["name"] for d in model["derived_inputs"]]
+    assert names == [
+        "(speed_rpm/1000)^1.667~lp1800sr",
+        "(speed_rpm/1000)^1.667",
+        "T_amb~delay3r",
+        "(speed_rpm/1000)^1.667~lp3600s",
+    ]
+    assert run.frame["speed_rpm"].iloc[0] > 0 and run.frame["T_amb"].iloc[0] > 0  # rest differs from steady
+    results, inputs = step_all(SwitchingRule(model), readings(model, run))
+    assert all(r.fault == 0 for r in results)
+    truth = model_inputs(model, run)  # groupfit.features: Feature.compute of every derived input
+    assert np.allclose(inputs, truth, rtol=1e-14, atol=0.0)
+    assert np.array_equal(inputs[:3, 6], [0.0, 0.0, 0.0]) and inputs[3, 6] == run.frame["T_amb"].iloc[0]
+    groups = np.array([r.group for r in results])
+    offline = ModelFile.coerce(model).predict(truth, groups - 1)  # the model, with the groups the rule chose
+    prediction = np.array([r.prediction_um for r in results])
+    assert np.max(np.abs(prediction - offline)) <= 1e-9
+    if which == "modelling":
+        assert np.max(np.abs(prediction - predict(model, run))) <= 1e-9  # and the offline groups
+        rms = np.sqrt(np.mean((run.error - prediction) ** 2))
+        assert rms == pytest.approx(model["training"]["rms_um"], rel=1e-9)
+
+
+def test_power_stage_is_computed_in_double_and_rounded_to_single_once():
+    model, run = augmented_model("heat law p=2")
+    raw = readings(model, run)
+    rule = SwitchingRule(model, precision="single")
+    identity = RuleTables.from_model(model).derived[1]
+    assert identity.transform == "identity" and identity.has_power
+    for row in raw[:50]:
+        rule.step(row)
+        reading = float(np.float32(row[4]))  # the float32 reading, widened to double
+        expected = np.float32(math.pow(abs(reading) / 1000.0, 5.0 / 3.0))
+        assert rule.derived[1] == expected and type(rule.derived[1]) is np.float32
+    double = SwitchingRule(model).replay(raw)
+    single = SwitchingRule(model, precision="single").replay(raw)
+    assert np.array_equal(single.group, double.group)
+    assert np.max(np.abs(single.prediction_um - double.prediction_um)) < 1e-2
+
+
+def test_a_power_stage_that_overflows_within_its_valid_range_is_refused():
+    model, _ = augmented_model("heat law p=2")
+    entry = model["derived_inputs"][1]
+    entry["scale"] = 1e-30
+    entry["name"] = Feature.from_dict(entry).name
+    model["temps"][5] = entry["name"]
+    with pytest.raises(InputError, match=r"power stage reaches .* valid range \[0, \d+\] of 'speed_rpm'"):
+        RuleTables.from_model(model)
 
 
 @pytest.mark.parametrize(
@@ -194,6 +281,77 @@ def test_model_files_carry_the_source_ranges_and_reload_to_the_same_rule(tmp_pat
     raw = readings(model, run)
     a, b = SwitchingRule(model).replay(raw), SwitchingRule(loaded).replay(raw)
     assert a.prediction_um.tobytes() == b.prediction_um.tobytes()
+
+
+def test_power_stage_and_start_round_trip_through_the_model_file(tmp_path):
+    model, run = augmented_model("heat law p=2")
+    save_model(model, tmp_path / "m.json")
+    text = (tmp_path / "m.json").read_text()
+    entries = json.loads(text)["derived_inputs"]
+    assert entries[0] == {**HEAT_LAW.to_dict(), "name": "(speed_rpm/1000)^1.667~lp1800sr"}
+    assert entries[0]["exponent"] == 5 / 3 and entries[0]["scale"] == 1000.0 and entries[0]["start"] == "rest"
+    assert "start" not in entries[1] and "exponent" not in entries[2]  # defaults are not written
+    loaded = load_model(tmp_path / "m.json")
+    assert ModelFile.coerce(loaded).derived_inputs[0] == HEAT_LAW
+    save_model(loaded, tmp_path / "again.json")
+    assert (tmp_path / "again.json").read_text() == text
+    raw = readings(model, run)
+    a, b = SwitchingRule(model).replay(raw), SwitchingRule(loaded).replay(raw)
+    assert a.prediction_um.tobytes() == b.prediction_um.tobytes()
+
+
+def test_files_without_power_or_start_keys_load_unchanged(tmp_path):
+    model, _ = augmented_model("all kinds p=2")
+    assert not any({"exponent", "scale", "start"} & set(entry) for entry in model["derived_inputs"])
+    save_model(model, tmp_path / "old.json")
+    text = (tmp_path / "old.json").read_text()
+    loaded = ModelFile.load(tmp_path / "old.json")
+    assert all(f.exponent is None and f.scale is None and f.start == "steady" for f in loaded.derived_inputs)
+    assert all(not d.has_power and not d.from_rest for d in RuleTables.from_model(loaded).derived)
+    loaded.save(tmp_path / "again.json")
+    assert (tmp_path / "again.json").read_text() == text
+
+
+def set_entry(**changes):
+    def change(model):
+        model["derived_inputs"][0].update(changes)
+
+    return change
+
+
+def drop_entry_key(key):
+    def change(model):
+        del model["derived_inputs"][0][key]
+
+    return change
+
+
+@pytest.mark.parametrize(
+    "breakage, message",
+    [
+        (set_entry(exponent=0.0), r"derived_inputs\[0\]: exponent must be a finite number > 0, not 0.0"),
+        (set_entry(exponent=-1.5), "exponent must be a finite number > 0"),
+        (set_entry(exponent=float("nan")), "exponent must be a finite number > 0"),
+        (set_entry(exponent="5/3"), "exponent must be a finite number > 0, not '5/3'"),
+        (set_entry(exponent=True), "exponent must be a finite number > 0"),
+        (set_entry(scale=float("inf")), "scale must be a finite number > 0"),
+        (set_entry(scale=0), "scale must be a finite number > 0"),
+        (drop_entry_key("exponent"), "needs both 'exponent' and 'scale'"),  # a scale without exponent
+        (drop_entry_key("scale"), "needs both 'exponent' and 'scale'"),
+        (set_entry(start="cold"), "start 'cold' must be one of steady, rest"),
+        (set_entry(start=None), "start None must be one of steady, rest"),
+        (set_entry(start="steady"), "name .* does not match its transform .*lp1800s'"),  # the name says rest
+        (set_entry(exponent=2.0), "does not match its transform"),
+    ],
+)
+def test_invalid_power_stages_and_starts_are_refused_in_one_line(tmp_path, breakage, message):
+    model, _ = augmented_model("heat law p=2")
+    breakage(model)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(model))
+    with pytest.raises(InputError, match=message) as caught:
+        load_model(path)
+    assert "\n" not in str(caught.value) and str(caught.value).startswith(str(path))
 
 
 def test_older_files_without_source_ranges_or_rule_keys_still_load(tmp_path):

@@ -17,7 +17,7 @@ import pytest
 from groupfit.data import Run, load_run
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.residual import model_inputs
-from groupfit.features import Feature
+from groupfit.features import Feature, lowpass
 from groupfit.modelfile import model_to_dict
 from groupfit.models import GroupedRegressor
 from groupfit.runtime import RuleTables
@@ -99,6 +99,46 @@ def fe_validation_runs(model: dict) -> list[Run]:
     return [load_run(path, temps=model["temps"]) for path in FE_VALIDATION if path.is_file()]
 
 
+HEAT_LAW = Feature("speed_rpm", "lowpass", tau_s=1800.0, exponent=5 / 3, scale=1000.0, start="rest")
+"""The unsensed part of :func:`heat_law_frame`: a lag of the bearing heat ``(n/1000)^(5/3)`` from a cold start."""
+HEAT_LAW_MODELLING = [(6000, 3000), (3000, 5000), (4000, 0), (8000, 4000), (5000, 6000), (6000, 2000), (16000, 4500)]
+HEAT_LAW_VALIDATION = [(4000, 4000), (5000, 1500), (3000, 0), (9000, 5500), (6000, 2500), (7000, 3500), (14000, 5000)]
+"""Spindle-speed schedules (duration s, r/min), both starting at speed from a cold machine."""
+
+
+def heat_law_frame(schedule, n_samples: int = 480, period_s: float = 100.0, seed: int = 0) -> pd.DataFrame:
+    """A spindle run at several speeds that starts at speed on a cold machine.
+
+    Four sensors lag the bearing heat ``q = (n/1000)^(5/3)`` (from rest) on top
+    of a drifting ambient ``T_amb``; the error is a linear function of three
+    sensors plus 3 µm per unit of an unsensed part, :data:`HEAT_LAW` of the
+    speed. The speed is not 0 at the first sample, so a lag that starts from
+    rest differs from one that starts steady.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_samples) * period_s
+    ends = np.cumsum([d for d, _ in schedule])
+    levels = np.array([n for _, n in schedule] + [schedule[-1][1]], dtype=float)
+    speed = levels[np.searchsorted(ends, t, side="right")]
+    heat = (speed / 1000.0) ** (5.0 / 3.0)
+    ambient = 20.0 + 1.5 * np.sin(2 * np.pi * t / 43200.0) + 0.3 * np.sin(2 * np.pi * t / 7000.0)
+    table = {"time_s": t}
+    sensors = {"T1": (300.0, 1.2), "T2": (900.0, 0.9), "T3": (5000.0, 0.7), "T4": (12000.0, 0.5)}
+    for name, (tau, gain) in sensors.items():
+        table[name] = ambient + gain * lowpass(heat, tau, period_s, 0.0) + 0.02 * rng.standard_normal(n_samples)
+    part = HEAT_LAW.compute(speed, period_s)
+    error = 0.8 * table["T1"] + 0.5 * table["T2"] + 0.3 * table["T4"] + 3.0 * part
+    table["error_um"] = error + 0.02 * rng.standard_normal(n_samples)
+    table["T_amb"] = ambient + 0.02 * rng.standard_normal(n_samples)
+    table["speed_rpm"] = speed
+    return pd.DataFrame(table)
+
+
+def heat_law_runs() -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The modelling and the validation run of the heat-law scenario."""
+    return heat_law_frame(HEAT_LAW_MODELLING, seed=1), heat_law_frame(HEAT_LAW_VALIDATION, seed=2)
+
+
 AUGMENTED = {
     # label: (data sets, fixed breaks (None: p = 0), derived inputs added one after another)
     "lowpass p=0": (DIAG_AMBIENT, None, (Feature("T_amb", "lowpass", tau_s=1800.0),)),
@@ -118,14 +158,29 @@ AUGMENTED = {
         [300],
         (Feature("src_zscrew_on", "lowpass", tau_s=3600.0), Feature("spindle_on", "delay", delay_samples=10)),
     ),
+    "heat law p=2": (
+        heat_law_runs,
+        [150, 330],
+        (
+            HEAT_LAW,  # heat-law low-pass from rest
+            Feature("speed_rpm", exponent=5 / 3, scale=1000.0),  # heat law as it is
+            Feature("T_amb", "delay", delay_samples=3, start="rest"),  # a delay from rest
+            Feature("speed_rpm", "lowpass", tau_s=3600.0, exponent=5 / 3, scale=1000.0),  # heat law, steady start
+        ),
+    ),
 }
-"""Models with derived inputs, built as ``groupfit diagnose`` builds them (augment_model), p = 0 and p > 0."""
+"""Models with derived inputs, built as ``groupfit diagnose`` builds them (augment_model), p = 0 and p > 0.
+
+The data sets are two CSV files or a function returning the two runs as DataFrames.
+"""
 
 
 @lru_cache(maxsize=None)
 def _augmented(label: str):
-    (modelling, validation), breaks, features = AUGMENTED[label]
-    run = load_run(modelling, temps=["T1", "T2", "T3", "T4"])
+    data, breaks, features = AUGMENTED[label]
+    modelling, validation = data() if callable(data) else data
+    names = (f"{label} modelling", f"{label} validation") if callable(data) else (None, None)
+    run = load_run(modelling, temps=["T1", "T2", "T3", "T4"], name=names[0])
     if breaks is None:
         estimator = GroupedRegressor(p=0, n=3, search="exact").fit(run.temps, run.error)
     else:
@@ -133,7 +188,7 @@ def _augmented(label: str):
     model = model_to_dict(estimator, run, criterion="T1")
     for feature in features:
         model = augment_model(model, run, model_inputs(model, run), feature)
-    return model, run, load_run(validation, temps=["T1", "T2", "T3", "T4"])
+    return model, run, load_run(validation, temps=["T1", "T2", "T3", "T4"], name=names[1])
 
 
 def augmented_model(label: str) -> tuple[dict, Run]:

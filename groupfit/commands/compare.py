@@ -56,6 +56,12 @@ def run_compare(args: argparse.Namespace) -> int:
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
+    if isinstance(config["data"].get("path"), (list, tuple)):
+        raise InputError(
+            f"{len(config['data']['path'])} modelling runs given: compare fits grouped models, whose breaks belong "
+            "to one run; give one --data (and the others as --validate), or fit a global model on several runs "
+            "with fit --p 0"
+        )
     modelling = load_configured_run(config)
     validation = [load_configured_run(config, path) for path in config["data"]["validate"]]
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)

@@ -9,11 +9,19 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_json_target, check_output_dir, report_stream, write_json
+from groupfit.commands.common import (
+    add_json_option,
+    add_out_option,
+    check_json_target,
+    check_output_dir,
+    report_stream,
+    write_json,
+    wrote_line,
+)
 from groupfit.data import DEFAULT_TIME, Run, load_run
 from groupfit.diagnose import DiagnosisResult, diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
-from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, joint_name
+from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.modelfile import load_model, save_model
@@ -33,8 +41,8 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     parser.add_argument("--time", default=DEFAULT_TIME, metavar="COLUMN", help="time column (default time_s)")
-    parser.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
-    parser.add_argument("--out", default="groupfit-out", metavar="DIR", help="folder for figures and the new model")
+    add_json_option(parser)
+    add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
         "--min-score",
         type=float,
@@ -140,129 +148,19 @@ def run_diagnose(args: argparse.Namespace) -> int:
     plot_diagnosis(result, runs, figure)
     written.append(figure)
 
-    json_path = write_json(args.json, result_json(result, model_path))
-    if json_path is not None:
-        written.append(json_path)
-    print(diagnosis_report(result, data, validate, written), file=report_stream(args))
+    written.append(write_json(args.json, result.to_json(model_path)))
+    print(result.summary() + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0
 
 
 def with_original_baseline(result, model, data, validate, live_rule, selection) -> DiagnosisResult:
     """Report before/after against the model the user gave, not the re-selected one."""
-    from groupfit.diagnose.loop import metrics_of, stacked_residual
+    from groupfit.diagnose.loop import metrics_of, residual_checks, stacked_residual
 
     runs = {"data": data, **({"validate": validate} if validate else {})}
     before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     result.residuals_before = before
     result.before = {key: metrics_of(r) for key, r in before.items()}
-    result.selection = selection
-    result.notes.insert(
-        0,
-        f"inputs re-selected by {selection['method']} on held-out conditions: {', '.join(selection['inputs'])} "
-        f"(of {len(model['temps'])}); before/after compare with the model as given",
-    )
+    result.checks_before = residual_checks(before["data"], np.arange(len(before["data"])) * data[0].period)
+    result.selection = {**selection, "of": len(model["temps"])}
     return result
-
-
-def result_json(result: DiagnosisResult, model_path: Path) -> dict[str, Any]:
-    return {
-        "candidates": [c.to_dict() for c in result.candidates],
-        "added": [c.to_dict() for c in result.added],
-        "steps": [s.to_dict() for s in result.steps],
-        "refused": [r.to_dict() for r in result.refused],
-        "folds": result.folds,
-        "base_model": result.base_check,
-        "selection": getattr(result, "selection", None),
-        "before": result.before,
-        "after": result.after,
-        "improved": result.improved,
-        "checks": {"before": result.checks_before, "after": result.checks_after},
-        "notes": result.notes,
-        "model": str(model_path),
-    }
-
-
-def column_words(column: str) -> str:
-    """What a column is, in words, for the report."""
-    if column.lower() in ("t_amb", "ambient", "t_ambient") or "amb" in column.lower():
-        return f"ambient temperature `{column}`"
-    if column.startswith("src_") and column.endswith("_on"):
-        return f"heat source '{column[4:-3]}' (on/off `{column}`)"
-    if column == "spindle_on":
-        return f"spindle heat, a part that lags it (`{column}`)"
-    if "speed" in column or "rpm" in column:
-        return f"spindle speed, a part that lags it (`{column}`)"
-    return f"column `{column}`"
-
-
-def change_words(before: float, after: float) -> str:
-    """``RMS 11 → 4.4 µm (60 % lower)`` or ``(80 % higher)``."""
-    if before <= 0:
-        return f"{before:.3g} → {after:.3g} µm"
-    change = 100.0 * (after - before) / before
-    if abs(change) < 0.5:
-        words = "unchanged"
-    else:
-        words = f"{abs(change):.0f} % {'higher' if change > 0 else 'lower'}"
-    return f"{before:.3g} → {after:.3g} µm ({words})"
-
-
-def diagnosis_report(result: DiagnosisResult, data: list[Run], validate: list[Run], written) -> str:
-    lines = []
-    judge = "validate" if validate else "data"
-    judged = joint_name(validate) if validate else joint_name(data)
-    b, a = result.before[judge], result.after[judge]
-    changed = bool(result.added) or getattr(result, "selection", None) is not None
-    if result.improved is False or (validate and changed and a["rms_um"] >= b["rms_um"]):
-        lines.append(
-            f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
-        )
-    if result.added:
-        for step in result.steps:
-            c = step.candidate
-            better = f"{c.folds_improved * len(c.fold_ratios):.0f} of {len(c.fold_ratios)}"
-            held_out = change_words(step.held_out_rms_before, step.held_out_rms_after)
-            lines.append(
-                f"missing effect: {column_words(c.feature.column)}, {c.feature.describe()} "
-                f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
-                f"held-out RMS {held_out})"
-            )
-        lines.append(
-            f"{'validation' if validate else 'measured'} run {judged}: RMS {change_words(b['rms_um'], a['rms_um'])}, "
-            f"max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
-        )
-        lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
-    else:
-        lines.append(
-            "nothing missing: no candidate explains a significant part of the held-out error; the model's effects "
-            "are unchanged"
-        )
-    lines.append(f"held out: {result.folds}")
-    for refusal in result.refused[:5]:
-        c = refusal.candidate
-        lines.append(f"refused: {c.feature.column} {c.feature.describe()} (score {c.score:.2f}): {refusal.reason}")
-    lines.append("")
-    lines.append(f"{'candidate':<24} {'transform':<40} {'score':>6} {'folds':>6} {'removes RMS µm':>15}")
-    for c in result.candidates[:10]:
-        lines.append(
-            f"{c.feature.column:<24} {c.feature.describe():<40} {c.score:>6.3f} "
-            f"{c.folds_improved * len(c.fold_ratios):>3.0f}/{len(c.fold_ratios):<2} {c.explained_rms_um:>15.3g}"
-        )
-    lines.append("")
-    for key in result.before:
-        runs = data if key == "data" else validate
-        b, a = result.before[key], result.after[key]
-        lines.append(
-            f"{key:<9} {joint_name(runs)}: RMS {change_words(b['rms_um'], a['rms_um'])}, max {b['max_um']:.4g} → "
-            f"{a['max_um']:.4g} µm, R {b['R_um']:.4g} → {a['R_um']:.4g} µm"
-        )
-    lb_b, lb_a = result.checks_before["ljung_box"], result.checks_after["ljung_box"]
-    dr_b, dr_a = result.checks_before["drift"], result.checks_after["drift"]
-    lines.append(
-        f"residual on {joint_name(data)}: Ljung–Box Q({lb_b['lags']}) {lb_b['Q']:.0f} → {lb_a['Q']:.0f}; "
-        f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
-        f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
-    )
-    lines += [f"note: {n}" for n in result.notes]
-    lines.append("wrote   " + ", ".join(str(p) for p in written))
-    return "\n".join(lines)

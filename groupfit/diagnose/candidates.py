@@ -93,6 +93,12 @@ class Candidate:
         }
 
 
+def is_sensor_column(column: str) -> bool:
+    """A temperature sensor of the machine (``T3``, ``t12_C``), not the ambient: a symptom rather than a cause."""
+    lowered = column.lower()
+    return len(column) > 1 and lowered[0] == "t" and lowered[1].isdigit() and "amb" not in lowered
+
+
 def is_displacement(column: str) -> bool:
     lowered = column.lower()
     return lowered.endswith(DISPLACEMENT_SUFFIXES) or lowered.startswith(("disp", "error"))

@@ -23,6 +23,11 @@ whose held-out error is within one standard error of the best one's is taken
 the spread of the fold-by-fold differences): a longer lag than the data need
 turns an effect into a trend of the modelling run, which the next run does
 not share, and depends more on how the run started.
+
+A cause is preferred to a symptom: an unused temperature sensor is added
+only when no cause column (an ambient, a speed, a heat source's on/off)
+passes. Other columns that explain the held-out error as well as the one
+added (within one standard error) are reported as alternatives.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ from groupfit.diagnose.candidates import (
     Candidate,
     base_fold_sse,
     candidate_features,
+    is_sensor_column,
     rank_candidates,
     usable_columns,
 )
@@ -53,8 +59,10 @@ from groupfit.modelfile import error_metrics
 
 MIN_SCORE = 0.3
 """Least share of the held-out squared error that makes an effect significant."""
-MIN_EFFECT_RMS_UM = 0.1
-"""Least residual RMS (µm) an effect must remove out of sample: below it, nothing a compensation would notice."""
+MIN_EFFECT_RMS_UM = 0.2
+"""Least residual RMS (µm) an effect must remove out of sample: below it, nothing a compensation would notice
+(a fifth of a typical positioning repeatability; a low-pass of a heat input that only averages sensor noise
+removes about 0.1 µm on the FE runs with realistic noise)."""
 MIN_FOLDS_IMPROVED = 0.5
 """Share of held-out folds an effect must improve (more than this); the strict test asks for all of them."""
 OVERFIT_RATIO = 3.0
@@ -69,12 +77,15 @@ class Step:
     candidate: Candidate
     held_out_rms_before: float
     held_out_rms_after: float
+    alternatives: list[Candidate] = field(default_factory=list)
+    """Candidates of other columns that explain the held-out error as well (within one standard error)."""
 
     def to_dict(self) -> dict[str, Any]:
         return {
             **self.candidate.to_dict(),
             "held_out_rms_before_um": self.held_out_rms_before,
             "held_out_rms_after_um": self.held_out_rms_after,
+            "alternatives": [c.to_dict() for c in self.alternatives],
         }
 
 
@@ -107,6 +118,34 @@ class DiagnosisResult:
     refused: list[Refusal] = field(default_factory=list)
     folds: str = ""
     base_check: dict[str, Any] = field(default_factory=dict)
+    run_names: dict[str, str] = field(default_factory=dict)
+    """Names of the modelling run(s) (``"data"``) and the validation run(s) (``"validate"``)."""
+    selection: dict[str, Any] | None = None
+    """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
+
+    def summary(self) -> str:
+        """The report, as ``groupfit diagnose`` prints it."""
+        from groupfit.diagnose.report import diagnosis_summary
+
+        return diagnosis_summary(self)
+
+    def to_json(self, model_path: str | None = None) -> dict[str, Any]:
+        """The machine-readable result (``diagnose --json``); ``model`` is the model file to use."""
+        return {
+            "candidates": [c.to_dict() for c in self.candidates],
+            "added": [c.to_dict() for c in self.added],
+            "steps": [s.to_dict() for s in self.steps],
+            "refused": [r.to_dict() for r in self.refused],
+            "folds": self.folds,
+            "base_model": self.base_check,
+            "selection": self.selection,
+            "before": self.before,
+            "after": self.after,
+            "improved": self.improved,
+            "checks": {"before": self.checks_before, "after": self.checks_after},
+            "notes": self.notes,
+            "model": None if model_path is None else str(model_path),
+        }
 
     @property
     def improved(self) -> bool | None:
@@ -212,6 +251,7 @@ def diagnose(
 
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
+    sensor_columns = frozenset(c for c in columns if is_sensor_column(c))
     tried = candidate_features(
         columns,
         measured_inputs if own_transforms else [],
@@ -231,7 +271,9 @@ def diagnose(
         if first_ranking is None:
             first_ranking = ranking
         held_out_before = float(np.sqrt(base_fold_sse(target, design, folds).sum() / len(target)))
-        best, step_refusals = choose(ranking, min_score, min_effect_rms_um, bool(added), own_transforms)
+        best, step_refusals, alternatives = choose(
+            ranking, min_score, min_effect_rms_um, bool(added), own_transforms, sensor_columns
+        )
         refused += step_refusals
         if best is None:
             break
@@ -241,7 +283,7 @@ def diagnose(
         after_sse = base_fold_sse(target, stacked_design(current_model, current_inputs), folds)
         held_out_after = float(np.sqrt(after_sse.sum() / len(target)))
         added.append(best)
-        steps.append(Step(best, held_out_before, held_out_after))
+        steps.append(Step(best, held_out_before, held_out_after, alternatives))
         tried = [f for f in tried if f.column != best.feature.column]
 
     time = np.arange(len(target)) * period
@@ -260,30 +302,59 @@ def diagnose(
         refused=refused,
         folds=folds.describe(),
         base_check=base_check,
+        run_names={key: joint_name(rs) for key, rs in runs.items()},
     )
 
 
 def choose(
-    ranking: list[Candidate], min_score: float, min_effect_rms_um: float, further: bool, own_transforms: bool = False
-) -> tuple[Candidate | None, list[Refusal]]:
-    """The best candidate that passes its test (the shortest adequate low-pass of its family), and the refusals."""
+    ranking: list[Candidate],
+    min_score: float,
+    min_effect_rms_um: float,
+    further: bool,
+    own_transforms: bool = False,
+    sensor_columns: frozenset[str] = frozenset(),
+) -> tuple[Candidate | None, list[Refusal], list[Candidate]]:
+    """The candidate to add, the refusals on the way, and other columns that explain the error as well.
+
+    The best *cause* that passes its test — an ambient, a speed, a heat
+    source's on/off, any column but the machine's temperature sensors — then
+    the shortest adequate low-pass of its family. An unused temperature
+    sensor is a symptom of some cause, not an effect: it is added only when
+    no cause passes (a better sensor set is the job of ``fit --select``).
+    """
     refusals = []
+    passing = []
     for candidate in ranking:
         if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
             break
         reason = failed_test(candidate, min_score, further, own_transforms)
         if reason:
-            refusals.append(Refusal(candidate, reason))
+            if not passing:
+                refusals.append(Refusal(candidate, reason))
             continue
-        family = [
-            c
-            for c in ranking
-            if c.family() == candidate.family()
-            and c.score >= min_score
-            and failed_test(c, min_score, further, own_transforms) is None
-        ]
-        return shortest_adequate_lag(candidate, family), refusals
-    return None, refusals
+        passing.append(candidate)
+    if not passing:
+        return None, refusals, []
+    causes = [c for c in passing if c.feature.column not in sensor_columns]
+    best = causes[0] if causes else passing[0]
+    chosen = shortest_adequate_lag(best, [c for c in passing if c.family() == best.family()])
+    alternatives, seen = [], {chosen.feature.column}
+    for c in passing:
+        if c.feature.column not in seen and within_one_se(c, passing[0]):
+            alternatives.append(c)
+            seen.add(c.feature.column)
+    return chosen, refusals, alternatives
+
+
+def within_one_se(candidate: Candidate, best: Candidate) -> bool:
+    """Whether ``candidate``'s held-out error is within one standard error of ``best``'s.
+
+    The standard error of the summed fold-by-fold differences, √K·sd(d).
+    """
+    difference = np.subtract(candidate.fold_sse, best.fold_sse)
+    if len(difference) < 2:
+        return bool(difference.sum() <= 0.0)
+    return bool(difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1))
 
 
 def failed_test(candidate: Candidate, min_score: float, further: bool, own_transforms: bool = False) -> str | None:
@@ -310,12 +381,7 @@ def shortest_adequate_lag(best: Candidate, family: list[Candidate]) -> Candidate
     """The shortest low-pass of ``family`` whose held-out error is within one standard error of ``best``'s."""
     if best.feature.transform != "lowpass":
         return best
-    adequate = [best]
-    for candidate in family:
-        difference = np.subtract(candidate.fold_sse, best.fold_sse)
-        standard_error = np.sqrt(len(difference)) * np.std(difference, ddof=1) if len(difference) > 1 else 0.0
-        if difference.sum() <= standard_error:
-            adequate.append(candidate)
+    adequate = [best, *(c for c in family if c.feature.transform == "lowpass" and within_one_se(c, best))]
     return min(adequate, key=lambda c: c.feature.tau_s)
 
 

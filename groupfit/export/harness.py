@@ -98,6 +98,7 @@ def build_driver(
         str(export_dir / "groupfit_model.c"),
         "-o",
         str(executable),
+        "-lm",  # pow and fabs of a power stage (a model without one uses no library)
     ]
     subprocess.run(command, check=True, capture_output=True, text=True)
     return Path(executable)

@@ -10,6 +10,15 @@ A model with derived inputs is written as ``groupfit-runtime/2``: its
 the table of transforms. A runtime written for ``groupfit-runtime/1`` (no
 derived inputs) refuses it by its format instead of computing with the wrong
 inputs.
+
+A model whose derived inputs use a power stage or a start from rest is written
+as ``groupfit-runtime/3``: every entry of ``derived_inputs`` also holds
+``exponent`` and ``power_scale`` (the power stage ``(|v| / power_scale)^exponent``,
+computed in double precision with the C library's ``pow``; both null without
+one) and ``start`` (``"steady"`` or ``"rest"``), and the derived-input step of
+``steps`` says how they enter. A runtime written for ``/2`` refuses such a file
+instead of computing the wrong inputs; models without them are still written
+as ``/1`` or ``/2``, byte for byte as before.
 """
 
 from __future__ import annotations
@@ -28,6 +37,30 @@ from groupfit.runtime import (
 
 RUNTIME_FORMAT = "groupfit-runtime/1"
 RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
+RUNTIME_FORMAT_POWER = "groupfit-runtime/3"
+"""Derived inputs with a power stage or a start from rest."""
+
+DERIVED_STEP = (
+    "for every derived input k in order, with v = last[derived_inputs[k].reading]: identity: value[k] = v. "
+    "Otherwise, if not started[k] and bad[reading] == 0: started[k] = true and memory[k] = v (lowpass, "
+    "derivative) or every entry of line[k] (delay_samples long) = v and pos[k] = 0 (delay). Then, if "
+    "started[k]: lowpass: memory[k] = b * v + a * memory[k], value[k] = memory[k]; derivative: "
+    "value[k] = (v - memory[k]) * scale, memory[k] = v; delay: value[k] = line[k][pos[k]], "
+    "line[k][pos[k]] = v, pos[k] += 1, pos[k] = 0 when it reaches delay_samples. started, memory, value, "
+    "line and pos start at false / 0"
+)
+DERIVED_STEP_POWER = (
+    "for every derived input k in order, with v = last[derived_inputs[k].reading]; if exponent is not null, "
+    "first v = pow(abs(v) / power_scale, exponent), computed in double precision (a single-precision runtime "
+    "widens v to double and rounds the result to single once): identity: value[k] = v. "
+    "Otherwise, if not started[k] and bad[reading] == 0: started[k] = true and memory[k] = s (lowpass, "
+    "derivative) or every entry of line[k] (delay_samples long) = s and pos[k] = 0 (delay), where s = v, "
+    "or s = 0 when start is 'rest' (lowpass and delay only). Then, if "
+    "started[k]: lowpass: memory[k] = b * v + a * memory[k], value[k] = memory[k]; derivative: "
+    "value[k] = (v - memory[k]) * scale, memory[k] = v; delay: value[k] = line[k][pos[k]], "
+    "line[k][pos[k]] = v, pos[k] += 1, pos[k] = 0 when it reaches delay_samples. started, memory, value, "
+    "line and pos start at false / 0"
+)
 
 STEPS = (
     "count = min(count + 1, count_max); count starts at 0, group at 1, compensation at 0, "
@@ -35,13 +68,7 @@ STEPS = (
     "for every reading m in order: if temp_min_c[m] <= x[m] <= temp_max_c[m] (false for NaN and +-inf) "
     "then last[m] = x[m], bad[m] = 0; else if bad[m] <= hold_samples then bad[m] += 1. "
     "faulted = some bad[m] > hold_samples; held = some 0 < bad[m] <= hold_samples",
-    "for every derived input k in order, with v = last[derived_inputs[k].reading]: identity: value[k] = v. "
-    "Otherwise, if not started[k] and bad[reading] == 0: started[k] = true and memory[k] = v (lowpass, "
-    "derivative) or every entry of line[k] (delay_samples long) = v and pos[k] = 0 (delay). Then, if "
-    "started[k]: lowpass: memory[k] = b * v + a * memory[k], value[k] = memory[k]; derivative: "
-    "value[k] = (v - memory[k]) * scale, memory[k] = v; delay: value[k] = line[k][pos[k]], "
-    "line[k][pos[k]] = v, pos[k] += 1, pos[k] = 0 when it reaches delay_samples. started, memory, value, "
-    "line and pos start at false / 0",
+    DERIVED_STEP,
     "if group < number of groups, with window w = group (1-based): if count >= windows[w].last then "
     "group += 1 (forced); else if count >= windows[w].first and (bad[criterion] > hold_samples or "
     "directions[w] == 0 or (directions[w] > 0 and last[criterion] - thresholds_c[w] >= -margin_c) or "
@@ -54,6 +81,14 @@ STEPS = (
     "output: group (or the sensor-fault return), prediction (um), compensation (um), "
     "fault = held * fault_bits.held + faulted * fault_bits.sensor",
 )
+"""The step in words (formats ``/1`` and ``/2``)."""
+STEPS_POWER = tuple(DERIVED_STEP_POWER if step is DERIVED_STEP else step for step in STEPS)
+"""The step in words of format ``/3``: the derived-input step with the power stage and the start."""
+
+
+def uses_power_or_rest(tables: RuleTables) -> bool:
+    """Whether a derived input has a power stage or starts from rest (format ``/3``)."""
+    return any(d.has_power or d.from_rest for d in tables.derived)
 
 
 def runtime_table(tables: RuleTables) -> dict:
@@ -76,16 +111,31 @@ def runtime_table(tables: RuleTables) -> dict:
         }
         for d in tables.derived
     ]
+    power = uses_power_or_rest(tables)
+    note = (
+        "per derived input: its source 'reading' (index into temps); lowpass: "
+        "a = exp(-dt/tau_s), b = 1 - a; derivative: scale = 3600/dt (per hour); delay: delay_samples"
+    )
+    if power:
+        for entry, d in zip(derived, tables.derived):
+            entry.update(exponent=d.exponent, power_scale=d.power_scale, start=d.start)
+        note += (
+            "; power stage (null: none): v = (|reading| / power_scale)^exponent in double precision "
+            "before the transform; start: 'steady' (state = the first good v) or 'rest' (state = 0)"
+        )
+    if power:
+        fmt = RUNTIME_FORMAT_POWER
+    else:
+        fmt = RUNTIME_FORMAT_DERIVED if tables.derived else RUNTIME_FORMAT
     return {
-        "format": RUNTIME_FORMAT_DERIVED if tables.derived else RUNTIME_FORMAT,
+        "format": fmt,
         "rule": RULE_FORMAT,
         "temps": list(tables.raw_names),
         "temps_note": "the readings passed every sample, in this order: the measured model inputs (degC), "
         "then the source columns of the derived inputs (in the unit of their column in the modelling data)",
         "inputs": inputs,
         "derived_inputs": derived,
-        "derived_inputs_note": "per derived input: its source 'reading' (index into temps); lowpass: "
-        "a = exp(-dt/tau_s), b = 1 - a; derivative: scale = 3600/dt (per hour); delay: delay_samples",
+        "derived_inputs_note": note,
         "criterion": tables.criterion,
         "criterion_index": tables.criterion_reading,
         "sampling_period_s": tables.sampling_period_s,
@@ -107,7 +157,7 @@ def runtime_table(tables: RuleTables) -> dict:
         "fault_bits": {"held": FAULT_HELD, "sensor": FAULT_SENSOR},
         "sensor_fault_return": RETURN_SENSOR_FAULT,
         "switch_codes": {"criterion": SWITCH_CRITERION, "forced": SWITCH_FORCED},
-        "steps": list(STEPS),
+        "steps": list(STEPS_POWER if power else STEPS),
     }
 
 

@@ -24,7 +24,11 @@ file (:mod:`groupfit.model`) only, never on the fitting stack.
 Everything is computed in double precision, or, with ``precision="single"``,
 in IEEE single precision operation for operation as the C build with
 ``GF_USE_FLOAT`` (and a PLC's REAL) computes it, so that the results agree bit
-for bit.
+for bit. The one exception is the power stage of a derived input,
+``(|x| / scale)^exponent`` (the bearing-heat law of a speed): it is computed in
+double precision in both modes and every target, with the C library's ``pow``
+(:func:`math.pow` in Python, not numpy's power); single precision widens the
+float32 value to double and rounds the power to float32 once.
 """
 
 from groupfit.model import MAX_DELAY_SAMPLES, RULE_KEYS, SOURCE_RANGES_KEY

@@ -1,4 +1,14 @@
-"""The run-time rule, sample by sample: the reference interpreter every export agrees with."""
+"""The run-time rule, sample by sample: the reference interpreter every export agrees with.
+
+Precision: double, or IEEE single precision operation for operation (numpy
+float32 scalars) as the C build with ``GF_USE_FLOAT`` and a PLC's REAL compute.
+One step is the same in both: the power stage of a derived input,
+``(|v| / scale)^exponent``, is computed in double precision with
+:func:`math.pow` (which calls the C library's ``pow``, as the C export does;
+not numpy's power, whose vector loops may round differently), from the
+source's value widened to double; single precision rounds its result to
+float32 once.
+"""
 
 from __future__ import annotations
 
@@ -186,19 +196,28 @@ class SwitchingRule:
         return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
 
     def _derive(self, k: int) -> None:
-        """Advance derived input ``k`` by one sample from its source's last good value."""
+        """Advance derived input ``k`` by one sample from its source's last good value.
+
+        The value ``x`` is the source's last good reading, or its power stage
+        (in double precision, rounded to the rule's precision once). A rest
+        start begins a low-pass or delay from a zero state at the source's
+        first good reading, a steady start from ``x``.
+        """
         d = self.tables.derived[k]
         x = self.last[d.reading]
+        if d.has_power:
+            x = self._real(d.power(float(x)))
         if d.transform == "identity":
             self.derived[k] = x
             return
         if not self.started[k] and self.bad[d.reading] == 0:
             self.started[k] = True
+            initial = self._zero if d.from_rest else x
             if d.transform == "delay":
-                self.lines[k] = [x] * d.delay_samples
+                self.lines[k] = [initial] * d.delay_samples
                 self.positions[k] = 0
             else:
-                self.memory[k] = x
+                self.memory[k] = initial  # a derivative always starts steady (its start is "steady")
         if not self.started[k]:
             return
         if d.transform == "lowpass":

@@ -1,7 +1,15 @@
-"""The run-time rule's tables: every number the rule uses, in the form every target embeds."""
+"""The run-time rule's tables: every number the rule uses, in the form every target embeds.
+
+A derived input with a power stage (:attr:`DerivedTable.exponent`) maps its
+source's value ``v`` to ``(|v| / power_scale)^exponent`` before its transform,
+computed in double precision in every mode and every target (``fabs`` and the
+C library's ``pow``; Python's :func:`math.pow` calls the same ``pow``); single
+precision rounds the result to IEEE single once.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
@@ -33,6 +41,19 @@ class DerivedTable:
         :func:`groupfit.features.lowpass` does) and ``b = 1 − a``; 0 otherwise.
     scale : float
         Derivative factor ``3600/Δt`` (per hour); 0 otherwise.
+    exponent, power_scale : float or None
+        The power stage ``v → (|v| / power_scale)^exponent`` applied to the
+        source's value before the transform (the file's ``exponent`` and
+        ``scale``); None without one. Computed in double precision in every
+        mode: a single-precision rule widens its float32 value to double,
+        takes ``pow(fabs(v) / power_scale, exponent)`` and rounds the result to
+        float32 once.
+    start : {"steady", "rest"}
+        Where a low-pass or a delay starts at the source's first good reading:
+        ``"steady"``: its state is that value (low-pass output, every entry of
+        the delay line); ``"rest"``: its state is 0 (the source was off before
+        the run), so the first low-pass output is ``b·v``. Always
+        ``"steady"`` for identity and derivative, which it does not affect.
     """
 
     name: str
@@ -45,16 +66,49 @@ class DerivedTable:
     a: float
     b: float
     scale: float
+    exponent: float | None = None
+    power_scale: float | None = None
+    start: str = "steady"
+
+    @property
+    def has_power(self) -> bool:
+        """Whether the source's value passes the power stage first."""
+        return self.exponent is not None
+
+    @property
+    def from_rest(self) -> bool:
+        """Whether a low-pass or a delay starts from 0 rather than from the first good value."""
+        return self.start == "rest"
+
+    def power_text(self) -> str:
+        """The power stage in words (ASCII), e.g. ``(|spindle_rpm| / 1000)^1.66667``; the column without one."""
+        if not self.has_power:
+            return self.column
+        return f"(|{self.column}| / {self.power_scale:g})^{self.exponent:.6g}"
 
     def describe(self) -> str:
         """Words for headers and sheets, ASCII only."""
+        if not self.has_power and not self.from_rest:
+            if self.transform == "lowpass":
+                return f"low-pass of {self.column}, tau = {self.tau_s:g} s"
+            if self.transform == "derivative":
+                return f"time derivative of {self.column}, per hour"
+            if self.transform == "delay":
+                return f"{self.column} delayed by {self.delay_samples} sample(s)"
+            return f"{self.column} as read"
+        source = self.power_text()
+        rest = ", from rest" if self.from_rest else ""
         if self.transform == "lowpass":
-            return f"low-pass of {self.column}, tau = {self.tau_s:g} s"
+            return f"low-pass of {source}, tau = {self.tau_s:g} s{rest}"
         if self.transform == "derivative":
-            return f"time derivative of {self.column}, per hour"
+            return f"time derivative of {source}, per hour"
         if self.transform == "delay":
-            return f"{self.column} delayed by {self.delay_samples} sample(s)"
-        return f"{self.column} as read"
+            return f"{source} delayed by {self.delay_samples} sample(s){rest}"
+        return f"{source} (heat law)"
+
+    def power(self, value: float) -> float:
+        """The power stage of a source value, in double precision (the C library's ``pow``, as C calls it)."""
+        return math.pow(math.fabs(value) / self.power_scale, self.exponent)
 
 
 @dataclass(frozen=True)
@@ -139,6 +193,9 @@ class RuleTables:
                     a=a,
                     b=float(1.0 - a) if feature.transform == "lowpass" else 0.0,
                     scale=DERIVATIVE_SCALE_S / period if feature.transform == "derivative" else 0.0,
+                    exponent=None if feature.exponent is None else float(feature.exponent),
+                    power_scale=None if feature.exponent is None else float(feature.scale),
+                    start=feature.start if feature.transform in ("lowpass", "delay") else "steady",
                 )
             )
         derived_index = {d.name: k for k, d in enumerate(derived)}
@@ -161,6 +218,8 @@ class RuleTables:
             valid_min.append(float(low))
             valid_max.append(float(high))
             origin.append(where)
+        for d in derived:
+            _check_power_range(d, valid_min[d.reading], valid_max[d.reading])
         return cls(
             raw_names=tuple(raw),
             input_names=input_names,
@@ -230,3 +289,22 @@ class RuleTables:
     def period_tolerance_s(self) -> float:
         """Largest accepted difference between the live and the model's sampling period (s)."""
         return self.period_tolerance * self.sampling_period_s
+
+
+POWER_MAX = 1e30
+"""Largest power-stage value a valid source reading may produce (far inside IEEE single precision)."""
+
+
+def _check_power_range(d: DerivedTable, low: float, high: float) -> None:
+    """Refuse a power stage that overflows within its source's valid range (no target may meet inf or UB)."""
+    if not d.has_power:
+        return
+    try:
+        top = d.power(max(abs(low), abs(high)))
+    except OverflowError:
+        top = math.inf
+    if not top <= POWER_MAX:
+        raise InputError(
+            f"derived input {d.name}: its power stage reaches {top:g} within the valid range "
+            f"[{low:g}, {high:g}] of '{d.column}' (at most {POWER_MAX:g}); narrow the range or change the scale"
+        )
