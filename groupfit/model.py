@@ -530,7 +530,21 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
             f"switching.criterion_index names the derived input '{temps[index]}'; "
             "the switching criterion must be a measured input"
         )
+    defined = {f.name for f in features}
+    for k, feature in enumerate(features):
+        if feature.name not in temps:
+            return f"derived_inputs[{k}] ('{feature.name}') is not one of the model's inputs (temps)"
+        if feature.name in [f.name for f in features[:k]]:
+            return f"derived_inputs[{k}] ('{feature.name}') is defined twice"
+    for name in temps:
+        if isinstance(name, str) and name not in defined and _looks_derived(name):
+            return f"input '{name}' is named as a derived input, but derived_inputs does not define it"
     return _switching_agrees(model, section)
+
+
+def _looks_derived(name: str) -> bool:
+    """Whether an input name has the form of a derived input's (``T_amb~lp1800s``, ``(speed/1000)^1.667``)."""
+    return "~" in name or (name.startswith("(") and ")^" in name)
 
 
 def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> str | None:

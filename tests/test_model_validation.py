@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_switching_models import SYNTHETIC, synthetic_model
+from test_switching_models import SYNTHETIC, augmented_model, readings, synthetic_model
 
 from groupfit.cli import main
 from groupfit.errors import InputError
@@ -35,6 +35,8 @@ from groupfit.runtime import SwitchingRule
 
 HOSTILE = [None, True, False, "text", [], {}, [1, 2], math.nan, math.inf, -math.inf, 1e308, -1e308, -1]
 """What a corrupted or hand-edited file may hold in place of any value."""
+FREE = ("coefficients", "derived_inputs")
+"""Sections whose whole numbers are free parameters (a delay of 4 samples instead of 3 is another valid model)."""
 
 
 def _base():
@@ -78,14 +80,17 @@ def mutations(model):
         mutated = copy.deepcopy(model)
         current = _get(model, path)
         kinds = ["replace", "delete"]
-        if isinstance(current, int) and not isinstance(current, bool) and path[0] != "coefficients":
+        if isinstance(current, int) and not isinstance(current, bool) and path[0] not in FREE:
             kinds.append("shift")
         if path == ("temps",):
             kinds.append("duplicate")
         kind = draw(st.sampled_from(kinds))
         if kind == "replace":
             free = path[0] == "coefficients" and len(path) == 3  # any finite number is a valid coefficient
-            value = draw(st.sampled_from([v for v in HOSTILE if not (free and v == -1)]))
+            a_range = path[:2] == ("switching", "source_ranges") and len(path) == 3  # [1, 2] is a valid range
+            value = draw(
+                st.sampled_from([v for v in HOSTILE if not (free and v == -1) and not (a_range and v == [1, 2])])
+            )
             _set(mutated, path, value)
             label = f"{'.'.join(map(str, path))} = {value!r}"
         elif kind == "delete":
@@ -125,11 +130,34 @@ def check_mutation(original, temps, label, mutated) -> str:
 BASE, TEMPS = _base()
 
 
+def _derived_base():
+    model, run = augmented_model("heat law p=2")
+    return model, readings(model, run)
+
+
+DERIVED, DERIVED_READINGS = _derived_base()
+
+
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(mutations(BASE))
 def test_a_mutated_model_is_refused_or_replays_identically(case):
     label, mutated = case
     check_mutation(BASE, TEMPS, label, mutated)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(mutations(DERIVED))
+def test_a_mutated_model_with_derived_inputs_is_refused_or_replays_identically(case):
+    label, mutated = case
+    check_mutation(DERIVED, DERIVED_READINGS, label, mutated)
+
+
+@pytest.mark.slow
+@settings(max_examples=3000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(mutations(DERIVED))
+def test_fuzz_thousands_of_mutations_with_derived_inputs(case):
+    label, mutated = case
+    check_mutation(DERIVED, DERIVED_READINGS, label, mutated)
 
 
 @pytest.mark.slow
