@@ -117,7 +117,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         )
     if written:
         print("  report " + ", ".join(str(p) for p in written), file=out)
-    write_json(
+    json_path = write_json(
         args.json,
         {
             "db": str(outcome.db),
@@ -134,4 +134,6 @@ def run_sweep(args: argparse.Namespace) -> int:
             "report": [str(p) for p in written],
         },
     )
+    if json_path is not None:
+        print(f"  wrote {json_path}", file=out)
     return 0
