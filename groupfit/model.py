@@ -322,8 +322,10 @@ def model_problem(model: Any) -> str | None:
     every hard group over-determined (more samples than coefficients) and
     longer than the soft offset n, hard and soft groups equal to what the
     breaks give, finite coefficients of at most :data:`COEFFICIENT_LIMIT` in
-    magnitude, unique input names, and a switching section that agrees with
-    the breaks (windows and thresholds recomputed and compared).
+    magnitude, unique input names, every derived input defined once and used,
+    rule numbers within :data:`RULE_LIMIT`, no NaN or infinity anywhere, and a
+    switching section that agrees with the breaks (the criterion's name,
+    windows, thresholds and directions recomputed and compared).
     """
     if not isinstance(model, Mapping) or model.get("format") != FORMAT:
         return f"not a {FORMAT} model file (missing or different 'format')"
@@ -347,7 +349,7 @@ def _is_whole(value) -> bool:
 def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     period = model["sampling_period_s"]
     if not _is_number(period) or not 0 < period <= RULE_LIMIT:
-        return f"sampling_period_s = {period!r}: must be a finite number of seconds > 0"
+        return f"sampling_period_s = {period!r}: must be a number of seconds > 0 (at most {RULE_LIMIT:g})"
     if model["objective"] not in ("sae", "sse"):
         return f"objective = {model['objective']!r}: must be 'sae' or 'sse'"
     if not isinstance(model["intercept"], bool):
