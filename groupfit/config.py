@@ -8,6 +8,8 @@ A configuration has up to four tables; every key is optional::
     temps = ["T1", "T2", "T3", "T4"]
     error = "error_um"
     validate = ["../datasets/other_run.csv"]
+    temp_range = [-50, 200]    # plausible temperatures (°C); a reading outside is refused
+    error_limit = 1e5          # largest plausible |error| (µm)
 
     [model]
     p = 3                      # or "auto": choose p by p_rule over 0…pmax
@@ -49,6 +51,7 @@ the wrong type, are errors that name the key.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any, Callable
 
@@ -72,6 +75,18 @@ def _whole_or_auto(table: Table, key: str) -> int | str:
     return value
 
 
+def _temp_range(table: Table, key: str) -> tuple[float, float]:
+    value = table.get(key)
+    if (
+        not isinstance(value, list)
+        or len(value) != 2
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
+        or not value[0] < value[1]
+    ):
+        raise table.fail(key, f"expected [LOW, HIGH] in °C with LOW < HIGH, got {value!r}")
+    return float(value[0]), float(value[1])
+
+
 def _target(table: Table, key: str) -> str | int | float:
     value = table.get(key)
     if not isinstance(value, str):
@@ -86,6 +101,8 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "temps": Table.strings,
         "error": Table.string,
         "validate": Table.strings,
+        "temp_range": _temp_range,
+        "error_limit": lambda table, key: table.number(key, positive=True),
     },
     "model": {
         "p": _whole_or_auto,

@@ -29,10 +29,11 @@ TEMP_RANGE_C = (-50.0, 200.0)
 
 Wider than any machine shop (coolant, bearings and motors stay well inside
 it) and narrower than the overflow values a broken logger writes (1e300, a
-missing sensor read as −273 or 850 °C). ``--range-temp LOW,HIGH`` widens it.
+missing sensor read as −273 or 850 °C). ``--range-temp=LOW,HIGH`` (or ``[data]
+temp_range``) widens it.
 """
 ERROR_LIMIT_UM = 1.0e5
-"""Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` widens it."""
+"""Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
 
 
 @dataclass(frozen=True)
@@ -198,13 +199,13 @@ def check_range(
 
 
 def parse_temp_range(text: str | None) -> tuple[float, float] | None:
-    """``--range-temp LOW,HIGH`` (°C)."""
+    """``--range-temp=LOW,HIGH`` (°C; with ``=``, as LOW is usually negative)."""
     if text is None:
         return None
     try:
         low, high = (float(v) for v in text.split(","))
     except ValueError:
-        raise InputError(f"--range-temp {text!r}: give LOW,HIGH in °C, e.g. -50,200") from None
+        raise InputError(f"--range-temp {text!r}: give LOW,HIGH in °C, e.g. --range-temp=-60,250") from None
     if not (np.isfinite(low) and np.isfinite(high) and low < high):
         raise InputError(f"--range-temp {text!r}: LOW and HIGH must be finite with LOW < HIGH")
     return low, high
@@ -327,7 +328,7 @@ def load_run(
     if not allow_nonfinite:
         if temp_range is not None:
             for j, t in enumerate(temps):
-                check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp LOW,HIGH")
+                check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp=LOW,HIGH")
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
 

@@ -299,6 +299,18 @@ CASES = [
     ),
     Case(
         "configs",
+        "temp_range reversed in the config",
+        ("fit", "{in}/range_reversed.toml", "--quiet", "--out", "{out}/r"),
+        "data.temp_range",
+    ),
+    Case(
+        "configs",
+        "reading outside the config's temp_range",
+        ("fit", "{in}/range_narrow.toml", "--quiet", "--out", "{out}/r"),
+        "outside the plausible range 0…25",
+    ),
+    Case(
+        "configs",
         "negative pmax in the config",
         ("compare", "{in}/pmax_negative.toml", "--quiet", "--out", "{out}/r"),
         "--pmax -1",
@@ -400,6 +412,8 @@ def _write_inputs(folder: Path) -> None:
         "wrong_type.toml": f"[data]\n{data}\n[model]\np = 'three'\n",
         "not_toml.toml": "[data\npath = \n",
         "missing_data.toml": '[data]\npath = "nowhere.csv"\ntemps = ["T1"]\n',
+        "range_reversed.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\ntemp_range = [30, 25]\n',
+        "range_narrow.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\ntemp_range = [0, 25]\n',
         "pmax_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\npmax = -1\n',
         "scenario_unknown.toml": 'kind = "lumped"\nwobble = 3\n',
         "lumped.toml": 'kind = "lumped"\n',

@@ -40,7 +40,8 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--range-temp",
         metavar="LOW,HIGH",
-        help="plausible temperature readings in °C (default -50,200); a reading outside is refused",
+        help="plausible temperature readings in °C (default -50,200; write --range-temp=-60,250 for a negative LOW); "
+        "a reading outside is refused",
     )
     parser.add_argument(
         "--range-error",
