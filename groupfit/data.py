@@ -49,6 +49,11 @@ class Run:
         The whole table, including columns that are not model inputs.
     time_name : str
         Name of the time column.
+    reference : str or None
+        What ``temps`` are relative to (:mod:`groupfit.reference`): None for
+        absolute readings (as loaded), a column or ``"start"`` once
+        :func:`groupfit.reference.with_reference` has applied it. ``frame``
+        keeps the readings as recorded.
     """
 
     name: str
@@ -61,6 +66,7 @@ class Run:
     period: float
     frame: pd.DataFrame = field(repr=False)
     time_name: str = DEFAULT_TIME
+    reference: str | None = None
 
     @property
     def n_samples(self) -> int:

@@ -28,6 +28,8 @@ from groupfit.runtime import (
 
 RUNTIME_FORMAT = "groupfit-runtime/1"
 RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
+RUNTIME_FORMAT_REFERENCE = "groupfit-runtime/3"
+"""A model with a reference temperature: a runtime for /1 or /2 would compute with absolute readings."""
 
 STEPS = (
     "count = min(count + 1, count_max); count starts at 0, group at 1, compensation at 0, "
@@ -113,4 +115,28 @@ def runtime_table(tables: RuleTables) -> dict:
 
 def render_json(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_runtime.json": text}``."""
-    return {"groupfit_runtime.json": to_json(runtime_table(tables))}
+    return {"groupfit_runtime.json": to_json(with_reference(runtime_table(tables), tables))}
+
+
+# --------------------------------------------------------------------- reference temperature
+
+REFERENCE_STEP = (
+    "reference, after the readings and before the derived inputs: every measured model input m (an entry of "
+    "'inputs' with a 'reading') is taken as ref(m) = last[m] - last[reference.reading] (reference.kind "
+    "'column'), or ref(m) = last[m] - first[m] (kind 'start': for every measured reading m in order, if not "
+    "has_first[m] and bad[m] == 0 then first[m] = last[m], has_first[m] = true; first and has_first start at "
+    "0 / false). Every later step that reads last[criterion] or last[inputs[j].reading] uses ref(...) instead; "
+    "derived inputs use last[] as read"
+)
+
+
+def with_reference(table: dict, tables: RuleTables) -> dict:
+    """The runtime table of a model with a reference temperature: format /3, the reference and its step."""
+    if tables.reference is None:
+        return table
+    steps = list(table["steps"])
+    steps.insert(2, REFERENCE_STEP)
+    reference = {"kind": "start"} if tables.reference_start else {"kind": "column", "name": tables.reference}
+    if tables.reference_reading >= 0:
+        reference["reading"] = tables.reference_reading
+    return {**table, "format": RUNTIME_FORMAT_REFERENCE, "reference": reference, "steps": steps}
