@@ -287,7 +287,7 @@ def model_problem(model: Any) -> str | None:
     n_groups = model["p"] + 1
     if len(model["breaks"]) != model["p"] or len(model["coefficients"]) != n_groups:
         return f"'breaks' and 'coefficients' do not match p = {model['p']}"
-    problem = rule_section_problem(model) or reference_problem(model.get("reference"), model["temps"])
+    problem = rule_section_problem(model) or _reference_check(model)
     if problem:
         return problem
     width = len(model["temps"]) + int(model["intercept"])
@@ -362,6 +362,15 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
             "the switching criterion must be a measured input"
         )
     return None
+
+
+def _reference_check(model: Mapping[str, Any]) -> str | None:
+    """The ``reference`` key's problem: it must name no measured input (a derived input of it is fine)."""
+    try:
+        derived = {feature.name for feature in _parse_derived(model.get("derived_inputs", []))}
+    except InputError:
+        derived = set()
+    return reference_problem(model.get("reference"), [name for name in model["temps"] if name not in derived])
 
 
 def _parse_derived(entries: Any) -> list[Feature]:

@@ -399,7 +399,11 @@ def _raw_readings(run) -> np.ndarray:
     """The run's input sensors as recorded (the valid ranges of a model with a reference temperature)."""
     if getattr(run, "reference", None) is None:
         return run.temps
-    return run.frame[list(run.temp_names)].to_numpy(dtype=float)
+    raw = np.array(run.temps, dtype=float)
+    for j, name in enumerate(run.temp_names):
+        if name in run.frame.columns:  # a measured input; a derived one is as computed
+            raw[:, j] = run.frame[name].to_numpy(dtype=float)
+    return raw
 
 
 def default_criterion(run) -> str:
