@@ -292,7 +292,16 @@ def join_runs(runs: Sequence[Run]) -> Run:
         period=first.period,
         frame=pd.concat([run.frame[shared] for run in runs], ignore_index=True),
         time_name=first.time_name,
+        reference=_shared_reference(runs),
     )
+
+
+def _shared_reference(runs: Sequence[Run]) -> str | None:
+    """The reference every joined run's inputs are relative to (they must agree)."""
+    references = {run.reference for run in runs}
+    if len(references) > 1:
+        raise InputError("the runs' inputs are relative to different references; load them alike")
+    return references.pop()
 
 
 def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:

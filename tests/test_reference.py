@@ -387,3 +387,18 @@ def test_diagnose_runs_on_a_referenced_model(tmp_path):
     assert result["before"]["data"]["rms_um"] > 0
     augmented = ModelFile.load(result["model"])
     assert augmented.reference == "T_amb"
+
+
+def test_a_global_model_on_several_runs_takes_each_from_its_own_start(tmp_path):
+    out = tmp_path / "model"
+    data = [str(MODELLING), str(AMBIENT_25)]
+    args = ["fit", "--data", *data, "--temps", "T1,T2", "--p", "0", "--reference", "start", "--quiet"]
+    assert main([*args, "--out", str(out)]) == 0
+    model = ModelFile.load(out / "model.json")
+    assert model.reference == "start"
+    runs = [load_run(path, temps=TEMPS) for path in data]
+    X = np.vstack([referenced(run.temps, "start") for run in runs])
+    A = np.column_stack([np.ones(len(X)), X])
+    expected = np.linalg.lstsq(A, np.concatenate([run.error for run in runs]), rcond=None)[0]
+    assert model.training["rms_um"] < 0.5
+    np.testing.assert_allclose(np.asarray(model.coefficients[0]), expected, rtol=1e-3, atol=1e-3)
