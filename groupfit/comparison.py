@@ -52,6 +52,9 @@ class ComparisonSettings:
     structural_gain_um_per_K: float | None = None
     conditions: tuple[str, ...] = ("speed_rpm",)
     p_target: str | float | None = "20%"
+    same_condition_samples: int = 2
+    """A run is on the modelling run's condition when its condition columns go through the same levels in
+    the same order, each change within this many samples of the modelling run's (:func:`run_condition`)."""
     search: SearchSettings = SearchSettings()
     """Seed and GA settings of the grouped models (always the GA, never certified one by one)."""
     intervals: dict[str, Any] = field(default_factory=dict)
@@ -97,6 +100,10 @@ class ComparisonResult:
     """Per p, a :class:`groupfit.inference.BreakIntervalReport` of the grouped model's breaks."""
     bands: dict[str, dict[str, tuple]] = field(default_factory=dict)
     """Per run and model key, the (lower, upper) prediction band of MLR and grouped models."""
+    run_conditions: dict[str, str] = field(default_factory=dict)
+    """Per run: ``"modelling"``, ``"same condition"`` or ``"other condition"`` (:func:`run_condition`)."""
+    reference: str | None = None
+    """What the temperature inputs were taken relative to (:mod:`groupfit.reference`)."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -111,6 +118,8 @@ class ComparisonResult:
             "ar1": self.ar1,
             "validation_grouping": self.validation_rule,
             "break_intervals": {str(p): report.to_json() for p, report in self.break_intervals.items()},
+            "run_conditions": self.run_conditions,
+            "reference": self.reference,
         }
 
     def summary(self) -> str:
@@ -127,6 +136,37 @@ def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
         values = run.frame[column].to_numpy()
         changes.update((np.flatnonzero(values[1:] != values[:-1]) + 1).tolist())
     return sorted(changes)
+
+
+def condition_levels(run: Run, columns: tuple[str, ...]) -> tuple[list[tuple], list[int]]:
+    """The sequence of operating-condition levels of a run and the samples (1-based) after which each ends."""
+    values = [tuple(row) for row in run.frame[list(columns)].to_numpy().tolist()] if columns else []
+    levels, ends = [], []
+    for i, value in enumerate(values):
+        if not levels or value != levels[-1]:
+            if levels:
+                ends.append(i)
+            levels.append(value)
+    return levels, ends
+
+
+def run_condition(run: Run, modelling: Run, columns: tuple[str, ...], tolerance: int) -> str:
+    """``"same condition"`` or ``"other condition"``: is ``run`` the modelling run's duty cycle again?
+
+    Same condition: the condition columns (e.g. the spindle speed) go through the same levels in the same
+    order, and each change comes within ``tolerance`` samples of the modelling run's: the paper's repeat of
+    a working condition, with sampling moments that differ a little. The ambient and the machine's state at
+    the start are not conditions: a repeat at another ambient or after a warm start is the same condition.
+    """
+    if not columns or any(c not in run.frame.columns for c in columns):
+        return "other condition"
+    levels, ends = condition_levels(run, columns)
+    model_levels, model_ends = condition_levels(modelling, columns)
+    if levels != model_levels:
+        return "other condition"
+    if any(abs(a - b) > tolerance for a, b in zip(ends, model_ends)):
+        return "other condition"
+    return "same condition"
 
 
 def distance_to_change(breaks: list[int], changes: list[int]) -> list[int | None]:
@@ -310,6 +350,13 @@ def compare_models(
         validation_rule="run-time switching" if live_rule is not None else "sample index",
         break_intervals=intervals,
         bands=bands,
+        run_conditions={
+            run.name: "modelling"
+            if run is modelling
+            else run_condition(run, modelling, settings.conditions, settings.same_condition_samples)
+            for run in runs
+        },
+        reference=modelling.reference,
     )
 
 
@@ -326,20 +373,7 @@ def comparison_summary(result: ComparisonResult) -> str:
         {f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:])
     )
     index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
-    header_runs = ["model".ljust(16)]
-    header_cols = [" " * 16]
-    for i, run in enumerate(result.runs):
-        label = f"{run} ({'modelling' if i == 0 else 'validation'})"
-        header_runs.append(label[:34].center(34))
-        header_cols.append(f"{'R mm':>8}{'R µm':>9}{'RMS':>8}{'max|e|':>9}")
-    lines = ["  ".join(header_runs), "  ".join(header_cols)]
-    for key in keys:
-        name = MODEL_LABELS.get(key, f"grouped p = {key[7:]}")
-        cells = [name.ljust(16)]
-        for run in result.runs:
-            r = index[(key, run)]
-            cells.append(f"{r['R_mm']:>8.4f}{r['R_um']:>9.2f}{r['rms_um']:>8.3f}{r['max_um']:>9.3f}")
-        lines.append("  ".join(cells))
+    lines = comparison_table(result, keys, index)
     lines += [
         "",
         f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
@@ -380,3 +414,22 @@ def comparison_summary(result: ComparisonResult) -> str:
         "they are fitted to the modelling run's condition and are not retuned."
     )
     return "\n".join(lines)
+
+
+def comparison_table(result: ComparisonResult, keys: list[str], index: dict) -> list[str]:
+    """One line per run (its condition, then every model's RMS, R and max |e|), the best model named."""
+    names = [MODEL_LABELS.get(key, f"p = {key[7:]}").replace(" (p = 0)", "").replace(" free run", "") for key in keys]
+    width = max(len(run) for run in result.runs)
+    reference = result.reference or "none (absolute temperatures)"
+    lines = [f"inputs relative to: {reference}"]
+    for title, metric, digits in (("RMS µm", "rms_um", 3), ("R = Σ|e| µm", "R_um", 2), ("max |e| µm", "max_um", 3)):
+        lines.append("")
+        lines.append(f"{title:<{width}}  {'condition':<15}" + "".join(f"{n:>8}" for n in names) + "  best")
+        for run in result.runs:
+            values = [index[(key, run)][metric] for key in keys]
+            best = keys[int(np.argmin(values))]
+            best_name = MODEL_LABELS.get(best, f"grouped p = {best[7:]}")
+            condition = result.run_conditions.get(run, "")
+            cells = "".join(f"{v:>8.{digits}f}" for v in values)
+            lines.append(f"{run:<{width}}  {condition:<15}{cells}  {best_name}")
+    return lines

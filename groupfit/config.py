@@ -114,6 +114,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "objective": Table.string,
         "intercept": Table.boolean,
         "criterion": Table.string,
+        "reference": Table.string,
     },
     "search": {
         "method": Table.string,

@@ -60,6 +60,11 @@ class Run:
         The whole table, including columns that are not model inputs.
     time_name : str
         Name of the time column.
+    reference : str or None
+        What ``temps`` are relative to (:mod:`groupfit.reference`): None for
+        absolute readings (as loaded), a column or ``"start"`` once
+        :func:`groupfit.reference.with_reference` has applied it. ``frame``
+        keeps the readings as recorded.
     """
 
     name: str
@@ -72,6 +77,7 @@ class Run:
     period: float
     frame: pd.DataFrame = field(repr=False)
     time_name: str = DEFAULT_TIME
+    reference: str | None = None
 
     @property
     def n_samples(self) -> int:
@@ -383,7 +389,16 @@ def join_runs(runs: Sequence[Run]) -> Run:
         period=first.period,
         frame=pd.concat([run.frame[shared] for run in runs], ignore_index=True),
         time_name=first.time_name,
+        reference=_shared_reference(runs),
     )
+
+
+def _shared_reference(runs: Sequence[Run]) -> str | None:
+    """The reference every joined run's inputs are relative to (they must agree)."""
+    references = {run.reference for run in runs}
+    if len(references) > 1:
+        raise InputError("the runs' inputs are relative to different references; load them alike")
+    return references.pop()
 
 
 def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:

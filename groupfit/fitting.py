@@ -73,7 +73,7 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile, interval
     search = estimator.search_
     lines = [
         f"run     {run.source}: N = {run.n_samples} samples every {run.period:g} s; "
-        f"inputs {', '.join(run.temp_names)} -> {run.error_name}",
+        f"inputs {', '.join(run.temp_names)}{_relative_to(run)} -> {run.error_name}",
         f"model   p = {estimator.p}, n = {estimator.n}, c = {estimator.c:g}, M = {estimator.n_coef} "
         f"({'with' if estimator.fit_intercept else 'no'} intercept), objective {estimator.objective}, "
         f"hard groups > {estimator.c * estimator.n_coef:g} samples",
@@ -123,6 +123,14 @@ def search_summary(search: dict, unit: str) -> str:
             f"GA gap {search['gap_percent']:.3g} %"
         )
     return text
+
+
+def _relative_to(run: Run) -> str:
+    """How the inputs are taken (:mod:`groupfit.reference`), for the report."""
+    reference = getattr(run, "reference", None)
+    if reference is None:
+        return " (absolute)"
+    return " (minus their first reading)" if reference == "start" else f" (minus {reference})"
 
 
 def _span(pair) -> str:

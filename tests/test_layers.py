@@ -112,5 +112,12 @@ def test_the_packaged_default_configuration_names_packaged_data():
 
     config = read_config(PACKAGED_DEFAULT)  # in a checkout the packaged files link to configs/ and datasets/
     names = [Path(path).name for path in [config["data"]["path"], *config["data"]["validate"]]]
-    assert names == ["paper_cycle.csv", "validation_speed.csv", "validation_timing.csv"]
+    assert names == [
+        "paper_cycle.csv",
+        "repeat_timing.csv",
+        "repeat_ambient25.csv",
+        "repeat_warm.csv",
+        "validation_speed.csv",
+        "validation_timing.csv",
+    ]
     assert all((PACKAGED_DEFAULT.parents[1] / "datasets" / name).is_file() for name in names)

@@ -245,3 +245,23 @@ class StageProgress:
         for bar in self.bars.values():
             bar.close()
         self.bars.clear()
+
+
+def add_reference_option(parser: argparse.ArgumentParser) -> None:
+    """``--reference COLUMN|start|none``: what the model's temperature inputs are taken relative to."""
+    parser.add_argument(
+        "--reference",
+        metavar="COLUMN|start|none",
+        help="take every input minus a reference sensor (e.g. T_amb), minus its first reading ('start'), "
+        "or as read ('none'); default: T_amb when the run has that column, else none",
+    )
+
+
+def configured_reference(args: argparse.Namespace, config: dict, run: Run) -> str | None:
+    """The reference of ``--reference``, else ``[model] reference``, else T_amb when ``run`` has it."""
+    from groupfit.reference import default_reference
+
+    value = getattr(args, "reference", None)
+    if value is None:
+        value = config["model"].get("reference")
+    return default_reference(run.frame, value)

@@ -10,11 +10,13 @@ from groupfit.commands.common import (
     add_json_option,
     add_out_option,
     add_quiet_option,
+    add_reference_option,
     add_run_options,
     check_exact_budget,
     check_json_target,
     check_output_dir,
     config_with_data_options,
+    configured_reference,
     load_configured_run,
     report_stream,
     write_json,
@@ -24,6 +26,7 @@ from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
 from groupfit.errors import InputError
 from groupfit.inference.cli import add_interval_options, interval_settings
+from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
 
 
@@ -33,6 +36,7 @@ def add_parser(verbs) -> None:
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
     compare.add_argument("--seed", type=int, help="seed of the genetic algorithm")
+    add_reference_option(compare)
     add_json_option(compare)
     add_out_option(compare, "folder for the figures")
     add_quiet_option(compare)
@@ -64,6 +68,9 @@ def run_compare(args: argparse.Namespace) -> int:
         )
     modelling = load_configured_run(config)
     validation = [load_configured_run(config, path) for path in config["data"]["validate"]]
+    reference = configured_reference(args, config, modelling)
+    modelling = with_reference(modelling, reference)
+    validation = [with_reference(run, reference) for run in validation]
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
     out_dir = check_output_dir(config["output"]["dir"])

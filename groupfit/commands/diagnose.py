@@ -67,7 +67,8 @@ def add_parser(verbs) -> None:
     parser.add_argument(
         "--own-transforms",
         action="store_true",
-        help="also try low-passes, derivatives and delays of the model's own inputs (under the every-fold test)",
+        help="also try low-passes, derivatives and delays of the model's own inputs (under the every-fold test) "
+        "and of unused temperature sensors",
     )
     parser.add_argument(
         "--select",

@@ -10,11 +10,13 @@ from groupfit.commands.common import (
     add_json_option,
     add_out_option,
     add_quiet_option,
+    add_reference_option,
     add_run_options,
     check_exact_budget,
     check_json_target,
     check_output_dir,
     config_with_data_options,
+    configured_reference,
     load_configured_run,
     report_stream,
     write_json,
@@ -27,6 +29,7 @@ from groupfit.fitting import FitResult
 from groupfit.inference.cli import add_interval_options, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
+from groupfit.reference import START, with_reference
 from groupfit.sweep.selection import SELECTION_METHODS
 
 
@@ -44,6 +47,7 @@ def add_parser(verbs) -> None:
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
     fit.add_argument("--seed", type=int, help="seed of the genetic algorithm")
     fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
+    add_reference_option(fit)
     fit.add_argument(
         "--select",
         choices=SELECTION_METHODS,
@@ -88,6 +92,11 @@ def run_fit(args: argparse.Namespace) -> int:
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)
+    if len(runs) > 1 and configured_reference(args, config, run) == START:
+        runs = [with_reference(r, START) for r in runs]  # each run's own start
+        run = join_runs(runs)
+    else:
+        run = with_reference(run, configured_reference(args, config, run))
     input_selection = None
     if args.select:
         run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors)

@@ -65,7 +65,9 @@ def refit_model(
     ).fit(X, error)
     time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
     frame = pd.concat([run.frame for run in runs], ignore_index=True)
-    refitted_run = replace(runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame)
+    refitted_run = replace(
+        runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame, reference=model.reference
+    )
     criterion = model.switching.criterion
     refitted = estimator.to_model_file(refitted_run, criterion=criterion if criterion in names else None)
     return refitted.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()

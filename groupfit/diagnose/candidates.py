@@ -138,6 +138,7 @@ def candidate_features(
     frame: pd.DataFrame,
     operating: Sequence[str] = (),
     heat_exponent: float | str = HEAT_EXPONENT,
+    sensor_transforms: bool = True,
 ) -> list[Feature]:
     """The transforms tried.
 
@@ -146,7 +147,10 @@ def candidate_features(
     from rest. A speed among ``operating`` (see :func:`speed_like`) enters
     through the heat law instead of linearly, as measured and low-passed;
     ``heat_exponent="fit"`` tries :data:`FITTED_EXPONENTS` (1 is the column
-    itself) instead of one exponent.
+    itself) instead of one exponent. With ``sensor_transforms=False`` an
+    unused temperature sensor (:func:`is_sensor_column`) enters as measured
+    only: a lag of a machine temperature re-weights what it reads, as a lag
+    of the model's own inputs does.
     """
     speeds = speed_like(frame, operating)
     exponents = FITTED_EXPONENTS if heat_exponent == "fit" else (float(heat_exponent),)
@@ -161,6 +165,8 @@ def candidate_features(
             continue
         if column in columns:
             features.append(Feature(column))
+            if not sensor_transforms and is_sensor_column(column):
+                continue
         features.extend(Feature(column, "lowpass", tau_s=tau, start=start) for tau in TAUS_S)
         features.append(Feature(column, "derivative"))
         features.extend(Feature(column, "delay", delay_samples=d, start=start) for d in DELAYS)

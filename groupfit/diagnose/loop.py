@@ -10,7 +10,8 @@ a chance fit is most tempting:
 * transforms of the model's own inputs (a low-pass of a sensor the model
   already reads) are refused unless asked for (``own_transforms=True``, then
   the every-fold test below): they re-weight information the model has, which
-  fits the modelling conditions and rarely the next run;
+  fits the modelling conditions and rarely the next run; unused temperature
+  sensors enter as measured only, for the same reason;
 * candidates nearly a copy of one of the model's inputs (|r| ≥ 0.95) must remove
   twice ``min_score``: most of what they add, the model could already say;
 * every effect after the first must lower the error on *every* held-out fold:
@@ -258,6 +259,7 @@ def diagnose(
         stacked_frame,
         operating,
         heat_exponent,
+        sensor_transforms=own_transforms,
     )
     added: list[Candidate] = []
     steps: list[Step] = []

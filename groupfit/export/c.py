@@ -92,7 +92,7 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
 #define GF_SAMPLING_PERIOD_S $period
 #define GF_PERIOD_TOLERANCE_S $period_tolerance
 #define GF_COUNT_MAX ${count_max}L
-$delay_macros
+$delay_macros$reference_macros
 #define GF_FAULT_NONE 0
 #define GF_FAULT_HELD $fault_held
 #define GF_FAULT_SENSOR $fault_sensor
@@ -120,7 +120,7 @@ typedef struct {
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
-$state_fields    gf_real error_um;           /* last prediction, um */
+$state_fields$reference_fields    gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */
 } gf_state;
 
@@ -164,7 +164,7 @@ static const gf_real gf_margin = $margin;
 /* Valid reading: temp_min <= x <= temp_max (degC, a source in its own unit); NaN and +-inf never are. */
 static const double gf_temp_min[GF_N_TEMPS] = { $temp_min };
 static const double gf_temp_max[GF_N_TEMPS] = { $temp_max };
-
+$reference_value
 void gf_init(gf_state *s)
 {
     int m;
@@ -176,7 +176,7 @@ void gf_init(gf_state *s)
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
     }
-$init_derived    s->error_um = 0;
+$init_derived$init_reference    s->error_um = 0;
     s->comp_um = 0;
 }
 
@@ -215,7 +215,7 @@ $step_locals    int held = 0;
             held = 1;
         }
     }
-$step_derived
+$step_reference$step_derived
     s->switched = 0;
     if (s->group < GF_N_GROUPS) {
         int w = s->group - 1;
@@ -225,7 +225,7 @@ $step_derived
         } else if (s->count >= gf_window_first[w]) {
             int passes = 1;
             if (s->bad[GF_CRITERION] <= GF_HOLD_SAMPLES && gf_direction[w] != 0) {
-                gf_real difference = s->last[GF_CRITERION] - gf_threshold[w];
+                gf_real difference = GF_VALUE(GF_CRITERION) - gf_threshold[w];
                 if (gf_direction[w] > 0) {
                     passes = difference >= -gf_margin;
                 } else {
@@ -317,6 +317,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         comp_min_d=double_literal(tables.comp_min_um),
         comp_max_d=double_literal(tables.comp_max_um),
         rate_d=double_literal(tables.rate_limit_um),
+        **reference_header(tables),
     )
     coefficient_rows = ",\n".join(
         f"    /* group {g + 1} */ {{ " + ", ".join(real_literal(v) for v in row) + " }"
@@ -339,6 +340,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         step_locals=("    int j;\n" if has_delay else "") + ("    gf_real v;\n" if has_power else ""),
         step_derived=step_derived(tables),
         dot_product=dot_product(tables),
+        **reference_source(tables),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
 
@@ -500,13 +502,13 @@ def dot_product(tables: RuleTables) -> str:
             "        const gf_real *row = gf_coef[s->group - 1];\n"
             "        prediction = row[0];\n"
             "        for (m = 0; m < GF_N_INPUTS; m++) {\n"
-            "            prediction = prediction + row[m + 1] * s->last[m];\n"
+            "            prediction = prediction + row[m + 1] * GF_VALUE(m);\n"
             "        }"
         )
     lines = ["        const gf_real *row = gf_coef[s->group - 1];\n", "        gf_real x[GF_N_INPUTS];\n"]
     for j in range(tables.n_inputs):
         r, k = tables.input_reading[j], tables.input_derived[j]
-        lines.append(f"        x[{j}] = " + (f"s->last[{r}];\n" if r >= 0 else f"s->derived[{k}];\n"))
+        lines.append(f"        x[{j}] = " + (f"GF_VALUE({r});\n" if r >= 0 else f"s->derived[{k}];\n"))
     lines.append(
         "        prediction = row[0];\n"
         "        for (m = 0; m < GF_N_INPUTS; m++) {\n"
@@ -514,6 +516,55 @@ def dot_product(tables: RuleTables) -> str:
         "        }"
     )
     return "".join(lines)
+
+
+# --------------------------------------------------------------------- reference temperature
+
+
+def reference_header(tables: RuleTables) -> dict[str, str]:
+    """Header pieces of the model's reference temperature (empty without one)."""
+    macros = fields = ""
+    if tables.reference_reading >= 0:
+        macros = (
+            f"#define GF_REFERENCE {tables.reference_reading} "
+            f"/* temps[GF_REFERENCE] ({_ascii(tables.reference)}): every measured input is taken minus it */\n"
+        )
+    elif tables.reference_start:
+        macros = "#define GF_REFERENCE_START 1 /* every measured input is taken minus its first good reading */\n"
+        fields = (
+            "    gf_real first[GF_N_TEMPS];  /* reference: first good reading per sensor since gf_init */\n"
+            "    int has_first[GF_N_TEMPS];  /* 1 once first[] holds it */\n"
+        )
+    return {"reference_macros": macros, "reference_fields": fields}
+
+
+def reference_source(tables: RuleTables) -> dict[str, str]:
+    """Source pieces: ``GF_VALUE(m)``, a measured reading as the model takes it, and the start reference's state."""
+    init = step = ""
+    if tables.reference_reading >= 0:
+        value = (
+            "/* A measured reading as the model takes it: its last good value minus the reference's. */\n"
+            "#define GF_VALUE(m) (s->last[m] - s->last[GF_REFERENCE])\n"
+        )
+    elif tables.reference_start:
+        value = (
+            "/* A measured reading as the model takes it: its last good value minus its first good reading. */\n"
+            "#define GF_VALUE(m) (s->last[m] - s->first[m])\n"
+        )
+        init = "    for (m = 0; m < GF_N_TEMPS; m++) {\n        s->first[m] = 0;\n        s->has_first[m] = 0;\n    }\n"
+        step = (
+            "\n    /* reference: keep every measured sensor's first good reading */\n"
+            f"    for (m = 0; m < {tables.n_measured}; m++) {{\n"
+            "        if (!s->has_first[m] && s->bad[m] == 0) {\n"
+            "            s->first[m] = s->last[m];\n"
+            "            s->has_first[m] = 1;\n"
+            "        }\n"
+            "    }\n"
+        )
+    else:
+        value = "/* A measured reading as the model takes it: its last good value. */\n"
+        value += "#define GF_VALUE(m) (s->last[m])\n"
+    return {"reference_value": "\n" + value, "init_reference": init, "step_reference": step}
 
 
 def _ascii(text: str) -> str:

@@ -16,9 +16,11 @@ as ``groupfit-runtime/3``: every entry of ``derived_inputs`` also holds
 ``exponent`` and ``power_scale`` (the power stage ``(|v| / power_scale)^exponent``,
 computed in double precision with the C library's ``pow``; both null without
 one) and ``start`` (``"steady"`` or ``"rest"``), and the derived-input step of
-``steps`` says how they enter. A runtime written for ``/2`` refuses such a file
-instead of computing the wrong inputs; models without them are still written
-as ``/1`` or ``/2``, byte for byte as before.
+``steps`` says how they enter. A model with a reference temperature is
+written as ``/3`` too, with a ``reference`` object and its step. ``/3`` is one
+format: a runtime for it implements both. A runtime written for ``/2``
+refuses such a file instead of computing the wrong inputs; models without
+them are still written as ``/1`` or ``/2``, byte for byte as before.
 """
 
 from __future__ import annotations
@@ -37,8 +39,9 @@ from groupfit.runtime import (
 
 RUNTIME_FORMAT = "groupfit-runtime/1"
 RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
-RUNTIME_FORMAT_POWER = "groupfit-runtime/3"
-"""Derived inputs with a power stage or a start from rest."""
+RUNTIME_FORMAT_3 = "groupfit-runtime/3"
+"""Derived inputs with a power stage or a start from rest, or a reference temperature (either or both):
+a runtime for /1 or /2 would compute wrong inputs, so it must refuse the table."""
 
 DERIVED_STEP = (
     "for every derived input k in order, with v = last[derived_inputs[k].reading]: identity: value[k] = v. "
@@ -124,7 +127,7 @@ def runtime_table(tables: RuleTables) -> dict:
             "before the transform; start: 'steady' (state = the first good v) or 'rest' (state = 0)"
         )
     if power:
-        fmt = RUNTIME_FORMAT_POWER
+        fmt = RUNTIME_FORMAT_3
     else:
         fmt = RUNTIME_FORMAT_DERIVED if tables.derived else RUNTIME_FORMAT
     return {
@@ -163,4 +166,28 @@ def runtime_table(tables: RuleTables) -> dict:
 
 def render_json(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_runtime.json": text}``."""
-    return {"groupfit_runtime.json": to_json(runtime_table(tables))}
+    return {"groupfit_runtime.json": to_json(with_reference(runtime_table(tables), tables))}
+
+
+# --------------------------------------------------------------------- reference temperature
+
+REFERENCE_STEP = (
+    "reference, after the readings and before the derived inputs: every measured model input m (an entry of "
+    "'inputs' with a 'reading') is taken as ref(m) = last[m] - last[reference.reading] (reference.kind "
+    "'column'), or ref(m) = last[m] - first[m] (kind 'start': for every measured reading m in order, if not "
+    "has_first[m] and bad[m] == 0 then first[m] = last[m], has_first[m] = true; first and has_first start at "
+    "0 / false). Every later step that reads last[criterion] or last[inputs[j].reading] uses ref(...) instead; "
+    "derived inputs use last[] as read"
+)
+
+
+def with_reference(table: dict, tables: RuleTables) -> dict:
+    """The runtime table of a model with a reference temperature: format /3, the reference and its step."""
+    if tables.reference is None:
+        return table
+    steps = list(table["steps"])
+    steps.insert(2, REFERENCE_STEP)
+    reference = {"kind": "start"} if tables.reference_start else {"kind": "column", "name": tables.reference}
+    if tables.reference_reading >= 0:
+        reference["reading"] = tables.reference_reading
+    return {**table, "format": RUNTIME_FORMAT_3, "reference": reference, "steps": steps}

@@ -80,6 +80,8 @@ def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]
         fed = [d.name for d in tables.derived if d.reading == r]
         if fed:
             notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))
+        if r == getattr(tables, "reference_reading", -1):
+            notes.append("reference: subtracted from every measured input")
         note = f"  ({'; '.join(notes)})" if notes else ""
         notes_per_reading.append((name, f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]", unit, note))
     return notes_per_reading

@@ -201,6 +201,8 @@ def sheet_text(sheet: dict) -> str:
         lines.append("  A source column is passed in the unit of its column in the modelling data (e.g. 0/1, r/min).")
     for derived in sheet["derived_inputs"]:
         lines.append(f"  derived input {derived['name']}: {derived['computed_as']}, by the routine itself")
+    if "reference" in sheet:
+        lines.append(f"  Reference temperature: {sheet['reference']['text']}.")
     lines += [
         f"  Invalid reading: {sheet['on_invalid_reading']}.",
         "",
@@ -233,5 +235,22 @@ def sheet_text(sheet: dict) -> str:
 
 def render_sheet(tables: RuleTables, resolution_um: float = 0.1, counts_limit: int = 30000) -> dict[str, str]:
     """``{"groupfit_sheet.txt": …, "groupfit_sheet.json": …}``."""
-    sheet = controller_sheet(tables, IntegerForm(resolution_um, counts_limit))
+    sheet = with_reference(controller_sheet(tables, IntegerForm(resolution_um, counts_limit)), tables)
     return {"groupfit_sheet.txt": sheet_text(sheet), "groupfit_sheet.json": to_json(sheet)}
+
+
+def with_reference(sheet: dict, tables: RuleTables) -> dict:
+    """The sheet with the model's reference temperature, when it has one."""
+    if tables.reference is None:
+        return sheet
+    if tables.reference_start:
+        text = (
+            "every measured input is taken minus its own first good reading since the routine was reset: "
+            "reset it when the machine starts cold, at ambient"
+        )
+    else:
+        text = (
+            f"every measured input is taken minus reading {tables.reference_reading + 1} ({tables.reference}); "
+            "an invalid reference is an invalid reading (held, then the safe output)"
+        )
+    return {**sheet, "reference": {"reference": tables.reference, "text": text}}

@@ -109,7 +109,7 @@ VAR
     prediction : $real;
     target : $real;
     delta : $real;
-${derived_vars}END_VAR
+${derived_vars}${reference_vars}END_VAR
 VAR CONSTANT
     N_TEMPS : INT := $n_temps;
     N_GROUPS : INT := $n_groups;
@@ -144,7 +144,7 @@ IF Reset THEN
         badCount[m] := HOLD_SAMPLES + 1;
         lastGood[m] := 0.0;
     END_FOR;
-${reset_derived}END_IF;
+${reset_derived}${reset_reference}END_IF;
 
 periodOk := ABS(SamplePeriodS - PERIOD_S) <= PERIOD_TOLERANCE_S;
 held := FALSE;
@@ -172,7 +172,7 @@ ELSE
             held := TRUE;
         END_IF;
     END_FOR;
-$step_derived
+$step_reference$step_derived
     IF currentGroup < N_GROUPS THEN
         w := currentGroup;
         IF sampleCount >= WINDOW_LAST[w] THEN
@@ -181,7 +181,7 @@ $step_derived
         ELSIF sampleCount >= WINDOW_FIRST[w] THEN
             switchOk := TRUE;
             IF badCount[CRITERION] <= HOLD_SAMPLES THEN
-                difference := lastGood[CRITERION] - THRESHOLD[w];
+                difference := $criterion_value - THRESHOLD[w];
                 IF DIRECTION[w] > 0 THEN
                     switchOk := difference >= -MARGIN;
                 ELSIF DIRECTION[w] < 0 THEN
@@ -311,6 +311,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         ret_period=RETURN_PERIOD_FAULT,
         switch_criterion=SWITCH_CRITERION,
         switch_forced=SWITCH_FORCED,
+        **reference_pieces(tables, real),
     )
     return {f"{name}.st": text}
 
@@ -358,7 +359,7 @@ def input_lines(tables: RuleTables) -> str:
 def input_value(tables: RuleTables, j: int) -> str:
     """The expression of model input ``j`` (0-based) in the block."""
     r = tables.input_reading[j]
-    return f"lastGood[{r + 1}]" if r >= 0 else f"derivedValue[{tables.input_derived[j] + 1}]"
+    return reading_value(tables, r + 1) if r >= 0 else f"derivedValue[{tables.input_derived[j] + 1}]"
 
 
 def derived_vars(tables: RuleTables, real: str) -> str:
@@ -479,6 +480,46 @@ def step_derived(tables: RuleTables, real: str = "LREAL") -> str:
         ]
         blocks.append("\n".join(lines))
     return "".join(block + "\n" for block in blocks)
+
+
+# --------------------------------------------------------------------- reference temperature
+
+
+def reading_value(tables: RuleTables, number: int | str) -> str:
+    """Measured reading ``number`` (1-based, or a constant's name) as the model takes it: minus the reference."""
+    if tables.reference_reading >= 0:
+        return f"(lastGood[{number}] - lastGood[{tables.reference_reading + 1}])"
+    if tables.reference_start:
+        return f"(lastGood[{number}] - firstGood[{number}])"
+    return f"lastGood[{number}]"
+
+
+def reference_pieces(tables: RuleTables, real: str) -> dict[str, str]:
+    """The block's pieces for the model's reference temperature (only ``criterion_value`` without one)."""
+    pieces = {"criterion_value": reading_value(tables, "CRITERION"), "reference_vars": ""}
+    pieces.update(reset_reference="", step_reference="")
+    if not tables.reference_start:
+        return pieces
+    n_temps = tables.n_temps
+    pieces["reference_vars"] = (
+        f"    firstGood : ARRAY[1..{n_temps}] OF {real};\n"
+        f"    hasFirst : ARRAY[1..{n_temps}] OF BOOL := [{', '.join(['FALSE'] * n_temps)}];\n"
+    )
+    pieces["reset_reference"] = (
+        "    FOR m := 1 TO N_TEMPS DO\n        firstGood[m] := 0.0;\n        hasFirst[m] := FALSE;\n    END_FOR;\n"
+    )
+    pieces["step_reference"] = (
+        "    (* reference: every measured sensor's first good reading since Reset *)\n"
+        f"    FOR m := 1 TO {tables.n_measured} DO\n"
+        "        IF NOT hasFirst[m] THEN\n"
+        "            IF badCount[m] = 0 THEN\n"
+        "                firstGood[m] := lastGood[m];\n"
+        "                hasFirst[m] := TRUE;\n"
+        "            END_IF;\n"
+        "        END_IF;\n"
+        "    END_FOR;\n"
+    )
+    return pieces
 
 
 def _ascii(text: str) -> str:

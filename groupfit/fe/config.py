@@ -11,6 +11,7 @@ optional; unknown keys, wrong types and impossible values raise
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -75,6 +76,32 @@ class HeatSource:
 
 
 @dataclass(frozen=True)
+class MeasurementNoise:
+    """Seeded measurement noise of a headstock run (``[noise]``); all zero means the exact FE values.
+
+    Temperature sensors (every sensor column and ``T_amb``): Gaussian noise of
+    ``sensor_sd_K``, then quantisation to ``sensor_resolution_K`` (a PT100 and
+    its transmitter: a few 0.01 K, 0.01 K). Displacement probe: Gaussian noise
+    of ``probe_sd_um``, then quantisation to ``probe_resolution_um``. The draws
+    come from ``numpy.random.default_rng(seed)``, sensors first (row by row),
+    then the probe, so a config always gives the same numbers.
+    ``ambient_drift_K_per_h`` is physics, not a measurement: the ambient air
+    drifts linearly by that much per hour from t = 0 (:class:`AmbientProfile`).
+    """
+
+    sensor_sd_K: float = 0.0
+    sensor_resolution_K: float = 0.0
+    probe_sd_um: float = 0.0
+    probe_resolution_um: float = 0.0
+    seed: int = 0
+    ambient_drift_K_per_h: float = 0.0
+
+    @property
+    def any(self) -> bool:
+        return bool(self.sensor_sd_K or self.sensor_resolution_K or self.probe_sd_um or self.probe_resolution_um)
+
+
+@dataclass(frozen=True)
 class HeadstockScenario:
     geometry: HousingGeometry = field(default_factory=HousingGeometry)
     resolution: MeshResolution = field(default_factory=MeshResolution)
@@ -94,6 +121,9 @@ class HeadstockScenario:
     candidate_count: int = 0
     sources: tuple[HeatSource, ...] = ()
     unsensed_part: UnsensedPart | None = None
+    noise: MeasurementNoise = field(default_factory=MeasurementNoise)
+    prerun: StepSchedule | None = None
+    """Warm start: ``[duration_s, speed_rpm]`` steps the spindle runs before t = 0 (not recorded)."""
 
 
 @dataclass(frozen=True)
@@ -226,6 +256,10 @@ def _parse_time(top: _Table, default_period, default_substeps, default_steps, va
         )
         if extra["max_duration_s"] < schedule.total_duration:
             raise _fail(time.key("max_duration_s"), "is shorter than the schedule; raise it or shorten the schedule")
+        prerun = _steps(time, "prerun", None, value_check=value_check)
+        if prerun is not None:
+            _check_alignment(prerun, time.key("prerun"), period / substeps)
+            extra["prerun"] = prerun
     time.finish()
     return period, substeps, schedule, extra
 
@@ -299,6 +333,9 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
         raise _fail("time.equilibrium_window_s", "must be a multiple of sampling_period_s")
 
     ambient = _parse_ambient(top.sub("ambient"), step_s)
+    noise = _parse_noise(top.sub("noise"))
+    if noise.ambient_drift_K_per_h:
+        ambient = dataclasses.replace(ambient, drift_K_per_h=noise.ambient_drift_K_per_h)
 
     err = top.sub("error")
     direction = err.vector("direction", base.error_direction, 3)
@@ -333,8 +370,23 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
         candidate_count=candidate_count,
         sources=tuple(sources),
         unsensed_part=unsensed_part,
+        noise=noise,
         **extra,
     )
+
+
+def _parse_noise(table: _Table) -> MeasurementNoise:
+    seed = table.integer("seed", 0, minimum=0)
+    noise = MeasurementNoise(
+        sensor_sd_K=table.number("sensor_sd_K", 0.0, nonnegative=True),
+        sensor_resolution_K=table.number("sensor_resolution_K", 0.0, nonnegative=True),
+        probe_sd_um=table.number("probe_sd_um", 0.0, nonnegative=True),
+        probe_resolution_um=table.number("probe_resolution_um", 0.0, nonnegative=True),
+        seed=seed,
+        ambient_drift_K_per_h=table.number("ambient_drift_K_per_h", 0.0),
+    )
+    table.finish()
+    return noise
 
 
 def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:

@@ -312,6 +312,20 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
             + list(temperature[candidates])
         )
 
+    if sc.prerun is not None:  # warm start: run the spindle before t = 0, unrecorded
+        ambient_start = sc.ambient.temperature(0.0)
+        n_steps = int(round(sc.prerun.total_duration / dt))
+        for s in range(n_steps):
+            t0 = s * dt
+            heat = _heat_inputs(sc, sc.prerun.value_at(t0), -1.0)
+            temperature = factor.solve(capacity_rate @ temperature + thermal.load(heat, ambient_start))
+            if lag is not None:
+                lag.step(
+                    heat[FRONT_SEAT] + heat[REAR_SEAT]
+                    if part.heat == "bearings"
+                    else thermal.bed_heat_W(temperature, ambient_start)
+                )
+
     record(0, 0.0)
     reached = not holding
     with tqdm(total=max_samples, disable=not progress, unit="sample", desc="headstock") as bar:
@@ -346,5 +360,27 @@ def simulate_headstock(sc: HeadstockScenario, *, progress: bool = True) -> pd.Da
         + [f"node_{n}" for n in candidates]
     )
     frame = pd.DataFrame(rows, columns=columns)
+    frame = add_measurement_noise(frame, [*sc.sensors, "T_amb"], sc.noise)
     frame.attrs["equilibrium_reached"] = reached
+    return frame
+
+
+def add_measurement_noise(frame: pd.DataFrame, sensors: list[str], noise) -> pd.DataFrame:
+    """The sensor and probe columns with seeded noise and quantisation (:class:`MeasurementNoise`)."""
+    if not noise.any:
+        return frame
+    frame = frame.copy()
+    rng = np.random.default_rng(noise.seed)
+    temps = frame[sensors].to_numpy(dtype=float)
+    error = frame["error_um"].to_numpy(dtype=float)
+    if noise.sensor_sd_K:
+        temps = temps + rng.normal(0.0, noise.sensor_sd_K, temps.shape)
+    if noise.probe_sd_um:
+        error = error + rng.normal(0.0, noise.probe_sd_um, error.shape)
+    if noise.sensor_resolution_K:
+        temps = np.round(temps / noise.sensor_resolution_K) * noise.sensor_resolution_K
+    if noise.probe_resolution_um:
+        error = np.round(error / noise.probe_resolution_um) * noise.probe_resolution_um
+    frame[sensors] = temps
+    frame["error_um"] = error
     return frame

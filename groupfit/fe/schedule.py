@@ -65,6 +65,8 @@ class AmbientProfile:
     (a :class:`StepSchedule` of temperatures; the last holds). ``offsets``,
     when given, is a :class:`StepSchedule` of temperature offsets (K) added
     to any of them: a hall heating switched on, a door left open.
+    ``drift_K_per_h`` adds a slow linear drift (K per hour from t = 0), the
+    ``[noise] ambient_drift_K_per_h`` key of a headstock scenario.
     """
 
     kind: str = "constant"
@@ -74,6 +76,7 @@ class AmbientProfile:
     phase_s: float = 0.0
     steps: StepSchedule | None = None
     offsets: StepSchedule | None = None
+    drift_K_per_h: float = 0.0
 
     def temperature(self, t: float) -> float:
         if self.kind == "sine":
@@ -84,6 +87,8 @@ class AmbientProfile:
             base = self.mean_C
         if self.offsets is not None:
             base += self.offsets.value_at(t)
+        if self.drift_K_per_h:
+            base += self.drift_K_per_h * t / 3600.0
         return base
 
 

@@ -353,8 +353,9 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             group_objective=tuple(float(v) for v in self.group_objective_),
             switching=switching,
             training={"run": run.name, **metrics},
+            reference=getattr(run, "reference", None),
         )
-        rule = rule_parameters(model, run.temps, criterion_index=column)
+        rule = rule_parameters(model, run.temps, criterion_index=column, valid_readings=_raw_readings(run))
         ranges = source_ranges(run.frame, exclude=(run.time_name, run.error_name))
         switching = switching.with_rule(rule)
         return model.replace(switching=switching.with_rule({"source_ranges": ranges}))
@@ -395,6 +396,17 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         if self.certify == "auto":
             return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[self.objective]
         return bool(self.certify)
+
+
+def _raw_readings(run) -> np.ndarray:
+    """The run's input sensors as recorded (the valid ranges of a model with a reference temperature)."""
+    if getattr(run, "reference", None) is None:
+        return run.temps
+    raw = np.array(run.temps, dtype=float)
+    for j, name in enumerate(run.temp_names):
+        if name in run.frame.columns:  # a measured input; a derived one is as computed
+            raw[:, j] = run.frame[name].to_numpy(dtype=float)
+    return raw
 
 
 def default_criterion(run) -> str:

@@ -138,6 +138,7 @@ class SwitchingRule:
         self.derived = [self._zero] * len(t.derived)
         self.lines = [[self._zero] * d.delay_samples for d in t.derived]
         self.positions = [0] * len(t.derived)
+        self._reset_reference()
 
     def step(self, readings: Sequence[float]) -> StepResult:
         """Process one sample of readings (the model's measured inputs, then the sources, see :attr:`tables`)."""
@@ -158,6 +159,7 @@ class SwitchingRule:
                 faulted = True
             elif self.bad[m] > 0:
                 held = True
+        self._reference_step()
         for k in range(len(t.derived)):
             self._derive(k)
 
@@ -179,7 +181,7 @@ class SwitchingRule:
             prediction = row[0]
             for j in range(t.n_inputs):
                 r = t.input_reading[j]
-                value = self.last[r] if r >= 0 else self.derived[t.input_derived[j]]
+                value = self._value(r) if r >= 0 else self.derived[t.input_derived[j]]
                 prediction = prediction + row[j + 1] * value
             target = -prediction
         if target > self._comp_max:
@@ -239,7 +241,7 @@ class SwitchingRule:
         """The model's inputs at the last sample: held readings and derived inputs."""
         t = self.tables
         return [
-            float(self.last[r] if r >= 0 else self.derived[t.input_derived[j]]) for j, r in enumerate(t.input_reading)
+            float(self._value(r) if r >= 0 else self.derived[t.input_derived[j]]) for j, r in enumerate(t.input_reading)
         ]
 
     def _criterion_passes(self, w: int) -> bool:
@@ -248,10 +250,37 @@ class SwitchingRule:
         direction = t.directions[w]
         if self.bad[c] > t.hold_samples or direction == 0:
             return True
-        difference = self.last[c] - self._threshold[w]
+        difference = self._value(c) - self._threshold[w]
         if direction > 0:
             return bool(difference >= -self._margin)
         return bool(difference <= self._margin)
+
+    # ----------------------------------------------------------------- reference temperature
+
+    def _reset_reference(self) -> None:
+        """No first reading yet (``start`` reference)."""
+        n_temps = self.tables.n_temps
+        self.first = [self._zero] * n_temps
+        self.has_first = [False] * n_temps
+
+    def _reference_step(self) -> None:
+        """``start`` reference: keep every measured sensor's first good reading since the reset."""
+        t = self.tables
+        if not t.reference_start:
+            return
+        for m in range(t.n_measured):
+            if not self.has_first[m] and self.bad[m] == 0:
+                self.first[m] = self.last[m]
+                self.has_first[m] = True
+
+    def _value(self, r: int):
+        """Measured reading ``r`` as the model takes it: its last good value, minus the reference."""
+        t = self.tables
+        if t.reference_reading >= 0:
+            return self.last[r] - self.last[t.reference_reading]
+        if t.reference_start:
+            return self.last[r] - self.first[r]
+        return self.last[r]
 
     def replay(self, readings) -> Replay:
         """Reset, then step through every row of an (N, k) array of readings."""
@@ -286,7 +315,7 @@ def replay_groups(model: ModelFile | Mapping[str, Any], inputs) -> np.ndarray:
     the rule is replayed on the measured inputs, with every source column
     that is not a model input held at a valid value.
     """
-    rule = SwitchingRule(model)
+    rule = SwitchingRule(without_reference(model))
     t = rule.tables
     inputs = np.asarray(inputs, dtype=float)
     if not t.derived:
@@ -300,6 +329,27 @@ def replay_groups(model: ModelFile | Mapping[str, Any], inputs) -> np.ndarray:
     for r in range(t.n_measured, t.n_temps):
         readings[:, r] = t.valid_min[r]
     return rule.replay(readings).group - 1
+
+
+def without_reference(model: ModelFile | Mapping[str, Any]) -> ModelFile:
+    """The model taking its inputs already relative to its reference, for :func:`replay_groups`.
+
+    The inputs :meth:`ModelFile.inputs` computes are already rises over the
+    reference, so the rule that replays them has no reference and accepts any
+    finite value of a measured input (NaN and ±inf stay faults): the valid
+    ranges of the model file hold the raw readings, not the rises.
+    """
+    model = ModelFile.coerce(model)
+    if model.reference is None:
+        return model
+    from groupfit.runtime.rule import LEGACY_SOURCE_RANGE, complete_rule_section
+
+    section = complete_rule_section(model)
+    wide = {
+        "temp_min_c": [LEGACY_SOURCE_RANGE[0]] * len(model.temps),
+        "temp_max_c": [LEGACY_SOURCE_RANGE[1]] * len(model.temps),
+    }
+    return model.replace(reference=None, switching=section.with_rule(wide))
 
 
 def check_period(tables: RuleTables, period_s: float) -> None:

@@ -125,6 +125,7 @@ def rule_parameters(
     *,
     criterion_index: int | None = None,
     settings: RuleSettings = RuleSettings(),
+    valid_readings: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Derive the switching rule's parameters from the modelling run.
 
@@ -142,6 +143,11 @@ def rule_parameters(
     criterion_index : int, optional
         0-based column of the criterion sensor.
     settings : RuleSettings
+    valid_readings : ndarray, shape (N, k), optional
+        The readings the valid ranges are taken from, when they differ from
+        the model's inputs: a model with a reference temperature takes rises
+        over the reference as inputs, but the rule checks each sensor's raw
+        reading (default: ``modelling_readings``).
 
     Returns
     -------
@@ -181,8 +187,9 @@ def rule_parameters(
     hold = max(1, int(math.floor(settings.hold_s / period + 1e-9)))
 
     if modelling_readings is not None:
-        low = np.floor(modelling_readings.min(axis=0) - settings.range_margin_c)
-        high = np.ceil(modelling_readings.max(axis=0) + settings.range_margin_c)
+        ranged = modelling_readings if valid_readings is None else np.asarray(valid_readings, dtype=float)
+        low = np.floor(ranged.min(axis=0) - settings.range_margin_c)
+        high = np.ceil(ranged.max(axis=0) + settings.range_margin_c)
         group = serving_group_index(model.breaks, len(modelling_readings), int(model.n))
         prediction = model.predict(modelling_readings, group)
         clamp = max(settings.clamp_floor_um, math.ceil(settings.clamp_factor * float(np.max(np.abs(prediction)))))

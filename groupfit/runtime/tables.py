@@ -17,6 +17,7 @@ import numpy as np
 
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
+from groupfit.reference import START, is_column_reference
 from groupfit.runtime.rule import DERIVATIVE_SCALE_S, LEGACY_SOURCE_RANGE, complete_rule_section
 
 
@@ -160,6 +161,10 @@ class RuleTables:
     breaks: tuple[int, ...]
     n: int
     error_name: str | None
+    reference: str | None = None
+    """The model's reference (:mod:`groupfit.reference`): a column, ``"start"`` or None."""
+    reference_reading: int = -1
+    """0-based reading of a reference column (one more reading, after the sources), or −1."""
 
     @classmethod
     def from_model(cls, model: ModelFile | Mapping[str, Any]) -> "RuleTables":
@@ -174,6 +179,7 @@ class RuleTables:
         for name in input_names:
             if name in features and features[name].column not in raw:
                 raw.append(features[name].column)
+        raw += reference_readings(model, raw)
         period = float(model.sampling_period_s)
         derived = []
         for name in input_names:
@@ -247,6 +253,8 @@ class RuleTables:
             breaks=tuple(int(b) for b in model.breaks),
             n=int(model.n),
             error_name=model.error,
+            reference=model.reference,
+            reference_reading=raw.index(model.reference) if is_column_reference(model.reference) else -1,
         )
 
     @property
@@ -275,11 +283,20 @@ class RuleTables:
         if reading < self.n_measured:
             uses.append(f"model input {self.input_reading.index(reading) + 1}")
         uses.extend(f"source of derived input {d.name}" for d in self.derived if d.reading == reading)
+        if reading == self.reference_reading:
+            uses.append("reference of every measured input")
         return uses
 
     @property
     def n_groups(self) -> int:
         return len(self.coefficients)
+
+    # ----------------------------------------------------------------- reference temperature
+
+    @property
+    def reference_start(self) -> bool:
+        """Whether every measured input is taken relative to its own first good reading."""
+        return self.reference == START
 
     @property
     def n_windows(self) -> int:
@@ -308,3 +325,10 @@ def _check_power_range(d: DerivedTable, low: float, high: float) -> None:
             f"derived input {d.name}: its power stage reaches {top:g} within the valid range "
             f"[{low:g}, {high:g}] of '{d.column}' (at most {POWER_MAX:g}); narrow the range or change the scale"
         )
+
+
+def reference_readings(model: ModelFile, raw: list[str]) -> list[str]:
+    """The reference column as one more reading, unless it already is one (a source of a derived input)."""
+    if is_column_reference(model.reference) and model.reference not in raw:
+        return [str(model.reference)]
+    return []
