@@ -176,3 +176,14 @@ def save_figure(figure, path: str | Path, **options) -> None:
     """``figure.savefig(path, **options)``, written completely or not at all."""
     with atomic_output(path) as temporary:
         figure.savefig(temporary, **options)
+
+
+def read_json_file(path: str | Path, what: str = "model file") -> Any:
+    """The JSON value in ``path``; one line naming the file when it is missing or not JSON."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: {what} not found")
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not a JSON {what} ({exc})") from None

@@ -31,7 +31,7 @@ import numpy as np
 from groupfit.errors import InputError
 from groupfit.features import STARTS, Feature, derived_matrix
 from groupfit.grouping import hard_groups, serving_group_index, soft_groups
-from groupfit.io import atomic_write_text, to_json
+from groupfit.io import atomic_write_text, read_json_file, to_json
 from groupfit.reference import reference_problem, referenced
 
 FORMAT = "groupfit-model/1"
@@ -162,14 +162,7 @@ class ModelFile:
     @classmethod
     def load(cls, path: str | Path) -> "ModelFile":
         """Read and check a model file."""
-        path = Path(path)
-        if not path.is_file():
-            raise InputError(f"{path}: model file not found")
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputError(f"{path}: not a JSON model file ({exc})") from None
-        return cls.from_dict(data, source=path)
+        return cls.from_dict(read_json_file(path), source=Path(path))
 
     def save(self, path: str | Path) -> None:
         """Write the model file (checked first: an invalid model is never written)."""

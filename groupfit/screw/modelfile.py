@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
 
 from groupfit.errors import InputError
-from groupfit.modelfile import atomic_write_text, to_json
+from groupfit.io import atomic_write_text, read_json_file, to_json
 
 from .model import BallScrewModel
 
@@ -62,12 +61,7 @@ def save_model(model_dict: dict[str, Any], path: str | Path) -> None:
 def load_model(path: str | Path) -> BallScrewModel:
     """Read a ball-screw model file and rebuild the fitted estimator."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: model file not found")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: not a JSON model file ({exc})") from None
+    data = read_json_file(path)
     if not isinstance(data, dict) or data.get("kind") != KIND:
         raise InputError(f"{path}: not a ball-screw model file (kind '{KIND}'); make one with groupfit screw identify")
     try:
