@@ -105,7 +105,7 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile, interval
         f"RMS {metrics['rms_um']:.4g} µm   max |e| {metrics['max_um']:.4g} µm",
         f"switch  criterion sensor {model.switching.criterion}",
     ]
-    if intervals is not None:
+    if intervals is not None and estimator.breaks_:
         lines.append(f"breaks  {100 * intervals.level:g} % intervals: {intervals.summary(run.n_samples)}")
     return "\n".join(lines)
 
