@@ -121,6 +121,8 @@ class Position:
     an intercept, then one per input) of ``c_k`` in group ``g``. Order 1 is
     SINUMERIK's ``K0 + tanβ·(P − P0)`` (``c1`` = tanβ in µm per mm). A position
     outside ``travel_mm`` is clamped to it at run time (and flagged).
+    ``coefficient_ranges``: per power, ``[min, max]`` of ``c_k(T)`` over the
+    modelling run (what a position table must cover).
     """
 
     column: str
@@ -128,8 +130,7 @@ class Position:
     order: int
     travel_mm: tuple[float, float]
     coefficients: tuple[tuple[tuple[float, ...], ...], ...]
-    table_spacing_mm: float | None = None
-    table_tolerance_um: float | None = None
+    coefficient_ranges: tuple[tuple[float, float], ...] | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -727,10 +728,13 @@ def position_problem(model: Mapping[str, Any]) -> str | None:
     p0 = section["p0_mm"]
     if not _is_number(p0) or abs(p0) > RULE_LIMIT:
         return "position.p0_mm must be a finite number of mm"
-    for key in ("table_spacing_mm", "table_tolerance_um"):
-        value = section.get(key)
-        if value is not None and not (_is_number(value) and value > 0):
-            return f"position.{key} must be a finite number > 0"
+    ranges = section.get("coefficient_ranges")
+    if ranges is not None and not (
+        isinstance(ranges, list)
+        and len(ranges) == order
+        and all(isinstance(r, list) and len(r) == 2 and all(_is_number(v) for v in r) and r[0] <= r[1] for r in ranges)
+    ):
+        return f"position.coefficient_ranges must hold {order} [min, max] pair(s)"
     width = len(model["temps"]) + int(model["intercept"])
     rows = section["coefficients"]
     if not isinstance(rows, list) or len(rows) != model["p"] + 1:

@@ -280,6 +280,9 @@ def with_position(
     )
     fitted = model.replace(coefficients=tuple(k0), position=position, dead_band=dead_band)
     groups = fitted.serving_groups(prun.run.n_samples)[prun.check]
+    states = position_coefficients(fitted, prun.run.temps, fitted.serving_groups(prun.run.n_samples))
+    ranges = tuple((float(lo), float(hi)) for lo, hi in zip(states.min(axis=0), states.max(axis=0)))
+    fitted = fitted.replace(position=replace(position, coefficient_ranges=ranges))
     prediction = fitted.predict_position(inputs, prun.position, groups)
     residuals = prun.error - prediction
     low, high = prun.travel
@@ -359,7 +362,8 @@ def position_table(
     interpolation errs by at most ``h²/8·max|E''|`` on a spacing ``h``; the
     spacing is the travel divided into the fewest equal parts meeting that
     bound (seed 004: ``l ≤ L/(Nmax − 1)`` with at most ``max_nodes`` nodes),
-    and the error is then measured on a fine grid.
+    and the error is then measured on 64 points per table interval (and
+    the table refined until it meets the tolerance there).
     """
     if model.position is None:
         raise InputError("the model has no position terms: no position table")
@@ -379,7 +383,7 @@ def position_table(
         d = nodes - model.position.p0_mm
         values = np.column_stack([d**k for k in range(1, model.position.order + 1)])
         table = PositionTable(low, length / parts, nodes, values, tolerance_um, 0.0)
-        error = table_error(model, table, states, fine)
+        error = table_error(model, table, states, np.linspace(low, high, 64 * parts + 1))
         if error <= tolerance_um:
             return replace(table, error_um=error)
         parts += max(1, parts // 8)
@@ -392,6 +396,30 @@ def table_error(model: ModelFile, table: PositionTable, states: np.ndarray, posi
     exact = np.column_stack([d**k for k in range(1, model.position.order + 1)])
     difference = table.interpolate(positions) - exact
     return float(np.max(np.abs(np.asarray(states) @ difference.T)))
+
+
+def range_states(model: ModelFile) -> np.ndarray:
+    """(2^order, order): the corners of the model's ``coefficient_ranges``.
+
+    The interpolation error ``Σ_k c_k·δ_k(P)`` is linear in the ``c_k``, so
+    its largest magnitude over the box of the modelling run's ranges is at a
+    corner: a table within the tolerance at the corners is within it for
+    every thermal state of that box.
+    """
+    ranges = model.position.coefficient_ranges
+    if ranges is None:
+        raise InputError("the model file holds no position.coefficient_ranges (refit it) to size a table")
+    grids = np.meshgrid(*[np.asarray(r, dtype=float) for r in ranges], indexing="ij")
+    return np.column_stack([g.ravel() for g in grids])
+
+
+def render_table(
+    model: ModelFile, tolerance_um: float = DEFAULT_TABLE_TOLERANCE_UM, name: str = "FB_GroupfitComp", real="LREAL"
+) -> dict[str, str]:
+    """The export target ``table``: the position table of a position model, sized for ``tolerance_um``."""
+    if model.position is None:
+        raise InputError("export --target table: the model has no position terms (fit it with --position)")
+    return table_files(position_table(model, range_states(model), tolerance_um), name, real)
 
 
 def table_files(table: PositionTable, name: str, real: str = "LREAL") -> dict[str, str]:
