@@ -15,18 +15,10 @@ from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.export import render, write
 from groupfit.export.harness import build_driver, run_driver
+from groupfit.export.table import position_coefficients, position_table, table_error
 from groupfit.model import ModelFile, model_problem
 from groupfit.models import GroupedRegressor
-from groupfit.position import (
-    cross_validate_order,
-    fit_blocks,
-    load_position_run,
-    position_coefficients,
-    position_table,
-    table_error,
-    wide_to_long,
-    with_position,
-)
+from groupfit.position import cross_validate_order, fit_blocks, load_position_run, wide_to_long, with_position
 from groupfit.runtime import FAULT_POSITION, FAULT_SENSOR, RuleTables, SwitchingRule
 
 POSITIONS = np.linspace(0.0, 1000.0, 11)

@@ -31,7 +31,7 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
     Options: ``real`` ("REAL" or "LREAL") and ``name`` (block name) for
     ``st``; ``resolution_um`` and ``counts_limit`` for ``sheet``; ``tolerance_um``
     for ``table`` (the equidistant position table of a position model,
-    :func:`groupfit.position.render_table`).
+    :func:`groupfit.export.table.render_table`).
     """
     tables = RuleTables.from_model(ModelFile.coerce(model).checked())
     if target == "c":
@@ -55,7 +55,7 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
             counts_limit=options.get("counts_limit", 30000),
         )
     if target == "table":
-        from groupfit.position import DEFAULT_TABLE_TOLERANCE_UM, render_table
+        from groupfit.export.table import DEFAULT_TABLE_TOLERANCE_UM, render_table
 
         return render_table(
             ModelFile.coerce(model).checked(),
