@@ -562,7 +562,7 @@ def test_position_order_needs_position(tmp_path, capsys):
     assert "--position-order needs --position" in capsys.readouterr().err
 
 
-def test_replay_reads_the_position_column(tmp_path):
+def test_replay_reads_the_position_column(tmp_path, capsys):
     model = model_for(1, p=1)
     (tmp_path / "model.json").write_text(json.dumps(model))
     readings = streams(model)["moving"]
@@ -580,9 +580,18 @@ def test_replay_reads_the_position_column(tmp_path):
         ]
     )
     assert code == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    outside = (readings[:, -1] < 0) | (readings[:, -1] > 1000)
+    assert result["faults"]["position_clamped_samples"] == int(outside.sum())
+    compensation = [s["compensation_um"] for s in result["samples"]]
+    assert compensation == python_replay(model, readings)["compensation_um"].tolist()
+    frame.drop(columns=["P_mm"]).to_csv(tmp_path / "blind.csv", index=False)
+    code = main(["replay", str(tmp_path / "model.json"), "--data", str(tmp_path / "blind.csv")])
+    assert code != 0
+    assert "column 'P_mm' not found; the model reads it as the axis position" in capsys.readouterr().err
 
 
-def test_a_model_without_position_has_no_position_reading():
+def test_the_position_is_the_last_reading_and_an_order_above_the_positions_is_refused():
     tables = RuleTables.from_model(model_for(1))
     assert tables.has_position and tables.raw_names[-1] == "P_mm"
     with pytest.raises(InputError):
