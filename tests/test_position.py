@@ -197,6 +197,14 @@ def test_a_bad_position_section_is_refused(change, message):
     assert problem is not None and message in problem
 
 
+def test_the_band_stream_goes_in_and_out_of_the_dead_band():
+    model = model_for(3, p=1, dead_band=True)
+    band = streams(model)["dead band"]
+    replay = SwitchingRule(model).replay(band)
+    held = np.flatnonzero(np.diff(replay.compensation_um) == 0)
+    assert 10 < held.size < len(band) - 10
+
+
 def test_a_bad_dead_band_is_refused():
     model = model_for(1, dead_band=True)
     assert model_problem(model) is None
@@ -224,7 +232,14 @@ def streams(model: dict, seed: int = 0) -> dict[str, np.ndarray]:
     faulty[30, 0] = np.nan
     still = readings.copy()
     still[:, p] = 250.0
-    return {"moving": readings, "faults": faulty, "still": still}
+    streams_ = {"moving": readings, "faults": faulty, "still": still}
+    if tables.has_dead_band:  # in and out of the band: every sensor near the reference, then not, then again
+        band = readings.copy()
+        ref = tables.dead_band_reading
+        band[:, 1] = band[:, 0] + np.where((np.arange(n) % 16) < 8, 0.4, 3.0)
+        band[:, ref] = band[:, 0] - 0.5
+        streams_["dead band"] = band
+    return streams_
 
 
 def test_replay_is_the_offline_model_and_a_position_outside_the_travel_is_clamped_and_flagged():
@@ -598,3 +613,57 @@ def test_the_position_is_the_last_reading_and_an_order_above_the_positions_is_re
         with_position(
             ModelFile.from_dict(model_for(1)), load_position_run(long_table(1), "P_mm", temps=["T1", "T2"]), 11, P0
         )
+
+
+# --------------------------------------------------------------------- with derived inputs, hostile readings
+
+
+def derived_position_model() -> tuple[dict, dict[str, np.ndarray]]:
+    """A model with derived inputs given position terms of order 2 and a dead band (coefficients made up)."""
+    from test_switching_models import augmented_model, derived_streams
+
+    model, run = augmented_model("all kinds p=2")
+    width = len(model["temps"]) + int(model["intercept"])
+    rng = np.random.default_rng(11)
+    rows = [[list(rng.normal(0, 1e-2, width)), list(rng.normal(0, 1e-5, width))] for _ in model["coefficients"]]
+    plain = derived_streams(model, run)
+    position = {"column": "X_mm", "p0_mm": 100.0, "order": 2, "travel_mm": [-50.0, 400.0], "coefficients": rows}
+    model["position"] = position
+    model["dead_band"] = {"reference": model["temps"][0], "threshold_c": 0.5}
+    assert model_problem(model) is None
+    assert RuleTables.from_model(model).raw_names[-1] == "X_mm"
+    chosen = {}
+    for label, raw in plain.items():
+        chosen[label] = np.column_stack([raw, rng.uniform(-200.0, 550.0, len(raw))])
+    hostile = chosen["faults"].copy()
+    specials = [np.nan, np.inf, -np.inf, 1e308, -1e308, 5e-324, -0.0, 3.4e38, 1e39, 1e9, -1e9]
+    hostile[: len(specials), -1] = specials
+    chosen["hostile position"] = hostile
+    return model, chosen
+
+
+@pytest.mark.parametrize("single", [False, True])
+def test_derived_inputs_with_position_and_dead_band_c_build_is_the_python_rule(tmp_path, single):
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc is not installed")
+    model, chosen = derived_position_model()
+    write(render(model, "c"), tmp_path)
+    flags = ("-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all")
+    driver = build_driver(tmp_path, tmp_path / "driver", single=single, flags=flags)
+    outputs = run_driver(driver, list(chosen.values()))
+    for temps, c_out in zip(chosen.values(), outputs):
+        assert_same_decisions(c_out, python_replay(model, temps, "single" if single else "double"))
+        assert np.all(np.isfinite(c_out.compensation_um))
+
+
+def test_derived_inputs_with_position_and_dead_band_lreal_block_is_the_python_rule():
+    from test_export_st import run_block
+
+    model, chosen = derived_position_model()
+    (text,) = render(model, "st", real="LREAL").values()
+    streams_ = {k: chosen[k] for k in ("modelling", "source faults", "hostile position")}
+    outputs = run_block(text, list(streams_.values()), model["sampling_period_s"], "LREAL")
+    for temps, out in zip(streams_.values(), outputs):
+        py = python_replay(model, temps)
+        assert out["fault"].tolist() == py["fault"].tolist()
+        assert out["compensation_um"].tobytes() == py["compensation_um"].tobytes()
