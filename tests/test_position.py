@@ -667,3 +667,15 @@ def test_derived_inputs_with_position_and_dead_band_lreal_block_is_the_python_ru
         py = python_replay(model, temps)
         assert out["fault"].tolist() == py["fault"].tolist()
         assert out["compensation_um"].tobytes() == py["compensation_um"].tobytes()
+
+
+@pytest.mark.parametrize("real", ["REAL", "LREAL"])
+def test_the_position_block_and_the_table_parse_as_structured_text(real):
+    from test_export_st import blark_accepts, tree_sitter_errors
+
+    model = model_for(3, p=1, dead_band=True)
+    texts = [render(model, "st", real=real)["FB_GroupfitComp.st"]]
+    texts += [text for name, text in render(model, "table", real=real).items() if name.endswith(".st")]
+    for text in texts:
+        assert not tree_sitter_errors(text) and blark_accepts(text)
+        assert text.isascii()
