@@ -714,6 +714,10 @@ def position_problem(model: Mapping[str, Any]) -> str | None:
         return "position.column must be a column name"
     if column in model["temps"]:
         return f"position.column '{column}' is also a model input"
+    derived = model.get("derived_inputs")
+    sources = {e.get("column") for e in derived if isinstance(e, Mapping)} if isinstance(derived, list) else set()
+    if column == model.get("reference") or column in sources:
+        return f"position.column '{column}' is also the reference or the source of a derived input"
     order = section["order"]
     if not _is_whole(order) or not 1 <= order <= MAX_POSITION_ORDER:
         return f"position.order = {order!r}: must be a whole number 1…{MAX_POSITION_ORDER}"

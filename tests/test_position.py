@@ -182,6 +182,7 @@ def test_old_files_load_unchanged_and_the_position_section_round_trips():
     [
         (lambda s: s.pop("column"), "lacks key 'column'"),
         (lambda s: s.update(column="T1"), "also a model input"),
+        (lambda s: s.update(column="T_amb"), "also the reference"),
         (lambda s: s.update(order=0), "position.order"),
         (lambda s: s.update(travel_mm=[5.0, 5.0]), "travel_mm"),
         (lambda s: s.update(p0_mm=float("nan")), "p0_mm"),
@@ -192,6 +193,8 @@ def test_old_files_load_unchanged_and_the_position_section_round_trips():
 )
 def test_a_bad_position_section_is_refused(change, message):
     model = model_for(1)
+    model["reference"] = "T_amb"
+    assert model_problem(model) is None
     change(model["position"])
     problem = model_problem(model)
     assert problem is not None and message in problem
