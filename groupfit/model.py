@@ -112,6 +112,64 @@ class Switching:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Position:
+    """The ``position`` section: the error's dependence on an axis position (docs/position.md).
+
+    ``E(P, T) = K0(T) + c1(T)·d + … + c_order(T)·d^order`` with ``d = P − P0``
+    (mm): ``K0(T)`` is the model's ``coefficients`` row of the serving group,
+    and ``coefficients[g][k − 1]`` the row (constant first when the model has
+    an intercept, then one per input) of ``c_k`` in group ``g``. Order 1 is
+    SINUMERIK's ``K0 + tanβ·(P − P0)`` (``c1`` = tanβ in µm per mm). A position
+    outside ``travel_mm`` is clamped to it at run time (and flagged).
+    ``coefficient_ranges``: per power, ``[min, max]`` of ``c_k(T)`` over the
+    modelling run (what a position table must cover).
+    """
+
+    column: str
+    p0_mm: float
+    order: int
+    travel_mm: tuple[float, float]
+    coefficients: tuple[tuple[tuple[float, ...], ...], ...]
+    coefficient_ranges: tuple[tuple[float, float], ...] | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return _fields_to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Position":
+        return _fields_from_dict(cls, data)
+
+    def coefficient_array(self, intercept: bool = True) -> np.ndarray:
+        """(G, order, M+1): the rows of ``c_1 … c_order`` per group, constant first (0 without an intercept)."""
+        rows = np.asarray(self.coefficients, dtype=float)
+        if not intercept:
+            rows = np.concatenate([np.zeros(rows.shape[:2] + (1,)), rows], axis=2)
+        return rows
+
+
+@dataclass(frozen=True, kw_only=True)
+class DeadBand:
+    """The ``dead_band`` section: no update while every measured input is within ``threshold_c`` of ``reference``.
+
+    Seed 001's rule: the compensation is only updated while some
+    ``|T_i − T_ref| > threshold_c``; inside the band the rule keeps the last
+    target it computed outside it (0 before the first).
+    """
+
+    reference: str
+    threshold_c: float
+    extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return _fields_to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "DeadBand":
+        return _fields_from_dict(cls, data)
+
+
+@dataclass(frozen=True, kw_only=True)
 class ModelFile:
     """A grouped model as the model file holds it (``groupfit-model/1``).
 
@@ -141,6 +199,8 @@ class ModelFile:
     switching: Switching
     training: Mapping[str, Any] | None = None
     derived_inputs: tuple[Feature, ...] | None = None
+    position: Position | None = None
+    dead_band: DeadBand | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     # ----------------------------------------------------------------- reading and writing
@@ -152,7 +212,12 @@ class ModelFile:
         problem = model_problem(data)
         if problem:
             raise InputError(prefix + problem)
-        nested = {"switching": Switching.from_dict, "derived_inputs": lambda v: tuple(_parse_derived(v))}
+        nested = {
+            "switching": Switching.from_dict,
+            "derived_inputs": lambda v: tuple(_parse_derived(v)),
+            "position": Position.from_dict,
+            "dead_band": DeadBand.from_dict,
+        }
         return _fields_from_dict(cls, data, nested)
 
     def to_dict(self) -> dict[str, Any]:
@@ -242,6 +307,28 @@ class ModelFile:
         matrix = self.coefficient_matrix()
         return grouped_prediction(matrix[:, 0], matrix[:, 1:], inputs, groups)
 
+    def predict_position(self, inputs, positions, groups: np.ndarray | None = None) -> np.ndarray:
+        """E(P, T) of every row: ``K0(T)`` (:meth:`predict`) plus the position polynomial in ``d = P − P0``.
+
+        Positions outside the travel are clamped to it, as the run-time rule
+        does. The polynomial is evaluated as the rule does (Horner's scheme,
+        highest power first). A model without a position section: :meth:`predict`.
+        """
+        k0 = self.predict(inputs, groups)
+        if self.position is None:
+            return k0
+        inputs = np.asarray(inputs, dtype=float)
+        if groups is None:
+            groups = self.serving_groups(len(inputs))
+        low, high = self.position.travel_mm
+        d = np.clip(np.asarray(positions, dtype=float), low, high) - self.position.p0_mm
+        rows = self.position.coefficient_array(self.intercept)[np.asarray(groups)]
+        terms = rows[:, :, 0] + np.einsum("ikj,ij->ik", rows[:, :, 1:], inputs)
+        poly = terms[:, -1]
+        for k in range(terms.shape[1] - 2, -1, -1):
+            poly = poly * d + terms[:, k]
+        return k0 + poly * d
+
     def inputs(self, frame, source: str = "the run") -> np.ndarray:
         """The model's input matrix from a table (DataFrame-like): measured columns and derived inputs.
 
@@ -328,9 +415,12 @@ def model_problem(model: Any) -> str | None:
     longer than the soft offset n, hard and soft groups equal to what the
     breaks give, finite coefficients of at most :data:`COEFFICIENT_LIMIT` in
     magnitude, unique input names, every derived input defined once and used,
-    rule numbers within :data:`RULE_LIMIT`, no NaN or infinity anywhere, and a
+    rule numbers within :data:`RULE_LIMIT`, no NaN or infinity anywhere, a
     switching section that agrees with the breaks (the criterion's name,
-    windows, thresholds and directions recomputed and compared).
+    windows, thresholds and directions recomputed and compared), and the
+    optional ``position`` (column not an input, order 1…8, travel low < high,
+    one row of coefficients per group and power) and ``dead_band`` (a
+    reference column, a threshold in (0, 50] °C) sections.
     """
     if not isinstance(model, Mapping) or model.get("format") != FORMAT:
         return f"not a {FORMAT} model file (missing or different 'format')"
@@ -338,7 +428,7 @@ def model_problem(model: Any) -> str | None:
     if missing:
         return f"model file lacks key '{missing[0]}'"
     checks = (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem)
-    for check in (*checks, _reference_check):
+    for check in (*checks, _reference_check, position_problem, dead_band_problem):
         problem = check(model)
         if problem:
             return problem
@@ -598,6 +688,81 @@ def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> s
     return None
 
 
+MAX_POSITION_ORDER = 8
+"""Highest polynomial order in the position a model file may hold."""
+
+
+def position_problem(model: Mapping[str, Any]) -> str | None:
+    """What is wrong with the optional ``position`` section, or None."""
+    section = model.get("position")
+    if section is None:
+        return None
+    if not isinstance(section, Mapping):
+        return "'position' must be an object"
+    for key in ("column", "p0_mm", "order", "travel_mm", "coefficients"):
+        if key not in section:
+            return f"position lacks key '{key}'"
+    column = section["column"]
+    if not isinstance(column, str) or not column.strip():
+        return "position.column must be a column name"
+    if column in model["temps"]:
+        return f"position.column '{column}' is also a model input"
+    derived = model.get("derived_inputs")
+    sources = {e.get("column") for e in derived if isinstance(e, Mapping)} if isinstance(derived, list) else set()
+    if column == model.get("reference") or column in sources:
+        return f"position.column '{column}' is also the reference or the source of a derived input"
+    order = section["order"]
+    if not _is_whole(order) or not 1 <= order <= MAX_POSITION_ORDER:
+        return f"position.order = {order!r}: must be a whole number 1…{MAX_POSITION_ORDER}"
+    travel = section["travel_mm"]
+    if not (
+        isinstance(travel, list)
+        and len(travel) == 2
+        and all(_is_number(v) and abs(v) <= RULE_LIMIT for v in travel)
+        and travel[0] < travel[1]
+    ):
+        return "position.travel_mm must be [low, high] in mm with low < high"
+    p0 = section["p0_mm"]
+    if not _is_number(p0) or abs(p0) > RULE_LIMIT:
+        return "position.p0_mm must be a finite number of mm"
+    ranges = section.get("coefficient_ranges")
+    if ranges is not None and not (
+        isinstance(ranges, list)
+        and len(ranges) == order
+        and all(isinstance(r, list) and len(r) == 2 and all(_is_number(v) for v in r) and r[0] <= r[1] for r in ranges)
+    ):
+        return f"position.coefficient_ranges must hold {order} [min, max] pair(s)"
+    width = len(model["temps"]) + int(model["intercept"])
+    rows = section["coefficients"]
+    if not isinstance(rows, list) or len(rows) != model["p"] + 1:
+        return f"position.coefficients must hold one entry per group ({model['p'] + 1})"
+    for g, group in enumerate(rows, start=1):
+        if not isinstance(group, list) or len(group) != order:
+            return f"position.coefficients of group {g} must hold {order} row(s), one per power of (P - P0)"
+        for k, row in enumerate(group, start=1):
+            if not isinstance(row, list) or len(row) != width or not all(_is_number(v) for v in row):
+                return f"position.coefficients of group {g}, power {k}: must be {width} finite numbers"
+            if max(abs(v) for v in row) > COEFFICIENT_LIMIT:
+                return f"position.coefficients of group {g}, power {k}: exceeds {COEFFICIENT_LIMIT:g} in magnitude"
+    return None
+
+
+def dead_band_problem(model: Mapping[str, Any]) -> str | None:
+    """What is wrong with the optional ``dead_band`` section, or None."""
+    section = model.get("dead_band")
+    if section is None:
+        return None
+    if not isinstance(section, Mapping) or not isinstance(section.get("reference"), str):
+        return "'dead_band' must be an object with a 'reference' column"
+    threshold = section.get("threshold_c")
+    if not _is_number(threshold) or not 0 < threshold <= MAX_MARGIN_C:
+        return f"dead_band.threshold_c = {threshold!r}: must lie in (0, {MAX_MARGIN_C:g}] °C"
+    position = model.get("position")
+    if isinstance(position, Mapping) and position.get("column") == section["reference"]:
+        return "dead_band.reference must be a temperature, not the position column"
+    return None
+
+
 def _reference_check(model: Mapping[str, Any]) -> str | None:
     """The ``reference`` key's problem: it must name no measured input (a derived input of it is fine)."""
     try:
@@ -705,7 +870,10 @@ def as_model_file(model: ModelFile | Mapping[str, Any]) -> ModelFile:
 
 __all__ = [
     "COEFFICIENT_LIMIT",
+    "DeadBand",
     "FORMAT",
+    "MAX_POSITION_ORDER",
+    "Position",
     "RULE_LIMIT",
     "MAX_DELAY_SAMPLES",
     "ModelFile",
@@ -714,7 +882,9 @@ __all__ = [
     "SOURCE_RANGES_KEY",
     "Switching",
     "as_model_file",
+    "dead_band_problem",
     "grouped_prediction",
     "model_problem",
+    "position_problem",
     "rule_section_problem",
 ]

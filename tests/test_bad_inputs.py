@@ -57,6 +57,10 @@ def data_fit(name, *args):
     return fit("--data", f"{{in}}/{name}", "--temps", "T1,T2,T3,T4", "--p", "1", *args)
 
 
+def position_fit(name, *args):
+    return fit("--data", f"{{in}}/{name}", "--temps", "T1,T2", "--p", "0", "--position", "P_mm", *args)
+
+
 CASES = [
     # ------------------------------------------------------------------ data
     Case("data", "duplicate column name", data_fit("duplicate.csv"), "appears twice (columns 2 and 4)"),
@@ -98,6 +102,9 @@ CASES = [
     ),
     Case("data", "constant temperature", data_fit("constant.csv"), "is constant"),
     Case("data", "data file not found", data_fit("missing.csv"), "not found"),
+    Case("data", "position column missing", data_fit("good.csv", "--position", "P_mm"), "'P_mm' not found"),
+    Case("data", "position not a number", position_fit("position_text.csv"), "column 'P_mm'"),
+    Case("data", "one position only", position_fit("position_one.csv"), "one position only"),
     # ------------------------------------------------------------------ parameters
     Case("parameters", "--pmax -1 with --p auto", data_fit("good.csv", "--p", "auto", "--pmax", "-1"), "--pmax -1"),
     Case(
@@ -127,6 +134,27 @@ CASES = [
     Case("parameters", "--search unknown", data_fit("good.csv", "--search", "anneal"), "invalid choice"),
     Case("parameters", "--criterion not an input", data_fit("good.csv", "--criterion", "T7"), "criterion 'T7'"),
     Case("parameters", "--sensors without --select", data_fit("good.csv", "--sensors", "2"), "--select"),
+    Case("parameters", "--position-order without --position", data_fit("good.csv", "--position-order", "2"), "needs"),
+    Case("parameters", "--position-order 0", position_fit("position.csv", "--position-order", "0"), "choose 1"),
+    Case(
+        "parameters",
+        "--position-order above the positions",
+        position_fit("position.csv", "--position-order", "3"),
+        "at most order 2",
+    ),
+    Case(
+        "parameters",
+        "--position-ref not a position",
+        position_fit("position.csv", "--position-ref", "left"),
+        "--position-ref",
+    ),
+    Case("parameters", "--dead-band negative", position_fit("position.csv", "--dead-band", "-1"), "--dead-band -1"),
+    Case(
+        "parameters",
+        "--dead-band without its reference",
+        position_fit("position.csv", "--dead-band", "1"),
+        "--dead-band-ref",
+    ),
     Case(
         "parameters",
         "replay with a faster sampled run",
@@ -153,6 +181,10 @@ CASES = [
             ("threshold not the criterion's", "threshold.json", "thresholds_c[0]"),
             ("truncated file", "truncated.json", "not a JSON model file"),
             ("foreign JSON", "foreign.json", "not a groupfit-model/1"),
+            ("position order 0", "position_order.json", "position.order"),
+            ("position travel reversed", "position_travel.json", "position.travel_mm"),
+            ("position column an input", "position_input.json", "also a model input"),
+            ("dead band of 0 °C", "dead_band_zero.json", "dead_band.threshold_c"),
         ]
         for verb, argv in [
             ("replay", ("replay", f"{{in}}/{name}", "--data", "{in}/good.csv", "--json", "{out}/r.json")),
@@ -352,6 +384,13 @@ CASES = [
 ]
 
 
+def with_position(model: dict) -> dict:
+    """A valid position section for ``model`` (zero slopes), for the mutations to break."""
+    width = len(model["temps"]) + int(model["intercept"])
+    rows = [[[0.0] * width] for _ in model["coefficients"]]
+    return {"column": "P_mm", "p0_mm": 0.0, "order": 1, "travel_mm": [0.0, 100.0], "coefficients": rows}
+
+
 def _write_inputs(folder: Path) -> None:
     good = pd.read_csv(SYNTHETIC)
     good.to_csv(folder / "good.csv", index=False)
@@ -378,6 +417,13 @@ def _write_inputs(folder: Path) -> None:
     )
     (folder / "empty.csv").write_text("")
     (folder / "header_only.csv").write_text(text[0] + "\n")
+    positions = pd.concat([good.assign(P_mm=p, error_um=good["error_um"] + 0.01 * p) for p in (0.0, 100.0, 200.0)])
+    positions = positions.sort_values("time_s", kind="stable")
+    positions.to_csv(folder / "position.csv", index=False)
+    text_position = positions.astype({"P_mm": object}).reset_index(drop=True)
+    text_position.loc[7, "P_mm"] = "left"
+    text_position.to_csv(folder / "position_text.csv", index=False)
+    positions[positions.P_mm == 0.0].to_csv(folder / "position_one.csv", index=False)
 
     model, _ = synthetic_model(p=3, n=3)
     (folder / "model.json").write_text(json.dumps(model))
@@ -397,6 +443,10 @@ def _write_inputs(folder: Path) -> None:
         "temps_number": lambda m: m["temps"].__setitem__(1, 7),
         "temps_repeated": lambda m: m["temps"].__setitem__(1, "T1"),
         "threshold": lambda m: m["switching"]["thresholds_c"].__setitem__(0, 99.0),
+        "position_order": lambda m: m.update(position={**with_position(m), "order": 0}),
+        "position_travel": lambda m: m.update(position={**with_position(m), "travel_mm": [100.0, 0.0]}),
+        "position_input": lambda m: m.update(position={**with_position(m), "column": "T1"}),
+        "dead_band_zero": lambda m: m.update(dead_band={"reference": "T_amb", "threshold_c": 0.0}),
     }
     for name, mutate in mutations.items():
         mutated = copy.deepcopy(model)

@@ -15,9 +15,10 @@ def add_parser(verbs) -> None:
     export.add_argument(
         "--target",
         required=True,
-        choices=(*TARGETS, "all"),
+        choices=(*TARGETS, "table", "all"),
         help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "
-        "sheet: controller sheet (text and JSON); all: every target",
+        "sheet: controller sheet (text and JSON); table: the equidistant position table of a position model "
+        "(C, ST and CSV); all: every target (with table for a position model)",
     )
     add_out_option(export, "folder for the exported files (required)", required=True)
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
@@ -36,6 +37,13 @@ def add_parser(verbs) -> None:
         metavar="N",
         help="sheet: largest magnitude of that register in counts (default 30000)",
     )
+    export.add_argument(
+        "--tolerance-um",
+        type=float,
+        default=0.5,
+        metavar="UM",
+        help="table: largest interpolation error of the position table (default 0.5 um)",
+    )
     export.set_defaults(handler=run_export)
 
 
@@ -43,6 +51,8 @@ def run_export(args: argparse.Namespace) -> int:
     model = ModelFile.load(args.model)
     out_dir = check_output_dir(args.out)
     targets = TARGETS if args.target == "all" else (args.target,)
+    if args.target == "all" and model.position is not None:
+        targets = (*TARGETS, "table")
     files: dict[str, str] = {}
     for target in targets:
         files.update(
@@ -53,6 +63,7 @@ def run_export(args: argparse.Namespace) -> int:
                 name=args.name,
                 resolution_um=args.resolution_um,
                 counts_limit=args.counts_limit,
+                tolerance_um=args.tolerance_um,
             )
         )
     written = write(files, out_dir)

@@ -54,6 +54,35 @@ def add_parser(verbs) -> None:
         help="choose the inputs among --temps on held-out conditions (forward, lasso or cluster)",
     )
     fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
+    fit.add_argument(
+        "--position",
+        metavar="COLUMN",
+        help="axis position column (mm) of a run measured at several positions (long table; a wide one has "
+        "err_P<mm> columns): fit E(P, T) = K0(T) + c1(T)(P - P0) + ...",
+    )
+    fit.add_argument(
+        "--position-order",
+        type=order_value,
+        metavar="N|auto",
+        help="with --position: polynomial order in P (default 1: K0 + tanb (P - P0)); auto: chosen by "
+        "cross-validation over held-out positions",
+    )
+    fit.add_argument(
+        "--position-ref",
+        metavar="MM|middle|min|max",
+        help="with --position: the reference position P0 (default: the middle of the measured travel)",
+    )
+    fit.add_argument(
+        "--dead-band",
+        type=float,
+        metavar="C",
+        help="no update of the compensation while every input is within C degC of --dead-band-ref",
+    )
+    fit.add_argument(
+        "--dead-band-ref",
+        metavar="COLUMN",
+        help="reference sensor of --dead-band (default: the --reference column)",
+    )
     add_json_option(fit)
     add_out_option(fit, "folder for model.json and fit.png")
     add_quiet_option(fit)
@@ -81,11 +110,17 @@ def run_fit(args: argparse.Namespace) -> int:
     check_output_dir(config["output"]["dir"])
 
     paths = config["data"].get("path")
-    runs = (
-        [load_configured_run(config, p) for p in paths]
-        if isinstance(paths, (list, tuple))
-        else [load_configured_run(config)]
-    )
+    position_run = None
+    check_position_options(args)
+    if args.position:
+        position_run = load_position_data(config, args.position)
+        runs = [position_run.run]
+    else:
+        runs = (
+            [load_configured_run(config, p) for p in paths]
+            if isinstance(paths, (list, tuple))
+            else [load_configured_run(config)]
+        )
     if len(runs) > 1 and config["model"]["p"] != 0:
         raise InputError(
             f"{len(runs)} runs given: several runs fit a global model, --p 0; a grouped model's "
@@ -98,6 +133,12 @@ def run_fit(args: argparse.Namespace) -> int:
     else:
         run = with_reference(run, configured_reference(args, config, run))
     input_selection = None
+    if position_run is not None:
+        from dataclasses import replace
+
+        position_run = replace(position_run, run=run)
+        if args.select:
+            raise InputError("--select is not available with --position; name the inputs with --temps")
     if args.select:
         run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors)
     elif args.sensors is not None:
@@ -130,7 +171,11 @@ def run_fit(args: argparse.Namespace) -> int:
         intervals = intervals_from_args(args, estimator, run.temps, run.error, config["search"]["seed"], progress)
     finally:
         progress.close()
-    result = FitResult(estimator, run, estimator.to_model_file(run, criterion), selection, input_selection, intervals)
+    model = estimator.to_model_file(run, criterion)
+    position_note = ""
+    if position_run is not None:
+        model, position_note = position_model(args, model, position_run)
+    result = FitResult(estimator, run, model, selection, input_selection, intervals)
 
     from groupfit.plots import plot_fit
 
@@ -150,8 +195,83 @@ def run_fit(args: argparse.Namespace) -> int:
     )
     json_path = write_json(args.json, result.to_json())
     written = wrote_line([model_path, figure_path, json_path])
-    print(result.summary() + "\nwrote   " + written, file=report_stream(args))
+    print(result.summary() + position_note + "\nwrote   " + written, file=report_stream(args))
     return 0
+
+
+def order_value(text: str) -> int | str:
+    """--position-order: a whole number or 'auto'."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid order: {text!r} (a whole number or 'auto')") from None
+
+
+def check_position_options(args: argparse.Namespace) -> None:
+    """The position and dead-band options that need another one."""
+    if not args.position:
+        for name in ("position_order", "position_ref"):
+            if getattr(args, name) is not None:
+                raise InputError(f"--{name.replace('_', '-')} needs --position COLUMN")
+    if args.dead_band_ref is not None and args.dead_band is None:
+        raise InputError("--dead-band-ref needs --dead-band C")
+    if args.dead_band is not None and not (0 < args.dead_band <= 50):
+        raise InputError(f"--dead-band {args.dead_band:g}: a threshold in (0, 50] degC")
+
+
+def load_position_data(config: dict, column: str):
+    """The run of ``--position COLUMN`` (long or wide table; :func:`groupfit.position.load_position_run`)."""
+    from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C
+    from groupfit.position import load_position_run
+
+    data = config["data"]
+    path = data.get("path")
+    if not path:
+        raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    if isinstance(path, (list, tuple)):
+        raise InputError("--position takes one run (a long or wide table of check runs)")
+    return load_position_run(
+        path,
+        column,
+        temps=data.get("temps"),
+        time=data["time"],
+        error=data["error"],
+        temp_range=data.get("temp_range", TEMP_RANGE_C),
+        error_limit=data.get("error_limit", ERROR_LIMIT_UM),
+    )
+
+
+def position_model(args: argparse.Namespace, model, position_run) -> tuple:
+    """The model with its position terms (and dead band), and the report's lines on them."""
+    from groupfit.model import DeadBand
+    from groupfit.position import choose_p0, cross_validate_order, with_position
+
+    p0 = choose_p0(position_run, args.position_ref)
+    order = args.position_order if args.position_order is not None else 1
+    lines = []
+    if order == "auto":
+        chosen = cross_validate_order(position_run, p0=p0, intercept=model.intercept)
+        order = chosen["order"]
+        scores = ", ".join(f"{k}: {v:.3g}" for k, v in zip(chosen["orders"], chosen["rms_um"]))
+        lines.append(f"position order {order} by cross-validation over held-out positions (RMS um: {scores})")
+    dead_band = None
+    if args.dead_band is not None:
+        reference = args.dead_band_ref or (model.reference if model.reference not in (None, "start") else None)
+        if reference is None:
+            raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
+        if reference not in position_run.run.frame.columns:
+            raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
+        dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
+    fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
+    training = fitted.training or {}
+    lines.append(
+        f"position {position_run.column}: order {order}, P0 = {p0:g} mm, travel {position_run.travel[0]:g} .. "
+        f"{position_run.travel[1]:g} mm, {len(position_run.positions)} positions x {position_run.run.n_samples} "
+        f"check runs; residual RMS {training['position_rms_um']:.3g} um, max {training['position_max_um']:.3g} um"
+    )
+    return fitted, "\n" + "\n".join(lines)
 
 
 def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tuple[Run, dict]:

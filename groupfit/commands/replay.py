@@ -25,7 +25,7 @@ from groupfit.errors import InputError
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile
-from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
+from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 
 
 def add_parser(verbs) -> None:
@@ -121,10 +121,13 @@ def load_readings(path, tables: RuleTables, *, time: str, error: str) -> Run:
         if name not in run.frame.columns:
             fed = ", ".join(d.name for d in tables.derived if d.reading == r)
             available = ", ".join(map(str, run.frame.columns))
-            raise InputError(
-                f"{run.source}: column '{name}' not found; the model computes its input(s) {fed} from it. "
-                f"The columns are: {available}"
+            uses = (
+                f"the model computes its input(s) {fed} from it"
+                if fed
+                else "the model reads it as the "
+                + ("axis position (mm)" if r == tables.position_reading else "reference of its dead band")
             )
+            raise InputError(f"{run.source}: column '{name}' not found; {uses}. The columns are: {available}")
         columns.append(numeric_column(run.frame, name, run.source, allow_nonfinite=True))
     readings = np.column_stack([run.temps, *columns])
     return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
@@ -192,6 +195,11 @@ def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, mod
         "faults": {
             "held_samples": int(np.sum((replay.fault & FAULT_HELD) != 0)),
             "sensor_fault_samples": int(np.sum((replay.fault & FAULT_SENSOR) != 0)),
+            **(
+                {"position_clamped_samples": int(np.sum((replay.fault & FAULT_POSITION) != 0))}
+                if tables.has_position
+                else {}
+            ),
         },
         "nonfinite_readings": int(np.sum(~np.isfinite(run.temps))),
     }
@@ -212,7 +220,12 @@ def replay_report(result: dict[str, Any]) -> str:
         f"offline  switches at samples {result['offline_switch_samples']} (breaks {result['offline_breaks']}); "
         f"{result['samples_off_offline_group']} sample(s) served by another group than offline",
         f"faults   {result['faults']['held_samples']} sample(s) on held readings, "
-        f"{result['faults']['sensor_fault_samples']} in sensor fault (safe output)",
+        f"{result['faults']['sensor_fault_samples']} in sensor fault (safe output)"
+        + (
+            f", {result['faults']['position_clamped_samples']} at a position clamped to the travel"
+            if "position_clamped_samples" in result["faults"]
+            else ""
+        ),
     ]
     if result["rms_um"] is not None:
         lines.append(

@@ -29,7 +29,9 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
     """The files of one export target, as ``{file name: text}``.
 
     Options: ``real`` ("REAL" or "LREAL") and ``name`` (block name) for
-    ``st``; ``resolution_um`` and ``counts_limit`` for ``sheet``.
+    ``st``; ``resolution_um`` and ``counts_limit`` for ``sheet``; ``tolerance_um``
+    for ``table`` (the equidistant position table of a position model,
+    :func:`groupfit.export.table.render_table`).
     """
     tables = RuleTables.from_model(ModelFile.coerce(model).checked())
     if target == "c":
@@ -51,6 +53,15 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
             tables,
             resolution_um=options.get("resolution_um", 0.1),
             counts_limit=options.get("counts_limit", 30000),
+        )
+    if target == "table":
+        from groupfit.export.table import DEFAULT_TABLE_TOLERANCE_UM, render_table
+
+        return render_table(
+            ModelFile.coerce(model).checked(),
+            tolerance_um=options.get("tolerance_um", DEFAULT_TABLE_TOLERANCE_UM),
+            name=options.get("name", "FB_GroupfitComp"),
+            real=options.get("real", "LREAL"),
         )
     raise InputError(f"export target {target!r}: choose one of {', '.join(TARGETS)}")
 

@@ -42,6 +42,7 @@ from groupfit.export.literals import c_float_literal, double_literal, reading_no
 from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
+    FAULT_POSITION,
     FAULT_SENSOR,
     RETURN_PERIOD_FAULT,
     RETURN_SENSOR_FAULT,
@@ -92,7 +93,7 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
 #define GF_SAMPLING_PERIOD_S $period
 #define GF_PERIOD_TOLERANCE_S $period_tolerance
 #define GF_COUNT_MAX ${count_max}L
-$delay_macros$reference_macros
+$delay_macros$reference_macros$position_macros
 #define GF_FAULT_NONE 0
 #define GF_FAULT_HELD $fault_held
 #define GF_FAULT_SENSOR $fault_sensor
@@ -120,7 +121,7 @@ typedef struct {
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
-$state_fields$reference_fields    gf_real error_um;           /* last prediction, um */
+$state_fields$reference_fields$position_fields    gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */
 } gf_state;
 
@@ -164,7 +165,7 @@ static const gf_real gf_margin = $margin;
 /* Valid reading: temp_min <= x <= temp_max (degC, a source in its own unit); NaN and +-inf never are. */
 static const double gf_temp_min[GF_N_TEMPS] = { $temp_min };
 static const double gf_temp_max[GF_N_TEMPS] = { $temp_max };
-$reference_value
+$reference_value$position_constants
 void gf_init(gf_state *s)
 {
     int m;
@@ -176,7 +177,7 @@ void gf_init(gf_state *s)
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
     }
-$init_derived$init_reference    s->error_um = 0;
+$init_derived$init_reference$init_position    s->error_um = 0;
     s->comp_um = 0;
 }
 
@@ -192,7 +193,7 @@ int gf_check_period(double period_s)
 int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
 {
     int m;
-$step_locals    int held = 0;
+$step_locals$position_locals    int held = 0;
     int faulted = 0;
     gf_real prediction;
     gf_real target;
@@ -243,9 +244,9 @@ $step_reference$step_derived
         prediction = 0;
         target = 0;
     } else {
-$dot_product
+$dot_product$position_terms
         target = -prediction;
-    }
+$dead_band    }
     if (target > GF_COMP_MAX_UM) {
         target = GF_COMP_MAX_UM;
     }
@@ -261,7 +262,7 @@ $dot_product
     }
     s->comp_um = s->comp_um + delta;
     s->error_um = prediction;
-    s->fault = (held ? GF_FAULT_HELD : 0) + (faulted ? GF_FAULT_SENSOR : 0);
+    s->fault = (held ? GF_FAULT_HELD : 0) + (faulted ? GF_FAULT_SENSOR : 0)$position_fault;
     if (error_um) {
         *error_um = (double)prediction;
     }
@@ -318,6 +319,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         comp_max_d=double_literal(tables.comp_max_um),
         rate_d=double_literal(tables.rate_limit_um),
         **reference_header(tables),
+        **position_header(tables),
     )
     coefficient_rows = ",\n".join(
         f"    /* group {g + 1} */ {{ " + ", ".join(real_literal(v) for v in row) + " }"
@@ -341,6 +343,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         step_derived=step_derived(tables),
         dot_product=dot_product(tables),
         **reference_source(tables),
+        **position_source(tables),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
 
@@ -565,6 +568,121 @@ def reference_source(tables: RuleTables) -> dict[str, str]:
         value = "/* A measured reading as the model takes it: its last good value. */\n"
         value += "#define GF_VALUE(m) (s->last[m])\n"
     return {"reference_value": "\n" + value, "init_reference": init, "step_reference": step}
+
+
+# --------------------------------------------------------------------- axis position and dead band
+
+
+def position_header(tables: RuleTables) -> dict[str, str]:
+    """Header pieces of a position model and a dead band (empty without them)."""
+    macros = fields = ""
+    if tables.has_position:
+        macros += (
+            f"#define GF_POSITION {tables.position_reading} "
+            f"/* temps[GF_POSITION] ({_ascii(tables.position_name)}): axis position, mm */\n"
+            f"#define GF_POSITION_ORDER {tables.position_order} /* highest power of (P - P0) */\n"
+            f"#define GF_FAULT_POSITION {FAULT_POSITION} /* position outside the travel, clamped (output valid) */\n"
+        )
+        fields += (
+            "    gf_real k0_um;              /* K0(T), um: the position-free part (SD43900 takes -k0_um / 1000) */\n"
+            "    gf_real slope_um_per_mm;    /* c1(T) = tan(beta), um/mm (SD43910 takes -slope / 1000) */\n"
+        )
+    if tables.has_dead_band:
+        macros += (
+            f"#define GF_DEAD_BAND_REF {tables.dead_band_reading} "
+            "/* dead band: no update while every measured input is within GF_DEAD_BAND_C of it */\n"
+        )
+        fields += "    gf_real band_target;        /* dead band: the last target computed outside it */\n"
+    return {"position_macros": macros, "position_fields": fields}
+
+
+def position_source(tables: RuleTables) -> dict[str, str]:
+    """Source pieces: the position polynomial after the dot product, the dead band after the target."""
+    pieces = dict(position_constants="", init_position="", position_locals="", position_terms="")
+    pieces.update(dead_band="", position_fault="")
+    constants = []
+    if tables.has_position:
+        order = tables.position_order
+        rows = []
+        for g, group in enumerate(tables.position_coefficients):
+            powers = ", ".join("{ " + ", ".join(real_literal(v) for v in row) + " }" for row in group)
+            rows.append(f"    /* group {g + 1} */ {{ {powers} }}")
+        constants += [
+            "/* Position terms: per group, per power k = 1..GF_POSITION_ORDER of d = P - P0, the coefficient\n"
+            " * c_k(T): constant, then one per model input (um per mm^k, um per mm^k and unit). */\n",
+            "static const gf_real gf_position_coef[GF_N_GROUPS][GF_POSITION_ORDER][GF_N_INPUTS + 1] = {\n"
+            + ",\n".join(rows)
+            + "\n};\n",
+            f"static const gf_real gf_p0 = {real_literal(tables.p0_mm)}; /* P0, mm */\n",
+            f"static const gf_real gf_travel_min = {real_literal(tables.travel_min_mm)}; /* modelled travel, mm */\n",
+            f"static const gf_real gf_travel_max = {real_literal(tables.travel_max_mm)};\n",
+        ]
+        pieces["init_position"] = "    s->k0_um = 0;\n    s->slope_um_per_mm = 0;\n"
+        pieces["position_locals"] = "    int clamped = 0;\n    int k;\n"
+        value = "x[m]" if tables.derived else "GF_VALUE(m)"
+        pieces["position_terms"] = (
+            "\n        {\n"
+            "            /* position: P clamped to the travel, d = P - P0, Horner from the highest power */\n"
+            "            gf_real position = s->last[GF_POSITION];\n"
+            "            gf_real d;\n"
+            "            gf_real poly = 0;\n"
+            "            if (position < gf_travel_min) {\n"
+            "                position = gf_travel_min;\n"
+            "                clamped = 1;\n"
+            "            }\n"
+            "            if (position > gf_travel_max) {\n"
+            "                position = gf_travel_max;\n"
+            "                clamped = 1;\n"
+            "            }\n"
+            "            d = position - gf_p0;\n"
+            "            for (k = GF_POSITION_ORDER - 1; k >= 0; k--) {\n"
+            "                const gf_real *prow = gf_position_coef[s->group - 1][k];\n"
+            "                gf_real term = prow[0];\n"
+            "                for (m = 0; m < GF_N_INPUTS; m++) {\n"
+            f"                    term = term + prow[m + 1] * {value};\n"
+            "                }\n"
+            "                if (k == GF_POSITION_ORDER - 1) {\n"
+            "                    poly = term;\n"
+            "                } else {\n"
+            "                    poly = poly * d + term;\n"
+            "                }\n"
+            "                if (k == 0) {\n"
+            "                    s->slope_um_per_mm = term;\n"
+            "                }\n"
+            "            }\n"
+            "            s->k0_um = prediction;\n"
+            "            prediction = prediction + poly * d;\n"
+            "        }"
+        )
+        pieces["position_fault"] = " + (clamped ? GF_FAULT_POSITION : 0)"
+        if order < 1:
+            raise ValueError("a position model has order >= 1")
+    if tables.has_dead_band:
+        constants.append(f"static const gf_real gf_dead_band = {real_literal(tables.dead_band_c)}; /* degC */\n")
+        pieces["init_position"] += "    s->band_target = 0;\n"
+        pieces["dead_band"] = (
+            "        {\n"
+            "            /* dead band: keep the last target while every measured input is near the reference */\n"
+            "            int outside = 0;\n"
+            f"            for (m = 0; m < {tables.n_measured}; m++) {{\n"
+            "                gf_real difference = s->last[m] - s->last[GF_DEAD_BAND_REF];\n"
+            "                if (difference < 0) {\n"
+            "                    difference = -difference;\n"
+            "                }\n"
+            "                if (difference > gf_dead_band) {\n"
+            "                    outside = 1;\n"
+            "                }\n"
+            "            }\n"
+            "            if (outside) {\n"
+            "                s->band_target = target;\n"
+            "            } else {\n"
+            "                target = s->band_target;\n"
+            "            }\n"
+            "        }\n"
+        )
+    if constants:
+        pieces["position_constants"] = "\n" + "".join(constants)
+    return pieces
 
 
 def _ascii(text: str) -> str:

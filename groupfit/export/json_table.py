@@ -21,6 +21,14 @@ written as ``/3`` too, with a ``reference`` object and its step. ``/3`` is one
 format: a runtime for it implements both. A runtime written for ``/2``
 refuses such a file instead of computing the wrong inputs; models without
 them are still written as ``/1`` or ``/2``, byte for byte as before.
+
+A model with an axis position (``position``) or a dead band (``dead_band``) is
+written as ``groupfit-runtime/4``, a superset of ``/3``: its ``temps`` end with
+the dead band's reference (unless it is already a reading) and the position
+(mm); ``position`` holds P0, the travel, the order and the coefficients of
+every power of ``P - P0``; ``dead_band`` the reference reading and the
+threshold; two more steps say where they enter. Models without them keep
+their format, byte for byte.
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ from groupfit.io import to_json
 from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
+    FAULT_POSITION,
     FAULT_SENSOR,
     RETURN_SENSOR_FAULT,
     RULE_FORMAT,
@@ -40,6 +49,8 @@ from groupfit.runtime import (
 RUNTIME_FORMAT = "groupfit-runtime/1"
 RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
 RUNTIME_FORMAT_3 = "groupfit-runtime/3"
+RUNTIME_FORMAT_4 = "groupfit-runtime/4"
+"""A position model or a dead band (a superset of /3)."""
 """Derived inputs with a power stage or a start from rest, or a reference temperature (either or both):
 a runtime for /1 or /2 would compute wrong inputs, so it must refuse the table."""
 
@@ -166,7 +177,7 @@ def runtime_table(tables: RuleTables) -> dict:
 
 def render_json(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_runtime.json": text}``."""
-    return {"groupfit_runtime.json": to_json(with_reference(runtime_table(tables), tables))}
+    return {"groupfit_runtime.json": to_json(with_position(with_reference(runtime_table(tables), tables), tables))}
 
 
 # --------------------------------------------------------------------- reference temperature
@@ -191,3 +202,53 @@ def with_reference(table: dict, tables: RuleTables) -> dict:
     if tables.reference_reading >= 0:
         reference["reading"] = tables.reference_reading
     return {**table, "format": RUNTIME_FORMAT_3, "reference": reference, "steps": steps}
+
+
+# --------------------------------------------------------------------- axis position and dead band
+
+POSITION_STEP = (
+    "position, after the prediction when not faulted: P = last[position.reading]; if P < travel_mm[0] then "
+    "P = travel_mm[0] and clamped = true; if P > travel_mm[1] then P = travel_mm[1] and clamped = true; "
+    "d = P - p0_mm; for k = order down to 1: term = coefficients[group][k - 1][0], then for every model input j "
+    "in order term = term + coefficients[group][k - 1][j + 1] * x[j]; poly = term for k = order, else "
+    "poly = poly * d + term; k0 = prediction, slope = the term of k = 1 (tan beta, um/mm); "
+    "prediction = prediction + poly * d. fault += fault_bits.position when clamped"
+)
+DEAD_BAND_STEP = (
+    "dead band, after target = -prediction when not faulted: if some measured reading m (0 <= m < "
+    "dead_band.n_measured) has |last[m] - last[dead_band.reading]| > dead_band.threshold_c then band_target = "
+    "target, else target = band_target (band_target starts at 0)"
+)
+
+
+def with_position(table: dict, tables: RuleTables) -> dict:
+    """The runtime table of a position model or a dead band: format /4, their sections and steps."""
+    if not (tables.has_position or tables.has_dead_band):
+        return table
+    steps = list(table["steps"])
+    at = len(steps) - 2  # before the clamp and rate limit
+    out = {**table, "format": RUNTIME_FORMAT_4}
+    if tables.has_position:
+        out["position"] = {
+            "name": tables.position_name,
+            "reading": tables.position_reading,
+            "p0_mm": tables.p0_mm,
+            "travel_mm": [tables.travel_min_mm, tables.travel_max_mm],
+            "order": tables.position_order,
+            "coefficients": tables.position_coefficients.tolist(),
+            "coefficients_layout": "per group, per power k = 1..order of (P - P0): constant, then one "
+            "coefficient per entry of 'inputs' (um per mm^k)",
+        }
+        out["fault_bits"] = {**table["fault_bits"], "position": FAULT_POSITION}
+        steps.insert(at, POSITION_STEP)
+        at += 1
+    if tables.has_dead_band:
+        out["dead_band"] = {
+            "name": tables.raw_names[tables.dead_band_reading],
+            "reading": tables.dead_band_reading,
+            "threshold_c": tables.dead_band_c,
+            "n_measured": tables.n_measured,
+        }
+        steps.insert(at, DEAD_BAND_STEP)
+    out["steps"] = steps
+    return out

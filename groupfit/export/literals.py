@@ -82,6 +82,10 @@ def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]
             notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))
         if r == getattr(tables, "reference_reading", -1):
             notes.append("reference: subtracted from every measured input")
+        if r == getattr(tables, "dead_band_reading", -1):
+            notes.append("dead band reference")
+        if r == getattr(tables, "position_reading", -1):
+            notes.append("axis position, mm; clamped to the travel")
         note = f"  ({'; '.join(notes)})" if notes else ""
         notes_per_reading.append((name, f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]", unit, note))
     return notes_per_reading

@@ -22,7 +22,7 @@ from decimal import ROUND_HALF_UP, Decimal
 
 from groupfit.errors import InputError
 from groupfit.io import to_json
-from groupfit.runtime import RuleTables
+from groupfit.runtime import FAULT_POSITION, RuleTables
 
 UM_PER_MM = 1000.0
 
@@ -117,6 +117,8 @@ def reading_list(tables: RuleTables) -> list[dict]:
                     "otherwise the modelling range widened by max(span, largest magnitude / 2, 1), not below 0 "
                     "if it never was, rounded outward)",
                     "fallback": "not in the model file (older file): any number within +-1e9",
+                    "position": "the axis position, mm: any finite number; outside the modelled travel it is "
+                    "clamped to the travel and flagged",
                 }[tables.valid_origin[r]],
                 "criterion": r == tables.criterion_reading,
                 "feeds": tables.uses_of(r),
@@ -203,6 +205,10 @@ def sheet_text(sheet: dict) -> str:
         lines.append(f"  derived input {derived['name']}: {derived['computed_as']}, by the routine itself")
     if "reference" in sheet:
         lines.append(f"  Reference temperature: {sheet['reference']['text']}.")
+    if "on_position_outside_travel" in sheet:
+        lines.append(f"  Axis position: {sheet['on_position_outside_travel']}.")
+    if "dead_band" in sheet:
+        lines.append(f"  Dead band: {sheet['dead_band']['text']}.")
     lines += [
         f"  Invalid reading: {sheet['on_invalid_reading']}.",
         "",
@@ -216,9 +222,7 @@ def sheet_text(sheet: dict) -> str:
         "SINUMERIK temperature compensation (dK = K0 + tanb * (P - P0))",
         f"  MD32750 TEMP_COMP_TYPE          = {sin['MD32750_TEMP_COMP_TYPE']}"
         "   (bit 0 position-independent, bit 1 position-dependent, bit 2 tool direction)",
-        "  SD43900 TEMP_COMP_ABS_VALUE     = C / 1000   [mm]   (K0)",
-        "  SD43910 TEMP_COMP_SLOPE         = 0          [-]    (tanb: the model has no position term)",
-        "  SD43920 TEMP_COMP_REF_POSITION  = 0          [mm]   (P0)",
+        *_sd_lines(sin),
         f"  {sin['writing']}.",
         f"  MD32760 COMP_ADD_VELO_FACTOR: {sin['MD32760_COMP_ADD_VELO_FACTOR']}.",
         "",
@@ -236,7 +240,71 @@ def sheet_text(sheet: dict) -> str:
 def render_sheet(tables: RuleTables, resolution_um: float = 0.1, counts_limit: int = 30000) -> dict[str, str]:
     """``{"groupfit_sheet.txt": …, "groupfit_sheet.json": …}``."""
     sheet = with_reference(controller_sheet(tables, IntegerForm(resolution_um, counts_limit)), tables)
+    sheet = with_position(sheet, tables)
     return {"groupfit_sheet.txt": sheet_text(sheet), "groupfit_sheet.json": to_json(sheet)}
+
+
+def _sd_lines(sin: dict) -> list[str]:
+    """The three setting-data lines: from the position terms of a position model, else C and zeros."""
+    if "position" not in sin:
+        return [
+            "  SD43900 TEMP_COMP_ABS_VALUE     = C / 1000   [mm]   (K0)",
+            "  SD43910 TEMP_COMP_SLOPE         = 0          [-]    (tanb: the model has no position term)",
+            "  SD43920 TEMP_COMP_REF_POSITION  = 0          [mm]   (P0)",
+        ]
+    position = sin["position"]
+    lines = [
+        "  SD43900 TEMP_COMP_ABS_VALUE     = -K0Um / 1000          [mm]   (K0 of the compensation)",
+        "  SD43910 TEMP_COMP_SLOPE         = -SlopeUmPerMm / 1000  [-]    (tanb of the compensation)",
+        f"  SD43920 TEMP_COMP_REF_POSITION  = {position['P0_mm']:<20g}  [mm]   (P0)",
+        f"  {position['note']}",
+    ]
+    if position["order"] > 1:
+        lines.append(f"  {position['higher_powers']}")
+    return lines
+
+
+def with_position(sheet: dict, tables: RuleTables) -> dict:
+    """The sheet of a position model (SD43900/43910/43920 from K0, tanb and P0) and of a dead band."""
+    if not (tables.has_position or tables.has_dead_band):
+        return sheet
+    sheet = dict(sheet)
+    if tables.has_position:
+        sin = dict(sheet["sinumerik"])
+        sin["MD32750_TEMP_COMP_TYPE"] = sinumerik_temp_comp_type(True, True, False)
+        sin["MD32750_note"] = "bits 0 and 1 (value 3): the model is position-dependent"
+        sin["SD43900_TEMP_COMP_ABS_VALUE"] = {"value": "-K0Um / 1000", "unit": "mm", "role": "K0"}
+        sin["SD43910_TEMP_COMP_SLOPE"] = {"value": "-SlopeUmPerMm / 1000", "unit": "1 (tan beta)", "role": "tanb"}
+        sin["SD43920_TEMP_COMP_REF_POSITION"] = {"value": tables.p0_mm, "unit": "mm", "role": "P0"}
+        sin["writing"] = (
+            f"the PLC writes SD43900 and SD43910 once per sample (every {tables.sampling_period_s:g} s) from the "
+            "block's outputs K0Um and SlopeUmPerMm (C: s->k0_um, s->slope_um_per_mm); SD43920 once"
+        )
+        sin["position"] = {
+            "reading": tables.position_reading + 1,
+            "name": tables.position_name,
+            "P0_mm": tables.p0_mm,
+            "travel_mm": [tables.travel_min_mm, tables.travel_max_mm],
+            "order": tables.position_order,
+            "note": "K0Um and SlopeUmPerMm are the model's (error) terms; the compensation is their negative. "
+            "The rule's own output C (clamp, rate limit, dead band) is the total at the position read; "
+            "through SD43900/43910 the NC applies the terms itself and MD32760 limits the rate.",
+            "higher_powers": "powers 2 and up of (P - P0) have no setting data: use C (the total at the "
+            "position read) or the equidistant position table (export --target table) in a compensation table",
+        }
+        sheet["sinumerik"] = sin
+        sheet["on_position_outside_travel"] = (
+            f"a position outside [{tables.travel_min_mm:g}, {tables.travel_max_mm:g}] mm is clamped to the travel "
+            f"and flagged (fault bit {FAULT_POSITION}); the output stays valid"
+        )
+    if tables.has_dead_band:
+        sheet["dead_band"] = {
+            "reference": tables.raw_names[tables.dead_band_reading],
+            "threshold_c": tables.dead_band_c,
+            "text": "no update of the compensation while every measured input is within "
+            f"{tables.dead_band_c:g} degC of {tables.raw_names[tables.dead_band_reading]}",
+        }
+    return sheet
 
 
 def with_reference(sheet: dict, tables: RuleTables) -> dict:

@@ -40,6 +40,7 @@ from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
     FAULT_PERIOD,
+    FAULT_POSITION,
     FAULT_SENSOR,
     RETURN_PERIOD_FAULT,
     RETURN_SENSOR_FAULT,
@@ -109,7 +110,7 @@ VAR
     prediction : $real;
     target : $real;
     delta : $real;
-${derived_vars}${reference_vars}END_VAR
+${derived_vars}${reference_vars}${position_vars}END_VAR
 VAR CONSTANT
     N_TEMPS : INT := $n_temps;
     N_GROUPS : INT := $n_groups;
@@ -134,7 +135,7 @@ $coefficients
     COMP_MIN : $real := $comp_min;
     COMP_MAX : $real := $comp_max;
     RATE_LIMIT : $real := $rate;
-END_VAR
+${position_constants}END_VAR
 
 IF Reset THEN
     sampleCount := 0;
@@ -144,7 +145,7 @@ IF Reset THEN
         badCount[m] := HOLD_SAMPLES + 1;
         lastGood[m] := 0.0;
     END_FOR;
-${reset_derived}${reset_reference}END_IF;
+${reset_derived}${reset_reference}${reset_position}END_IF;
 
 periodOk := ABS(SamplePeriodS - PERIOD_S) <= PERIOD_TOLERANCE_S;
 held := FALSE;
@@ -200,9 +201,9 @@ $step_reference$step_derived
         target := 0.0;
     ELSE
         prediction := COEF_0[currentGroup];
-$dot_product
+$dot_product${position_terms}
         target := -prediction;
-    END_IF;
+${dead_band}    END_IF;
     Fault := 0;
     IF held THEN
         Fault := Fault + $fault_held;
@@ -210,7 +211,7 @@ $dot_product
     IF faulted THEN
         Fault := Fault + $fault_sensor;
     END_IF;
-END_IF;
+${position_fault}END_IF;
 
 IF target > COMP_MAX THEN
     target := COMP_MAX;
@@ -312,6 +313,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         switch_criterion=SWITCH_CRITERION,
         switch_forced=SWITCH_FORCED,
         **reference_pieces(tables, real),
+        **position_pieces(tables, real, literal),
     )
     return {f"{name}.st": text}
 
@@ -519,6 +521,97 @@ def reference_pieces(tables: RuleTables, real: str) -> dict[str, str]:
         "        END_IF;\n"
         "    END_FOR;\n"
     )
+    return pieces
+
+
+# --------------------------------------------------------------------- axis position and dead band
+
+
+def position_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
+    """The block's pieces of a position model and a dead band (all empty without them).
+
+    The position terms are written out as the dot product is: per power k of
+    ``d = P - P0`` one array per term, indexed by group (``PCOEF_k_0`` the
+    constant, ``PCOEF_k_m`` the coefficient of model input m), evaluated by
+    Horner's scheme from the highest power, as the other targets do.
+    """
+    pieces = dict(position_vars="", position_constants="", reset_position="", position_terms="")
+    pieces.update(dead_band="", position_fault="")
+    if tables.has_position:
+        order = tables.position_order
+        pieces["position_vars"] = (
+            "    positionMm : $real;\n    positionD : $real;\n    positionPoly : $real;\n"
+            "    positionTerm : $real;\n    positionClamped : BOOL;\n"
+            "    K0Um : $real; (* K0(T), um: SD43900 takes -K0Um / 1000 *)\n"
+            "    SlopeUmPerMm : $real; (* c1(T) = tan(beta), um/mm: SD43910 takes -SlopeUmPerMm / 1000 *)\n"
+        ).replace("$real", real)
+        lines = [
+            f"    POSITION : INT := {tables.position_reading + 1}; (* Temps[POSITION]: axis position, mm *)",
+            f"    P0 : {real} := {literal(tables.p0_mm)};",
+            f"    TRAVEL_MIN : {real} := {literal(tables.travel_min_mm)};",
+            f"    TRAVEL_MAX : {real} := {literal(tables.travel_max_mm)};",
+            "    (* Position terms: PCOEF_k_0 the constant of c_k (um/mm^k), PCOEF_k_m its coefficient of input m. *)",
+        ]
+        for k in range(order):
+            for j in range(tables.n_inputs + 1):
+                values = ", ".join(literal(v) for v in tables.position_coefficients[:, k, j])
+                lines.append(f"    PCOEF_{k + 1}_{j} : ARRAY[1..{tables.n_groups}] OF {real} := [{values}];")
+        pieces["position_constants"] = "\n".join(lines) + "\n"
+        pieces["reset_position"] = "    K0Um := 0.0;\n    SlopeUmPerMm := 0.0;\n"
+        terms = [
+            "",
+            "        (* position: P clamped to the travel, d = P - P0, Horner from the highest power *)",
+            "        positionClamped := FALSE;",
+            "        positionMm := lastGood[POSITION];",
+            "        IF positionMm < TRAVEL_MIN THEN",
+            "            positionMm := TRAVEL_MIN;",
+            "            positionClamped := TRUE;",
+            "        END_IF;",
+            "        IF positionMm > TRAVEL_MAX THEN",
+            "            positionMm := TRAVEL_MAX;",
+            "            positionClamped := TRUE;",
+            "        END_IF;",
+            "        positionD := positionMm - P0;",
+        ]
+        for k in range(order, 0, -1):
+            terms.append(f"        positionTerm := PCOEF_{k}_0[currentGroup];")
+            for j in range(tables.n_inputs):
+                term = f"PCOEF_{k}_{j + 1}[currentGroup] * {input_value(tables, j)}"
+                terms.append(f"        positionTerm := positionTerm + {term};")
+            if k == order:
+                terms.append("        positionPoly := positionTerm;")
+            else:
+                terms.append("        positionPoly := positionPoly * positionD + positionTerm;")
+        terms += [
+            "        SlopeUmPerMm := positionTerm;",
+            "        K0Um := prediction;",
+            "        prediction := prediction + positionPoly * positionD;",
+        ]
+        pieces["position_terms"] = "\n".join(terms)
+        pieces["position_fault"] = "    IF NOT faulted THEN\n        IF positionClamped THEN\n"
+        pieces["position_fault"] += f"            Fault := Fault + {FAULT_POSITION};\n        END_IF;\n    END_IF;\n"
+    if tables.has_dead_band:
+        pieces["position_vars"] += f"    bandTarget : {real} := 0.0;\n    bandOutside : BOOL;\n"
+        pieces["position_constants"] += (
+            f"    DEAD_BAND_REF : INT := {tables.dead_band_reading + 1};\n"
+            f"    DEAD_BAND : {real} := {literal(tables.dead_band_c)}; (* degC *)\n"
+        )
+        pieces["reset_position"] += "    bandTarget := 0.0;\n"
+        pieces["dead_band"] = (
+            "        (* dead band: keep the last target while every measured input is near the reference *)\n"
+            "        bandOutside := FALSE;\n"
+            f"        FOR m := 1 TO {tables.n_measured} DO\n"
+            "            difference := lastGood[m] - lastGood[DEAD_BAND_REF];\n"
+            "            IF ABS(difference) > DEAD_BAND THEN\n"
+            "                bandOutside := TRUE;\n"
+            "            END_IF;\n"
+            "        END_FOR;\n"
+            "        IF bandOutside THEN\n"
+            "            bandTarget := target;\n"
+            "        ELSE\n"
+            "            target := bandTarget;\n"
+            "        END_IF;\n"
+        )
     return pieces
 
 

@@ -22,6 +22,7 @@ from groupfit.model import ModelFile
 from groupfit.runtime.rule import (
     COUNT_MAX,
     FAULT_HELD,
+    FAULT_POSITION,
     FAULT_SENSOR,
     RETURN_SENSOR_FAULT,
     SWITCH_CRITERION,
@@ -123,6 +124,12 @@ class SwitchingRule:
         self._lp_a = [real(d.a) for d in t.derived]
         self._lp_b = [real(d.b) for d in t.derived]
         self._scale = [real(d.scale) for d in t.derived]
+        if t.has_position:
+            self._pcoef = [[[real(v) for v in row] for row in group] for group in t.position_coefficients]
+            self._p0 = real(t.p0_mm)
+            self._travel_min = real(t.travel_min_mm)
+            self._travel_max = real(t.travel_max_mm)
+        self._band = real(t.dead_band_c)
         self.reset()
 
     def reset(self) -> None:
@@ -138,6 +145,9 @@ class SwitchingRule:
         self.derived = [self._zero] * len(t.derived)
         self.lines = [[self._zero] * d.delay_samples for d in t.derived]
         self.positions = [0] * len(t.derived)
+        self.band_target = self._zero
+        self.k0 = self._zero
+        self.slope = self._zero
         self._reset_reference()
 
     def step(self, readings: Sequence[float]) -> StepResult:
@@ -173,6 +183,7 @@ class SwitchingRule:
                 self.group += 1
                 switched = SWITCH_CRITERION
 
+        clamped = False
         if faulted:
             prediction = self._zero
             target = self._zero
@@ -183,7 +194,14 @@ class SwitchingRule:
                 r = t.input_reading[j]
                 value = self._value(r) if r >= 0 else self.derived[t.input_derived[j]]
                 prediction = prediction + row[j + 1] * value
+            if t.has_position:
+                prediction, clamped = self._position_terms(prediction)
             target = -prediction
+            if t.has_dead_band:
+                if self._outside_dead_band():
+                    self.band_target = target
+                else:
+                    target = self.band_target
         if target > self._comp_max:
             target = self._comp_max
         if target < self._comp_min:
@@ -194,8 +212,51 @@ class SwitchingRule:
         if delta < -self._rate:
             delta = -self._rate
         self.compensation = self.compensation + delta
-        fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0)
+        fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
         return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
+
+    def _position_terms(self, prediction):
+        """``K0 + c_1·d + … + c_K·d^K`` (Horner, highest power first), ``d = P − P0``, P clamped to the travel.
+
+        Also keeps ``k0`` (the position-free part) and ``slope`` (``c_1``, µm per
+        mm: tanβ of a first-order model) for the controller's SD43900/SD43910.
+        """
+        t = self.tables
+        position = self.last[t.position_reading]
+        clamped = False
+        if position < self._travel_min:
+            position = self._travel_min
+            clamped = True
+        if position > self._travel_max:
+            position = self._travel_max
+            clamped = True
+        d = position - self._p0
+        rows = self._pcoef[self.group - 1]
+        poly = self._zero
+        for k in range(t.position_order - 1, -1, -1):
+            row = rows[k]
+            term = row[0]
+            for j in range(t.n_inputs):
+                r = t.input_reading[j]
+                value = self._value(r) if r >= 0 else self.derived[t.input_derived[j]]
+                term = term + row[j + 1] * value
+            poly = term if k == t.position_order - 1 else poly * d + term
+            if k == 0:
+                self.slope = term
+        self.k0 = prediction
+        return prediction + poly * d, clamped
+
+    def _outside_dead_band(self) -> bool:
+        """Whether some measured input differs from the dead band's reference by more than the band."""
+        t = self.tables
+        ref = self.last[t.dead_band_reading]
+        for m in range(t.n_measured):
+            difference = self.last[m] - ref
+            if difference < self._zero:
+                difference = -difference
+            if difference > self._band:
+                return True
+        return False
 
     def _derive(self, k: int) -> None:
         """Advance derived input ``k`` by one sample from its source's last good value.
@@ -313,12 +374,13 @@ def replay_groups(model: ModelFile | Mapping[str, Any], inputs) -> np.ndarray:
     ModelFile.inputs computes them). The group
     depends only on the sample count and the criterion, a measured input, so
     the rule is replayed on the measured inputs, with every source column
-    that is not a model input held at a valid value.
+    that is not a model input (and a position or dead-band reading) held at a
+    valid value.
     """
     rule = SwitchingRule(without_reference(model))
     t = rule.tables
     inputs = np.asarray(inputs, dtype=float)
-    if not t.derived:
+    if not t.derived and t.n_temps == t.n_inputs:
         return rule.replay(inputs).group - 1
     if inputs.ndim != 2 or inputs.shape[1] != t.n_inputs:
         raise InputError(f"model inputs of shape {inputs.shape}: the model has {t.n_inputs} inputs")

@@ -30,6 +30,8 @@ FAULT_SENSOR = 2
 """Fault bit: a reading has been invalid for more than K samples (or was never valid): safe output."""
 FAULT_PERIOD = 4
 """Fault bit used by the Structured Text block when its task period differs from the model's."""
+FAULT_POSITION = 8
+"""Flag of a position model: the axis position lay outside the modelled travel and was clamped to it (output valid)."""
 
 RETURN_SENSOR_FAULT = -1
 """What the exported step routines return instead of the group under a sensor fault."""

@@ -165,6 +165,18 @@ class RuleTables:
     """The model's reference (:mod:`groupfit.reference`): a column, ``"start"`` or None."""
     reference_reading: int = -1
     """0-based reading of a reference column (one more reading, after the sources), or −1."""
+    dead_band_reading: int = -1
+    """0-based reading of the dead band's reference sensor, or −1 without a dead band."""
+    dead_band_c: float = 0.0
+    """Dead band (°C): no update while every measured input is within it of the dead band's reference."""
+    position_reading: int = -1
+    """0-based reading of the axis position (mm; the last reading), or −1 without a position model."""
+    position_name: str | None = None
+    p0_mm: float = 0.0
+    travel_min_mm: float = 0.0
+    travel_max_mm: float = 0.0
+    position_coefficients: np.ndarray | None = field(default=None, repr=False)
+    """(G, order, M+1): per group the rows of c_1 … c_order (constant first), or None."""
 
     @classmethod
     def from_model(cls, model: ModelFile | Mapping[str, Any]) -> "RuleTables":
@@ -180,6 +192,10 @@ class RuleTables:
             if name in features and features[name].column not in raw:
                 raw.append(features[name].column)
         raw += reference_readings(model, raw)
+        if model.dead_band is not None and model.dead_band.reference not in raw:
+            raw.append(model.dead_band.reference)
+        if model.position is not None:
+            raw.append(model.position.column)
         period = float(model.sampling_period_s)
         derived = []
         for name in input_names:
@@ -217,6 +233,8 @@ class RuleTables:
             if r < len(measured):
                 j = input_names.index(name)
                 low, high, where = section.temp_min_c[j], section.temp_max_c[j], "temperature"
+            elif model.position is not None and name == model.position.column:
+                (low, high), where = LEGACY_SOURCE_RANGE, "position"
             elif name in ranges:
                 (low, high), where = ranges[name], "source"
             else:
@@ -255,6 +273,7 @@ class RuleTables:
             error_name=model.error,
             reference=model.reference,
             reference_reading=raw.index(model.reference) if is_column_reference(model.reference) else -1,
+            **_position_tables(model, raw),
         )
 
     @property
@@ -285,11 +304,28 @@ class RuleTables:
         uses.extend(f"source of derived input {d.name}" for d in self.derived if d.reading == reading)
         if reading == self.reference_reading:
             uses.append("reference of every measured input")
+        if reading == self.dead_band_reading:
+            uses.append("reference of the dead band")
+        if reading == self.position_reading:
+            uses.append("axis position (mm) of the position terms")
         return uses
 
     @property
     def n_groups(self) -> int:
         return len(self.coefficients)
+
+    @property
+    def position_order(self) -> int:
+        """Highest power of ``P − P0`` (0 without a position model)."""
+        return 0 if self.position_coefficients is None else int(self.position_coefficients.shape[1])
+
+    @property
+    def has_position(self) -> bool:
+        return self.position_reading >= 0
+
+    @property
+    def has_dead_band(self) -> bool:
+        return self.dead_band_reading >= 0
 
     # ----------------------------------------------------------------- reference temperature
 
@@ -325,6 +361,26 @@ def _check_power_range(d: DerivedTable, low: float, high: float) -> None:
             f"derived input {d.name}: its power stage reaches {top:g} within the valid range "
             f"[{low:g}, {high:g}] of '{d.column}' (at most {POWER_MAX:g}); narrow the range or change the scale"
         )
+
+
+def _position_tables(model: ModelFile, raw: list[str]) -> dict[str, Any]:
+    """The position and dead-band fields of :class:`RuleTables` (defaults without them)."""
+    out: dict[str, Any] = {}
+    if model.dead_band is not None:
+        out.update(
+            dead_band_reading=raw.index(model.dead_band.reference), dead_band_c=float(model.dead_band.threshold_c)
+        )
+    position = model.position
+    if position is not None:
+        out.update(
+            position_reading=raw.index(position.column),
+            position_name=position.column,
+            p0_mm=float(position.p0_mm),
+            travel_min_mm=float(position.travel_mm[0]),
+            travel_max_mm=float(position.travel_mm[1]),
+            position_coefficients=position.coefficient_array(model.intercept),
+        )
+    return out
 
 
 def reference_readings(model: ModelFile, raw: list[str]) -> list[str]:
