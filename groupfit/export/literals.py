@@ -89,3 +89,20 @@ def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]
         note = f"  ({'; '.join(notes)})" if notes else ""
         notes_per_reading.append((name, f"[{tables.valid_min[r]:g}, {tables.valid_max[r]:g}]", unit, note))
     return notes_per_reading
+
+
+def real_literal(value: float) -> str:
+    """``GF_R(double, float)``: a C table entry of one real number (double and single literal)."""
+    return f"GF_R({double_literal(value)}, {c_float_literal(value)})"
+
+
+def c_comment_text(text: str) -> str:
+    """Names as they may appear in a C comment: ASCII, no comment terminators."""
+    cleaned = text.encode("ascii", "replace").decode("ascii")
+    return cleaned.replace("*/", "* /").replace("/*", "/ *")
+
+
+def st_comment_text(text: str) -> str:
+    """Names as they may appear in a Structured Text comment: ASCII, no comment delimiters."""
+    cleaned = text.encode("ascii", "replace").decode("ascii")
+    return cleaned.replace("*)", "* )").replace("(*", "( *")
