@@ -103,7 +103,7 @@ def test_ranking_finds_the_generating_transform_even_when_the_inputs_mimic_it():
     def compute(feature):
         return feature.compute(frame[feature.column].to_numpy(dtype=float), 100.0)
 
-    ranked = rank_candidates(error, features, compute, design, folds, X, own_inputs={"T1"})
+    ranked = rank_candidates(error, features, compute, HeldOutScorer(error, design, folds), X, own_inputs={"T1"})
     assert ranked[0].feature == Feature("spindle_on", "lowpass", tau_s=3600.0, start="rest")
     assert ranked[0].score == pytest.approx(1.0, abs=1e-9)
     assert ranked[0].coefficient == pytest.approx(1.5, rel=1e-9)

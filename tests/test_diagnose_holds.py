@@ -11,7 +11,7 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import candidate_features, rank_candidates
+from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
 from groupfit.diagnose.folds import Folds, block_labels, make_folds
 from groupfit.diagnose.loop import metrics_of, stacked_design, stacked_residual
 from groupfit.diagnose.report import change_words
@@ -71,8 +71,11 @@ def test_a_tempting_but_harmful_second_effect_is_not_added():
             run.error,
             candidate_features(["T_amb", "spindle_on"], TEMPS, modelling),
             lambda f: f.compute(modelling[f.column].to_numpy(float), 100.0),
-            stacked_design(current, [model_inputs(current, run)]),
-            Folds(block_labels(run.n_samples, 10), "block"),
+            HeldOutScorer(
+                run.error,
+                stacked_design(current, [model_inputs(current, run)]),
+                Folds(block_labels(run.n_samples, 10), "block"),
+            ),
         )
         return ranked[0]
 

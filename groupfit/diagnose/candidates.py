@@ -246,13 +246,22 @@ class HeldOutScorer:
         """The candidate's coefficient fitted with the design on all samples."""
         return self._update(values, len(self.splits) - 1)[0]
 
+    @property
+    def held_out_rms(self) -> float:
+        """RMS of the design's own error on the held-out folds (no candidate), µm."""
+        return float(np.sqrt(self.base_sse.sum() / len(self.target)))
+
+    @property
+    def in_sample_rms(self) -> float:
+        """RMS of the design's residual fitted on all samples, µm."""
+        return float(np.sqrt(np.mean(self.fits[-1][2] ** 2)))
+
 
 def rank_candidates(
     target: np.ndarray,
     features: list[Feature],
     compute,
-    design: np.ndarray,
-    folds: Folds,
+    scorer: HeldOutScorer,
     inputs: np.ndarray | None = None,
     own_inputs: set[str] = frozenset(),
 ) -> list[Candidate]:
@@ -264,21 +273,19 @@ def rank_candidates(
         The measured error, all runs stacked.
     compute : callable
         ``compute(feature) -> ndarray``: the candidate's values on the same samples.
-    design : ndarray
-        The model's regressors on the same samples, each group's inputs in
-        its own columns (see :func:`groupfit.diagnose.loop.group_design`).
-        Scoring the error rather than the in-sample residual matters: a
-        model fitted on the same run absorbs part of a missing effect into
-        its coefficients, and only an out-of-sample comparison of the model
-        with and without the candidate shows it.
-    folds : Folds
-        The held-out folds.
+    scorer : HeldOutScorer
+        The model's regressors on the same samples (each group's inputs in
+        its own columns, see :func:`groupfit.diagnose.loop.group_design`)
+        fitted on each held-out fold's complement. Scoring the error rather
+        than the in-sample residual matters: a model fitted on the same run
+        absorbs part of a missing effect into its coefficients, and only an
+        out-of-sample comparison of the model with and without the
+        candidate shows it.
     inputs : ndarray, optional
         The model's inputs on the same samples, for the collinearity of each candidate.
     own_inputs : set of str
         The model's input columns: their transforms are marked ``own_input``.
     """
-    scorer = HeldOutScorer(target, design, folds)
     without = float(scorer.base_sse.sum())
     n = len(target)
     ranked = []
@@ -314,8 +321,3 @@ def largest_correlation(values: np.ndarray, inputs: np.ndarray | None) -> float:
     with np.errstate(invalid="ignore", divide="ignore"):
         r = np.abs(centred.T @ v) / norms
     return float(np.nanmax(np.where(norms > 0, r, 0.0)))
-
-
-def base_fold_sse(target: np.ndarray, design: np.ndarray, folds: Folds) -> np.ndarray:
-    """Held-out SSE per fold of the model's own regression (no candidate)."""
-    return HeldOutScorer(target, design, folds).base_sse

@@ -45,7 +45,7 @@ from groupfit.diagnose.candidates import (
     COLLINEAR_R,
     HEAT_EXPONENT,
     Candidate,
-    base_fold_sse,
+    HeldOutScorer,
     candidate_features,
     is_sensor_column,
     rank_candidates,
@@ -237,7 +237,8 @@ def diagnose(
     before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     current_model, current_inputs = model, inputs
     current = dict(before)
-    base_check = overfit_check(target, stacked_design(model, inputs), folds)
+    scorer = HeldOutScorer(target, stacked_design(model, inputs), folds)
+    base_check = overfit_check(scorer, folds)
     if base_check["overfitted"]:
         notes.append(
             f"the model over-fits: held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
@@ -266,13 +267,12 @@ def diagnose(
     refused: list[Refusal] = []
     first_ranking: list[Candidate] | None = None
     while len(added) < max_effects and tried:
-        design = stacked_design(current_model, current_inputs)
         ranking = rank_candidates(
-            target, tried, compute, design, folds, np.vstack(current_inputs), own_inputs=set(measured_inputs)
+            target, tried, compute, scorer, np.vstack(current_inputs), own_inputs=set(measured_inputs)
         )
         if first_ranking is None:
             first_ranking = ranking
-        held_out_before = float(np.sqrt(base_fold_sse(target, design, folds).sum() / len(target)))
+        held_out_before = scorer.held_out_rms
         best, step_refusals, alternatives = choose(
             ranking, min_score, min_effect_rms_um, bool(added), own_transforms, sensor_columns
         )
@@ -282,8 +282,8 @@ def diagnose(
         current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
         current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
-        after_sse = base_fold_sse(target, stacked_design(current_model, current_inputs), folds)
-        held_out_after = float(np.sqrt(after_sse.sum() / len(target)))
+        scorer = HeldOutScorer(target, stacked_design(current_model, current_inputs), folds)
+        held_out_after = scorer.held_out_rms
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
         tried = [f for f in tried if f.column != best.feature.column]
@@ -404,11 +404,9 @@ def stacked_design(model: dict[str, Any], inputs: list[np.ndarray]) -> np.ndarra
     return np.vstack([group_design(model, x) for x in inputs])
 
 
-def overfit_check(target: np.ndarray, design: np.ndarray, folds: Folds) -> dict[str, Any]:
+def overfit_check(scorer: HeldOutScorer, folds: Folds) -> dict[str, Any]:
     """The model's own regression: in-sample RMS against held-out RMS on the folds."""
-    coef, *_ = np.linalg.lstsq(design, target, rcond=None)
-    in_sample = float(np.sqrt(np.mean((target - design @ coef) ** 2)))
-    held_out = float(np.sqrt(base_fold_sse(target, design, folds).sum() / len(target)))
+    in_sample, held_out = scorer.in_sample_rms, scorer.held_out_rms
     return {
         "in_sample_rms_um": in_sample,
         "held_out_rms_um": held_out,
