@@ -42,3 +42,33 @@ def lumped_run():
     """The paper's duty cycle on the lumped thermal network: 300 samples, 4 sensors."""
     frame = simulate_lumped({})
     return frame[["T1", "T2", "T3", "T4"]].to_numpy(), frame["error_um"].to_numpy()
+
+
+@pytest.fixture(scope="module")
+def drivers(tmp_path_factory):
+    """Build (and cache, per test module) the C driver of a model: ``drivers(label, model, kind)``.
+
+    ``kind``: ``"double"``, ``"single"`` (``GF_USE_FLOAT``) or ``"sanitized"`` (ASan/UBSan). Skips without gcc.
+    """
+    import shutil
+
+    from groupfit.export import render, write
+    from groupfit.export.harness import build_driver
+
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc is not installed")
+    built = {}
+
+    def get(label, model, kind="double"):
+        key = (label, kind)
+        if key not in built:
+            folder = tmp_path_factory.mktemp(f"c_{len(built)}")
+            write(render(model, "c"), folder)
+            if kind == "sanitized":
+                flags = ("-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all")
+                built[key] = build_driver(folder, folder / "driver", flags=flags)
+            else:
+                built[key] = build_driver(folder, folder / "driver", single=(kind == "single"))
+        return built[key]
+
+    return get

@@ -34,26 +34,6 @@ from groupfit.runtime import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
 
 
-@pytest.fixture(scope="module")
-def drivers(tmp_path_factory):
-    """Build (and cache) a driver per model and build kind."""
-    built = {}
-
-    def get(label, model, kind="double"):
-        key = (label, kind)
-        if key not in built:
-            folder = tmp_path_factory.mktemp(f"c_{len(built)}")
-            write(render(model, "c"), folder)
-            if kind == "sanitized":
-                flags = ("-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all")
-                built[key] = build_driver(folder, folder / "driver", flags=flags)
-            else:
-                built[key] = build_driver(folder, folder / "driver", single=(kind == "single"))
-        return built[key]
-
-    return get
-
-
 def python_replay(model, temps, precision="double"):
     rule = SwitchingRule(model, precision=precision)
     rule.reset()

@@ -272,29 +272,12 @@ def test_a_missing_position_reading_is_held_then_a_sensor_fault():
 CASES = [(1, 1, False), (3, 1, True), (2, 0, True)]
 
 
-@pytest.fixture(scope="module")
-def drivers(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed")
-    built = {}
-
-    def get(case, single):
-        key = (case, single)
-        if key not in built:
-            folder = tmp_path_factory.mktemp(f"c_pos_{len(built)}")
-            write(render(model_for(*case), "c"), folder)
-            built[key] = build_driver(folder, folder / "driver", single=single)
-        return built[key]
-
-    return get
-
-
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("single", [False, True])
 def test_c_build_makes_the_decisions_of_replay_bit_for_bit(drivers, case, single):
     model = model_for(*case)
     chosen = streams(model)
-    outputs = run_driver(drivers(case, single), list(chosen.values()))
+    outputs = run_driver(drivers(case, model, "single" if single else "double"), list(chosen.values()))
     for temps, c_out in zip(chosen.values(), outputs):
         assert_same_decisions(c_out, python_replay(model, temps, "single" if single else "double"))
 
@@ -322,7 +305,7 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, ca
     (text,) = render(model, "st", real="REAL").values()
     chosen = as_single(list(streams(model).values()))
     st_out = run_block(text, chosen, model["sampling_period_s"], "REAL")
-    c_out = run_driver(drivers(case, True), chosen)
+    c_out = run_driver(drivers(case, model, "single"), chosen)
     for st_stream, c_stream in zip(st_out, c_out):
         assert np.array_equal(st_stream["code"], c_stream.code)
         assert np.array_equal(st_stream["fault"], c_stream.fault)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
 from functools import lru_cache
 
 import numpy as np
@@ -14,8 +13,8 @@ from test_switching_models import DATASETS, noisy, shifted
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.errors import InputError
-from groupfit.export import render, write
-from groupfit.export.harness import build_driver, run_driver
+from groupfit.export import render
+from groupfit.export.harness import run_driver
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile
 from groupfit.models import GroupedRegressor
@@ -195,29 +194,12 @@ def test_start_reference_takes_each_sensor_from_its_first_good_reading():
     assert rule.first[0] == late[2, 0] and rule.first[1] == raw[0, 1]
 
 
-@pytest.fixture(scope="module")
-def drivers(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed")
-    built = {}
-
-    def get(reference, single):
-        key = (reference, single)
-        if key not in built:
-            folder = tmp_path_factory.mktemp(f"c_ref_{reference}_{int(single)}")
-            write(render(model_for(reference), "c"), folder)
-            built[key] = build_driver(folder, folder / "driver", single=single)
-        return built[key]
-
-    return get
-
-
 @pytest.mark.parametrize("reference", ["T_amb", "start"])
 @pytest.mark.parametrize("single", [False, True])
 def test_c_build_makes_the_decisions_of_replay_bit_for_bit(drivers, reference, single):
     model = model_for(reference)
     chosen = streams(model)
-    outputs = run_driver(drivers(reference, single), list(chosen.values()))
+    outputs = run_driver(drivers(reference, model, "single" if single else "double"), list(chosen.values()))
     for temps, c_out in zip(chosen.values(), outputs):
         assert_same_decisions(c_out, python_replay(model, temps, "single" if single else "double"))
 
@@ -253,7 +235,7 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, re
     (text,) = render(model, "st", real="REAL").values()
     chosen = as_single(list(streams(model).values()))
     st_out = run_block(text, chosen, model["sampling_period_s"], "REAL")
-    c_out = run_driver(drivers(reference, True), chosen)
+    c_out = run_driver(drivers(reference, model, "single"), chosen)
     for st_stream, c_stream in zip(st_out, c_out):
         assert np.array_equal(st_stream["code"], c_stream.code)
         assert np.array_equal(st_stream["fault"], c_stream.fault)
