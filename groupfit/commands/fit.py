@@ -278,15 +278,12 @@ def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tup
     """The run restricted to the inputs ``method`` chooses, scored on held-out conditions or runs."""
     from dataclasses import replace
 
-    from groupfit.diagnose.candidates import usable_columns
-    from groupfit.diagnose.folds import make_folds
-    from groupfit.sweep.selection import select_sensors
+    from groupfit.diagnose.select import select_inputs
 
     if k is not None and not 1 <= k <= len(run.temp_names):
         raise InputError(f"--sensors {k}: choose 1 to {len(run.temp_names)} of the {len(run.temp_names)} inputs")
-    columns, _ = usable_columns(run.frame, {run.time_name, run.error_name, *run.temp_names})
-    folds = make_folds(frames, columns)
-    names = select_sensors(run.temps, run.error, run.temp_names, method, k, splits=folds.index_splits())
+    exclude = {run.time_name, run.error_name, *run.temp_names}
+    names, folds = select_inputs(run.temps, run.error, run.temp_names, frames, exclude, method, k)
     keep = [run.temp_names.index(name) for name in names]
     selected = replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
     return selected, {"method": method, "inputs": names, "candidates": len(run.temp_names), "folds": folds.describe()}

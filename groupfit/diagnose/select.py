@@ -12,14 +12,34 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 import numpy as np
+import pandas as pd
 
 from groupfit.data import Run
 from groupfit.diagnose.augment import refit_model
 from groupfit.diagnose.candidates import usable_columns
-from groupfit.diagnose.folds import make_folds
+from groupfit.diagnose.folds import Folds, make_folds
 from groupfit.diagnose.residual import model_inputs
 from groupfit.errors import InputError
 from groupfit.sweep.selection import select_sensors
+
+
+def select_inputs(
+    X: np.ndarray,
+    y: np.ndarray,
+    names: Sequence[str],
+    frames: Sequence[pd.DataFrame],
+    exclude: set[str],
+    method: str,
+    k: int | None = None,
+) -> tuple[list[str], Folds]:
+    """The inputs ``method`` chooses among ``names`` (columns of X), scored on held-out conditions or runs.
+
+    ``frames`` are the runs' tables (stacked in the order of X's rows); the
+    folds come from their operating columns, the columns not in ``exclude``.
+    """
+    columns, _ = usable_columns(pd.concat(list(frames), ignore_index=True), exclude)
+    folds = make_folds(list(frames), columns)
+    return select_sensors(X, y, list(names), method, k, splits=folds.index_splits()), folds
 
 
 def select_base_model(model: dict[str, Any], runs: Sequence[Run], method: str) -> tuple[dict[str, Any], dict]:
@@ -28,12 +48,10 @@ def select_base_model(model: dict[str, Any], runs: Sequence[Run], method: str) -
     if derived:
         raise InputError("--select re-chooses measured inputs; this model already has derived inputs: select first")
     inputs = [model_inputs(model, run) for run in runs]
-    X = np.vstack(inputs)
-    y = np.concatenate([run.error for run in runs])
     exclude = {runs[0].time_name, model["error"], *model["temps"]}
-    columns, _ = usable_columns(runs[0].frame, exclude)
-    folds = make_folds([run.frame for run in runs], columns)
-    names = select_sensors(X, y, model["temps"], method, None, splits=folds.index_splits())
+    frames = [run.frame for run in runs]
+    y = np.concatenate([run.error for run in runs])
+    names, folds = select_inputs(np.vstack(inputs), y, model["temps"], frames, exclude, method)
     keep = [model["temps"].index(name) for name in names]
     selected = refit_model(model, list(runs), [x[:, keep] for x in inputs], names, [])
     return selected, {"method": method, "inputs": names, "folds": folds.describe()}
