@@ -6,7 +6,10 @@ the parts of the test before and after it; the base model is the MLR on the 16
 sensors (``disp_ch3_um``), fitted on the modelling runs; ``groupfit diagnose``
 chooses effects on the modelling runs only (leave-one-condition-out) and is
 judged on the held-out block, through the run-time rule. A second table starts
-from a model whose inputs were re-selected (``--select forward``).
+from a model whose inputs were re-selected (``--select forward``), a third
+from the 16-sensor model refitted with a ridge penalty chosen on the same
+held-out conditions (``--ridge auto``). "RMS µm" is the model each diagnosis
+started from.
 
     python bench/bench_diagnose_measured.py [--figure-dir DIR]
 """
@@ -23,7 +26,7 @@ import pandas as pd
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.select import select_base_model
+from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.plots import plot_diagnosis
@@ -76,17 +79,21 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     columns = f"{'held out':<26} {'RMS µm':>8} {'after':>8} {'change':>9}  {'verdict':<9}"
     header = columns + " effects added (chosen on the other blocks)"
-    for start in ("16 sensors", "forward-selected"):
+    for start in ("16 sensors", "forward-selected", "16 sensors, ridge (auto)"):
         print(f"\nbase model: MLR on {start}")
         print(header)
         for label, (first, last) in BLOCKS.items():
             runs, held = runs_around(frame, first, last)
             model = base_model(runs)
-            if start != "16 sensors":
+            extra = ""
+            if start == "forward-selected":
                 model, info = select_base_model(model, runs, "forward")
-                label_inputs = ",".join(info["inputs"])
+                extra = f"  [inputs {','.join(info['inputs'])}]"
+            elif start.endswith("ridge (auto)"):
+                model, info = ridge_base_model(model, runs, "auto")
+                extra = f"  [alpha {info['alpha']:g}]"
             result = diagnose(model, runs, held, live_rule=replay_groups)
-            print(row(label, result) + (f"  [inputs {label_inputs}]" if start != "16 sensors" else ""))
+            print(row(label, result) + extra)
             if start == "16 sensors":
                 name = label.split()[0]
                 plot_diagnosis(result, {"data": runs, "validate": [held]}, out / f"diagnose_measured_{name}.png")

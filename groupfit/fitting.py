@@ -26,6 +26,8 @@ class FitResult:
     input_selection: dict[str, Any] | None = None
     intervals: Any = None
     """The breaks' confidence intervals (a :class:`groupfit.inference.BreakIntervalReport`), when computed."""
+    ridge: dict[str, Any] | None = None
+    """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.choose_ridge`), when it did."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
@@ -36,6 +38,8 @@ class FitResult:
             result["p_selection"] = self.selection
         if self.input_selection is not None:
             result["input_selection"] = self.input_selection
+        if self.ridge is not None:
+            result["ridge"] = self.ridge
         return result
 
     def summary(self) -> str:
@@ -49,7 +53,20 @@ class FitResult:
                 f"inputs  {chosen['method']} selection ({chosen['folds']}): "
                 f"{', '.join(chosen['inputs'])} of {chosen['candidates']}\n" + report
             )
+        if self.ridge is not None:
+            report = ridge_summary(self.ridge) + "\n" + report
         return report
+
+
+def ridge_summary(ridge: dict) -> str:
+    """One line on the ridge penalty: given, or chosen on held-out data with the error of every penalty tried."""
+    if ridge["chosen"] == "given":
+        return f"ridge   penalty alpha = {ridge['alpha']:g} (given)"
+    table = ", ".join(f"{row['alpha']:g}: {row['held_out_rms_um']:.3g}" for row in ridge["held_out"])
+    return (
+        f"ridge   penalty alpha = {ridge['alpha']:g}, the least held-out error ({ridge['folds']}; "
+        f"held-out RMS µm by alpha: {table})"
+    )
 
 
 def selection_summary(selection: dict) -> str:

@@ -190,6 +190,8 @@ class ModelFile:
     error: str | None
     intercept: bool
     objective: str
+    ridge_alpha: float | None = None
+    """The ridge penalty the coefficients were fitted with (:mod:`groupfit.models.ridge`); absent: least squares."""
     p: int
     n: int
     c: float

@@ -77,7 +77,8 @@ def model_problem(model: Any) -> str | None:
     windows, thresholds and directions recomputed and compared), and the
     optional ``position`` (column not an input, order 1…8, travel low < high,
     one row of coefficients per group and power) and ``dead_band`` (a
-    reference column, a threshold in (0, 50] °C) sections.
+    reference column, a threshold in (0, 50] °C) sections, and the optional
+    ``ridge_alpha`` (≥ 0, a global model only).
     """
     if not isinstance(model, Mapping) or model.get("format") != FORMAT:
         return f"not a {FORMAT} model file (missing or different 'format')"
@@ -87,7 +88,7 @@ def model_problem(model: Any) -> str | None:
     if missing:
         return f"model file lacks key '{missing[0]}'"
     checks = (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem)
-    for check in (*checks, _reference_check, position_problem, dead_band_problem):
+    for check in (*checks, _reference_check, position_problem, dead_band_problem, ridge_problem):
         problem = check(model)
         if problem:
             return problem
@@ -419,6 +420,18 @@ def dead_band_problem(model: Mapping[str, Any]) -> str | None:
     position = model.get("position")
     if isinstance(position, Mapping) and position.get("column") == section["reference"]:
         return "dead_band.reference must be a temperature, not the position column"
+    return None
+
+
+def ridge_problem(model: Mapping[str, Any]) -> str | None:
+    """What is wrong with the optional ``ridge_alpha`` (the penalty the coefficients were fitted with), or None."""
+    alpha = model.get("ridge_alpha")
+    if alpha is None:
+        return None
+    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 <= alpha <= 1e6:
+        return f"ridge_alpha = {alpha!r}: must be a number in [0, 1e6]"
+    if model.get("p") != 0:
+        return f"ridge_alpha with p = {model.get('p')!r}: a ridge penalty belongs to a global model (p = 0)"
     return None
 
 

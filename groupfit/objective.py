@@ -254,8 +254,13 @@ def grouped_residuals(
     *,
     n: int,
     fit_intercept: bool,
+    ridge_alpha: float = 0.0,
 ) -> tuple[list[np.ndarray], np.ndarray]:
     """Fit every soft group directly (minimum-norm least squares) and return the residuals.
+
+    With ``ridge_alpha > 0`` each group's slopes are shrunk by the penalty of
+    :mod:`groupfit.models.ridge` (on the inputs scaled to unit spread, so on
+    the standardised design: ``ridge_alpha`` times the group's rows).
 
     Returns
     -------
@@ -276,7 +281,16 @@ def grouped_residuals(
     coefs = []
     residuals = np.empty(n_samples)
     for (first, last), (s_first, s_last) in zip(soft_groups(breaks, n_samples, n), served_ranges(breaks, n_samples, n)):
-        coef = min_norm_lstsq(A[first - 1 : last], t[first - 1 : last])
+        if ridge_alpha > 0:
+            from groupfit.models.ridge import ridge_solve
+
+            rows = last - first + 1
+            penalty = np.full(A.shape[1], ridge_alpha * rows)
+            if fit_intercept:
+                penalty[0] = 0.0
+            coef = ridge_solve(A[first - 1 : last], t[first - 1 : last], penalty)
+        else:
+            coef = min_norm_lstsq(A[first - 1 : last], t[first - 1 : last])
         residuals[s_first - 1 : s_last] = (t[s_first - 1 : s_last] - A[s_first - 1 : s_last] @ coef) * std.y_scale
         coefs.append(unstandardise(coef, std))
     return coefs, residuals

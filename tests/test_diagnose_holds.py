@@ -210,7 +210,6 @@ def test_fit_select_keeps_the_sensors_that_carry_the_error(tmp_path, capsys):
     out = tmp_path / "model"
     capsys.readouterr()
     args = ["fit", "--data", str(path), "--temps", temps, "--p", "0", "--select", "forward", "--json", "-"]
-    args += ["--reference", "none"]
     args += ["--reference", "none"]  # the error is defined on absolute readings
     assert main([*args, "--quiet", "--out", str(out)]) == 0
     result = json.loads(capsys.readouterr().out)

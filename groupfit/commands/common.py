@@ -265,3 +265,16 @@ def configured_reference(args: argparse.Namespace, config: dict, run: Run) -> st
     if value is None:
         value = config["model"].get("reference")
     return default_reference(run.frame, value)
+
+
+def ridge_value(text: str) -> float | str:
+    """--ridge: a penalty >= 0 or 'auto'."""
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number >= 0 or 'auto')") from None
+    if not (value >= 0 and value <= 1e6):
+        raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number in [0, 1e6] or 'auto')")
+    return value

@@ -15,6 +15,7 @@ from groupfit.commands.common import (
     check_json_target,
     check_output_dir,
     report_stream,
+    ridge_value,
     write_json,
     wrote_line,
 )
@@ -75,6 +76,13 @@ def add_parser(verbs) -> None:
         choices=SELECTION_METHODS,
         help="first re-select the model's inputs on held-out conditions (for a model that over-fits)",
     )
+    parser.add_argument(
+        "--ridge",
+        type=ridge_value,
+        metavar="ALPHA|auto",
+        help="first refit the global model (p = 0) with a ridge penalty (auto: chosen on held-out conditions), "
+        "for many collinear inputs; effects are then scored and added with the same penalty",
+    )
     parser.set_defaults(handler=run_diagnose)
 
 
@@ -123,6 +131,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
         from groupfit.diagnose.select import select_base_model
 
         start, selection = select_base_model(model, data, args.select)
+    ridge = None
+    if args.ridge is not None:
+        from groupfit.diagnose.select import ridge_base_model
+
+        start, ridge = ridge_base_model(start, data, args.ridge)
     result = diagnose(
         start,
         data,
@@ -133,12 +146,12 @@ def run_diagnose(args: argparse.Namespace) -> int:
         heat_exponent=args.heat_exponent,
         own_transforms=args.own_transforms,
     )
-    if selection is not None:
-        result = with_original_baseline(result, model, data, validate, replay_groups, selection)
+    if selection is not None or ridge is not None:
+        result = with_original_baseline(result, model, data, validate, replay_groups, selection, ridge)
 
     model_path = Path(args.model)
     written = []
-    if result.added or selection is not None:
+    if result.changed:
         model_path = out_dir / "model_augmented.json"
         save_model(ModelFile.coerce(result.model), model_path)  # checked: an invalid model is never written
         written.append(model_path)
@@ -154,8 +167,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
-def with_original_baseline(result, model, data, validate, live_rule, selection) -> DiagnosisResult:
-    """Report before/after against the model the user gave, not the re-selected one."""
+def with_original_baseline(result, model, data, validate, live_rule, selection, ridge=None) -> DiagnosisResult:
+    """Report before/after against the model the user gave, not the re-selected or ridge-refitted one."""
     from groupfit.diagnose.loop import metrics_of, residual_checks, stacked_residual
 
     runs = {"data": data, **({"validate": validate} if validate else {})}
@@ -163,5 +176,7 @@ def with_original_baseline(result, model, data, validate, live_rule, selection) 
     result.residuals_before = before
     result.before = {key: metrics_of(r) for key, r in before.items()}
     result.checks_before = residual_checks(before["data"], np.arange(len(before["data"])) * data[0].period)
-    result.selection = {**selection, "of": len(model["temps"])}
+    if selection is not None:
+        result.selection = {**selection, "of": len(model["temps"])}
+    result.ridge = ridge
     return result

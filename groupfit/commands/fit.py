@@ -19,6 +19,7 @@ from groupfit.commands.common import (
     configured_reference,
     load_configured_run,
     report_stream,
+    ridge_value,
     write_json,
     wrote_line,
 )
@@ -54,6 +55,13 @@ def add_parser(verbs) -> None:
         help="choose the inputs among --temps on held-out conditions (forward, lasso or cluster)",
     )
     fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
+    fit.add_argument(
+        "--ridge",
+        type=ridge_value,
+        metavar="ALPHA|auto",
+        help="shrink the coefficients of a global model (p = 0) on many collinear inputs by a ridge penalty; "
+        "auto: the penalty with the least error on held-out conditions or runs",
+    )
     fit.add_argument(
         "--position",
         metavar="COLUMN",
@@ -139,6 +147,8 @@ def run_fit(args: argparse.Namespace) -> int:
         position_run = replace(position_run, run=run)
         if args.select:
             raise InputError("--select is not available with --position; name the inputs with --temps")
+        if args.ridge is not None:
+            raise InputError("--ridge is not available with --position: the position terms are fitted by least squares")
     if args.select:
         run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors)
     elif args.sensors is not None:
@@ -164,6 +174,10 @@ def run_fit(args: argparse.Namespace) -> int:
     elif not isinstance(config["model"]["p"], int):
         raise InputError(f"p = {config['model']['p']!r}: give a whole number or 'auto'")
     estimator = GroupedRegressor.from_config(config)
+    ridge = None
+    if args.ridge is not None:
+        ridge = ridge_for(args.ridge, config["model"], run, [r.frame for r in runs])
+        estimator.set_params(ridge_alpha=ridge["alpha"])
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
     try:
@@ -175,7 +189,7 @@ def run_fit(args: argparse.Namespace) -> int:
     position_note = ""
     if position_run is not None:
         model, position_note = position_model(args, model, position_run)
-    result = FitResult(estimator, run, model, selection, input_selection, intervals)
+    result = FitResult(estimator, run, model, selection, input_selection, intervals, ridge)
 
     from groupfit.plots import plot_fit
 
@@ -287,6 +301,21 @@ def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tup
     keep = [run.temp_names.index(name) for name in names]
     selected = replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
     return selected, {"method": method, "inputs": names, "candidates": len(run.temp_names), "folds": folds.describe()}
+
+
+def ridge_for(option: float | str, model: dict, run: Run, frames: list) -> dict:
+    """The ridge penalty of ``--ridge`` (chosen on held-out conditions or runs for 'auto'), and how it was found."""
+    if model["p"] != 0:
+        raise InputError(
+            f"--ridge with p = {model['p']}: the ridge penalty is for one global model (--p 0) on many collinear "
+            "inputs; a grouped model's groups are fitted by least squares"
+        )
+    if option != "auto":
+        return {"alpha": float(option), "chosen": "given"}
+    from groupfit.diagnose.select import choose_ridge
+
+    exclude = {run.time_name, run.error_name, *run.temp_names}
+    return choose_ridge(run.temps, run.error, frames, exclude, model["intercept"])
 
 
 def p_value(text: str) -> int | str:

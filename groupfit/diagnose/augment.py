@@ -57,11 +57,13 @@ def refit_model(
     X = np.vstack(inputs)
     error = np.concatenate([run.error for run in runs])
     estimator = GroupedRegressor(
+        p=model.p,
         n=model.n,
         c=model.c,
         objective=model.objective,
         fit_intercept=model.intercept,
         fixed_breaks=list(model.breaks),
+        ridge_alpha=model.ridge_alpha or 0.0,
     ).fit(X, error)
     time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
     frame = pd.concat([run.frame for run in runs], ignore_index=True)

@@ -192,25 +192,45 @@ class HeldOutScorer:
     the pseudo-inverse of each fold's Gram matrix of the norm-scaled design,
     so a design that loses rank on a fold (a group absent from it) still has
     a defined, minimum-norm answer.
+
+    With ``ridge_alpha > 0`` (a global model fitted with a ridge penalty,
+    :mod:`groupfit.models.ridge`) every fit is the penalised one, the
+    candidate penalised like the inputs, the spreads those of all samples:
+    the update then solves the penalised normal equations in the same way.
     """
 
-    def __init__(self, target: np.ndarray, design: np.ndarray, folds: Folds):
+    def __init__(
+        self,
+        target: np.ndarray,
+        design: np.ndarray,
+        folds: Folds,
+        ridge_alpha: float = 0.0,
+        fit_intercept: bool = True,
+    ):
         from scipy.linalg import pinvh
         from threadpoolctl import threadpool_limits
 
+        self.ridge_alpha = float(ridge_alpha)
+        self.fit_intercept = fit_intercept
         with threadpool_limits(limits=1, user_api="blas"):  # products this small only lose to thread hand-offs
             self._fit(target, design, folds, pinvh)
 
     def _fit(self, target, design, folds, pinvh) -> None:
+        from groupfit.models.ridge import input_spreads
+
         self.target = target
         norms = np.linalg.norm(design, axis=0)
-        self.design = design / np.where(norms > 0, norms, 1.0)
+        norms = np.where(norms > 0, norms, 1.0)
+        self.design = design / norms
+        # the ridge penalty of each column, per training row, on the norm-scaled design
+        self.penalty_per_row = self.ridge_alpha * input_spreads(design, self.fit_intercept) ** 2 / norms**2
         everything = np.ones(len(target), dtype=bool)
         self.splits = [*folds.splits(), (everything, np.zeros_like(everything))]
         self.fits = []
         for train, _ in self.splits:
             Z = self.design[train]
-            gram_inverse = pinvh(Z.T @ Z, atol=0.0, rtol=1e-13)
+            gram = Z.T @ Z + np.diag(self.penalty_per_row * np.count_nonzero(train))
+            gram_inverse = pinvh(gram, atol=0.0, rtol=1e-13)
             coef = gram_inverse @ (Z.T @ target[train])
             self.fits.append((gram_inverse, coef, target[train] - Z @ coef))
         self.base_sse = np.array(
@@ -226,10 +246,19 @@ class HeldOutScorer:
         gram_inverse, _, residual = self.fits[fold]
         v_coef = gram_inverse @ (self.design[train].T @ values[train])
         v_res = values[train] - self.design[train] @ v_coef
-        denom = float(v_res @ v_res)
+        if self.ridge_alpha > 0:  # the penalised normal equations, the candidate penalised like the inputs
+            from groupfit.models.ridge import input_spreads
+
+            spread = float(input_spreads(values[:, None], self.fit_intercept)[0])
+            own_penalty = self.ridge_alpha * np.count_nonzero(train) * spread**2
+            denom = float(values[train] @ v_res) + own_penalty
+            numerator = float(values[train] @ residual)
+        else:
+            denom = float(v_res @ v_res)
+            numerator = float(v_res @ residual)
         if denom <= 1e-12 * max(1.0, float(values[train] @ values[train])):
             return 0.0, v_coef
-        return float(v_res @ residual) / denom, v_coef
+        return numerator / denom, v_coef
 
     def fold_sse(self, values: np.ndarray) -> np.ndarray:
         """Held-out SSE per fold with ``values`` as one more regressor."""

@@ -123,6 +123,8 @@ class DiagnosisResult:
     """Names of the modelling run(s) (``"data"``) and the validation run(s) (``"validate"``)."""
     selection: dict[str, Any] | None = None
     """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
+    ridge: dict[str, Any] | None = None
+    """The ridge penalty the model was refitted with before the diagnosis (``diagnose --ridge``), when it was."""
 
     def summary(self) -> str:
         """The report, as ``groupfit diagnose`` prints it."""
@@ -140,6 +142,7 @@ class DiagnosisResult:
             "folds": self.folds,
             "base_model": self.base_check,
             "selection": self.selection,
+            "ridge": self.ridge,
             "before": self.before,
             "after": self.after,
             "improved": self.improved,
@@ -149,9 +152,14 @@ class DiagnosisResult:
         }
 
     @property
+    def changed(self) -> bool:
+        """Whether the model differs from the one given: an effect added, inputs re-selected or a ridge refit."""
+        return bool(self.added) or self.selection is not None or self.ridge is not None
+
+    @property
     def improved(self) -> bool | None:
-        """Whether the validation run got better; None without one (or when nothing was added)."""
-        if "validate" not in self.before or not self.added:
+        """Whether the validation run got better; None without one (or when the model was not changed)."""
+        if "validate" not in self.before or not self.changed:
             return None
         return self.after["validate"]["rms_um"] < self.before["validate"]["rms_um"]
 
@@ -237,7 +245,7 @@ def diagnose(
     before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     current_model, current_inputs = model, inputs
     current = dict(before)
-    scorer = HeldOutScorer(target, stacked_design(model, inputs), folds)
+    scorer = model_scorer(model, target, inputs, folds)
     base_check = overfit_check(scorer, folds)
     if base_check["overfitted"]:
         notes.append(
@@ -282,7 +290,7 @@ def diagnose(
         current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
         current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
-        scorer = HeldOutScorer(target, stacked_design(current_model, current_inputs), folds)
+        scorer = model_scorer(current_model, target, current_inputs, folds)
         held_out_after = scorer.held_out_rms
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
@@ -398,6 +406,13 @@ def common_usable_columns(runs: list[Run], exclude: set[str]) -> tuple[list[str]
 
 def stacked_residual(model: dict[str, Any], runs: list[Run], live_rule: LiveRule | None) -> np.ndarray:
     return np.concatenate([residual(model, run, live_rule) for run in runs])
+
+
+def model_scorer(model: dict[str, Any], target: np.ndarray, inputs: list[np.ndarray], folds: Folds) -> HeldOutScorer:
+    """The held-out scorer of the model's own design, fitted as the model is (least squares or ridge)."""
+    ridge = model.get("ridge_alpha") or 0.0
+    design = stacked_design(model, inputs)
+    return HeldOutScorer(target, design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
 
 
 def stacked_design(model: dict[str, Any], inputs: list[np.ndarray]) -> np.ndarray:

@@ -36,7 +36,7 @@ def diagnosis_summary(result) -> str:
     judge = "validate" if validate else "data"
     judged = names.get(judge, judge)
     b, a = result.before[judge], result.after[judge]
-    changed = bool(result.added) or result.selection is not None
+    changed = result.changed
     if result.improved is False or (validate and changed and a["rms_um"] >= b["rms_um"]):
         lines.append(
             f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
@@ -46,6 +46,13 @@ def diagnosis_summary(result) -> str:
         lines.append(
             f"inputs re-selected by {selection['method']} on held-out conditions: {', '.join(selection['inputs'])} "
             f"({len(selection['inputs'])} of {selection['of']}); before/after compare with the model as given"
+        )
+    if result.ridge is not None:
+        ridge = result.ridge
+        how = "given" if ridge["chosen"] == "given" else f"the least error on {ridge['folds']}"
+        lines.append(
+            f"coefficients refitted with the ridge penalty alpha = {ridge['alpha']:g} ({how}); "
+            "before/after compare with the model as given"
         )
     if result.added:
         for step in result.steps:
@@ -67,6 +74,11 @@ def diagnosis_summary(result) -> str:
         lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
     else:
         lines.append("nothing missing: no candidate explains a significant part of the held-out error; no effect added")
+        if changed:
+            lines.append(
+                f"{'validation' if validate else 'measured'} run {judged}: RMS "
+                f"{change_words(b['rms_um'], a['rms_um'])}, max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
+            )
     lines.append(f"held out: {result.folds}")
     for refusal in result.refused[:5]:
         c = refusal.candidate

@@ -20,6 +20,7 @@ from groupfit.diagnose.candidates import usable_columns
 from groupfit.diagnose.folds import Folds, make_folds
 from groupfit.diagnose.residual import model_inputs
 from groupfit.errors import InputError
+from groupfit.model import ModelFile
 from groupfit.sweep.selection import select_sensors
 
 
@@ -40,6 +41,45 @@ def select_inputs(
     columns, _ = usable_columns(pd.concat(list(frames), ignore_index=True), exclude)
     folds = make_folds(list(frames), columns)
     return select_sensors(X, y, list(names), method, k, splits=folds.index_splits()), folds
+
+
+def choose_ridge(
+    X: np.ndarray,
+    y: np.ndarray,
+    frames: Sequence[pd.DataFrame],
+    exclude: set[str],
+    fit_intercept: bool = True,
+) -> dict[str, Any]:
+    """The ridge penalty (:mod:`groupfit.models.ridge`) with the least error on held-out conditions or runs.
+
+    Returns ``alpha``, ``held_out`` (the held-out RMS of every penalty tried) and ``folds``.
+    """
+    from groupfit.models.ridge import choose_ridge_alpha
+
+    columns, _ = usable_columns(pd.concat(list(frames), ignore_index=True), exclude)
+    folds = make_folds(list(frames), columns)
+    alpha, table = choose_ridge_alpha(X, y, folds.index_splits(), fit_intercept)
+    return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
+
+
+def ridge_base_model(model: dict[str, Any], runs: Sequence[Run], alpha: float | str) -> tuple[dict[str, Any], dict]:
+    """The global model refitted with a ridge penalty (``"auto"``: chosen on held-out conditions or runs)."""
+    from groupfit.models.ridge import check_ridge_alpha
+
+    if model["p"] != 0:
+        raise InputError(
+            f"--ridge refits a global model (p = 0); this model has p = {model['p']}: a grouped model's groups "
+            "are fitted by least squares"
+        )
+    inputs = [model_inputs(model, run) for run in runs]
+    if alpha == "auto":
+        exclude = {runs[0].time_name, model["error"], *model["temps"]}
+        y = np.concatenate([run.error for run in runs])
+        info = choose_ridge(np.vstack(inputs), y, [run.frame for run in runs], exclude, model["intercept"])
+    else:
+        info = {"alpha": check_ridge_alpha(alpha), "chosen": "given"}
+    ridged = ModelFile.coerce(dict(model, ridge_alpha=info["alpha"] or None))
+    return refit_model(ridged, list(runs), inputs, ridged.temps, ridged.derived_inputs or ()), info
 
 
 def select_base_model(model: dict[str, Any], runs: Sequence[Run], method: str) -> tuple[dict[str, Any], dict]:

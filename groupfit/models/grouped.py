@@ -120,6 +120,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         certify="auto",
         random_state: int | None = None,
         fixed_breaks: list[int] | None = None,
+        ridge_alpha: float = 0.0,
     ):
         self.p = p
         self.n = n
@@ -136,6 +137,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.certify = certify
         self.random_state = random_state
         self.fixed_breaks = fixed_breaks
+        self.ridge_alpha = ridge_alpha
 
     @property
     def n_coef(self) -> int:
@@ -259,7 +261,9 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.n_samples_fit_ = n_samples
         self.hard_groups_ = hard_groups(self.breaks_, n_samples)
         self.soft_groups_ = soft_groups(self.breaks_, n_samples, self.n)
-        coefs, self.residuals_ = grouped_residuals(X, y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept)
+        coefs, self.residuals_ = grouped_residuals(
+            X, y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept, ridge_alpha=float(self.ridge_alpha)
+        )
         coefs = np.asarray(coefs)
         if self.fit_intercept:
             self.intercept_, self.coef_ = coefs[:, 0], coefs[:, 1:]
@@ -273,7 +277,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.search_ = info
         from groupfit.inference.prediction import group_interval_stats
 
-        self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept)
+        ridge = float(self.ridge_alpha) > 0
+        self.interval_stats_ = None if ridge else group_interval_stats(X, y, self.soft_groups_, self.fit_intercept)
         return self
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
@@ -354,6 +359,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             switching=switching,
             training={"run": run.name, **metrics},
             reference=getattr(run, "reference", None),
+            ridge_alpha=float(self.ridge_alpha) if self.ridge_alpha else None,
         )
         rule = rule_parameters(model, run.temps, criterion_index=column, valid_readings=_raw_readings(run))
         ranges = source_ranges(run.frame, exclude=(run.time_name, run.error_name))
@@ -364,7 +370,14 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
     def from_model_file(cls, model: ModelFile | Mapping[str, Any]) -> "GroupedRegressor":
         """A fitted estimator with the model file's groups and coefficients (no residuals or search details)."""
         model = ModelFile.coerce(model)
-        estimator = cls(p=model.p, n=model.n, c=model.c, objective=model.objective, fit_intercept=model.intercept)
+        estimator = cls(
+            p=model.p,
+            n=model.n,
+            c=model.c,
+            objective=model.objective,
+            fit_intercept=model.intercept,
+            ridge_alpha=model.ridge_alpha or 0.0,
+        )
         coefficients = np.asarray(model.coefficients, dtype=float)
         n_samples = model.n_samples_fit
         estimator.breaks_ = [int(b) for b in model.breaks]
@@ -391,6 +404,13 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             raise InputError(f"n = {self.n!r}: the soft offset must be a whole number ≥ 0")
         if not np.isfinite(self.c) or self.c < 0:
             raise InputError(f"c = {self.c!r}: the spacing coefficient must be a finite number ≥ 0")
+        from groupfit.models.ridge import check_ridge_alpha
+
+        if check_ridge_alpha(self.ridge_alpha) > 0 and (self.p != 0 or self.fixed_breaks):
+            raise InputError(
+                f"ridge alpha {self.ridge_alpha:g} with p = {self.p}: the ridge penalty is for one global model "
+                "(p = 0) on many collinear inputs; a grouped model's groups are fitted by least squares"
+            )
 
     def _should_certify(self, n_samples: int) -> bool:
         if self.certify == "auto":
