@@ -262,6 +262,7 @@ def load_run(
     error: str | None = DEFAULT_ERROR,
     require_error: bool = True,
     allow_nonfinite: bool = False,
+    missing_error: bool = False,
     name: str | None = None,
     temp_range: tuple[float, float] | None = TEMP_RANGE_C,
     error_limit: float | None = ERROR_LIMIT_UM,
@@ -285,6 +286,10 @@ def load_run(
     allow_nonfinite : bool
         When True, NaN and ±inf in temperature and error columns are kept
         (the run-time switching logic treats them as sensor faults).
+    missing_error : bool
+        When True, empty error cells are kept as NaN: rows where the error
+        was not measured (a probe cycle every few minutes while the
+        temperatures are logged throughout). At least one row must have it.
     name : str, optional
         Name of the run (default: the file stem).
     temp_range : (low, high) or None
@@ -330,7 +335,16 @@ def load_run(
 
     error_values = None
     if error is not None and (require_error or error in frame.columns):
-        error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite)
+        error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite or missing_error)
+        if missing_error and not allow_nonfinite:
+            infinite = np.flatnonzero(np.isinf(error_values))
+            if infinite.size:
+                raise InputError(
+                    f"{label}: row {int(infinite[0]) + 1}, column '{error}' is {error_values[infinite[0]]} "
+                    "(an empty cell marks a row without a measurement); repair or drop that row"
+                )
+            if np.isnan(error_values).all():
+                raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
     if not allow_nonfinite:
         if temp_range is not None:
             for j, t in enumerate(temps):

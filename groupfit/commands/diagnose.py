@@ -108,12 +108,20 @@ def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
             f"{run.source}: sampled every {run.period:g} s but the model every {period:g} s; "
             "resample the run to the model's period"
         )
-    bad = ~np.isfinite(run.error)
+    missing = np.isnan(run.error)
+    bad = ~np.isfinite(run.error) & ~missing if model["p"] == 0 else ~np.isfinite(run.error)
     if bad.any():
+        fix = (
+            "leave the cell empty where the error was not measured, or drop those rows"
+            if model["p"] == 0
+            else "a grouped model's residual needs the error on every row: drop those rows"
+        )
         raise InputError(
             f"{run.source}: row {int(np.flatnonzero(bad)[0]) + 1}, error column '{model['error']}' is not finite "
-            f"({int(bad.sum())} rows); the residual needs the measured error: drop those rows"
+            f"({int(bad.sum())} rows); {fix}"
         )
+    if missing.all():
+        raise InputError(f"{run.source}: error column '{model['error']}' is empty on every row; diagnose needs it")
     return run
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
+
 from groupfit.commands.common import (
     StageProgress,
     add_budget_option,
@@ -125,9 +127,9 @@ def run_fit(args: argparse.Namespace) -> int:
         runs = [position_run.run]
     else:
         runs = (
-            [load_configured_run(config, p) for p in paths]
+            [load_configured_run(config, p, missing_error=True) for p in paths]
             if isinstance(paths, (list, tuple))
-            else [load_configured_run(config)]
+            else [load_configured_run(config, missing_error=True)]
         )
     if len(runs) > 1 and config["model"]["p"] != 0:
         raise InputError(
@@ -140,6 +142,7 @@ def run_fit(args: argparse.Namespace) -> int:
         run = join_runs(runs)
     else:
         run = with_reference(run, configured_reference(args, config, run))
+    check_measured(run, config["model"]["p"])
     input_selection = None
     if position_run is not None:
         from dataclasses import replace
@@ -180,16 +183,24 @@ def run_fit(args: argparse.Namespace) -> int:
         estimator.set_params(ridge_alpha=ridge["alpha"])
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
+    fit_run = measured_rows(run)
     try:
-        estimator.fit(run.temps, run.error, progress=progress)
-        intervals = intervals_from_args(args, estimator, run.temps, run.error, config["search"]["seed"], progress)
+        estimator.fit(fit_run.temps, fit_run.error, progress=progress)
+        seed = config["search"]["seed"]
+        intervals = intervals_from_args(args, estimator, fit_run.temps, fit_run.error, seed, progress)
     finally:
         progress.close()
-    model = estimator.to_model_file(run, criterion)
+    model = estimator.to_model_file(run, criterion)  # the valid ranges over every row, measured or not
     position_note = ""
     if position_run is not None:
         model, position_note = position_model(args, model, position_run)
-    result = FitResult(estimator, run, model, selection, input_selection, intervals, ridge)
+    if fit_run is not run:
+        position_note += (
+            f"\nnote    the error is measured on {fit_run.n_samples} of {run.n_samples} rows: the model is fitted "
+            "on those"
+        )
+    result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge)
+    run = fit_run
 
     from groupfit.plots import plot_fit
 
@@ -221,6 +232,29 @@ def order_value(text: str) -> int | str:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"invalid order: {text!r} (a whole number or 'auto')") from None
+
+
+def check_measured(run: Run, p) -> None:
+    """Rows without a measured error are for a global model only (a grouped model's breaks are row indices)."""
+    missing = int(np.isnan(run.error).sum())
+    if missing and p != 0:
+        row = int(np.flatnonzero(np.isnan(run.error))[0]) + 1
+        raise InputError(
+            f"{run.source}: row {row}, column '{run.error_name}' is empty ({missing} rows without a measured "
+            f"error); a grouped model (p = {p}) needs the error on every row: fill or drop those rows, or fit a "
+            "global model (--p 0) on the measured rows"
+        )
+
+
+def measured_rows(run: Run) -> Run:
+    """The run restricted to the rows with a measured error (the run itself when every row has one)."""
+    from dataclasses import replace
+
+    rows = np.isfinite(run.error)
+    if rows.all():
+        return run
+    frame = run.frame.loc[rows].reset_index(drop=True)
+    return replace(run, time=run.time[rows], temps=run.temps[rows], error=run.error[rows], frame=frame)
 
 
 def check_position_options(args: argparse.Namespace) -> None:

@@ -67,6 +67,10 @@ class Folds:
             test = rows & (self.labels == label)
             yield rows & ~test, test
 
+    def restricted(self, rows: np.ndarray) -> "Folds":
+        """The same folds on the samples ``rows`` only (e.g. those with a measured error)."""
+        return Folds(self.labels[rows], self.kind, self.columns)
+
     def index_splits(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """``(train, test)`` sample indices, one pair per fold (the scikit-learn ``cv`` form)."""
         return [(np.flatnonzero(train), np.flatnonzero(test)) for train, test in self.splits()]

@@ -236,16 +236,29 @@ def diagnose(
     measured_inputs = [t for t in model["temps"] if all(t in r.frame.columns for r in data_runs)]
     stacked_frame = pd.concat([r.frame[columns] for r in data_runs], ignore_index=True)
     operating = operating_columns(stacked_frame, columns) if columns else []
-    folds = make_folds([r.frame for r in data_runs], columns)
+    target = np.concatenate([r.error for r in data_runs])
+    measured = np.isfinite(target)
+    if not measured.any():
+        raise InputError(f"{data_runs[0].source}: the error is measured on no row; diagnose needs it")
+    if not measured.all():
+        if model["p"] > 0:
+            raise InputError(
+                f"{data_runs[0].source}: the error is missing on {int((~measured).sum())} rows; a grouped model's "
+                "breaks are sample indices of a fully measured run: fill or drop those rows"
+            )
+        notes.append(
+            f"the error is measured on {int(measured.sum())} of {len(target)} rows: the others carry the history "
+            "of the derived inputs and are neither fitted nor scored"
+        )
+    folds = make_folds([r.frame for r in data_runs], columns).restricted(measured)
     if folds.n_folds < 2:
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
 
-    target = np.concatenate([r.error for r in data_runs])
     runs = {"data": data_runs, **({"validate": validate_runs} if validate_runs else {})}
     before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     current_model, current_inputs = model, inputs
     current = dict(before)
-    scorer = model_scorer(model, target, inputs, folds)
+    scorer = model_scorer(model, target[measured], inputs, folds, measured)
     base_check = overfit_check(scorer, folds)
     if base_check["overfitted"]:
         notes.append(
@@ -255,9 +268,8 @@ def diagnose(
         )
 
     def compute(feature):
-        return np.concatenate(
-            [feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in data_runs]
-        )
+        values = [feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in data_runs]
+        return np.concatenate(values)[measured]
 
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
@@ -276,7 +288,7 @@ def diagnose(
     first_ranking: list[Candidate] | None = None
     while len(added) < max_effects and tried:
         ranking = rank_candidates(
-            target, tried, compute, scorer, np.vstack(current_inputs), own_inputs=set(measured_inputs)
+            target[measured], tried, compute, scorer, np.vstack(current_inputs)[measured], set(measured_inputs)
         )
         if first_ranking is None:
             first_ranking = ranking
@@ -290,7 +302,7 @@ def diagnose(
         current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
         current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
-        scorer = model_scorer(current_model, target, current_inputs, folds)
+        scorer = model_scorer(current_model, target[measured], current_inputs, folds, measured)
         held_out_after = scorer.held_out_rms
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
@@ -408,10 +420,12 @@ def stacked_residual(model: dict[str, Any], runs: list[Run], live_rule: LiveRule
     return np.concatenate([residual(model, run, live_rule) for run in runs])
 
 
-def model_scorer(model: dict[str, Any], target: np.ndarray, inputs: list[np.ndarray], folds: Folds) -> HeldOutScorer:
-    """The held-out scorer of the model's own design, fitted as the model is (least squares or ridge)."""
+def model_scorer(
+    model: dict[str, Any], target: np.ndarray, inputs: list[np.ndarray], folds: Folds, rows: np.ndarray
+) -> HeldOutScorer:
+    """The held-out scorer of the model's own design on ``rows``, fitted as the model is (least squares or ridge)."""
     ridge = model.get("ridge_alpha") or 0.0
-    design = stacked_design(model, inputs)
+    design = stacked_design(model, inputs)[rows]
     return HeldOutScorer(target, design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
 
 

@@ -38,9 +38,15 @@ def select_inputs(
     ``frames`` are the runs' tables (stacked in the order of X's rows); the
     folds come from their operating columns, the columns not in ``exclude``.
     """
+    folds = held_out_folds(frames, exclude, y)
+    rows = np.isfinite(y)
+    return select_sensors(X[rows], y[rows], list(names), method, k, splits=folds.index_splits()), folds
+
+
+def held_out_folds(frames: Sequence[pd.DataFrame], exclude: set[str], y: np.ndarray) -> Folds:
+    """The diagnosis's held-out folds over the runs' rows with a measured error ``y``."""
     columns, _ = usable_columns(pd.concat(list(frames), ignore_index=True), exclude)
-    folds = make_folds(list(frames), columns)
-    return select_sensors(X, y, list(names), method, k, splits=folds.index_splits()), folds
+    return make_folds(list(frames), columns).restricted(np.isfinite(y))
 
 
 def choose_ridge(
@@ -56,9 +62,9 @@ def choose_ridge(
     """
     from groupfit.models.ridge import choose_ridge_alpha
 
-    columns, _ = usable_columns(pd.concat(list(frames), ignore_index=True), exclude)
-    folds = make_folds(list(frames), columns)
-    alpha, table = choose_ridge_alpha(X, y, folds.index_splits(), fit_intercept)
+    folds = held_out_folds(frames, exclude, y)
+    rows = np.isfinite(y)
+    alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept)
     return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
 
 
