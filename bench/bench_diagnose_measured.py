@@ -104,9 +104,9 @@ def main(argv=None) -> int:
                 extra = f"  [alpha {info['alpha']:g}]"
             result = diagnose(model, runs, held, live_rule=replay_groups)
             print(row(label, result) + extra)
-            if start == "16 sensors":
-                name = label.split()[0]
-                plot_diagnosis(result, {"data": runs, "validate": [held]}, out / f"diagnose_measured_{name}.png")
+            suffix = {"16 sensors": "", "forward-selected": "_forward"}.get(start, "_ridge")
+            name = f"diagnose_measured_{label.split()[0]}{suffix}.png"
+            plot_diagnosis(result, {"data": runs, "validate": [held]}, out / name)
     print(f"\nfigures in {out}/")
     return 0
 
