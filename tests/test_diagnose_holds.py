@@ -253,3 +253,18 @@ def test_compare_takes_one_modelling_run(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "compare fits grouped models, whose breaks belong to one run" in err[0]
     assert not (tmp_path / "c").exists()
+
+
+def test_an_effect_that_doubles_the_error_of_one_held_out_condition_is_refused():
+    from groupfit.diagnose.candidates import Candidate
+    from groupfit.diagnose.loop import MAX_FOLD_WORSENING, failed_test
+    from groupfit.features import Feature
+
+    def candidate(worst_ratio):
+        ratios = (0.2, 0.3, 0.25, 0.4, worst_ratio)  # four conditions much better, one worse
+        return Candidate(Feature("speed", "lowpass", tau_s=3600.0), 0.7, 1.0, 2.0, ratios, ratios)
+
+    limit = MAX_FOLD_WORSENING**2  # the folds hold squared errors
+    assert failed_test(candidate(0.999 * limit), 0.3, further=False) is None
+    reason = failed_test(candidate(1.001 * limit), 0.3, further=False)
+    assert reason == f"makes one held-out condition (fold 5) {np.sqrt(1.001 * limit):.1f} times worse (RMS)"

@@ -71,3 +71,12 @@ def test_a_held_out_speed_block_is_judged_honestly(frame, block):
     # the held-out block is scored on its own rows, its inputs' history run through the whole test
     prediction = GroupedRegressor.from_model_file(base).predict(held.temps)
     assert before == pytest.approx(np.sqrt(np.nanmean((held.error - prediction) ** 2)))
+
+
+def test_an_effect_that_fits_the_other_speeds_at_the_cold_starts_expense_is_refused(frame):
+    """With the 1250 r/min block held out the heat law wins the summed score but ruins the cold start."""
+    runs, held = split_runs(frame, 31, 1951)
+    result = diagnose(sixteen_sensor_model(runs), runs, held, live_rule=replay_groups)
+    assert result.candidates[0].feature.column == "spindle_rpm" and result.candidates[0].score > 0.3
+    assert not result.added and result.after == result.before
+    assert any("times worse (RMS)" in refusal.reason for refusal in result.refused)

@@ -125,6 +125,10 @@ def test_exact_search_over_the_budget_is_refused_before_it_starts(tmp_path, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--objective sse" in err[0] and "--search ga" in err[0] and "--no-budget" in err[0]
     assert not (tmp_path / "o").exists()
+    # p = 0 is one least-squares fit, not a search: no budget to refuse it on
+    argv[argv.index("3")] = "0"
+    assert main(argv) == 0
+    assert json.loads((tmp_path / "o" / "model.json").read_text())["p"] == 0
 
 
 def test_data_on_the_command_line_does_not_inherit_the_default_runs(tmp_path, capsys):

@@ -168,7 +168,7 @@ def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objectiv
     """Refuse, before it starts, an exact search estimated to exceed the budget; one line saying what to do."""
     from groupfit.search.exact import estimate_exact_cost, format_seconds
 
-    if getattr(args, "no_budget", False):
+    if getattr(args, "no_budget", False) or pmax == 0:  # p = 0: one least-squares fit, no search
         return
     cost = estimate_exact_cost(run.n_samples, n_coef, objective, pmax)
     if cost.seconds <= EXACT_BUDGET_SECONDS and cost.bytes <= EXACT_BUDGET_BYTES:
@@ -181,7 +181,7 @@ def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objectiv
     step = 2
     while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
         step *= 2
-    hints.append(f"or keep every {step}th row of the run")
+    hints.append(f"or keep one row in {step} of the run")
     raise InputError(
         f"{run.source}: {what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "
         f"{cost.describe()}, over the budget of {format_seconds(EXACT_BUDGET_SECONDS)} and "

@@ -158,8 +158,10 @@ def candidate_features(
     for column in [*columns, *model_inputs]:
         start = "rest" if column in operating else "steady"
         if column in speeds:
+            values = frame[column].to_numpy(float)
             for k in exponents:
-                power = {} if k == 1.0 else {"exponent": k, "scale": heat_law_scale(frame[column].to_numpy(float))}
+                signed = k == 1.0 and values.min() >= 0  # n itself; with a direction sign, |n|
+                power = {} if signed else {"exponent": k, "scale": heat_law_scale(values)}
                 features.append(Feature(column, **power))
                 features.extend(Feature(column, "lowpass", tau_s=tau, start=start, **power) for tau in TAUS_S)
             continue
@@ -174,11 +176,14 @@ def candidate_features(
 
 
 def speed_like(frame: pd.DataFrame, operating: Sequence[str]) -> list[str]:
-    """Operating columns that set a level (more than two values, none negative): a speed, a feed."""
+    """Operating columns that set a level (more than two magnitudes): a speed, a feed.
+
+    The sign is a direction (M3/M4, a feed forward or back): the heat law takes the magnitude.
+    """
     out = []
     for column in operating:
-        values = frame[column].to_numpy(dtype=float)
-        if len(np.unique(values)) > 2 and values.min() >= 0:
+        values = np.abs(frame[column].to_numpy(dtype=float))
+        if len(np.unique(values)) > 2:
             out.append(column)
     return out
 

@@ -9,7 +9,7 @@ operating segments:
 
 * three or more runs given: each run is a fold (leave-one-run-out);
 * one or two runs with operating columns (spindle speed, on/off of a heat source:
-  piecewise-constant columns with few levels): each stretch between two
+  piecewise-constant columns that move in steps): each stretch between two
   changes of any of them is a fold (leave-one-condition-out), a stretch
   shorter than :data:`MIN_FOLD_FRACTION` of the run joined to the one before,
   one longer than ``1 /`` :data:`FALLBACK_BLOCKS` of the run cut into equal
@@ -27,10 +27,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-MAX_LEVELS = 20
-"""An operating column takes at most this many distinct values."""
-MAX_CHANGE_FRACTION = 0.02
-"""…and changes value on at most this share of its samples (a setting, not a measurement)."""
+MAX_LEVELS = 64
+"""An operating column takes at most this many distinct values (a speed spectrum has dozens)…"""
+MAX_CHANGE_FRACTION = 0.05
+"""…changes value on at most this share of its samples (a level is held for at least 20 samples on average)…"""
+MIN_STEP_FRACTION = 0.05
+"""…and moves in steps: its median change is at least this share of its range. A setting jumps from one
+level to another; a quantised measurement (an ambient read to 0.1 K) creeps by one quantum."""
 MIN_FOLD_FRACTION = 0.03
 """A condition segment shorter than this share of the run is joined to the one before."""
 MIN_FOLDS = 3
@@ -83,8 +86,13 @@ def operating_columns(frame: pd.DataFrame, candidates: list[str]) -> list[str]:
         values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
         if not np.isfinite(values).all() or np.ptp(values) == 0.0:
             continue
-        changes = int(np.count_nonzero(np.diff(values)))
-        if len(np.unique(values)) <= MAX_LEVELS and changes <= MAX_CHANGE_FRACTION * len(values):
+        steps = np.abs(np.diff(values))
+        steps = steps[steps > 0]
+        if (
+            len(np.unique(values)) <= MAX_LEVELS
+            and len(steps) <= MAX_CHANGE_FRACTION * len(values)
+            and np.median(steps) >= MIN_STEP_FRACTION * np.ptp(values)
+        ):
             found.append(column)
     return found
 

@@ -3,9 +3,13 @@
 Acceptance imitates the next run. A candidate is added only when, on folds
 that are whole operating conditions or whole runs
 (:mod:`groupfit.diagnose.folds`), it removes at least ``min_score`` of the
-model's held-out squared error and at least ``min_effect_rms_um`` of RMS, and
-lowers the error on more than half of the folds. Stricter tests apply where
-a chance fit is most tempting:
+model's held-out squared error and at least ``min_effect_rms_um`` of RMS,
+lowers the error on more than half of the folds, and at most doubles the RMS
+error of any one fold (:data:`MAX_FOLD_WORSENING`): an effect that fits most
+conditions at the expense of one (a cold start, the lowest speed) is a fit of
+those conditions, not a cause that holds on the next run, however small that
+one condition's share of the samples. Stricter tests apply where a chance fit
+is most tempting:
 
 * transforms of the model's own inputs (a low-pass of a sensor the model
   already reads) are refused unless asked for (``own_transforms=True``, then
@@ -69,6 +73,8 @@ MIN_FOLDS_IMPROVED = 0.5
 OVERFIT_RATIO = 3.0
 """The base model is called over-fitted when its held-out RMS exceeds its in-sample RMS by this factor."""
 MAX_EFFECTS = 3
+MAX_FOLD_WORSENING = 2.0
+"""No held-out fold's RMS error may grow by more than this factor when the effect is added."""
 
 
 @dataclass
@@ -393,6 +399,12 @@ def failed_test(candidate: Candidate, min_score: float, further: bool, own_trans
         return (
             f"collinear with a model input (|r| {candidate.collinearity:.2f}): it must remove "
             f"{200 * min_score:.0f} % of the held-out error"
+        )
+    worst = int(np.argmax(candidate.fold_ratios))
+    if MAX_FOLD_WORSENING is not None and candidate.fold_ratios[worst] > MAX_FOLD_WORSENING**2:
+        return (
+            f"makes one held-out condition (fold {worst + 1}) {np.sqrt(candidate.fold_ratios[worst]):.1f} times "
+            "worse (RMS)"
         )
     if candidate.folds_improved <= MIN_FOLDS_IMPROVED:
         return f"lowers the error on only {improved} of {n_folds} held-out folds"
