@@ -12,7 +12,7 @@ from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
-from groupfit.diagnose.folds import Folds, block_labels, make_folds
+from groupfit.diagnose.folds import Folds, block_labels, make_folds, operating_columns
 from groupfit.diagnose.loop import metrics_of, stacked_design, stacked_residual
 from groupfit.diagnose.report import change_words
 from groupfit.diagnose.residual import model_inputs
@@ -51,6 +51,25 @@ def test_folds_are_whole_conditions_runs_or_blocks():
     assert make_folds([frame[["T"]]], ["T"]).kind == "block"
     for train, test in folds.splits():
         assert not (train & test).any() and (train | test).all()
+
+
+def test_settings_move_in_steps_and_measurements_do_not():
+    rng = np.random.default_rng(3)
+    n = 2880  # a day at 30 s
+    spectrum = np.repeat(rng.choice(np.arange(500, 6001, 125), size=72), 40)  # 72 speeds of 20 min, 45 levels
+    ambient = np.round(20.0 + 2.0 * np.sin(np.linspace(0.0, 2 * np.pi, n)), 1)  # read to 0.1 K, no noise
+    frame = pd.DataFrame(
+        {"speed": spectrum, "reverse": spectrum * np.where(np.arange(n) % 960 < 480, 1, -1), "T_amb": ambient}
+    )
+    assert operating_columns(frame, ["speed", "reverse", "T_amb"]) == ["speed", "reverse"]
+    folds = make_folds([frame], ["speed", "T_amb"])
+    assert folds.kind == "condition" and folds.columns == ("speed",) and folds.n_folds >= 20
+    # the heat law takes the magnitude of a speed logged with its direction (M3 positive, M4 negative)
+    features = candidate_features(["reverse"], [], frame, operating=["reverse"])
+    heat = next(f for f in features if f.transform == "lowpass" and f.exponent)
+    assert heat.exponent == pytest.approx(5 / 3) and heat.scale == 1000.0 and heat.start == "rest"
+    magnitude = lowpass((spectrum / 1000.0) ** (5 / 3), heat.tau_s, 30.0, before=0.0)
+    np.testing.assert_allclose(heat.compute(frame["reverse"].to_numpy(float), 30.0), magnitude, rtol=1e-12)
 
 
 def test_a_tempting_but_harmful_second_effect_is_not_added():
@@ -268,3 +287,21 @@ def test_an_effect_that_doubles_the_error_of_one_held_out_condition_is_refused()
     assert failed_test(candidate(0.999 * limit), 0.3, further=False) is None
     reason = failed_test(candidate(1.001 * limit), 0.3, further=False)
     assert reason == f"makes one held-out condition (fold 5) {np.sqrt(1.001 * limit):.1f} times worse (RMS)"
+
+
+@pytest.mark.parametrize(
+    "column, words",
+    [
+        ("T_amb", "ambient temperature `T_amb`"),
+        ("T_room", "ambient temperature `T_room`"),
+        ("air_C", "ambient temperature `air_C`"),
+        ("src_zscrew_on", "heat source 'zscrew' (on/off `src_zscrew_on`)"),
+        ("pump_on", "heat source 'pump' (on/off `pump_on`)"),
+        ("Speed_RPM", "spindle speed, a part that lags it (`Speed_RPM`)"),
+        ("T9", "column `T9`"),
+    ],
+)
+def test_the_report_names_the_effect_in_words(column, words):
+    from groupfit.diagnose.report import column_words
+
+    assert column_words(column) == words

@@ -3,16 +3,22 @@
 from __future__ import annotations
 
 
+AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop")
+
+
 def column_words(column: str) -> str:
     """What a column is, in words, for the report."""
-    if column.lower() in ("t_amb", "ambient", "t_ambient") or "amb" in column.lower():
+    lowered = column.lower()
+    if any(word in lowered for word in AMBIENT_WORDS):
         return f"ambient temperature `{column}`"
     if column.startswith("src_") and column.endswith("_on"):
         return f"heat source '{column[4:-3]}' (on/off `{column}`)"
     if column == "spindle_on":
         return f"spindle heat, a part that lags it (`{column}`)"
-    if "speed" in column or "rpm" in column:
+    if "speed" in lowered or "rpm" in lowered:
         return f"spindle speed, a part that lags it (`{column}`)"
+    if lowered.endswith("_on"):
+        return f"heat source '{column[:-3]}' (on/off `{column}`)"
     return f"column `{column}`"
 
 
