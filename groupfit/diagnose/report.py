@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop")
 
 
