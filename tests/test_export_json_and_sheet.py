@@ -3,8 +3,8 @@
 import json
 import math
 
-import numpy as np
 import pytest
+from json_runtime import run_table
 from test_switching_models import augmented_model, derived_streams, streams_for, synthetic_model
 
 from groupfit.cli import main
@@ -22,77 +22,6 @@ from groupfit.modelfile import save_model
 from groupfit.runtime import RuleTables, SwitchingRule
 
 
-def run_from_table(table: dict, temps: np.ndarray) -> list[tuple]:
-    """A runtime written only from groupfit_runtime.json and its 'steps' (not from groupfit.switching)."""
-    hold, crit = table["hold_samples"], table["criterion_index"]
-    n_temps, n_groups = len(table["temps"]), len(table["coefficients"])
-    derived = table["derived_inputs"]
-    count, group, comp = 0, 1, 0.0
-    bad, last = [hold + 1] * n_temps, [0.0] * n_temps
-    started, memory, value = [False] * len(derived), [0.0] * len(derived), [0.0] * len(derived)
-    line, pos = [[0.0] * d["delay_samples"] for d in derived], [0] * len(derived)
-    out = []
-    for x in temps.tolist():
-        count = min(count + 1, table["count_max"])
-        for m in range(n_temps):
-            if table["temp_min_c"][m] <= x[m] <= table["temp_max_c"][m]:
-                last[m], bad[m] = x[m], 0
-            elif bad[m] <= hold:
-                bad[m] += 1
-        faulted = any(b > hold for b in bad)
-        held = any(0 < b <= hold for b in bad)
-        for k, d in enumerate(derived):
-            v = last[d["reading"]]
-            if d.get("exponent") is not None:  # format /3: the power stage, in double precision
-                v = math.pow(abs(v) / d["power_scale"], d["exponent"])
-            if d["transform"] == "identity":
-                value[k] = v
-                continue
-            if not started[k] and bad[d["reading"]] == 0:
-                started[k] = True
-                s = 0.0 if d.get("start") == "rest" else v
-                if d["transform"] == "delay":
-                    line[k], pos[k] = [s] * d["delay_samples"], 0
-                else:
-                    memory[k] = s
-            if started[k]:
-                if d["transform"] == "lowpass":
-                    memory[k] = d["b"] * v + d["a"] * memory[k]
-                    value[k] = memory[k]
-                elif d["transform"] == "derivative":
-                    value[k], memory[k] = (v - memory[k]) * d["scale"], v
-                else:
-                    value[k], line[k][pos[k]] = line[k][pos[k]], v
-                    pos[k] = 0 if pos[k] + 1 == d["delay_samples"] else pos[k] + 1
-        if group < n_groups:
-            first, final = table["windows"][group - 1]
-            d, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
-            if count >= final:
-                group += 1
-            elif count >= first and (
-                bad[crit] > hold
-                or d == 0
-                or (d > 0 and last[crit] - threshold >= -table["margin_c"])
-                or (d < 0 and last[crit] - threshold <= table["margin_c"])
-            ):
-                group += 1
-        if faulted:
-            prediction = target = 0.0
-        else:
-            row = table["coefficients"][group - 1]
-            prediction = row[0]
-            for j, source in enumerate(table["inputs"]):
-                x_j = last[source["reading"]] if "reading" in source else value[source["derived"]]
-                prediction = prediction + row[j + 1] * x_j
-            target = -prediction
-        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
-        delta = max(min(target - comp, table["rate_limit_um"]), -table["rate_limit_um"])
-        comp = comp + delta
-        fault = held * table["fault_bits"]["held"] + faulted * table["fault_bits"]["sensor"]
-        out.append((table["sensor_fault_return"] if faulted else group, fault, prediction, comp))
-    return out
-
-
 def test_json_table_is_enough_to_rebuild_the_rule():
     model, run = synthetic_model()
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
@@ -101,7 +30,7 @@ def test_json_table_is_enough_to_rebuild_the_rule():
     for temps in streams_for(model, run).values():
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
-        assert run_from_table(table, temps) == expected
+        assert run_table(table, temps) == expected
 
 
 @pytest.mark.parametrize("label", ["all kinds p=2", "on/off p=1"])
@@ -116,7 +45,7 @@ def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
     for temps in derived_streams(model, run).values():
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
-        assert run_from_table(table, temps) == expected
+        assert run_table(table, temps) == expected
 
 
 def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_rebuild_the_rule():
@@ -134,7 +63,7 @@ def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_
     for temps in derived_streams(model, run).values():
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
-        assert run_from_table(table, temps) == expected
+        assert run_table(table, temps) == expected
 
 
 def test_models_without_power_or_rest_keep_their_json_format_and_steps():

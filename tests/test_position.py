@@ -9,6 +9,7 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 import pytest
+from json_runtime import compensation, run_table
 from test_export_c import assert_same_decisions, python_replay
 
 from groupfit.cli import main
@@ -313,69 +314,6 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, ca
         assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
 
 
-def runtime_from_json(table: dict, readings: np.ndarray) -> np.ndarray:
-    """The compensation of a runtime written from groupfit_runtime.json alone (no derived inputs, no reference)."""
-    n_temps = len(table["temps"])
-    bad = [table["hold_samples"] + 1] * n_temps
-    last = [0.0] * n_temps
-    count, group, comp, band_target = 0, 1, 0.0, 0.0
-    out = []
-    position, dead = table.get("position"), table.get("dead_band")
-    for row in readings:
-        count = min(count + 1, table["count_max"])
-        for m in range(n_temps):
-            if table["temp_min_c"][m] <= row[m] <= table["temp_max_c"][m]:
-                last[m], bad[m] = row[m], 0
-            elif bad[m] <= table["hold_samples"]:
-                bad[m] += 1
-        faulted = any(b > table["hold_samples"] for b in bad)
-        if group < len(table["coefficients"]):
-            first, final = table["windows"][group - 1]
-            c = table["criterion_index"]
-            direction = table["directions"][group - 1]
-            diff = last[c] - table["thresholds_c"][group - 1]
-            if count >= final:
-                group += 1
-            elif count >= first and (
-                bad[c] > table["hold_samples"]
-                or direction == 0
-                or (direction > 0 and diff >= -table["margin_c"])
-                or (direction < 0 and diff <= table["margin_c"])
-            ):
-                group += 1
-        if faulted:
-            target = 0.0
-        else:
-            x = [last[i["reading"]] for i in table["inputs"]]
-            coef = table["coefficients"][group - 1]
-            prediction = coef[0]
-            for j, value in enumerate(x):
-                prediction = prediction + coef[j + 1] * value
-            if position:
-                p = min(max(last[position["reading"]], position["travel_mm"][0]), position["travel_mm"][1])
-                d = p - position["p0_mm"]
-                poly = 0.0
-                for k in range(position["order"], 0, -1):
-                    row_k = position["coefficients"][group - 1][k - 1]
-                    term = row_k[0]
-                    for j, value in enumerate(x):
-                        term = term + row_k[j + 1] * value
-                    poly = term if k == position["order"] else poly * d + term
-                prediction = prediction + poly * d
-            target = -prediction
-            if dead:
-                ref = last[dead["reading"]]
-                if any(abs(last[m] - ref) > dead["threshold_c"] for m in range(dead["n_measured"])):
-                    band_target = target
-                else:
-                    target = band_target
-        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
-        delta = max(min(target - comp, table["rate_limit_um"]), -table["rate_limit_um"])
-        comp = comp + delta
-        out.append(comp)
-    return np.array(out)
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_the_json_table_is_format_4_and_enough_to_rebuild_the_rule(case):
     model = model_for(*case)
@@ -384,7 +322,10 @@ def test_the_json_table_is_format_4_and_enough_to_rebuild_the_rule(case):
     assert table["fault_bits"]["position"] == FAULT_POSITION and table["position"]["order"] == case[0]
     for temps in streams(model).values():
         py = python_replay(model, temps)["compensation_um"]
-        assert runtime_from_json(table, temps).tobytes() == py.tobytes()
+        assert compensation(table, temps).tobytes() == py.tobytes()
+        rule = SwitchingRule(model)
+        expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
+        assert run_table(table, temps) == expected  # the position fault bit and the prediction too
 
 
 def test_the_controller_sheet_fills_sd43900_to_43920_from_k0_tanb_and_p0():
@@ -653,6 +594,16 @@ def test_derived_inputs_with_position_and_dead_band_lreal_block_is_the_python_ru
         py = python_replay(model, temps)
         assert out["fault"].tolist() == py["fault"].tolist()
         assert out["compensation_um"].tobytes() == py["compensation_um"].tobytes()
+
+
+def test_derived_inputs_with_position_and_dead_band_json_table_is_enough_to_rebuild_the_rule():
+    model, chosen = derived_position_model()
+    table = json.loads(render(model, "json")["groupfit_runtime.json"])
+    assert table["format"] == "groupfit-runtime/4" and table["derived_inputs"] and table["dead_band"]
+    for temps in chosen.values():
+        rule = SwitchingRule(model)
+        expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
+        assert run_table(table, temps) == expected
 
 
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])

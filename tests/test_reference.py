@@ -7,6 +7,7 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
+from json_runtime import run_table
 from test_export_c import assert_same_decisions, python_replay
 from test_switching_models import DATASETS, noisy, shifted
 
@@ -243,63 +244,6 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, re
         assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
 
 
-def runtime_from_json(table: dict, temps: np.ndarray) -> list[tuple]:
-    """A runtime written from groupfit_runtime.json alone (a model without derived inputs), reference step included."""
-    hold, crit = table["hold_samples"], table["criterion_index"]
-    n_temps, n_groups = len(table["temps"]), len(table["coefficients"])
-    reference = table["reference"]
-    measured = [source["reading"] for source in table["inputs"]]
-    count, group, comp = 0, 1, 0.0
-    bad, last = [hold + 1] * n_temps, [0.0] * n_temps
-    first, has_first = [0.0] * n_temps, [False] * n_temps
-    out = []
-
-    def ref(m):
-        if reference["kind"] == "column":
-            return last[m] - last[reference["reading"]]
-        return last[m] - first[m]
-
-    for x in temps.tolist():
-        count = min(count + 1, table["count_max"])
-        for m in range(n_temps):
-            if table["temp_min_c"][m] <= x[m] <= table["temp_max_c"][m]:
-                last[m], bad[m] = x[m], 0
-            elif bad[m] <= hold:
-                bad[m] += 1
-        faulted = any(b > hold for b in bad)
-        held = any(0 < b <= hold for b in bad)
-        if reference["kind"] == "start":
-            for m in measured:
-                if not has_first[m] and bad[m] == 0:
-                    first[m], has_first[m] = last[m], True
-        if group < n_groups:
-            start, final = table["windows"][group - 1]
-            d, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
-            if count >= final:
-                group += 1
-            elif count >= start and (
-                bad[crit] > hold
-                or d == 0
-                or (d > 0 and ref(crit) - threshold >= -table["margin_c"])
-                or (d < 0 and ref(crit) - threshold <= table["margin_c"])
-            ):
-                group += 1
-        if faulted:
-            prediction = target = 0.0
-        else:
-            row = table["coefficients"][group - 1]
-            prediction = row[0]
-            for j, source in enumerate(table["inputs"]):
-                prediction = prediction + row[j + 1] * ref(source["reading"])
-            target = -prediction
-        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
-        delta = max(min(target - comp, table["rate_limit_um"]), -table["rate_limit_um"])
-        comp = comp + delta
-        fault = held * table["fault_bits"]["held"] + faulted * table["fault_bits"]["sensor"]
-        out.append((table["sensor_fault_return"] if faulted else group, fault, prediction, comp))
-    return out
-
-
 @pytest.mark.parametrize("reference", ["T_amb", "start"])
 def test_json_table_is_enough_to_rebuild_the_rule_with_a_reference(reference):
     model = model_for(reference)
@@ -310,7 +254,7 @@ def test_json_table_is_enough_to_rebuild_the_rule_with_a_reference(reference):
     for temps in streams(model).values():
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
-        assert runtime_from_json(table, temps) == expected
+        assert run_table(table, temps) == expected
 
 
 def test_controller_sheet_states_the_reference():
