@@ -9,7 +9,8 @@ effects (the physical variants, whose unsensed part also follows the air) or
 none. For each scenario the bench
 
 1. fits the base model as ``groupfit fit --p 0 --search exact --reference none``
-   does: the MLR on the sensor temperatures of the modelling run;
+   does: the MLR on the sensor temperatures of the modelling run
+   (``--reference default``: on their rises over ``T_amb``, the fit's default);
 2. runs ``groupfit diagnose`` on the modelling run with the validation run
    (effects chosen on the modelling run only, judged on the validation run
    through the run-time rule);
@@ -23,7 +24,7 @@ was added; "worse, reported so" when the validation got worse and the
 diagnosis says so (``improved is False``); otherwise FAIL with a short reason.
 It is a measurement, not a test: it exits 0 whatever the verdicts.
 
-    python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE]
+    python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE] [--reference none|default]
 
 The whole set runs in about 10 s on two cores.
 """
@@ -44,19 +45,27 @@ from groupfit.data import load_run  # noqa: E402
 from groupfit.diagnose import diagnose  # noqa: E402
 from groupfit.modelfile import model_to_dict  # noqa: E402
 from groupfit.models.grouped import GroupedRegressor  # noqa: E402
+from groupfit.reference import default_reference, with_reference  # noqa: E402
 from groupfit.runtime import replay_groups  # noqa: E402
 
 MIN_FALL = 0.40
 """The validation RMS must fall by at least this fraction for an OK."""
 
 
-def base_model(scenario: Scenario):
-    """The MLR on the sensors fitted on the modelling run, as a model file dict, and the two runs."""
+def base_model(scenario: Scenario, reference: str = "none"):
+    """The MLR on the sensors fitted on the modelling run, as a model file dict, and the two runs.
+
+    ``reference="default"``: the inputs taken as rises over ``T_amb`` when the run has it, as
+    ``groupfit fit`` does without ``--reference``; ``"none"``: absolute readings.
+    """
     modelling = load_run(scenario.modelling, temps=scenario.temps, error="error_um", name="modelling")
     validation = load_run(
         scenario.validation, temps=scenario.temps, error="error_um", name="validation", allow_nonfinite=True
     )
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    fitted = modelling
+    if reference == "default":
+        fitted = with_reference(modelling, default_reference(modelling.frame))
+    model = model_to_dict(GroupedRegressor(p=0).fit(fitted.temps, fitted.error), fitted)
     return model, modelling, validation
 
 
@@ -92,10 +101,10 @@ def verdict(scenario: Scenario, added: list[dict], before: float, after: float, 
     return f"FAIL: validation fell only {100 * fall:.0f} %"
 
 
-def measure(scenario: Scenario) -> dict:
+def measure(scenario: Scenario, reference: str = "none") -> dict:
     """Fit, diagnose and score one scenario."""
     start = time.perf_counter()
-    model, modelling, validation = base_model(scenario)
+    model, modelling, validation = base_model(scenario, reference)
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     seconds = time.perf_counter() - start
     added = [
@@ -144,6 +153,12 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", metavar="NAME", help="run only these scenarios")
     parser.add_argument("--json", metavar="FILE", help="write the rows to FILE")
+    parser.add_argument(
+        "--reference",
+        choices=("none", "default"),
+        default="none",
+        help="the base model on absolute readings (none, as --reference none) or on rises over T_amb (default)",
+    )
     args = parser.parse_args(argv)
     known = [spec.name for spec in scenario_specs()]
     if args.only and any(name not in known for name in args.only):
@@ -151,7 +166,7 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     rows = []
     for scenario in scenarios(args.only):
-        rows.append(measure(scenario))
+        rows.append(measure(scenario, args.reference))
         r = rows[-1]
         print(f"{r['scenario']:<28} {r['seconds']:5.1f} s  {r['verdict']}", file=sys.stderr, flush=True)
     print(table(rows))
