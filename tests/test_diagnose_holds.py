@@ -305,3 +305,18 @@ def test_the_report_names_the_effect_in_words(column, words):
     from groupfit.diagnose.report import column_words
 
     assert column_words(column) == words
+
+
+def test_an_effect_no_better_than_a_drift_of_the_run_is_not_added():
+    """Nothing physical is missing; the probe creeps over the modelling run. A long low-pass would follow the creep."""
+    frame = sensor_error(lumped(seed=5, n_samples=1000))
+    hours = frame["time_s"].to_numpy() / 3600.0
+    frame["error_um"] += 0.15 * hours  # µm/h
+    run = load_run(frame, temps=TEMPS)
+    result = diagnose(global_model(run), run)
+    assert not result.added
+    assert any("a straight drift over the run explains" in refusal.reason for refusal in result.refused)
+    # without the creep the same run has nothing to refuse on that ground
+    clean = load_run(sensor_error(lumped(seed=5, n_samples=1000)), temps=TEMPS)
+    clean_result = diagnose(global_model(clean), clean)
+    assert not any("drift" in refusal.reason for refusal in clean_result.refused)

@@ -13,7 +13,6 @@ import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "bench"
 KNOWN_LIMITS = {
-    "none_drift_60s": "a drift of the modelling run alone is taken up by a long low-pass of the ambient",
     "amb_named_T9_30s": "an ambient column named like a machine sensor is treated as one",
 }
 

@@ -21,6 +21,10 @@ is most tempting:
 * every effect after the first must lower the error on *every* held-out fold:
   a second effect explains what is left of a smaller residual, where a fit to
   one condition is easiest to mistake for an effect.
+* when a straight line in time explains the held-out error (a probe creeping,
+  a drift nobody logged), a candidate must beat it by more than one standard
+  error: a long low-pass of anything that rises over the run follows a drift
+  on held-out conditions too.
 
 Among low-passes of the same column that pass, the shortest time constant
 whose held-out error is within one standard error of the best one's is taken
@@ -59,6 +63,7 @@ from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
+from groupfit.features import Feature
 from groupfit.grouping import serving_group_index
 from groupfit.modelfile import error_metrics
 
@@ -288,6 +293,7 @@ def diagnose(
         heat_exponent,
         sensor_transforms=own_transforms,
     )
+    ramp = np.concatenate([r.time - r.time[0] for r in data_runs])[measured]
     added: list[Candidate] = []
     steps: list[Step] = []
     refused: list[Refusal] = []
@@ -299,8 +305,9 @@ def diagnose(
         if first_ranking is None:
             first_ranking = ranking
         held_out_before = scorer.held_out_rms
+        drift = drift_candidate(scorer, ramp, data_runs[0].time_name)
         best, step_refusals, alternatives = choose(
-            ranking, min_score, min_effect_rms_um, bool(added), own_transforms, sensor_columns
+            ranking, min_score, min_effect_rms_um, bool(added), own_transforms, sensor_columns, drift
         )
         refused += step_refusals
         if best is None:
@@ -341,6 +348,7 @@ def choose(
     further: bool,
     own_transforms: bool = False,
     sensor_columns: frozenset[str] = frozenset(),
+    drift: Candidate | None = None,
 ) -> tuple[Candidate | None, list[Refusal], list[Candidate]]:
     """The candidate to add, the refusals on the way, and other columns that explain the error as well.
 
@@ -356,6 +364,11 @@ def choose(
         if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
             break
         reason = failed_test(candidate, min_score, further, own_transforms)
+        if not reason and drift is not None and drift.score >= min_score and within_one_se(drift, candidate):
+            reason = (
+                f"a straight drift over the run explains the held-out error as well (score {drift.score:.2f}): "
+                "the effect cannot be told from a drift of the modelling run (a probe creeping?)"
+            )
         if reason:
             if not passing:
                 refusals.append(Refusal(candidate, reason))
@@ -372,6 +385,21 @@ def choose(
             alternatives.append(c)
             seen.add(c.feature.column)
     return chosen, refusals, alternatives
+
+
+def drift_candidate(scorer: HeldOutScorer, ramp: np.ndarray, name: str) -> Candidate:
+    """A straight line in time scored like a candidate: the null effect of a drift over the run."""
+    sse = scorer.fold_sse(ramp)
+    without = float(scorer.base_sse.sum())
+    ratios = sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)
+    return Candidate(
+        feature=Feature(name),
+        score=1.0 - float(sse.sum()) / without if without > 0 else 0.0,
+        coefficient=scorer.coefficient(ramp),
+        explained_rms_um=float(np.sqrt(max(0.0, without - float(sse.sum())) / len(ramp))),
+        fold_sse=tuple(float(v) for v in sse),
+        fold_ratios=tuple(float(r) for r in ratios),
+    )
 
 
 def within_one_se(candidate: Candidate, best: Candidate) -> bool:
