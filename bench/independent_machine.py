@@ -702,10 +702,10 @@ def scenario_specs() -> list[ScenarioSpec]:
             ),
             notes="the drift is no thermal effect; nothing should be added",
         ),
-        # known limitation: the tool tells the ambient from the sensors by the column name
+        # the ambient under a sensor-like name: no column is named as an ambient
         ScenarioSpec(
             "amb_named_T9_30s",
-            "ambient via unsensed thin part, ambient logged as T9 (known limitation)",
+            "ambient via unsensed thin part, ambient logged under a sensor-like name, T9",
             ("T9",),
             _pair(
                 _modelling(speed=sm, seed=23),

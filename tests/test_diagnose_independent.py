@@ -12,9 +12,6 @@ from pathlib import Path
 import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "bench"
-KNOWN_LIMITS = {
-    "amb_named_T9_30s": "an ambient column named like a machine sensor is treated as one",
-}
 
 
 def load(name):
@@ -36,6 +33,4 @@ def test_the_right_effect_first_and_the_next_run_better_by_40_percent(name):
     # never reported better when it is worse
     assert row["improved"] is (None if not row["added"] else after < before)
     assert row["report_first_line"].startswith("the augmented model is worse") is bool(row["added"] and after >= before)
-    if name in KNOWN_LIMITS:
-        pytest.xfail(KNOWN_LIMITS[name])
     assert row["verdict"] == "OK", row

@@ -93,10 +93,22 @@ class Candidate:
         }
 
 
+AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop")
+"""A column whose name holds one of these is an ambient temperature."""
+EXOGENOUS_R = 0.5
+"""An unused sensor whose correlation with every lag of every heat source stays below this follows something
+else than the machine's heat (the air, when no column is named as the ambient)."""
+
+
+def is_ambient_name(column: str) -> bool:
+    lowered = column.lower()
+    return any(word in lowered for word in AMBIENT_WORDS)
+
+
 def is_sensor_column(column: str) -> bool:
     """A temperature sensor of the machine (``T3``, ``t12_C``), not the ambient: a symptom rather than a cause."""
     lowered = column.lower()
-    return len(column) > 1 and lowered[0] == "t" and lowered[1].isdigit() and "amb" not in lowered
+    return len(column) > 1 and lowered[0] == "t" and lowered[1].isdigit() and not is_ambient_name(column)
 
 
 def is_displacement(column: str) -> bool:
@@ -139,6 +151,7 @@ def candidate_features(
     operating: Sequence[str] = (),
     heat_exponent: float | str = HEAT_EXPONENT,
     sensor_transforms: bool = True,
+    sensor_columns: frozenset[str] | None = None,
 ) -> list[Feature]:
     """The transforms tried.
 
@@ -148,7 +161,8 @@ def candidate_features(
     through the heat law instead of linearly, as measured and low-passed;
     ``heat_exponent="fit"`` tries :data:`FITTED_EXPONENTS` (1 is the column
     itself) instead of one exponent. With ``sensor_transforms=False`` an
-    unused temperature sensor (:func:`is_sensor_column`) enters as measured
+    unused temperature sensor (``sensor_columns``, by default those
+    :func:`is_sensor_column` names) enters as measured
     only: a lag of a machine temperature re-weights what it reads, as a lag
     of the model's own inputs does.
     """
@@ -167,7 +181,8 @@ def candidate_features(
             continue
         if column in columns:
             features.append(Feature(column))
-            if not sensor_transforms and is_sensor_column(column):
+            is_sensor = column in sensor_columns if sensor_columns is not None else is_sensor_column(column)
+            if not sensor_transforms and is_sensor:
                 continue
         features.extend(Feature(column, "lowpass", tau_s=tau, start=start) for tau in TAUS_S)
         features.append(Feature(column, "derivative"))

@@ -51,11 +51,14 @@ from groupfit.data import Run
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import (
     COLLINEAR_R,
+    EXOGENOUS_R,
     HEAT_EXPONENT,
     Candidate,
     HeldOutScorer,
     candidate_features,
+    is_ambient_name,
     is_sensor_column,
+    largest_correlation,
     rank_candidates,
     usable_columns,
 )
@@ -285,6 +288,14 @@ def diagnose(
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
     sensor_columns = frozenset(c for c in columns if is_sensor_column(c))
+    if sensor_columns and operating and not any(is_ambient_name(c) for c in columns):
+        exogenous = exogenous_sensors(data_runs, sorted(sensor_columns), operating, period)
+        for column in exogenous:
+            notes.append(
+                f"'{column}' is read as an ambient: no column is named as one, and it does not follow the heat "
+                f"sources ({', '.join(operating)}; |r| < {EXOGENOUS_R} with every lag)"
+            )
+        sensor_columns -= set(exogenous)
     tried = candidate_features(
         columns,
         measured_inputs if own_transforms else [],
@@ -292,6 +303,7 @@ def diagnose(
         operating,
         heat_exponent,
         sensor_transforms=own_transforms,
+        sensor_columns=sensor_columns,
     )
     ramp = np.concatenate([r.time - r.time[0] for r in data_runs])[measured]
     added: list[Candidate] = []
@@ -385,6 +397,22 @@ def choose(
             alternatives.append(c)
             seen.add(c.feature.column)
     return chosen, refusals, alternatives
+
+
+def exogenous_sensors(runs: list[Run], sensors: list[str], operating: list[str], period: float) -> list[str]:
+    """Sensors whose correlation with every lag of every heat source stays below :data:`EXOGENOUS_R`."""
+    frame = pd.concat([r.frame for r in runs], ignore_index=True)
+    lags = [
+        np.concatenate([f.compute(r.frame[f.column].to_numpy(dtype=float), period) for r in runs])
+        for f in candidate_features(operating, [], frame, operating)
+        if f.transform in ("identity", "lowpass")
+    ]
+    found = []
+    for column in sensors:
+        values = frame[column].to_numpy(dtype=float)
+        if largest_correlation(values, np.column_stack(lags)) < EXOGENOUS_R:
+            found.append(column)
+    return found
 
 
 def drift_candidate(scorer: HeldOutScorer, ramp: np.ndarray, name: str) -> Candidate:

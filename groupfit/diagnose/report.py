@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop")
+from groupfit.diagnose.candidates import is_ambient_name
 
 
 def column_words(column: str) -> str:
     """What a column is, in words, for the report."""
     lowered = column.lower()
-    if any(word in lowered for word in AMBIENT_WORDS):
+    if is_ambient_name(column):
         return f"ambient temperature `{column}`"
     if column.startswith("src_") and column.endswith("_on"):
         return f"heat source '{column[4:-3]}' (on/off `{column}`)"
