@@ -320,3 +320,13 @@ def test_an_effect_no_better_than_a_drift_of_the_run_is_not_added():
     clean = load_run(sensor_error(lumped(seed=5, n_samples=1000)), temps=TEMPS)
     clean_result = diagnose(global_model(clean), clean)
     assert not any("drift" in refusal.reason for refusal in clean_result.refused)
+
+
+def test_an_unused_sensor_that_follows_no_heat_source_is_read_as_the_ambient():
+    from groupfit.diagnose.loop import exogenous_sensors
+
+    frame = lumped(seed=6, n_samples=600)  # T_amb: a daily sine and an HVAC step, not the machine's heat
+    frame["T9"] = frame.pop("T_amb")
+    frame["T5"] = 20.0 + 3.0 * lowpass(frame["spindle_on"].to_numpy(float), 5400.0, 100.0, before=0.0)
+    run = load_run(frame, temps=TEMPS)
+    assert exogenous_sensors([run], ["T5", "T9"], ["spindle_on"], 100.0) == ["T9"]
