@@ -394,9 +394,11 @@ def _plain(value: Any) -> Any:
 
 
 def _fields_to_dict(obj) -> dict[str, Any]:
-    """Every field that is not None, in field order, then the keys this version does not know."""
-    out = {f.name: _plain(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.name != "extra"}
-    out = {key: value for key, value in out.items() if value is not None}
+    """Every required field and every optional one that is not None, in field order, then unknown keys."""
+    fields = [f for f in dataclasses.fields(obj) if f.name != "extra"]
+    required = {f.name for f in fields if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
+    out = {f.name: _plain(getattr(obj, f.name)) for f in fields}
+    out = {key: value for key, value in out.items() if value is not None or key in required}
     out.update(_plain(obj.extra))
     return out
 

@@ -249,3 +249,15 @@ def test_the_original_model_is_valid_and_saving_an_invalid_one_is_refused(tmp_pa
     with pytest.raises(InputError, match="strictly increasing"):
         broken.save(tmp_path / "bad.json")
     assert not (tmp_path / "bad.json").exists()
+
+
+def test_a_model_without_an_error_name_saves_and_exports_as_it_loads(tmp_path):
+    """A required key holding null stays in the file: what loads also saves (a case the fuzzing found)."""
+    data = json.loads(json.dumps(BASE))
+    data["error"] = None
+    model = ModelFile.from_dict(data)
+    path = tmp_path / "model.json"
+    model.save(path)
+    assert json.loads(path.read_text())["error"] is None
+    assert ModelFile.load(path) == model
+    assert main(["export", str(path), "--target", "all", "--out", str(tmp_path / "export")]) == 0
