@@ -1,10 +1,18 @@
 import itertools
+import os
 
 import numpy as np
 import pytest
+from hypothesis import settings
 
 from groupfit.grouping import Constraints, soft_groups
 from groupfit.synthetic import simulate_lumped
+
+# The property tests draw the same examples on every run (a red CI is a change, not a draw);
+# HYPOTHESIS_PROFILE=explore draws new ones, as bench/bench_model_fuzz.py does at scale.
+settings.register_profile("deterministic", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
 
 
 def brute_force_rg(X, y, breaks, n, objective, fit_intercept):
