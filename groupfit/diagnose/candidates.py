@@ -260,18 +260,22 @@ class HeldOutScorer:
             ]
         )
 
-    def _update(self, values: np.ndarray, fold: int) -> tuple[float, np.ndarray]:
+    def _penalty_per_row(self, values: np.ndarray) -> float:
+        """The candidate's ridge penalty per training row: penalised like the inputs (0 for least squares)."""
+        if self.ridge_alpha == 0:
+            return 0.0
+        from groupfit.models.ridge import input_spreads
+
+        return self.ridge_alpha * float(input_spreads(values[:, None], self.fit_intercept)[0]) ** 2
+
+    def _update(self, values: np.ndarray, fold: int, penalty_per_row: float) -> tuple[float, np.ndarray]:
         """Coefficient of ``values`` fitted with the design on the fold's training rows, and its design part."""
         train, _ = self.splits[fold]
         gram_inverse, _, residual = self.fits[fold]
         v_coef = gram_inverse @ (self.design[train].T @ values[train])
         v_res = values[train] - self.design[train] @ v_coef
-        if self.ridge_alpha > 0:  # the penalised normal equations, the candidate penalised like the inputs
-            from groupfit.models.ridge import input_spreads
-
-            spread = float(input_spreads(values[:, None], self.fit_intercept)[0])
-            own_penalty = self.ridge_alpha * np.count_nonzero(train) * spread**2
-            denom = float(values[train] @ v_res) + own_penalty
+        if self.ridge_alpha > 0:  # the penalised normal equations
+            denom = float(values[train] @ v_res) + penalty_per_row * np.count_nonzero(train)
             numerator = float(values[train] @ residual)
         else:
             denom = float(v_res @ v_res)
@@ -283,8 +287,9 @@ class HeldOutScorer:
     def fold_sse(self, values: np.ndarray) -> np.ndarray:
         """Held-out SSE per fold with ``values`` as one more regressor."""
         sse = np.empty(len(self.splits) - 1)
+        penalty = self._penalty_per_row(values)
         for f, (_, test) in enumerate(self.splits[:-1]):
-            gamma, v_coef = self._update(values, f)
+            gamma, v_coef = self._update(values, f, penalty)
             coef = self.fits[f][1]
             design = self.design[test]
             error = self.target[test] - design @ coef - gamma * (values[test] - design @ v_coef)
@@ -293,7 +298,7 @@ class HeldOutScorer:
 
     def coefficient(self, values: np.ndarray) -> float:
         """The candidate's coefficient fitted with the design on all samples."""
-        return self._update(values, len(self.splits) - 1)[0]
+        return self._update(values, len(self.splits) - 1, self._penalty_per_row(values))[0]
 
     @property
     def held_out_rms(self) -> float:
@@ -335,29 +340,40 @@ def rank_candidates(
     own_inputs : set of str
         The model's input columns: their transforms are marked ``own_input``.
     """
-    without = float(scorer.base_sse.sum())
-    n = len(target)
     ranked = []
     for feature in features:
         values = compute(feature)
         if np.ptp(values) == 0.0:
             continue
-        sse = scorer.fold_sse(values)
-        with_feature = float(sse.sum())
         ranked.append(
-            Candidate(
-                feature=feature,
-                score=1.0 - with_feature / without if without > 0 else 0.0,
-                coefficient=scorer.coefficient(values),
-                explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / n)),
-                fold_sse=tuple(float(v) for v in sse),
-                fold_ratios=tuple(float(r) for r in sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)),
+            score_candidate(
+                feature,
+                values,
+                scorer,
                 own_input=feature.column in own_inputs,
                 collinearity=largest_correlation(values, inputs),
             )
         )
     ranked.sort(key=lambda c: -c.score)
     return ranked
+
+
+def score_candidate(
+    feature: Feature, values: np.ndarray, scorer: HeldOutScorer, own_input: bool = False, collinearity: float = 0.0
+) -> Candidate:
+    """``values`` (one per sample of the scorer's target) scored as one more regressor: a :class:`Candidate`."""
+    sse = scorer.fold_sse(values)
+    without, with_feature = float(scorer.base_sse.sum()), float(sse.sum())
+    return Candidate(
+        feature=feature,
+        score=1.0 - with_feature / without if without > 0 else 0.0,
+        coefficient=scorer.coefficient(values),
+        explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / len(values))),
+        fold_sse=tuple(float(v) for v in sse),
+        fold_ratios=tuple(float(r) for r in sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)),
+        own_input=own_input,
+        collinearity=collinearity,
+    )
 
 
 def largest_correlation(values: np.ndarray, inputs: np.ndarray | None) -> float:

@@ -60,6 +60,7 @@ from groupfit.diagnose.candidates import (
     is_sensor_column,
     largest_correlation,
     rank_candidates,
+    score_candidate,
     usable_columns,
 )
 from groupfit.diagnose.checks import drift, ljung_box
@@ -272,7 +273,7 @@ def diagnose(
     before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
     current_model, current_inputs = model, inputs
     current = dict(before)
-    scorer = model_scorer(model, target[measured], inputs, folds, measured)
+    scorer = model_scorer(model, target, inputs, folds, measured)
     base_check = overfit_check(scorer, folds)
     if base_check["overfitted"]:
         notes.append(
@@ -282,8 +283,7 @@ def diagnose(
         )
 
     def compute(feature):
-        values = [feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in data_runs]
-        return np.concatenate(values)[measured]
+        return stacked_feature(feature, data_runs, period)[measured]
 
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
@@ -317,7 +317,7 @@ def diagnose(
         if first_ranking is None:
             first_ranking = ranking
         held_out_before = scorer.held_out_rms
-        drift = drift_candidate(scorer, ramp, data_runs[0].time_name)
+        drift = score_candidate(Feature(data_runs[0].time_name), ramp, scorer)  # the null effect: a straight drift
         best, step_refusals, alternatives = choose(
             ranking, min_score, min_effect_rms_um, bool(added), own_transforms, sensor_columns, drift
         )
@@ -327,7 +327,7 @@ def diagnose(
         current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
         current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
-        scorer = model_scorer(current_model, target[measured], current_inputs, folds, measured)
+        scorer = model_scorer(current_model, target, current_inputs, folds, measured)
         held_out_after = scorer.held_out_rms
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
@@ -399,11 +399,16 @@ def choose(
     return chosen, refusals, alternatives
 
 
+def stacked_feature(feature: Feature, runs: list[Run], period: float) -> np.ndarray:
+    """``feature`` computed on each run from its own start, the runs stacked."""
+    return np.concatenate([feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in runs])
+
+
 def exogenous_sensors(runs: list[Run], sensors: list[str], operating: list[str], period: float) -> list[str]:
     """Sensors whose correlation with every lag of every heat source stays below :data:`EXOGENOUS_R`."""
     frame = pd.concat([r.frame for r in runs], ignore_index=True)
     lags = [
-        np.concatenate([f.compute(r.frame[f.column].to_numpy(dtype=float), period) for r in runs])
+        stacked_feature(f, runs, period)
         for f in candidate_features(operating, [], frame, operating)
         if f.transform in ("identity", "lowpass")
     ]
@@ -413,21 +418,6 @@ def exogenous_sensors(runs: list[Run], sensors: list[str], operating: list[str],
         if largest_correlation(values, np.column_stack(lags)) < EXOGENOUS_R:
             found.append(column)
     return found
-
-
-def drift_candidate(scorer: HeldOutScorer, ramp: np.ndarray, name: str) -> Candidate:
-    """A straight line in time scored like a candidate: the null effect of a drift over the run."""
-    sse = scorer.fold_sse(ramp)
-    without = float(scorer.base_sse.sum())
-    ratios = sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)
-    return Candidate(
-        feature=Feature(name),
-        score=1.0 - float(sse.sum()) / without if without > 0 else 0.0,
-        coefficient=scorer.coefficient(ramp),
-        explained_rms_um=float(np.sqrt(max(0.0, without - float(sse.sum())) / len(ramp))),
-        fold_sse=tuple(float(v) for v in sse),
-        fold_ratios=tuple(float(r) for r in ratios),
-    )
 
 
 def within_one_se(candidate: Candidate, best: Candidate) -> bool:
@@ -457,7 +447,7 @@ def failed_test(candidate: Candidate, min_score: float, further: bool, own_trans
             f"{200 * min_score:.0f} % of the held-out error"
         )
     worst = int(np.argmax(candidate.fold_ratios))
-    if MAX_FOLD_WORSENING is not None and candidate.fold_ratios[worst] > MAX_FOLD_WORSENING**2:
+    if candidate.fold_ratios[worst] > MAX_FOLD_WORSENING**2:
         return (
             f"makes one held-out condition (fold {worst + 1}) {np.sqrt(candidate.fold_ratios[worst]):.1f} times "
             "worse (RMS)"
@@ -494,7 +484,7 @@ def model_scorer(
     """The held-out scorer of the model's own design on ``rows``, fitted as the model is (least squares or ridge)."""
     ridge = model.get("ridge_alpha") or 0.0
     design = stacked_design(model, inputs)[rows]
-    return HeldOutScorer(target, design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
+    return HeldOutScorer(target[rows], design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
 
 
 def stacked_design(model: dict[str, Any], inputs: list[np.ndarray]) -> np.ndarray:
