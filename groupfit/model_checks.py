@@ -423,13 +423,17 @@ def dead_band_problem(model: Mapping[str, Any]) -> str | None:
     return None
 
 
+MAX_RIDGE_ALPHA = 1e6
+"""The largest ridge penalty a model file may record (:mod:`groupfit.models.ridge`)."""
+
+
 def ridge_problem(model: Mapping[str, Any]) -> str | None:
     """What is wrong with the optional ``ridge_alpha`` (the penalty the coefficients were fitted with), or None."""
     alpha = model.get("ridge_alpha")
     if alpha is None:
         return None
-    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 <= alpha <= 1e6:
-        return f"ridge_alpha = {alpha!r}: must be a number in [0, 1e6]"
+    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 <= alpha <= MAX_RIDGE_ALPHA:
+        return f"ridge_alpha = {alpha!r}: must be a number in [0, {MAX_RIDGE_ALPHA:g}]"
     if model.get("p") != 0:
         return f"ridge_alpha with p = {model.get('p')!r}: a ridge penalty belongs to a global model (p = 0)"
     return None

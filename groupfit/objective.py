@@ -282,12 +282,10 @@ def grouped_residuals(
     residuals = np.empty(n_samples)
     for (first, last), (s_first, s_last) in zip(soft_groups(breaks, n_samples, n), served_ranges(breaks, n_samples, n)):
         if ridge_alpha > 0:
-            from groupfit.models.ridge import ridge_solve
+            from groupfit.models.ridge import penalty_diagonal, ridge_solve
 
-            rows = last - first + 1
-            penalty = np.full(A.shape[1], ridge_alpha * rows)
-            if fit_intercept:
-                penalty[0] = 0.0
+            unit_spreads = np.ones(X.shape[1])  # the standardised inputs
+            penalty = penalty_diagonal(unit_spreads, ridge_alpha, last - first + 1, fit_intercept)
             coef = ridge_solve(A[first - 1 : last], t[first - 1 : last], penalty)
         else:
             coef = min_norm_lstsq(A[first - 1 : last], t[first - 1 : last])

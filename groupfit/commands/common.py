@@ -275,6 +275,8 @@ def ridge_value(text: str) -> float | str:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number >= 0 or 'auto')") from None
-    if not (value >= 0 and value <= 1e6):
-        raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number in [0, 1e6] or 'auto')")
+    from groupfit.model_checks import MAX_RIDGE_ALPHA
+
+    if not (0 <= value <= MAX_RIDGE_ALPHA):
+        raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number in [0, {MAX_RIDGE_ALPHA:g}] or 'auto')")
     return value

@@ -179,7 +179,12 @@ def run_fit(args: argparse.Namespace) -> int:
     estimator = GroupedRegressor.from_config(config)
     ridge = None
     if args.ridge is not None:
-        ridge = ridge_for(args.ridge, config["model"], run, [r.frame for r in runs])
+        from groupfit.diagnose.select import ridge_setting
+
+        exclude = {run.time_name, run.error_name, *run.temp_names}
+        frames = [r.frame for r in runs]
+        settings = config["model"]
+        ridge = ridge_setting(args.ridge, settings["p"], run.temps, run.error, frames, exclude, settings["intercept"])
         estimator.set_params(ridge_alpha=ridge["alpha"])
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
@@ -335,21 +340,6 @@ def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tup
     keep = [run.temp_names.index(name) for name in names]
     selected = replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
     return selected, {"method": method, "inputs": names, "candidates": len(run.temp_names), "folds": folds.describe()}
-
-
-def ridge_for(option: float | str, model: dict, run: Run, frames: list) -> dict:
-    """The ridge penalty of ``--ridge`` (chosen on held-out conditions or runs for 'auto'), and how it was found."""
-    if model["p"] != 0:
-        raise InputError(
-            f"--ridge with p = {model['p']}: the ridge penalty is for one global model (--p 0) on many collinear "
-            "inputs; a grouped model's groups are fitted by least squares"
-        )
-    if option != "auto":
-        return {"alpha": float(option), "chosen": "given"}
-    from groupfit.diagnose.select import choose_ridge
-
-    exclude = {run.time_name, run.error_name, *run.temp_names}
-    return choose_ridge(run.temps, run.error, frames, exclude, model["intercept"])
 
 
 def p_value(text: str) -> int | str:

@@ -68,22 +68,35 @@ def choose_ridge(
     return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
 
 
-def ridge_base_model(model: dict[str, Any], runs: Sequence[Run], alpha: float | str) -> tuple[dict[str, Any], dict]:
-    """The global model refitted with a ridge penalty (``"auto"``: chosen on held-out conditions or runs)."""
+def ridge_setting(
+    option: float | str,
+    p: int,
+    X: np.ndarray,
+    y: np.ndarray,
+    frames: Sequence[pd.DataFrame],
+    exclude: set[str],
+    fit_intercept: bool = True,
+) -> dict[str, Any]:
+    """The penalty of ``--ridge ALPHA|auto`` for a global model and how it was found (:func:`choose_ridge`)."""
     from groupfit.models.ridge import check_ridge_alpha
 
-    if model["p"] != 0:
+    if p != 0:
         raise InputError(
-            f"--ridge refits a global model (p = 0); this model has p = {model['p']}: a grouped model's groups "
-            "are fitted by least squares"
+            f"--ridge with p = {p}: the ridge penalty is for one global model (--p 0) on many collinear "
+            "inputs; a grouped model's groups are fitted by least squares"
         )
+    if option == "auto":
+        return choose_ridge(X, y, frames, exclude, fit_intercept)
+    return {"alpha": check_ridge_alpha(option), "chosen": "given"}
+
+
+def ridge_base_model(model: dict[str, Any], runs: Sequence[Run], alpha: float | str) -> tuple[dict[str, Any], dict]:
+    """The global model refitted with a ridge penalty (``"auto"``: chosen on held-out conditions or runs)."""
     inputs = [model_inputs(model, run) for run in runs]
-    if alpha == "auto":
-        exclude = {runs[0].time_name, model["error"], *model["temps"]}
-        y = np.concatenate([run.error for run in runs])
-        info = choose_ridge(np.vstack(inputs), y, [run.frame for run in runs], exclude, model["intercept"])
-    else:
-        info = {"alpha": check_ridge_alpha(alpha), "chosen": "given"}
+    exclude = {runs[0].time_name, model["error"], *model["temps"]}
+    y = np.concatenate([run.error for run in runs])
+    frames = [run.frame for run in runs]
+    info = ridge_setting(alpha, model["p"], np.vstack(inputs), y, frames, exclude, model["intercept"])
     ridged = ModelFile.coerce(dict(model, ridge_alpha=info["alpha"] or None))
     return refit_model(ridged, list(runs), inputs, ridged.temps, ridged.derived_inputs or ()), info
 

@@ -25,10 +25,10 @@ from typing import Sequence
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.model_checks import MAX_RIDGE_ALPHA
 
 RIDGE_GRID = (0.0, 1e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1, 3e-1, 1.0)
 """The penalties ``--ridge auto`` tries."""
-MAX_RIDGE_ALPHA = 1e6
 
 
 def input_spreads(X: np.ndarray, fit_intercept: bool) -> np.ndarray:
