@@ -21,13 +21,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from groupfit.data import load_run
+from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.modelfile import model_to_dict
@@ -64,9 +63,7 @@ def runs_around(frame, first, last):
 
 def base_model(runs):
     """The MLR on the 16 sensors, fitted on the rows with a measured error."""
-    run = runs[0]
-    rows = np.isfinite(run.error)
-    fitted = replace(run, temps=run.temps[rows], error=run.error[rows], time=run.time[rows], frame=run.frame[rows])
+    fitted = measured_rows(runs[0])
     return model_to_dict(GroupedRegressor(p=0).fit(fitted.temps, fitted.error), fitted)
 
 

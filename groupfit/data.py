@@ -366,6 +366,17 @@ def load_run(
     )
 
 
+def measured_rows(run: Run) -> Run:
+    """The run restricted to the rows with a measured error (the run itself when every row has one)."""
+    import dataclasses
+
+    rows = np.isfinite(run.error)
+    if rows.all():
+        return run
+    frame = run.frame.loc[rows].reset_index(drop=True)
+    return dataclasses.replace(run, time=run.time[rows], temps=run.temps[rows], error=run.error[rows], frame=frame)
+
+
 def join_runs(runs: Sequence[Run]) -> Run:
     """Several runs of one machine laid end to end, as one run for a global model.
 

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from groupfit.data import load_run
+from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
@@ -33,11 +33,7 @@ def split_runs(frame, first, last):
 
 
 def sixteen_sensor_model(runs):
-    from dataclasses import replace
-
-    run = runs[0]
-    rows = np.isfinite(run.error)
-    measured = replace(run, temps=run.temps[rows], error=run.error[rows], time=run.time[rows], frame=run.frame[rows])
+    measured = measured_rows(runs[0])
     return model_to_dict(GroupedRegressor(p=0).fit(measured.temps, measured.error), measured)
 
 

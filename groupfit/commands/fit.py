@@ -26,7 +26,7 @@ from groupfit.commands.common import (
     wrote_line,
 )
 from groupfit.config import default_config_path, override
-from groupfit.data import Run, join_runs
+from groupfit.data import Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
 from groupfit.inference.cli import add_interval_options, intervals_from_args
@@ -249,17 +249,6 @@ def check_measured(run: Run, p) -> None:
             f"error); a grouped model (p = {p}) needs the error on every row: fill or drop those rows, or fit a "
             "global model (--p 0) on the measured rows"
         )
-
-
-def measured_rows(run: Run) -> Run:
-    """The run restricted to the rows with a measured error (the run itself when every row has one)."""
-    from dataclasses import replace
-
-    rows = np.isfinite(run.error)
-    if rows.all():
-        return run
-    frame = run.frame.loc[rows].reset_index(drop=True)
-    return replace(run, time=run.time[rows], temps=run.temps[rows], error=run.error[rows], frame=frame)
 
 
 def check_position_options(args: argparse.Namespace) -> None:
