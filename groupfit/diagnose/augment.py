@@ -57,15 +57,8 @@ def refit_model(
     X = np.vstack(inputs)
     error = np.concatenate([run.error for run in runs])
     measured = np.isfinite(error)  # rows without a measured error only carry the derived inputs' history
-    estimator = GroupedRegressor(
-        p=model.p,
-        n=model.n,
-        c=model.c,
-        objective=model.objective,
-        fit_intercept=model.intercept,
-        fixed_breaks=list(model.breaks),
-        ridge_alpha=model.ridge_alpha or 0.0,
-    ).fit(X[measured], error[measured])
+    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
+    estimator.fit(X[measured], error[measured])
     time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
     frame = pd.concat([run.frame for run in runs], ignore_index=True)
     refitted_run = replace(

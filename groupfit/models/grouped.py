@@ -367,17 +367,17 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         return model.replace(switching=switching.with_rule({"source_ranges": ranges}))
 
     @classmethod
+    def for_model_file(cls, model: ModelFile | Mapping[str, Any], **params) -> "GroupedRegressor":
+        """An unfitted estimator with the model file's settings and ``params``."""
+        model = ModelFile.coerce(model)
+        settings = dict(p=model.p, n=model.n, c=model.c, objective=model.objective, fit_intercept=model.intercept)
+        return cls(**settings, ridge_alpha=model.ridge_alpha or 0.0, **params)
+
+    @classmethod
     def from_model_file(cls, model: ModelFile | Mapping[str, Any]) -> "GroupedRegressor":
         """A fitted estimator with the model file's groups and coefficients (no residuals or search details)."""
         model = ModelFile.coerce(model)
-        estimator = cls(
-            p=model.p,
-            n=model.n,
-            c=model.c,
-            objective=model.objective,
-            fit_intercept=model.intercept,
-            ridge_alpha=model.ridge_alpha or 0.0,
-        )
+        estimator = cls.for_model_file(model)
         coefficients = np.asarray(model.coefficients, dtype=float)
         n_samples = model.n_samples_fit
         estimator.breaks_ = [int(b) for b in model.breaks]
