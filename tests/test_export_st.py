@@ -416,6 +416,17 @@ def single_driver(tmp_path_factory):
     return get
 
 
+def assert_same_decisions(st_out, c_out) -> None:
+    """Every stream of the ST block and of the C build: the same codes, faults, switches, and the same bits."""
+    assert len(st_out) == len(c_out)
+    for st_stream, c_stream in zip(st_out, c_out):
+        assert np.array_equal(st_stream["code"], c_stream.code)
+        assert np.array_equal(st_stream["fault"], c_stream.fault)
+        assert np.array_equal(st_stream["switched"], c_stream.switched)
+        assert st_stream["prediction_um"].tobytes() == c_stream.prediction_um.tobytes()
+        assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
+
+
 def as_single(streams):
     with np.errstate(over="ignore", invalid="ignore"):
         return [np.asarray(s, dtype=np.float32).astype(float) for s in streams]
@@ -432,12 +443,7 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(single_driv
     streams = as_single([v for k, v in streams_for(model, run).items() if chosen is None or k in chosen])
     st_out = run_block(block_source(label, "REAL"), streams, model["sampling_period_s"], "REAL")
     c_out = run_driver(single_driver(label, model), streams)
-    for st_stream, c_stream in zip(st_out, c_out):
-        assert np.array_equal(st_stream["code"], c_stream.code)
-        assert np.array_equal(st_stream["fault"], c_stream.fault)
-        assert np.array_equal(st_stream["switched"], c_stream.switched)
-        assert st_stream["prediction_um"].tobytes() == c_stream.prediction_um.tobytes()
-        assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
+    assert_same_decisions(st_out, c_out)
 
 
 def test_lreal_block_matches_the_python_rule():
@@ -514,12 +520,7 @@ def test_real_block_with_derived_inputs_matches_the_single_precision_c_build_bit
     streams = as_single(list(derived_streams(model, run).values()))
     st_out = run_block(derived_block("all kinds p=2", "REAL"), streams, model["sampling_period_s"], "REAL")
     c_out = run_driver(single_driver("derived all kinds", model), streams)
-    for st_stream, c_stream in zip(st_out, c_out):
-        assert np.array_equal(st_stream["code"], c_stream.code)
-        assert np.array_equal(st_stream["fault"], c_stream.fault)
-        assert np.array_equal(st_stream["switched"], c_stream.switched)
-        assert st_stream["prediction_um"].tobytes() == c_stream.prediction_um.tobytes()
-        assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
+    assert_same_decisions(st_out, c_out)
 
 
 def test_lreal_block_with_derived_inputs_matches_the_python_rule():
@@ -584,12 +585,8 @@ def test_real_heat_law_block_matches_the_single_precision_c_build_bit_for_bit(si
     streams = as_single(list(streams.values()))
     st_out = run_block(derived_block("heat law p=2", "REAL"), streams, model["sampling_period_s"], "REAL")
     c_out = run_driver(single_driver("heat law", model), streams)
-    for temps, st_stream, c_stream in zip(streams, st_out, c_out):
-        assert np.array_equal(st_stream["code"], c_stream.code)
-        assert np.array_equal(st_stream["fault"], c_stream.fault)
-        assert np.array_equal(st_stream["switched"], c_stream.switched)
-        assert st_stream["prediction_um"].tobytes() == c_stream.prediction_um.tobytes()
-        assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
+    assert_same_decisions(st_out, c_out)
+    for temps, st_stream in zip(streams, st_out):
         single = SwitchingRule(model, precision="single").replay(temps)  # and the float32 Python rule
         assert st_stream["prediction_um"].tobytes() == single.prediction_um.tobytes()
 

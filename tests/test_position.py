@@ -300,18 +300,14 @@ def test_lreal_block_matches_replay(case):
 
 @pytest.mark.parametrize("case", CASES)
 def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, case):
-    from test_export_st import as_single, run_block
+    from test_export_st import as_single, assert_same_decisions, run_block
 
     model = model_for(*case)
     (text,) = render(model, "st", real="REAL").values()
     chosen = as_single(list(streams(model).values()))
     st_out = run_block(text, chosen, model["sampling_period_s"], "REAL")
     c_out = run_driver(drivers(case, model, "single"), chosen)
-    for st_stream, c_stream in zip(st_out, c_out):
-        assert np.array_equal(st_stream["code"], c_stream.code)
-        assert np.array_equal(st_stream["fault"], c_stream.fault)
-        assert st_stream["prediction_um"].tobytes() == c_stream.prediction_um.tobytes()
-        assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
+    assert_same_decisions(st_out, c_out)
 
 
 @pytest.mark.parametrize("case", CASES)
