@@ -432,7 +432,7 @@ def ridge_problem(model: Mapping[str, Any]) -> str | None:
     alpha = model.get("ridge_alpha")
     if alpha is None:
         return None
-    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 <= alpha <= MAX_RIDGE_ALPHA:
+    if not _is_number(alpha) or not 0 <= alpha <= MAX_RIDGE_ALPHA:
         return f"ridge_alpha = {alpha!r}: must be a number in [0, {MAX_RIDGE_ALPHA:g}]"
     if model.get("p") != 0:
         return f"ridge_alpha with p = {model.get('p')!r}: a ridge penalty belongs to a global model (p = 0)"
