@@ -27,7 +27,7 @@ class FitResult:
     intervals: Any = None
     """The breaks' confidence intervals (a :class:`groupfit.inference.BreakIntervalReport`), when computed."""
     ridge: dict[str, Any] | None = None
-    """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.choose_ridge`), when it did."""
+    """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.ridge_setting`), when it did."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""

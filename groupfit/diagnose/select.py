@@ -49,25 +49,6 @@ def held_out_folds(frames: Sequence[pd.DataFrame], exclude: set[str], y: np.ndar
     return make_folds(list(frames), columns).restricted(np.isfinite(y))
 
 
-def choose_ridge(
-    X: np.ndarray,
-    y: np.ndarray,
-    frames: Sequence[pd.DataFrame],
-    exclude: set[str],
-    fit_intercept: bool = True,
-) -> dict[str, Any]:
-    """The ridge penalty (:mod:`groupfit.models.ridge`) with the least error on held-out conditions or runs.
-
-    Returns ``alpha``, ``held_out`` (the held-out RMS of every penalty tried) and ``folds``.
-    """
-    from groupfit.models.ridge import choose_ridge_alpha
-
-    folds = held_out_folds(frames, exclude, y)
-    rows = np.isfinite(y)
-    alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept)
-    return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
-
-
 def ridge_setting(
     option: float | str,
     p: int,
@@ -77,17 +58,24 @@ def ridge_setting(
     exclude: set[str],
     fit_intercept: bool = True,
 ) -> dict[str, Any]:
-    """The penalty of ``--ridge ALPHA|auto`` for a global model and how it was found (:func:`choose_ridge`)."""
-    from groupfit.models.ridge import check_ridge_alpha
+    """The penalty of ``--ridge ALPHA|auto`` for a global model, and how it was found.
+
+    ``auto``: the penalty with the least error on held-out conditions or runs, the rows with a measured
+    error ``y``; the result then holds ``held_out`` (the held-out RMS of every penalty tried) and ``folds``.
+    """
+    from groupfit.models.ridge import check_ridge_alpha, choose_ridge_alpha
 
     if p != 0:
         raise InputError(
             f"--ridge with p = {p}: the ridge penalty is for one global model (--p 0) on many collinear "
             "inputs; a grouped model's groups are fitted by least squares"
         )
-    if option == "auto":
-        return choose_ridge(X, y, frames, exclude, fit_intercept)
-    return {"alpha": check_ridge_alpha(option), "chosen": "given"}
+    if option != "auto":
+        return {"alpha": check_ridge_alpha(option), "chosen": "given"}
+    folds = held_out_folds(frames, exclude, y)
+    rows = np.isfinite(y)
+    alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept)
+    return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
 
 
 def ridge_base_model(model: dict[str, Any], runs: Sequence[Run], alpha: float | str) -> tuple[dict[str, Any], dict]:
