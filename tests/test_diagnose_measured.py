@@ -76,3 +76,13 @@ def test_an_effect_that_fits_the_other_speeds_at_the_cold_starts_expense_is_refu
     assert result.candidates[0].feature.column == "spindle_rpm" and result.candidates[0].score > 0.3
     assert not result.added and result.after == result.before
     assert any("times worse (RMS)" in refusal.reason for refusal in result.refused)
+
+
+def test_joint_selection_on_the_whole_test_forecasts_less_than_the_given_model(frame):
+    """Sensors and the heat law chosen together: fewer inputs, speed named, a nested forecast below the base's."""
+    run = load_run(frame, temps=SENSORS, error="disp_ch3_um", name="spindle_step_test")
+    result = diagnose(sixteen_sensor_model([run]), run, live_rule=replay_groups, select_jointly=True)
+    assert result.added[0].feature.column == "spindle_rpm" and result.added[0].feature.exponent == pytest.approx(5 / 3)
+    assert 1 <= len(result.selection["inputs"]) < len(SENSORS)
+    assert result.selection["nested_held_out_rms_um"] < result.base_check["held_out_rms_um"]
+    assert result.model["temps"][: len(result.selection["inputs"])] == result.selection["inputs"]

@@ -73,8 +73,9 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument(
         "--select",
-        choices=SELECTION_METHODS,
-        help="first re-select the model's inputs on held-out conditions (for a model that over-fits)",
+        choices=(*SELECTION_METHODS, "joint"),
+        help="first re-select the model's inputs on held-out conditions (for a model that over-fits); joint: "
+        "choose the inputs and the first effects together (a global model, p = 0)",
     )
     parser.add_argument(
         "--ridge",
@@ -135,7 +136,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
 
     start = model
     selection = None
-    if args.select:
+    joint = args.select == "joint"
+    if joint and args.ridge is not None:
+        raise InputError("--select joint and --ridge: the joint selection fits by least squares; give one of them")
+    if args.select and not joint:
         from groupfit.diagnose.select import select_base_model
 
         start, selection = select_base_model(model, data, args.select)
@@ -153,6 +157,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         min_effect_rms_um=args.min_effect,
         heat_exponent=args.heat_exponent,
         own_transforms=args.own_transforms,
+        select_jointly=joint,
     )
     if selection is not None or ridge is not None:
         result = with_original_baseline(result, model, data, validate, replay_groups, selection, ridge)

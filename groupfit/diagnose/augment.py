@@ -65,5 +65,9 @@ def refit_model(
         runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame, reference=model.reference
     )
     criterion = model.switching.criterion
-    refitted = estimator.to_model_file(refitted_run, criterion=criterion if criterion in names else None)
+    if criterion not in names:  # the given criterion was not kept: the measured input that moves most
+        derived = {f.name for f in derived_inputs}
+        spans = {name: np.ptp(X[:, j]) for j, name in enumerate(names) if name not in derived}
+        criterion = max(spans, key=spans.get) if spans else None
+    refitted = estimator.to_model_file(refitted_run, criterion=criterion)
     return refitted.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()

@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
-from groupfit.diagnose.augment import augment_model
+from groupfit.diagnose.augment import augment_model, refit_model
 from groupfit.diagnose.candidates import (
     COLLINEAR_R,
     EXOGENOUS_R,
@@ -65,6 +65,7 @@ from groupfit.diagnose.candidates import (
 )
 from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
+from groupfit.diagnose.joint import JointProblem, JointSelection
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature
@@ -225,14 +226,24 @@ def diagnose(
     max_effects: int = MAX_EFFECTS,
     heat_exponent: float | str = HEAT_EXPONENT,
     own_transforms: bool = False,
+    select_jointly: bool = False,
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
     Candidates are chosen on ``data`` only, by held-out folds that are whole
     operating conditions (one run) or whole runs (several); ``validate`` is
-    never used to choose, only to report.
+    never used to choose, only to report. With ``select_jointly`` the model's
+    measured inputs are re-chosen together with the first effects
+    (:mod:`groupfit.diagnose.joint`; a global model without derived inputs
+    only), the further effects then as usual.
     """
     data_runs, validate_runs = as_runs(data), as_runs(validate)
+    if select_jointly and (model["p"] > 0 or model.get("derived_inputs")):
+        raise InputError(
+            "--select joint re-chooses the inputs of a global model (p = 0) without derived inputs; this model "
+            + (f"has p = {model['p']}" if model["p"] > 0 else "already has derived inputs")
+            + ": fit one with --p 0 on the measured sensors"
+        )
     if len(data_runs) > 1 and model["p"] > 0:
         raise InputError(
             f"{len(data_runs)} modelling runs given for a grouped model (p = {model['p']}): its breaks belong to "
@@ -310,6 +321,30 @@ def diagnose(
     steps: list[Step] = []
     refused: list[Refusal] = []
     first_ranking: list[Candidate] | None = None
+
+    def effect_test(candidate: Candidate, drift: Candidate) -> str | None:
+        if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
+            return "removes too little of the held-out error"
+        return failed_test(candidate, min_score, False, own_transforms) or drift_reason(drift, candidate, min_score)
+
+    selection = None
+    if select_jointly:
+        causes = [f for f in tried if f.column not in sensor_columns and f.column not in model["temps"]]
+        current_model, joint, selection = joint_start(
+            model, data_runs, inputs, target, measured, folds, [(f, compute(f)) for f in causes], effect_test, ramp
+        )
+        added, first_ranking = list(joint.effects), joint.first_ranking
+        steps = [Step(c, *joint.held_out_around(c)) for c in added]
+        current_inputs = [model_inputs(current_model, run) for run in data_runs]
+        current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
+        scorer = model_scorer(current_model, target, current_inputs, folds, measured)
+        tried = [f for f in tried if f.column not in {c.feature.column for c in added}]
+        if selection["nested_held_out_rms_um"] >= base_check["held_out_rms_um"]:
+            notes.append(
+                f"the joint selection is not expected to carry to a new condition: chosen again without each "
+                f"held-out condition, it predicts it with {selection['nested_held_out_rms_um']:.3g} µm RMS, the "
+                f"model as given with {base_check['held_out_rms_um']:.3g} µm"
+            )
     while len(added) < max_effects and tried:
         ranking = rank_candidates(
             target[measured], tried, compute, scorer, np.vstack(current_inputs)[measured], set(measured_inputs)
@@ -350,7 +385,43 @@ def diagnose(
         folds=folds.describe(),
         base_check=base_check,
         run_names={key: joint_name(rs) for key, rs in runs.items()},
+        selection=selection,
     )
+
+
+def joint_start(
+    model: dict[str, Any],
+    runs: list[Run],
+    inputs: list[np.ndarray],
+    target: np.ndarray,
+    measured: np.ndarray,
+    folds: Folds,
+    effects: list[tuple[Feature, np.ndarray]],
+    effect_test,
+    drift: np.ndarray,
+) -> tuple[dict[str, Any], JointSelection, dict[str, Any]]:
+    """The model refitted on inputs and effects chosen together, the choice, and what to report of it."""
+    stacked = np.vstack(inputs)[measured]
+    values = {name: stacked[:, j] for j, name in enumerate(model["temps"])}
+    problem = JointProblem(target[measured], values, effects, folds, effect_test, drift, bool(model["intercept"]))
+    chosen = problem.select()
+    keep = [model["temps"].index(name) for name in chosen.inputs]
+    features = [effect.feature for effect in chosen.effects]
+    period = float(model["sampling_period_s"])
+    columns = [
+        np.column_stack([x[:, keep], *(f.compute(r.frame[f.column].to_numpy(float), period) for f in features)])
+        for x, r in zip(inputs, runs)
+    ]
+    current = refit_model(model, runs, columns, [*chosen.inputs, *(f.name for f in features)], features)
+    info = {
+        "method": "joint",
+        "inputs": chosen.inputs,
+        "of": len(model["temps"]),
+        "order": chosen.order,
+        "folds": folds.describe(),
+        "nested_held_out_rms_um": problem.nested_held_out_rms(),
+    }
+    return current, chosen, info
 
 
 def choose(
@@ -376,11 +447,8 @@ def choose(
         if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
             break
         reason = failed_test(candidate, min_score, further, own_transforms)
-        if not reason and drift is not None and drift.score >= min_score and within_one_se(drift, candidate):
-            reason = (
-                f"a straight drift over the run explains the held-out error as well (score {drift.score:.2f}): "
-                "the effect cannot be told from a drift of the modelling run (a probe creeping?)"
-            )
+        if not reason and drift is not None:
+            reason = drift_reason(drift, candidate, min_score)
         if reason:
             if not passing:
                 refusals.append(Refusal(candidate, reason))
@@ -397,6 +465,16 @@ def choose(
             alternatives.append(c)
             seen.add(c.feature.column)
     return chosen, refusals, alternatives
+
+
+def drift_reason(drift: Candidate, candidate: Candidate, min_score: float) -> str | None:
+    """Why ``candidate`` cannot be told from a straight drift over the run (``drift``), or None."""
+    if drift.score >= min_score and within_one_se(drift, candidate):
+        return (
+            f"a straight drift over the run explains the held-out error as well (score {drift.score:.2f}): "
+            "the effect cannot be told from a drift of the modelling run (a probe creeping?)"
+        )
+    return None
 
 
 def stacked_feature(feature: Feature, runs: list[Run], period: float) -> np.ndarray:

@@ -48,10 +48,17 @@ def diagnosis_summary(result) -> str:
         )
     selection = result.selection
     if selection is not None:
+        how = "together with the effects" if selection["method"] == "joint" else f"by {selection['method']}"
         lines.append(
-            f"inputs re-selected by {selection['method']} on held-out conditions: {', '.join(selection['inputs'])} "
+            f"inputs re-selected {how} on held-out conditions: {', '.join(selection['inputs']) or 'none'} "
             f"({len(selection['inputs'])} of {selection['of']}); before/after compare with the model as given"
         )
+        if "nested_held_out_rms_um" in selection:
+            lines.append(
+                f"  chosen again without each held-out condition, the selection predicts it with "
+                f"{selection['nested_held_out_rms_um']:.3g} µm RMS; the model as given, "
+                f"{result.base_check['held_out_rms_um']:.3g} µm"
+            )
     if result.ridge is not None:
         ridge = result.ridge
         how = "given" if ridge["chosen"] == "given" else f"the least error on {ridge['folds']}"

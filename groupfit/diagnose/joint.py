@@ -1,0 +1,175 @@
+"""Choose a model's inputs and its missing effects together, on held-out conditions.
+
+A model on many collinear sensors leaves a candidate effect a held-out score
+that hardly depends on the effect's time constant: every refit moves all the
+collinear coefficients, and they absorb whatever lag the candidate brings.
+Choosing the inputs first (``--select forward``) and the effects after fixes
+the sensors before the effect can take its share, and a sensor picked to do
+the effect's work stays in. Forward selection over both at once lets a heat
+law's low-pass and the sensors compete for the same error: each step adds
+whichever of them most lowers the held-out error of the model so far.
+
+The two kinds face different tests. A measured input of the model enters
+while it lowers the held-out squared error by :data:`MIN_GAIN` (the rule of
+``fit --select forward``); an effect enters only if it passes the test the
+diagnosis gives a first effect (``effect_test``: the least share of the
+held-out error, more than half of the folds improved, no fold more than
+doubled), so a cause is never admitted on weaker evidence than the diagnosis
+asks of it elsewhere. One effect per column. At least one measured input
+is kept (the best one, if none lowers the error enough): a compensation
+reads temperatures, and its switching criterion is one of them.
+
+The selection is itself fitted to the folds it was scored on.
+:meth:`JointProblem.nested_held_out_rms` repeats it with each fold left out of the choice
+too, the error to expect of the procedure on a new condition.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from groupfit.diagnose.candidates import Candidate, HeldOutScorer, score_candidate
+from groupfit.diagnose.folds import Folds
+from groupfit.features import Feature
+from groupfit.sweep.selection import MIN_GAIN, cluster_representatives, correlation_clusters
+
+
+@dataclass
+class JointSelection:
+    """What a joint forward selection chose, in the order it chose it."""
+
+    inputs: list[str] = field(default_factory=list)
+    """The measured inputs kept."""
+    effects: list[Candidate] = field(default_factory=list)
+    """The effects added, each scored against the model chosen before it."""
+    order: list[str] = field(default_factory=list)
+    """Every name chosen (inputs and effects' feature names), in order."""
+    held_out_rms: list[float] = field(default_factory=list)
+    """Held-out RMS (µm) of the model before the first choice and after each."""
+    first_ranking: list[Candidate] = field(default_factory=list)
+    """Every effect scored at the step the first effect entered (or the last step, if none did), best first."""
+
+    def held_out_around(self, effect: Candidate) -> tuple[float, float]:
+        """Held-out RMS just before and just after ``effect`` was added."""
+        position = self.order.index(effect.feature.name)
+        return self.held_out_rms[position], self.held_out_rms[position + 1]
+
+
+@dataclass(frozen=True)
+class JointProblem:
+    """A joint forward selection: the error, the candidates and the folds, all on the scored rows.
+
+    Parameters
+    ----------
+    target : ndarray, shape (N,)
+        The measured error on the scored rows.
+    inputs : mapping of name to ndarray, shape (N,)
+        The model's measured inputs; columns correlated above 0.98 are one
+        (their representative most correlated with the error stands for them).
+    effects : sequence of (Feature, ndarray)
+        The candidate effects and their values on the same rows.
+    folds : Folds
+        The held-out folds (whole conditions or runs) on the same rows.
+    effect_test : callable
+        ``effect_test(candidate, drift) -> reason or None``: why an effect may not enter; ``drift`` is the
+        null effect scored in the same way.
+    drift : ndarray, shape (N,)
+        Time since the start of the run: the straight drift an effect must be told from.
+    fit_intercept : bool
+    """
+
+    target: np.ndarray
+    inputs: Mapping[str, np.ndarray]
+    effects: Sequence[tuple[Feature, np.ndarray]]
+    folds: Folds
+    effect_test: Callable[[Candidate, Candidate], str | None]
+    drift: np.ndarray
+    fit_intercept: bool = True
+
+    def restricted(self, rows: np.ndarray) -> "JointProblem":
+        """The same problem on the rows ``rows`` (a boolean mask), their folds only."""
+        return JointProblem(
+            self.target[rows],
+            {name: values[rows] for name, values in self.inputs.items()},
+            [(feature, values[rows]) for feature, values in self.effects],
+            Folds(self.folds.labels[rows], self.folds.kind, self.folds.columns),
+            self.effect_test,
+            self.drift[rows],
+            self.fit_intercept,
+        )
+
+    def select(self) -> JointSelection:
+        """Forward selection over the measured inputs and the candidate effects together."""
+        target, inputs = self.target, self.inputs
+        names = list(inputs)
+        if names:
+            X = np.column_stack([inputs[n] for n in names])
+            pool = [names[i] for i in cluster_representatives(X, target, correlation_clusters(X, min_corr=0.98))]
+        else:
+            pool = []
+        remaining = [(f, v) for f, v in self.effects if np.ptp(v) > 0.0]
+        chosen_values: list[np.ndarray] = []
+        result = JointSelection()
+        while True:
+            scorer = HeldOutScorer(target, self.design(chosen_values), self.folds, fit_intercept=self.fit_intercept)
+            if not result.held_out_rms:
+                result.held_out_rms.append(scorer.held_out_rms)
+            best: tuple[Candidate, np.ndarray] | None = None
+            null = score_candidate(Feature("drift"), self.drift, scorer)
+            for name in pool:
+                candidate = score_candidate(Feature(name), inputs[name], scorer)
+                if candidate.score >= MIN_GAIN and (best is None or candidate.score > best[0].score):
+                    best = (candidate, inputs[name])
+            scored = [(score_candidate(feature, values, scorer), values) for feature, values in remaining]
+            for candidate, values in scored:
+                if (best is None or candidate.score > best[0].score) and self.effect_test(candidate, null) is None:
+                    best = (candidate, values)
+            if not result.effects:
+                result.first_ranking = sorted((c for c, _ in scored), key=lambda c: -c.score)
+            if best is None and not result.inputs and pool:  # a compensation reads at least one temperature
+                best = max(
+                    ((score_candidate(Feature(n), inputs[n], scorer), inputs[n]) for n in pool),
+                    key=lambda c: c[0].score,
+                )
+            if best is None:
+                return result
+            candidate, values = best
+            chosen_values.append(values)
+            if candidate.feature.transform == "identity" and candidate.feature.column in pool:
+                pool.remove(candidate.feature.column)
+                result.inputs.append(candidate.feature.column)
+                result.order.append(candidate.feature.column)
+            else:
+                remaining = [(f, v) for f, v in remaining if f.column != candidate.feature.column]
+                result.effects.append(candidate)
+                result.order.append(candidate.feature.name)
+            result.held_out_rms.append(float(np.sqrt(np.sum(candidate.fold_sse) / len(target))))
+
+    def design(self, columns: Sequence[np.ndarray]) -> np.ndarray:
+        """The regressors: the constant (when fitted) and ``columns``."""
+        constant = [np.ones(len(self.target))] if self.fit_intercept else []
+        if not constant and not columns:
+            return np.empty((len(self.target), 0))
+        return np.column_stack([*constant, *columns])
+
+    def nested_held_out_rms(self) -> float:
+        """Held-out RMS (µm) of the whole procedure: each fold predicted by a selection made without it.
+
+        The selection on the other folds (scored on their own held-out folds),
+        fitted by least squares on them, predicts the fold left out.
+        """
+        values_of = {**self.inputs, **{f.name: v for f, v in self.effects}}
+        squared = 0.0
+        for train, test in self.folds.splits():
+            chosen = self.restricted(train).select()
+            design = self.design([values_of[name] for name in chosen.order])
+            if design.shape[1] == 0:
+                squared += float(self.target[test] @ self.target[test])
+                continue
+            coef, *_ = np.linalg.lstsq(design[train], self.target[train], rcond=None)
+            error = self.target[test] - design[test] @ coef
+            squared += float(error @ error)
+        return float(np.sqrt(squared / len(self.target)))
