@@ -15,7 +15,10 @@ held-out conditions (``--ridge auto``), a fourth from the 16-sensor model
 whose inputs are chosen together with the effects (``--select joint``; its
 nested held-out forecast is shown next to the given model's held-out RMS).
 "RMS µm" is the model each diagnosis started from (the 16-sensor model for
-the fourth).
+the fourth). A last table cuts the test in two files at 50 … 90 % and
+validates on the second, once as the continuation of the first (its
+derived inputs carry the first file's history, as on the controller) and
+once after an hour's gap (the controller restarted: from rest).
 
     python bench/bench_diagnose_measured.py [--figure-dir DIR]
 """
@@ -70,6 +73,25 @@ def base_model(runs):
     return model_to_dict(GroupedRegressor(p=0).fit(fitted.temps, fitted.error), fitted)
 
 
+FORWARD_CUTS = (0.5, 0.6, 0.7, 0.8, 0.9)
+
+
+def forward_split_row(frame, cut):
+    """Diagnose with the rows after ``cut`` as a second file: continuing the first, and after an hour's gap."""
+    modelling = load_run(frame.iloc[:cut].reset_index(drop=True), temps=SENSORS, error="disp_ch3_um", name="first")
+    model = base_model([modelling])
+    cells = []
+    for gap_s in (0.0, 3600.0):
+        later = frame.iloc[cut:].reset_index(drop=True)
+        later["time_s"] += gap_s
+        validation = load_run(later, temps=SENSORS, error="disp_ch3_um", name="second")
+        result = diagnose(model, [modelling], [validation], live_rule=replay_groups)
+        b, a = result.before["validate"]["rms_um"], result.after["validate"]["rms_um"]
+        cells.append(f"{b:.2f} → {a:.2f} µm ({100 * (a - b) / b:+.0f} %)")
+    effects = "; ".join(c.feature.describe() for c in result.added) or "nothing added"
+    return f"{cut / len(frame):<10.0%} {cells[0]:>32} {cells[1]:>32}  {effects}"
+
+
 def row(label, result):
     b, a = result.before["validate"]["rms_um"], result.after["validate"]["rms_um"]
     effects = "; ".join(f"{c.feature.column} {c.feature.describe()}" for c in result.added) or "nothing added"
@@ -116,6 +138,10 @@ def main(argv=None) -> int:
             )
             name = f"diagnose_measured_{label.split()[0]}{suffix}.png"
             plot_diagnosis(result, {"data": runs, "validate": [held]}, out / name)
+    print("\nthe log cut in two files: modelling up to the cut, validation after it (16-sensor start)")
+    print(f"{'cut':<10} {'continuing the modelling file':>32} {'after an hour gap (from rest)':>32}  effects added")
+    for share in FORWARD_CUTS:
+        print(forward_split_row(frame, int(share * len(frame))))
     print(f"\nfigures in {out}/")
     return 0
 

@@ -20,7 +20,7 @@ from groupfit.commands.common import (
     wrote_line,
 )
 from groupfit.data import DEFAULT_TIME, Run, load_run
-from groupfit.diagnose import DiagnosisResult, diagnose
+from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.errors import InputError
@@ -158,9 +158,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
         heat_exponent=args.heat_exponent,
         own_transforms=args.own_transforms,
         select_jointly=joint,
+        baseline=model,
     )
-    if selection is not None or ridge is not None:
-        result = with_original_baseline(result, model, data, validate, replay_groups, selection, ridge)
+    if selection is not None:
+        result.selection = {**selection, "of": len(model["temps"])}
+    result.ridge = ridge
 
     model_path = Path(args.model)
     written = []
@@ -178,18 +180,3 @@ def run_diagnose(args: argparse.Namespace) -> int:
     written.append(write_json(args.json, result.to_json(model_path)))
     print(result.summary() + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0
-
-
-def with_original_baseline(result, model, data, validate, live_rule, selection, ridge=None) -> DiagnosisResult:
-    """Report before/after against the model the user gave, not the re-selected or ridge-refitted one."""
-    from groupfit.diagnose.loop import metrics_of, residual_checks, stacked_residual
-
-    runs = {"data": data, **({"validate": validate} if validate else {})}
-    before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
-    result.residuals_before = before
-    result.before = {key: metrics_of(r) for key, r in before.items()}
-    result.checks_before = residual_checks(before["data"], np.arange(len(before["data"])) * data[0].period)
-    if selection is not None:
-        result.selection = {**selection, "of": len(model["temps"])}
-    result.ridge = ridge
-    return result

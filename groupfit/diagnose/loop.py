@@ -65,6 +65,7 @@ from groupfit.diagnose.candidates import (
 )
 from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
+from groupfit.diagnose.history import preceding_run, with_history
 from groupfit.diagnose.joint import JointProblem, JointSelection
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
@@ -227,6 +228,7 @@ def diagnose(
     heat_exponent: float | str = HEAT_EXPONENT,
     own_transforms: bool = False,
     select_jointly: bool = False,
+    baseline: dict[str, Any] | None = None,
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
@@ -235,7 +237,11 @@ def diagnose(
     never used to choose, only to report. With ``select_jointly`` the model's
     measured inputs are re-chosen together with the first effects
     (:mod:`groupfit.diagnose.joint`; a global model without derived inputs
-    only), the further effects then as usual.
+    only), the further effects then as usual. ``baseline`` is the model
+    before/after compare with (default ``model``; the model as the user gave
+    it, when ``model`` is a re-selected or ridge-refitted start). A
+    validation run that continues a modelling run is judged with it in front
+    (:mod:`groupfit.diagnose.history`).
     """
     data_runs, validate_runs = as_runs(data), as_runs(validate)
     if select_jointly and (model["p"] > 0 or model.get("derived_inputs")):
@@ -280,10 +286,26 @@ def diagnose(
     if folds.n_folds < 2:
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
 
-    runs = {"data": data_runs, **({"validate": validate_runs} if validate_runs else {})}
-    before = {key: stacked_residual(model, rs, live_rule) for key, rs in runs.items()}
+    runs, skipped = {"data": data_runs}, {"data": [0] * len(data_runs)}
+    if validate_runs:
+        joined = []
+        for run in validate_runs:
+            history = preceding_run(run, data_runs)
+            if history is not None:
+                notes.append(
+                    f"{run.name} continues {history.name} (its first time stamp one sampling period after the "
+                    f"last): judged with {history.name} in front, so that its derived inputs and run-time state "
+                    "carry their history, as on the controller"
+                )
+            joined.append(with_history(run, history))
+        runs["validate"], skipped["validate"] = [r for r, _ in joined], [n for _, n in joined]
+
+    def residuals_of(m: dict[str, Any]) -> dict[str, np.ndarray]:
+        return {key: stacked_residual(m, rs, live_rule, skipped[key]) for key, rs in runs.items()}
+
+    before = residuals_of(model if baseline is None else baseline)
     current_model, current_inputs = model, inputs
-    current = dict(before)
+    current = dict(before) if baseline is None else residuals_of(model)
     scorer = model_scorer(model, target, inputs, folds, measured)
     base_check = overfit_check(scorer, folds)
     if base_check["overfitted"]:
@@ -336,7 +358,7 @@ def diagnose(
         added, first_ranking = list(joint.effects), joint.first_ranking
         steps = [Step(c, *joint.held_out_around(c)) for c in added]
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
-        current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
+        current = residuals_of(current_model)
         scorer = model_scorer(current_model, target, current_inputs, folds, measured)
         tried = [f for f in tried if f.column not in {c.feature.column for c in added}]
         if selection["nested_held_out_rms_um"] >= base_check["held_out_rms_um"]:
@@ -361,7 +383,7 @@ def diagnose(
             break
         current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
-        current = {key: stacked_residual(current_model, rs, live_rule) for key, rs in runs.items()}
+        current = residuals_of(current_model)
         scorer = model_scorer(current_model, target, current_inputs, folds, measured)
         held_out_after = scorer.held_out_rms
         added.append(best)
@@ -552,8 +574,12 @@ def common_usable_columns(runs: list[Run], exclude: set[str]) -> tuple[list[str]
     return columns, notes + more_notes
 
 
-def stacked_residual(model: dict[str, Any], runs: list[Run], live_rule: LiveRule | None) -> np.ndarray:
-    return np.concatenate([residual(model, run, live_rule) for run in runs])
+def stacked_residual(
+    model: dict[str, Any], runs: list[Run], live_rule: LiveRule | None, skipped: Sequence[int] | None = None
+) -> np.ndarray:
+    """The residuals on ``runs``, stacked, each without its first ``skipped`` rows (a history put in front)."""
+    skipped = skipped or [0] * len(runs)
+    return np.concatenate([residual(model, run, live_rule)[skip:] for run, skip in zip(runs, skipped)])
 
 
 def model_scorer(

@@ -1,0 +1,59 @@
+"""A validation run that continues a modelling run: the controller's history carried into it.
+
+Shops split long logs into files, and a run held back for validation is often
+the rest of the modelling log. A low-pass of the spindle speed evaluated on
+the validation file alone starts from rest at its first row, while the
+machine is hot: the derived inputs are wrong for the first time constants of
+the run, a fault the controller, which ran through, does not have. When a
+validation run's first time stamp follows a modelling run's last by one
+sampling period, the two are one recording: the validation run is judged
+with the modelling run in front of it, its error left out, so that the
+derived inputs, a reference taken at the start and the run-time switching
+carry their history into it. Only the validation rows are scored.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from groupfit.data import Run
+
+CONTIGUITY_TOLERANCE = 0.5
+"""The gap between the two runs may differ from one sampling period by this share of it."""
+
+
+def continues(previous: Run, run: Run) -> bool:
+    """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period."""
+    if previous.time_name != run.time_name or previous.temp_names != run.temp_names:
+        return False
+    if previous.error_name != run.error_name or abs(previous.period - run.period) > 0.01 * previous.period:
+        return False
+    gap = run.time[0] - previous.time[-1]
+    return bool(abs(gap - previous.period) <= CONTIGUITY_TOLERANCE * previous.period)
+
+
+def preceding_run(run: Run, candidates: Sequence[Run]) -> Run | None:
+    """The run among ``candidates`` that ``run`` continues, if any."""
+    return next((previous for previous in candidates if continues(previous, run)), None)
+
+
+def with_history(run: Run, history: Run | None) -> tuple[Run, int]:
+    """``run`` with ``history`` in front of it, the history's error left empty; and the rows put in front."""
+    if history is None:
+        return run, 0
+    frame = pd.concat([history.frame, run.frame], ignore_index=True)
+    if run.error_name is not None:
+        frame.loc[: len(history.frame) - 1, run.error_name] = np.nan
+    error = None if run.error is None else np.concatenate([np.full(len(history.time), np.nan), run.error])
+    joined = replace(
+        run,
+        time=np.concatenate([history.time, run.time]),
+        temps=np.vstack([history.temps, run.temps]),
+        error=error,
+        frame=frame,
+    )
+    return joined, len(history.time)

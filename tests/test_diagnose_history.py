@@ -1,0 +1,87 @@
+"""A validation file that continues the modelling file is judged with the controller's history carried over."""
+
+import json
+
+import numpy as np
+from test_diagnose_joint import SENSORS, spindle_run
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.diagnose import diagnose
+from groupfit.diagnose.history import continues
+from groupfit.diagnose.loop import stacked_residual
+from groupfit.modelfile import model_to_dict
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.runtime import replay_groups
+
+TEMPS = SENSORS[:2]
+
+
+def split(frame, at):
+    """The log cut in two files at row ``at``: the second's time stamps go on from the first's."""
+    first = load_run(frame.iloc[:at].reset_index(drop=True), temps=TEMPS, name="monday")
+    second = load_run(frame.iloc[at:].reset_index(drop=True), temps=TEMPS, name="monday_evening")
+    return first, second
+
+
+def test_only_a_run_that_starts_one_period_after_another_continues_it():
+    frame = spindle_run(7, hours=6.0)
+    first, second = split(frame, 400)
+    assert continues(first, second) and not continues(second, first)
+    later = frame.iloc[400:].copy()
+    later["time_s"] += 3600.0  # an hour's gap: the machine may have stood
+    assert not continues(first, load_run(later.reset_index(drop=True), temps=TEMPS))
+    other_sensors = load_run(frame.iloc[400:].reset_index(drop=True), temps=["T1", "T3"])
+    assert not continues(first, other_sensors)
+    resampled = frame.iloc[400::2].reset_index(drop=True)  # every 60 s instead of 30 s
+    assert not continues(first, load_run(resampled, temps=TEMPS))
+
+
+def test_the_validation_part_of_a_split_log_is_judged_as_if_the_log_were_whole():
+    frame = spindle_run(8, hours=16.0)
+    at = int(np.flatnonzero(frame["speed_rpm"].to_numpy() >= 4000.0)[-1]) - 60  # cut while the spindle runs fast
+    modelling, validation = split(frame, at)
+    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    result = diagnose(model, modelling, validation, live_rule=replay_groups)
+    assert result.added and result.added[0].feature.column == "speed_rpm"
+    assert any(note.startswith("monday_evening continues monday") for note in result.notes)
+
+    # the independent path: the whole log, the error of the modelling rows left empty, the first rows dropped
+    whole = frame.copy()
+    whole.loc[: at - 1, "error_um"] = np.nan
+    whole_run = load_run(whole, temps=TEMPS, name="whole", allow_nonfinite=True)
+    expected = stacked_residual(result.model, [whole_run], replay_groups)[at:]
+    np.testing.assert_allclose(result.residuals_after["validate"], expected, rtol=0, atol=1e-12)
+    assert len(result.residuals_after["validate"]) == len(validation.time)
+    # judged from rest instead, the speed's low-pass starts cold on a hot machine
+    from_rest = stacked_residual(result.model, [validation], replay_groups)
+    assert np.sqrt(np.mean(from_rest**2)) > 1.5 * np.sqrt(np.mean(expected**2))
+
+
+def test_diagnose_on_files_says_the_validation_run_continues_the_modelling_run(tmp_path, capsys):
+    frame = spindle_run(9, hours=12.0)
+    paths = [tmp_path / "part1.csv", tmp_path / "part2.csv"]
+    frame.iloc[:900].to_csv(paths[0], index=False)
+    frame.iloc[900:].to_csv(paths[1], index=False)
+    fit = ["fit", "--data", str(paths[0]), "--temps", ",".join(TEMPS), "--p", "0", "--reference", "none"]
+    assert main([*fit, "--quiet", "--out", str(tmp_path / "m")]) == 0
+    capsys.readouterr()
+    args = ["diagnose", str(tmp_path / "m" / "model.json"), "--data", str(paths[0]), "--validate", str(paths[1])]
+    assert main([*args, "--out", str(tmp_path / "d"), "--json", "-"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert any(note.startswith("part2 continues part1") for note in result["notes"])
+    assert result["after"]["validate"]["rms_um"] < result["before"]["validate"]["rms_um"]
+
+
+def test_a_validation_run_after_a_gap_starts_from_rest():
+    frame = spindle_run(10, hours=10.0)
+    modelling, _ = split(frame, 600)
+    later = frame.iloc[600:].copy()
+    later["time_s"] += 3600.0  # the machine stood for an hour: the controller started again
+    validation = load_run(later.reset_index(drop=True), temps=TEMPS, name="later")
+    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    result = diagnose(model, modelling, validation, live_rule=replay_groups)
+    assert not any("continues" in note for note in result.notes)
+    np.testing.assert_allclose(
+        result.residuals_after["validate"], stacked_residual(result.model, [validation], replay_groups), atol=1e-12
+    )
