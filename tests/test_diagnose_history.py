@@ -85,3 +85,20 @@ def test_a_validation_run_after_a_gap_starts_from_rest():
     np.testing.assert_allclose(
         result.residuals_after["validate"], stacked_residual(result.model, [validation], replay_groups), atol=1e-12
     )
+
+
+def test_a_chain_of_files_carries_the_history_through_every_one():
+    frame = spindle_run(11, hours=12.0)
+    parts = [frame.iloc[a:b].reset_index(drop=True) for a, b in ((0, 700), (700, 1000), (1000, None))]
+    modelling, *validation = [load_run(p, temps=TEMPS, name=f"part{k}") for k, p in enumerate(parts)]
+    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    result = diagnose(model, modelling, validation, live_rule=replay_groups)
+    assert [n.split(" (")[0] for n in result.notes if "continues" in n] == [
+        "part1 continues part0",
+        "part2 continues part1",
+    ]
+    whole = frame.copy()
+    whole.loc[:699, "error_um"] = np.nan
+    whole_run = load_run(whole, temps=TEMPS, name="whole", allow_nonfinite=True)
+    expected = stacked_residual(result.model, [whole_run], replay_groups)[700:]
+    np.testing.assert_allclose(result.residuals_after["validate"], expected, rtol=0, atol=1e-12)

@@ -9,7 +9,9 @@ validation run's first time stamp follows a modelling run's last by one
 sampling period, the two are one recording: the validation run is judged
 with the modelling run in front of it, its error left out, so that the
 derived inputs, a reference taken at the start and the run-time switching
-carry their history into it. Only the validation rows are scored.
+carry their history into it. Only the validation rows are scored. A log
+split into more files chains: a validation run that continues another is
+judged with all that came before it.
 """
 
 from __future__ import annotations

@@ -289,15 +289,18 @@ def diagnose(
     runs, skipped = {"data": data_runs}, {"data": [0] * len(data_runs)}
     if validate_runs:
         joined = []
+        earlier = {id(r): r for r in data_runs}  # a run, and the run it continues with its history in front
         for run in validate_runs:
-            history = preceding_run(run, data_runs)
+            history = preceding_run(run, [r for r in [*data_runs, *validate_runs] if id(r) in earlier])
             if history is not None:
                 notes.append(
                     f"{run.name} continues {history.name} (its first time stamp one sampling period after the "
                     f"last): judged with {history.name} in front, so that its derived inputs and run-time state "
                     "carry their history, as on the controller"
                 )
+                history = earlier[id(history)]
             joined.append(with_history(run, history))
+            earlier[id(run)] = joined[-1][0]
         runs["validate"], skipped["validate"] = [r for r, _ in joined], [n for _, n in joined]
 
     def residuals_of(m: dict[str, Any]) -> dict[str, np.ndarray]:
