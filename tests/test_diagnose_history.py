@@ -35,6 +35,8 @@ def test_only_a_run_that_starts_one_period_after_another_continues_it():
     assert not continues(first, other_sensors)
     resampled = frame.iloc[400::2].reset_index(drop=True)  # every 60 s instead of 30 s
     assert not continues(first, load_run(resampled, temps=TEMPS))
+    fewer_columns = frame.iloc[400:].drop(columns="T8").reset_index(drop=True)  # another logger set-up
+    assert not continues(first, load_run(fewer_columns, temps=TEMPS))
 
 
 def test_the_validation_part_of_a_split_log_is_judged_as_if_the_log_were_whole():

@@ -32,6 +32,8 @@ def continues(previous: Run, run: Run) -> bool:
     """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period."""
     if previous.time_name != run.time_name or previous.temp_names != run.temp_names:
         return False
+    if set(previous.frame.columns) != set(run.frame.columns):
+        return False
     if previous.error_name != run.error_name or abs(previous.period - run.period) > 0.01 * previous.period:
         return False
     gap = run.time[0] - previous.time[-1]
