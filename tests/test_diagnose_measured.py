@@ -86,3 +86,21 @@ def test_joint_selection_on_the_whole_test_forecasts_less_than_the_given_model(f
     assert 1 <= len(result.selection["inputs"]) < len(SENSORS)
     assert result.selection["nested_held_out_rms_um"] < result.base_check["held_out_rms_um"]
     assert result.model["temps"][: len(result.selection["inputs"])] == result.selection["inputs"]
+
+
+def test_a_validation_file_that_continues_the_log_is_judged_with_its_history(frame):
+    """The test cut in two files in the 5000 r/min block: from rest, the heat law's low-pass starts cold."""
+    cut = int(0.9 * len(frame))
+    first = load_run(frame.iloc[:cut].reset_index(drop=True), temps=SENSORS, error="disp_ch3_um", name="first")
+    later = frame.iloc[cut:].reset_index(drop=True)
+    model = sixteen_sensor_model([first])
+    results = {}
+    for gap_s in (0.0, 3600.0):
+        shifted = later.assign(time_s=later["time_s"] + gap_s)
+        second = load_run(shifted, temps=SENSORS, error="disp_ch3_um", name="second")
+        results[gap_s] = diagnose(model, first, second, live_rule=replay_groups)
+    continuing, restarted = results[0.0], results[3600.0]
+    assert any(note.startswith("second continues first") for note in continuing.notes)
+    assert continuing.added[0].feature.column == "spindle_rpm"
+    assert continuing.improved is True and restarted.improved is False  # the same effect, judged two ways
+    assert continuing.after["validate"]["rms_um"] < 0.7 * continuing.before["validate"]["rms_um"]
