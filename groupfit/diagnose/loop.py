@@ -97,6 +97,8 @@ class Step:
     held_out_rms_after: float
     alternatives: list[Candidate] = field(default_factory=list)
     """Candidates of other columns that explain the held-out error as well (within one standard error)."""
+    joint: bool = False
+    """Chosen together with the inputs (``select_jointly``): scored against the inputs chosen before it."""
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -104,6 +106,7 @@ class Step:
             "held_out_rms_before_um": self.held_out_rms_before,
             "held_out_rms_after_um": self.held_out_rms_after,
             "alternatives": [c.to_dict() for c in self.alternatives],
+            "joint": self.joint,
         }
 
 
@@ -359,7 +362,7 @@ def diagnose(
             model, data_runs, inputs, target, measured, folds, [(f, compute(f)) for f in causes], effect_test, ramp
         )
         added, first_ranking = list(joint.effects), joint.first_ranking
-        steps = [Step(c, *joint.held_out_around(c)) for c in added]
+        steps = [Step(c, *joint.held_out_around(c), joint=True) for c in added]
         current_inputs = [model_inputs(current_model, run) for run in data_runs]
         current = residuals_of(current_model)
         scorer = model_scorer(current_model, target, current_inputs, folds, measured)

@@ -74,7 +74,7 @@ def diagnosis_summary(result) -> str:
             lines.append(
                 f"missing effect: {column_words(c.feature.column)}, {c.feature.describe()} "
                 f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
-                f"held-out RMS {held_out})"
+                f"held-out RMS {held_out}{' against the inputs chosen before it' if step.joint else ''})"
             )
             if step.alternatives:
                 others = "; ".join(f"{a.feature.column} {a.feature.describe()}" for a in step.alternatives[:3])
