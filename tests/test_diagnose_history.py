@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 from test_diagnose_joint import SENSORS, spindle_run
 
 from groupfit.cli import main
@@ -39,11 +40,12 @@ def test_only_a_run_that_starts_one_period_after_another_continues_it():
     assert not continues(first, load_run(fewer_columns, temps=TEMPS))
 
 
-def test_the_validation_part_of_a_split_log_is_judged_as_if_the_log_were_whole():
+@pytest.mark.parametrize("p", [0, 1], ids=["global", "grouped"])
+def test_the_validation_part_of_a_split_log_is_judged_as_if_the_log_were_whole(p):
     frame = spindle_run(8, hours=16.0)
     at = int(np.flatnonzero(frame["speed_rpm"].to_numpy() >= 4000.0)[-1]) - 60  # cut while the spindle runs fast
     modelling, validation = split(frame, at)
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    model = model_to_dict(GroupedRegressor(p=p).fit(modelling.temps, modelling.error), modelling)
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert result.added and result.added[0].feature.column == "speed_rpm"
     assert any(note.startswith("monday_evening continues monday") for note in result.notes)
