@@ -14,14 +14,14 @@ while it lowers the held-out squared error by :data:`MIN_GAIN` (the rule of
 ``fit --select forward``); an effect enters only if it passes the test the
 diagnosis gives a first effect (``effect_test``: the least share of the
 held-out error, more than half of the folds improved, no fold more than
-doubled), so a cause is never admitted on weaker evidence than the diagnosis
-asks of it elsewhere. One effect per column. At least one measured input
+doubled, better than a straight drift), so a cause is never admitted on
+weaker evidence than the diagnosis asks of it elsewhere. One effect per column. At least one measured input
 is kept (the best one, if none lowers the error enough): a compensation
 reads temperatures, and its switching criterion is one of them.
 
 The selection is itself fitted to the folds it was scored on.
-:meth:`JointProblem.nested_held_out_rms` repeats it with each fold left out of the choice
-too, the error to expect of the procedure on a new condition.
+:meth:`JointProblem.nested_held_out_rms` repeats it with each fold left out
+of the choice too: the error to expect of the procedure on a new condition.
 """
 
 from __future__ import annotations
