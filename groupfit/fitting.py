@@ -28,6 +28,8 @@ class FitResult:
     """The breaks' confidence intervals (a :class:`groupfit.inference.BreakIntervalReport`), when computed."""
     ridge: dict[str, Any] | None = None
     """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.ridge_setting`), when it did."""
+    held_out: dict[str, Any] | None = None
+    """A global model's error on held-out conditions or runs (:func:`groupfit.diagnose.select.held_out_check`)."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
@@ -40,6 +42,8 @@ class FitResult:
             result["input_selection"] = self.input_selection
         if self.ridge is not None:
             result["ridge"] = self.ridge
+        if self.held_out is not None:
+            result["held_out"] = self.held_out
         return result
 
     def summary(self) -> str:
@@ -55,6 +59,8 @@ class FitResult:
             )
         if self.ridge is not None:
             report = ridge_summary(self.ridge) + "\n" + report
+        if self.held_out is not None:
+            report += "\n" + held_out_summary(self.held_out)
         return report
 
 
@@ -67,6 +73,20 @@ def ridge_summary(ridge: dict) -> str:
         f"ridge   penalty alpha = {ridge['alpha']:g}, the least held-out error ({ridge['folds']}; "
         f"held-out RMS µm by alpha: {table})"
     )
+
+
+def held_out_summary(check: dict) -> str:
+    """The held-out line of a global model, with a note when it over-fits."""
+    line = (
+        f"check   held-out RMS {check['held_out_rms_um']:.4g} µm against {check['in_sample_rms_um']:.4g} µm in sample "
+        f"({check['folds']})"
+    )
+    if check["overfitted"]:
+        line += (
+            "\nnote    the model over-fits: expect the held-out error on the next run, not the in-sample one; "
+            "fewer inputs (--select forward) or a ridge penalty (--ridge auto) hold better"
+        )
+    return line
 
 
 def selection_summary(selection: dict) -> str:

@@ -204,7 +204,15 @@ def run_fit(args: argparse.Namespace) -> int:
             f"\nnote    the error is measured on {fit_run.n_samples} of {run.n_samples} rows: the model is fitted "
             "on those"
         )
-    result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge)
+    held_out = None
+    if estimator.p == 0 and position_run is None:
+        from groupfit.diagnose.select import held_out_check
+
+        exclude = {run.time_name, run.error_name, *run.temp_names}
+        alpha = ridge["alpha"] if ridge is not None else 0.0
+        intercept = config["model"]["intercept"]
+        held_out = held_out_check(run.temps, run.error, [r.frame for r in runs], exclude, intercept, alpha)
+    result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
     run = fit_run
 
     from groupfit.plots import plot_fit

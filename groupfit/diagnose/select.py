@@ -49,6 +49,31 @@ def held_out_folds(frames: Sequence[pd.DataFrame], exclude: set[str], y: np.ndar
     return make_folds(list(frames), columns).restricted(np.isfinite(y))
 
 
+def held_out_check(
+    X: np.ndarray,
+    y: np.ndarray,
+    frames: Sequence[pd.DataFrame],
+    exclude: set[str],
+    fit_intercept: bool = True,
+    ridge_alpha: float = 0.0,
+) -> dict[str, Any] | None:
+    """A global model's RMS in sample and on the diagnosis's held-out folds; None with fewer than two folds.
+
+    The rows with a measured error ``y`` are fitted and scored; the model is fitted as ``fit --p 0`` fits
+    it (least squares, or the ridge penalty ``ridge_alpha``). ``overfitted`` is the diagnosis's warning.
+    """
+    from groupfit.diagnose.candidates import HeldOutScorer
+    from groupfit.diagnose.loop import overfit_check
+
+    folds = held_out_folds(frames, exclude, y)
+    if folds.n_folds < 2:
+        return None
+    rows = np.isfinite(y)
+    design = np.column_stack([np.ones(int(rows.sum())), X[rows]]) if fit_intercept else X[rows]
+    scorer = HeldOutScorer(y[rows], design, folds, ridge_alpha=ridge_alpha, fit_intercept=fit_intercept)
+    return overfit_check(scorer, folds)
+
+
 def ridge_setting(
     option: float | str,
     p: int,
