@@ -24,7 +24,7 @@ was added; "worse, reported so" when the validation got worse and the
 diagnosis says so (``improved is False``); otherwise FAIL with a short reason.
 It is a measurement, not a test: it exits 0 whatever the verdicts.
 
-    python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE] [--reference none|default]
+    python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE] [--reference none|default] [--joint]
 
 The whole set runs in about 10 s on two cores.
 """
@@ -101,11 +101,11 @@ def verdict(scenario: Scenario, added: list[dict], before: float, after: float, 
     return f"FAIL: validation fell only {100 * fall:.0f} %"
 
 
-def measure(scenario: Scenario, reference: str = "none") -> dict:
-    """Fit, diagnose and score one scenario."""
+def measure(scenario: Scenario, reference: str = "none", joint: bool = False) -> dict:
+    """Fit, diagnose and score one scenario (``joint``: as ``diagnose --select joint``)."""
     start = time.perf_counter()
     model, modelling, validation = base_model(scenario, reference)
-    result = diagnose(model, modelling, validation, live_rule=replay_groups)
+    result = diagnose(model, modelling, validation, live_rule=replay_groups, select_jointly=joint)
     seconds = time.perf_counter() - start
     added = [
         {k: c.to_dict()[k] for k in ("column", "transform", "tau_s", "exponent", "delay_samples", "description")}
@@ -159,6 +159,7 @@ def main(argv=None) -> int:
         default="none",
         help="the base model on absolute readings (none, as --reference none) or on rises over T_amb (default)",
     )
+    parser.add_argument("--joint", action="store_true", help="diagnose as --select joint does")
     args = parser.parse_args(argv)
     known = [spec.name for spec in scenario_specs()]
     if args.only and any(name not in known for name in args.only):
@@ -166,7 +167,7 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     rows = []
     for scenario in scenarios(args.only):
-        rows.append(measure(scenario, args.reference))
+        rows.append(measure(scenario, args.reference, args.joint))
         r = rows[-1]
         print(f"{r['scenario']:<28} {r['seconds']:5.1f} s  {r['verdict']}", file=sys.stderr, flush=True)
     print(table(rows))

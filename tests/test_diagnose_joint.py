@@ -134,7 +134,7 @@ def test_diagnose_select_joint_keeps_one_sensor_and_names_the_speed(tmp_path, ca
     assert report[0].startswith("inputs re-selected together with the effects on held-out conditions")
     assert len(result["selection"]["inputs"]) < len(SENSORS)
     assert result["added"][0]["column"] == "speed_rpm" and result["added"][0]["exponent"] == pytest.approx(5 / 3)
-    assert any(line.startswith("missing effect: spindle speed") for line in report)
+    assert any(line.startswith("effect chosen with the inputs: spindle speed") for line in report)
     assert result["steps"][0]["joint"] is True and "against the inputs chosen before it" in "\n".join(report)
     # the procedure's own forecast for a new condition beats the given model's, and the next run agrees
     assert result["selection"]["nested_held_out_rms_um"] < result["base_model"]["held_out_rms_um"]

@@ -71,8 +71,9 @@ def diagnosis_summary(result) -> str:
             c = step.candidate
             better = f"{c.folds_improved * len(c.fold_ratios):.0f} of {len(c.fold_ratios)}"
             held_out = change_words(step.held_out_rms_before, step.held_out_rms_after)
+            kind = "effect chosen with the inputs" if step.joint else "missing effect"
             lines.append(
-                f"missing effect: {column_words(c.feature.column)}, {c.feature.describe()} "
+                f"{kind}: {column_words(c.feature.column)}, {c.feature.describe()} "
                 f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
                 f"held-out RMS {held_out}{' against the inputs chosen before it' if step.joint else ''})"
             )
