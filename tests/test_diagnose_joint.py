@@ -172,3 +172,16 @@ def test_diagnose_select_joint_refuses_what_it_cannot_do(tmp_path, capsys, extra
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]
     assert not (tmp_path / "d").exists()
+
+
+def test_diagnose_select_joint_refuses_a_model_with_derived_inputs(tmp_path, capsys):
+    path, model = fit_all_sensors(tmp_path, spindle_run(6, hours=10.0))
+    assert main(["diagnose", str(model), "--data", str(path), "--out", str(tmp_path / "first")]) == 0
+    augmented = tmp_path / "first" / "model_augmented.json"
+    assert json.loads(augmented.read_text())["derived_inputs"]  # the speed's low-pass was added
+    capsys.readouterr()
+    args = ["diagnose", str(augmented), "--data", str(path), "--select", "joint", "--out", str(tmp_path / "again")]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "already has derived inputs" in err[0]
+    assert not (tmp_path / "again").exists()
