@@ -61,3 +61,29 @@ def with_history(run: Run, history: Run | None) -> tuple[Run, int]:
         frame=frame,
     )
     return joined, len(history.time)
+
+
+def with_histories(runs: Sequence[Run], earlier: Sequence[Run]) -> tuple[list[Run], list[int], list[str]]:
+    """Each of ``runs`` with what it continues in front; the rows put in front of each; a note for each.
+
+    A run continues one of ``earlier`` or one of ``runs`` before it (which
+    then brings its own history along).
+    """
+    joined_of = {id(run): run for run in earlier}  # each run, with its history in front
+    candidates = list(earlier)
+    joined, skipped, notes = [], [], []
+    for run in runs:
+        history = preceding_run(run, candidates)
+        if history is not None:
+            notes.append(
+                f"{run.name} continues {history.name} (its first time stamp one sampling period after the "
+                f"last): judged with {history.name} in front, so that its derived inputs and run-time state "
+                "carry their history, as on the controller"
+            )
+            history = joined_of[id(history)]
+        run_with_history, rows = with_history(run, history)
+        joined.append(run_with_history)
+        skipped.append(rows)
+        joined_of[id(run)] = run_with_history
+        candidates.append(run)
+    return joined, skipped, notes

@@ -65,7 +65,7 @@ from groupfit.diagnose.candidates import (
 )
 from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
-from groupfit.diagnose.history import preceding_run, with_history
+from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
@@ -291,20 +291,8 @@ def diagnose(
 
     runs, skipped = {"data": data_runs}, {"data": [0] * len(data_runs)}
     if validate_runs:
-        joined = []
-        earlier = {id(r): r for r in data_runs}  # a run, and the run it continues with its history in front
-        for run in validate_runs:
-            history = preceding_run(run, [r for r in [*data_runs, *validate_runs] if id(r) in earlier])
-            if history is not None:
-                notes.append(
-                    f"{run.name} continues {history.name} (its first time stamp one sampling period after the "
-                    f"last): judged with {history.name} in front, so that its derived inputs and run-time state "
-                    "carry their history, as on the controller"
-                )
-                history = earlier[id(history)]
-            joined.append(with_history(run, history))
-            earlier[id(run)] = joined[-1][0]
-        runs["validate"], skipped["validate"] = [r for r, _ in joined], [n for _, n in joined]
+        runs["validate"], skipped["validate"], history_notes = with_histories(validate_runs, data_runs)
+        notes += history_notes
 
     def residuals_of(m: dict[str, Any]) -> dict[str, np.ndarray]:
         return {key: stacked_residual(m, rs, live_rule, skipped[key]) for key, rs in runs.items()}
