@@ -69,7 +69,7 @@ from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
-from groupfit.features import Feature
+from groupfit.features import Feature, derived_matrix
 from groupfit.grouping import serving_group_index
 from groupfit.modelfile import error_metrics
 
@@ -339,9 +339,14 @@ def diagnose(
     first_ranking: list[Candidate] | None = None
 
     def effect_test(candidate: Candidate, drift: Candidate) -> str | None:
-        if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
+        if not significant(candidate, min_score, min_effect_rms_um):
             return "removes too little of the held-out error"
-        return failed_test(candidate, min_score, False, own_transforms) or drift_reason(drift, candidate, min_score)
+        return failed_test(candidate, min_score, False, own_transforms, drift)
+
+    def adopted(m: dict[str, Any]):
+        """The model's inputs on the modelling runs, its residuals and its held-out scorer."""
+        m_inputs = [model_inputs(m, run) for run in data_runs]
+        return m_inputs, residuals_of(m), model_scorer(m, target, m_inputs, folds, measured)
 
     selection = None
     if select_jointly:
@@ -351,9 +356,7 @@ def diagnose(
         )
         added, first_ranking = list(joint.effects), joint.first_ranking
         steps = [Step(c, *joint.held_out_around(c), joint=True) for c in added]
-        current_inputs = [model_inputs(current_model, run) for run in data_runs]
-        current = residuals_of(current_model)
-        scorer = model_scorer(current_model, target, current_inputs, folds, measured)
+        current_inputs, current, scorer = adopted(current_model)
         tried = [f for f in tried if f.column not in {c.feature.column for c in added}]
         if selection["nested_held_out_rms_um"] >= base_check["held_out_rms_um"]:
             notes.append(
@@ -376,9 +379,7 @@ def diagnose(
         if best is None:
             break
         current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
-        current_inputs = [model_inputs(current_model, run) for run in data_runs]
-        current = residuals_of(current_model)
-        scorer = model_scorer(current_model, target, current_inputs, folds, measured)
+        current_inputs, current, scorer = adopted(current_model)
         held_out_after = scorer.held_out_rms
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
@@ -424,10 +425,7 @@ def joint_start(
     keep = [model["temps"].index(name) for name in chosen.inputs]
     features = [effect.feature for effect in chosen.effects]
     period = float(model["sampling_period_s"])
-    columns = [
-        np.column_stack([x[:, keep], *(f.compute(r.frame[f.column].to_numpy(float), period) for f in features)])
-        for x, r in zip(inputs, runs)
-    ]
+    columns = [np.column_stack([x[:, keep], derived_matrix(features, r.frame, period)]) for x, r in zip(inputs, runs)]
     current = refit_model(model, runs, columns, [*chosen.inputs, *(f.name for f in features)], features)
     info = {
         "method": "joint",
@@ -460,11 +458,9 @@ def choose(
     refusals = []
     passing = []
     for candidate in ranking:
-        if candidate.score < min_score or candidate.explained_rms_um < min_effect_rms_um:
+        if not significant(candidate, min_score, min_effect_rms_um):
             break
-        reason = failed_test(candidate, min_score, further, own_transforms)
-        if not reason and drift is not None:
-            reason = drift_reason(drift, candidate, min_score)
+        reason = failed_test(candidate, min_score, further, own_transforms, drift)
         if reason:
             if not passing:
                 refusals.append(Refusal(candidate, reason))
@@ -481,16 +477,6 @@ def choose(
             alternatives.append(c)
             seen.add(c.feature.column)
     return chosen, refusals, alternatives
-
-
-def drift_reason(drift: Candidate, candidate: Candidate, min_score: float) -> str | None:
-    """Why ``candidate`` cannot be told from a straight drift over the run (``drift``), or None."""
-    if drift.score >= min_score and within_one_se(drift, candidate):
-        return (
-            f"a straight drift over the run explains the held-out error as well (score {drift.score:.2f}): "
-            "the effect cannot be told from a drift of the modelling run (a probe creeping?)"
-        )
-    return None
 
 
 def stacked_feature(feature: Feature, runs: list[Run], period: float) -> np.ndarray:
@@ -525,8 +511,14 @@ def within_one_se(candidate: Candidate, best: Candidate) -> bool:
     return bool(difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1))
 
 
-def failed_test(candidate: Candidate, min_score: float, further: bool, own_transforms: bool = False) -> str | None:
-    """Why the candidate fails the test it faces, or None."""
+def failed_test(
+    candidate: Candidate,
+    min_score: float,
+    further: bool,
+    own_transforms: bool = False,
+    drift: Candidate | None = None,
+) -> str | None:
+    """Why the candidate fails the test it faces, or None; ``drift``: a straight drift, scored as the candidate was."""
     n_folds = len(candidate.fold_ratios)
     improved = int(round(candidate.folds_improved * n_folds))
     if candidate.own_input and not own_transforms:
@@ -548,7 +540,17 @@ def failed_test(candidate: Candidate, min_score: float, further: bool, own_trans
         )
     if candidate.folds_improved <= MIN_FOLDS_IMPROVED:
         return f"lowers the error on only {improved} of {n_folds} held-out folds"
+    if drift is not None and drift.score >= min_score and within_one_se(drift, candidate):
+        return (
+            f"a straight drift over the run explains the held-out error as well (score {drift.score:.2f}): "
+            "the effect cannot be told from a drift of the modelling run (a probe creeping?)"
+        )
     return None
+
+
+def significant(candidate: Candidate, min_score: float, min_effect_rms_um: float) -> bool:
+    """Whether the candidate removes enough of the held-out error to be an effect at all."""
+    return candidate.score >= min_score and candidate.explained_rms_um >= min_effect_rms_um
 
 
 def shortest_adequate_lag(best: Candidate, family: list[Candidate]) -> Candidate:
