@@ -177,14 +177,16 @@ def run_fit(args: argparse.Namespace) -> int:
     elif not isinstance(config["model"]["p"], int):
         raise InputError(f"p = {config['model']['p']!r}: give a whole number or 'auto'")
     estimator = GroupedRegressor.from_config(config)
+    frames = [r.frame for r in runs]
+    not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
     if args.ridge is not None:
         from groupfit.diagnose.select import ridge_setting
 
-        exclude = {run.time_name, run.error_name, *run.temp_names}
-        frames = [r.frame for r in runs]
         settings = config["model"]
-        ridge = ridge_setting(args.ridge, settings["p"], run.temps, run.error, frames, exclude, settings["intercept"])
+        ridge = ridge_setting(
+            args.ridge, settings["p"], run.temps, run.error, frames, not_conditions, settings["intercept"]
+        )
         estimator.set_params(ridge_alpha=ridge["alpha"])
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
@@ -208,10 +210,9 @@ def run_fit(args: argparse.Namespace) -> int:
     if estimator.p == 0 and position_run is None:
         from groupfit.diagnose.select import held_out_check
 
-        exclude = {run.time_name, run.error_name, *run.temp_names}
         alpha = ridge["alpha"] if ridge is not None else 0.0
         intercept = config["model"]["intercept"]
-        held_out = held_out_check(run.temps, run.error, [r.frame for r in runs], exclude, intercept, alpha)
+        held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha)
     result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
     run = fit_run
 
