@@ -427,6 +427,21 @@ def assert_same_decisions(st_out, c_out) -> None:
         assert st_stream["compensation_um"].tobytes() == c_stream.compensation_um.tobytes()
 
 
+def assert_lreal_block_replays(model: dict, streams) -> None:
+    """The LREAL block of ``model`` against the Python rule on every stream: the same decisions, bit for bit."""
+    from test_export_c import python_replay
+
+    streams = list(streams)
+    (text,) = render(model, "st", real="LREAL").values()
+    outputs = run_block(text, streams, model["sampling_period_s"], "LREAL")
+    for temps, out in zip(streams, outputs):
+        py = python_replay(model, temps)
+        assert out["code"].tolist() == py["code"].tolist() and out["fault"].tolist() == py["fault"].tolist()
+        assert out["switched"].tolist() == py["switched"].tolist()
+        assert out["prediction_um"].tobytes() == py["prediction_um"].tobytes()
+        assert out["compensation_um"].tobytes() == py["compensation_um"].tobytes()
+
+
 def as_single(streams):
     with np.errstate(over="ignore", invalid="ignore"):
         return [np.asarray(s, dtype=np.float32).astype(float) for s in streams]

@@ -285,17 +285,10 @@ def test_c_build_makes_the_decisions_of_replay_bit_for_bit(drivers, case, single
 
 @pytest.mark.parametrize("case", CASES)
 def test_lreal_block_matches_replay(case):
-    from test_export_st import run_block
+    from test_export_st import assert_lreal_block_replays
 
     model = model_for(*case)
-    (text,) = render(model, "st", real="LREAL").values()
-    chosen = streams(model)
-    outputs = run_block(text, list(chosen.values()), model["sampling_period_s"], "LREAL")
-    for temps, out in zip(chosen.values(), outputs):
-        py = python_replay(model, temps)
-        assert out["code"].tolist() == py["code"].tolist() and out["fault"].tolist() == py["fault"].tolist()
-        assert out["prediction_um"].tobytes() == py["prediction_um"].tobytes()
-        assert out["compensation_um"].tobytes() == py["compensation_um"].tobytes()
+    assert_lreal_block_replays(model, streams(model).values())
 
 
 @pytest.mark.parametrize("case", CASES)

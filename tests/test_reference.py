@@ -214,18 +214,10 @@ def test_c_header_names_the_reference():
 
 @pytest.mark.parametrize("reference", ["T_amb", "start"])
 def test_lreal_block_matches_replay(reference):
-    from test_export_st import run_block
+    from test_export_st import assert_lreal_block_replays
 
     model = model_for(reference)
-    (text,) = render(model, "st", real="LREAL").values()
-    chosen = streams(model)
-    outputs = run_block(text, list(chosen.values()), model["sampling_period_s"], "LREAL")
-    for temps, out in zip(chosen.values(), outputs):
-        py = python_replay(model, temps)
-        assert out["code"].tolist() == py["code"].tolist() and out["fault"].tolist() == py["fault"].tolist()
-        assert out["switched"].tolist() == py["switched"].tolist()
-        assert out["prediction_um"].tobytes() == py["prediction_um"].tobytes()
-        assert out["compensation_um"].tobytes() == py["compensation_um"].tobytes()
+    assert_lreal_block_replays(model, streams(model).values())
 
 
 @pytest.mark.parametrize("reference", ["T_amb", "start"])
