@@ -53,6 +53,7 @@ from .ballscrew_config import (  # noqa: F401 - the scenario's names, re-exporte
     Source,
     parse_ballscrew,
 )
+from .noise import add_noise
 
 # ---------------------------------------------------------------- operators
 
@@ -236,18 +237,6 @@ def simulate_ballscrew(sc: BallScrewScenario, *, progress: bool = True) -> pd.Da
         exact = theta @ model.displacement_weights(sc.displacements).T
         columns.update({f"u{1000 * x:g}mm_um": exact[:, j] for j, x in enumerate(sc.displacements)})
     return pd.DataFrame(columns)
-
-
-def add_noise(temps: np.ndarray, error: np.ndarray, noise: Noise) -> tuple[np.ndarray, np.ndarray]:
-    """Seeded Gaussian noise, then quantisation to the instruments' resolution."""
-    rng = np.random.default_rng(noise.seed)
-    temps = temps + rng.normal(0.0, noise.sensor_sd_K, temps.shape) if noise.sensor_sd_K else temps.copy()
-    error = error + rng.normal(0.0, noise.probe_sd_um, error.shape) if noise.probe_sd_um else error.copy()
-    if noise.sensor_resolution_K:
-        temps = np.round(temps / noise.sensor_resolution_K) * noise.sensor_resolution_K
-    if noise.probe_resolution_um:
-        error = np.round(error / noise.probe_resolution_um) * noise.probe_resolution_um
-    return temps, error
 
 
 def steady_rise_at_source(screw: Screw, power_in_W: float) -> float:

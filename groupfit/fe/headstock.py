@@ -47,6 +47,7 @@ from .geometry import (
     boundary_facets_in_box,
     build_housing_mesh,
 )
+from .noise import add_noise
 from .schedule import bearing_heat_W
 from .unsensed import FirstOrderLag
 
@@ -369,6 +370,11 @@ def add_measurement_noise(frame: pd.DataFrame, sensors: list[str], noise) -> pd.
     """The sensor and probe columns with seeded noise and quantisation (:class:`MeasurementNoise`)."""
     if not noise.any:
         return frame
+    frame = frame.copy()
+    temps, error = add_noise(frame[sensors].to_numpy(dtype=float), frame["error_um"].to_numpy(dtype=float), noise)
+    frame[sensors] = temps
+    frame["error_um"] = error
+    return frame
     frame = frame.copy()
     rng = np.random.default_rng(noise.seed)
     temps = frame[sensors].to_numpy(dtype=float)
