@@ -131,3 +131,34 @@ def test_two_sweeps_on_one_database_share_the_runs(tmp_path):
     with sqlite3.connect(db) as connection:
         assert connection.execute("SELECT COUNT(*) FROM runs WHERE status = 'done'").fetchone()[0] == total
         assert connection.execute("SELECT COUNT(*) FROM claims").fetchone()[0] == 0
+
+
+def test_a_sweep_retries_the_journal_switch_another_sweep_holds(tmp_path, monkeypatch):
+    """SQLite refuses the WAL switch at once when two sweeps open a new database together: it is tried again."""
+    import groupfit.sweep.store as store
+
+    refusals = []
+
+    class Connection:
+        def __init__(self, connection):
+            self.connection = connection
+
+        def execute(self, sql, *args):
+            if sql.startswith("PRAGMA journal_mode") and len(refusals) < 3:
+                refusals.append(sql)
+                raise sqlite3.OperationalError("database is locked")
+            return self.connection.execute(sql, *args)
+
+        def __getattr__(self, name):
+            return getattr(self.connection, name)
+
+    real_connect = sqlite3.connect
+    monkeypatch.setattr(store.sqlite3, "connect", lambda *a, **k: Connection(real_connect(*a, **k)))
+    with StudyStore(tmp_path / "study.sqlite") as study:
+        assert len(refusals) == 3
+        assert study.connection.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    # a lock that outlasts the wait is still refused in one clear line
+    monkeypatch.setattr(store, "BUSY_TIMEOUT_S", 0.0)
+    refusals.clear()
+    with pytest.raises(store.InputError, match="not a usable study database \\(database is locked\\)"):
+        StudyStore(tmp_path / "other.sqlite")

@@ -62,6 +62,8 @@ from groupfit.errors import InputError
 from groupfit.sweep.config import RunSpec
 
 SCHEMA_VERSION = 1
+BUSY_TIMEOUT_S = 30.0
+"""How long a sweep waits for another one that holds the database."""
 COLUMNS = (
     ("run_hash", "TEXT PRIMARY KEY"),
     ("study", "TEXT"),
@@ -113,8 +115,8 @@ class StudyStore:
             raise InputError(f"{self.path}: the study database path is a folder; give a file with --db")
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.connection = sqlite3.connect(self.path, timeout=30.0, isolation_level=None)
-            self.connection.execute("PRAGMA journal_mode = WAL")
+            self.connection = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+            _switch_to_wal(self.connection)
             self.connection.execute("PRAGMA synchronous = NORMAL")
             self._create()
         except sqlite3.DatabaseError as exc:
@@ -273,6 +275,26 @@ def _owner_alive(owner: str) -> bool:
     except PermissionError:
         return True
     return True
+
+
+def _switch_to_wal(connection: sqlite3.Connection) -> None:
+    """``PRAGMA journal_mode = WAL``, retried while another sweep holds the database.
+
+    Two sweeps opening a new database together can both read it and then both
+    ask for the exclusive lock the switch needs; SQLite then answers one of
+    them "database is locked" at once instead of waiting (its busy handler is
+    not called where waiting could deadlock). The other finishes the switch
+    within milliseconds, so the refused one tries again.
+    """
+    deadline = time.monotonic() + BUSY_TIMEOUT_S
+    while True:
+        try:
+            connection.execute("PRAGMA journal_mode = WAL")
+            return
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) or time.monotonic() >= deadline:
+                raise
+            time.sleep(0.05)
 
 
 class _Transaction:
