@@ -25,6 +25,14 @@ diagnosis says so (``improved is False``); otherwise FAIL with a short reason.
 It is a measurement, not a test: it exits 0 whatever the verdicts.
 
     python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE] [--reference none|default] [--joint]
+        [--keep-reference] [--random N [--first-seed S] [--truth absolute|rises]]
+
+``--random N`` replaces the fixed set by N randomised scenarios (:func:`independent_machine.random_spec`): the
+missing effect cycles through an ambient, a pump, a speed, an on/off spindle and nothing; every run is a new
+workshop day (ambient level 18 … 24 °C, swing, phase, HVAC step, door), with new schedules, sampling period and
+time constant. ``--truth rises`` makes the error follow the parts' rises over the air instead of their
+temperatures over 20 °C: with ``--reference default`` the two together show whether diagnose's check of the
+reference sensor drops it only where it is wrong.
 
 The whole set runs in about 10 s on two cores.
 """
@@ -39,7 +47,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from independent_machine import Scenario, oracle_rms_um, scenario_specs, scenarios  # noqa: E402
+from independent_machine import (  # noqa: E402
+    RANDOM_KINDS,
+    Scenario,
+    oracle_rms_um,
+    random_scenarios,
+    scenario_specs,
+    scenarios,
+)
 
 from groupfit.data import load_run  # noqa: E402
 from groupfit.diagnose import diagnose  # noqa: E402
@@ -101,11 +116,14 @@ def verdict(scenario: Scenario, added: list[dict], before: float, after: float, 
     return f"FAIL: validation fell only {100 * fall:.0f} %"
 
 
-def measure(scenario: Scenario, reference: str = "none", joint: bool = False) -> dict:
-    """Fit, diagnose and score one scenario (``joint``: as ``diagnose --select joint``)."""
+def measure(scenario: Scenario, reference: str = "none", joint: bool = False, keep_reference: bool = False) -> dict:
+    """Fit, diagnose and score one scenario (``joint``: as ``diagnose --select joint``; ``keep_reference``: as
+    ``diagnose --keep-reference``)."""
     start = time.perf_counter()
     model, modelling, validation = base_model(scenario, reference)
-    result = diagnose(model, modelling, validation, live_rule=replay_groups, select_jointly=joint)
+    result = diagnose(
+        model, modelling, validation, live_rule=replay_groups, select_jointly=joint, check_reference=not keep_reference
+    )
     seconds = time.perf_counter() - start
     added = [
         {k: c.to_dict()[k] for k in ("column", "transform", "tau_s", "exponent", "delay_samples", "description")}
@@ -123,6 +141,7 @@ def measure(scenario: Scenario, reference: str = "none", joint: bool = False) ->
         "validation_rms_after_um": after,
         "change_pct": 100 * (after - before) / before,
         "improved": result.improved,
+        "reference_dropped": bool(result.reference and result.reference["dropped"]),
         "oracle_rms_um": oracle_rms_um(scenario),
         "verdict": verdict(scenario, added, before, after, result.improved),
         "report_first_line": result.summary().splitlines()[0],
@@ -140,6 +159,8 @@ def table(rows: list[dict]) -> str:
     for r in rows:
         truth = " + ".join(f"`{c}`" for c in r["missing"]) or "nothing"
         first = describe(r["added"][0]) if r["added"] else "nothing"
+        if r["reference_dropped"]:
+            first = f"(T_amb reference dropped) {first}"
         further = "; ".join(describe(a) for a in r["added"][1:]) or "–"
         rms = f"{r['validation_rms_before_um']:.3g} → {r['validation_rms_after_um']:.3g} ({r['change_pct']:+.0f} %)"
         lines.append(
@@ -160,17 +181,43 @@ def main(argv=None) -> int:
         help="the base model on absolute readings (none, as --reference none) or on rises over T_amb (default)",
     )
     parser.add_argument("--joint", action="store_true", help="diagnose as --select joint does")
+    parser.add_argument(
+        "--keep-reference", action="store_true", help="diagnose as --keep-reference does (no check of T_amb)"
+    )
+    parser.add_argument(
+        "--random",
+        type=int,
+        metavar="N",
+        help="instead of the fixed set, N randomised scenarios r0 … (a missing effect by seed, a new workshop "
+        "day, schedules, sampling and time constant each)",
+    )
+    parser.add_argument("--first-seed", type=int, default=0, help="first seed of --random (default 0)")
+    parser.add_argument(
+        "--truth",
+        choices=("absolute", "rises"),
+        default="absolute",
+        help="--random: the error follows the parts' temperatures over 20 °C (absolute) or their rises over the air",
+    )
     args = parser.parse_args(argv)
     known = [spec.name for spec in scenario_specs()]
     if args.only and any(name not in known for name in args.only):
         parser.error(f"--only: known scenarios are {', '.join(known)}")
     start = time.perf_counter()
     rows = []
-    for scenario in scenarios(args.only):
-        rows.append(measure(scenario, args.reference, args.joint))
+    chosen = random_scenarios(args.random, args.first_seed, args.truth) if args.random else scenarios(args.only)
+    for scenario in chosen:
+        rows.append(measure(scenario, args.reference, args.joint, args.keep_reference))
         r = rows[-1]
         print(f"{r['scenario']:<28} {r['seconds']:5.1f} s  {r['verdict']}", file=sys.stderr, flush=True)
     print(table(rows))
+    if args.random:
+        print("\n| missing | OK | worse, reported so | FAIL | reference dropped |\n|---|---|---|---|---|")
+        for kind in RANDOM_KINDS:
+            of_kind = [r for r in rows if r["scenario"].endswith("_" + kind)]
+            ok = sum(r["verdict"] == "OK" for r in of_kind)
+            worse = sum(r["verdict"].startswith("worse") for r in of_kind)
+            dropped = sum(r["reference_dropped"] for r in of_kind)
+            print(f"| {kind} | {ok} | {worse} | {len(of_kind) - ok - worse} | {dropped} of {len(of_kind)} |")
     ok = sum(r["verdict"] == "OK" for r in rows)
     worse = sum(r["verdict"].startswith("worse") for r in rows)
     total = time.perf_counter() - start

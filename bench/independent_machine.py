@@ -293,7 +293,9 @@ def sensor_reading(true_value, rng, noise_k):
     return np.round(true_value + rng.normal(0, noise_k, len(true_value)), 2)
 
 
-def thermal_error(sim, gains, heat_driven_only=(), zero_at_start=False, extra_um=None, probe_noise_um=0.1):
+def thermal_error(
+    sim, gains, heat_driven_only=(), zero_at_start=False, extra_um=None, probe_noise_um=0.1, over_air=False
+):
     """Thermal error (µm) at the tool, as a probe measures it.
 
     Parameters
@@ -309,12 +311,16 @@ def thermal_error(sim, gains, heat_driven_only=(), zero_at_start=False, extra_um
         An error not caused by temperature (e.g. a fixture settling), added as is.
     probe_noise_um : float
         Gaussian probe noise; the result is rounded to 1 nm.
+    over_air : bool
+        Error of each node's rise over the air (probe and workpiece in the air) instead of over 20 °C.
     """
     error = np.zeros(len(sim.time_s))
     for node, gain in gains.items():
         temperature = sim.node(node, heat_driven_only=node in heat_driven_only)
         if node in heat_driven_only:
             error += gain * temperature
+        elif over_air:
+            error += gain * (temperature - sim.ambient)
         else:
             error += gain * (temperature - (temperature[0] if zero_at_start else 20.0))
     if extra_um is not None:
@@ -334,6 +340,7 @@ def logged_run(
     heat_driven_only=(),
     extra_um=None,
     zero_at_start=False,
+    over_air=False,
 ):
     """The log of a run as a DataFrame: time, sensors, ambient, operating columns, error.
 
@@ -349,7 +356,7 @@ def logged_run(
         default one sensor per sensed node (``T1`` … ``T4``).
     sensor_noise_k : float
         Noise of the machine sensors (the ambient sensor has 0.05 K).
-    heat_driven_only, extra_um, zero_at_start
+    heat_driven_only, extra_um, zero_at_start, over_air
         See :func:`thermal_error`.
     """
     rng = sim.rng
@@ -370,7 +377,7 @@ def logged_run(
     if spindle_on_name:
         columns[spindle_on_name] = sim.spindle_on.astype(int)
     columns["error_um"] = thermal_error(
-        sim, gains, heat_driven_only=heat_driven_only, zero_at_start=zero_at_start, extra_um=extra_um
+        sim, gains, heat_driven_only=heat_driven_only, zero_at_start=zero_at_start, extra_um=extra_um, over_air=over_air
     )
     return pd.DataFrame(columns)
 
@@ -395,6 +402,8 @@ class Scenario:
     """The true hidden input (noise-free) on the modelling run, for the oracle; None when nothing is missing."""
     hidden_validation: np.ndarray | None = None
     notes: str = ""
+    over_air: str | None = None
+    """The ambient column when the error follows the parts' rises over the air (the oracle then reads rises)."""
 
 
 @dataclass
@@ -407,6 +416,7 @@ class ScenarioSpec:
     build: Callable[[], tuple[pd.DataFrame, pd.DataFrame, np.ndarray | None, np.ndarray | None]]
     notes: str = ""
     ambient_as_sensor: str | None = None
+    over_air: str | None = None
 
     def make(self) -> Scenario:
         modelling, validation, hidden_modelling, hidden_validation = self.build()
@@ -421,6 +431,7 @@ class ScenarioSpec:
             hidden_modelling,
             hidden_validation,
             self.notes,
+            self.over_air,
         )
 
 
@@ -447,6 +458,8 @@ def _pair(modelling, validation, hidden_node=None, heat_driven_only=False, **log
             sim = simulate(**recipe)
             frame = logged_run(sim, gains, heat_driven_only=heat_only, extra_um=extra_um, **log)
             node = sim.node(hidden_node, heat_driven_only=heat_driven_only) if hidden_node else None
+            if node is not None and log.get("over_air") and not heat_driven_only:
+                node = node - sim.ambient
             runs.append(frame)
             hidden.append(node)
         return runs[0], runs[1], hidden[0], hidden[1]
@@ -762,7 +775,8 @@ def oracle_rms_um(scenario: Scenario) -> float:
     """
 
     def design(frame, hidden):
-        columns = [frame[c].to_numpy(float) for c in scenario.temps]
+        air = frame[scenario.over_air].to_numpy(float) if scenario.over_air else 0.0
+        columns = [frame[c].to_numpy(float) - air for c in scenario.temps]
         if hidden is not None:
             columns.append(hidden)
         return np.column_stack(columns + [np.ones(len(frame))])
@@ -774,3 +788,84 @@ def oracle_rms_um(scenario: Scenario) -> float:
         coefficients
     )
     return float(np.sqrt(np.mean(residual**2)))
+
+
+RANDOM_KINDS = ("ambient", "pump", "speed", "spindle_on", "none")
+"""What scenario ``r<seed>`` misses: ``RANDOM_KINDS[seed % 5]``."""
+
+
+def _random_schedule(rng, hours, levels):
+    """Segments of 0.5 … 3 h at levels drawn from ``levels``, until ``hours``."""
+    segments, elapsed = [], 0.0
+    while elapsed < hours:
+        duration = float(rng.choice([0.5, 1.0, 1.5, 2.0, 2.5, 3.0]))
+        segments.append((duration, float(rng.choice(levels))))
+        elapsed += duration
+    return segments
+
+
+def _random_ambient(rng):
+    """A workshop day: level 18 … 24 °C, daily swing 0.5 … 2.5 K at any phase, an HVAC step, a door opened."""
+    return {
+        "base_c": float(rng.uniform(18, 24)),
+        "daily_amplitude_k": float(rng.uniform(0.5, 2.5)),
+        "phase_h": float(rng.uniform(0, 24)),
+        "hvac": (float(rng.uniform(2, 18)), float(rng.uniform(-1.5, 1.5))),
+        "door": (float(rng.uniform(2, 18)), float(rng.uniform(-3.0, -0.5)), float(rng.uniform(0.2, 0.8))),
+    }
+
+
+def random_spec(seed: int, truth: str = "absolute") -> ScenarioSpec:
+    """Scenario ``r<seed>``: one missing effect (or none), everything else drawn at random.
+
+    Sampling 10 … 120 s; runs of 14 … 30 h (modelling) and 10 … 24 h
+    (validation), each on its own workshop day (another level, swing, phase,
+    HVAC step and door); new schedules; the hidden part's time constant
+    0.4 … 4 h and its gain. ``truth="rises"``: the error follows the parts'
+    rises over the air instead of their temperatures over 20 °C.
+    """
+    rng = np.random.default_rng(seed)
+    kind = RANDOM_KINDS[seed % len(RANDOM_KINDS)]
+    period = float(rng.choice([10, 20, 30, 60, 120]))
+    hours = (float(rng.uniform(14, 30)), float(rng.uniform(10, 24)))
+    tau_h = float(rng.uniform(0.4, 4.0))
+    recipes = [
+        _recipe(h, period, 2 * seed + k, _random_ambient(rng), spindle_part_tau_h=tau_h, pump_part_tau_h=tau_h)
+        for k, h in enumerate(hours)
+    ]
+    speeds = (0, 0, 1000, 2000, 3000, 4000, 5000, 6000)
+    log = {"over_air": truth == "rises"}
+    hidden, missing = None, ()
+    if kind != "spindle_on":
+        for recipe in recipes:
+            recipe["speed"] = _random_schedule(rng, recipe["hours"], speeds)
+    if kind == "ambient":
+        hidden, missing = "U", ("T_amb",)
+        log["extra_gains"] = {"U": float(rng.uniform(1.5, 4.0))}
+    elif kind == "pump":
+        for recipe in recipes:
+            recipe["pump"] = _random_schedule(rng, recipe["hours"], (0, 1))
+        hidden, missing = "P", ("pump_on",)
+        log.update(extra_gains={"P": float(rng.uniform(1.5, 4.0))}, pump_name="pump_on")
+    elif kind == "speed":
+        hidden, missing = "S", ("spindle_rpm",)
+        log["extra_gains"] = {"S": float(rng.uniform(2.0, 5.0))}
+    elif kind == "spindle_on":
+        for recipe in recipes:
+            recipe["spindle_on"] = _random_schedule(rng, recipe["hours"], (0, 1))
+        hidden, missing = "S", ("spindle_on",)
+        log.update(extra_gains={"S": float(rng.uniform(2.0, 5.0))}, speed_name=None, spindle_on_name="spindle_on")
+    pure = kind in ("pump", "speed", "spindle_on")
+    what = {"ambient": "ambient via an unsensed part", "none": "nothing missing"}.get(kind, f"{kind} part, heat only")
+    return ScenarioSpec(
+        f"r{seed}_{kind}",
+        f"{what}, τ = {tau_h:.1f} h, {period:g} s sampling, error over {'the air' if truth == 'rises' else '20 °C'}",
+        missing,
+        _pair(*recipes, hidden, heat_driven_only=pure, **log),
+        over_air="T_amb" if truth == "rises" else None,
+    )
+
+
+def random_scenarios(n: int, first_seed: int = 0, truth: str = "absolute") -> list[Scenario]:
+    """Scenarios ``r<first_seed>`` … ``r<first_seed + n − 1>`` (see :func:`random_spec`)."""
+    return [random_spec(seed, truth).make() for seed in range(first_seed, first_seed + n)]

@@ -84,6 +84,12 @@ def add_parser(verbs) -> None:
         help="first refit the global model (p = 0) with a ridge penalty (auto: chosen on held-out conditions), "
         "for many collinear inputs; effects are then scored and added with the same penalty",
     )
+    parser.add_argument(
+        "--keep-reference",
+        action="store_true",
+        help="keep the model's reference sensor (e.g. T_amb) even where absolute readings predict the held-out "
+        "conditions clearly better (by default the model is then refitted on absolute readings)",
+    )
     parser.set_defaults(handler=run_diagnose)
 
 
@@ -159,6 +165,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         own_transforms=args.own_transforms,
         select_jointly=joint,
         baseline=model,
+        check_reference=not args.keep_reference,
     )
     if selection is not None:
         result.selection = {**selection, "of": len(model["temps"])}

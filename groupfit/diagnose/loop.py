@@ -67,6 +67,7 @@ from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
+from groupfit.diagnose.reference import absolute_candidate, absolute_model, droppable_reference
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
@@ -145,6 +146,9 @@ class DiagnosisResult:
     """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
     ridge: dict[str, Any] | None = None
     """The ridge penalty the model was refitted with before the diagnosis (``diagnose --ridge``), when it was."""
+    reference: dict[str, Any] | None = None
+    """The check of the model's reference sensor against absolute readings (:mod:`groupfit.diagnose.reference`),
+    when the model has one; ``dropped`` says whether the model was refitted without it."""
 
     def summary(self) -> str:
         """The report, as ``groupfit diagnose`` prints it."""
@@ -163,6 +167,7 @@ class DiagnosisResult:
             "base_model": self.base_check,
             "selection": self.selection,
             "ridge": self.ridge,
+            "reference": self.reference,
             "before": self.before,
             "after": self.after,
             "improved": self.improved,
@@ -173,8 +178,10 @@ class DiagnosisResult:
 
     @property
     def changed(self) -> bool:
-        """Whether the model differs from the one given: an effect added, inputs re-selected or a ridge refit."""
-        return bool(self.added) or self.selection is not None or self.ridge is not None
+        """Whether the model differs from the one given: an effect added, inputs re-selected, a ridge refit or its
+        reference dropped."""
+        dropped = self.reference is not None and self.reference["dropped"]
+        return bool(self.added) or self.selection is not None or self.ridge is not None or dropped
 
     @property
     def improved(self) -> bool | None:
@@ -232,6 +239,7 @@ def diagnose(
     own_transforms: bool = False,
     select_jointly: bool = False,
     baseline: dict[str, Any] | None = None,
+    check_reference: bool = True,
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
@@ -348,11 +356,59 @@ def diagnose(
         m_inputs = [model_inputs(m, run) for run in data_runs]
         return m_inputs, residuals_of(m), model_scorer(m, target, m_inputs, folds, measured)
 
+    reference = droppable_reference(model, data_runs) if check_reference else None
+    reference_check: dict[str, Any] | None = None
+
+    def drop_reference_if_wrong() -> None:
+        """Refit on absolute readings when they beat the reference on the held-out folds.
+
+        The test of a first effect without its least RMS and its drift guard: the two models have the same
+        number of coefficients, and their difference is the reference sensor's weight, not a new regressor.
+        """
+        nonlocal reference_check, current_model, current_inputs, current, scorer
+        absolute = absolute_model(current_model, data_runs)
+        absolute_inputs, absolute_current, absolute_scorer = adopted(absolute)
+        candidate = absolute_candidate(reference, scorer, absolute_scorer)
+        reason = (
+            failed_test(candidate, min_score, False)
+            if candidate.score >= min_score
+            else f"removes {100 * candidate.score:.0f} % of the held-out error; a change of reference needs "
+            f"{100 * min_score:.0f} %"
+        )
+        reference_check = {
+            "reference": reference,
+            "dropped": reason is None,
+            "after_effects": len(added),
+            "held_out_rms_um": {"given": scorer.held_out_rms, "absolute": absolute_scorer.held_out_rms},
+            "folds_improved": int(round(candidate.folds_improved * folds.n_folds)),
+            "n_folds": folds.n_folds,
+            "score": candidate.score,
+            "reason": reason,
+        }
+        if reason is None:
+            current_model, current_inputs, current, scorer = (
+                absolute,
+                absolute_inputs,
+                absolute_current,
+                absolute_scorer,
+            )
+
+    if reference is not None:
+        drop_reference_if_wrong()
+
     selection = None
     if select_jointly:
         causes = [f for f in tried if f.column not in sensor_columns and f.column not in model["temps"]]
         current_model, joint, selection = joint_start(
-            model, data_runs, inputs, target, measured, folds, [(f, compute(f)) for f in causes], effect_test, ramp
+            current_model,
+            data_runs,
+            current_inputs,
+            target,
+            measured,
+            folds,
+            [(f, compute(f)) for f in causes],
+            effect_test,
+            ramp,
         )
         added, first_ranking = list(joint.effects), joint.first_ranking
         steps = [Step(c, *joint.held_out_around(c), joint=True) for c in added]
@@ -384,6 +440,8 @@ def diagnose(
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
         tried = [f for f in tried if f.column != best.feature.column]
+        if reference is not None and not reference_check["dropped"]:
+            drop_reference_if_wrong()  # an effect the reference's misfit hid may now be in
 
     time = np.arange(len(target)) * period
     return DiagnosisResult(
@@ -403,6 +461,7 @@ def diagnose(
         base_check=base_check,
         run_names={key: joint_name(rs) for key, rs in runs.items()},
         selection=selection,
+        reference=reference_check,
     )
 
 

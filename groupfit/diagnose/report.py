@@ -66,6 +66,17 @@ def diagnosis_summary(result) -> str:
             f"coefficients refitted with the ridge penalty alpha = {ridge['alpha']:g} ({how}); "
             "before/after compare with the model as given"
         )
+    reference = result.reference
+    if reference is not None and reference["dropped"]:
+        rms = reference["held_out_rms_um"]
+        effects = reference["after_effects"]
+        when = f" (checked again with the first {effects} effect{'s' if effects > 1 else ''} in)" if effects else ""
+        lines.append(
+            f"reference dropped{when}: the error follows the absolute temperatures, not their rises over "
+            f"`{reference['reference']}` (held-out RMS {change_words(rms['given'], rms['absolute'])}, better on "
+            f"{reference['folds_improved']} of {reference['n_folds']} held-out folds); the model was refitted on "
+            "absolute readings"
+        )
     if result.added:
         for step in result.steps:
             c = step.candidate

@@ -1,0 +1,61 @@
+"""Is the model's reference temperature right? Rises over a reference sensor against absolute readings.
+
+``groupfit fit`` takes every input relative to ``T_amb`` when a run has that
+column (:mod:`groupfit.reference`): right for a machine whose error follows
+its temperatures *over the air* (a probe and workpiece that sit in the air,
+the error zeroed at ambient equilibrium), wrong for one whose error follows
+the absolute temperatures of its parts (the error measured against a fixed
+reference). The two read the same on a modelling run whose air stays
+constant; when the air moves, the rises impose the reference sensor with the
+weight −Σβ on a machine that does not feel it that way, and every effect
+searched for afterwards is judged against that wrong weight (the reference
+column itself then looks like the missing effect).
+
+The check scores the model refitted on absolute readings on the diagnosis's
+held-out folds, against the model as given, and faces it with the test of a
+first effect. Only a clear win drops the reference: where the run cannot
+tell the two apart, the given reference stays.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from groupfit.data import Run
+from groupfit.diagnose.augment import refit_model
+from groupfit.diagnose.candidates import Candidate, HeldOutScorer
+from groupfit.diagnose.residual import model_inputs
+from groupfit.features import Feature
+from groupfit.model import ModelFile
+from groupfit.reference import is_column_reference
+
+
+def droppable_reference(model: dict[str, Any], runs: Sequence[Run]) -> str | None:
+    """The model's reference sensor when every run has that column, else None (no reference, or ``start``)."""
+    reference = model.get("reference")
+    if not is_column_reference(reference):
+        return None
+    return reference if all(reference in run.frame.columns for run in runs) else None
+
+
+def absolute_model(model: dict[str, Any], runs: Sequence[Run]) -> dict[str, Any]:
+    """The model refitted on ``runs`` with its measured inputs as read (no reference), hard breaks kept."""
+    absolute = ModelFile.coerce(dict(model, reference=None))
+    inputs = [model_inputs(absolute, run) for run in runs]
+    return refit_model(absolute, list(runs), inputs, absolute.temps, absolute.derived_inputs or ())
+
+
+def absolute_candidate(reference: str, given: HeldOutScorer, absolute: HeldOutScorer) -> Candidate:
+    """Absolute readings scored like an effect: the share of the given model's held-out error they remove."""
+    sse = np.array([float(v) for v in absolute.base_sse])
+    without, with_absolute = float(given.base_sse.sum()), float(sse.sum())
+    return Candidate(
+        feature=Feature(reference),
+        score=1.0 - with_absolute / without if without > 0 else 0.0,
+        coefficient=0.0,
+        explained_rms_um=float(np.sqrt(max(0.0, without - with_absolute) / len(given.target))),
+        fold_sse=tuple(sse),
+        fold_ratios=tuple(float(r) for r in sse / np.where(given.base_sse > 0, given.base_sse, 1.0)),
+    )
