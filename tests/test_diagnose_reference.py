@@ -12,7 +12,9 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.folds import make_folds
+from groupfit.diagnose.loop import stacked_residual
 from groupfit.features import derived_matrix, lowpass
+from groupfit.model_checks import model_problem
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.reference import with_reference
@@ -143,3 +145,18 @@ def test_the_cli_reports_the_dropped_reference_and_keep_reference_turns_the_chec
     result = json.loads(capsys.readouterr().out)
     assert result["reference"] is None
     assert json.loads((tmp_path / "k" / "model_augmented.json").read_text())["reference"] == "T_amb"
+
+
+def test_a_grouped_model_loses_its_reference_with_its_breaks_kept_and_still_replays():
+    modelling = workshop_run(1)
+    run = load_run(modelling, temps=TEMPS, name="modelling")
+    referenced = with_reference(run, "T_amb")
+    model = model_to_dict(GroupedRegressor(p=2).fit(referenced.temps, referenced.error), referenced)
+    validation = load_run(workshop_run(2, ambient_level=23.0), temps=TEMPS, name="warmer_day")
+    result = diagnose(model, run, validation, live_rule=replay_groups)
+    assert result.reference["dropped"] and result.model.get("reference") is None
+    assert result.model["breaks"] == model["breaks"]
+    assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
+    assert model_problem(result.model) is None
+    replayed = stacked_residual(result.model, [validation], replay_groups)
+    np.testing.assert_allclose(replayed, result.residuals_after["validate"], rtol=0, atol=1e-12)
