@@ -69,6 +69,11 @@ class Candidate:
         ratios = np.asarray(self.fold_ratios)
         return float(np.mean(ratios < 1.0)) if ratios.size else 0.0
 
+    @property
+    def n_folds_improved(self) -> int:
+        """Number of the held-out folds on which the candidate lowers the error."""
+        return int(np.count_nonzero(np.asarray(self.fold_ratios) < 1.0))
+
     def family(self) -> tuple:
         """Candidates that differ only in their low-pass time constant."""
         f = self.feature
@@ -362,13 +367,26 @@ def score_candidate(
     feature: Feature, values: np.ndarray, scorer: HeldOutScorer, own_input: bool = False, collinearity: float = 0.0
 ) -> Candidate:
     """``values`` (one per sample of the scorer's target) scored as one more regressor: a :class:`Candidate`."""
-    sse = scorer.fold_sse(values)
-    without, with_feature = float(scorer.base_sse.sum()), float(sse.sum())
+    return candidate_of_fold_sse(
+        feature, scorer.fold_sse(values), scorer, scorer.coefficient(values), own_input, collinearity
+    )
+
+
+def candidate_of_fold_sse(
+    feature: Feature,
+    sse: np.ndarray,
+    scorer: HeldOutScorer,
+    coefficient: float = 0.0,
+    own_input: bool = False,
+    collinearity: float = 0.0,
+) -> Candidate:
+    """A :class:`Candidate` whose held-out SSE per fold is ``sse``, scored against the scorer's own design."""
+    without, with_feature = float(scorer.base_sse.sum()), float(np.sum(sse))
     return Candidate(
         feature=feature,
         score=1.0 - with_feature / without if without > 0 else 0.0,
-        coefficient=scorer.coefficient(values),
-        explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / len(values))),
+        coefficient=coefficient,
+        explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / len(scorer.target))),
         fold_sse=tuple(float(v) for v in sse),
         fold_ratios=tuple(float(r) for r in sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)),
         own_input=own_input,

@@ -366,8 +366,8 @@ def diagnose(
         number of coefficients, and their difference is the reference sensor's weight, not a new regressor.
         """
         nonlocal reference_check, current_model, current_inputs, current, scorer
-        absolute = absolute_model(current_model, data_runs)
-        absolute_inputs, absolute_current, absolute_scorer = adopted(absolute)
+        absolute, absolute_inputs = absolute_model(current_model, data_runs)
+        absolute_scorer = model_scorer(absolute, target, absolute_inputs, folds, measured)
         candidate = absolute_candidate(reference, scorer, absolute_scorer)
         reason = (
             failed_test(candidate, min_score, False)
@@ -380,7 +380,7 @@ def diagnose(
             "dropped": reason is None,
             "after_effects": len(added),
             "held_out_rms_um": {"given": scorer.held_out_rms, "absolute": absolute_scorer.held_out_rms},
-            "folds_improved": int(round(candidate.folds_improved * folds.n_folds)),
+            "folds_improved": candidate.n_folds_improved,
             "n_folds": folds.n_folds,
             "score": candidate.score,
             "reason": reason,
@@ -389,7 +389,7 @@ def diagnose(
             current_model, current_inputs, current, scorer = (
                 absolute,
                 absolute_inputs,
-                absolute_current,
+                residuals_of(absolute),
                 absolute_scorer,
             )
 
@@ -579,7 +579,7 @@ def failed_test(
 ) -> str | None:
     """Why the candidate fails the test it faces, or None; ``drift``: a straight drift, scored as the candidate was."""
     n_folds = len(candidate.fold_ratios)
-    improved = int(round(candidate.folds_improved * n_folds))
+    improved = candidate.n_folds_improved
     if candidate.own_input and not own_transforms:
         return "a transform of the model's own input: refused (it re-weights what the model already reads)"
     if candidate.own_input or further:

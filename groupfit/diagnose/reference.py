@@ -25,7 +25,7 @@ import numpy as np
 
 from groupfit.data import Run
 from groupfit.diagnose.augment import refit_model
-from groupfit.diagnose.candidates import Candidate, HeldOutScorer
+from groupfit.diagnose.candidates import Candidate, HeldOutScorer, candidate_of_fold_sse
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature
 from groupfit.model import ModelFile
@@ -40,22 +40,14 @@ def droppable_reference(model: dict[str, Any], runs: Sequence[Run]) -> str | Non
     return reference if all(reference in run.frame.columns for run in runs) else None
 
 
-def absolute_model(model: dict[str, Any], runs: Sequence[Run]) -> dict[str, Any]:
-    """The model refitted on ``runs`` with its measured inputs as read (no reference), hard breaks kept."""
+def absolute_model(model: dict[str, Any], runs: Sequence[Run]) -> tuple[dict[str, Any], list[np.ndarray]]:
+    """The model refitted on ``runs`` with its measured inputs as read (no reference), hard breaks kept; and
+    its inputs on each run."""
     absolute = ModelFile.coerce(dict(model, reference=None))
     inputs = [model_inputs(absolute, run) for run in runs]
-    return refit_model(absolute, list(runs), inputs, absolute.temps, absolute.derived_inputs or ())
+    return refit_model(absolute, list(runs), inputs, absolute.temps, absolute.derived_inputs or ()), inputs
 
 
 def absolute_candidate(reference: str, given: HeldOutScorer, absolute: HeldOutScorer) -> Candidate:
     """Absolute readings scored like an effect: the share of the given model's held-out error they remove."""
-    sse = np.array([float(v) for v in absolute.base_sse])
-    without, with_absolute = float(given.base_sse.sum()), float(sse.sum())
-    return Candidate(
-        feature=Feature(reference),
-        score=1.0 - with_absolute / without if without > 0 else 0.0,
-        coefficient=0.0,
-        explained_rms_um=float(np.sqrt(max(0.0, without - with_absolute) / len(given.target))),
-        fold_sse=tuple(sse),
-        fold_ratios=tuple(float(r) for r in sse / np.where(given.base_sse > 0, given.base_sse, 1.0)),
-    )
+    return candidate_of_fold_sse(Feature(reference), absolute.base_sse, given)

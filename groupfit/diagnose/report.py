@@ -80,7 +80,7 @@ def diagnosis_summary(result) -> str:
     if result.added:
         for step in result.steps:
             c = step.candidate
-            better = f"{c.folds_improved * len(c.fold_ratios):.0f} of {len(c.fold_ratios)}"
+            better = f"{c.n_folds_improved} of {len(c.fold_ratios)}"
             held_out = change_words(step.held_out_rms_before, step.held_out_rms_after)
             kind = "effect chosen with the inputs" if step.joint else "missing effect"
             lines.append(
@@ -112,7 +112,7 @@ def diagnosis_summary(result) -> str:
     for c in result.candidates[:10]:
         lines.append(
             f"{c.feature.column:<24} {c.feature.describe():<40} {c.score:>6.3f} "
-            f"{c.folds_improved * len(c.fold_ratios):>3.0f}/{len(c.fold_ratios):<2} {c.explained_rms_um:>15.3g}"
+            f"{c.n_folds_improved:>3d}/{len(c.fold_ratios):<2} {c.explained_rms_um:>15.3g}"
         )
     lines.append("")
     for key in result.before:
