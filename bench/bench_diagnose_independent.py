@@ -94,6 +94,8 @@ def describe(effect: dict) -> str:
         text += f" ^{effect['exponent']:.3g}"
     if effect["delay_samples"]:
         text += f" delay {effect['delay_samples']}"
+    if effect.get("over_reference"):
+        text += f" over {effect['over_reference']}"
     return text
 
 
@@ -126,7 +128,10 @@ def measure(scenario: Scenario, reference: str = "none", joint: bool = False, ke
     )
     seconds = time.perf_counter() - start
     added = [
-        {k: c.to_dict()[k] for k in ("column", "transform", "tau_s", "exponent", "delay_samples", "description")}
+        {
+            k: c.to_dict()[k]
+            for k in ("column", "transform", "tau_s", "exponent", "delay_samples", "over_reference", "description")
+        }
         for c in result.added
     ]
     before = float(result.before["validate"]["rms_um"])

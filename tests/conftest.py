@@ -80,3 +80,31 @@ def drivers(tmp_path_factory):
         return built[key]
 
     return get
+
+
+@pytest.fixture
+def fitted_on_monday(tmp_path):
+    """``fitted_on_monday(monday, tuesday, temps)``: both runs written as CSV and ``groupfit fit --p 0`` run on the
+    first with the fit's defaults; returns the two paths and the model file's path."""
+    from groupfit.cli import main
+
+    def fit(monday, tuesday, temps):
+        data, other = tmp_path / "monday.csv", tmp_path / "tuesday.csv"
+        monday.to_csv(data, index=False)
+        tuesday.to_csv(other, index=False)
+        args = [
+            "fit",
+            "--data",
+            str(data),
+            "--temps",
+            ",".join(temps),
+            "--p",
+            "0",
+            "--quiet",
+            "--out",
+            str(tmp_path / "m"),
+        ]
+        assert main(args) == 0
+        return data, other, tmp_path / "m" / "model.json"
+
+    return fit

@@ -117,13 +117,10 @@ def test_models_without_a_reference_sensor_are_not_checked():
     assert diagnose(model, run, live_rule=replay_groups).reference is None
 
 
-def test_the_cli_reports_the_dropped_reference_and_keep_reference_turns_the_check_off(tmp_path, capsys):
-    data, other = tmp_path / "monday.csv", tmp_path / "tuesday.csv"
-    workshop_run(1).to_csv(data, index=False)
-    workshop_run(2, ambient_level=23.0).to_csv(other, index=False)
-    fit = ["fit", "--data", str(data), "--temps", ",".join(TEMPS), "--p", "0", "--quiet", "--out", str(tmp_path / "m")]
-    assert main(fit) == 0
-    model_path = tmp_path / "m" / "model.json"
+def test_the_cli_reports_the_dropped_reference_and_keep_reference_turns_the_check_off(
+    tmp_path, capsys, fitted_on_monday
+):
+    data, other, model_path = fitted_on_monday(workshop_run(1), workshop_run(2, ambient_level=23.0), TEMPS)
     assert json.loads(model_path.read_text())["reference"] == "T_amb"  # the fit's default on a run with T_amb
     capsys.readouterr()
     args = ["diagnose", str(model_path), "--data", str(data), "--validate", str(other)]

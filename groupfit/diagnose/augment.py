@@ -71,3 +71,55 @@ def refit_model(
         criterion = max(spans, key=spans.get) if spans else None
     refitted = estimator.to_model_file(refitted_run, criterion=criterion)
     return refitted.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()
+
+
+def augment_model_over_reference(
+    model: ModelFile | dict[str, Any],
+    runs: Sequence[Run],
+    inputs: Sequence[np.ndarray],
+    feature: Feature,
+) -> dict[str, Any]:
+    """The model refitted with ``feature`` taken over the model's reference column, written on absolute readings.
+
+    A model of rises over a reference ``R`` (the air) reads ``T_i − R``; a part
+    that lags the air adds ``F − R``, ``F`` a low-pass of ``R``. The groups are
+    refitted on those rises, then written as the same function of absolute
+    readings: ``Σ c_i (T_i − R) + d (F − R) = Σ c_i T_i + d F − (Σ c_i + d) R``,
+    so the model file reads ``R`` as one more measured input, computes ``F`` as
+    a derived input and has no reference. Every target evaluates it as it
+    evaluates any model, and its predictions are those the effect was scored
+    with.
+
+    Parameters
+    ----------
+    inputs : sequence of ndarray, shape (N, k)
+        The model's current inputs on each run (measured ones as rises over the reference).
+    """
+    model = ModelFile.coerce(model)
+    reference = model.reference
+    derived_names = set(model.derived)
+    measured = np.array([name not in derived_names for name in model.temps])
+    air = [run.frame[reference].to_numpy(dtype=float) for run in runs]
+    lagged = [feature.compute(run.frame[feature.column].to_numpy(dtype=float), model.sampling_period_s) for run in runs]
+    rises = np.vstack([np.column_stack([x, f - r]) for x, f, r in zip(inputs, lagged, air)])
+    absolute = np.vstack(
+        [np.column_stack([x + np.where(measured, r[:, None], 0.0), r, f]) for x, f, r in zip(inputs, lagged, air)]
+    )
+    error = np.concatenate([run.error for run in runs])
+    fitted = np.isfinite(error)
+    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
+    estimator.fit(rises[fitted], error[fitted])
+    slopes = estimator.coef_
+    reference_slope = -(slopes[:, :-1][:, measured].sum(axis=1) + slopes[:, -1])
+    estimator.coef_ = np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1]])
+    estimator.n_features_in_ = absolute.shape[1]
+    estimator.interval_stats_ = None  # the rises' intervals, not those of a fit on the absolute readings
+    names = (*model.temps, reference, feature.name)
+    time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
+    frame = pd.concat([run.frame for run in runs], ignore_index=True)
+    written_run = replace(
+        runs[0], time=time, temps=absolute, temp_names=names, error=error, frame=frame, reference=None
+    )
+    derived = (*(model.derived_inputs or ()), feature)
+    written = estimator.to_model_file(written_run, criterion=model.switching.criterion)
+    return written.replace(derived_inputs=derived).to_dict()

@@ -62,6 +62,14 @@ class Candidate:
     """A transform of one of the model's own inputs."""
     collinearity: float = 0.0
     """Largest |r| between the candidate and one of the model's inputs."""
+    over: str | None = None
+    """The model's reference column when the candidate is taken over it (``feature − reference``: the lag of a
+    part behind the air, for a model of rises over the air); None when taken as computed."""
+
+    def describe(self) -> str:
+        """The transform in words, with the reference it is taken over."""
+        words = self.feature.describe()
+        return words if self.over is None else f"{words}, over {self.over}"
 
     @property
     def folds_improved(self) -> float:
@@ -77,7 +85,7 @@ class Candidate:
     def family(self) -> tuple:
         """Candidates that differ only in their low-pass time constant."""
         f = self.feature
-        return (f.column, f.transform, f.exponent, f.scale)
+        return (f.column, f.transform, f.exponent, f.scale, self.over)
 
     def to_dict(self) -> dict:
         return {
@@ -88,7 +96,8 @@ class Candidate:
             "exponent": self.feature.exponent,
             "scale": self.feature.scale,
             "name": self.feature.name,
-            "description": self.feature.describe(),
+            "over_reference": self.over,
+            "description": self.describe(),
             "score": self.score,
             "explained_rms_um": self.explained_rms_um,
             "folds_improved": self.folds_improved,

@@ -33,6 +33,12 @@ the spread of the fold-by-fold differences): a longer lag than the data need
 turns an effect into a trend of the modelling run, which the next run does
 not share, and depends more on how the run started.
 
+On a model of rises over a reference column (the air), each low-pass and
+delay of that column is scored twice, as read and over the reference
+(``feature − reference``: the lag of an unsensed part behind the air, which
+such a model cannot otherwise say); one added over the reference is written
+on absolute readings (:func:`groupfit.diagnose.augment.augment_model_over_reference`).
+
 A cause is preferred to a symptom: an unused temperature sensor is added
 only when no cause column (an ambient, a speed, a heat source's on/off)
 passes. Other columns that explain the held-out error as well as the one
@@ -41,14 +47,14 @@ added (within one standard error) are reported as alternatives.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
-from groupfit.diagnose.augment import augment_model, refit_model
+from groupfit.diagnose.augment import augment_model, augment_model_over_reference, refit_model
 from groupfit.diagnose.candidates import (
     COLLINEAR_R,
     EXOGENOUS_R,
@@ -317,8 +323,17 @@ def diagnose(
             "unreliable: start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
         )
 
+    def over_reference(feature: Feature) -> str | None:
+        """The current model's reference column when ``feature`` is a lag of it, which may be taken over it."""
+        over = droppable_reference(current_model, data_runs)
+        return over if feature.column == over and feature.transform in ("lowpass", "delay") else None
+
     def compute(feature):
         return stacked_feature(feature, data_runs, period)[measured]
+
+    def compute_over_reference(feature):
+        reference_values = np.concatenate([r.frame[feature.column].to_numpy(dtype=float) for r in data_runs])
+        return compute(feature) - reference_values[measured]
 
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
@@ -421,9 +436,16 @@ def diagnose(
                 f"model as given with {base_check['held_out_rms_um']:.3g} µm"
             )
     while len(added) < max_effects and tried:
-        ranking = rank_candidates(
-            target[measured], tried, compute, scorer, np.vstack(current_inputs)[measured], set(measured_inputs)
-        )
+        model_inputs_now = np.vstack(current_inputs)[measured]
+        ranking = rank_candidates(target[measured], tried, compute, scorer, model_inputs_now, set(measured_inputs))
+        lags_of_reference = [f for f in tried if over_reference(f) is not None]
+        if lags_of_reference:  # a part lagging the air, read over the air as the model reads its sensors
+            over = rank_candidates(
+                target[measured], lags_of_reference, compute_over_reference, scorer, model_inputs_now
+            )
+            ranking = sorted(
+                ranking + [replace(c, over=over_reference(c.feature)) for c in over], key=lambda c: -c.score
+            )
         if first_ranking is None:
             first_ranking = ranking
         held_out_before = scorer.held_out_rms
@@ -434,13 +456,16 @@ def diagnose(
         refused += step_refusals
         if best is None:
             break
-        current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
+        if best.over is None:
+            current_model = augment_model(current_model, data_runs, current_inputs, best.feature)
+        else:
+            current_model = augment_model_over_reference(current_model, data_runs, current_inputs, best.feature)
         current_inputs, current, scorer = adopted(current_model)
         held_out_after = scorer.held_out_rms
         added.append(best)
         steps.append(Step(best, held_out_before, held_out_after, alternatives))
         tried = [f for f in tried if f.column != best.feature.column]
-        if reference is not None and not reference_check["dropped"]:
+        if reference_check is not None and droppable_reference(current_model, data_runs) is not None:
             drop_reference_if_wrong()  # an effect the reference's misfit hid may now be in
 
     time = np.arange(len(target)) * period

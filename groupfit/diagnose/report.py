@@ -84,12 +84,12 @@ def diagnosis_summary(result) -> str:
             held_out = change_words(step.held_out_rms_before, step.held_out_rms_after)
             kind = "effect chosen with the inputs" if step.joint else "missing effect"
             lines.append(
-                f"{kind}: {column_words(c.feature.column)}, {c.feature.describe()} "
+                f"{kind}: {column_words(c.feature.column)}, {c.describe()} "
                 f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
                 f"held-out RMS {held_out}{' against the inputs chosen before it' if step.joint else ''})"
             )
             if step.alternatives:
-                others = "; ".join(f"{a.feature.column} {a.feature.describe()}" for a in step.alternatives[:3])
+                others = "; ".join(f"{a.feature.column} {a.describe()}" for a in step.alternatives[:3])
                 lines.append(f"  as well explained (within one standard error) by: {others}")
         lines.append(
             f"{'validation' if validate else 'measured'} run {judged}: RMS {change_words(b['rms_um'], a['rms_um'])}, "
@@ -106,12 +106,12 @@ def diagnosis_summary(result) -> str:
     lines.append(f"held out: {result.folds}")
     for refusal in result.refused[:5]:
         c = refusal.candidate
-        lines.append(f"refused: {c.feature.column} {c.feature.describe()} (score {c.score:.2f}): {refusal.reason}")
+        lines.append(f"refused: {c.feature.column} {c.describe()} (score {c.score:.2f}): {refusal.reason}")
     lines.append("")
     lines.append(f"{'candidate':<24} {'transform':<40} {'score':>6} {'folds':>6} {'removes RMS µm':>15}")
     for c in result.candidates[:10]:
         lines.append(
-            f"{c.feature.column:<24} {c.feature.describe():<40} {c.score:>6.3f} "
+            f"{c.feature.column:<24} {c.describe():<40} {c.score:>6.3f} "
             f"{c.n_folds_improved:>3d}/{len(c.fold_ratios):<2} {c.explained_rms_um:>15.3g}"
         )
     lines.append("")

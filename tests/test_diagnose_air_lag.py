@@ -1,0 +1,145 @@
+"""diagnose on a model of rises over the air: a part that lags the air is found over the air, and written on
+absolute readings with the same predictions."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.linear_model import LinearRegression
+from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.diagnose import diagnose
+from groupfit.diagnose.augment import augment_model_over_reference
+from groupfit.diagnose.folds import make_folds
+from groupfit.diagnose.loop import stacked_residual
+from groupfit.diagnose.residual import model_inputs, predict
+from groupfit.features import Feature, lowpass
+from groupfit.model_checks import model_problem
+from groupfit.modelfile import model_to_dict
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.reference import with_reference
+from groupfit.runtime import replay_groups
+
+PERIOD = 60.0
+TEMPS = ["T1", "T2"]
+GAINS = (2.0, -1.5)
+LAG_TAU_S = 3600.0
+
+
+def workshop_run(seed, hours=24.0, ambient_level=20.0, lag_gain=4.0):
+    """A machine whose error follows its parts' rises over the air (probe and workpiece in the air).
+
+    T1 and T2 follow the air and the spindle's heat; an unsensed part follows the air with τ = 1 h and adds
+    ``lag_gain`` µm per kelvin of its lag behind the air. The air: a 3 K daily swing and an HVAC step.
+    """
+    rng = np.random.default_rng(seed)
+    n = int(hours * 3600 / PERIOD)
+    speed = np.repeat(rng.choice([0.0, 2000.0, 4000.0, 6000.0], size=int(hours / 1.5) + 1), 90)[:n]
+    heat = (speed / 1000.0) ** (5 / 3)
+    time = np.arange(n) * PERIOD
+    air = ambient_level + 3.0 * np.sin(2 * np.pi * (time / 86400.0 + rng.uniform()))
+    air = air + np.where(time > rng.uniform(0.3, 0.7) * time[-1], rng.uniform(-1.5, 1.5), 0.0)
+    parts = [
+        air + 0.3 * lowpass(heat, 900.0, PERIOD, before=0.0),
+        air + 0.1 * lowpass(heat, 3600.0, PERIOD, before=0.0),
+    ]
+    frame = pd.DataFrame({"time_s": time, "speed_rpm": speed, "T_amb": np.round(air + rng.normal(0, 0.02, n), 2)})
+    for name, part in zip(TEMPS, parts):
+        frame[name] = np.round(part + rng.normal(0, 0.02, n), 2)
+    lag = lowpass(air, LAG_TAU_S, PERIOD) - air
+    frame["error_um"] = sum(g * (p - air) for g, p in zip(GAINS, parts)) + lag_gain * lag + rng.normal(0, 0.05, n)
+    return frame
+
+
+def rises_model(frame, p=0):
+    run = load_run(frame, temps=TEMPS, name="modelling")
+    referenced = with_reference(run, "T_amb")
+    return model_to_dict(GroupedRegressor(p=p).fit(referenced.temps, referenced.error), referenced), run
+
+
+def rises_design(frame, tau_s):
+    """[T1 − T_amb, T2 − T_amb, low-pass(T_amb) − T_amb]: the model of rises with the air lag, as numpy sees it."""
+    air = frame["T_amb"].to_numpy(float)
+    lag = lowpass(air, tau_s, PERIOD) - air
+    return np.column_stack([frame[TEMPS].to_numpy(float) - air[:, None], lag])
+
+
+def test_a_part_lagging_the_air_is_found_over_the_air_and_written_on_absolute_readings():
+    modelling, warmer = workshop_run(1), workshop_run(2, ambient_level=23.0)
+    model, run = rises_model(modelling)
+    validation = load_run(warmer, temps=TEMPS, name="warmer_day")
+    result = diagnose(model, run, validation, live_rule=replay_groups)
+
+    first = result.added[0]
+    assert first.feature.column == "T_amb" and first.feature.transform == "lowpass" and first.over == "T_amb"
+    assert first.feature.tau_s == LAG_TAU_S
+    assert "over T_amb" in result.summary().splitlines()[0]
+    assert not result.reference["dropped"]  # the rises were right: the reference stays in what the model computes
+    assert result.after["validate"]["rms_um"] < 0.2 * result.before["validate"]["rms_um"]
+    assert result.improved is True
+
+    written = result.model
+    assert written.get("reference") is None and "T_amb" in written["temps"]
+    assert model_problem(written) is None
+
+    # the written model is least squares on the rises with the lag over the air, as numpy fits it
+    y = modelling["error_um"].to_numpy(float)
+    coef, *_ = np.linalg.lstsq(np.c_[np.ones(len(y)), rises_design(modelling, LAG_TAU_S)], y, rcond=None)
+    expected = np.c_[np.ones(len(warmer)), rises_design(warmer, LAG_TAU_S)] @ coef
+    np.testing.assert_allclose(predict(written, validation), expected, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(predict(written, validation, replay_groups), expected, rtol=0, atol=1e-9)
+
+    # its held-out score, as scikit-learn scores the rises with and without the lag on the same conditions
+    groups = make_folds([modelling], ["speed_rpm"]).labels
+    design = rises_design(modelling, LAG_TAU_S)
+    without = cross_val_predict(LinearRegression(), design[:, :2], y, groups=groups, cv=LeaveOneGroupOut())
+    with_lag = cross_val_predict(LinearRegression(), design, y, groups=groups, cv=LeaveOneGroupOut())
+    assert first.score == pytest.approx(1.0 - np.sum((y - with_lag) ** 2) / np.sum((y - without) ** 2), rel=1e-9)
+
+    # the same low-pass taken as read (absolute) was scored too, and explains less
+    absolute = [c for c in result.candidates if c.feature == first.feature and c.over is None]
+    assert absolute and absolute[0].score < first.score
+
+
+def test_without_a_lagging_part_nothing_is_added_over_the_air():
+    modelling = workshop_run(3, lag_gain=0.0)
+    model, run = rises_model(modelling)
+    result = diagnose(model, run, live_rule=replay_groups)
+    assert not any(c.over for c in result.added)
+    assert result.model["reference"] == "T_amb"
+
+
+def test_a_grouped_model_keeps_its_breaks_and_the_written_model_predicts_as_its_rises():
+    modelling = workshop_run(1)
+    model, run = rises_model(modelling, p=2)
+    feature = Feature("T_amb", "lowpass", tau_s=LAG_TAU_S)
+    written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature)
+    assert written["breaks"] == model["breaks"] and written.get("reference") is None
+    assert model_problem(written) is None
+
+    rises = GroupedRegressor.for_model_file(model, fixed_breaks=list(model["breaks"]))
+    rises.fit(rises_design(modelling, LAG_TAU_S), modelling["error_um"].to_numpy(float))
+    expected = rises.predict(rises_design(modelling, LAG_TAU_S))
+    np.testing.assert_allclose(predict(written, run), expected, rtol=0, atol=1e-9)
+    # on the controller: the groups the run-time rule picks, with the same coefficients
+    replayed = stacked_residual(written, [run], replay_groups)
+    assert np.all(np.isfinite(replayed))
+    assert np.sqrt(np.mean(replayed**2)) < 0.2
+
+
+def test_the_cli_names_the_lag_over_the_air_and_the_written_model_replays(tmp_path, capsys, fitted_on_monday):
+    data, other, model_path = fitted_on_monday(workshop_run(1), workshop_run(2, ambient_level=23.0), TEMPS)
+    capsys.readouterr()
+    args = ["diagnose", str(model_path), "--data", str(data), "--validate", str(other), "--out", str(tmp_path / "d")]
+    assert main([*args, "--json", "-"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    added = result["added"][0]
+    assert added["column"] == "T_amb" and added["over_reference"] == "T_amb"
+    assert added["description"].endswith("over T_amb") and result["improved"] is True
+    written = tmp_path / "d" / "model_augmented.json"
+    assert main(["replay", str(written), "--data", str(other), "--json", "-"]) == 0
+    replayed = np.array([s["residual_um"] for s in json.loads(capsys.readouterr().out)["samples"]])
+    assert np.sqrt(np.mean(replayed**2)) == pytest.approx(result["after"]["validate"]["rms_um"], rel=1e-12)
