@@ -8,14 +8,14 @@ keeps its history through the block, as on the controller); the base model is
 the MLR on the 16 sensors (``disp_ch3_um``) fitted on the modelling rows;
 ``groupfit diagnose`` chooses effects on the modelling rows only
 (leave-one-condition-out) and is judged on the held-out block, through the
-run-time rule. A second table starts
-from a model whose inputs were re-selected (``--select forward``), a third
-from the 16-sensor model refitted with a ridge penalty chosen on the same
-held-out conditions (``--ridge auto``), a fourth from the 16-sensor model
-whose inputs are chosen together with the effects (``--select joint``; its
-nested held-out forecast is shown next to the given model's held-out RMS).
-"RMS µm" is the model each diagnosis started from (the 16-sensor model for
-the fourth). A last table cuts the test in two files at 50 … 90 % and
+run-time rule. The second, third and fourth tables start from a model
+whose inputs were re-selected (``--select forward``, ``lasso``, ``cluster``),
+the fifth from the 16-sensor model refitted with a ridge penalty chosen on
+the same held-out conditions (``--ridge auto``), the sixth from the 16-sensor
+model whose inputs are chosen together with the effects (``--select joint``;
+its nested held-out forecast is shown next to the given model's held-out
+RMS). "RMS µm" is the model each diagnosis started from (the 16-sensor model
+for the sixth). A last table cuts the test in two files at 50 … 90 % and
 validates on the second, once as the continuation of the first (its
 derived inputs carry the first file's history, as on the controller) and
 once after an hour's gap (the controller restarted: from rest).
@@ -111,15 +111,16 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     columns = f"{'held out':<26} {'RMS µm':>8} {'after':>8} {'change':>9}  {'verdict':<9}"
     header = columns + " effects added (chosen on the other blocks)"
-    for start in ("16 sensors", "forward-selected", "16 sensors, ridge (auto)", "16 sensors, joint selection"):
+    starts = ("16 sensors", "forward-selected", "lasso-selected", "cluster-selected", "16 sensors, ridge (auto)")
+    for start in (*starts, "16 sensors, joint selection"):
         print(f"\nbase model: MLR on {start}")
         print(header)
         for label, (first, last) in BLOCKS.items():
             runs, held = runs_around(frame, first, last)
             model = base_model(runs)
             extra = ""
-            if start == "forward-selected":
-                model, info = select_base_model(model, runs, "forward")
+            if start.endswith("-selected"):
+                model, info = select_base_model(model, runs, start.split("-")[0])
                 extra = f"  [inputs {','.join(info['inputs'])}]"
             elif start.endswith("ridge (auto)"):
                 model, info = ridge_base_model(model, runs, "auto")
@@ -133,9 +134,8 @@ def main(argv=None) -> int:
                     f"{selection['nested_held_out_rms_um']:.2f} vs {result.base_check['held_out_rms_um']:.2f} µm]"
                 )
             print(row(label, result) + extra)
-            suffix = {"16 sensors": "", "forward-selected": "_forward", "16 sensors, ridge (auto)": "_ridge"}.get(
-                start, "_joint"
-            )
+            suffix = {"16 sensors": "", "16 sensors, ridge (auto)": "_ridge", "16 sensors, joint selection": "_joint"}
+            suffix = suffix.get(start, "_" + start.split("-")[0])
             name = f"diagnose_measured_{label.split()[0]}{suffix}.png"
             plot_diagnosis(result, {"data": runs, "validate": [held]}, out / name)
     print("\nthe log cut in two files: modelling up to the cut, validation after it (16-sensor start)")
