@@ -143,3 +143,22 @@ def test_the_cli_names_the_lag_over_the_air_and_the_written_model_replays(tmp_pa
     assert main(["replay", str(written), "--data", str(other), "--json", "-"]) == 0
     replayed = np.array([s["residual_um"] for s in json.loads(capsys.readouterr().out)["samples"]])
     assert np.sqrt(np.mean(replayed**2)) == pytest.approx(result["after"]["validate"]["rms_um"], rel=1e-12)
+
+
+def test_the_written_model_runs_on_the_controller_as_in_python(drivers):
+    from test_export_c import assert_same_decisions, python_replay
+
+    from groupfit.export.harness import run_driver
+    from groupfit.runtime import RuleTables
+
+    modelling = workshop_run(1)
+    model, run = rises_model(modelling, p=2)
+    feature = Feature("T_amb", "lowpass", tau_s=LAG_TAU_S)
+    written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature)
+    readings = modelling[list(RuleTables.from_model(written).raw_names)].to_numpy(float)
+    assert list(RuleTables.from_model(written).raw_names) == [*TEMPS, "T_amb"]  # the air read once, for both inputs
+    warmer = workshop_run(2, ambient_level=23.0)[[*TEMPS, "T_amb"]].to_numpy(float)
+    for precision in ("double", "single"):
+        outputs = run_driver(drivers(f"air lag {precision}", written, precision), [readings, warmer])
+        for temps, c_out in zip([readings, warmer], outputs):
+            assert_same_decisions(c_out, python_replay(written, temps, precision))
