@@ -180,6 +180,8 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
         values = np.concatenate(
             [feature.compute(r.frame[feature.column].to_numpy(dtype=float), r.period) for r in data]
         )
+        if shown.over is not None:  # taken over the model's reference column
+            values = values - np.concatenate([r.frame[shown.over].to_numpy(dtype=float) for r in data])
         residual = result.residuals_before["data"]
         top.scatter(values, residual, s=6, c=stacked_hours(data), cmap="viridis")
         order = np.argsort(values)
@@ -188,10 +190,10 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
         top.plot(values[order], np.polyval(fit, values[order]), color="tab:red", lw=1.2)
         verdict = "added" if result.added else "best candidate, not significant"
         top.set_title(
-            f"{'+'.join(r.name for r in data)}: residual against {feature.column}, {feature.describe()} ({verdict})",
+            f"{'+'.join(r.name for r in data)}: residual against {feature.column}, {shown.describe()} ({verdict})",
             fontsize=9,
         )
-        top.set_xlabel(feature.name)
+        top.set_xlabel(feature.name if shown.over is None else f"{feature.name} − {shown.over}")
     top.set_ylabel("residual before (µm)")
     for axis, (key, key_runs) in zip(axes[1:], runs.items()):
         hours = stacked_hours(key_runs)
