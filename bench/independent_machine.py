@@ -804,6 +804,12 @@ def _random_schedule(rng, hours, levels):
     return segments
 
 
+def _schedule_each(rng, recipes, key, levels):
+    """A new :func:`_random_schedule` of ``levels`` as ``recipe[key]`` of every recipe, in order."""
+    for recipe in recipes:
+        recipe[key] = _random_schedule(rng, recipe["hours"], levels)
+
+
 def _random_ambient(rng):
     """A workshop day: level 18 … 24 °C, daily swing 0.5 … 2.5 K at any phase, an HVAC step, a door opened."""
     return {
@@ -837,22 +843,19 @@ def random_spec(seed: int, truth: str = "absolute") -> ScenarioSpec:
     log = {"over_air": truth == "rises"}
     hidden, missing = None, ()
     if kind != "spindle_on":
-        for recipe in recipes:
-            recipe["speed"] = _random_schedule(rng, recipe["hours"], speeds)
+        _schedule_each(rng, recipes, "speed", speeds)
     if kind == "ambient":
         hidden, missing = "U", ("T_amb",)
         log["extra_gains"] = {"U": float(rng.uniform(1.5, 4.0))}
     elif kind == "pump":
-        for recipe in recipes:
-            recipe["pump"] = _random_schedule(rng, recipe["hours"], (0, 1))
+        _schedule_each(rng, recipes, "pump", (0, 1))
         hidden, missing = "P", ("pump_on",)
         log.update(extra_gains={"P": float(rng.uniform(1.5, 4.0))}, pump_name="pump_on")
     elif kind == "speed":
         hidden, missing = "S", ("spindle_rpm",)
         log["extra_gains"] = {"S": float(rng.uniform(2.0, 5.0))}
     elif kind == "spindle_on":
-        for recipe in recipes:
-            recipe["spindle_on"] = _random_schedule(rng, recipe["hours"], (0, 1))
+        _schedule_each(rng, recipes, "spindle_on", (0, 1))
         hidden, missing = "S", ("spindle_on",)
         log.update(extra_gains={"S": float(rng.uniform(2.0, 5.0))}, speed_name=None, spindle_on_name="spindle_on")
     pure = kind in ("pump", "speed", "spindle_on")

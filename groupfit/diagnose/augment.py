@@ -39,7 +39,7 @@ def augment_model(
     model = ModelFile.coerce(model)
     if isinstance(runs, Run):
         runs, inputs = [runs], [inputs]
-    values = [feature.compute(run.frame[feature.column].to_numpy(dtype=float), model.sampling_period_s) for run in runs]
+    values = feature_on_runs(feature, runs, model.sampling_period_s)
     X = [np.column_stack([x, v]) for x, v in zip(inputs, values)]
     derived = (*(model.derived_inputs or ()), feature)
     return refit_model(model, runs, X, (*model.temps, feature.name), derived)
@@ -54,23 +54,9 @@ def refit_model(
 ) -> dict[str, Any]:
     """The model's groups (hard breaks kept) refitted on other inputs, as a model file object."""
     model = ModelFile.coerce(model)
-    X = np.vstack(inputs)
-    error = np.concatenate([run.error for run in runs])
-    measured = np.isfinite(error)  # rows without a measured error only carry the derived inputs' history
-    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
-    estimator.fit(X[measured], error[measured])
-    time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
-    frame = pd.concat([run.frame for run in runs], ignore_index=True)
-    refitted_run = replace(
-        runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame, reference=model.reference
-    )
-    criterion = model.switching.criterion
-    if criterion not in names:  # the given criterion was not kept: the measured input that moves most
-        derived = {f.name for f in derived_inputs}
-        spans = {name: np.ptp(X[:, j]) for j, name in enumerate(names) if name not in derived}
-        criterion = max(spans, key=spans.get) if spans else None
-    refitted = estimator.to_model_file(refitted_run, criterion=criterion)
-    return refitted.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()
+    X, error = np.vstack(inputs), stacked_error(runs)
+    estimator = fitted_groups(model, X, error)
+    return written_model(estimator, model, runs, X, error, names, derived_inputs, model.reference)
 
 
 def augment_model_over_reference(
@@ -100,26 +86,60 @@ def augment_model_over_reference(
     derived_names = set(model.derived)
     measured = np.array([name not in derived_names for name in model.temps])
     air = [run.frame[reference].to_numpy(dtype=float) for run in runs]
-    lagged = [feature.compute(run.frame[feature.column].to_numpy(dtype=float), model.sampling_period_s) for run in runs]
+    lagged = feature_on_runs(feature, runs, model.sampling_period_s)
     rises = np.vstack([np.column_stack([x, f - r]) for x, f, r in zip(inputs, lagged, air)])
     absolute = np.vstack(
         [np.column_stack([x + np.where(measured, r[:, None], 0.0), r, f]) for x, f, r in zip(inputs, lagged, air)]
     )
-    error = np.concatenate([run.error for run in runs])
-    fitted = np.isfinite(error)
-    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
-    estimator.fit(rises[fitted], error[fitted])
+    error = stacked_error(runs)
+    estimator = fitted_groups(model, rises, error)
     slopes = estimator.coef_
     reference_slope = -(slopes[:, :-1][:, measured].sum(axis=1) + slopes[:, -1])
     estimator.coef_ = np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1]])
     estimator.n_features_in_ = absolute.shape[1]
     estimator.interval_stats_ = None  # the rises' intervals, not those of a fit on the absolute readings
     names = (*model.temps, reference, feature.name)
+    derived = (*(model.derived_inputs or ()), feature)
+    return written_model(estimator, model, runs, absolute, error, names, derived, None)
+
+
+def feature_on_runs(feature: Feature, runs: Sequence[Run], period: float) -> list[np.ndarray]:
+    """``feature`` computed on each run from its own start, at the model's sampling period."""
+    return [feature.compute(run.frame[feature.column].to_numpy(dtype=float), period) for run in runs]
+
+
+def stacked_error(runs: Sequence[Run]) -> np.ndarray:
+    return np.concatenate([run.error for run in runs])
+
+
+def fitted_groups(model: ModelFile, X: np.ndarray, error: np.ndarray) -> GroupedRegressor:
+    """The model's estimator, hard breaks kept, fitted on the rows whose error is measured."""
+    measured = np.isfinite(error)  # rows without a measured error only carry the derived inputs' history
+    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
+    return estimator.fit(X[measured], error[measured])
+
+
+def written_model(
+    estimator: GroupedRegressor,
+    model: ModelFile,
+    runs: Sequence[Run],
+    X: np.ndarray,
+    error: np.ndarray,
+    names: Sequence[str],
+    derived_inputs: Sequence[Feature],
+    reference: str | None,
+) -> dict[str, Any]:
+    """The model file of ``estimator`` on inputs ``X`` (the runs stacked), its switching criterion kept if it is
+    still an input, else the measured input that moves most."""
     time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
     frame = pd.concat([run.frame for run in runs], ignore_index=True)
-    written_run = replace(
-        runs[0], time=time, temps=absolute, temp_names=names, error=error, frame=frame, reference=None
+    stacked = replace(
+        runs[0], time=time, temps=X, temp_names=tuple(names), error=error, frame=frame, reference=reference
     )
-    derived = (*(model.derived_inputs or ()), feature)
-    written = estimator.to_model_file(written_run, criterion=model.switching.criterion)
-    return written.replace(derived_inputs=derived).to_dict()
+    criterion = model.switching.criterion
+    if criterion not in names:  # the given criterion was not kept: the measured input that moves most
+        derived = {f.name for f in derived_inputs}
+        spans = {name: np.ptp(X[:, j]) for j, name in enumerate(names) if name not in derived}
+        criterion = max(spans, key=spans.get) if spans else None
+    written = estimator.to_model_file(stacked, criterion=criterion)
+    return written.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()

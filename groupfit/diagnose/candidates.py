@@ -74,8 +74,7 @@ class Candidate:
     @property
     def folds_improved(self) -> float:
         """Share of the held-out folds on which the candidate lowers the error."""
-        ratios = np.asarray(self.fold_ratios)
-        return float(np.mean(ratios < 1.0)) if ratios.size else 0.0
+        return self.n_folds_improved / len(self.fold_ratios) if self.fold_ratios else 0.0
 
     @property
     def n_folds_improved(self) -> int:

@@ -54,7 +54,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
-from groupfit.diagnose.augment import augment_model, augment_model_over_reference, refit_model
+from groupfit.diagnose.augment import augment_model, augment_model_over_reference, feature_on_runs, refit_model
 from groupfit.diagnose.candidates import (
     COLLINEAR_R,
     EXOGENOUS_R,
@@ -323,17 +323,8 @@ def diagnose(
             "unreliable: start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
         )
 
-    def over_reference(feature: Feature) -> str | None:
-        """The current model's reference column when ``feature`` is a lag of it, which may be taken over it."""
-        over = droppable_reference(current_model, data_runs)
-        return over if feature.column == over and feature.transform in ("lowpass", "delay") else None
-
     def compute(feature):
         return stacked_feature(feature, data_runs, period)[measured]
-
-    def compute_over_reference(feature):
-        reference_values = np.concatenate([r.frame[feature.column].to_numpy(dtype=float) for r in data_runs])
-        return compute(feature) - reference_values[measured]
 
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
@@ -438,14 +429,14 @@ def diagnose(
     while len(added) < max_effects and tried:
         model_inputs_now = np.vstack(current_inputs)[measured]
         ranking = rank_candidates(target[measured], tried, compute, scorer, model_inputs_now, set(measured_inputs))
-        lags_of_reference = [f for f in tried if over_reference(f) is not None]
+        over = droppable_reference(current_model, data_runs)
+        lags_of_reference = [f for f in tried if f.column == over and f.transform in ("lowpass", "delay")]
         if lags_of_reference:  # a part lagging the air, read over the air as the model reads its sensors
-            over = rank_candidates(
-                target[measured], lags_of_reference, compute_over_reference, scorer, model_inputs_now
+            air = np.concatenate([r.frame[over].to_numpy(dtype=float) for r in data_runs])[measured]
+            taken_over = rank_candidates(
+                target[measured], lags_of_reference, lambda f, air=air: compute(f) - air, scorer, model_inputs_now
             )
-            ranking = sorted(
-                ranking + [replace(c, over=over_reference(c.feature)) for c in over], key=lambda c: -c.score
-            )
+            ranking = sorted(ranking + [replace(c, over=over) for c in taken_over], key=lambda c: -c.score)
         if first_ranking is None:
             first_ranking = ranking
         held_out_before = scorer.held_out_rms
@@ -565,7 +556,7 @@ def choose(
 
 def stacked_feature(feature: Feature, runs: list[Run], period: float) -> np.ndarray:
     """``feature`` computed on each run from its own start, the runs stacked."""
-    return np.concatenate([feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in runs])
+    return np.concatenate(feature_on_runs(feature, runs, period))
 
 
 def exogenous_sensors(runs: list[Run], sensors: list[str], operating: list[str], period: float) -> list[str]:
