@@ -9,6 +9,7 @@ from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
 from groupfit.diagnose.folds import Folds, make_folds
+from groupfit.diagnose.report import column_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
 from groupfit.grouping import soft_groups
@@ -152,6 +153,34 @@ def test_nothing_missing_leaves_the_model_unchanged(tmp_path, capsys):
     assert result["after"] == result["before"]
     assert "nothing missing" in captured.err
     assert not (out / "model_augmented.json").exists()
+
+
+def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
+    """A refused candidate and an over-fitting base are named at the top, not reported as 'nothing missing'."""
+    from dataclasses import replace
+
+    from groupfit.diagnose.loop import Refusal
+
+    frame = sensor_error(lumped())
+    data_path, model_path = fit_model(tmp_path, frame, "clean")
+    result = diagnose(load_model(model_path), load_run(data_path, temps=TEMPS))
+    assert not result.added and not result.base_check["overfitted"]
+    assert result.summary().splitlines()[0].startswith("nothing missing")
+    best = replace(result.candidates[0], score=0.93)
+    refusal = Refusal(best, "makes one held-out condition (fold 4) 3.6 times worse (RMS)")
+    check = {**result.base_check, "overfitted": True, "held_out_rms_um": 18.8, "in_sample_rms_um": 0.468}
+    first, second = replace(result, refused=[refusal], base_check=check).summary().splitlines()[:2]
+    assert first == (
+        f"no effect added: the best candidate, {column_words(best.feature.column)}, {best.describe()} "
+        "(removes 93 % of the held-out error), was refused: makes one held-out condition (fold 4) 3.6 times worse (RMS)"
+    )
+    assert second == (
+        "the model over-fits (held-out RMS 18.8 µm against 0.468 µm in sample): start from a selected model "
+        "(--select forward)"
+    )
+    first, second = replace(result, base_check=check).summary().splitlines()[:2]
+    assert first == "no effect added: no candidate explains a significant part of the held-out error"
+    assert second.startswith("the model over-fits")
 
 
 def test_measured_data_realities(tmp_path, capsys):

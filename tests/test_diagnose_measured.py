@@ -76,6 +76,8 @@ def test_an_effect_that_fits_the_other_speeds_at_the_cold_starts_expense_is_refu
     assert result.candidates[0].feature.column == "spindle_rpm" and result.candidates[0].score > 0.3
     assert not result.added and result.after == result.before
     assert any("times worse (RMS)" in refusal.reason for refusal in result.refused)
+    first = result.summary().splitlines()[0]
+    assert first.startswith("no effect added: the best candidate, spindle speed") and "was refused: makes one" in first
 
 
 def test_joint_selection_on_the_whole_test_forecasts_less_than_the_given_model(frame):

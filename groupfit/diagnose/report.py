@@ -96,13 +96,28 @@ def diagnosis_summary(result) -> str:
             f"max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
         )
         lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
+    elif result.refused:
+        refusal = result.refused[0]
+        c = refusal.candidate
+        lines.append(
+            f"no effect added: the best candidate, {column_words(c.feature.column)}, {c.describe()} (removes "
+            f"{100 * c.score:.0f} % of the held-out error), was refused: {refusal.reason}"
+        )
+    elif result.base_check.get("overfitted"):  # a model that over-fits hides what is missing
+        lines.append("no effect added: no candidate explains a significant part of the held-out error")
     else:
         lines.append("nothing missing: no candidate explains a significant part of the held-out error; no effect added")
-        if changed:
-            lines.append(
-                f"{'validation' if validate else 'measured'} run {judged}: RMS "
-                f"{change_words(b['rms_um'], a['rms_um'])}, max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
-            )
+    if not result.added and result.base_check.get("overfitted"):
+        check = result.base_check
+        lines.append(
+            f"the model over-fits (held-out RMS {check['held_out_rms_um']:.3g} µm against "
+            f"{check['in_sample_rms_um']:.3g} µm in sample): start from a selected model (--select forward)"
+        )
+    if not result.added and changed:
+        lines.append(
+            f"{'validation' if validate else 'measured'} run {judged}: RMS "
+            f"{change_words(b['rms_um'], a['rms_um'])}, max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
+        )
     lines.append(f"held out: {result.folds}")
     for refusal in result.refused[:5]:
         c = refusal.candidate
