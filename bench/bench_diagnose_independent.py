@@ -25,7 +25,7 @@ diagnosis says so (``improved is False``); otherwise FAIL with a short reason.
 It is a measurement, not a test: it exits 0 whatever the verdicts.
 
     python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE] [--reference none|default] [--joint]
-        [--keep-reference] [--random N [--first-seed S] [--truth absolute|rises]]
+        [--keep-reference] [--p P] [--random N [--first-seed S] [--truth absolute|rises]]
 
 ``--random N`` replaces the fixed set by N randomised scenarios (:func:`independent_machine.random_spec`): the
 missing effect cycles through an ambient, a pump, a speed, an on/off spindle and nothing; every run is a new
@@ -67,11 +67,12 @@ MIN_FALL = 0.40
 """The validation RMS must fall by at least this fraction for an OK."""
 
 
-def base_model(scenario: Scenario, reference: str = "none"):
+def base_model(scenario: Scenario, reference: str = "none", p: int = 0):
     """The MLR on the sensors fitted on the modelling run, as a model file dict, and the two runs.
 
     ``reference="default"``: the inputs taken as rises over ``T_amb`` when the run has it, as
-    ``groupfit fit`` does without ``--reference``; ``"none"``: absolute readings.
+    ``groupfit fit`` does without ``--reference``; ``"none"``: absolute readings. ``p > 0``: a grouped
+    model with p hard breaks (the genetic algorithm, seed 0) instead of the MLR.
     """
     modelling = load_run(scenario.modelling, temps=scenario.temps, error="error_um", name="modelling")
     validation = load_run(
@@ -80,7 +81,7 @@ def base_model(scenario: Scenario, reference: str = "none"):
     fitted = modelling
     if reference == "default":
         fitted = with_reference(modelling, default_reference(modelling.frame))
-    model = model_to_dict(GroupedRegressor(p=0).fit(fitted.temps, fitted.error), fitted)
+    model = model_to_dict(GroupedRegressor(p=p, random_state=0).fit(fitted.temps, fitted.error), fitted)
     return model, modelling, validation
 
 
@@ -118,11 +119,13 @@ def verdict(scenario: Scenario, added: list[dict], before: float, after: float, 
     return f"FAIL: validation fell only {100 * fall:.0f} %"
 
 
-def measure(scenario: Scenario, reference: str = "none", joint: bool = False, keep_reference: bool = False) -> dict:
+def measure(
+    scenario: Scenario, reference: str = "none", joint: bool = False, keep_reference: bool = False, p: int = 0
+) -> dict:
     """Fit, diagnose and score one scenario (``joint``: as ``diagnose --select joint``; ``keep_reference``: as
-    ``diagnose --keep-reference``)."""
+    ``diagnose --keep-reference``; ``p``: hard breaks of the base model)."""
     start = time.perf_counter()
-    model, modelling, validation = base_model(scenario, reference)
+    model, modelling, validation = base_model(scenario, reference, p)
     result = diagnose(
         model, modelling, validation, live_rule=replay_groups, select_jointly=joint, check_reference=not keep_reference
     )
@@ -198,6 +201,9 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--first-seed", type=int, default=0, help="first seed of --random (default 0)")
     parser.add_argument(
+        "--p", type=int, default=0, help="hard breaks of the base model (default 0: the MLR; > 0: a grouped model)"
+    )
+    parser.add_argument(
         "--truth",
         choices=("absolute", "rises"),
         default="absolute",
@@ -211,7 +217,7 @@ def main(argv=None) -> int:
     rows = []
     chosen = random_scenarios(args.random, args.first_seed, args.truth) if args.random else scenarios(args.only)
     for scenario in chosen:
-        rows.append(measure(scenario, args.reference, args.joint, args.keep_reference))
+        rows.append(measure(scenario, args.reference, args.joint, args.keep_reference, args.p))
         r = rows[-1]
         print(f"{r['scenario']:<28} {r['seconds']:5.1f} s  {r['verdict']}", file=sys.stderr, flush=True)
     print(table(rows))

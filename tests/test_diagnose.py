@@ -176,7 +176,7 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     )
     assert second == (
         "the model over-fits (held-out RMS 18.8 µm against 0.468 µm in sample): start from a selected model "
-        "(--select forward)"
+        "(groupfit fit --select forward, or diagnose --select forward)"
     )
     first, second = replace(result, base_check=check).summary().splitlines()[:2]
     assert first == "no effect added: no candidate explains a significant part of the held-out error"

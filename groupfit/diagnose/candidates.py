@@ -272,6 +272,7 @@ class HeldOutScorer:
                 for (_, test), (_, coef, _) in zip(self.splits[:-1], self.fits[:-1])
             ]
         )
+        self.n_scored = max(sum(int(np.count_nonzero(test)) for _, test in self.splits[:-1]), 1)
 
     def _penalty_per_row(self, values: np.ndarray) -> float:
         """The candidate's ridge penalty per training row: penalised like the inputs (0 for least squares)."""
@@ -316,7 +317,7 @@ class HeldOutScorer:
     @property
     def held_out_rms(self) -> float:
         """RMS of the design's own error on the held-out folds (no candidate), µm."""
-        return float(np.sqrt(self.base_sse.sum() / len(self.target)))
+        return float(np.sqrt(self.base_sse.sum() / self.n_scored))
 
     @property
     def in_sample_rms(self) -> float:
@@ -394,7 +395,7 @@ def candidate_of_fold_sse(
         feature=feature,
         score=1.0 - with_feature / without if without > 0 else 0.0,
         coefficient=coefficient,
-        explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / len(scorer.target))),
+        explained_rms_um=float(np.sqrt(max(0.0, without - with_feature) / scorer.n_scored)),
         fold_sse=tuple(float(v) for v in sse),
         fold_ratios=tuple(float(r) for r in sse / np.where(scorer.base_sse > 0, scorer.base_sse, 1.0)),
         own_input=own_input,

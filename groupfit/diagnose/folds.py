@@ -51,28 +51,59 @@ class Folds:
     """``"run"``, ``"condition"`` or ``"block"``."""
     columns: tuple[str, ...] = ()
     """The operating columns the conditions were read from (kind ``"condition"``)."""
+    scored: np.ndarray | None = None
+    """Which samples are scored when their fold is held out (None: all). An unscored sample is neither
+    fitted nor scored in its own fold, and fitted in the others (:meth:`within_groups`)."""
 
     @property
     def n_folds(self) -> int:
-        return len(np.unique(self.labels))
+        scored = self.labels if self.scored is None else self.labels[self.scored]
+        return len(np.unique(scored))
+
+    @property
+    def n_unscored(self) -> int:
+        return 0 if self.scored is None else int(np.count_nonzero(~self.scored))
 
     def describe(self) -> str:
         if self.kind == "run":
-            return f"leave-one-run-out over {self.n_folds} runs"
-        if self.kind == "condition":
-            return f"leave-one-condition-out over {self.n_folds} operating segments (from {', '.join(self.columns)})"
-        return f"{self.n_folds} contiguous blocks of time (no operating column to cut conditions from)"
+            text = f"leave-one-run-out over {self.n_folds} runs"
+        elif self.kind == "condition":
+            text = f"leave-one-condition-out over {self.n_folds} operating segments (from {', '.join(self.columns)})"
+        else:
+            text = f"{self.n_folds} contiguous blocks of time (no operating column to cut conditions from)"
+        if self.n_unscored:
+            text += f"; {self.n_unscored} samples not scored: held out, their group keeps too few samples to be fitted"
+        return text
 
     def splits(self, rows: np.ndarray | None = None):
-        """``(train, test)`` boolean masks, one pair per fold, restricted to ``rows``."""
+        """``(train, test)`` boolean masks, one pair per fold with a scored sample, restricted to ``rows``."""
         rows = np.ones(len(self.labels), dtype=bool) if rows is None else rows
-        for label in np.unique(self.labels[rows]):
-            test = rows & (self.labels == label)
-            yield rows & ~test, test
+        scored = rows if self.scored is None else rows & self.scored
+        for label in np.unique(self.labels[scored]):
+            held_out = self.labels == label
+            yield rows & ~held_out, scored & held_out
 
     def restricted(self, rows: np.ndarray) -> "Folds":
         """The same folds on the samples ``rows`` only (e.g. those with a measured error)."""
-        return Folds(self.labels[rows], self.kind, self.columns)
+        return Folds(self.labels[rows], self.kind, self.columns, None if self.scored is None else self.scored[rows])
+
+    def within_groups(self, groups: np.ndarray, min_samples: int) -> "Folds":
+        """The folds of a grouped model, whose groups (``groups``, one label per sample) are fitted apart.
+
+        A held-out sample is scored only when its group keeps more than ``min_samples`` samples outside
+        the sample's fold: a fold that takes (nearly) all of a group leaves nothing to fit that group on,
+        and the model is never asked to predict with a group it could not fit (the fit itself asks each
+        group for more than c·M samples).
+        """
+        scored = np.ones(len(self.labels), dtype=bool)
+        for label in np.unique(self.labels):
+            held_out = self.labels == label
+            for group in np.unique(groups[held_out]):
+                if np.count_nonzero((groups == group) & ~held_out) <= min_samples:
+                    scored[held_out & (groups == group)] = False
+        if self.scored is not None:
+            scored &= self.scored
+        return Folds(self.labels, self.kind, self.columns, scored)
 
     def index_splits(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """``(train, test)`` sample indices, one pair per fold (the scikit-learn ``cv`` form)."""

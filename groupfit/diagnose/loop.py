@@ -300,6 +300,8 @@ def diagnose(
             "of the derived inputs and are neither fitted nor scored"
         )
     folds = make_folds([r.frame for r in data_runs], columns).restricted(measured)
+    if model["p"] > 0:
+        folds = folds.within_groups(group_index(model, len(target)), group_sample_floor(model))
     if folds.n_folds < 2:
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
 
@@ -315,12 +317,12 @@ def diagnose(
     current_model, current_inputs = model, inputs
     current = dict(before) if baseline is None else residuals_of(model)
     scorer = model_scorer(model, target, inputs, folds, measured)
-    base_check = overfit_check(scorer, folds)
+    base_check = overfit_check(scorer, folds, grouped=bool(model["breaks"]))
     if base_check["overfitted"]:
         notes.append(
             f"the model over-fits: held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
             f"{base_check['in_sample_rms_um']:.3g} µm in sample ({folds.describe()}); effects found on it are "
-            "unreliable: start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
+            f"unreliable: {base_check['advice']}"
         )
 
     def compute(feature):
@@ -666,20 +668,39 @@ def stacked_design(model: dict[str, Any], inputs: list[np.ndarray]) -> np.ndarra
     return np.vstack([group_design(model, x) for x in inputs])
 
 
-def overfit_check(scorer: HeldOutScorer, folds: Folds) -> dict[str, Any]:
-    """The model's own regression: in-sample RMS against held-out RMS on the folds."""
+def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> dict[str, Any]:
+    """The model's own regression: in-sample RMS against held-out RMS on the folds, and what to do about it.
+
+    A grouped model's groups are stretches of the modelling run: a held-out fold that takes most of a
+    group leaves that group's coefficients with little to be fitted on, so fewer groups is advised too.
+    """
     in_sample, held_out = scorer.in_sample_rms, scorer.held_out_rms
+    advice = "start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
+    if grouped:
+        advice = "refit with fewer groups (groupfit fit --p 0) or " + advice
     return {
         "in_sample_rms_um": in_sample,
         "held_out_rms_um": held_out,
         "folds": folds.describe(),
         "overfitted": bool(held_out > OVERFIT_RATIO * max(in_sample, 1e-12)),
+        "advice": advice,
     }
+
+
+def group_index(model: dict[str, Any], n_rows: int) -> np.ndarray:
+    """The group serving each of ``n_rows`` samples of the modelling run, by sample index."""
+    return serving_group_index(model["breaks"], int(model.get("n_samples", n_rows)), model["n"], n_rows)
+
+
+def group_sample_floor(model: dict[str, Any]) -> int:
+    """c·M with M the coefficients of a group and one effect more: a group is fitted on more samples than this."""
+    n_coefficients = len(model["temps"]) + int(model["intercept"]) + 1  # temps names the derived inputs too
+    return int(np.floor(float(model["c"]) * n_coefficients))
 
 
 def group_design(model: dict[str, Any], inputs: np.ndarray) -> np.ndarray:
     """The model's regressors: each group's inputs (and intercept) in its own columns, groups by sample index."""
-    groups = serving_group_index(model["breaks"], int(model.get("n_samples", len(inputs))), model["n"], len(inputs))
+    groups = group_index(model, len(inputs))
     block = np.column_stack([np.ones(len(inputs)), inputs]) if model["intercept"] else inputs
     n_groups = len(model["breaks"]) + 1
     design = np.zeros((len(inputs), n_groups * block.shape[1]))

@@ -111,7 +111,7 @@ def diagnosis_summary(result) -> str:
         check = result.base_check
         lines.append(
             f"the model over-fits (held-out RMS {check['held_out_rms_um']:.3g} µm against "
-            f"{check['in_sample_rms_um']:.3g} µm in sample): start from a selected model (--select forward)"
+            f"{check['in_sample_rms_um']:.3g} µm in sample): {check['advice']}"
         )
     if not result.added and changed:
         lines.append(
