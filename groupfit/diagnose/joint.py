@@ -95,7 +95,7 @@ class JointProblem:
             self.target[rows],
             {name: values[rows] for name, values in self.inputs.items()},
             [(feature, values[rows]) for feature, values in self.effects],
-            Folds(self.folds.labels[rows], self.folds.kind, self.folds.columns),
+            self.folds.restricted(rows),
             self.effect_test,
             self.drift[rows],
             self.fit_intercept,

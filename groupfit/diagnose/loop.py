@@ -300,7 +300,8 @@ def diagnose(
             "of the derived inputs and are neither fitted nor scored"
         )
     folds = make_folds([r.frame for r in data_runs], columns).restricted(measured)
-    if model["p"] > 0:
+    grouped = model["p"] > 0
+    if grouped:
         folds = folds.within_groups(group_index(model, len(target)), group_sample_floor(model))
     if folds.n_folds < 2:
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
@@ -317,7 +318,7 @@ def diagnose(
     current_model, current_inputs = model, inputs
     current = dict(before) if baseline is None else residuals_of(model)
     scorer = model_scorer(model, target, inputs, folds, measured)
-    base_check = overfit_check(scorer, folds, grouped=bool(model["breaks"]))
+    base_check = overfit_check(scorer, folds, grouped)
     if base_check["overfitted"]:
         notes.append(
             f"the model over-fits: held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
