@@ -29,7 +29,7 @@ class FitResult:
     ridge: dict[str, Any] | None = None
     """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.ridge_setting`), when it did."""
     held_out: dict[str, Any] | None = None
-    """A global model's error on held-out conditions or runs (:func:`groupfit.diagnose.select.held_out_check`)."""
+    """The model's error on held-out conditions or runs (:func:`groupfit.diagnose.select.held_out_check`)."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
@@ -76,15 +76,18 @@ def ridge_summary(ridge: dict) -> str:
 
 
 def held_out_summary(check: dict) -> str:
-    """The held-out line of a global model, with a note when it over-fits."""
+    """The held-out line of a model, with a note when it over-fits."""
     line = (
         f"check   held-out RMS {check['held_out_rms_um']:.4g} µm against {check['in_sample_rms_um']:.4g} µm in sample "
         f"({check['folds']})"
     )
     if check["overfitted"]:
+        hold_better = "fewer inputs (--select forward) or a ridge penalty (--ridge auto) hold better"
+        if check.get("grouped"):
+            hold_better = "try fewer groups (--p 0) or fewer inputs (--select forward)"
         line += (
             "\nnote    the model over-fits: expect the held-out error on the next run, not the in-sample one; "
-            "fewer inputs (--select forward) or a ridge penalty (--ridge auto) hold better"
+            + hold_better
         )
     return line
 

@@ -1,4 +1,4 @@
-"""``fit --p 0`` reports the model's error on held-out conditions, and warns when it is far above the in-sample one."""
+"""``fit`` reports the model's error on held-out conditions, and warns when it is far above the in-sample one."""
 
 import json
 
@@ -11,6 +11,7 @@ from test_diagnose_joint import SENSORS, spindle_run
 
 from groupfit.cli import main
 from groupfit.diagnose.folds import make_folds
+from groupfit.grouping import serving_group_index
 
 
 def fit_json(tmp_path, capsys, frame, temps, *extra):
@@ -62,14 +63,35 @@ def test_a_model_on_sensors_that_only_drift_is_called_over_fitted(tmp_path, caps
     assert "over-fits" not in capsys.readouterr().out
 
 
-def test_a_grouped_model_has_no_held_out_check(tmp_path, capsys):
+def test_a_grouped_model_is_held_out_group_by_group(tmp_path, capsys):
+    """Each group refitted without the held-out condition predicts its part of it, where it keeps > c·M samples."""
     frame = spindle_run(23, hours=6.0)
     path = tmp_path / "run.csv"
     frame.to_csv(path, index=False)
     args = ["fit", "--data", str(path), "--temps", "T1,T2", "--p", "1", "--n", "2", "--c", "2", "--reference", "none"]
     capsys.readouterr()
     assert main([*args, "--quiet", "--out", str(tmp_path / "m"), "--json", "-"]) == 0
-    assert "held_out" not in json.loads(capsys.readouterr().out)
+    result = json.loads(capsys.readouterr().out)
+    labels = make_folds([frame], ["speed_rpm"]).labels
+    groups = serving_group_index(result["breaks"], len(frame), 2)
+    X, y = frame[["T1", "T2"]].to_numpy(), frame["error_um"].to_numpy()
+    squared, scored = 0.0, 0
+    for label in np.unique(labels):
+        for group in np.unique(groups[labels == label]):
+            train, test = (groups == group) & (labels != label), (groups == group) & (labels == label)
+            if train.sum() <= 2 * 3:  # c·M: the group could not be fitted without this condition
+                continue
+            fitted = LinearRegression().fit(X[train], y[train])
+            squared += float(np.sum((y[test] - fitted.predict(X[test])) ** 2))
+            scored += int(test.sum())
+    check = result["held_out"]
+    assert check["held_out_rms_um"] == pytest.approx(np.sqrt(squared / scored), rel=1e-8)
+    # in sample: each group fitted on the samples it serves (the soft groups' overlap of n samples aside)
+    served = [groups == g for g in (0, 1)]
+    residual = np.concatenate([y[s] - LinearRegression().fit(X[s], y[s]).predict(X[s]) for s in served])
+    assert check["in_sample_rms_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-8)
+    assert check["in_sample_rms_um"] == pytest.approx(result["training"]["rms_um"], rel=1e-3)
+    assert check["grouped"] is True and not check["overfitted"]
 
 
 def test_held_out_check_needs_two_folds():

@@ -207,12 +207,13 @@ def run_fit(args: argparse.Namespace) -> int:
             "on those"
         )
     held_out = None
-    if estimator.p == 0 and position_run is None:
+    if position_run is None:
         from groupfit.diagnose.select import held_out_check
 
         alpha = ridge["alpha"] if ridge is not None else 0.0
         intercept = config["model"]["intercept"]
-        held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha)
+        grouped = model.to_dict() if estimator.p > 0 else None
+        held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)
     result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
     run = fit_run
 

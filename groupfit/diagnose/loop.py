@@ -684,6 +684,7 @@ def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) ->
         "held_out_rms_um": held_out,
         "folds": folds.describe(),
         "overfitted": bool(held_out > OVERFIT_RATIO * max(in_sample, 1e-12)),
+        "grouped": grouped,
         "advice": advice,
     }
 
@@ -693,9 +694,9 @@ def group_index(model: dict[str, Any], n_rows: int) -> np.ndarray:
     return serving_group_index(model["breaks"], int(model.get("n_samples", n_rows)), model["n"], n_rows)
 
 
-def group_sample_floor(model: dict[str, Any]) -> int:
-    """c·M with M the coefficients of a group and one effect more: a group is fitted on more samples than this."""
-    n_coefficients = len(model["temps"]) + int(model["intercept"]) + 1  # temps names the derived inputs too
+def group_sample_floor(model: dict[str, Any], effects: int = 1) -> int:
+    """c·M, M the coefficients of a group with ``effects`` more: a group is fitted on more samples than this."""
+    n_coefficients = len(model["temps"]) + int(model["intercept"]) + effects  # temps names the derived inputs too
     return int(np.floor(float(model["c"]) * n_coefficients))
 
 

@@ -56,22 +56,33 @@ def held_out_check(
     exclude: set[str],
     fit_intercept: bool = True,
     ridge_alpha: float = 0.0,
+    grouped: dict[str, Any] | None = None,
 ) -> dict[str, Any] | None:
-    """A global model's RMS in sample and on the diagnosis's held-out folds; None with fewer than two folds.
+    """A model's RMS in sample and on the diagnosis's held-out folds; None with fewer than two folds.
 
-    The rows with a measured error ``y`` are fitted and scored; the model is fitted as ``fit --p 0`` fits
-    it (least squares, or the ridge penalty ``ridge_alpha``). ``overfitted`` is the diagnosis's warning.
+    The rows with a measured error ``y`` are fitted and scored; a global model is fitted as ``fit --p 0``
+    fits it (least squares, or the ridge penalty ``ridge_alpha``). ``grouped``: the model file (as a dict)
+    of a grouped model on a fully measured run, its groups refitted on each fold with the breaks kept
+    and scored where they keep enough samples (:meth:`Folds.within_groups`). ``overfitted`` is the
+    diagnosis's warning.
     """
     from groupfit.diagnose.candidates import HeldOutScorer
-    from groupfit.diagnose.loop import overfit_check
+    from groupfit.diagnose.loop import group_design, group_index, group_sample_floor, overfit_check
 
+    rows = np.isfinite(y)
     folds = held_out_folds(frames, exclude, y)
+    if grouped is not None:
+        if not rows.all():
+            return None
+        folds = folds.within_groups(group_index(grouped, len(y)), group_sample_floor(grouped, effects=0))
     if folds.n_folds < 2:
         return None
-    rows = np.isfinite(y)
-    design = np.column_stack([np.ones(int(rows.sum())), X[rows]]) if fit_intercept else X[rows]
+    if grouped is not None:
+        design = group_design(grouped, X)
+    else:
+        design = np.column_stack([np.ones(int(rows.sum())), X[rows]]) if fit_intercept else X[rows]
     scorer = HeldOutScorer(y[rows], design, folds, ridge_alpha=ridge_alpha, fit_intercept=fit_intercept)
-    return overfit_check(scorer, folds)
+    return overfit_check(scorer, folds, grouped is not None)
 
 
 def ridge_setting(
