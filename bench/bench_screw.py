@@ -131,9 +131,8 @@ def straight_line_minimax(model, run, x, t, measured, tau0) -> float:
         return temperature_rise(x[None, :], t[:, None], c1, c2, lam, alpha, x0)
 
     bounds = [(0, 30), (-5, 5), (0.1, 50), (0, 0.5), (-5, 50), (-5, 50)]
-    model.fit_source(run.rises, run.time, run.positions, name := run.name)
-    identified = [*(model.sources_[name][k] for k in ("C1", "C2")), model.lambda_, model.source_offset_]
-    identified += [1e5 * a for a in model.alpha_prime_]
+    c1, c2 = model.fit_source(run.rises, run.time, run.positions, run.name)
+    identified = [c1, c2, model.lambda_, model.source_offset_, *(1e5 * a for a in model.alpha_prime_)]
     lo, hi = zip(*bounds)
     fitted = least_squares(lambda p: (predicted(p) - measured).ravel(), identified, bounds=(lo, hi)).x
     best = np.inf
