@@ -251,7 +251,10 @@ def diagnose(
 
     Candidates are chosen on ``data`` only, by held-out folds that are whole
     operating conditions (one run) or whole runs (several); ``validate`` is
-    never used to choose, only to report. With ``select_jointly`` the model's
+    never used to choose, only to report. A model of rises over a reference
+    sensor is also diagnosed from absolute readings, and that diagnosis
+    replaces this one when its end model predicts the held-out conditions
+    clearly better (:func:`absolute_branch`). With ``select_jointly`` the model's
     measured inputs are re-chosen together with the first effects
     (:mod:`groupfit.diagnose.joint`; a global model without derived inputs
     only), the further effects then as usual. ``baseline`` is the model
@@ -369,21 +372,13 @@ def diagnose(
     reference_check: dict[str, Any] | None = None
 
     def drop_reference_if_wrong() -> None:
-        """Refit on absolute readings when they beat the reference on the held-out folds.
-
-        The test of a first effect without its least RMS and its drift guard: the two models have the same
-        number of coefficients, and their difference is the reference sensor's weight, not a new regressor.
-        """
+        """Refit on absolute readings when they beat the reference on the held-out folds
+        (:func:`reference_change_refusal`)."""
         nonlocal reference_check, current_model, current_inputs, current, scorer
         absolute, absolute_inputs = absolute_model(current_model, data_runs)
         absolute_scorer = model_scorer(absolute, target, absolute_inputs, folds, measured)
         candidate = absolute_candidate(reference, scorer, absolute_scorer)
-        reason = (
-            failed_test(candidate, min_score, False)
-            if candidate.score >= min_score
-            else f"removes {100 * candidate.score:.0f} % of the held-out error; a change of reference needs "
-            f"{100 * min_score:.0f} %"
-        )
+        reason = reference_change_refusal(candidate, min_score)
         reference_check = {
             "reference": reference,
             "dropped": reason is None,
@@ -461,6 +456,36 @@ def diagnose(
         tried = [f for f in tried if f.column != best.feature.column]
         if reference_check is not None and droppable_reference(current_model, data_runs) is not None:
             drop_reference_if_wrong()  # an effect the reference's misfit hid may now be in
+
+    if reference_check is not None and not reference_check["dropped"] and not select_jointly:
+        on_absolute = absolute_branch(
+            model,
+            data_runs,
+            scorer,
+            added,
+            folds,
+            target,
+            measured,
+            reference_check,
+            lambda start: diagnose(
+                start,
+                data_runs,
+                validate_runs or None,
+                live_rule,
+                min_score,
+                min_effect_rms_um,
+                max_effects,
+                heat_exponent,
+                own_transforms,
+                baseline=model if baseline is None else baseline,
+                check_reference=False,
+            ),
+            min_score,
+        )
+        if on_absolute is not None:
+            on_absolute.base_check = base_check
+            on_absolute.notes = notes + [n for n in on_absolute.notes if n not in notes]
+            return on_absolute
 
     time = np.arange(len(target)) * period
     return DiagnosisResult(
@@ -555,6 +580,79 @@ def choose(
             alternatives.append(c)
             seen.add(c.feature.column)
     return chosen, refusals, alternatives
+
+
+def reference_change_refusal(candidate: Candidate, min_score: float) -> str | None:
+    """Why absolute readings, scored like a first effect, fail the test of a change of reference; or None.
+
+    The test of a first effect without its least RMS and its drift guard: the two models differ in the
+    reference sensor's weight, not by a new regressor.
+    """
+    if candidate.score < min_score:
+        return (
+            f"removes {100 * candidate.score:.0f} % of the held-out error; a change of reference needs "
+            f"{100 * min_score:.0f} %"
+        )
+    return failed_test(candidate, min_score, False)
+
+
+def absolute_branch(
+    model: dict[str, Any],
+    data_runs: list[Run],
+    scorer: HeldOutScorer,
+    added: list[Candidate],
+    folds: Folds,
+    target: np.ndarray,
+    measured: np.ndarray,
+    reference_check: dict[str, Any],
+    diagnose_from,
+    min_score: float,
+) -> DiagnosisResult | None:
+    """The diagnosis on absolute readings when it beats the one on rises with the effects of each in; else None.
+
+    The reference check before the effects compares two models that both
+    miss the effect; when the missing effect dominates the held-out error,
+    neither reading wins clearly and the wrong one is kept, and with it the
+    effect is not found at all. So the diagnosis is also run from the model
+    on absolute readings, and the two end models face the test of a
+    reference change on the same held-out folds. A branch that needs the
+    reference column itself (a lag of the air on absolute readings) is not
+    evidence against the reference: it gives the air a free weight, which
+    the diagnosis on rises already tried as a lag over the reference. The
+    outcome is recorded in ``reference_check["branch"]``.
+    """
+    reference = reference_check["reference"]
+    start, _ = absolute_model(model, data_runs)
+    branch = diagnose_from(start)
+    branch_inputs = [model_inputs(branch.model, run) for run in data_runs]
+    branch_scorer = model_scorer(branch.model, target, branch_inputs, folds, measured)
+    candidate = absolute_candidate(reference, scorer, branch_scorer)
+    if any(c.feature.column == reference for c in branch.added):
+        reason = f"the effects found on absolute readings include `{reference}` itself: not evidence against it"
+    else:
+        reason = reference_change_refusal(candidate, min_score)
+    outcome = {
+        "effects": {
+            "given": [c.feature.name for c in added],
+            "absolute": [c.feature.name for c in branch.added],
+        },
+        "held_out_rms_um": {"given": scorer.held_out_rms, "absolute": branch_scorer.held_out_rms},
+        "folds_improved": candidate.n_folds_improved,
+        "score": candidate.score,
+        "reason": reason,
+    }
+    reference_check["branch"] = outcome
+    if reason is not None:
+        return None
+    branch.reference = {
+        **reference_check,
+        "dropped": True,
+        "held_out_rms_um": outcome["held_out_rms_um"],
+        "folds_improved": candidate.n_folds_improved,
+        "score": candidate.score,
+        "reason": None,
+    }
+    return branch
 
 
 def stacked_feature(feature: Feature, runs: list[Run], period: float) -> np.ndarray:

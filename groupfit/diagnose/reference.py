@@ -15,6 +15,12 @@ The check scores the model refitted on absolute readings on the diagnosis's
 held-out folds, against the model as given, and faces it with the test of a
 first effect. Only a clear win drops the reference: where the run cannot
 tell the two apart, the given reference stays.
+
+Before an effect is in, both readings may miss it so badly that neither wins,
+and with the wrong reference kept the effect is then not found at all. So
+when the reference survives the diagnosis, the diagnosis is run again from
+absolute readings, and the two end models, each with its own effects, face
+the same test (:func:`groupfit.diagnose.loop.absolute_branch`).
 """
 
 from __future__ import annotations

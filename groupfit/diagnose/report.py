@@ -67,7 +67,19 @@ def diagnosis_summary(result) -> str:
             "before/after compare with the model as given"
         )
     reference = result.reference
-    if reference is not None and reference["dropped"]:
+    branch = None if reference is None else reference.get("branch")
+    if reference is not None and reference["dropped"] and branch is not None and branch["reason"] is None:
+        rms = branch["held_out_rms_um"]
+        n_given = len(branch["effects"]["given"])
+        given = f"the {n_given} effect{'s' if n_given > 1 else ''} found on it" if n_given else "no effect"
+        lines.append(
+            f"reference dropped: the error follows the absolute temperatures, not their rises over "
+            f"`{reference['reference']}`: diagnosed again on absolute readings, the model with its effects predicts "
+            f"the held-out conditions with RMS {change_words(rms['given'], rms['absolute'])} against the model as "
+            f"given with {given} (better on {branch['folds_improved']} of {reference['n_folds']} held-out folds); "
+            "the model was refitted on absolute readings"
+        )
+    elif reference is not None and reference["dropped"]:
         rms = reference["held_out_rms_um"]
         effects = reference["after_effects"]
         when = f" (checked again with the first {effects} effect{'s' if effects > 1 else ''} in)" if effects else ""
