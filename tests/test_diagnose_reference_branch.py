@@ -14,7 +14,7 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.folds import make_folds
 from groupfit.diagnose.loop import MIN_SCORE
-from groupfit.features import derived_matrix
+from groupfit.features import Feature, derived_matrix
 from groupfit.runtime import replay_groups
 
 machine = load("independent_machine")
@@ -68,3 +68,42 @@ def test_a_branch_that_needs_the_air_itself_keeps_the_reference():
     assert branch["score"] >= MIN_SCORE and branch["folds_improved"] == result.reference["n_folds"]
     assert "`T_amb` itself" in branch["reason"]
     assert not result.reference["dropped"] and result.model["reference"] == "T_amb"
+
+
+def fold_sse(design, y, groups):
+    """Held-out squared error per left-out group, in the order of the groups' labels."""
+    sse = []
+    for train, test in LeaveOneGroupOut().split(design, y, groups):
+        fitted = LinearRegression().fit(design[train], y[train])
+        sse.append(float(np.sum((y[test] - fitted.predict(design[test])) ** 2)))
+    return np.array(sse)
+
+
+def test_as_well_with_the_airs_weight_fixed_is_taken_over_a_diagnosis_that_freed_it():
+    # on rises, the diagnosis first takes T_amb as measured back in (the weight the reference fixed, freed),
+    # then the spindle; on absolute readings it finds the spindle alone and predicts within one standard error
+    scenario, model, modelling, result = diagnosed(3, "absolute")
+    branch = result.reference["branch"]
+    assert branch["effects"]["given"][0] == "T_amb" and branch["as_well_with_fewer_coefficients"]
+    assert result.reference["dropped"] and branch["score"] < MIN_SCORE
+    assert [c.feature.column for c in result.added] == ["spindle_on"]
+    assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
+    assert "with one coefficient fewer" in result.summary().splitlines()[0]
+
+    # the one-standard-error comparison, recomputed with scikit-learn on the same held-out conditions
+    frame, y = modelling.frame, modelling.error
+    groups = make_folds([frame], ["spindle_on"]).labels
+    spindle = Feature("spindle_on", "lowpass", tau_s=result.added[0].feature.tau_s, start="rest")
+    assert branch["effects"]["absolute"] == [spindle.name] and branch["effects"]["given"][1:] == [spindle.name]
+    effect = derived_matrix([spindle], frame, model["sampling_period_s"])
+    absolute = frame[scenario.temps].to_numpy(float)
+    air = frame[["T_amb"]].to_numpy(float)
+    given = fold_sse(np.c_[absolute - air, air, effect], y, groups)
+    on_absolute = fold_sse(np.c_[absolute, effect], y, groups)
+    np.testing.assert_allclose(
+        [given.sum(), on_absolute.sum()],
+        [branch["held_out_rms_um"][k] ** 2 * len(y) for k in ("given", "absolute")],
+        rtol=1e-9,
+    )
+    difference = on_absolute - given
+    assert difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1)

@@ -615,7 +615,11 @@ def absolute_branch(
     neither reading wins clearly and the wrong one is kept, and with it the
     effect is not found at all. So the diagnosis is also run from the model
     on absolute readings, and the two end models face the test of a
-    reference change on the same held-out folds. A branch that needs the
+    reference change on the same held-out folds. When the diagnosis on rises
+    added the reference sensor as measured, its end model is the one on
+    absolute readings with the air's weight freed: the one on absolute
+    readings then wins when it predicts within one standard error as well,
+    with that coefficient fewer. A branch that needs the
     reference column itself (a lag of the air on absolute readings) is not
     evidence against the reference: it gives the air a free weight, which
     the diagnosis on rises already tried as a lag over the reference. The
@@ -631,6 +635,15 @@ def absolute_branch(
         reason = f"the effects found on absolute readings include `{reference}` itself: not evidence against it"
     else:
         reason = reference_change_refusal(candidate, min_score)
+    frees_reference = any(c.feature.column == reference and c.feature.transform == "identity" for c in added)
+    as_well = (
+        reason is not None
+        and frees_reference
+        and not any(c.feature.column == reference for c in branch.added)
+        and within_one_se(candidate, absolute_candidate(reference, scorer, scorer))
+    )
+    if as_well:
+        reason = None
     outcome = {
         "effects": {
             "given": [c.feature.name for c in added],
@@ -639,6 +652,7 @@ def absolute_branch(
         "held_out_rms_um": {"given": scorer.held_out_rms, "absolute": branch_scorer.held_out_rms},
         "folds_improved": candidate.n_folds_improved,
         "score": candidate.score,
+        "as_well_with_fewer_coefficients": as_well,
         "reason": reason,
     }
     reference_check["branch"] = outcome

@@ -72,11 +72,22 @@ def diagnosis_summary(result) -> str:
         rms = branch["held_out_rms_um"]
         n_given = len(branch["effects"]["given"])
         given = f"the {n_given} effect{'s' if n_given > 1 else ''} found on it" if n_given else "no effect"
+        name = reference["reference"]
+        if branch.get("as_well_with_fewer_coefficients"):
+            how = (
+                f"the diagnosis on rises took `{name}` as measured back in, which frees the weight the reference "
+                f"fixes; diagnosed again on absolute readings, the model predicts the held-out conditions as well "
+                f"(RMS {change_words(rms['given'], rms['absolute'])}, within one standard error) with one "
+                "coefficient fewer"
+            )
+        else:
+            how = (
+                f"diagnosed again on absolute readings, the model with its effects predicts the held-out conditions "
+                f"with RMS {change_words(rms['given'], rms['absolute'])} against the model as given with {given} "
+                f"(better on {branch['folds_improved']} of {reference['n_folds']} held-out folds)"
+            )
         lines.append(
-            f"reference dropped: the error follows the absolute temperatures, not their rises over "
-            f"`{reference['reference']}`: diagnosed again on absolute readings, the model with its effects predicts "
-            f"the held-out conditions with RMS {change_words(rms['given'], rms['absolute'])} against the model as "
-            f"given with {given} (better on {branch['folds_improved']} of {reference['n_folds']} held-out folds); "
+            f"reference dropped: the error follows the absolute temperatures, not their rises over `{name}`: {how}; "
             "the model was refitted on absolute readings"
         )
     elif reference is not None and reference["dropped"]:
