@@ -22,7 +22,7 @@ from groupfit.commands.common import (
 from groupfit.data import DEFAULT_TIME, Run, load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
-from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE
+from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.modelfile import load_model, save_model
@@ -56,7 +56,15 @@ def add_parser(verbs) -> None:
         type=float,
         default=MIN_EFFECT_RMS_UM,
         metavar="UM",
-        help=f"least residual RMS in µm an effect must remove (default {MIN_EFFECT_RMS_UM})",
+        help=f"least residual RMS in µm the first effect must remove out of sample (default {MIN_EFFECT_RMS_UM})",
+    )
+    parser.add_argument(
+        "--min-further-effect",
+        type=float,
+        default=MIN_FURTHER_EFFECT_RMS_UM,
+        metavar="UM",
+        help="least residual RMS in µm every further effect must remove out of sample, at least --min-effect "
+        f"(default {MIN_FURTHER_EFFECT_RMS_UM})",
     )
     parser.add_argument(
         "--heat-exponent",
@@ -161,6 +169,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         live_rule=replay_groups,
         min_score=args.min_score,
         min_effect_rms_um=args.min_effect,
+        min_further_effect_rms_um=args.min_further_effect,
         heat_exponent=args.heat_exponent,
         own_transforms=args.own_transforms,
         select_jointly=joint,
