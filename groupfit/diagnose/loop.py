@@ -643,15 +643,16 @@ def absolute_branch(
     branch_inputs = [model_inputs(branch.model, run) for run in data_runs]
     branch_scorer = model_scorer(branch.model, target, branch_inputs, folds, measured)
     candidate = absolute_candidate(reference, scorer, branch_scorer)
-    if any(c.feature.column == reference for c in branch.added):
+    needs_reference = any(c.feature.column == reference for c in branch.added)
+    if needs_reference:
         reason = f"the effects found on absolute readings include `{reference}` itself: not evidence against it"
     else:
         reason = reference_change_refusal(candidate, min_score)
     frees_reference = any(c.feature.column == reference and c.feature.transform == "identity" for c in added)
     as_well = (
         reason is not None
+        and not needs_reference
         and frees_reference
-        and not any(c.feature.column == reference for c in branch.added)
         and within_one_se(candidate, absolute_candidate(reference, scorer, scorer))
     )
     if as_well:
