@@ -159,7 +159,7 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     """A refused candidate and an over-fitting base are named at the top, not reported as 'nothing missing'."""
     from dataclasses import replace
 
-    from groupfit.diagnose.loop import Refusal
+    from groupfit.diagnose.loop import OVERFIT_NOTE, Refusal
 
     frame = sensor_error(lumped())
     data_path, model_path = fit_model(tmp_path, frame, "clean")
@@ -181,6 +181,13 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     first, second = replace(result, base_check=check).summary().splitlines()[:2]
     assert first == "no effect added: no candidate explains a significant part of the held-out error"
     assert second.startswith("the model over-fits")
+
+    # said once: the note diagnose writes for an over-fitting base is left out where the head says it
+    note = f"{OVERFIT_NOTE} held-out RMS 18.8 µm against 0.468 µm in sample; effects found on it are unreliable"
+    report = replace(result, base_check=check, notes=[note, *result.notes]).summary()
+    assert report.count("over-fits") == 1 and report.splitlines()[1].startswith("the model over-fits (")
+    with_effect = replace(result, base_check=check, notes=[note], added=result.candidates[:1], steps=[])
+    assert with_effect.summary().count("over-fits") == 1 and f"note: {note}" in with_effect.summary()
 
 
 def test_measured_data_realities(tmp_path, capsys):

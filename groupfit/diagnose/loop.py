@@ -94,6 +94,8 @@ MIN_FOLDS_IMPROVED = 0.5
 """Share of held-out folds an effect must improve (more than this); the strict test asks for all of them."""
 OVERFIT_RATIO = 3.0
 """The base model is called over-fitted when its held-out RMS exceeds its in-sample RMS by this factor."""
+OVERFIT_NOTE = "the model over-fits:"
+"""How the note on an over-fitting base model begins (the report leaves it out where its head says it)."""
 MAX_EFFECTS = 3
 MAX_FOLD_WORSENING = 2.0
 """No held-out fold's RMS error may grow by more than this factor when the effect is added."""
@@ -329,7 +331,7 @@ def diagnose(
     base_check = overfit_check(scorer, folds, grouped)
     if base_check["overfitted"]:
         notes.append(
-            f"the model over-fits: held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
+            f"{OVERFIT_NOTE} held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
             f"{base_check['in_sample_rms_um']:.3g} µm in sample ({folds.describe()}); effects found on it are "
             f"unreliable: {base_check['advice']}"
         )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from groupfit.diagnose.candidates import is_ambient_name
+from groupfit.diagnose.loop import OVERFIT_NOTE
 
 
 def column_words(column: str) -> str:
@@ -130,7 +131,8 @@ def diagnosis_summary(result) -> str:
         lines.append("no effect added: no candidate explains a significant part of the held-out error")
     else:
         lines.append("nothing missing: no candidate explains a significant part of the held-out error; no effect added")
-    if not result.added and result.base_check.get("overfitted"):
+    overfit_in_head = not result.added and result.base_check.get("overfitted")
+    if overfit_in_head:
         check = result.base_check
         lines.append(
             f"the model over-fits (held-out RMS {check['held_out_rms_um']:.3g} µm against "
@@ -166,5 +168,5 @@ def diagnosis_summary(result) -> str:
         f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
         f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
     )
-    lines += [f"note: {n}" for n in result.notes]
+    lines += [f"note: {n}" for n in result.notes if not (overfit_in_head and n.startswith(OVERFIT_NOTE))]
     return "\n".join(lines)
