@@ -2,17 +2,18 @@ import json
 
 import numpy as np
 import pytest
+from grouped_reference import shared_effect_fit
 
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
+from groupfit.diagnose.design import group_design
 from groupfit.diagnose.folds import Folds, make_folds
 from groupfit.diagnose.report import column_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
-from groupfit.grouping import soft_groups
 from groupfit.modelfile import load_model
 from groupfit.synthetic import simulate_lumped
 
@@ -112,7 +113,9 @@ def test_ranking_finds_the_generating_transform_even_when_the_inputs_mimic_it():
     assert all(c.own_input for c in ranked if c.feature.column == "T1")
 
 
-def test_augmented_groups_are_least_squares_with_the_extra_input(tmp_path):
+def test_a_grouped_model_gets_the_effect_with_one_coefficient_as_it_was_scored(tmp_path):
+    """One least-squares problem over the hard groups (each its own inputs, the effect shared), then each soft
+    group refitted by least squares on what the effect leaves; the shared coefficient is the scorer's."""
     frame = with_ambient_effect(lumped())
     path, model_path = fit_model(tmp_path, frame, "amb", p=2)
     model = load_model(model_path)
@@ -120,11 +123,16 @@ def test_augmented_groups_are_least_squares_with_the_extra_input(tmp_path):
     feature = Feature("T_amb", "lowpass", tau_s=3600.0)
     augmented = augment_model(model, run, model_inputs(model, run), feature)
     assert augmented["temps"] == TEMPS + ["T_amb~lp3600s"] and augmented["breaks"] == model["breaks"]
-    A = np.column_stack([np.ones(len(frame)), frame[TEMPS], feature.compute(frame["T_amb"].to_numpy(), 100.0)])
+    effect = feature.compute(frame["T_amb"].to_numpy(), 100.0)
     y = frame["error_um"].to_numpy()
-    for coefficients, (first, last) in zip(augmented["coefficients"], soft_groups(model["breaks"], len(y), model["n"])):
-        reference = np.linalg.lstsq(A[first - 1 : last], y[first - 1 : last], rcond=None)[0]
-        np.testing.assert_allclose(A[first - 1 : last] @ coefficients, A[first - 1 : last] @ reference, atol=1e-7)
+    own = np.column_stack([np.ones(len(frame)), frame[TEMPS]])
+    (gamma,), reference, rows = shared_effect_fit(own, effect[:, None], y, model["breaks"], model["n"])
+    coefficients = np.asarray(augmented["coefficients"])
+    np.testing.assert_allclose(coefficients[:, -1], gamma, rtol=1e-9)
+    for row, expected, r in zip(coefficients, reference, rows):
+        np.testing.assert_allclose(own[r] @ row[:-1], own[r] @ expected, atol=1e-7)
+    scorer = HeldOutScorer(y, group_design(model, model_inputs(model, run)), Folds(np.arange(len(y)) % 2, "block"))
+    assert scorer.coefficient(effect) == pytest.approx(gamma, rel=1e-8)
 
 
 def test_missing_ambient_effect_is_found_and_judged_on_another_run(tmp_path):

@@ -145,11 +145,11 @@ def test_the_cli_reports_the_dropped_reference_and_keep_reference_turns_the_chec
 
 
 def test_a_grouped_model_loses_its_reference_with_its_breaks_kept_and_still_replays():
-    modelling = workshop_run(1)
+    modelling = workshop_run(2)
     run = load_run(modelling, temps=TEMPS, name="modelling")
     referenced = with_reference(run, "T_amb")
     model = model_to_dict(GroupedRegressor(p=2).fit(referenced.temps, referenced.error), referenced)
-    validation = load_run(workshop_run(2, ambient_level=23.0), temps=TEMPS, name="warmer_day")
+    validation = load_run(workshop_run(3, ambient_level=23.0), temps=TEMPS, name="warmer_day")
     result = diagnose(model, run, validation, live_rule=replay_groups)
     assert result.reference["dropped"] and result.model.get("reference") is None
     assert result.model["breaks"] == model["breaks"]

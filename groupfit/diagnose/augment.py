@@ -3,8 +3,10 @@
 The effect enters as an extra regressor in each soft group, the hard breaks
 kept, rather than as a term added to the old prediction: an omitted input that
 correlates with the sensors biases their coefficients, and only a joint refit
-removes that bias. The result is an ordinary model file with one more input,
-whose ``derived_inputs`` say how to compute it from the data's columns.
+removes that bias. In a grouped model the effect has one coefficient, the same
+in every group, as it was scored (:mod:`groupfit.diagnose.design`). The result
+is an ordinary model file with one more input, whose ``derived_inputs`` say
+how to compute it from the data's columns.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
+from groupfit.diagnose.design import group_design
 from groupfit.features import Feature
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
@@ -55,7 +58,8 @@ def refit_model(
     """The model's groups (hard breaks kept) refitted on other inputs, as a model file object."""
     model = ModelFile.coerce(model)
     X, error = np.vstack(inputs), stacked_error(runs)
-    estimator = fitted_groups(model, X, error)
+    derived = {feature.name for feature in derived_inputs}
+    estimator = fitted_groups(model, X, error, np.array([name in derived for name in names]))
     return written_model(estimator, model, runs, X, error, names, derived_inputs, model.reference)
 
 
@@ -92,7 +96,7 @@ def augment_model_over_reference(
         [np.column_stack([x + np.where(measured, r[:, None], 0.0), r, f]) for x, f, r in zip(inputs, lagged, air)]
     )
     error = stacked_error(runs)
-    estimator = fitted_groups(model, rises, error)
+    estimator = fitted_groups(model, rises, error, np.append(~measured, True))
     slopes = estimator.coef_
     reference_slope = -(slopes[:, :-1][:, measured].sum(axis=1) + slopes[:, -1])
     estimator.coef_ = np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1]])
@@ -112,11 +116,29 @@ def stacked_error(runs: Sequence[Run]) -> np.ndarray:
     return np.concatenate([run.error for run in runs])
 
 
-def fitted_groups(model: ModelFile, X: np.ndarray, error: np.ndarray) -> GroupedRegressor:
-    """The model's estimator, hard breaks kept, fitted on the rows whose error is measured."""
+def fitted_groups(
+    model: ModelFile, X: np.ndarray, error: np.ndarray, shared: np.ndarray | None = None
+) -> GroupedRegressor:
+    """The model's estimator, hard breaks kept, fitted on the rows whose error is measured.
+
+    ``shared`` marks the columns of ``X`` with one coefficient for every group (the effects of a grouped
+    model, :mod:`groupfit.diagnose.design`): those coefficients are fitted with every group's own ones on
+    the hard groups, then each soft group is refitted on what they leave. Their prediction intervals are
+    not those of a per-group fit, so the estimator carries none.
+    """
     measured = np.isfinite(error)  # rows without a measured error only carry the derived inputs' history
     estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
-    return estimator.fit(X[measured], error[measured])
+    X, error = X[measured], error[measured]
+    if shared is None or not model.breaks or not np.any(shared):
+        return estimator.fit(X, error)
+    shared = np.asarray(shared, dtype=bool)
+    design = group_design(model.to_dict(), X, shared)
+    gamma = np.linalg.lstsq(design, error, rcond=None)[0][-int(shared.sum()) :]
+    estimator.fit(X[:, ~shared], error - X[:, shared] @ gamma)
+    slopes = np.empty((len(estimator.coef_), X.shape[1]))
+    slopes[:, ~shared], slopes[:, shared] = estimator.coef_, gamma
+    estimator.coef_, estimator.n_features_in_, estimator.interval_stats_ = slopes, X.shape[1], None
+    return estimator
 
 
 def written_model(

@@ -343,7 +343,7 @@ def rank_candidates(
         ``compute(feature) -> ndarray``: the candidate's values on the same samples.
     scorer : HeldOutScorer
         The model's regressors on the same samples (each group's inputs in
-        its own columns, see :func:`groupfit.diagnose.loop.group_design`)
+        its own columns, see :func:`groupfit.diagnose.design.group_design`)
         fitted on each held-out fold's complement. Scoring the error rather
         than the in-sample residual matters: a model fitted on the same run
         absorbs part of a missing effect into its coefficients, and only an

@@ -71,6 +71,7 @@ from groupfit.diagnose.candidates import (
     usable_columns,
 )
 from groupfit.diagnose.checks import drift, ljung_box
+from groupfit.diagnose.design import group_index, group_sample_floor, stacked_design
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
@@ -78,7 +79,6 @@ from groupfit.diagnose.reference import absolute_candidate, absolute_model, drop
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
-from groupfit.grouping import serving_group_index
 from groupfit.modelfile import error_metrics
 
 MIN_SCORE = 0.3
@@ -792,10 +792,6 @@ def model_scorer(
     return HeldOutScorer(target[rows], design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
 
 
-def stacked_design(model: dict[str, Any], inputs: list[np.ndarray]) -> np.ndarray:
-    return np.vstack([group_design(model, x) for x in inputs])
-
-
 def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> dict[str, Any]:
     """The model's own regression: in-sample RMS against held-out RMS on the folds, and what to do about it.
 
@@ -814,29 +810,6 @@ def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) ->
         "grouped": grouped,
         "advice": advice,
     }
-
-
-def group_index(model: dict[str, Any], n_rows: int) -> np.ndarray:
-    """The group serving each of ``n_rows`` samples of the modelling run, by sample index."""
-    return serving_group_index(model["breaks"], int(model.get("n_samples", n_rows)), model["n"], n_rows)
-
-
-def group_sample_floor(model: dict[str, Any], effects: int = 1) -> int:
-    """c·M, M the coefficients of a group with ``effects`` more: a group is fitted on more samples than this."""
-    n_coefficients = len(model["temps"]) + int(model["intercept"]) + effects  # temps names the derived inputs too
-    return int(np.floor(float(model["c"]) * n_coefficients))
-
-
-def group_design(model: dict[str, Any], inputs: np.ndarray) -> np.ndarray:
-    """The model's regressors: each group's inputs (and intercept) in its own columns, groups by sample index."""
-    groups = group_index(model, len(inputs))
-    block = np.column_stack([np.ones(len(inputs)), inputs]) if model["intercept"] else inputs
-    n_groups = len(model["breaks"]) + 1
-    design = np.zeros((len(inputs), n_groups * block.shape[1]))
-    for g in range(n_groups):
-        rows = groups == g
-        design[rows, g * block.shape[1] : (g + 1) * block.shape[1]] = block[rows]
-    return design
 
 
 def residual_checks(res: np.ndarray, time_s: np.ndarray) -> dict[str, Any]:

@@ -119,7 +119,13 @@ def diagnosis_summary(result) -> str:
             f"{'validation' if validate else 'measured'} run {judged}: RMS {change_words(b['rms_um'], a['rms_um'])}, "
             f"max {b['max_um']:.3g} → {a['max_um']:.3g} µm"
         )
-        lines.append("each effect was added as one more input of every group, the hard breaks kept, groups refitted")
+        if result.model["p"] > 0:
+            lines.append(
+                "each effect was added as one more input, with one coefficient for every group; the hard breaks "
+                "kept, the groups refitted"
+            )
+        else:
+            lines.append("each effect was added as one more input and the model refitted")
     elif result.refused:
         refusal = result.refused[0]
         c = refusal.candidate

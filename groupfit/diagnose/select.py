@@ -67,7 +67,8 @@ def held_out_check(
     diagnosis's warning.
     """
     from groupfit.diagnose.candidates import HeldOutScorer
-    from groupfit.diagnose.loop import group_design, group_index, group_sample_floor, overfit_check
+    from groupfit.diagnose.design import group_design, group_index, group_sample_floor
+    from groupfit.diagnose.loop import overfit_check
 
     rows = np.isfinite(y)
     folds = held_out_folds(frames, exclude, y)
