@@ -177,9 +177,8 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
     top = axes[0]
     if shown is not None:
         feature = shown.feature
-        values = np.concatenate(
-            [feature.compute(r.frame[feature.column].to_numpy(dtype=float), r.period) for r in data]
-        )
+        period = float(result.model["sampling_period_s"])  # as the diagnosis computed it
+        values = np.concatenate([feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in data])
         if shown.over is not None:  # taken over the model's reference column
             values = values - np.concatenate([r.frame[shown.over].to_numpy(dtype=float) for r in data])
         residual = result.residuals_before["data"]

@@ -13,7 +13,7 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.folds import make_folds
-from groupfit.diagnose.loop import MIN_SCORE
+from groupfit.diagnose.loop import MIN_SCORE, OVERFIT_NOTE
 from groupfit.features import Feature, derived_matrix
 from groupfit.runtime import replay_groups
 
@@ -26,9 +26,9 @@ def held_out_rms(design, y, groups):
     return float(np.sqrt(np.mean((y - predicted) ** 2)))
 
 
-def diagnosed(seed, truth):
+def diagnosed(seed, truth, p=0):
     scenario = machine.random_scenarios(1, first_seed=seed, truth=truth)[0]
-    model, modelling, validation = bench.base_model(scenario, "default")
+    model, modelling, validation = bench.base_model(scenario, "default", p)
     return scenario, model, modelling, diagnose(model, modelling, validation, live_rule=replay_groups)
 
 
@@ -107,3 +107,13 @@ def test_as_well_with_the_airs_weight_fixed_is_taken_over_a_diagnosis_that_freed
     )
     difference = on_absolute - given
     assert difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1)
+
+
+def test_an_over_fitting_model_is_said_to_over_fit_once_when_the_branch_is_taken():
+    # a grouped model (p = 3) over-fits on rises and on absolute readings; the report's check is the given
+    # model's, and its note is not followed by the start of the second diagnosis's
+    _, _, _, result = diagnosed(13, "absolute", p=3)
+    assert result.reference["dropped"] and result.reference["branch"]["reason"] is None
+    assert result.base_check["overfitted"]
+    overfit = [n for n in result.notes if n.startswith(OVERFIT_NOTE)]
+    assert len(overfit) == 1 and f"{result.base_check['held_out_rms_um']:.3g} µm" in overfit[0]

@@ -498,7 +498,10 @@ def diagnose(
         )
         if on_absolute is not None:
             on_absolute.base_check = base_check
-            on_absolute.notes = notes + [n for n in on_absolute.notes if n not in notes]
+            # the over-fit check is the given model's (base_check), said once
+            on_absolute.notes = notes + [
+                n for n in on_absolute.notes if n not in notes and not n.startswith(OVERFIT_NOTE)
+            ]
             return on_absolute
 
     time = np.arange(len(target)) * period

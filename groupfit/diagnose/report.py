@@ -22,6 +22,11 @@ def column_words(column: str) -> str:
     return f"column `{column}`"
 
 
+def effect_count(n: int) -> str:
+    """``effect`` for one, ``2 effects`` for more: "the effect found on it", "the first 2 effects"."""
+    return "effect" if n == 1 else f"{n} effects"
+
+
 def change_words(before: float, after: float) -> str:
     """``RMS 11 → 4.4 µm (60 % lower)`` or ``(80 % higher)``."""
     if before <= 0:
@@ -72,7 +77,7 @@ def diagnosis_summary(result) -> str:
     if reference is not None and reference["dropped"] and branch is not None and branch["reason"] is None:
         rms = branch["held_out_rms_um"]
         n_given = len(branch["effects"]["given"])
-        given = f"the {n_given} effect{'s' if n_given > 1 else ''} found on it" if n_given else "no effect"
+        given = f"the {effect_count(n_given)} found on it" if n_given else "no effect"
         name = reference["reference"]
         if branch.get("as_well_with_fewer_coefficients"):
             how = (
@@ -94,7 +99,7 @@ def diagnosis_summary(result) -> str:
     elif reference is not None and reference["dropped"]:
         rms = reference["held_out_rms_um"]
         effects = reference["after_effects"]
-        when = f" (checked again with the first {effects} effect{'s' if effects > 1 else ''} in)" if effects else ""
+        when = f" (checked again with the first {effect_count(effects)} in)" if effects else ""
         lines.append(
             f"reference dropped{when}: the error follows the absolute temperatures, not their rises over "
             f"`{reference['reference']}` (held-out RMS {change_words(rms['given'], rms['absolute'])}, better on "
