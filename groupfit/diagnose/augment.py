@@ -72,13 +72,14 @@ def augment_model_over_reference(
     """The model refitted with ``feature`` taken over the model's reference column, written on absolute readings.
 
     A model of rises over a reference ``R`` (the air) reads ``T_i − R``; a part
-    that lags the air adds ``F − R``, ``F`` a low-pass of ``R``. The groups are
-    refitted on those rises, then written as the same function of absolute
-    readings: ``Σ c_i (T_i − R) + d (F − R) = Σ c_i T_i + d F − (Σ c_i + d) R``,
-    so the model file reads ``R`` as one more measured input, computes ``F`` as
-    a derived input and has no reference. Every target evaluates it as it
-    evaluates any model, and its predictions are those the effect was scored
-    with.
+    that lags the air adds ``F − R̄``, ``F`` a low-pass or delay of ``R`` and
+    ``R̄`` the air through a short low-pass (:func:`steady_reference`). The
+    groups are refitted on those rises, then written as the same function of
+    absolute readings: ``Σ c_i (T_i − R) + d (F − R̄) = Σ c_i T_i − (Σ c_i) R
+    + d F − d R̄``, so the model file reads ``R`` as one more measured input,
+    computes ``F`` and ``R̄`` as derived inputs and has no reference. Every
+    target evaluates it as it evaluates any model, and its predictions are
+    those the effect was scored with.
 
     Parameters
     ----------
@@ -89,22 +90,43 @@ def augment_model_over_reference(
     reference = model.reference
     derived_names = set(model.derived)
     measured = np.array([name not in derived_names for name in model.temps])
+    period = model.sampling_period_s
     air = [run.frame[reference].to_numpy(dtype=float) for run in runs]
-    lagged = feature_on_runs(feature, runs, model.sampling_period_s)
-    rises = np.vstack([np.column_stack([x, f - r]) for x, f, r in zip(inputs, lagged, air)])
+    smooth = steady_reference(reference)
+    lagged = feature_on_runs(feature, runs, period)
+    steady = feature_on_runs(smooth, runs, period)
+    rises = np.vstack([np.column_stack([x, f - g]) for x, f, g in zip(inputs, lagged, steady)])
     absolute = np.vstack(
-        [np.column_stack([x + np.where(measured, r[:, None], 0.0), r, f]) for x, f, r in zip(inputs, lagged, air)]
+        [
+            np.column_stack([x + np.where(measured, r[:, None], 0.0), r, f, g])
+            for x, f, g, r in zip(inputs, lagged, steady, air)
+        ]
     )
     error = stacked_error(runs)
     estimator = fitted_groups(model, rises, error, np.append(~measured, True))
     slopes = estimator.coef_
-    reference_slope = -(slopes[:, :-1][:, measured].sum(axis=1) + slopes[:, -1])
-    estimator.coef_ = np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1]])
+    reference_slope = -slopes[:, :-1][:, measured].sum(axis=1)
+    estimator.coef_ = np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1], -slopes[:, -1]])
     estimator.n_features_in_ = absolute.shape[1]
     estimator.interval_stats_ = None  # the rises' intervals, not those of a fit on the absolute readings
-    names = (*model.temps, reference, feature.name)
-    derived = (*(model.derived_inputs or ()), feature)
+    names = (*model.temps, reference, feature.name, smooth.name)
+    derived = (*(model.derived_inputs or ()), feature, smooth)
     return written_model(estimator, model, runs, absolute, error, names, derived, None)
+
+
+REFERENCE_SMOOTHING_S = 120.0
+"""Time constant (s) of the short low-pass of the reference that a lag of it is taken over."""
+
+
+def steady_reference(reference: str) -> Feature:
+    """The reference as a lag of it is taken over: through a 2-minute low-pass.
+
+    ``F − R`` with ``R`` as read carries the noise of every reading of the air at full weight, while the
+    lag it measures (a part behind the air) is slow: the fit then trades the lag against that noise, and the
+    lag is refused on held-out conditions it would improve. ``F − R̄``, ``R̄`` the air low-passed over a few
+    minutes, keeps the lag and drops most of the noise.
+    """
+    return Feature(reference, "lowpass", tau_s=REFERENCE_SMOOTHING_S)
 
 
 def feature_on_runs(feature: Feature, runs: Sequence[Run], period: float) -> list[np.ndarray]:

@@ -36,8 +36,9 @@ not share, and depends more on how the run started.
 
 On a model of rises over a reference column (the air), each low-pass and
 delay of that column is scored twice, as read and over the reference
-(``feature − reference``: the lag of an unsensed part behind the air, which
-such a model cannot otherwise say); one added over the reference is written
+(``feature − reference``, the reference through a 2-minute low-pass: the lag
+of an unsensed part behind the air, which such a model cannot otherwise say);
+one added over the reference is written
 on absolute readings (:func:`groupfit.diagnose.augment.augment_model_over_reference`).
 
 A cause is preferred to a symptom: an unused temperature sensor is added
@@ -55,7 +56,13 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
-from groupfit.diagnose.augment import augment_model, augment_model_over_reference, feature_on_runs, refit_model
+from groupfit.diagnose.augment import (
+    augment_model,
+    augment_model_over_reference,
+    feature_on_runs,
+    refit_model,
+    steady_reference,
+)
 from groupfit.diagnose.candidates import (
     COLLINEAR_R,
     EXOGENOUS_R,
@@ -437,7 +444,7 @@ def diagnose(
         over = droppable_reference(current_model, data_runs)
         lags_of_reference = [f for f in tried if f.column == over and f.transform in ("lowpass", "delay")]
         if lags_of_reference:  # a part lagging the air, read over the air as the model reads its sensors
-            air = np.concatenate([r.frame[over].to_numpy(dtype=float) for r in data_runs])[measured]
+            air = compute(steady_reference(over))
             taken_over = rank_candidates(
                 target[measured], lags_of_reference, lambda f, air=air: compute(f) - air, scorer, model_inputs_now
             )
