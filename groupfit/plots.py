@@ -176,11 +176,14 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
     shown = result.added[0] if result.added else (result.candidates[0] if result.candidates else None)
     top = axes[0]
     if shown is not None:
+        from groupfit.diagnose.augment import feature_on_runs, steady_reference
+
         feature = shown.feature
         period = float(result.model["sampling_period_s"])  # as the diagnosis computed it
-        values = np.concatenate([feature.compute(r.frame[feature.column].to_numpy(dtype=float), period) for r in data])
-        if shown.over is not None:  # taken over the model's reference column
-            values = values - np.concatenate([r.frame[shown.over].to_numpy(dtype=float) for r in data])
+        values = np.concatenate(feature_on_runs(feature, data, period))
+        if shown.over is not None:  # taken over the model's reference column, as the diagnosis took it
+            steady = steady_reference(shown.over)
+            values = values - np.concatenate(feature_on_runs(steady, data, period))
         residual = result.residuals_before["data"]
         top.scatter(values, residual, s=6, c=stacked_hours(data), cmap="viridis")
         order = np.argsort(values)
@@ -192,7 +195,7 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
             f"{'+'.join(r.name for r in data)}: residual against {feature.column}, {shown.describe()} ({verdict})",
             fontsize=9,
         )
-        top.set_xlabel(feature.name if shown.over is None else f"{feature.name} − {shown.over}")
+        top.set_xlabel(feature.name if shown.over is None else f"{feature.name} − {steady.name}")
     top.set_ylabel("residual before (µm)")
     for axis, (key, key_runs) in zip(axes[1:], runs.items()):
         hours = stacked_hours(key_runs)
