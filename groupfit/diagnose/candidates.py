@@ -245,6 +245,7 @@ class HeldOutScorer:
 
         self.ridge_alpha = float(ridge_alpha)
         self.fit_intercept = fit_intercept
+        self.folds = folds
         with threadpool_limits(limits=1, user_api="blas"):  # products this small only lose to thread hand-offs
             self._fit(target, design, folds, pinvh)
 
@@ -314,6 +315,12 @@ class HeldOutScorer:
         """The candidate's coefficient fitted with the design on all samples."""
         return self._update(values, len(self.splits) - 1, self._penalty_per_row(values))[0]
 
+    def with_regressor(self, values: np.ndarray) -> "HeldOutScorer":
+        """The scorer of the same design with ``values`` as one more regressor, on the same folds."""
+        return HeldOutScorer(
+            self.target, np.column_stack([self.design, values]), self.folds, self.ridge_alpha, self.fit_intercept
+        )
+
     @property
     def held_out_rms(self) -> float:
         """RMS of the design's own error on the held-out folds (no candidate), µm."""
@@ -323,6 +330,17 @@ class HeldOutScorer:
     def in_sample_rms(self) -> float:
         """RMS of the design's residual fitted on all samples, µm."""
         return float(np.sqrt(np.mean(self.fits[-1][2] ** 2)))
+
+
+def within_one_se(candidate: Candidate, best: Candidate) -> bool:
+    """Whether ``candidate``'s held-out error is within one standard error of ``best``'s.
+
+    The standard error of the summed fold-by-fold differences, √K·sd(d).
+    """
+    difference = np.subtract(candidate.fold_sse, best.fold_sse)
+    if len(difference) < 2:
+        return bool(difference.sum() <= 0.0)
+    return bool(difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1))
 
 
 def rank_candidates(

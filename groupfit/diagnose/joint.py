@@ -32,6 +32,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from groupfit.diagnose.candidates import Candidate, HeldOutScorer, score_candidate
+from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.diagnose.folds import Folds
 from groupfit.features import Feature
 from groupfit.sweep.selection import MIN_GAIN, cluster_representatives, correlation_clusters
@@ -75,7 +76,7 @@ class JointProblem:
         The held-out folds (whole conditions or runs) on the same rows.
     effect_test : callable
         ``effect_test(candidate, drift) -> reason or None``: why an effect may not enter; ``drift`` is the
-        null effect scored in the same way.
+        :class:`~groupfit.diagnose.drift_guard.DriftGuard` of the inputs chosen so far.
     drift : ndarray, shape (N,)
         Time since the start of the run: the straight drift an effect must be told from.
     fit_intercept : bool
@@ -85,7 +86,7 @@ class JointProblem:
     inputs: Mapping[str, np.ndarray]
     effects: Sequence[tuple[Feature, np.ndarray]]
     folds: Folds
-    effect_test: Callable[[Candidate, Candidate], str | None]
+    effect_test: Callable[[Candidate, DriftGuard], str | None]
     drift: np.ndarray
     fit_intercept: bool = True
 
@@ -118,7 +119,8 @@ class JointProblem:
             if not result.held_out_rms:
                 result.held_out_rms.append(scorer.held_out_rms)
             best: tuple[Candidate, np.ndarray] | None = None
-            null = score_candidate(Feature("drift"), self.drift, scorer)
+            values_of = dict(remaining)
+            null = DriftGuard(self.drift, scorer, lambda c, values_of=values_of: values_of[c.feature], "drift")
             for name in pool:
                 candidate = score_candidate(Feature(name), inputs[name], scorer)
                 if candidate.score >= MIN_GAIN and (best is None or candidate.score > best[0].score):

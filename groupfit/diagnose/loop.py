@@ -24,8 +24,9 @@ is most tempting:
   one condition is easiest to mistake for an effect.
 * when a straight line in time explains the held-out error (a probe creeping,
   a drift nobody logged), a candidate must beat it by more than one standard
-  error: a long low-pass of anything that rises over the run follows a drift
-  on held-out conditions too.
+  error, or still explain what the line leaves (``drift_guard``): a long
+  low-pass of anything that rises over the run follows a drift on held-out
+  conditions too.
 
 Among low-passes of the same column that pass, the shortest time constant
 whose held-out error is within one standard error of the best one's is taken
@@ -49,6 +50,7 @@ added (within one standard error) are reported as alternatives.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
@@ -74,11 +76,12 @@ from groupfit.diagnose.candidates import (
     is_sensor_column,
     largest_correlation,
     rank_candidates,
-    score_candidate,
     usable_columns,
+    within_one_se,
 )
 from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.design import group_index, group_sample_floor, stacked_design
+from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
@@ -346,6 +349,17 @@ def diagnose(
     def compute(feature):
         return stacked_feature(feature, data_runs, period)[measured]
 
+    @functools.cache
+    def steady_air(reference: str) -> np.ndarray:
+        return compute(steady_reference(reference))
+
+    def compute_over(feature: Feature, reference: str) -> np.ndarray:
+        """A lag of the air taken over the air (through its 2-minute low-pass)."""
+        return compute(feature) - steady_air(reference)
+
+    def values_of(candidate: Candidate) -> np.ndarray:
+        return compute(candidate.feature) if candidate.over is None else compute_over(candidate.feature, candidate.over)
+
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
     sensor_columns = frozenset(c for c in columns if is_sensor_column(c))
@@ -372,7 +386,7 @@ def diagnose(
     refused: list[Refusal] = []
     first_ranking: list[Candidate] | None = None
 
-    def effect_test(candidate: Candidate, drift: Candidate) -> str | None:
+    def effect_test(candidate: Candidate, drift: DriftGuard) -> str | None:
         if not significant(candidate, min_score, min_effect_rms_um):
             return "removes too little of the held-out error"
         return failed_test(candidate, min_score, False, own_transforms, drift)
@@ -444,15 +458,18 @@ def diagnose(
         over = droppable_reference(current_model, data_runs)
         lags_of_reference = [f for f in tried if f.column == over and f.transform in ("lowpass", "delay")]
         if lags_of_reference:  # a part lagging the air, read over the air as the model reads its sensors
-            air = compute(steady_reference(over))
             taken_over = rank_candidates(
-                target[measured], lags_of_reference, lambda f, air=air: compute(f) - air, scorer, model_inputs_now
+                target[measured],
+                lags_of_reference,
+                functools.partial(compute_over, reference=over),
+                scorer,
+                model_inputs_now,
             )
             ranking = sorted(ranking + [replace(c, over=over) for c in taken_over], key=lambda c: -c.score)
         if first_ranking is None:
             first_ranking = ranking
         held_out_before = scorer.held_out_rms
-        drift = score_candidate(Feature(data_runs[0].time_name), ramp, scorer)  # the null effect: a straight drift
+        drift = DriftGuard(ramp, scorer, values_of, data_runs[0].time_name)
         best, step_refusals, alternatives = choose(
             ranking,
             min_score,
@@ -572,7 +589,7 @@ def choose(
     further: bool,
     own_transforms: bool = False,
     sensor_columns: frozenset[str] = frozenset(),
-    drift: Candidate | None = None,
+    drift: DriftGuard | None = None,
 ) -> tuple[Candidate | None, list[Refusal], list[Candidate]]:
     """The candidate to add, the refusals on the way, and other columns that explain the error as well.
 
@@ -715,25 +732,14 @@ def exogenous_sensors(runs: list[Run], sensors: list[str], operating: list[str],
     return found
 
 
-def within_one_se(candidate: Candidate, best: Candidate) -> bool:
-    """Whether ``candidate``'s held-out error is within one standard error of ``best``'s.
-
-    The standard error of the summed fold-by-fold differences, √K·sd(d).
-    """
-    difference = np.subtract(candidate.fold_sse, best.fold_sse)
-    if len(difference) < 2:
-        return bool(difference.sum() <= 0.0)
-    return bool(difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1))
-
-
 def failed_test(
     candidate: Candidate,
     min_score: float,
     further: bool,
     own_transforms: bool = False,
-    drift: Candidate | None = None,
+    drift: DriftGuard | None = None,
 ) -> str | None:
-    """Why the candidate fails the test it faces, or None; ``drift``: a straight drift, scored as the candidate was."""
+    """Why the candidate fails the test it faces, or None; ``drift``: the straight drift it must be told from."""
     n_folds = len(candidate.fold_ratios)
     improved = candidate.n_folds_improved
     if candidate.own_input and not own_transforms:
@@ -755,11 +761,8 @@ def failed_test(
         )
     if candidate.folds_improved <= MIN_FOLDS_IMPROVED:
         return f"lowers the error on only {improved} of {n_folds} held-out folds"
-    if drift is not None and drift.score >= min_score and within_one_se(drift, candidate):
-        return (
-            f"a straight drift over the run explains the held-out error as well (score {drift.score:.2f}): "
-            "the effect cannot be told from a drift of the modelling run (a probe creeping?)"
-        )
+    if drift is not None:
+        return drift.refusal(candidate, min_score)
     return None
 
 
