@@ -85,7 +85,7 @@ from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
-from groupfit.diagnose.reference import absolute_candidate, absolute_model, droppable_reference
+from groupfit.diagnose.reference import absolute_candidate, absolute_model, droppable_reference, global_view
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
@@ -405,16 +405,21 @@ def diagnose(
         nonlocal reference_check, current_model, current_inputs, current, scorer
         absolute, absolute_inputs = absolute_model(current_model, data_runs)
         absolute_scorer = model_scorer(absolute, target, absolute_inputs, folds, measured)
-        candidate = absolute_candidate(reference, scorer, absolute_scorer)
+        given_scorer, judged_scorer = scorer, absolute_scorer
+        if grouped:  # judged as one group: the groups' own intercepts absorb the level the reference sets
+            given_scorer = model_scorer(global_view(current_model), target, current_inputs, folds, measured)
+            judged_scorer = model_scorer(global_view(absolute), target, absolute_inputs, folds, measured)
+        candidate = absolute_candidate(reference, given_scorer, judged_scorer)
         reason = reference_change_refusal(candidate, min_score)
         reference_check = {
             "reference": reference,
             "dropped": reason is None,
             "after_effects": len(added),
-            "held_out_rms_um": {"given": scorer.held_out_rms, "absolute": absolute_scorer.held_out_rms},
+            "held_out_rms_um": {"given": given_scorer.held_out_rms, "absolute": judged_scorer.held_out_rms},
             "folds_improved": candidate.n_folds_improved,
             "n_folds": folds.n_folds,
             "score": candidate.score,
+            "as_one_group": grouped,
             "reason": reason,
         }
         if reason is None:

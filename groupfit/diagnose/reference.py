@@ -16,6 +16,13 @@ held-out folds, against the model as given, and faces it with the test of a
 first effect. Only a clear win drops the reference: where the run cannot
 tell the two apart, the given reference stays.
 
+A grouped model is compared as one group (:func:`global_view`): each group's
+own intercept and weights follow the level of the air over its stretch of
+the run, so the held-out folds, which lie inside the groups, cannot see the
+level the reference sets, while the next run on a warmer day does. The
+question of the reference is one of physics, not of grouping; one set of
+coefficients over the whole run answers it.
+
 Before an effect is in, both readings may miss it so badly that neither wins,
 and with the wrong reference kept the effect is then not found at all. So
 when the reference survives the diagnosis, the diagnosis is run again from
@@ -57,3 +64,8 @@ def absolute_model(model: dict[str, Any], runs: Sequence[Run]) -> tuple[dict[str
 def absolute_candidate(reference: str, given: HeldOutScorer, absolute: HeldOutScorer) -> Candidate:
     """Absolute readings scored like an effect: the share of the given model's held-out error they remove."""
     return candidate_of_fold_sse(Feature(reference), absolute.base_sse, given)
+
+
+def global_view(model: dict[str, Any]) -> dict[str, Any]:
+    """The model's inputs, intercept and effects as one group: the design the reference is judged in."""
+    return dict(model, p=0, breaks=[])

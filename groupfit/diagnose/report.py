@@ -100,11 +100,16 @@ def diagnosis_summary(result) -> str:
         rms = reference["held_out_rms_um"]
         effects = reference["after_effects"]
         when = f" (checked again with the first {effect_count(effects)} in)" if effects else ""
+        grouped = (
+            "judged with the groups as one, since each group's own intercept would absorb the air's level; "
+            if reference.get("as_one_group")
+            else ""
+        )
         lines.append(
             f"reference dropped{when}: the error follows the absolute temperatures, not their rises over "
-            f"`{reference['reference']}` (held-out RMS {change_words(rms['given'], rms['absolute'])}, better on "
-            f"{reference['folds_improved']} of {reference['n_folds']} held-out folds); the model was refitted on "
-            "absolute readings"
+            f"`{reference['reference']}` ({grouped}held-out RMS {change_words(rms['given'], rms['absolute'])}, "
+            f"better on {reference['folds_improved']} of {reference['n_folds']} held-out folds); the model was "
+            "refitted on absolute readings"
         )
     if result.added:
         for step in result.steps:
