@@ -9,7 +9,7 @@ from test_diagnose_joint import SENSORS, spindle_run
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.history import continues
+from groupfit.diagnose.history import COLD_START_NOTE, continues
 from groupfit.diagnose.loop import stacked_residual
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
@@ -106,3 +106,31 @@ def test_a_chain_of_files_carries_the_history_through_every_one():
     whole_run = load_run(whole, temps=TEMPS, name="whole", allow_nonfinite=True)
     expected = stacked_residual(result.model, [whole_run], replay_groups)[700:]
     np.testing.assert_allclose(result.residuals_after["validate"], expected, rtol=0, atol=1e-12)
+
+
+def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
+    # the log cut while the spindle runs fast, the second file's clock started again: its lag of the speed
+    # starts from rest on a hot machine, and the report says why the validation may look worse
+    frame = spindle_run(8, hours=16.0)
+    speed = frame["speed_rpm"].to_numpy()
+    at = int(np.flatnonzero(speed >= 4000.0)[-1]) - 60
+    modelling, _ = split(frame, at)
+    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+
+    def diagnosed_from(row):
+        later = frame.iloc[row:].reset_index(drop=True)
+        later["time_s"] -= later["time_s"].iloc[0]  # the logger's clock started again
+        return diagnose(model, modelling, load_run(later, temps=TEMPS, name="evening"), live_rule=replay_groups)
+
+    hot = diagnosed_from(at)
+    assert hot.added[0].feature.column == "speed_rpm" and hot.added[0].feature.start == "rest"
+    said = [n for n in hot.notes if COLD_START_NOTE in n]
+    assert len(said) == 1 and said[0].startswith(f"evening {COLD_START_NOTE} speed_rpm = {speed[at]:g}")
+    lines = hot.summary().splitlines()
+    if lines[0].startswith("the augmented model is worse"):
+        assert lines[1] == f"  ({said[0]})" and not any(line == f"note: {said[0]}" for line in lines)
+    else:
+        assert f"note: {said[0]}" in lines
+
+    cold_row = int(np.flatnonzero(speed[:at] == 0.0)[-1])  # a file that starts with the spindle stopped
+    assert not any(COLD_START_NOTE in n for n in diagnosed_from(cold_row).notes)

@@ -23,7 +23,10 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
+from groupfit.features import Feature
 
+COLD_START_NOTE = "starts with a source on,"
+"""What a note on a validation run that starts hot without its history says (the report puts it first)."""
 CONTIGUITY_TOLERANCE = 0.5
 """The gap between the two runs may differ from one sampling period by this share of it."""
 
@@ -87,3 +90,30 @@ def with_histories(runs: Sequence[Run], earlier: Sequence[Run]) -> tuple[list[Ru
         joined_of[id(run)] = run_with_history
         candidates.append(run)
     return joined, skipped, notes
+
+
+def started_running_notes(runs: Sequence[Run], skipped: Sequence[int], features: Sequence[Feature]) -> list[str]:
+    """A note for each validation run that starts with a source on, carries no history, and has a lag of it.
+
+    A lag from rest (``start="rest"``) takes the source as off before the run, as after a controller restart.
+    A file cut from a longer recording, whose time stamps start again, starts hot instead: the lag starts
+    cold there, and the validation of the effect is pessimistic for its first time constants.
+    """
+    notes = []
+    for run, rows in zip(runs, skipped):
+        if rows:  # judged with its history in front
+            continue
+        for feature in features:
+            if feature.start != "rest" or feature.column not in run.frame.columns:
+                continue
+            first = pd.to_numeric(run.frame[feature.column], errors="coerce").to_numpy(dtype=float)[0]
+            if np.isfinite(first) and first != 0.0:
+                lag = feature.describe().replace(", from rest", "")
+                notes.append(
+                    f"{run.name} {COLD_START_NOTE} {feature.column} = {first:g}, and is not the continuation of "
+                    f"a modelling run: the effect's {lag} starts there from rest (the source off before the "
+                    "file), as after a controller restart; if the file is the rest of the modelling recording, "
+                    "keep its time stamps going on from the modelling run's (one sampling period after its last) "
+                    "and it is judged with that history"
+                )
+    return notes

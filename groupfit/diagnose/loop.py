@@ -83,7 +83,7 @@ from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.design import group_index, group_sample_floor, stacked_design
 from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.diagnose.folds import Folds, make_folds, operating_columns
-from groupfit.diagnose.history import with_histories
+from groupfit.diagnose.history import started_running_notes, with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
 from groupfit.diagnose.reference import absolute_candidate, absolute_model, droppable_reference, global_view
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
@@ -533,6 +533,8 @@ def diagnose(
             ]
             return on_absolute
 
+    if validate_runs:
+        notes += started_running_notes(validate_runs, skipped["validate"], [c.feature for c in added])
     time = np.arange(len(target)) * period
     return DiagnosisResult(
         candidates=first_ranking or [],

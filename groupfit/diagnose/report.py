@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from groupfit.diagnose.candidates import is_ambient_name
+from groupfit.diagnose.history import COLD_START_NOTE
 from groupfit.diagnose.loop import OVERFIT_NOTE
 
 
@@ -52,6 +53,7 @@ def diagnosis_summary(result) -> str:
         lines.append(
             f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
         )
+        lines += [f"  ({n})" for n in result.notes if COLD_START_NOTE in n]
     selection = result.selection
     if selection is not None:
         how = "together with the effects" if selection["method"] == "joint" else f"by {selection['method']}"
@@ -184,5 +186,10 @@ def diagnosis_summary(result) -> str:
         f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
         f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
     )
-    lines += [f"note: {n}" for n in result.notes if not (overfit_in_head and n.startswith(OVERFIT_NOTE))]
+    said_first = bool(lines) and lines[0].startswith("the augmented model is worse")
+    lines += [
+        f"note: {n}"
+        for n in result.notes
+        if not (overfit_in_head and n.startswith(OVERFIT_NOTE)) and not (said_first and COLD_START_NOTE in n)
+    ]
     return "\n".join(lines)
