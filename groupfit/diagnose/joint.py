@@ -112,6 +112,7 @@ class JointProblem:
         else:
             pool = []
         remaining = [(f, v) for f, v in self.effects if np.ptp(v) > 0.0]
+        values_of = dict(remaining)
         chosen_values: list[np.ndarray] = []
         result = JointSelection()
         while True:
@@ -119,8 +120,7 @@ class JointProblem:
             if not result.held_out_rms:
                 result.held_out_rms.append(scorer.held_out_rms)
             best: tuple[Candidate, np.ndarray] | None = None
-            values_of = dict(remaining)
-            null = DriftGuard(self.drift, scorer, lambda c, values_of=values_of: values_of[c.feature], "drift")
+            null = DriftGuard(self.drift, scorer, lambda c: values_of[c.feature], "drift")
             for name in pool:
                 candidate = score_candidate(Feature(name), inputs[name], scorer)
                 if candidate.score >= MIN_GAIN and (best is None or candidate.score > best[0].score):

@@ -404,11 +404,13 @@ def diagnose(
         (:func:`reference_change_refusal`)."""
         nonlocal reference_check, current_model, current_inputs, current, scorer
         absolute, absolute_inputs = absolute_model(current_model, data_runs)
-        absolute_scorer = model_scorer(absolute, target, absolute_inputs, folds, measured)
-        given_scorer, judged_scorer = scorer, absolute_scorer
-        if grouped:  # judged as one group: the groups' own intercepts absorb the level the reference sets
-            given_scorer = model_scorer(global_view(current_model), target, current_inputs, folds, measured)
-            judged_scorer = model_scorer(global_view(absolute), target, absolute_inputs, folds, measured)
+        # a grouped model is judged as one group: the groups' own intercepts absorb the level the reference sets
+        given_scorer = (
+            model_scorer(global_view(current_model), target, current_inputs, folds, measured) if grouped else scorer
+        )
+        judged_scorer = model_scorer(
+            global_view(absolute) if grouped else absolute, target, absolute_inputs, folds, measured
+        )
         candidate = absolute_candidate(reference, given_scorer, judged_scorer)
         reason = reference_change_refusal(candidate, min_score)
         reference_check = {
@@ -427,7 +429,7 @@ def diagnose(
                 absolute,
                 absolute_inputs,
                 residuals_of(absolute),
-                absolute_scorer,
+                model_scorer(absolute, target, absolute_inputs, folds, measured) if grouped else judged_scorer,
             )
 
     if reference is not None:

@@ -49,7 +49,8 @@ def diagnosis_summary(result) -> str:
     judged = names.get(judge, judge)
     b, a = result.before[judge], result.after[judge]
     changed = result.changed
-    if result.improved is False or (validate and changed and a["rms_um"] >= b["rms_um"]):
+    worse = result.improved is False or (validate and changed and a["rms_um"] >= b["rms_um"])
+    if worse:
         lines.append(
             f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
         )
@@ -186,10 +187,9 @@ def diagnosis_summary(result) -> str:
         f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
         f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
     )
-    said_first = bool(lines) and lines[0].startswith("the augmented model is worse")
     lines += [
         f"note: {n}"
         for n in result.notes
-        if not (overfit_in_head and n.startswith(OVERFIT_NOTE)) and not (said_first and COLD_START_NOTE in n)
+        if not (overfit_in_head and n.startswith(OVERFIT_NOTE)) and not (worse and COLD_START_NOTE in n)
     ]
     return "\n".join(lines)
