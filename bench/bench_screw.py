@@ -9,8 +9,17 @@ Prints, for configs/screw_H.toml without noise:
 
 then identifies the model on run H and scores it on runs A, B, C — once on the
 shipped data sets (FE + noise) and once on the same runs regenerated without
-noise (the bare FE truth) — for the source offset fitted and for x0 = 0 (the
-formula as printed), next to the paper's figures scaled to each run.
+noise (the bare FE truth) — with α′ from the identified α′(t) table (the
+default) and from the paper's straight line in τ0, for the source offset
+fitted, and for x0 = 0 (the formula as printed), next to the paper's figures
+scaled to each run.
+
+Then, on three other screws made by the same FE model (a 32 mm screw held at
+both ends with the source 20 cm in, 10 s sampling, 3 h; convection 40
+W/(m²·K); a 40 mm screw heated for 4 h), each heated at 60, 40 and 25 W:
+identified at 60 W, C1 and C2 of the others from their first 400 s, the
+largest temperature error at 0/4/8/12 cm and the largest error at the probe
+(16 cm from the source), for both α′ laws.
 
 ``--best-case`` then asks how close the model's form can come at all: on
 each validation run it fits every parameter of eq. 7 (C1, C2, λ, x0 and the
@@ -83,12 +92,13 @@ def fin_vs_body() -> None:
         )
 
 
-def score(label: str, runs: dict, offset) -> None:
-    model = BallScrewModel(source_offset=offset)
+def score(label: str, runs: dict, offset, law: str) -> None:
+    model = BallScrewModel(source_offset=offset, alpha_law=law)
     result = compare_screw(model, runs["H"], [runs[n] for n in "ABC"])
     a0, a1 = model.alpha_prime_
     print(
-        f"\n{label}, x0 {'fitted' if offset == 'fit' else '= ' + str(offset)}: h = {model.h_:.3f} W/(m²·K) "
+        f"\n{label}, α′ by the {'α′(t) table' if law == 'table' else 'straight line in τ0'}, "
+        f"x0 {'fitted' if offset == 'fit' else '= ' + str(offset)}: h = {model.h_:.3f} W/(m²·K) "
         f"(FE 17.2, paper 17.2), α′ = {a0 * 1e5:.3f} + {a1 * 1e5:.4f}·τ0 (1e-5 m²/s), "
         f"x0 = {1e3 * model.source_offset_:.1f} mm"
     )
@@ -106,7 +116,7 @@ def score(label: str, runs: dict, offset) -> None:
 
 def best_case(runs: dict) -> None:
     """The least largest temperature error eq. 7 reaches on each validation run, fitted to that run itself."""
-    model = BallScrewModel().fit(runs["H"].rises, runs["H"].time, runs["H"].positions, "H")
+    model = BallScrewModel(alpha_law="line").fit(runs["H"].rises, runs["H"].time, runs["H"].positions, "H")
     print("\nbest case of the model's form, every parameter fitted to the run itself (largest |ΔT| at 0/4/8/12 cm)")
     lam = model.lambda_
     print(f"{'run':<9}{'α′ a straight line in τ0':>26}{'α′ free at every time':>32}{'paper scaled':>14}")
@@ -164,6 +174,46 @@ def free_alpha_minimax(x, t, measured) -> tuple[float, float]:
     return worst(best), float(best[2])
 
 
+OTHER_SCREWS = {
+    "32 mm, fixed-fixed, source 20 cm in": {
+        "screw": {"diameter_m": 0.032, "bearings": "fixed-fixed", "length_m": 0.6},
+        "source": {"x_m": 0.2},
+        "time": {"sampling_period_s": 10.0, "duration_s": 10800.0},
+    },
+    "h = 40 W/(m²·K)": {"screw": {"convection_W_m2K": 40.0}},
+    "40 mm, 4 h, 10 s sampling": {
+        "screw": {"diameter_m": 0.04},
+        "time": {"sampling_period_s": 10.0, "duration_s": 14400.0},
+    },
+}
+
+
+def other_screw_run(changes: dict, power: float):
+    raw = config("screw_H")
+    raw["name"] = f"screw_{power:g}W"
+    for section, values in changes.items():
+        raw[section].update(values)
+    raw["source"]["power_W"] = power
+    start = raw["source"]["x_m"]
+    raw["sensors"] = {name: x + start for name, x in raw["sensors"].items()}
+    raw["probe"]["x_m"] += start
+    return load_screw_run(simulate_config(raw, progress=False), name=raw["name"])
+
+
+def other_screws() -> None:
+    print("\nother screws: identified at 60 W, C1 and C2 at 40 and 25 W from their first 400 s")
+    print(f"{'screw':<38}{'α′ law':<8}{'max ΔT 60/40/25 W (peak rise)':>44}{'max |e| µm':>20}")
+    for label, changes in OTHER_SCREWS.items():
+        runs = [other_screw_run(changes, power) for power in (60.0, 40.0, 25.0)]
+        diameter = changes["screw"].get("diameter_m", 0.02)
+        for law in ("table", "line"):
+            model = BallScrewModel(alpha_law=law, diameter=diameter)
+            scores = [s for s in compare_screw(model, runs[0], runs[1:]).scores if s.model == "screw"]
+            temps = " / ".join(f"{s.max_temp_K:.2f} ({r.rises[:, 0].max():.1f})" for s, r in zip(scores, runs))
+            errors = " / ".join(f"{s.max_um:.2f}" for s in scores)
+            print(f"{label:<38}{law:<8}{temps + ' K':>44}{errors:>20}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--best-case", action="store_true", help="also the least error the model's form can reach")
@@ -174,9 +224,10 @@ def main() -> None:
         n: load_screw_run(simulate_config(config(f"screw_{n}", noise=False), progress=False), name=f"screw_{n}")
         for n in "HABC"
     }
-    for offset in ("fit", 0.0):
-        score("shipped data (FE + noise)", shipped, offset)
-        score("FE truth without noise", bare, offset)
+    for offset, law in (("fit", "table"), ("fit", "line"), (0.0, "table")):
+        score("shipped data (FE + noise)", shipped, offset, law)
+        score("FE truth without noise", bare, offset, law)
+    other_screws()
     if args.best_case:
         best_case(shipped)
 

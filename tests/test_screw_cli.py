@@ -29,7 +29,10 @@ def test_identify_writes_the_ballscrew_model_file(model_file):
     data = json.loads(model_file.read_text())
     assert data["kind"] == "ballscrew"
     assert data["h_W_m2K"] == pytest.approx(17.2, rel=0.1)
-    assert set(data["alpha_prime"]) >= {"a0_m2_s", "a1_m2_sK", "table"}
+    assert set(data["alpha_prime"]) >= {"a0_m2_s", "a1_m2_sK", "table", "curve", "used"}
+    assert data["alpha_prime"]["used"] == data["settings"]["alpha_law"] == "table"
+    curve = data["alpha_prime"]["curve"]
+    assert curve["t_s"][0] == 5.0 and len(curve["t_s"]) == len(curve["alpha_prime_m2_s"])
     names = [s["name"] for s in data["sources"]]
     assert names == ["screw_H", "screw_A"]
     assert all(isinstance(s["C1"], float) and isinstance(s["C2"], float) for s in data["sources"])
@@ -59,6 +62,26 @@ def test_predict_reidentifies_a_new_source_and_reports_the_papers_metrics(model_
     assert result["metrics"]["max_um"] < result["paper"]["max_um_scaled"]
     assert "max temperature error" in err
     assert (tmp_path / "screw_rises_screw_C.png").is_file() and (tmp_path / "screw_error_screw_C.png").is_file()
+
+
+def test_the_papers_line_law_on_request(tmp_path, capsys):
+    """--alpha-law line: α′ = a0 + a1·τ0, read from the rise at the source, as printed in the paper."""
+    args = ["screw", "compare", str(DATA / "screw_H.csv"), "--validate", str(DATA / "screw_B.csv"), "--json", "-"]
+    status, out, err = run_cli([*args, "--out", str(tmp_path / "line"), "--alpha-law", "line"], capsys)
+    assert status == 0, err
+    assert "straight line in τ0" in err
+    line = json.loads(out)
+    status, out, err = run_cli([*args, "--out", str(tmp_path / "table")], capsys)
+    table = json.loads(out)
+    assert (line["alpha_prime"]["used"], table["alpha_prime"]["used"]) == ("line", "table")
+    assert line["alpha_prime"]["a0_m2_s"] == pytest.approx(table["alpha_prime"]["a0_m2_s"])
+
+    def worst(result):
+        return next(r["max_temp_K"] for r in result["rows"] if r["run"] == "screw_B" and r["model"] == "screw")
+
+    assert worst(line) > worst(table)
+    saved = json.loads((tmp_path / "line" / "screw_model.json").read_text())
+    assert saved["settings"]["alpha_law"] == "line"
 
 
 def test_predict_uses_a_stored_source_and_gives_the_field_anywhere(model_file, tmp_path, capsys):

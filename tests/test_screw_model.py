@@ -107,21 +107,66 @@ def test_identification_on_run_H_recovers_the_fe_convection(identified):
     assert 0.0 < model.source_offset_ < 0.2
 
 
-def test_validation_runs_within_the_papers_error_at_the_probe(identified):
+def test_validation_runs_within_the_papers_errors(identified):
+    """Runs A, B, C (FE truth + noise), C1 and C2 from their first 400 s: within the paper's 0.8 °C and
+    3.8 µm, scaled to each run."""
     model, runs, result = identified
+    assert model.alpha_law == "table"
     scores = {(s.model, s.run): s for s in result.scores}
     for n in "ABC":
         screw = scores[("screw", f"screw_{n}")]
         bound = paper_bounds(runs[n])
         assert bound["paper_source"] == n
         assert screw.max_um < bound["max_um_scaled"]
-        # the temperature field: within 2.5 K (the paper: 0.8 °C; see docs/ballscrew.md for why)
-        assert screw.max_temp_K < 2.5
+        assert screw.max_temp_K < bound["max_temp_K_scaled"]  # over the whole run, the first seconds included
         # C1 and C2 of the new source: C1 near the source's share of H's
         c1 = model.sources_[f"screw_{n}"]["C1"]
         assert c1 == pytest.approx(13.0 * {"A": 0.9, "B": 0.8, "C": 0.7}[n], rel=0.1)
         # an MLR on the same eight sensors predicts the error at the probe better
         assert scores[("mlr", f"screw_{n}")].max_um < screw.max_um
+
+
+def test_the_papers_straight_line_in_tau0_misses_the_temperature_field(identified):
+    """The paper's law α′ = a0 + a1·τ0 gives a weaker source a smaller α′ at the same time; on a conductor
+    whose properties do not depend on temperature that is wrong, and the field misses by more than the table."""
+    table_model, runs, table_result = identified
+    line_model = BallScrewModel(alpha_law="line")
+    line_result = compare_screw(line_model, runs["H"], [runs[n] for n in "ABC"])
+    assert line_model.alpha_prime_ == pytest.approx(table_model.alpha_prime_)
+    table = {s.run: s for s in table_result.scores if s.model == "screw"}
+    line = {s.run: s for s in line_result.scores if s.model == "screw"}
+    for n in "ABC":
+        run = f"screw_{n}"
+        assert line[run].max_temp_K > 2 * table[run].max_temp_K
+        assert line[run].max_um < paper_bounds(runs[n])["max_um_scaled"]
+
+
+def test_the_table_law_carries_alpha_from_one_power_to_another():
+    """Fields made by eq. 7 itself with α′ a function of time only, two powers: the table identified on the
+    first predicts the second to within the identification's accuracy; the straight line in τ0 cannot."""
+    lam, x0 = 8.7, 0.06
+    time = np.arange(0.0, 14400.0 + 1, 5.0)
+    positions = np.arange(8) * 0.02
+
+    def alpha_true(t):
+        return 1e-5 * np.exp(t / 1200.0)
+
+    def field(c1, c2):
+        return temperature_rise(positions[None, :], time[:, None], c1, c2, lam, alpha_true(time)[:, None], x0)
+
+    strong, weak = field(13.0, 0.06), field(9.1, 0.042)
+    errors = {}
+    for law in ("table", "line"):
+        model = BallScrewModel(alpha_law=law, smooth_s=0.0).fit(strong, time, positions, "strong")
+        model.fit_source(weak, time, positions, "weak")
+        assert model.source_offset_ == pytest.approx(x0, rel=1e-3)
+        assert model.lambda_ == pytest.approx(lam, rel=1e-3)
+        tau0 = weak[:, 0] if law == "line" else None
+        errors[law] = np.max(np.abs(model.predict(time, positions, tau0, "weak") - weak))
+        if law == "table":
+            assert model.sources_["weak"]["C1"] == pytest.approx(9.1, rel=1e-3)
+    assert errors["table"] < 0.02
+    assert errors["line"] > 10 * errors["table"]
 
 
 def test_model_file_round_trip(identified, tmp_path):
@@ -134,4 +179,21 @@ def test_model_file_round_trip(identified, tmp_path):
     run = runs["B"]
     first = score_screw(model, run, "screw_B")[2]
     second = score_screw(again, run, "screw_B")[2]
+    assert again.alpha_law == "table"
     assert np.array_equal(first, second)
+
+
+def test_a_model_file_without_the_alpha_table_is_read_with_the_line_law(identified, tmp_path):
+    """Files written before the table law keep predicting as they did."""
+    model, runs, _ = identified
+    data = model_to_dict(model)
+    del data["alpha_prime"]["curve"]
+    del data["alpha_prime"]["used"]
+    del data["settings"]["alpha_law"]
+    save_model(data, tmp_path / "old.json")
+    old = load_model(tmp_path / "old.json")
+    assert old.alpha_law == "line"
+    run = runs["B"]
+    line = BallScrewModel(alpha_law="line")
+    line.__dict__.update({k: v for k, v in model.__dict__.items() if k.endswith("_")})
+    assert np.array_equal(score_screw(old, run, "screw_B")[2], score_screw(line, run, "screw_B")[2])

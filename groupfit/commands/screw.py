@@ -63,6 +63,13 @@ def add_parser(verbs) -> None:
 
 
 def _model_options(parser) -> None:
+    parser.add_argument(
+        "--alpha-law",
+        choices=("table", "line"),
+        default="table",
+        help="how α′ is predicted: the α′(t) table identified on the first run (default), or the paper's "
+        "straight line a0 + a1·τ0 in the rise at the source",
+    )
     parser.add_argument("--diameter", type=float, default=0.02, metavar="M", help="screw diameter 2R0 (default 0.02)")
     parser.add_argument("--conductivity", type=float, default=45.0, metavar="W_MK", help="k (default 45)")
     parser.add_argument("--expansion", type=float, default=11.5e-6, metavar="1_K", help="a_m (default 11.5e-6)")
@@ -100,6 +107,7 @@ def build_model(args: argparse.Namespace):
     if not 0 < args.transient_fraction < 1:
         raise InputError(f"--transient-fraction {args.transient_fraction:g}: must be between 0 and 1")
     return BallScrewModel(
+        alpha_law=args.alpha_law,
         diameter=args.diameter,
         conductivity=args.conductivity,
         expansion=args.expansion,
@@ -165,6 +173,7 @@ def identify_report(model, path) -> str:
         f"α′ = {a0 * 1e5:.3f} + {a1 * 1e5:.4f}·τ0  (10⁻⁵ m²/s; τ0 the rise at x = {1000 * model.reference_x_:g} mm; "
         f"transient residual {ident['transient_rms_K']:.3g} K rms)",
         f"source offset x0 = {1000 * model.source_offset_:.1f} mm",
+        f"α′ predicted by {_law_text(model)}",
         "α′(t) as the paper's Table 1 (t ks: α′ 10⁻⁵ m²/s, τ0 K; * = in the linear fit): " + _alpha_rows(model),
         "source            C1        C2   from",
     ]
@@ -172,6 +181,16 @@ def identify_report(model, path) -> str:
         lines.append(f"{name:<14}{entry['C1']:>8.3f}  {entry['C2']:>8.3f}   {entry['method']}")
     lines.append(f"wrote   {path}")
     return "\n".join(lines)
+
+
+def _law_text(model) -> str:
+    if model.alpha_law == "line":
+        return "the straight line in τ0 (the paper's law; --alpha-law line)"
+    times, _ = model.alpha_curve_
+    return (
+        f"the α′(t) table ({len(times)} times, {times[0]:g} to {times[-1]:g} s, interpolated in log t; "
+        "--alpha-law table): τ0 not needed"
+    )
 
 
 def _alpha_rows(model) -> str:
@@ -185,7 +204,7 @@ def _alpha_rows(model) -> str:
 
 # ------------------------------------------------------------------ predict
 def run_predict(args: argparse.Namespace) -> int:
-    from groupfit.screw.compare import paper_bounds, score_screw
+    from groupfit.screw.compare import law_input, paper_bounds, score_screw
     from groupfit.screw.modelfile import load_model
     from groupfit.screw.runs import load_screw_run
 
@@ -225,7 +244,7 @@ def run_predict(args: argparse.Namespace) -> int:
         "predicted_error_um": None if error is None else error.tolist(),
     }
     if at is not None:
-        tau0 = model.reference_rise(run.rises, run.positions, run.source)
+        tau0 = law_input(model, run)
         result["field"] = {
             "x_m": at.tolist(),
             "rise_K": model.predict(run.time, at, tau0, source).tolist(),
@@ -323,7 +342,7 @@ def compare_json(result, runs) -> dict[str, Any]:
         "runs": [r.name for r in runs],
         "rows": [s.as_dict() for s in result.scores],
         "h_W_m2K": result.model.h_,
-        "alpha_prime": {"a0_m2_s": a0, "a1_m2_sK": a1},
+        "alpha_prime": {"used": result.model.alpha_law, "a0_m2_s": a0, "a1_m2_sK": a1},
         "source_offset_m": result.model.source_offset_,
         "sources": [{"name": n, **e} for n, e in result.model.sources_.items()],
     }
@@ -351,7 +370,7 @@ def compare_report(result, runs, written) -> str:
     lines += [
         "",
         f"h = {model.h_:.3f} W/(m²·K) (paper {17.2}); α′ = {a0 * 1e5:.3f} + {a1 * 1e5:.4f}·τ0 (10⁻⁵ m²/s; "
-        f"paper 0.6 + 0.08·τ0); x0 = {1000 * model.source_offset_:.1f} mm",
+        f"paper 0.6 + 0.08·τ0); x0 = {1000 * model.source_offset_:.1f} mm; α′ predicted by {_law_text(model)}",
         "max ΔT over the sensors at 0, 4, 8, 12 cm and the whole run (after t_r: from t_r on); errors in µm at the "
         "probe; the MLR maps the same sensors to the error, fitted on the identification run",
         "wrote   " + ", ".join(str(p) for p in written),

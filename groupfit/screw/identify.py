@@ -11,8 +11,16 @@
    τ0(t) at those times, over the transient (τ0 below ``transient_fraction``
    of its steady value).
 4. For a new source: C1 and C2 by linear least squares on the first t_r
-   seconds of two sensors (the reference and the farthest), h, α′(τ0) and x0
+   seconds of two sensors (the reference and the farthest), h, α′ and x0
    kept.
+
+The α′(t) table of step 2 is also kept as a law of its own (the *table* law,
+:func:`alpha_curve`): α′ at every sample of the first t_r seconds and every
+``alpha_step_s`` after, from all sensors with x0 fixed, interpolated in log t.
+A conductor whose properties do not change with temperature heats along the
+same normalised transient at any power, so α′(t) carries from one source to
+another, where a straight line in τ0 gives a weaker source a smaller α′ at the
+same time.
 """
 
 from __future__ import annotations
@@ -28,6 +36,8 @@ from .model import steady_profile, transient_factor
 
 LAMBDA_BOUNDS = (0.05, 200.0)  # 1/m
 ALPHA_BOUNDS = (1e-8, 1e-2)  # m²/s
+CURVE_ALPHA_BOUNDS = (1e-8, 1.0)
+"""α′ (m²/s) searched for the table law; near the steady state only a large α′ brings the erf factor to 1."""
 OFFSET_BOUNDS = (0.0, 0.5)  # m
 STEADY_DRIFT = 0.01
 """Largest relative change of the reference rise between the last two steady windows."""
@@ -74,6 +84,7 @@ def identify_first_source(
     smooth_s,
     steady_window_s,
     min_sensors,
+    dense_until_s,
     label,
 ) -> dict:
     """Steps 1–3 on the identification run; see the module docstring.
@@ -130,11 +141,13 @@ def identify_first_source(
         {"t_s": float(t), "alpha_prime_m2_s": float(a), "tau0_K": float(tau), "used": bool(w)}
         for t, a, tau, w in zip(time[times_idx], alpha, tau0, well)
     ]
+    curve = alpha_curve(data, time, positions, c1, c2, lam, offset, dense_until_s=dense_until_s, step_s=alpha_step_s)
     return {
         "lambda": lam,
         "C1": c1,
         "C2": c2,
         "alpha_law": (float(a0), float(a1)),
+        "alpha_curve": curve,
         "alpha_table": table,
         "source_offset": float(offset),
         "residuals": {
@@ -144,6 +157,41 @@ def identify_first_source(
             "steady_drift": float(drift),
         },
     }
+
+
+def alpha_curve(rises, time, positions, c1, c2, lam, source_offset, *, dense_until_s, step_s):
+    """α′ (m²/s) at every sample with 0 < t ≤ ``dense_until_s`` and every ``step_s`` after, one scalar fit per time.
+
+    All sensors enter, the reference included: in the first seconds it is the
+    only one the heat has reached. Each α′ minimises the squared error of eq. 7
+    over the sensors (h, C1, C2 and x0 fixed): a log grid, then a bounded
+    search around its best point.
+
+    Returns
+    -------
+    times, alphas : ndarray
+    """
+    period = float(np.median(np.diff(time)))
+    on_step = np.abs(np.mod(time + 1e-9, step_s)) < period / 2 + 1e-9
+    rows = np.flatnonzero((time > 0) & ((time <= dense_until_s + 1e-9) | on_step))
+    steady = steady_profile(positions, c1, c2, lam)
+    log_lo, log_hi = np.log(CURVE_ALPHA_BOUNDS)
+    grid = np.linspace(log_lo, log_hi, 161)
+
+    def cost(log_alpha, row):
+        model = steady * transient_factor(positions, time[row], np.exp(log_alpha), source_offset)
+        return float(np.sum((model - rises[row]) ** 2))
+
+    factor = transient_factor(
+        positions[None, None, :], time[rows][:, None, None], np.exp(grid)[None, :, None], source_offset
+    )
+    costs = np.sum((steady * factor - rises[rows][:, None, :]) ** 2, axis=2)
+    alphas = np.empty(len(rows))
+    for i, (row, best) in enumerate(zip(rows, np.argmin(costs, axis=1))):
+        lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, len(grid) - 1)]
+        found = minimize_scalar(cost, bounds=(lo, hi), args=(row,), method="bounded", options={"xatol": 1e-6})
+        alphas[i] = np.exp(found.x if found.fun <= costs[i, best] else grid[best])
+    return time[rows].astype(float), alphas
 
 
 def _alpha_table(rises, time, positions, c1, c2, lam, source_offset, used):
@@ -187,8 +235,11 @@ def _alpha_table(rises, time, positions, c1, c2, lam, source_offset, used):
     return alpha, offset, float(np.sqrt(np.mean(transient**2)))
 
 
-def refit_source(rises, time, positions, tau0, *, lam, alpha, source_offset, identification_time_s, label):
-    """C1, C2 and the rms residual (K) from the first t_r seconds of the reference and farthest sensors."""
+def refit_source(rises, time, positions, alpha, *, lam, source_offset, identification_time_s, label):
+    """C1, C2 and the rms residual (K) from the first t_r seconds of the reference and farthest sensors.
+
+    ``alpha`` holds α′ (m²/s) at every sample of the run.
+    """
     if len(positions) < 2:
         raise InputError(
             f"{label}: {len(positions)} temperature sensor(s); re-identifying C1 and C2 of a new source needs two "
@@ -204,7 +255,7 @@ def refit_source(rises, time, positions, tau0, *, lam, alpha, source_offset, ide
         raise InputError(f"{label}: fewer than two samples in the first {identification_time_s:g} s")
     columns = [0, len(positions) - 1]
     x = positions[columns]
-    factor = transient_factor(x[None, :], time[window][:, None], alpha(tau0[window])[:, None], source_offset)
+    factor = transient_factor(x[None, :], time[window][:, None], np.asarray(alpha)[window][:, None], source_offset)
     design = np.stack([np.exp(-lam * x)[None, :] * factor, np.exp(lam * x)[None, :] * factor], axis=-1)
     design = design.reshape(-1, 2)
     target = rises[window][:, columns].reshape(-1)

@@ -8,7 +8,9 @@ Temperature rise at a distance x from the heat source (eq. 7 of the paper)::
 the first factor the steady profile of a fin with convection h (eq. 5), the
 second the erf solution of the heat equation without convection behind a
 source whose temperature is held (eq. 3), with the diffusivity replaced by a
-coefficient α′ that follows a reference rise τ0 measured at the source.
+coefficient α′ that follows a reference rise τ0 measured at the source
+(``alpha_law="line"``, the paper's law), or is read from the α′(t) table
+identified on the first source (``alpha_law="table"``, the default).
 ``x0`` is the distance from the effective source to the sensor at x = 0 (the
 *reading* of docs/ballscrew.md; x0 = 0 is the paper's formula as printed).
 Thermal error of a screw fixed at x = 0 (eq. 9)::
@@ -27,6 +29,9 @@ from groupfit.errors import InputError
 
 ALPHA_FLOOR = 1e-9
 """Smallest α′ (m²/s) the model uses: the linear law may cross zero for small τ0."""
+
+ALPHA_LAWS = ("table", "line")
+"""How α′ is predicted: the identified α′(t) table, or the paper's straight line in τ0."""
 
 _GAUSS = np.polynomial.legendre.leggauss(16)
 _PANELS = 16
@@ -84,6 +89,14 @@ class BallScrewModel:
 
     Parameters
     ----------
+    alpha_law : {"table", "line"}
+        How α′ is predicted. ``"table"``: α′(t), identified at the first
+        source's times (every sample of its first t_r seconds, then every
+        ``alpha_step_s``), interpolated in log t and held beyond its ends;
+        a linear conductor heats along one normalised transient at any power,
+        so the table carries to new sources, and no sensor at the source is
+        needed to predict. ``"line"``: the paper's α′ = a0 + a1·τ0, τ0 the
+        rise measured at the reference sensor. Both are identified either way.
     diameter : float
         Screw diameter 2R0 (m) of the equivalent cylinder (the paper: the pitch diameter).
     conductivity : float
@@ -118,7 +131,10 @@ class BallScrewModel:
     alpha_prime_ : tuple of float
         ``(a0, a1)``: α′ = a0 + a1·τ0, in m²/s and m²/(s·K).
     alpha_table_ : list of dict
-        The α′(t) identified at each time: ``t_s``, ``alpha_prime_m2_s``, ``tau0_K``, ``used``.
+        The α′(t) the line is fitted to (sensors other than the reference):
+        ``t_s``, ``alpha_prime_m2_s``, ``tau0_K``, ``used``.
+    alpha_curve_ : tuple of ndarray
+        ``(times_s, alpha_m2_s)``: the table law's α′(t), from all sensors.
     source_offset_ : float
         x0 (m).
     reference_x_ : float
@@ -131,6 +147,7 @@ class BallScrewModel:
 
     def __init__(
         self,
+        alpha_law: str = "table",
         diameter: float = 0.02,
         conductivity: float = 45.0,
         expansion: float = 11.5e-6,
@@ -142,6 +159,7 @@ class BallScrewModel:
         steady_window_s: float = 300.0,
         min_sensors: int = 4,
     ):
+        self.alpha_law = alpha_law
         self.diameter = diameter
         self.conductivity = conductivity
         self.expansion = expansion
@@ -172,6 +190,8 @@ class BallScrewModel:
         """
         from . import identify
 
+        if self.alpha_law not in ALPHA_LAWS:
+            raise ValueError(f"alpha_law must be one of {', '.join(ALPHA_LAWS)}, got {self.alpha_law!r}")
         rises, time, positions = _check_arrays(rises, time, positions)
         radius = self.diameter / 2.0
         fit = identify.identify_first_source(
@@ -186,12 +206,14 @@ class BallScrewModel:
             smooth_s=self.smooth_s,
             steady_window_s=self.steady_window_s,
             min_sensors=self.min_sensors,
+            dense_until_s=self.identification_time_s,
             label=label,
         )
         self.lambda_ = fit["lambda"]
         self.h_ = convection_from_fin_parameter(self.lambda_, self.conductivity, radius)
         self.alpha_prime_ = fit["alpha_law"]
         self.alpha_table_ = fit["alpha_table"]
+        self.alpha_curve_ = fit["alpha_curve"]
         self.source_offset_ = fit["source_offset"]
         self.reference_x_ = float(positions[0])
         self.sources_ = {source: {"C1": fit["C1"], "C2": fit["C2"], "method": "steady profile", "run": label}}
@@ -200,19 +222,18 @@ class BallScrewModel:
 
     def fit_source(self, rises, time, positions, source: str, label: str = "run") -> tuple[float, float]:
         """Identify C1 and C2 of a new source from the first t_r seconds of two sensors
-        (the reference and the farthest), h and α′(τ0) kept; store them under ``source``."""
+        (the reference and the farthest), h, the α′ law and x0 kept; store them under ``source``."""
         from . import identify
 
         self._check_fitted()
         rises, time, positions = _check_arrays(rises, time, positions)
-        tau0 = self.reference_rise(rises, positions, label)
+        tau0 = self.reference_rise(rises, positions, label) if self.alpha_law == "line" else None
         c1, c2, rms = identify.refit_source(
             rises,
             time,
             positions,
-            tau0,
+            self.alpha_at(time, tau0),
             lam=self.lambda_,
-            alpha=self.alpha,
             source_offset=self.source_offset_,
             identification_time_s=self.identification_time_s,
             label=label,
@@ -233,6 +254,18 @@ class BallScrewModel:
         a0, a1 = self.alpha_prime_
         return np.maximum(a0 + a1 * np.asarray(tau0, dtype=float), ALPHA_FLOOR)
 
+    def alpha_at(self, time, tau0=None) -> np.ndarray:
+        """α′ (m²/s) at each sample by the model's law: the table at ``time``, or the line at ``tau0``."""
+        self._check_fitted()
+        if self.alpha_law == "line":
+            if tau0 is None:
+                raise ValueError("the line law needs tau0, the rise measured at the reference sensor")
+            return self.alpha(tau0)
+        times, alphas = self.alpha_curve_
+        time = np.asarray(time, dtype=float)
+        log_t = np.log(np.clip(time, times[0], times[-1]))
+        return np.exp(np.interp(log_t, np.log(times), np.log(alphas)))
+
     def reference_rise(self, rises, positions, label: str = "run") -> np.ndarray:
         """τ0: the measured rise at the reference sensor's position."""
         positions = np.asarray(positions, dtype=float)
@@ -245,10 +278,10 @@ class BallScrewModel:
         return np.asarray(rises, dtype=float)[:, match[0]]
 
     def predict(self, time, positions, tau0, source: str) -> np.ndarray:
-        """Temperature rises Γ (K), shape (len(time), len(positions))."""
+        """Temperature rises Γ (K), shape (len(time), len(positions)); ``tau0`` only for the line law."""
         c1, c2 = self._source(source)
+        alpha = self.alpha_at(time, tau0)[:, None]
         time = np.asarray(time, dtype=float)[:, None]
-        alpha = self.alpha(tau0)[:, None]
         x = np.asarray(positions, dtype=float)[None, :]
         return temperature_rise(x, time, c1, c2, self.lambda_, alpha, self.source_offset_)
 
@@ -257,7 +290,8 @@ class BallScrewModel:
         c1, c2 = self._source(source)
         time = np.asarray(time, dtype=float)
         x = np.broadcast_to(np.asarray(x, dtype=float), time.shape)
-        return thermal_error(x, time, c1, c2, self.lambda_, self.alpha(tau0), self.expansion, self.source_offset_)
+        alpha = self.alpha_at(time, tau0)
+        return thermal_error(x, time, c1, c2, self.lambda_, alpha, self.expansion, self.source_offset_)
 
     # ------------------------------------------------------------- helpers
     def _source(self, source: str) -> tuple[float, float]:
@@ -275,6 +309,7 @@ class BallScrewModel:
         return {
             name: getattr(self, name)
             for name in (
+                "alpha_law",
                 "diameter",
                 "conductivity",
                 "expansion",

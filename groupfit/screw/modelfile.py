@@ -6,6 +6,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text, read_json_file, to_json
 
@@ -18,7 +20,8 @@ KIND = "ballscrew"
 def model_to_dict(model: BallScrewModel, *, runs: dict[str, str] | None = None) -> dict[str, Any]:
     """The model file object of a fitted :class:`BallScrewModel`.
 
-    ``h_W_m2K``, ``alpha_prime`` (law ``a0 + a1·τ0`` and the α′(t) table) and,
+    ``h_W_m2K``, ``alpha_prime`` (the law in use, the line ``a0 + a1·τ0`` with
+    the α′(t) table it was fitted to, and the table law's α′(t) curve) and,
     per source, ``C1`` and ``C2``; the screw's known constants and the
     identification settings so that the estimator can be rebuilt.
     """
@@ -29,11 +32,17 @@ def model_to_dict(model: BallScrewModel, *, runs: dict[str, str] | None = None) 
         "h_W_m2K": float(model.h_),
         "lambda_1_m": float(model.lambda_),
         "alpha_prime": {
+            "used": model.alpha_law,
             "law": "a0_m2_s + a1_m2_sK * tau0_K",
             "a0_m2_s": float(a0),
             "a1_m2_sK": float(a1),
             "reference_x_m": float(model.reference_x_),
             "table": model.alpha_table_,
+            "curve": {
+                "law": "interpolated in log t, held beyond its ends",
+                "t_s": [float(t) for t in model.alpha_curve_[0]],
+                "alpha_prime_m2_s": [float(a) for a in model.alpha_curve_[1]],
+            },
         },
         "source_offset_m": float(model.source_offset_),
         "sources": [{"name": name, **entry} for name, entry in model.sources_.items()],
@@ -43,6 +52,7 @@ def model_to_dict(model: BallScrewModel, *, runs: dict[str, str] | None = None) 
             "expansion_1_K": float(model.expansion),
         },
         "settings": {
+            "alpha_law": model.alpha_law,
             "source_offset": model.source_offset,
             "transient_fraction": float(model.transient_fraction),
             "alpha_step_s": float(model.alpha_step_s),
@@ -71,7 +81,9 @@ def load_model(path: str | Path) -> BallScrewModel:
 
 
 def model_from_dict(data: dict[str, Any]) -> BallScrewModel:
-    settings, screw, alpha = data["settings"], data["screw"], data["alpha_prime"]
+    settings, screw, alpha = dict(data["settings"]), data["screw"], data["alpha_prime"]
+    curve = alpha.get("curve")
+    settings.setdefault("alpha_law", "table" if curve else "line")
     model = BallScrewModel(
         diameter=float(screw["diameter_m"]),
         conductivity=float(screw["conductivity_W_mK"]),
@@ -82,6 +94,14 @@ def model_from_dict(data: dict[str, Any]) -> BallScrewModel:
     model.lambda_ = float(data["lambda_1_m"])
     model.alpha_prime_ = (float(alpha["a0_m2_s"]), float(alpha["a1_m2_sK"]))
     model.alpha_table_ = list(alpha.get("table", []))
+    if curve:
+        times = np.asarray(curve["t_s"], dtype=float)
+        alphas = np.asarray(curve["alpha_prime_m2_s"], dtype=float)
+        if times.shape != alphas.shape or not times.size or np.any(np.diff(times) <= 0) or np.any(alphas <= 0):
+            raise ValueError("alpha_prime.curve: t_s must increase and alpha_prime_m2_s be positive, one per time")
+        model.alpha_curve_ = (times, alphas)
+    elif settings["alpha_law"] == "table":
+        raise ValueError("alpha law 'table' without alpha_prime.curve")
     model.reference_x_ = float(alpha["reference_x_m"])
     model.source_offset_ = float(data["source_offset_m"])
     model.sources_ = {}
