@@ -27,6 +27,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from groupfit.data import DEFAULT_TIME
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
 from groupfit.grouping import serving_group_index
@@ -173,6 +174,12 @@ class DeadBand:
         return _fields_from_dict(cls, data)
 
 
+def time_column(model: "ModelFile | Mapping[str, Any]") -> str:
+    """The time column the model was fitted with, kept under ``training.time`` (default ``time_s``)."""
+    training = model.training if isinstance(model, ModelFile) else model.get("training")
+    return str((training or {}).get("time") or DEFAULT_TIME)
+
+
 @dataclass(frozen=True, kw_only=True)
 class ModelFile:
     """A grouped model as the model file holds it (``groupfit-model/1``).
@@ -255,6 +262,11 @@ class ModelFile:
         return dataclasses.replace(self, **changes)
 
     # ----------------------------------------------------------------- what the model holds
+
+    @property
+    def time_column(self) -> str:
+        """The time column of the modelling run (files written before it was recorded: ``time_s``)."""
+        return time_column(self)
 
     @property
     def n_groups(self) -> int:

@@ -19,12 +19,12 @@ from groupfit.commands.common import (
     write_json,
     wrote_line,
 )
-from groupfit.data import DEFAULT_TIME, Run, load_run
+from groupfit.data import Run, load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.errors import InputError
-from groupfit.model import ModelFile
+from groupfit.model import ModelFile, time_column
 from groupfit.modelfile import load_model, save_model
 from groupfit.sweep.selection import SELECTION_METHODS
 
@@ -41,7 +41,9 @@ def add_parser(verbs) -> None:
         "one at a time",
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
-    parser.add_argument("--time", default=DEFAULT_TIME, metavar="COLUMN", help="time column (default time_s)")
+    parser.add_argument(
+        "--time", metavar="COLUMN", help="time column (default: the one the model was fitted with, else time_s)"
+    )
     add_json_option(parser)
     add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
@@ -142,8 +144,9 @@ def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
 
 def run_diagnose(args: argparse.Namespace) -> int:
     model = load_model(args.model)
-    data = [load_measured(path, model, args.time) for path in args.data]
-    validate = [load_measured(path, model, args.time) for path in args.validate or []]
+    time = args.time or time_column(model)
+    data = [load_measured(path, model, time) for path in args.data]
+    validate = [load_measured(path, model, time) for path in args.validate or []]
     out_dir = check_output_dir(args.out)
     check_json_target(args)
     from groupfit.runtime import replay_groups

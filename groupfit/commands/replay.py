@@ -37,7 +37,11 @@ def add_parser(verbs) -> None:
         metavar="CSV",
         help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
     )
-    replay.add_argument("--time", default="time_s", metavar="COLUMN", help="time column in seconds (default time_s)")
+    replay.add_argument(
+        "--time",
+        metavar="COLUMN",
+        help="time column in seconds (default: the one the model was fitted with, else time_s)",
+    )
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
     replay.add_argument(
         "--precision",
@@ -73,7 +77,8 @@ def run_replay(args: argparse.Namespace) -> int:
 
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
-    run = load_readings(args.data, tables, time=args.time, error=args.error or model.error or "error_um")
+    error = args.error or model.error or "error_um"
+    run = load_readings(args.data, tables, time=args.time or model.time_column, error=error)
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:

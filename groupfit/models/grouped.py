@@ -357,7 +357,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             objective_value=float(self.objective_value_),
             group_objective=tuple(float(v) for v in self.group_objective_),
             switching=switching,
-            training={"run": run.name, **metrics},
+            training={"run": run.name, "time": run.time_name, **metrics},
             reference=getattr(run, "reference", None),
             ridge_alpha=float(self.ridge_alpha) if self.ridge_alpha else None,
         )
