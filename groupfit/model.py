@@ -264,11 +264,6 @@ class ModelFile:
     # ----------------------------------------------------------------- what the model holds
 
     @property
-    def time_column(self) -> str:
-        """The time column of the modelling run (files written before it was recorded: ``time_s``)."""
-        return time_column(self)
-
-    @property
     def n_groups(self) -> int:
         return len(self.coefficients)
 

@@ -24,7 +24,7 @@ from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
-from groupfit.model import ModelFile
+from groupfit.model import ModelFile, time_column
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 
 
@@ -78,7 +78,7 @@ def run_replay(args: argparse.Namespace) -> int:
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
-    run = load_readings(args.data, tables, time=args.time or model.time_column, error=error)
+    run = load_readings(args.data, tables, time=args.time or time_column(model), error=error)
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:

@@ -204,7 +204,7 @@ def _alpha_rows(model) -> str:
 
 # ------------------------------------------------------------------ predict
 def run_predict(args: argparse.Namespace) -> int:
-    from groupfit.screw.compare import law_input, paper_bounds, score_screw
+    from groupfit.screw.compare import paper_bounds, score_screw
     from groupfit.screw.modelfile import load_model
     from groupfit.screw.runs import load_screw_run
 
@@ -244,7 +244,7 @@ def run_predict(args: argparse.Namespace) -> int:
         "predicted_error_um": None if error is None else error.tolist(),
     }
     if at is not None:
-        tau0 = law_input(model, run)
+        tau0 = model.law_input(run.rises, run.positions, run.source)
         result["field"] = {
             "x_m": at.tolist(),
             "rise_K": model.predict(run.time, at, tau0, source).tolist(),

@@ -79,14 +79,9 @@ def paper_columns(run: ScrewRun) -> list[int]:
     return found or list(range(len(run.positions)))
 
 
-def law_input(model: BallScrewModel, run: ScrewRun) -> np.ndarray | None:
-    """τ0, the rise at the reference sensor, when the model's α′ law reads it (the line); else None."""
-    return model.reference_rise(run.rises, run.positions, run.source) if model.alpha_law == "line" else None
-
-
 def screw_prediction(model: BallScrewModel, run: ScrewRun, source: str) -> tuple[np.ndarray, np.ndarray | None]:
     """Predicted rises at the run's sensors and thermal error at its probe."""
-    tau0 = law_input(model, run)
+    tau0 = model.law_input(run.rises, run.positions, run.source)
     rises = model.predict(run.time, run.positions, tau0, source)
     error = None if run.probe_x is None else model.predict_error(run.time, run.probe_x, tau0, source)
     return rises, error

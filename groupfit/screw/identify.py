@@ -50,6 +50,12 @@ def smooth(rises: np.ndarray, time: np.ndarray, width_s: float) -> np.ndarray:
     return uniform_filter1d(rises, size=size, axis=0, mode="nearest") if size > 1 else rises
 
 
+def on_step(time: np.ndarray, step_s: float) -> np.ndarray:
+    """Samples at multiples of ``step_s`` (to half a sampling period)."""
+    period = float(np.median(np.diff(time)))
+    return np.abs(np.mod(time + 1e-9, step_s)) < period / 2 + 1e-9
+
+
 def fit_steady_profile(profile: np.ndarray, positions: np.ndarray) -> tuple[float, float, float, float]:
     """λ, C1, C2 and the rms residual (K) of the steady profile (eq. 5)."""
 
@@ -120,9 +126,7 @@ def identify_first_source(
     lam, c1, c2, steady_rms = fit_steady_profile(last, positions)
     tau_inf = float(steady_profile(positions[0], c1, c2, lam))
 
-    times_idx = np.flatnonzero(
-        (time >= alpha_step_s - 1e-9) & (np.abs(np.mod(time + 1e-9, alpha_step_s)) < period / 2 + 1e-9)
-    )
+    times_idx = np.flatnonzero((time >= alpha_step_s - 1e-9) & on_step(time, alpha_step_s))
     tau0 = data[times_idx, 0]
     used = tau0 <= transient_fraction * tau_inf
     if used.sum() < 2:
@@ -171,9 +175,7 @@ def alpha_curve(rises, time, positions, c1, c2, lam, source_offset, *, dense_unt
     -------
     times, alphas : ndarray
     """
-    period = float(np.median(np.diff(time)))
-    on_step = np.abs(np.mod(time + 1e-9, step_s)) < period / 2 + 1e-9
-    rows = np.flatnonzero((time > 0) & ((time <= dense_until_s + 1e-9) | on_step))
+    rows = np.flatnonzero((time > 0) & ((time <= dense_until_s + 1e-9) | on_step(time, step_s)))
     steady = steady_profile(positions, c1, c2, lam)
     log_lo, log_hi = np.log(CURVE_ALPHA_BOUNDS)
     grid = np.linspace(log_lo, log_hi, 161)

@@ -227,7 +227,7 @@ class BallScrewModel:
 
         self._check_fitted()
         rises, time, positions = _check_arrays(rises, time, positions)
-        tau0 = self.reference_rise(rises, positions, label) if self.alpha_law == "line" else None
+        tau0 = self.law_input(rises, positions, label)
         c1, c2, rms = identify.refit_source(
             rises,
             time,
@@ -265,6 +265,10 @@ class BallScrewModel:
         time = np.asarray(time, dtype=float)
         log_t = np.log(np.clip(time, times[0], times[-1]))
         return np.exp(np.interp(log_t, np.log(times), np.log(alphas)))
+
+    def law_input(self, rises, positions, label: str = "run") -> np.ndarray | None:
+        """τ0 when the model's α′ law reads it (the line: the rise at the reference sensor); else None."""
+        return self.reference_rise(rises, positions, label) if self.alpha_law == "line" else None
 
     def reference_rise(self, rises, positions, label: str = "run") -> np.ndarray:
         """τ0: the measured rise at the reference sensor's position."""
