@@ -147,6 +147,40 @@ def test_a_worse_validation_is_said_first_and_in_json(tmp_path, capsys):
     assert "% higher)" in "\n".join(report)
 
 
+def test_worse_on_one_of_several_validation_runs_is_not_reported_as_better():
+    """Better on the validation runs together, worse on one of them: the report names that run, first."""
+    modelling = ambient_run(0)
+    with_effect = ambient_run(2, schedule=OTHER_SCHEDULE, ambient_phase_h=7.0)
+    without = sensor_error(lumped(seed=1, n_samples=1000, schedule=OTHER_SCHEDULE, ambient_phase_h=7.0))
+    run = load_run(modelling, temps=TEMPS)
+    validation = [
+        load_run(with_effect, temps=TEMPS, name="with_effect"),
+        load_run(without, temps=TEMPS, name="without"),
+    ]
+    model = global_model(run)
+
+    result = diagnose(model, run, validation)
+    assert [c.feature.column for c in result.added] == ["T_amb"]
+    # each run's RMS, replayed on its own, against the stacked residuals cut per run
+    rms = lambda m, r: metrics_of(stacked_residual(m, [r], None))["rms_um"]  # noqa: E731
+    for entry, val in zip(result.validation_runs, validation):
+        assert entry["name"] == val.name
+        assert entry["before"]["rms_um"] == pytest.approx(rms(model, val), rel=1e-12)
+        assert entry["after"]["rms_um"] == pytest.approx(rms(result.model, val), rel=1e-12)
+    together_before, together_after = result.before["validate"]["rms_um"], result.after["validate"]["rms_um"]
+    assert together_after < together_before  # the pooled RMS alone would call it better
+    assert rms(result.model, validation[1]) > rms(model, validation[1])
+    assert result.improved is False and [r["name"] for r in result.worse_runs] == ["without"]
+    head = result.summary().splitlines()[0]
+    assert head.startswith("the augmented model is worse on without:") and head.endswith("not recommended")
+    assert "(the 2 validation runs together:" in head
+    as_json = json.loads(json.dumps(result.to_json()))
+    assert as_json["improved"] is False and [r["name"] for r in as_json["validation_runs"]] == [
+        "with_effect",
+        "without",
+    ]
+
+
 def test_percentages_read_right():
     assert change_words(11.0, 4.4) == "11 → 4.4 µm (60 % lower)"
     assert change_words(11.0, 19.8) == "11 → 19.8 µm (80 % higher)"

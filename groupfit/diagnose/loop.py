@@ -171,6 +171,8 @@ class DiagnosisResult:
     reference: dict[str, Any] | None = None
     """The check of the model's reference sensor against absolute readings (:mod:`groupfit.diagnose.reference`),
     when the model has one; ``dropped`` says whether the model was refitted without it."""
+    validation_runs: list[dict[str, Any]] = field(default_factory=list)
+    """Each validation run on its own: ``name``, and the error metrics ``before`` and ``after``."""
 
     def summary(self) -> str:
         """The report, as ``groupfit diagnose`` prints it."""
@@ -192,6 +194,7 @@ class DiagnosisResult:
             "reference": self.reference,
             "before": self.before,
             "after": self.after,
+            "validation_runs": self.validation_runs,
             "improved": self.improved,
             "checks": {"before": self.checks_before, "after": self.checks_after},
             "notes": self.notes,
@@ -207,10 +210,19 @@ class DiagnosisResult:
 
     @property
     def improved(self) -> bool | None:
-        """Whether the validation run got better; None without one (or when the model was not changed)."""
+        """Whether the validation runs got better, together and each one; None without one (or when the model
+        was not changed)."""
         if "validate" not in self.before or not self.changed:
             return None
-        return self.after["validate"]["rms_um"] < self.before["validate"]["rms_um"]
+        together = self.after["validate"]["rms_um"] < self.before["validate"]["rms_um"]
+        return together and not self.worse_runs
+
+    @property
+    def worse_runs(self) -> list[dict[str, Any]]:
+        """The validation runs on which the changed model's RMS error is not lower (none when it is unchanged)."""
+        if not self.changed:
+            return []
+        return [r for r in self.validation_runs if r["after"]["rms_um"] >= r["before"]["rms_um"]]
 
 
 def check_inputs(model: dict[str, Any], run: Run, inputs: np.ndarray) -> list[str]:
@@ -237,6 +249,21 @@ def check_inputs(model: dict[str, Any], run: Run, inputs: np.ndarray) -> list[st
 
 def metrics_of(res: np.ndarray) -> dict[str, float]:
     return error_metrics(res[np.isfinite(res)])
+
+
+def metrics_per_run(
+    runs: Sequence[Run], skipped: Sequence[int], before: np.ndarray, after: np.ndarray
+) -> list[dict[str, Any]]:
+    """The error metrics of each of ``runs`` before and after, cut from the stacked residuals (a run's history
+    rows, ``skipped``, are not in them); runs without a measured error are left out."""
+    edges = np.cumsum([0, *(len(run.time) - skip for run, skip in zip(runs, skipped))])
+    out = []
+    for run, start, end in zip(runs, edges[:-1], edges[1:]):
+        if np.isfinite(before[start:end]).any():
+            out.append(
+                {"name": run.name, "before": metrics_of(before[start:end]), "after": metrics_of(after[start:end])}
+            )
+    return out
 
 
 def as_runs(runs: Run | Sequence[Run] | None) -> list[Run]:
@@ -556,6 +583,11 @@ def diagnose(
         run_names={key: joint_name(rs) for key, rs in runs.items()},
         selection=selection,
         reference=reference_check,
+        validation_runs=(
+            metrics_per_run(runs["validate"], skipped["validate"], before["validate"], current["validate"])
+            if validate_runs
+            else []
+        ),
     )
 
 

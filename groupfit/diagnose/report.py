@@ -50,7 +50,16 @@ def diagnosis_summary(result) -> str:
     b, a = result.before[judge], result.after[judge]
     changed = result.changed
     worse = result.improved is False or (validate and changed and a["rms_um"] >= b["rms_um"])
-    if worse:
+    several = len(result.validation_runs) > 1
+    if worse and several and a["rms_um"] < b["rms_um"]:  # better together, worse on some run
+        each = "; ".join(
+            f"{r['name']}: {r['before']['rms_um']:.3g} → {r['after']['rms_um']:.3g} µm RMS" for r in result.worse_runs
+        )
+        lines.append(
+            f"the augmented model is worse on {each} (the {len(result.validation_runs)} validation runs together: "
+            f"{change_words(b['rms_um'], a['rms_um'])}); not recommended"
+        )
+    elif worse:
         lines.append(
             f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
         )
@@ -180,6 +189,12 @@ def diagnosis_summary(result) -> str:
             f"{key:<9} {names.get(key, key)}: RMS {change_words(b['rms_um'], a['rms_um'])}, max {b['max_um']:.4g} → "
             f"{a['max_um']:.4g} µm, R {b['R_um']:.4g} → {a['R_um']:.4g} µm"
         )
+        if key == "validate" and several:
+            lines += [
+                f"  {r['name']}: RMS {change_words(r['before']['rms_um'], r['after']['rms_um'])}, max "
+                f"{r['before']['max_um']:.4g} → {r['after']['max_um']:.4g} µm"
+                for r in result.validation_runs
+            ]
     lb_b, lb_a = result.checks_before["ljung_box"], result.checks_after["ljung_box"]
     dr_b, dr_a = result.checks_before["drift"], result.checks_after["drift"]
     lines.append(
