@@ -30,3 +30,19 @@ def test_from_the_fits_default_reference_too(name):
     before, after = row["validation_rms_before_um"], row["validation_rms_after_um"]
     assert row["improved"] is (None if not (row["added"] or row["reference_dropped"]) else after < before)
     assert row["verdict"] == "OK", row
+
+
+def test_a_fall_the_oracle_cannot_reach_is_told_from_a_miss():
+    """The right effect, validation better by 20 %: out of reach when the oracle does no better, else a FAIL."""
+    from types import SimpleNamespace
+
+    pump = SimpleNamespace(missing=("pump_on",))
+    right = [{"column": "pump_on"}]
+    assert bench.verdict(pump, right, 10.0, 8.0, True, oracle=7.0).startswith(
+        "out of reach: fell 20 %, the oracle 30 %"
+    )
+    assert bench.verdict(pump, right, 10.0, 8.0, True, oracle=3.0) == "FAIL: validation fell only 20 %"
+    # never out of reach when the effect is the wrong one, or the validation got worse
+    assert bench.verdict(pump, [{"column": "T_amb"}], 10.0, 8.0, True, oracle=9.0).startswith("FAIL: first effect")
+    assert bench.verdict(pump, right, 10.0, 11.0, False, oracle=9.0) == "worse, reported so"
+    assert bench.verdict(pump, right, 10.0, 5.0, True, oracle=9.0) == "OK"
