@@ -17,8 +17,10 @@ its nested held-out forecast is shown next to the given model's held-out
 RMS). "RMS µm" is the model each diagnosis started from (the 16-sensor model
 for the sixth). A last table cuts the test in two files at 50 … 90 % and
 validates on the second, once as the continuation of the first (its
-derived inputs carry the first file's history, as on the controller) and
-once after an hour's gap (the controller restarted: from rest). The last
+derived inputs carry the first file's history, as on the controller),
+once after an hour's gap (the controller restarted: from rest), and once
+cut in two halves, two files that continue each other, each judged on its
+own. The last
 table asks whether a −40 % on a held-out block was within reach: for each τ
 of the speed's heat-law low-pass, the score the diagnosis gave it on the
 other blocks, how many of their folds it improved and why it was not taken
@@ -83,7 +85,8 @@ FORWARD_CUTS = (0.5, 0.6, 0.7, 0.8, 0.9)
 
 
 def forward_split_row(frame, cut):
-    """Diagnose with the rows after ``cut`` as a second file: continuing the first, and after an hour's gap."""
+    """Diagnose with the rows after ``cut`` as a second file: continuing the first, and after an hour's gap;
+    then with them as two files, each continuing the one before, judged each on its own."""
     modelling = load_run(frame.iloc[:cut].reset_index(drop=True), temps=SENSORS, error="disp_ch3_um", name="first")
     model = base_model([modelling])
     cells = []
@@ -95,7 +98,16 @@ def forward_split_row(frame, cut):
         b, a = result.before["validate"]["rms_um"], result.after["validate"]["rms_um"]
         cells.append(f"{b:.2f} → {a:.2f} µm ({100 * (a - b) / b:+.0f} %)")
     effects = "; ".join(c.feature.describe() for c in result.added) or "nothing added"
-    return f"{cut / len(frame):<10.0%} {cells[0]:>32} {cells[1]:>32}  {effects}"
+    middle = (cut + len(frame)) // 2
+    halves = [
+        load_run(frame.iloc[rows].reset_index(drop=True), temps=SENSORS, error="disp_ch3_um", name=name)
+        for name, rows in (("second", slice(cut, middle)), ("third", slice(middle, None)))
+    ]
+    in_two = diagnose(model, [modelling], halves, live_rule=replay_groups)
+    each = ", ".join(f"{r['before']['rms_um']:.2f} → {r['after']['rms_um']:.2f}" for r in in_two.validation_runs) + (
+        " (worse on one)" if in_two.worse_runs else ""
+    )
+    return f"{cut / len(frame):<10.0%} {cells[0]:>32} {cells[1]:>32} {each:>42}  {effects}"
 
 
 def tau_sweep(frame, label, first, last):
@@ -179,7 +191,10 @@ def main(argv=None) -> int:
             name = f"diagnose_measured_{label.split()[0]}{suffix}.png"
             plot_diagnosis(result, {"data": runs, "validate": [held]}, out / name)
     print("\nthe log cut in two files: modelling up to the cut, validation after it (16-sensor start)")
-    print(f"{'cut':<10} {'continuing the modelling file':>32} {'after an hour gap (from rest)':>32}  effects added")
+    print(
+        f"{'cut':<10} {'continuing the modelling file':>32} {'after an hour gap (from rest)':>32} "
+        f"{'as two files, each half µm':>42}  effects added"
+    )
     for share in FORWARD_CUTS:
         print(forward_split_row(frame, int(share * len(frame))))
     print("\nwas a 40 % cut within reach? the heat-law low-pass at each τ (16-sensor start)")
