@@ -100,7 +100,22 @@ def add_parser(verbs) -> None:
         help="keep the model's reference sensor (e.g. T_amb) even where absolute readings predict the held-out "
         "conditions clearly better (by default the model is then refitted on absolute readings)",
     )
+    parser.add_argument(
+        "--ambient",
+        type=column_list,
+        default=(),
+        metavar="COLUMN[,COLUMN]",
+        help="columns that are ambient temperatures whatever their names (an air sensor logged as T0): tried as "
+        "causes with every transform (default: columns named like T_amb, ambient_C, T_room, air…)",
+    )
     parser.set_defaults(handler=run_diagnose)
+
+
+def column_list(text: str) -> tuple[str, ...]:
+    columns = tuple(c.strip() for c in text.split(",") if c.strip())
+    if not columns:
+        raise argparse.ArgumentTypeError(f"{text!r}: give one or more column names, separated by commas")
+    return columns
 
 
 def heat_exponent(text: str) -> float | str:
@@ -178,6 +193,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         select_jointly=joint,
         baseline=model,
         check_reference=not args.keep_reference,
+        ambient=args.ambient,
     )
     if selection is not None:
         result.selection = {**selection, "of": len(model["temps"])}

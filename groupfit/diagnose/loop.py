@@ -171,6 +171,8 @@ class DiagnosisResult:
     reference: dict[str, Any] | None = None
     """The check of the model's reference sensor against absolute readings (:mod:`groupfit.diagnose.reference`),
     when the model has one; ``dropped`` says whether the model was refitted without it."""
+    ambient: tuple[str, ...] = ()
+    """Columns declared ambient temperatures (``diagnose --ambient``), whatever their names."""
     validation_runs: list[dict[str, Any]] = field(default_factory=list)
     """Each validation run on its own: ``name``, and the error metrics ``before`` and ``after``."""
 
@@ -290,6 +292,7 @@ def diagnose(
     baseline: dict[str, Any] | None = None,
     check_reference: bool = True,
     min_further_effect_rms_um: float = MIN_FURTHER_EFFECT_RMS_UM,
+    ambient: Sequence[str] = (),
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
@@ -305,9 +308,24 @@ def diagnose(
     before/after compare with (default ``model``; the model as the user gave
     it, when ``model`` is a re-selected or ridge-refitted start). A
     validation run that continues a modelling run is judged with it in front
-    (:mod:`groupfit.diagnose.history`).
+    (:mod:`groupfit.diagnose.history`). ``ambient`` names columns that are
+    ambient temperatures whatever their names (an air sensor logged as
+    ``T0``): causes, tried with every transform, not machine sensors.
     """
     data_runs, validate_runs = as_runs(data), as_runs(validate)
+    ambient = tuple(ambient)
+    for column in ambient:
+        missing = [run for run in data_runs if column not in run.frame.columns]
+        if missing:
+            raise InputError(
+                f"{missing[0].source}: --ambient column '{column}' not found; columns: "
+                f"{', '.join(map(str, missing[0].frame.columns))}"
+            )
+        if column in model["temps"]:
+            raise InputError(
+                f"--ambient {column}: the model reads '{column}' as an input; name a column it does not read "
+                "(its transforms would re-weight an input: --own-transforms)"
+            )
     if select_jointly and (model["p"] > 0 or model.get("derived_inputs")):
         raise InputError(
             "--select joint re-chooses the inputs of a global model (p = 0) without derived inputs; this model "
@@ -389,8 +407,9 @@ def diagnose(
 
     if not own_transforms:
         notes.append("transforms of the model's own inputs not tried (they re-weight what the model reads)")
-    sensor_columns = frozenset(c for c in columns if is_sensor_column(c))
-    if sensor_columns and operating and not any(is_ambient_name(c) for c in columns):
+    sensor_columns = frozenset(c for c in columns if is_sensor_column(c) and c not in ambient)
+    air_named = any(is_ambient_name(c) or c in ambient for c in columns)
+    if sensor_columns and operating and not air_named:
         exogenous = exogenous_sensors(data_runs, sorted(sensor_columns), operating, period)
         for column in exogenous:
             notes.append(
@@ -398,6 +417,14 @@ def diagnose(
                 f"sources ({', '.join(operating)}; |r| < {EXOGENOUS_R} with every lag)"
             )
         sensor_columns -= set(exogenous)
+        air_named = bool(exogenous)
+    if sensor_columns and not air_named:
+        unused = ", ".join(sorted(sensor_columns))
+        notes.append(
+            f"no column is named as an ambient (T_amb, ambient_C, T_room, air…): the unused sensors ({unused}) "
+            "were read as machine sensors, tried as measured only; if one of them reads the air, say so with "
+            "--ambient COLUMN and its lags are tried as well"
+        )
     tried = candidate_features(
         columns,
         measured_inputs if own_transforms else [],
@@ -551,6 +578,7 @@ def diagnose(
                 baseline=model if baseline is None else baseline,
                 check_reference=False,
                 min_further_effect_rms_um=min_further_effect_rms_um,
+                ambient=ambient,
             ),
             min_score,
         )
@@ -581,6 +609,7 @@ def diagnose(
         folds=folds.describe(),
         base_check=base_check,
         run_names={key: joint_name(rs) for key, rs in runs.items()},
+        ambient=ambient,
         selection=selection,
         reference=reference_check,
         validation_runs=(

@@ -7,10 +7,10 @@ from groupfit.diagnose.history import COLD_START_NOTE
 from groupfit.diagnose.loop import OVERFIT_NOTE
 
 
-def column_words(column: str) -> str:
-    """What a column is, in words, for the report."""
+def column_words(column: str, ambient: tuple[str, ...] = ()) -> str:
+    """What a column is, in words, for the report; ``ambient``: columns declared ambient temperatures."""
     lowered = column.lower()
-    if is_ambient_name(column):
+    if is_ambient_name(column) or column in ambient:
         return f"ambient temperature `{column}`"
     if column.startswith("src_") and column.endswith("_on"):
         return f"heat source '{column[4:-3]}' (on/off `{column}`)"
@@ -130,7 +130,7 @@ def diagnosis_summary(result) -> str:
             held_out = change_words(step.held_out_rms_before, step.held_out_rms_after)
             kind = "effect chosen with the inputs" if step.joint else "missing effect"
             lines.append(
-                f"{kind}: {column_words(c.feature.column)}, {c.describe()} "
+                f"{kind}: {column_words(c.feature.column, result.ambient)}, {c.describe()} "
                 f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
                 f"held-out RMS {held_out}{' against the inputs chosen before it' if step.joint else ''})"
             )
@@ -152,8 +152,8 @@ def diagnosis_summary(result) -> str:
         refusal = result.refused[0]
         c = refusal.candidate
         lines.append(
-            f"no effect added: the best candidate, {column_words(c.feature.column)}, {c.describe()} (removes "
-            f"{100 * c.score:.0f} % of the held-out error), was refused: {refusal.reason}"
+            f"no effect added: the best candidate, {column_words(c.feature.column, result.ambient)}, {c.describe()} "
+            f"(removes {100 * c.score:.0f} % of the held-out error), was refused: {refusal.reason}"
         )
     elif result.base_check.get("overfitted"):  # a model that over-fits hides what is missing
         lines.append("no effect added: no candidate explains a significant part of the held-out error")
