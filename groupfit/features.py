@@ -10,13 +10,18 @@ controller can run too:
 * ``lowpass``: first-order lag with time constant τ,
   ``y[k] = a·y[k−1] + (1 − a)·x[k]``, ``a = e^{−Δt/τ}``, ``y[0] = x[0]``;
 * ``derivative``: ``(x[k] − x[k−1]) / Δt`` per hour, ``y[0] = 0``;
-* ``delay``: ``x[k − d]``, ``x[0]`` before the run.
+* ``delay``: ``x[k − d]``, ``x[0]`` before the run;
+* ``ontime``: ``x[k]·h[k]``, ``h[k]`` the hours the column has been non-zero
+  without a break up to sample k (``n[k]·Δt/3600``, ``n[k]`` the samples
+  counted, 0 while it is zero): a heat source's power times the time it has
+  run, the early, still linear rise of a part it heats.
 
 Where the recursion starts is the feature's ``start``: ``"steady"`` (the
 default) takes the part as settled at the first reading (``y[−1] = x[0]``),
 right for a lag of the ambient; ``"rest"`` takes the source as off before the
 run (``y[−1] = 0``, a delay line of zeros), right for a lag of a heat source —
 a controller starts with the machine, and a test starts from a cold machine.
+An on-time always starts from rest: its count begins at the first reading.
 
 A feature may first raise its column to a power, ``(|x| / scale)^exponent``:
 bearing heat grows with spindle speed as ``n^{5/3}`` (Palmgren's friction
@@ -33,7 +38,9 @@ import numpy as np
 
 from groupfit.errors import InputError
 
-TRANSFORMS = ("identity", "lowpass", "derivative", "delay")
+TRANSFORMS = ("identity", "lowpass", "derivative", "delay", "ontime")
+HOURS_PER_S = 1.0 / 3600.0
+"""An on-time is counted in hours."""
 STARTS = ("steady", "rest")
 
 
@@ -58,6 +65,8 @@ class Feature:
             raise InputError(f"low-pass of '{self.column}' needs a time constant tau_s > 0")
         if self.transform == "delay" and self.delay_samples < 1:
             raise InputError(f"delay of '{self.column}' needs delay_samples >= 1")
+        if self.transform == "ontime" and self.start != "rest":
+            raise InputError(f"on-time of '{self.column}': it starts from rest (start 'rest')")
         if self.exponent is not None:
             if not (np.isfinite(self.exponent) and self.exponent > 0):
                 raise InputError(f"power of '{self.column}': exponent {self.exponent!r} must be finite and > 0")
@@ -84,6 +93,8 @@ class Feature:
             return f"{source}~ddt"
         if self.transform == "delay":
             return f"{source}~delay{self.delay_samples}{rest}"
+        if self.transform == "ontime":
+            return f"{source}~ontime"
         return source
 
     def describe(self) -> str:
@@ -95,6 +106,8 @@ class Feature:
             words = "time derivative (per hour)"
         elif self.transform == "delay":
             words = f"delay {self.delay_samples} samples"
+        elif self.transform == "ontime":
+            words = "times the hours on"
         else:
             words = "as measured"
         if self.start == "rest" and self.transform in ("lowpass", "delay"):
@@ -132,11 +145,21 @@ class Feature:
             return x.copy()
         if self.transform == "derivative":
             return np.r_[0.0, np.diff(x)] * (3600.0 / period_s)
+        if self.transform == "ontime":
+            return x * (on_counts(x) * (period_s * HOURS_PER_S))
         before = 0.0 if self.start == "rest" else x[0]
         if self.transform == "delay":
             d = min(self.delay_samples, len(x))
             return np.r_[np.full(d, before), x[: len(x) - d]]
         return lowpass(x, self.tau_s, period_s, before)
+
+
+def on_counts(x: np.ndarray) -> np.ndarray:
+    """Samples ``x`` has been non-zero without a break, up to and including each sample (0 where it is zero)."""
+    on = np.asarray(x) != 0
+    counts = np.cumsum(on, dtype=float)
+    last_off = np.maximum.accumulate(np.where(on, 0.0, counts))
+    return counts - last_off
 
 
 def power_stage(x: np.ndarray, scale: float, exponent: float) -> np.ndarray:

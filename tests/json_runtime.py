@@ -21,7 +21,9 @@ It implements every format the exporter writes:
 * ``/4``: ``position`` terms (a polynomial in ``P - P0`` whose coefficients
   are again dot products with the inputs, the position clamped to the travel
   and flagged) and a ``dead_band`` (the target held while every measured
-  reading is near the band's reference).
+  reading is near the band's reference);
+* ``/5``: an ``ontime`` derived input (the source's value times its count of
+  samples on without a break, times ``scale`` hours).
 
 All arithmetic is on Python floats (IEEE double) in the order the steps give
 it, so the results are those of any double-precision runtime that performs
@@ -34,7 +36,7 @@ import math
 
 import numpy as np
 
-FORMATS = ("groupfit-runtime/1", "groupfit-runtime/2", "groupfit-runtime/3", "groupfit-runtime/4")
+FORMATS = tuple(f"groupfit-runtime/{n}" for n in range(1, 6))
 """The formats this runtime implements; it refuses any other instead of computing wrongly."""
 
 
@@ -125,6 +127,9 @@ def run_table(table: dict, readings: np.ndarray) -> list[tuple[int, int, float, 
                     value[k] = memory[k]
                 elif d["transform"] == "derivative":
                     value[k], memory[k] = (v - memory[k]) * d["scale"], v
+                elif d["transform"] == "ontime":
+                    memory[k] = memory[k] + 1.0 if v != 0.0 else 0.0
+                    value[k] = v * (memory[k] * d["scale"])
                 else:
                     value[k], line[k][pos[k]] = line[k][pos[k]], v
                     pos[k] = 0 if pos[k] + 1 == d["delay_samples"] else pos[k] + 1

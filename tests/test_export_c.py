@@ -189,7 +189,7 @@ def test_period_check(tmp_path):
 
 # derived inputs ---------------------------------------------------------------
 
-DERIVED = ["lowpass p=0", "all kinds p=2", "on/off p=1"]
+DERIVED = ["lowpass p=0", "all kinds p=2", "on/off p=1", "on-time p=1"]
 
 
 def derived_case(label):

@@ -66,6 +66,25 @@ def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_
         assert run_table(table, temps) == expected
 
 
+def test_json_table_with_an_on_time_is_format_5_and_enough_to_rebuild_the_rule():
+    model, run = augmented_model("on-time p=1")
+    table = json.loads(render(model, "json")["groupfit_runtime.json"])
+    assert table["format"] == "groupfit-runtime/5"  # a runtime for /4 refuses it instead of computing wrongly
+    heat, speed = table["derived_inputs"]
+    assert heat["transform"] == speed["transform"] == "ontime" and heat["start"] == "rest"
+    assert heat["scale"] == model["sampling_period_s"] / 3600.0 and heat["exponent"] == 5 / 3
+    assert "ontime: memory[k] = memory[k] + 1 if v != 0" in table["steps"][2]
+    rule = SwitchingRule(model)
+    for temps in derived_streams(model, run).values():
+        rule.reset()
+        expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
+        assert run_table(table, temps) == expected
+    # the heat law is formats /3 and /4 as before: only an on-time makes /5
+    assert json.loads(render(augmented_model("heat law p=2")[0], "json")["groupfit_runtime.json"])["format"] == (
+        "groupfit-runtime/3"
+    )
+
+
 def test_models_without_power_or_rest_keep_their_json_format_and_steps():
     for label, fmt in [("all kinds p=2", "groupfit-runtime/2"), ("on/off p=1", "groupfit-runtime/2")]:
         table = json.loads(render(augmented_model(label)[0], "json")["groupfit_runtime.json"])

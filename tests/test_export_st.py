@@ -568,6 +568,31 @@ def test_reset_restarts_the_derived_inputs():
     assert again == first and block.vars["delayPos2"] == 40 % 10
 
 
+def test_on_time_blocks_match_the_c_build_and_the_python_rule(single_driver):
+    """REAL: bit for bit with the single-precision C build; LREAL: the Python rule's decisions."""
+    model, run = augmented_model("on-time p=1")
+    streams = derived_streams(model, run)
+    text = derived_block("on-time p=1", "REAL")
+    assert "ONTIME_STEP_1 : REAL := " in text and "derivedMemory[1] := derivedMemory[1] + ONTIME_ONE;" in text
+    single = as_single(list(streams.values()))
+    st_out = run_block(text, single, model["sampling_period_s"], "REAL")
+    assert_same_decisions(st_out, run_driver(single_driver("derived on-time", model), single))
+    rule = SwitchingRule(model)
+    outputs = run_block(derived_block("on-time p=1", "LREAL"), list(streams.values()), 100.0, "LREAL")
+    for temps, out in zip(streams.values(), outputs):
+        rule.reset()
+        results = [rule.step(row) for row in temps]
+        assert out["code"].tolist() == [r.code for r in results]
+        assert np.max(np.abs(out["prediction_um"] - [r.prediction_um for r in results])) <= 1e-9
+
+
+@pytest.mark.slow
+def test_on_time_blocks_parse_with_both_parsers():
+    for real in ("REAL", "LREAL"):
+        text = derived_block("on-time p=1", real)
+        assert blark_accepts(text) and not tree_sitter_errors(text), f"a parser rejects the on-time {real} block"
+
+
 # power stage and start from rest ------------------------------------------------
 
 

@@ -42,3 +42,21 @@ def test_derived_matrix_names_a_missing_column():
     frame = pd.DataFrame({"a": [1.0, 2.0]})
     with pytest.raises(InputError, match="column 'b'"):
         derived_matrix([Feature("b")], frame, 100.0)
+
+
+def test_on_time_is_the_value_times_the_hours_on_without_a_break():
+    rng = np.random.default_rng(4)
+    speed = np.repeat(rng.choice([0.0, 0.0, 1500.0, 3000.0, 4500.0], size=60), rng.integers(1, 9, size=60))
+    period = 30.0
+    hours, hours_on = 0.0, []
+    for value in speed:  # the controller's count, one sample at a time
+        hours = hours + period / 3600.0 if value != 0 else 0.0
+        hours_on.append(hours)
+    on_time = Feature("n", "ontime", start="rest")
+    np.testing.assert_allclose(on_time.compute(speed, period), speed * hours_on, rtol=1e-12, atol=0.0)
+    heat = Feature("n", "ontime", start="rest", exponent=5 / 3, scale=1000.0)
+    np.testing.assert_allclose(heat.compute(speed, period), (speed / 1000.0) ** (5 / 3) * hours_on, rtol=1e-12)
+    assert on_time.name == "n~ontime" and heat.describe() == "heat law (x/1000)^1.67, times the hours on"
+    assert Feature.from_dict(heat.to_dict()) == heat
+    with pytest.raises(InputError, match="starts from rest"):
+        Feature("n", "ontime")

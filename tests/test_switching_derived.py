@@ -118,7 +118,7 @@ def assert_as_computed(actual: np.ndarray, expected: np.ndarray, feature: Featur
         assert np.allclose(actual, expected, rtol=1e-14, atol=0.0), name
 
 
-@pytest.mark.parametrize("label", ["all kinds p=2", "heat law p=2"])
+@pytest.mark.parametrize("label", ["all kinds p=2", "heat law p=2", "on-time p=1"])
 def test_a_held_or_faulty_source_feeds_its_transform_with_the_last_good_value(label):
     model, run = augmented_model(label)
     tables = RuleTables.from_model(model)

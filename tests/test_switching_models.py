@@ -168,6 +168,14 @@ AUGMENTED = {
             Feature("speed_rpm", "lowpass", tau_s=3600.0, exponent=5 / 3, scale=1000.0),  # heat law, steady start
         ),
     ),
+    "on-time p=1": (
+        heat_law_runs,
+        [240],
+        (
+            Feature("speed_rpm", "ontime", exponent=5 / 3, scale=1000.0, start="rest"),  # heat law × hours on
+            Feature("speed_rpm", "ontime", start="rest"),  # speed × hours on
+        ),
+    ),
 }
 """Models with derived inputs, built as ``groupfit diagnose`` builds them (augment_model), p = 0 and p > 0.
 

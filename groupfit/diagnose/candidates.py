@@ -5,8 +5,8 @@ temperature, spindle speed, on/off of other heat sources, unused sensors), as
 measured, low-passed over a grid of time constants (thermal lag),
 differentiated and delayed. A speed (an operating column with more than two
 levels) enters through the bearing-heat law ``(n / scale)^k`` (k = 5/3 by
-default, or fitted over :data:`FITTED_EXPONENTS`), as measured and
-low-passed. Lags of operating columns (speeds, on/off of heat sources) start
+default, or fitted over :data:`FITTED_EXPONENTS`), as measured, low-passed
+and times the hours it has run without a break (speed × on-time). Lags of operating columns (speeds, on/off of heat sources) start
 from rest, lags of everything else from the first reading
 (:mod:`groupfit.features`). Transforms of the model's own inputs are tried
 only when asked for. A column is left out, with the
@@ -171,7 +171,8 @@ def candidate_features(
     Every column: as measured (unused columns only), low-pass over
     :data:`TAUS_S`, derivative, delays; lags of ``operating`` columns start
     from rest. A speed among ``operating`` (see :func:`speed_like`) enters
-    through the heat law instead of linearly, as measured and low-passed;
+    through the heat law instead of linearly, as measured, low-passed and
+    times the hours it has run without a break (``ontime``);
     ``heat_exponent="fit"`` tries :data:`FITTED_EXPONENTS` (1 is the column
     itself) instead of one exponent. With ``sensor_transforms=False`` an
     unused temperature sensor (``sensor_columns``, by default those
@@ -191,6 +192,7 @@ def candidate_features(
                 power = {} if signed else {"exponent": k, "scale": heat_law_scale(values)}
                 features.append(Feature(column, **power))
                 features.extend(Feature(column, "lowpass", tau_s=tau, start=start, **power) for tau in TAUS_S)
+                features.append(Feature(column, "ontime", start="rest", **power))
             continue
         if column in columns:
             features.append(Feature(column))

@@ -378,6 +378,8 @@ def input_lines(tables: RuleTables) -> str:
             formula = f"y = b*v + a*y with y = {before} before its first sample; a = exp(-dt/tau), b = 1 - a"
         elif d.transform == "derivative":
             formula = "(v - v_previous) * 3600/dt per hour, 0 at the first sample"
+        elif d.transform == "ontime":
+            formula = "v * (n * dt/3600), n the samples v has been non-zero without a break (0 while it is 0)"
         else:
             first = "0" if d.from_rest else "the first v"
             formula = f"v of {d.delay_samples} sample(s) before, {first} before that"
@@ -398,7 +400,7 @@ def state_fields(tables: RuleTables) -> str:
     fields = [
         "    int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */\n",
         "    gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */\n",
-        "    gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value */\n",
+        "    gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; on-time: samples on */\n",
     ]
     for k, d in enumerate(tables.derived):
         if d.transform == "delay":
@@ -425,6 +427,9 @@ def derived_constants(tables: RuleTables) -> str:
         elif d.transform == "derivative":
             lines.append(f"/* derived[{k}], {_ascii(d.name)}: 3600 / dt (per hour). */\n")
             lines.append(f"static const gf_real gf_derivative_scale_{k} = {real_literal(d.scale)};\n")
+        elif d.transform == "ontime":
+            lines.append(f"/* derived[{k}], {_ascii(d.name)}: dt / 3600 (hours per sample on). */\n")
+            lines.append(f"static const gf_real gf_ontime_step_{k} = {real_literal(d.scale)};\n")
     return ("\n" + "".join(lines)) if lines else ""
 
 
@@ -476,6 +481,15 @@ def step_derived(tables: RuleTables) -> str:
                 update = (
                     f"        s->memory[{k}] = gf_lowpass_b_{k} * {v} + gf_lowpass_a_{k} * s->memory[{k}];\n"
                     f"        s->derived[{k}] = s->memory[{k}];\n"
+                )
+            elif d.transform == "ontime":
+                update = (
+                    f"        if ({v} != 0) {{\n"
+                    f"            s->memory[{k}] = s->memory[{k}] + (gf_real)1;\n"
+                    "        } else {\n"
+                    f"            s->memory[{k}] = 0;\n"
+                    "        }\n"
+                    f"        s->derived[{k}] = {v} * (s->memory[{k}] * gf_ontime_step_{k});\n"
                 )
             else:
                 update = (

@@ -29,6 +29,12 @@ the dead band's reference (unless it is already a reading) and the position
 every power of ``P - P0``; ``dead_band`` the reference reading and the
 threshold; two more steps say where they enter. Models without them keep
 their format, byte for byte.
+
+A model with an on-time derived input (``transform`` ``"ontime"``: the
+source's value times the hours it has been non-zero, ``scale`` = Δt/3600) is
+written as ``groupfit-runtime/5``, a superset of ``/4`` whose derived-input
+step has that branch; a runtime for ``/4`` refuses it. Models without one keep
+their format, byte for byte.
 """
 
 from __future__ import annotations
@@ -51,6 +57,8 @@ RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
 RUNTIME_FORMAT_3 = "groupfit-runtime/3"
 RUNTIME_FORMAT_4 = "groupfit-runtime/4"
 """A position model or a dead band (a superset of /3)."""
+RUNTIME_FORMAT_5 = "groupfit-runtime/5"
+"""An on-time derived input (a superset of /4)."""
 """Derived inputs with a power stage or a start from rest, or a reference temperature (either or both):
 a runtime for /1 or /2 would compute wrong inputs, so it must refuse the table."""
 
@@ -74,6 +82,14 @@ DERIVED_STEP_POWER = (
     "value[k] = (v - memory[k]) * scale, memory[k] = v; delay: value[k] = line[k][pos[k]], "
     "line[k][pos[k]] = v, pos[k] += 1, pos[k] = 0 when it reaches delay_samples. started, memory, value, "
     "line and pos start at false / 0"
+)
+
+DERIVED_STEP_ONTIME = DERIVED_STEP_POWER.replace(
+    "(lowpass and delay only)", "(lowpass, delay and ontime, whose start is always 'rest')"
+).replace(
+    "value[k] = (v - memory[k]) * scale, memory[k] = v;",
+    "value[k] = (v - memory[k]) * scale, memory[k] = v; ontime: memory[k] = memory[k] + 1 if v != 0, else "
+    "memory[k] = 0, then value[k] = v * (memory[k] * scale);",
 )
 
 STEPS = (
@@ -177,7 +193,17 @@ def runtime_table(tables: RuleTables) -> dict:
 
 def render_json(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_runtime.json": text}``."""
-    return {"groupfit_runtime.json": to_json(with_position(with_reference(runtime_table(tables), tables), tables))}
+    table = with_ontime(with_position(with_reference(runtime_table(tables), tables), tables), tables)
+    return {"groupfit_runtime.json": to_json(table)}
+
+
+def with_ontime(table: dict, tables: RuleTables) -> dict:
+    """The runtime table of a model with an on-time derived input: format /5, the step with its branch."""
+    if not any(d.transform == "ontime" for d in tables.derived):
+        return table
+    steps = [DERIVED_STEP_ONTIME if step == DERIVED_STEP_POWER else step for step in table["steps"]]
+    note = table["derived_inputs_note"] + "; ontime: scale = dt/3600 (hours per sample on)"
+    return {**table, "format": RUNTIME_FORMAT_5, "steps": steps, "derived_inputs_note": note}
 
 
 # --------------------------------------------------------------------- reference temperature

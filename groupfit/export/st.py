@@ -353,6 +353,11 @@ def input_lines(tables: RuleTables) -> str:
             )
         elif d.transform == "derivative":
             lines.append(f"      (v - previous v) * DERIVATIVE_SCALE_{k} (3600/dt: per hour), 0 at the first call")
+        elif d.transform == "ontime":
+            lines.append(
+                f"      v * (n * ONTIME_STEP_{k}), n the calls v has been non-zero without a break (0 while it is 0);"
+                " ONTIME_STEP = dt/3600 (hours)"
+            )
         elif d.transform == "delay":
             first = "0" if d.from_rest else "the first v"
             lines.append(f"      v of DELAY_{k} calls before, {first} before that")
@@ -392,8 +397,13 @@ def derived_constants(tables: RuleTables, real: str, literal) -> str:
             lines.append(f"    LOWPASS_B_{k} : {real} := {literal(d.b)};")
         elif d.transform == "derivative":
             lines.append(f"    DERIVATIVE_SCALE_{k} : {real} := {literal(d.scale)};")
+        elif d.transform == "ontime":
+            lines.append(f"    ONTIME_STEP_{k} : {real} := {literal(d.scale)};")
         elif d.transform == "delay":
             lines.append(f"    DELAY_{k} : INT := {d.delay_samples};")
+    if any(d.transform == "ontime" for d in tables.derived):  # typed, so that no operation mixes real types
+        lines.append(f"    ONTIME_ZERO : {real} := {literal(0.0)};")
+        lines.append(f"    ONTIME_ONE : {real} := {literal(1.0)};")
     return "".join(line + "\n" for line in lines)
 
 
@@ -458,6 +468,15 @@ def step_derived(tables: RuleTables, real: str = "LREAL") -> str:
                 update = [
                     f"        derivedMemory[{k}] := LOWPASS_B_{k} * {v} + LOWPASS_A_{k} * derivedMemory[{k}];",
                     f"        derivedValue[{k}] := derivedMemory[{k}];",
+                ]
+            elif d.transform == "ontime":
+                update = [
+                    f"        IF {v} <> ONTIME_ZERO THEN",
+                    f"            derivedMemory[{k}] := derivedMemory[{k}] + ONTIME_ONE;",
+                    "        ELSE",
+                    f"            derivedMemory[{k}] := ONTIME_ZERO;",
+                    "        END_IF;",
+                    f"        derivedValue[{k}] := {v} * (derivedMemory[{k}] * ONTIME_STEP_{k});",
                 ]
             else:
                 update = [

@@ -124,6 +124,7 @@ class SwitchingRule:
         self._lp_a = [real(d.a) for d in t.derived]
         self._lp_b = [real(d.b) for d in t.derived]
         self._scale = [real(d.scale) for d in t.derived]
+        self._one = real(1.0)
         if t.has_position:
             self._pcoef = [[[real(v) for v in row] for row in group] for group in t.position_coefficients]
             self._p0 = real(t.p0_mm)
@@ -289,6 +290,9 @@ class SwitchingRule:
         elif d.transform == "derivative":
             self.derived[k] = (x - self.memory[k]) * self._scale[k]
             self.memory[k] = x
+        elif d.transform == "ontime":  # memory: the samples the source has been on without a break
+            self.memory[k] = self.memory[k] + self._one if x != self._zero else self._zero
+            self.derived[k] = x * (self.memory[k] * self._scale[k])
         else:
             line, position = self.lines[k], self.positions[k]
             self.derived[k] = line[position]

@@ -16,9 +16,19 @@ from typing import Any, Mapping
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.features import HOURS_PER_S
 from groupfit.model import ModelFile
 from groupfit.reference import START, is_column_reference
 from groupfit.runtime.rule import DERIVATIVE_SCALE_S, LEGACY_SOURCE_RANGE, complete_rule_section
+
+
+def derived_scale(transform: str, period: float) -> float:
+    """The factor of a derivative (``3600/Δt``, per hour) or the step of an on-time (``Δt/3600``, hours); else 0."""
+    if transform == "derivative":
+        return DERIVATIVE_SCALE_S / period
+    if transform == "ontime":
+        return period * HOURS_PER_S
+    return 0.0
 
 
 @dataclass(frozen=True)
@@ -41,7 +51,8 @@ class DerivedTable:
         Low-pass coefficients ``a = e^{−Δt/τ}`` (computed as
         :func:`groupfit.features.lowpass` does) and ``b = 1 − a``; 0 otherwise.
     scale : float
-        Derivative factor ``3600/Δt`` (per hour); 0 otherwise.
+        Derivative factor ``3600/Δt`` (per hour); on-time step ``Δt/3600``
+        (hours per sample); 0 otherwise.
     exponent, power_scale : float or None
         The power stage ``v → (|v| / power_scale)^exponent`` applied to the
         source's value before the transform (the file's ``exponent`` and
@@ -54,7 +65,8 @@ class DerivedTable:
         ``"steady"``: its state is that value (low-pass output, every entry of
         the delay line); ``"rest"``: its state is 0 (the source was off before
         the run), so the first low-pass output is ``b·v``. Always
-        ``"steady"`` for identity and derivative, which it does not affect.
+        ``"steady"`` for identity and derivative, which it does not affect,
+        and ``"rest"`` for an on-time (its count starts at 0).
     """
 
     name: str
@@ -97,6 +109,8 @@ class DerivedTable:
             if self.transform == "delay":
                 return f"{self.column} delayed by {self.delay_samples} sample(s)"
             return f"{self.column} as read"
+        if self.transform == "ontime":
+            return f"{self.power_text()} times the hours it has been non-zero"
         source = self.power_text()
         rest = ", from rest" if self.from_rest else ""
         if self.transform == "lowpass":
@@ -214,10 +228,10 @@ class RuleTables:
                     delay_samples=int(feature.delay_samples) if feature.transform == "delay" else 0,
                     a=a,
                     b=float(1.0 - a) if feature.transform == "lowpass" else 0.0,
-                    scale=DERIVATIVE_SCALE_S / period if feature.transform == "derivative" else 0.0,
+                    scale=derived_scale(feature.transform, period),
                     exponent=None if feature.exponent is None else float(feature.exponent),
                     power_scale=None if feature.exponent is None else float(feature.scale),
-                    start=feature.start if feature.transform in ("lowpass", "delay") else "steady",
+                    start=feature.start if feature.transform in ("lowpass", "delay", "ontime") else "steady",
                 )
             )
         derived_index = {d.name: k for k, d in enumerate(derived)}
