@@ -6,8 +6,9 @@ measured, low-passed over a grid of time constants (thermal lag),
 differentiated and delayed. A speed (an operating column with more than two
 levels) enters through the bearing-heat law ``(n / scale)^k`` (k = 5/3 by
 default, or fitted over :data:`FITTED_EXPONENTS`), as measured, low-passed
-and times the hours it has run without a break (speed × on-time). Lags of operating columns (speeds, on/off of heat sources) start
-from rest, lags of everything else from the first reading
+and times the hours it has run without a break (speed × on-time). Lags of
+operating columns (speeds, on/off of heat sources) start from rest, lags of
+everything else from the first reading
 (:mod:`groupfit.features`). Transforms of the model's own inputs are tried
 only when asked for. A column is left out, with the
 reason, when it is not numeric, has non-finite values, is constant (a dead

@@ -400,7 +400,8 @@ def state_fields(tables: RuleTables) -> str:
     fields = [
         "    int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */\n",
         "    gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */\n",
-        "    gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; on-time: samples on */\n",
+        "    gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; "
+        "on-time: samples on */\n",
     ]
     for k, d in enumerate(tables.derived):
         if d.transform == "delay":
