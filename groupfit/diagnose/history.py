@@ -1,4 +1,4 @@
-"""A validation run that continues a modelling run: the controller's history carried into it.
+"""A run that continues another: the controller's history carried into it.
 
 Shops split long logs into files, and a run held back for validation is often
 the rest of the modelling log. A low-pass of the spindle speed evaluated on
@@ -11,7 +11,9 @@ with the modelling run in front of it, its error left out, so that the
 derived inputs, a reference taken at the start and the run-time switching
 carry their history into it. Only the validation rows are scored. A log
 split into more files chains: a validation run that continues another is
-judged with all that came before it.
+judged with all that came before it. Modelling runs that continue one another
+are chained the same way (each fitted and scored on its own rows, with the
+rows before it in front): their derived inputs are those of the whole log.
 """
 
 from __future__ import annotations

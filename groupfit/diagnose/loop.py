@@ -308,7 +308,9 @@ def diagnose(
     before/after compare with (default ``model``; the model as the user gave
     it, when ``model`` is a re-selected or ridge-refitted start). A
     validation run that continues a modelling run is judged with it in front
-    (:mod:`groupfit.diagnose.history`). ``ambient`` names columns that are
+    (:mod:`groupfit.diagnose.history`), and a modelling run that continues
+    another is fitted and scored with it in front, its rows unscored: the
+    derived inputs of a log split into files are those of the whole log. ``ambient`` names columns that are
     ambient temperatures whatever their names (an air sensor logged as
     ``T0``): causes, tried with every transform, not machine sensors.
     """
@@ -337,9 +339,17 @@ def diagnose(
             f"{len(data_runs)} modelling runs given for a grouped model (p = {model['p']}): its breaks belong to "
             "one run; diagnose a grouped model on one run, or a global model (p = 0) on several"
         )
+    data_runs, history_rows, _ = with_histories(data_runs, [])  # a log split into files: one recording
     period = float(model["sampling_period_s"])
     inputs = [model_inputs(model, run) for run in data_runs]
     notes = [n for run, x in zip(data_runs, inputs) for n in check_inputs(model, run, x)]
+    notes += [
+        f"{run.name} continues the modelling run before it (its first time stamp one sampling period after that "
+        f"run's last): its derived inputs carry the history of the {rows} rows before it, as on the controller, "
+        "which ran through; it is still held out as a run of its own"
+        for run, rows in zip(data_runs, history_rows)
+        if rows
+    ]
     for run in validate_runs:
         notes += check_inputs(model, run, model_inputs(model, run))
     base_columns = {data_runs[0].time_name, model["error"]}
@@ -354,14 +364,15 @@ def diagnose(
     measured = np.isfinite(target)
     if not measured.any():
         raise InputError(f"{data_runs[0].source}: the error is measured on no row; diagnose needs it")
-    if not measured.all():
+    own_rows = len(target) - sum(history_rows)  # the rows of the runs as given, without the histories in front
+    if int((~measured).sum()) > sum(history_rows):
         if model["p"] > 0:
             raise InputError(
                 f"{data_runs[0].source}: the error is missing on {int((~measured).sum())} rows; a grouped model's "
                 "breaks are sample indices of a fully measured run: fill or drop those rows"
             )
         notes.append(
-            f"the error is measured on {int(measured.sum())} of {len(target)} rows: the others carry the history "
+            f"the error is measured on {int(measured.sum())} of {own_rows} rows: the others carry the history "
             "of the derived inputs and are neither fitted nor scored"
         )
     folds = make_folds([r.frame for r in data_runs], columns).restricted(measured)
@@ -371,7 +382,7 @@ def diagnose(
     if folds.n_folds < 2:
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
 
-    runs, skipped = {"data": data_runs}, {"data": [0] * len(data_runs)}
+    runs, skipped = {"data": data_runs}, {"data": list(history_rows)}
     if validate_runs:
         runs["validate"], skipped["validate"], history_notes = with_histories(validate_runs, data_runs)
         notes += history_notes
@@ -592,7 +603,7 @@ def diagnose(
 
     if validate_runs:
         notes += started_running_notes(validate_runs, skipped["validate"], [c.feature for c in added])
-    time = np.arange(len(target)) * period
+    time = np.arange(len(before["data"])) * period
     return DiagnosisResult(
         candidates=first_ranking or [],
         added=added,
