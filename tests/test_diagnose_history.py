@@ -85,7 +85,7 @@ def test_a_validation_run_after_a_gap_starts_from_rest():
     validation = load_run(later.reset_index(drop=True), temps=TEMPS, name="later")
     model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
-    assert not any("continues" in note for note in result.notes)
+    assert not any(note.startswith("later continues") for note in result.notes)
     np.testing.assert_allclose(
         result.residuals_after["validate"], stacked_residual(result.model, [validation], replay_groups), atol=1e-12
     )
@@ -134,3 +134,41 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
 
     cold_row = int(np.flatnonzero(speed[:at] == 0.0)[-1])  # a file that starts with the spindle stopped
     assert not any(COLD_START_NOTE in n for n in diagnosed_from(cold_row).notes)
+
+
+def test_continues_judges_a_restarted_clock_as_the_rest_of_the_recording(tmp_path, capsys):
+    """The second file's clock starts again at 0: from rest without the flag; with it, as the continuing log."""
+    frame = spindle_run(8, hours=16.0)
+    at = int(np.flatnonzero(frame["speed_rpm"].to_numpy() >= 4000.0)[-1]) - 60  # cut while the spindle runs fast
+    modelling, continuing = split(frame, at)
+    restarted = frame.iloc[at:].reset_index(drop=True)
+    restarted["time_s"] -= restarted["time_s"].iloc[0]
+    paths = {"modelling": tmp_path / "a.csv", "continuing": tmp_path / "b.csv", "restarted": tmp_path / "c.csv"}
+    frame.iloc[:at].to_csv(paths["modelling"], index=False)
+    frame.iloc[at:].to_csv(paths["continuing"], index=False)
+    restarted.to_csv(paths["restarted"], index=False)
+    fit = ["fit", "--data", str(paths["modelling"]), "--temps", ",".join(TEMPS), "--p", "0", "--reference", "none"]
+    assert main([*fit, "--quiet", "--out", str(tmp_path / "m")]) == 0
+    capsys.readouterr()
+
+    def diagnosed(validation, *flags):
+        args = ["diagnose", str(tmp_path / "m" / "model.json"), "--data", str(paths["modelling"])]
+        assert main([*args, "--validate", str(paths[validation]), *flags, "--json", "-"]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    as_logged = diagnosed("continuing")
+    from_rest = diagnosed("restarted")
+    declared = diagnosed("restarted", "--continues")
+    assert declared["validation_runs"] == [{**as_logged["validation_runs"][0], "name": "c"}]
+    assert declared["added"] == as_logged["added"] == from_rest["added"]
+    assert any(n.startswith("c is taken to continue a (--continues)") for n in declared["notes"])
+    assert any(COLD_START_NOTE in n and "--continues" in n for n in from_rest["notes"])
+    assert from_rest["after"]["validate"]["rms_um"] > as_logged["after"]["validate"]["rms_um"]
+    # another recording cannot be declared the rest of this one: one line, exit 2
+    other = frame.iloc[at:].drop(columns="T8")
+    other.to_csv(tmp_path / "d.csv", index=False)
+    args = ["diagnose", str(tmp_path / "m" / "model.json"), "--data", str(paths["modelling"]), "--continues"]
+    assert main([*args, "--validate", str(tmp_path / "d.csv"), "--out", str(tmp_path / "x")]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "--continues, but it cannot be the rest of a" in error[0]
+    assert not (tmp_path / "x").exists()

@@ -108,6 +108,12 @@ def add_parser(verbs) -> None:
         help="columns that are ambient temperatures whatever their names (an air sensor logged as T0): tried as "
         "causes with every transform (default: columns named like T_amb, ambient_C, T_room, air…)",
     )
+    parser.add_argument(
+        "--continues",
+        action="store_true",
+        help="each --validate file is the rest of the recording before it (the last --data file, then the "
+        "previous --validate file) even though its clock starts again: judged with that history in front",
+    )
     parser.set_defaults(handler=run_diagnose)
 
 
@@ -194,6 +200,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         baseline=model,
         check_reference=not args.keep_reference,
         ambient=args.ambient,
+        validation_continues=args.continues,
     )
     if selection is not None:
         result.selection = {**selection, "of": len(model["temps"])}

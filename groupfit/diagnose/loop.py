@@ -293,6 +293,7 @@ def diagnose(
     check_reference: bool = True,
     min_further_effect_rms_um: float = MIN_FURTHER_EFFECT_RMS_UM,
     ambient: Sequence[str] = (),
+    validation_continues: bool = False,
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
@@ -312,7 +313,9 @@ def diagnose(
     another is fitted and scored with it in front, its rows unscored: the
     derived inputs of a log split into files are those of the whole log. ``ambient`` names columns that are
     ambient temperatures whatever their names (an air sensor logged as
-    ``T0``): causes, tried with every transform, not machine sensors.
+    ``T0``): causes, tried with every transform, not machine sensors. With
+    ``validation_continues`` each validation run is taken to continue the run
+    before it whatever its time stamps (a file whose clock starts again).
     """
     data_runs, validate_runs = as_runs(data), as_runs(validate)
     ambient = tuple(ambient)
@@ -384,7 +387,9 @@ def diagnose(
 
     runs, skipped = {"data": data_runs}, {"data": list(history_rows)}
     if validate_runs:
-        runs["validate"], skipped["validate"], history_notes = with_histories(validate_runs, data_runs)
+        runs["validate"], skipped["validate"], history_notes = with_histories(
+            validate_runs, data_runs, assume_continued=validation_continues
+        )
         notes += history_notes
 
     def residuals_of(m: dict[str, Any]) -> dict[str, np.ndarray]:
@@ -590,6 +595,7 @@ def diagnose(
                 check_reference=False,
                 min_further_effect_rms_um=min_further_effect_rms_um,
                 ambient=ambient,
+                validation_continues=validation_continues,
             ),
             min_score,
         )
