@@ -311,11 +311,12 @@ def diagnose(
     validation run that continues a modelling run is judged with it in front
     (:mod:`groupfit.diagnose.history`), and a modelling run that continues
     another is fitted and scored with it in front, its rows unscored: the
-    derived inputs of a log split into files are those of the whole log. ``ambient`` names columns that are
-    ambient temperatures whatever their names (an air sensor logged as
-    ``T0``): causes, tried with every transform, not machine sensors. With
-    ``validation_continues`` each validation run is taken to continue the run
-    before it whatever its time stamps (a file whose clock starts again).
+    derived inputs of a log split into files are those of the whole log.
+    ``ambient`` names columns that are ambient temperatures whatever their
+    names (an air sensor logged as ``T0``): causes, tried with every
+    transform, not machine sensors. With ``validation_continues`` each
+    validation run is taken to continue the run before it whatever its time
+    stamps (a file whose clock starts again).
     """
     data_runs, validate_runs = as_runs(data), as_runs(validate)
     ambient = tuple(ambient)
@@ -342,17 +343,10 @@ def diagnose(
             f"{len(data_runs)} modelling runs given for a grouped model (p = {model['p']}): its breaks belong to "
             "one run; diagnose a grouped model on one run, or a global model (p = 0) on several"
         )
-    data_runs, history_rows, _ = with_histories(data_runs, [])  # a log split into files: one recording
+    data_runs, history_rows, chain_notes = with_histories(data_runs, [])  # a log split into files: one recording
     period = float(model["sampling_period_s"])
     inputs = [model_inputs(model, run) for run in data_runs]
-    notes = [n for run, x in zip(data_runs, inputs) for n in check_inputs(model, run, x)]
-    notes += [
-        f"{run.name} continues the modelling run before it (its first time stamp one sampling period after that "
-        f"run's last): its derived inputs carry the history of the {rows} rows before it, as on the controller, "
-        "which ran through; it is still held out as a run of its own"
-        for run, rows in zip(data_runs, history_rows)
-        if rows
-    ]
+    notes = [n for run, x in zip(data_runs, inputs) for n in check_inputs(model, run, x)] + chain_notes
     for run in validate_runs:
         notes += check_inputs(model, run, model_inputs(model, run))
     base_columns = {data_runs[0].time_name, model["error"]}

@@ -55,12 +55,12 @@ from groupfit.runtime import (
 RUNTIME_FORMAT = "groupfit-runtime/1"
 RUNTIME_FORMAT_DERIVED = "groupfit-runtime/2"
 RUNTIME_FORMAT_3 = "groupfit-runtime/3"
+"""Derived inputs with a power stage or a start from rest, or a reference temperature (either or both):
+a runtime for /1 or /2 would compute wrong inputs, so it must refuse the table."""
 RUNTIME_FORMAT_4 = "groupfit-runtime/4"
 """A position model or a dead band (a superset of /3)."""
 RUNTIME_FORMAT_5 = "groupfit-runtime/5"
 """An on-time derived input (a superset of /4)."""
-"""Derived inputs with a power stage or a start from rest, or a reference temperature (either or both):
-a runtime for /1 or /2 would compute wrong inputs, so it must refuse the table."""
 
 DERIVED_STEP = (
     "for every derived input k in order, with v = last[derived_inputs[k].reading]: identity: value[k] = v. "
