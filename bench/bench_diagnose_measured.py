@@ -52,7 +52,7 @@ import pandas as pd
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import TAUS_S, Candidate, heat_law_scale, within_one_se
-from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, failed_test
+from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, failed_test, shortest_adequate_lag
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.features import Feature
 from groupfit.modelfile import model_to_dict
@@ -237,10 +237,12 @@ def pick(candidates, prefer, majority=True):
     if not passing:
         return None
     best = max(passing, key=lambda c: c.score)
+    family = [c for c in passing if c.family() == best.family()]
     if prefer == "best":
         return best
-    family = [c for c in passing if c.family() == best.family() and within_one_se(c, best)]
-    return (min if prefer == "shortest" else max)(family, key=lambda c: c.feature.tau_s)
+    if prefer == "shortest":
+        return shortest_adequate_lag(best, family)
+    return max([best, *(c for c in family if within_one_se(c, best))], key=lambda c: c.feature.tau_s)
 
 
 def held_out_rms(frame, first, last, feature):

@@ -302,8 +302,8 @@ class HeldOutScorer:
         """Coefficient of ``values`` fitted with the design on the fold's training rows, and its design part."""
         train, _ = self.splits[fold]
         gram_inverse, _, residual = self.fits[fold]
-        penalty = self.penalty_per_row * np.count_nonzero(train)
-        v_coef = refined_solution(gram_inverse, self.design[train], values[train], penalty)
+        design_penalty = self.penalty_per_row * np.count_nonzero(train)
+        v_coef = refined_solution(gram_inverse, self.design[train], values[train], design_penalty)
         v_res = values[train] - self.design[train] @ v_coef
         if self.ridge_alpha > 0:  # the penalised normal equations
             denom = float(values[train] @ v_res) + penalty_per_row * np.count_nonzero(train)
