@@ -281,11 +281,11 @@ class HeldOutScorer:
             penalty = self.penalty_per_row * np.count_nonzero(train)
             gram_inverse = pinvh(Z.T @ Z + np.diag(penalty), atol=0.0, rtol=1e-13)
             coef = refined_solution(gram_inverse, Z, target[train], penalty)
-            self.fits.append((gram_inverse, coef, target[train] - Z @ coef))
+            self.fits.append((gram_inverse, coef, target[train] - Z @ coef, penalty))
         self.base_sse = np.array(
             [
                 float(np.sum((target[test] - self.design[test] @ coef) ** 2))
-                for (_, test), (_, coef, _) in zip(self.splits[:-1], self.fits[:-1])
+                for (_, test), (_, coef, *_) in zip(self.splits[:-1], self.fits[:-1])
             ]
         )
         self.n_scored = max(sum(int(np.count_nonzero(test)) for _, test in self.splits[:-1]), 1)
@@ -301,8 +301,7 @@ class HeldOutScorer:
     def _update(self, values: np.ndarray, fold: int, penalty_per_row: float) -> tuple[float, np.ndarray]:
         """Coefficient of ``values`` fitted with the design on the fold's training rows, and its design part."""
         train, _ = self.splits[fold]
-        gram_inverse, _, residual = self.fits[fold]
-        design_penalty = self.penalty_per_row * np.count_nonzero(train)
+        gram_inverse, _, residual, design_penalty = self.fits[fold]
         v_coef = refined_solution(gram_inverse, self.design[train], values[train], design_penalty)
         v_res = values[train] - self.design[train] @ v_coef
         if self.ridge_alpha > 0:  # the penalised normal equations
