@@ -51,7 +51,8 @@ import pandas as pd
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.candidates import TAUS_S, Candidate, heat_law_scale, within_one_se
+from groupfit.diagnose.candidates import TAUS_S, HeldOutScorer, heat_law_scale, score_candidate, within_one_se
+from groupfit.diagnose.folds import Folds
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, failed_test, shortest_adequate_lag
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.features import Feature
@@ -171,45 +172,23 @@ def heat_lags(runs, exponent):
 
 
 def block_folds_lags(frame, held_out, exponent=5.0 / 3.0):
-    """Heat-law low-passes scored as the diagnosis scores them, on folds that are whole speed blocks with their
-    cool-downs (the other blocks than ``held_out``; all four when it is None): least squares on the 16 sensors."""
-    sensors, error = frame[SENSORS].to_numpy(float), frame["disp_ch3_um"].to_numpy(float)
+    """Heat-law low-passes scored by the diagnosis's scorer on folds that are whole speed blocks with their
+    cool-downs (the other blocks than ``held_out``; all four when it is None): the 16 sensors' regression."""
+    labels = np.full(len(frame), -1)  # never held out: always fitted
     modelling = np.ones(len(frame), dtype=bool)
-    folds = []
-    for label, (first, last) in BLOCKS.items():
-        last = len(frame) if last is None else last
+    for k, (label, (first, last)) in enumerate(BLOCKS.items()):
         if label == held_out:
             modelling[first:last] = False
-        else:
-            folds.append((0 if first == BLOCKS_START else first, last))  # the rest before the first block with it
-
-    def fold_sse(design):
-        out = []
-        for first, last in folds:
-            train = modelling.copy()
-            train[first:last] = False
-            coefficients, *_ = np.linalg.lstsq(design[train], error[train], rcond=None)
-            out.append(float(np.sum((error[first:last] - design[first:last] @ coefficients) ** 2)))
-        return np.array(out)
-
-    base = np.column_stack([sensors, np.ones(len(frame))])
-    without = fold_sse(base)
+        else:  # the rows at rest before the first block are held out with it, as the diagnosis's folds do
+            labels[0 if first == BLOCKS_START else first : last] = k
+    folds = Folds(labels[modelling], "block", scored=labels[modelling] >= 0)
+    design = np.column_stack([np.ones(len(frame)), frame[SENSORS].to_numpy(float)])[modelling]
+    scorer = HeldOutScorer(frame["disp_ch3_um"].to_numpy(float)[modelling], design, folds)
     scale = heat_law_scale(frame["spindle_rpm"].to_numpy(float))
     candidates = []
     for tau in TAUS_S:
         feature = Feature("spindle_rpm", "lowpass", tau_s=tau, start="rest", exponent=exponent, scale=scale)
-        with_lag = fold_sse(np.column_stack([base, speed_feature(frame, feature)]))
-        removed = max(without.sum() - with_lag.sum(), 0.0) / modelling.sum()
-        candidates.append(
-            Candidate(
-                feature,
-                score=1.0 - with_lag.sum() / without.sum(),
-                coefficient=np.nan,
-                explained_rms_um=float(np.sqrt(removed)),
-                fold_sse=tuple(with_lag),
-                fold_ratios=tuple(with_lag / without),
-            )
-        )
+        candidates.append(score_candidate(feature, speed_feature(frame, feature)[modelling], scorer))
     return sorted(candidates, key=lambda c: -c.score)
 
 
