@@ -51,11 +51,12 @@ import pandas as pd
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.candidates import TAUS_S, HeldOutScorer, heat_law_scale, score_candidate, within_one_se
-from groupfit.diagnose.folds import Folds
+from groupfit.diagnose.candidates import TAUS_S, heat_law_scale, score_candidate, within_one_se
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, failed_test, shortest_adequate_lag
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.features import Feature
+from groupfit.heldout.folds import Folds
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.plots import plot_diagnosis

@@ -8,12 +8,13 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
-from groupfit.diagnose.design import group_design
-from groupfit.diagnose.folds import Folds, make_folds
+from groupfit.diagnose.candidates import candidate_features, rank_candidates
 from groupfit.diagnose.report import column_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
+from groupfit.heldout.design import group_design
+from groupfit.heldout.folds import Folds, make_folds
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.modelfile import load_model
 from groupfit.synthetic import simulate_lumped
 

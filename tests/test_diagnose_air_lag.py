@@ -15,11 +15,11 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model_over_reference
-from groupfit.diagnose.folds import make_folds
 from groupfit.diagnose.loop import stacked_residual
 from groupfit.diagnose.residual import model_inputs, predict
 from groupfit.features import Feature, lowpass
 from groupfit.grouping import serving_group_index
+from groupfit.heldout.folds import make_folds
 from groupfit.model_checks import model_problem
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor

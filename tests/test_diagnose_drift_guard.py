@@ -10,10 +10,11 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.candidates import HeldOutScorer, score_candidate, within_one_se
+from groupfit.diagnose.candidates import score_candidate, within_one_se
 from groupfit.diagnose.drift_guard import DriftGuard
-from groupfit.diagnose.folds import Folds
 from groupfit.features import Feature, lowpass
+from groupfit.heldout.folds import Folds
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 

@@ -10,9 +10,9 @@ from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.folds import make_folds
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM
 from groupfit.features import derived_matrix
+from groupfit.heldout.folds import make_folds
 from groupfit.runtime import replay_groups
 
 machine = load("independent_machine")

@@ -7,8 +7,8 @@ from test_diagnose import TEMPS, fit_model, lumped, sensor_error, with_ambient_e
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.candidates import HeldOutScorer
-from groupfit.diagnose.folds import Folds
+from groupfit.heldout.folds import Folds
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.modelfile import load_model
 
 

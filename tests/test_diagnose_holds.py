@@ -11,13 +11,14 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import HeldOutScorer, candidate_features, rank_candidates
-from groupfit.diagnose.design import stacked_design
-from groupfit.diagnose.folds import Folds, block_labels, make_folds, operating_columns
+from groupfit.diagnose.candidates import candidate_features, rank_candidates
 from groupfit.diagnose.loop import metrics_of, stacked_residual
 from groupfit.diagnose.report import change_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import lowpass
+from groupfit.heldout.design import stacked_design
+from groupfit.heldout.folds import Folds, block_labels, make_folds, operating_columns
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 

@@ -9,10 +9,10 @@ from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 
 from groupfit.cli import main
-from groupfit.diagnose.folds import make_folds
 from groupfit.diagnose.joint import JointProblem
 from groupfit.features import Feature, lowpass
-from groupfit.sweep.selection import MIN_GAIN
+from groupfit.heldout.folds import make_folds
+from groupfit.heldout.selection import MIN_GAIN
 
 PERIOD = 30.0
 SENSORS = [f"T{k}" for k in range(1, 9)]

@@ -11,9 +11,9 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.folds import make_folds
 from groupfit.diagnose.loop import stacked_residual
 from groupfit.features import derived_matrix, lowpass
+from groupfit.heldout.folds import make_folds
 from groupfit.model_checks import model_problem
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor

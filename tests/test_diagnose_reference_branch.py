@@ -12,10 +12,10 @@ from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.design import group_index, group_sample_floor
-from groupfit.diagnose.folds import make_folds
 from groupfit.diagnose.loop import MIN_SCORE, OVERFIT_NOTE
 from groupfit.features import Feature, derived_matrix
+from groupfit.heldout.design import group_index, group_sample_floor
+from groupfit.heldout.folds import make_folds
 from groupfit.runtime import replay_groups
 
 machine = load("independent_machine")

@@ -10,8 +10,8 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 from test_diagnose_joint import SENSORS, spindle_run
 
 from groupfit.cli import main
-from groupfit.diagnose.folds import make_folds
 from groupfit.grouping import serving_group_index
+from groupfit.heldout.folds import make_folds
 
 
 def fit_json(tmp_path, capsys, frame, temps, *extra):
@@ -95,7 +95,7 @@ def test_a_grouped_model_is_held_out_group_by_group(tmp_path, capsys):
 
 
 def test_held_out_check_needs_two_folds():
-    from groupfit.diagnose.select import held_out_check
+    from groupfit.heldout.check import held_out_check
 
     frame = pd.DataFrame({"time_s": np.arange(40) * 10.0, "T1": np.linspace(20, 21, 40)})
     frame["error_um"] = 2.0 * frame["T1"]

@@ -1,8 +1,10 @@
 """The layers: what the light entry points import, and the model file as one typed object."""
 
+import ast
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -121,3 +123,27 @@ def test_the_packaged_default_configuration_names_packaged_data():
         "validation_timing.csv",
     ]
     assert all((PACKAGED_DEFAULT.parents[1] / "datasets" / name).is_file() for name in names)
+
+
+def own_imports(package: str) -> dict[str, set[str]]:
+    """For every module of ``groupfit.<package>``, the project's modules it imports (at any depth of its code)."""
+    root = Path(__file__).resolve().parents[1] / "groupfit" / package
+    found = {}
+    for path in sorted(root.rglob("*.py")):
+        names = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("groupfit"):
+                names.add(node.module)
+            elif isinstance(node, ast.Import):
+                names.update(alias.name for alias in node.names if alias.name.startswith("groupfit"))
+        found[str(path.relative_to(root.parent))] = names
+    return found
+
+
+def test_held_out_validation_imports_no_command_no_diagnosis_and_no_sweep():
+    forbidden = ("groupfit.commands", "groupfit.cli", "groupfit.diagnose", "groupfit.sweep", "groupfit.comparison")
+    offenders = {
+        module: sorted(name for name in names if name.startswith(forbidden))
+        for module, names in own_imports("heldout").items()
+    }
+    assert len(offenders) >= 5 and not any(offenders.values()), offenders

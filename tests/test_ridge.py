@@ -8,8 +8,8 @@ import pytest
 from sklearn.linear_model import Ridge
 
 from groupfit.cli import main
-from groupfit.diagnose.candidates import HeldOutScorer
-from groupfit.diagnose.folds import Folds, make_folds
+from groupfit.heldout.folds import Folds, make_folds
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
 from groupfit.model_checks import model_problem
 from groupfit.models.grouped import GroupedRegressor

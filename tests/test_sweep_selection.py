@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from groupfit.errors import InputError
-from groupfit.sweep.selection import correlation_clusters, select_sensors
+from groupfit.heldout.selection import correlation_clusters, select_sensors
 
 
 def smooth_noise(rng, n_samples, width=15):

@@ -24,9 +24,9 @@ from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.errors import InputError
+from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
 from groupfit.modelfile import load_model, save_model
-from groupfit.sweep.selection import SELECTION_METHODS
 
 
 def add_parser(verbs) -> None:

@@ -29,11 +29,11 @@ from groupfit.config import default_config_path, override
 from groupfit.data import Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
+from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.inference.cli import add_interval_options, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.reference import START, with_reference
-from groupfit.sweep.selection import SELECTION_METHODS
 
 
 def add_parser(verbs) -> None:
@@ -181,7 +181,7 @@ def run_fit(args: argparse.Namespace) -> int:
     not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
     if args.ridge is not None:
-        from groupfit.diagnose.select import ridge_setting
+        from groupfit.heldout.check import ridge_setting
 
         settings = config["model"]
         ridge = ridge_setting(
@@ -208,7 +208,7 @@ def run_fit(args: argparse.Namespace) -> int:
         )
     held_out = None
     if position_run is None:
-        from groupfit.diagnose.select import held_out_check
+        from groupfit.heldout.check import held_out_check
 
         alpha = ridge["alpha"] if ridge is not None else 0.0
         intercept = config["model"]["intercept"]
@@ -330,7 +330,7 @@ def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tup
     """The run restricted to the inputs ``method`` chooses, scored on held-out conditions or runs."""
     from dataclasses import replace
 
-    from groupfit.diagnose.select import select_inputs
+    from groupfit.heldout.check import select_inputs
 
     if k is not None and not 1 <= k <= len(run.temp_names):
         raise InputError(f"--sensors {k}: choose 1 to {len(run.temp_names)} of the {len(run.temp_names)} inputs")

@@ -4,7 +4,7 @@ The effect enters as an extra regressor in each soft group, the hard breaks
 kept, rather than as a term added to the old prediction: an omitted input that
 correlates with the sensors biases their coefficients, and only a joint refit
 removes that bias. In a grouped model the effect has one coefficient, the same
-in every group, as it was scored (:mod:`groupfit.diagnose.design`). The result
+in every group, as it was scored (:mod:`groupfit.heldout.design`). The result
 is an ordinary model file with one more input, whose ``derived_inputs`` say
 how to compute it from the data's columns.
 """
@@ -18,8 +18,8 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
-from groupfit.diagnose.design import group_design
 from groupfit.features import Feature
+from groupfit.heldout.design import group_design
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
@@ -144,7 +144,7 @@ def fitted_groups(
     """The model's estimator, hard breaks kept, fitted on the rows whose error is measured.
 
     ``shared`` marks the columns of ``X`` with one coefficient for every group (the effects of a grouped
-    model, :mod:`groupfit.diagnose.design`): those coefficients are fitted with every group's own ones on
+    model, :mod:`groupfit.heldout.design`): those coefficients are fitted with every group's own ones on
     the hard groups, then each soft group is refitted on what they leave. Their prediction intervals are
     not those of a per-group fit, so the estimator carries none.
     """

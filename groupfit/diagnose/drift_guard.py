@@ -18,8 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from groupfit.diagnose.candidates import Candidate, HeldOutScorer, score_candidate, within_one_se
+from groupfit.diagnose.candidates import Candidate, score_candidate, within_one_se
 from groupfit.features import Feature
+from groupfit.heldout.scorer import HeldOutScorer
 
 
 @dataclass

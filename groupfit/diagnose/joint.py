@@ -31,11 +31,12 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from groupfit.diagnose.candidates import Candidate, HeldOutScorer, score_candidate
+from groupfit.diagnose.candidates import Candidate, score_candidate
 from groupfit.diagnose.drift_guard import DriftGuard
-from groupfit.diagnose.folds import Folds
 from groupfit.features import Feature
-from groupfit.sweep.selection import MIN_GAIN, cluster_representatives, correlation_clusters
+from groupfit.heldout.folds import Folds
+from groupfit.heldout.scorer import HeldOutScorer
+from groupfit.heldout.selection import MIN_GAIN, cluster_representatives, correlation_clusters
 
 
 @dataclass

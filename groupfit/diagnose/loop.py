@@ -2,7 +2,7 @@
 
 Acceptance imitates the next run. A candidate is added only when, on folds
 that are whole operating conditions or whole runs
-(:mod:`groupfit.diagnose.folds`), it removes at least ``min_score`` of the
+(:mod:`groupfit.heldout.folds`), it removes at least ``min_score`` of the
 model's held-out squared error and at least ``min_effect_rms_um`` of RMS
 (``min_further_effect_rms_um`` for an effect after the first),
 lowers the error on more than half of the folds, and at most doubles the RMS
@@ -57,6 +57,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.columns import is_ambient_name, is_sensor_column, usable_columns
 from groupfit.data import Run
 from groupfit.diagnose.augment import (
     augment_model,
@@ -70,25 +71,23 @@ from groupfit.diagnose.candidates import (
     EXOGENOUS_R,
     HEAT_EXPONENT,
     Candidate,
-    HeldOutScorer,
     candidate_features,
-    is_ambient_name,
-    is_sensor_column,
     largest_correlation,
     rank_candidates,
-    usable_columns,
     within_one_se,
 )
 from groupfit.diagnose.checks import drift, ljung_box
-from groupfit.diagnose.design import group_index, group_sample_floor, stacked_design
 from groupfit.diagnose.drift_guard import DriftGuard
-from groupfit.diagnose.folds import Folds, make_folds, operating_columns
 from groupfit.diagnose.history import started_running_notes, with_histories
 from groupfit.diagnose.joint import JointProblem, JointSelection
 from groupfit.diagnose.reference import absolute_candidate, absolute_model, droppable_reference, global_view
 from groupfit.diagnose.residual import LiveRule, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
+from groupfit.heldout.check import overfit_check
+from groupfit.heldout.design import group_index, group_sample_floor, stacked_design
+from groupfit.heldout.folds import Folds, make_folds, operating_columns
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.modelfile import error_metrics
 
 MIN_SCORE = 0.3
@@ -102,8 +101,6 @@ MIN_FURTHER_EFFECT_RMS_UM = 0.2
 a typical positioning repeatability)."""
 MIN_FOLDS_IMPROVED = 0.5
 """Share of held-out folds an effect must improve (more than this); the strict test asks for all of them."""
-OVERFIT_RATIO = 3.0
-"""The base model is called over-fitted when its held-out RMS exceeds its in-sample RMS by this factor."""
 OVERFIT_NOTE = "the model over-fits:"
 """How the note on an over-fitting base model begins (the report leaves it out where its head says it)."""
 MAX_EFFECTS = 3
@@ -884,26 +881,6 @@ def model_scorer(
     ridge = model.get("ridge_alpha") or 0.0
     design = stacked_design(model, inputs)[rows]
     return HeldOutScorer(target[rows], design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
-
-
-def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> dict[str, Any]:
-    """The model's own regression: in-sample RMS against held-out RMS on the folds, and what to do about it.
-
-    A grouped model's groups are stretches of the modelling run: a held-out fold that takes most of a
-    group leaves that group's coefficients with little to be fitted on, so fewer groups is advised too.
-    """
-    in_sample, held_out = scorer.in_sample_rms, scorer.held_out_rms
-    advice = "start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
-    if grouped:
-        advice = "refit with fewer groups (groupfit fit --p 0) or " + advice
-    return {
-        "in_sample_rms_um": in_sample,
-        "held_out_rms_um": held_out,
-        "folds": folds.describe(),
-        "overfitted": bool(held_out > OVERFIT_RATIO * max(in_sample, 1e-12)),
-        "grouped": grouped,
-        "advice": advice,
-    }
 
 
 def residual_checks(res: np.ndarray, time_s: np.ndarray) -> dict[str, Any]:

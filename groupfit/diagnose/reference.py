@@ -38,9 +38,10 @@ import numpy as np
 
 from groupfit.data import Run
 from groupfit.diagnose.augment import refit_model
-from groupfit.diagnose.candidates import Candidate, HeldOutScorer, candidate_of_fold_sse
+from groupfit.diagnose.candidates import Candidate, candidate_of_fold_sse
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature
+from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
 from groupfit.reference import is_column_reference
 

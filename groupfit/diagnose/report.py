@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from groupfit.diagnose.candidates import is_ambient_name
+from groupfit.columns import is_ambient_name
 from groupfit.diagnose.history import COLD_START_NOTE
 from groupfit.diagnose.loop import OVERFIT_NOTE
 

@@ -6,7 +6,7 @@ its specification, run on local processes or a Dask cluster
 (:mod:`groupfit.sweep.executors`), and its result is written to a SQLite study
 database (:mod:`groupfit.sweep.store`) keyed by a hash of the specification,
 so that a study started again runs only what is missing.
-:mod:`groupfit.sweep.selection` picks sensors, :mod:`groupfit.sweep.report`
+sensors are picked on held-out folds (:mod:`groupfit.heldout.selection`), :mod:`groupfit.sweep.report`
 summarises a study in tables and figures, and :mod:`groupfit.sweep.study`
 ties them together.
 """

@@ -55,9 +55,9 @@ from typing import Any, Callable
 
 from groupfit.data import load_run
 from groupfit.errors import InputError
+from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import GASettings
-from groupfit.sweep.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 SEARCHES = ("exact", "ga")

@@ -28,11 +28,11 @@ import pandas as pd
 from groupfit.data import Run, load_run
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
+from groupfit.heldout.selection import select_sensors
 from groupfit.models.grouped import CERTIFY_PAIR_LIMIT, GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.search.exact import ExactResult, solve_exact
 from groupfit.sweep.config import canonical_json
-from groupfit.sweep.selection import select_sensors
 
 REFERENCE_PMAX = 8
 """The exact reference is solved for every p up to at least this many breaks at once."""

@@ -3,7 +3,7 @@
 A grouped model's measured inputs (and intercept) get their own columns in
 each group. An effect the diagnosis adds (a derived input) gets one column,
 and so one coefficient, for all groups: the candidates are scored that way
-(:class:`groupfit.diagnose.candidates.HeldOutScorer` adds one column to the
+(:class:`groupfit.heldout.scorer.HeldOutScorer` adds one column to the
 design), and the groups are refitted that way
 (:func:`groupfit.diagnose.augment.fitted_groups`), so the model written is
 the one that was scored. A coefficient per group would fit a slow effect on

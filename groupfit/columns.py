@@ -1,0 +1,55 @@
+"""The roles of a run's columns: which can explain a thermal error and which cannot.
+
+A column is a *cause* the controller can read (a temperature, a speed, the
+on/off of a heat source) unless it is a displacement (another probe's error),
+not numeric, partly non-finite (a failing sensor) or constant (a dead sensor).
+The diagnosis draws its candidates from these columns and the held-out folds
+(:mod:`groupfit.heldout.folds`) their operating conditions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+DISPLACEMENT_SUFFIXES = ("_um", "_mm", "_µm")
+AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop")
+"""A column whose name holds one of these is an ambient temperature."""
+
+
+def is_ambient_name(column: str) -> bool:
+    lowered = column.lower()
+    return any(word in lowered for word in AMBIENT_WORDS)
+
+
+def is_sensor_column(column: str) -> bool:
+    """A temperature sensor of the machine (``T3``, ``t12_C``), not the ambient: a symptom rather than a cause."""
+    lowered = column.lower()
+    return len(column) > 1 and lowered[0] == "t" and lowered[1].isdigit() and not is_ambient_name(column)
+
+
+def is_displacement(column: str) -> bool:
+    lowered = column.lower()
+    return lowered.endswith(DISPLACEMENT_SUFFIXES) or lowered.startswith(("disp", "error"))
+
+
+def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], list[str]]:
+    """Columns that can explain a residual, and a note for each one left out."""
+    usable, notes = [], []
+    for column in frame.columns:
+        if column in exclude:
+            continue
+        if is_displacement(column):
+            notes.append(f"column '{column}' left out: a displacement, not a cause the controller can read")
+            continue
+        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+        bad = int((~np.isfinite(values)).sum())
+        if bad == len(values):
+            notes.append(f"column '{column}' left out: not numeric or empty")
+        elif bad:
+            notes.append(f"column '{column}' left out: {bad} non-finite value(s) (a failing sensor?)")
+        elif np.ptp(values) == 0.0:
+            notes.append(f"column '{column}' left out: constant {values[0]:g} (a dead sensor?)")
+        else:
+            usable.append(column)
+    return usable, notes
