@@ -13,8 +13,8 @@ import numpy as np
 
 from groupfit.errors import InputError
 
-from .config import _fail, _steps, _Table
 from .schedule import StepSchedule
+from .tables import ScenarioTable, fail, on_off, step_schedule
 
 BEARINGS = ("fixed-free", "fixed-fixed")
 SOURCES = ("fixed", "nut")
@@ -137,7 +137,7 @@ RESERVED = {"time_s", "error_um", "probe_x_m", "power_W", "nut_x_m", "screw_rpm"
 # --------------------------------------------------------------------- config
 
 
-def parse_ballscrew(top: _Table) -> BallScrewScenario:
+def parse_ballscrew(top: ScenarioTable) -> BallScrewScenario:
     """Read the tables of a ``kind = "ballscrew"`` scenario (``configs/screw_H.toml``)."""
     try:
         return _parse_ballscrew(top)
@@ -146,7 +146,7 @@ def parse_ballscrew(top: _Table) -> BallScrewScenario:
         raise InputError(text) from None
 
 
-def _parse_ballscrew(top: _Table) -> BallScrewScenario:
+def _parse_ballscrew(top: ScenarioTable) -> BallScrewScenario:
     d = Screw()
     s = top.sub("screw")
     screw = Screw(
@@ -171,7 +171,7 @@ def _parse_ballscrew(top: _Table) -> BallScrewScenario:
     substeps = time.integer("substeps", 5)
     duration = time.number("duration_s", 7200.0, positive=True)
     if abs(duration / period - round(duration / period)) > 1e-9:
-        raise _fail("time.duration_s", f"{duration:g} s is not a multiple of sampling_period_s ({period:g} s)")
+        raise fail("time.duration_s", f"{duration:g} s is not a multiple of sampling_period_s ({period:g} s)")
     time.finish()
 
     source = _parse_source(top.sub("source"), screw)
@@ -186,19 +186,19 @@ def _parse_ballscrew(top: _Table) -> BallScrewScenario:
     raw_probe = probe_table.get("x_m", 0.16)
     if raw_probe == "nut":
         if source.kind != "nut":
-            raise _fail("probe.x_m", '"nut" needs a moving nut ([source] kind = "nut")')
+            raise fail("probe.x_m", '"nut" needs a moving nut ([source] kind = "nut")')
         probe: float | str = "nut"
     else:
         probe = probe_table.number("x_m", 0.16, nonnegative=True)
         if probe > screw.length:
-            raise _fail("probe.x_m", f"{probe:g} m is beyond the screw's end ({screw.length:g} m)")
+            raise fail("probe.x_m", f"{probe:g} m is beyond the screw's end ({screw.length:g} m)")
     raw_extra = probe_table.get("displacements_m", [])
     if (
         not isinstance(raw_extra, list)
         or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= screw.length for v in raw_extra)
         or len(set(raw_extra)) != len(raw_extra)
     ):
-        raise _fail(
+        raise fail(
             "probe.displacements_m", f"expected a list of distinct positions within the screw (m), got {raw_extra!r}"
         )
     displacements = tuple(float(v) for v in raw_extra)
@@ -228,20 +228,18 @@ def _parse_ballscrew(top: _Table) -> BallScrewScenario:
     )
 
 
-def _parse_source(src: _Table, screw: Screw) -> Source:
+def _parse_source(src: ScenarioTable, screw: Screw) -> Source:
     d = Source()
     kind = src.string("kind", d.kind, SOURCES)
     power = src.number("power_W", d.power_W, nonnegative=True)
     if kind == "fixed":
         fraction = src.number("into_screw", d.into_screw, positive=True)
         if fraction > 1:
-            raise _fail(
-                src.key("into_screw"), f"is the fraction of power_W entering the screw (0 to 1), got {fraction}"
-            )
+            raise fail(src.key("into_screw"), f"is the fraction of power_W entering the screw (0 to 1), got {fraction}")
         x = src.number("x_m", 0.0, nonnegative=True)
         if x > screw.length:
-            raise _fail(src.key("x_m"), f"{x:g} m is beyond the screw's end ({screw.length:g} m)")
-        schedule = _steps(src, "schedule", [[1.0, 1.0]], value_check=_on_off)
+            raise fail(src.key("x_m"), f"{x:g} m is beyond the screw's end ({screw.length:g} m)")
+        schedule = step_schedule(src, "schedule", [[1.0, 1.0]], value_check=on_off)
         source = Source(kind, power, fraction, x, schedule)
     else:
         length = src.number("nut_length_m", d.nut_length, positive=True)
@@ -251,7 +249,7 @@ def _parse_source(src: _Table, screw: Screw) -> Source:
         raw = src.get("programme", None)
         name = src.key("programme")
         if not isinstance(raw, list) or not raw:
-            raise _fail(name, 'is required for kind = "nut": a list of [target_m, speed_m_s, dwell_s]')
+            raise fail(name, 'is required for kind = "nut": a list of [target_m, speed_m_s, dwell_s]')
         moves = []
         for i, move in enumerate(raw):
             if (
@@ -259,16 +257,16 @@ def _parse_source(src: _Table, screw: Screw) -> Source:
                 or len(move) != 3
                 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in move)
             ):
-                raise _fail(name, f"move {i + 1} must be [target_m, speed_m_s, dwell_s], got {move!r}")
+                raise fail(name, f"move {i + 1} must be [target_m, speed_m_s, dwell_s], got {move!r}")
             target, speed, dwell = (float(v) for v in move)
             if not (0 <= target <= screw.length) or speed <= 0 or dwell < 0:
-                raise _fail(
+                raise fail(
                     name, f"move {i + 1}: target within the screw, speed > 0 and dwell >= 0 needed, got {move!r}"
                 )
             moves.append((target, speed, dwell))
         programme = Programme(start, tuple(moves), src.boolean("repeat", True))
         if programme._segments()[1] <= 0:
-            raise _fail(name, "the programme takes no time; give a move or a dwell")
+            raise fail(name, "the programme takes no time; give a move or a dwell")
         source = Source(
             kind,
             power,
@@ -281,21 +279,17 @@ def _parse_source(src: _Table, screw: Screw) -> Source:
     return source
 
 
-def _on_off(value):
-    return None if value in (0.0, 1.0) else f"value must be 0 (off) or 1 (on), got {value:g}"
-
-
 def _parse_sensors(raw, screw: Screw) -> dict:
     if raw is None:
         return dict(PAPER_SENSORS)
     if not isinstance(raw, dict) or not raw:
-        raise _fail("sensors", "must be a table of NAME = x_m (distance from the source end)")
+        raise fail("sensors", "must be a table of NAME = x_m (distance from the source end)")
     sensors = {}
     for name, x in raw.items():
         key = f"sensors.{name}"
         if name in RESERVED:
-            raise _fail(key, "this name is reserved for another column; rename the sensor")
+            raise fail(key, "this name is reserved for another column; rename the sensor")
         if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 <= x <= screw.length:
-            raise _fail(key, f"expected a position in metres within the screw (0 to {screw.length:g}), got {x!r}")
+            raise fail(key, f"expected a position in metres within the screw (0 to {screw.length:g}), got {x!r}")
         sensors[name] = float(x)
     return sensors

@@ -17,11 +17,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from groupfit.errors import InputError
-from groupfit.tomlconfig import Table
-
-from .geometry import HousingGeometry, MeshResolution
+from .ballscrew_config import parse_ballscrew
+from .geometry import HousingGeometry, MeshResolution, points_inside
 from .schedule import PALMGREN_SPEED_EXPONENT, AmbientProfile, EquilibriumRule, StepSchedule
+from .tables import ScenarioTable, check_alignment, fail, non_negative, on_off, step_schedule
 from .unsensed import HEAT_INPUTS, UnsensedPart
 
 RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on", "q_W_m2"}
@@ -154,61 +153,6 @@ DEFAULT_SENSORS = {
 }
 
 
-def _fail(key: str, what: str) -> InputError:
-    return InputError(f"config key '{key}': {what}")
-
-
-class _Table(Table):
-    """A scenario table: an unknown key points to the shipped scenarios for the spelling."""
-
-    def finish(self, hint: str | None = None) -> None:
-        super().finish(hint or "check the spelling against configs/paper_cycle.toml or configs/rod_ar1.toml")
-
-
-def _steps(table: _Table, key: str, default, *, value_check=None) -> StepSchedule | None:
-    raw = table.get(key, default)
-    if raw is None:
-        return None
-    name = table.key(key)
-    if not isinstance(raw, (list, tuple)) or not raw:
-        raise _fail(name, "expected a non-empty list of [duration_s, value] pairs")
-    steps = []
-    for i, step in enumerate(raw):
-        if (
-            not isinstance(step, (list, tuple))
-            or len(step) != 2
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in step)
-        ):
-            raise _fail(name, f"step {i + 1} must be [duration_s, value], got {step!r}")
-        duration, value = float(step[0]), float(step[1])
-        if duration <= 0:
-            raise _fail(name, f"step {i + 1} has duration {step[0]!r}; durations must be positive (seconds)")
-        if value_check is not None:
-            problem = value_check(value)
-            if problem:
-                raise _fail(name, f"step {i + 1}: {problem}")
-        steps.append((duration, value))
-    return StepSchedule(tuple(steps))
-
-
-def _check_alignment(schedule: StepSchedule, key: str, step_s: float):
-    for duration, _ in schedule.steps:
-        if abs(duration / step_s - round(duration / step_s)) > 1e-6:
-            raise _fail(
-                key,
-                f"duration {duration:g} s is not a multiple of the "
-                f"time step {step_s:g} s (sampling_period_s / substeps)",
-            )
-
-
-def _non_negative(value):
-    return None if value >= 0 else f"value must not be negative, got {value:g}"
-
-
-def _on_off(value):
-    return None if value in (0.0, 1.0) else f"value must be 0 (off) or 1 (on), got {value:g}"
-
-
 def parse_config(config: dict):
     """Validate a parsed TOML scenario and return its scenario object.
 
@@ -217,15 +161,13 @@ def parse_config(config: dict):
     InputError
         On a missing ``kind``, an unknown key, a wrong type or an invalid value.
     """
-    top = _Table(config, "")
+    top = ScenarioTable(config, "")
     kind = top.get("kind", "headstock")
     if kind not in ("headstock", "rod", "ballscrew"):
-        raise _fail("kind", f'must be "headstock", "rod" or "ballscrew", got {kind!r}')
+        raise fail("kind", f'must be "headstock", "rod" or "ballscrew", got {kind!r}')
     top.string("description", "")
     top.string("name", "")
     if kind == "ballscrew":
-        from .ballscrew import parse_ballscrew
-
         scenario = parse_ballscrew(top)
     else:
         scenario = _parse_headstock(top) if kind == "headstock" else _parse_rod(top)
@@ -233,19 +175,19 @@ def parse_config(config: dict):
     return scenario
 
 
-def _parse_time(top: _Table, default_period, default_substeps, default_steps, value_check, *, headstock: bool):
+def _parse_time(top: ScenarioTable, default_period, default_substeps, default_steps, value_check, *, headstock: bool):
     time = top.sub("time")
     period = time.number("sampling_period_s", default_period, positive=True)
     substeps = time.integer("substeps", default_substeps)
-    schedule = _steps(time, "schedule", default_steps, value_check=value_check)
-    _check_alignment(schedule, time.key("schedule"), period / substeps)
+    schedule = step_schedule(time, "schedule", default_steps, value_check=value_check)
+    check_alignment(schedule, time.key("schedule"), period / substeps)
     extra = {}
     if headstock:
         hold = time.get("hold_until_equilibrium_rpm", 2000.0)
         if hold is False:
             hold = None
         elif isinstance(hold, bool) or not isinstance(hold, (int, float)) or hold < 0:
-            raise _fail(
+            raise fail(
                 time.key("hold_until_equilibrium_rpm"), f"expected a non-negative speed in r/min or false, got {hold!r}"
             )
         extra["hold_until_equilibrium_rpm"] = None if hold is None else float(hold)
@@ -255,16 +197,16 @@ def _parse_time(top: _Table, default_period, default_substeps, default_steps, va
             tolerance=time.number("equilibrium_tolerance", 0.005, positive=True),
         )
         if extra["max_duration_s"] < schedule.total_duration:
-            raise _fail(time.key("max_duration_s"), "is shorter than the schedule; raise it or shorten the schedule")
-        prerun = _steps(time, "prerun", None, value_check=value_check)
+            raise fail(time.key("max_duration_s"), "is shorter than the schedule; raise it or shorten the schedule")
+        prerun = step_schedule(time, "prerun", None, value_check=value_check)
         if prerun is not None:
-            _check_alignment(prerun, time.key("prerun"), period / substeps)
+            check_alignment(prerun, time.key("prerun"), period / substeps)
             extra["prerun"] = prerun
     time.finish()
     return period, substeps, schedule, extra
 
 
-def _parse_headstock(top: _Table) -> HeadstockScenario:
+def _parse_headstock(top: ScenarioTable) -> HeadstockScenario:
     base = HeadstockScenario()
     g0 = base.geometry
     housing = top.sub("housing")
@@ -279,7 +221,7 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     )
     problems = geometry.problems()
     if problems:
-        raise _fail("housing", problems[0])
+        raise fail("housing", problems[0])
     housing.finish()
 
     m0 = base.resolution
@@ -303,7 +245,7 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
         young=mat.number("young_Pa", d.young, positive=True),
     )
     if not material.poisson < 0.5:
-        raise _fail("material.poisson", "must be below 0.5")
+        raise fail("material.poisson", "must be below 0.5")
     mat.finish()
 
     bnd = top.sub("boundary")
@@ -326,11 +268,11 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     brg.finish()
 
     period, substeps, spindle, extra = _parse_time(
-        top, base.sampling_period_s, base.substeps, [list(s) for s in base.spindle.steps], _non_negative, headstock=True
+        top, base.sampling_period_s, base.substeps, [list(s) for s in base.spindle.steps], non_negative, headstock=True
     )
     step_s = period / substeps
     if abs(extra["equilibrium"].window_s / period - round(extra["equilibrium"].window_s / period)) > 1e-6:
-        raise _fail("time.equilibrium_window_s", "must be a multiple of sampling_period_s")
+        raise fail("time.equilibrium_window_s", "must be a multiple of sampling_period_s")
 
     ambient = _parse_ambient(top.sub("ambient"), step_s)
     noise = _parse_noise(top.sub("noise"))
@@ -341,7 +283,7 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     direction = err.vector("direction", base.error_direction, 3)
     norm = math.sqrt(sum(c * c for c in direction))
     if norm == 0:
-        raise _fail("error.direction", "must not be the zero vector")
+        raise fail("error.direction", "must not be the zero vector")
     err.finish()
 
     sensors = _parse_sensors(top.get("sensors", None), geometry)
@@ -375,7 +317,7 @@ def _parse_headstock(top: _Table) -> HeadstockScenario:
     )
 
 
-def _parse_noise(table: _Table) -> MeasurementNoise:
+def _parse_noise(table: ScenarioTable) -> MeasurementNoise:
     seed = table.integer("seed", 0, minimum=0)
     noise = MeasurementNoise(
         sensor_sd_K=table.number("sensor_sd_K", 0.0, nonnegative=True),
@@ -389,7 +331,7 @@ def _parse_noise(table: _Table) -> MeasurementNoise:
     return noise
 
 
-def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
+def _parse_ambient(amb: ScenarioTable, step_s: float) -> AmbientProfile:
     kind = amb.string("profile", "constant", ("constant", "sine", "steps"))
     profile = AmbientProfile(
         kind=kind,
@@ -397,15 +339,15 @@ def _parse_ambient(amb: _Table, step_s: float) -> AmbientProfile:
         amplitude_C=amb.number("amplitude_C", 0.0, nonnegative=True),
         period_s=amb.number("period_s", 86400.0, positive=True),
         phase_s=amb.number("phase_s", 0.0),
-        steps=_steps(amb, "steps", None),
-        offsets=_steps(amb, "offsets", None),
+        steps=step_schedule(amb, "steps", None),
+        offsets=step_schedule(amb, "offsets", None),
     )
     if kind == "steps":
         if profile.steps is None:
-            raise _fail(amb.key("steps"), 'is required when profile = "steps"')
-        _check_alignment(profile.steps, amb.key("steps"), step_s)
+            raise fail(amb.key("steps"), 'is required when profile = "steps"')
+        check_alignment(profile.steps, amb.key("steps"), step_s)
     if profile.offsets is not None:
-        _check_alignment(profile.offsets, amb.key("offsets"), step_s)
+        check_alignment(profile.offsets, amb.key("offsets"), step_s)
     amb.finish()
     return profile
 
@@ -415,10 +357,10 @@ def _parse_unsensed_part(raw) -> UnsensedPart | None:
     (see :mod:`groupfit.fe.unsensed`); absent means none."""
     if raw is None:
         return None
-    part = _Table(raw, "unsensed_part")
+    part = ScenarioTable(raw, "unsensed_part")
     for key in ("tau_s", "gain_um_per_W"):
         if key not in raw:
-            raise _fail(part.key(key), "is required in [unsensed_part]")
+            raise fail(part.key(key), "is required in [unsensed_part]")
     unsensed = UnsensedPart(
         tau_s=part.number("tau_s", None, positive=True),
         gain_um_per_W=part.number("gain_um_per_W", None),
@@ -429,26 +371,24 @@ def _parse_unsensed_part(raw) -> UnsensedPart | None:
 
 
 def _parse_sensors(raw, geometry: HousingGeometry) -> dict:
-    from .geometry import points_inside
-
     if raw is None:
         return dict(DEFAULT_SENSORS)
     if not isinstance(raw, dict) or not raw:
-        raise _fail("sensors", "must be a table of NAME = [x_m, y_m, z_m]")
+        raise fail("sensors", "must be a table of NAME = [x_m, y_m, z_m]")
     sensors = {}
     for name, point in raw.items():
         key = f"sensors.{name}"
         if name in RESERVED_COLUMNS or name.startswith(("node_", "src_")):
-            raise _fail(key, "this name is reserved for another column; rename the sensor")
+            raise fail(key, "this name is reserved for another column; rename the sensor")
         if (
             not isinstance(point, (list, tuple))
             or len(point) != 3
             or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in point)
         ):
-            raise _fail(key, f"expected [x_m, y_m, z_m], got {point!r}")
+            raise fail(key, f"expected [x_m, y_m, z_m], got {point!r}")
         xyz = tuple(float(v) for v in point)
         if not points_inside(geometry, np.array(xyz)[:, None])[0]:
-            raise _fail(
+            raise fail(
                 key, f"point {xyz} is outside the housing material; move it inside the housing (not in the bore)"
             )
         sensors[name] = xyz
@@ -457,15 +397,15 @@ def _parse_sensors(raw, geometry: HousingGeometry) -> dict:
 
 def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
     if not isinstance(raw, list):
-        raise _fail("sources", "must be an array of tables ([[sources]])")
+        raise fail("sources", "must be an array of tables ([[sources]])")
     sources, names = [], set()
     for i, item in enumerate(raw):
-        src = _Table(item, f"sources[{i + 1}]")
+        src = ScenarioTable(item, f"sources[{i + 1}]")
         name = src.string("name", "")
         if not name.isidentifier():
-            raise _fail(src.key("name"), f"must be a plain identifier, got {name!r}")
+            raise fail(src.key("name"), f"must be a plain identifier, got {name!r}")
         if name in names:
-            raise _fail(src.key("name"), f"duplicate source name {name!r}")
+            raise fail(src.key("name"), f"duplicate source name {name!r}")
         names.add(name)
         power = src.number("power_W", 0.0, nonnegative=True)
         region_raw = src.get("region_m", None)
@@ -480,10 +420,10 @@ def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
                 for r in region_raw
             )
         ):
-            raise _fail(src.key("region_m"), "expected [[x0, x1], [y0, y1], [z0, z1]] in metres with x0 <= x1 …")
-        schedule = _steps(src, "schedule", [[1.0, 1.0]], value_check=_on_off)
+            raise fail(src.key("region_m"), "expected [[x0, x1], [y0, y1], [z0, z1]] in metres with x0 <= x1 …")
+        schedule = step_schedule(src, "schedule", [[1.0, 1.0]], value_check=on_off)
         if "schedule" in item:
-            _check_alignment(schedule, src.key("schedule"), step_s)
+            check_alignment(schedule, src.key("schedule"), step_s)
         schedule = StepSchedule(schedule.steps, src.boolean("repeat", False))
         src.finish()
         sources.append(
@@ -497,7 +437,7 @@ def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
     return sources
 
 
-def _parse_rod(top: _Table) -> RodScenario:
+def _parse_rod(top: ScenarioTable) -> RodScenario:
     d = RodScenario()
     rod = top.sub("rod")
     values = dict(
@@ -514,7 +454,7 @@ def _parse_rod(top: _Table) -> RodScenario:
     values["elements"] = mesh.integer("elements", d.elements)
     values["order"] = mesh.integer("order", d.order)
     if values["order"] > 2:
-        raise _fail("mesh.order", "must be 1 or 2")
+        raise fail("mesh.order", "must be 1 or 2")
     mesh.finish()
     period, substeps, flux, _ = _parse_time(
         top, d.sampling_period_s, d.substeps, [list(s) for s in d.flux.steps], None, headstock=False
