@@ -50,7 +50,7 @@ from groupfit.fe import parse_config, simulate_config
 from groupfit.fe.ballscrew import simulate_axisymmetric, simulate_ballscrew
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns
-from groupfit.screw.model import steady_profile, temperature_rise
+from groupfit.screw.physics import steady_profile, temperature_rise
 from groupfit.screw.runs import load_screw_run
 
 ROOT = Path(__file__).resolve().parents[1]

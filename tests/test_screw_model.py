@@ -12,8 +12,8 @@ from groupfit.fe.ballscrew import Screw, ScrewModel
 from groupfit.screw import BallScrewModel, temperature_rise, thermal_error
 from groupfit.screw.compare import compare_screw, paper_bounds, score_screw
 from groupfit.screw.identify import fit_steady_profile
-from groupfit.screw.model import convection_from_fin_parameter, fin_parameter
 from groupfit.screw.modelfile import load_model, model_to_dict, save_model
+from groupfit.screw.physics import convection_from_fin_parameter, fin_parameter
 from groupfit.screw.runs import load_screw_run
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -13,6 +13,7 @@
 See ``docs/ballscrew.md``.
 """
 
-from .model import BallScrewModel, temperature_rise, thermal_error
+from .model import BallScrewModel
+from .physics import temperature_rise, thermal_error
 
 __all__ = ["BallScrewModel", "temperature_rise", "thermal_error"]

@@ -32,7 +32,7 @@ from scipy.sparse import lil_matrix
 
 from groupfit.errors import InputError
 
-from .model import steady_profile, transient_factor
+from .physics import steady_profile, transient_factor
 
 LAMBDA_BOUNDS = (0.05, 200.0)  # 1/m
 ALPHA_BOUNDS = (1e-8, 1e-2)  # m²/s
