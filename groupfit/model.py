@@ -222,7 +222,7 @@ class ModelFile:
     def from_dict(cls, data: Mapping[str, Any], source: str | Path | None = None) -> "ModelFile":
         """Check a model file object and build the model; InputError names what is wrong (and ``source``)."""
         prefix = f"{source}: " if source is not None else ""
-        problem = model_problem(data)
+        problem = model_file_problem(data)
         if problem:
             raise InputError(prefix + problem)
         nested = {
@@ -248,7 +248,7 @@ class ModelFile:
 
     def checked(self) -> "ModelFile":
         """This model, after the checks of :func:`model_problem` on its file object; InputError otherwise."""
-        problem = model_problem(json.loads(to_json(self.to_dict())))
+        problem = model_file_problem(json.loads(to_json(self.to_dict())))
         if problem:
             raise InputError(f"invalid model: {problem}")
         return self
@@ -378,6 +378,12 @@ REQUIRED = ("format",) + tuple(
 """Keys every model file holds: ``format`` and the fields without a default."""
 
 
+def model_file_problem(data: Any) -> str | None:
+    """What is wrong with a model file object (its JSON form), or None: every check of :func:`model_problem`,
+    the keys of :data:`REQUIRED` included."""
+    return model_problem(data, REQUIRED)
+
+
 def _frozen(value: Any) -> Any:
     """Lists as tuples, all the way down (mappings keep their keys)."""
     if isinstance(value, (list, tuple)):
@@ -440,6 +446,6 @@ __all__ = [
     "Switching",
     "as_model_file",
     "grouped_prediction",
-    "model_problem",
+    "model_file_problem",
     "rule_section_problem",
 ]

@@ -9,7 +9,7 @@ imports the fitting stack.
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from groupfit.errors import InputError
 from groupfit.features import STARTS, Feature
@@ -63,7 +63,7 @@ def _nonfinite(value: Any, where: str) -> str | None:
     return None
 
 
-def model_problem(model: Any) -> str | None:
+def model_problem(model: Any, required: Sequence[str]) -> str | None:
     """What is wrong with a model file object, or None (the checks of :meth:`ModelFile.from_dict`).
 
     Every invariant the run-time rule and the exported routines rely on:
@@ -82,9 +82,7 @@ def model_problem(model: Any) -> str | None:
     """
     if not isinstance(model, Mapping) or model.get("format") != FORMAT:
         return f"not a {FORMAT} model file (missing or different 'format')"
-    from groupfit.model import REQUIRED  # the fields of ModelFile without a default
-
-    missing = [key for key in REQUIRED if key not in model]
+    missing = [key for key in required if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"
     checks = (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem)

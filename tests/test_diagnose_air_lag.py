@@ -20,7 +20,7 @@ from groupfit.diagnose.residual import model_inputs, predict
 from groupfit.features import Feature, lowpass
 from groupfit.grouping import serving_group_index
 from groupfit.heldout.folds import make_folds
-from groupfit.model_checks import model_problem
+from groupfit.model import model_file_problem
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.reference import with_reference
@@ -87,7 +87,7 @@ def test_a_part_lagging_the_air_is_found_over_the_air_and_written_on_absolute_re
 
     written = result.model
     assert written.get("reference") is None and "T_amb" in written["temps"]
-    assert model_problem(written) is None
+    assert model_file_problem(written) is None
 
     # the written model is least squares on the rises with the lag over the air, as numpy fits it
     y = modelling["error_um"].to_numpy(float)
@@ -122,7 +122,7 @@ def test_a_grouped_model_keeps_its_breaks_and_the_written_model_predicts_as_its_
     feature = Feature("T_amb", "lowpass", tau_s=LAG_TAU_S)
     written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature)
     assert written["breaks"] == model["breaks"] and written.get("reference") is None
-    assert model_problem(written) is None
+    assert model_file_problem(written) is None
 
     # the rises fitted with the lag's coefficient shared by the groups, as numpy sees it
     design = rises_design(modelling, LAG_TAU_S)

@@ -14,7 +14,7 @@ from groupfit.diagnose import diagnose
 from groupfit.diagnose.loop import stacked_residual
 from groupfit.features import derived_matrix, lowpass
 from groupfit.heldout.folds import make_folds
-from groupfit.model_checks import model_problem
+from groupfit.model import model_file_problem
 from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.reference import with_reference
@@ -154,6 +154,6 @@ def test_a_grouped_model_loses_its_reference_with_its_breaks_kept_and_still_repl
     assert result.reference["dropped"] and result.model.get("reference") is None
     assert result.model["breaks"] == model["breaks"]
     assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
-    assert model_problem(result.model) is None
+    assert model_file_problem(result.model) is None
     replayed = stacked_residual(result.model, [validation], replay_groups)
     np.testing.assert_allclose(replayed, result.residuals_after["validate"], rtol=0, atol=1e-12)

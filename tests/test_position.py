@@ -17,7 +17,7 @@ from groupfit.errors import InputError
 from groupfit.export import render, write
 from groupfit.export.harness import build_driver, run_driver
 from groupfit.export.table import position_coefficients, position_table, table_error
-from groupfit.model import ModelFile, model_problem
+from groupfit.model import ModelFile, model_file_problem
 from groupfit.models import GroupedRegressor
 from groupfit.position import cross_validate_order, fit_blocks, load_position_run, wide_to_long, with_position
 from groupfit.runtime import FAULT_POSITION, FAULT_SENSOR, RuleTables, SwitchingRule
@@ -195,9 +195,9 @@ def test_old_files_load_unchanged_and_the_position_section_round_trips():
 def test_a_bad_position_section_is_refused(change, message):
     model = model_for(1)
     model["reference"] = "T_amb"
-    assert model_problem(model) is None
+    assert model_file_problem(model) is None
     change(model["position"])
-    problem = model_problem(model)
+    problem = model_file_problem(model)
     assert problem is not None and message in problem
 
 
@@ -211,9 +211,9 @@ def test_the_band_stream_goes_in_and_out_of_the_dead_band():
 
 def test_a_bad_dead_band_is_refused():
     model = model_for(1, dead_band=True)
-    assert model_problem(model) is None
+    assert model_file_problem(model) is None
     model["dead_band"]["threshold_c"] = 0.0
-    assert "dead_band.threshold_c" in model_problem(model)
+    assert "dead_band.threshold_c" in model_file_problem(model)
 
 
 # --------------------------------------------------------------------- the run-time rule
@@ -403,7 +403,7 @@ def seed_001_model() -> dict:
 
 def test_seed_001_rule_dead_band_sign_and_units_on_a_hand_made_case():
     model = seed_001_model()
-    assert model_problem(model) is None
+    assert model_file_problem(model) is None
     rule = SwitchingRule(model)
     assert rule.tables.raw_names == ("x1", "x2", "x8", "l_mm")
     #              x1     x2     x8    l (mm)
@@ -546,7 +546,7 @@ def derived_position_model() -> tuple[dict, dict[str, np.ndarray]]:
     position = {"column": "X_mm", "p0_mm": 100.0, "order": 2, "travel_mm": [-50.0, 400.0], "coefficients": rows}
     model["position"] = position
     model["dead_band"] = {"reference": model["temps"][0], "threshold_c": 0.5}
-    assert model_problem(model) is None
+    assert model_file_problem(model) is None
     assert RuleTables.from_model(model).raw_names[-1] == "X_mm"
     chosen = {}
     for label, raw in plain.items():

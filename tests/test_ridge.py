@@ -10,8 +10,7 @@ from sklearn.linear_model import Ridge
 from groupfit.cli import main
 from groupfit.heldout.folds import Folds, make_folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.model import ModelFile
-from groupfit.model_checks import model_problem
+from groupfit.model import ModelFile, model_file_problem
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.ridge import choose_ridge_alpha, held_out_sse
 from groupfit.runtime import replay_groups
@@ -144,11 +143,11 @@ def test_model_file_ridge_alpha_is_checked():
     frame["error_um"] = y
     run = load_run(frame, temps=list(frame.columns[1:-1]))
     model = GroupedRegressor(p=0, c=0, ridge_alpha=0.1).fit(run.temps, run.error).to_model_file(run).to_dict()
-    assert model_problem(model) is None and model["ridge_alpha"] == 0.1
-    assert "ridge_alpha = -1" in model_problem({**model, "ridge_alpha": -1})
-    assert "ridge_alpha = 'x'" in model_problem({**model, "ridge_alpha": "x"})
+    assert model_file_problem(model) is None and model["ridge_alpha"] == 0.1
+    assert "ridge_alpha = -1" in model_file_problem({**model, "ridge_alpha": -1})
+    assert "ridge_alpha = 'x'" in model_file_problem({**model, "ridge_alpha": "x"})
     grouped = GroupedRegressor(p=1, c=0).fit(run.temps, run.error).to_model_file(run).to_dict()
-    assert "belongs to a global model" in model_problem({**grouped, "ridge_alpha": 0.1})
+    assert "belongs to a global model" in model_file_problem({**grouped, "ridge_alpha": 0.1})
 
 
 def test_diagnose_with_ridge_scores_and_refits_with_the_same_penalty(tmp_path, capsys):
