@@ -61,7 +61,6 @@ from independent_machine import (  # noqa: E402
 
 from groupfit.data import load_run  # noqa: E402
 from groupfit.diagnose import diagnose  # noqa: E402
-from groupfit.modelfile import model_to_dict  # noqa: E402
 from groupfit.models.grouped import GroupedRegressor  # noqa: E402
 from groupfit.reference import default_reference, with_reference  # noqa: E402
 from groupfit.runtime import replay_groups  # noqa: E402
@@ -84,7 +83,7 @@ def base_model(scenario: Scenario, reference: str = "none", p: int = 0):
     fitted = modelling
     if reference == "default":
         fitted = with_reference(modelling, default_reference(modelling.frame))
-    model = model_to_dict(GroupedRegressor(p=p, random_state=0).fit(fitted.temps, fitted.error), fitted)
+    model = GroupedRegressor(p=p, random_state=0).fit(fitted.temps, fitted.error).to_model_file(fitted).to_dict()
     return model, modelling, validation
 
 

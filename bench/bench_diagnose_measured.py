@@ -57,10 +57,9 @@ from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.features import Feature
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.plots import plot_diagnosis
-from groupfit.switching import replay_groups
+from groupfit.runtime import replay_groups
 
 MEASURED = Path(__file__).resolve().parents[2] / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"
 SENSORS = [f"t{k}_C" for k in range(1, 17)]
@@ -94,7 +93,7 @@ def runs_around(frame, first, last):
 def base_model(runs):
     """The MLR on the 16 sensors, fitted on the rows with a measured error."""
     fitted = measured_rows(runs[0])
-    return model_to_dict(GroupedRegressor(p=0).fit(fitted.temps, fitted.error), fitted)
+    return GroupedRegressor(p=0).fit(fitted.temps, fitted.error).to_model_file(fitted).to_dict()
 
 
 FORWARD_CUTS = (0.5, 0.6, 0.7, 0.8, 0.9)

@@ -427,11 +427,6 @@ def _fields_from_dict(cls, data: Mapping[str, Any], nested: Mapping[str, Any] = 
     return cls(**values, extra=extra)
 
 
-def as_model_file(model: ModelFile | Mapping[str, Any]) -> ModelFile:
-    """Shorthand for :meth:`ModelFile.coerce`."""
-    return ModelFile.coerce(model)
-
-
 __all__ = [
     "COEFFICIENT_LIMIT",
     "DeadBand",
@@ -444,7 +439,6 @@ __all__ = [
     "RULE_KEYS",
     "SOURCE_RANGES_KEY",
     "Switching",
-    "as_model_file",
     "grouped_prediction",
     "model_file_problem",
     "rule_section_problem",

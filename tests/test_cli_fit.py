@@ -8,7 +8,8 @@ import pytest
 
 from groupfit.cli import main
 from groupfit.data import load_run
-from groupfit.modelfile import estimator_from_dict, load_model
+from groupfit.model import ModelFile
+from groupfit.models.grouped import GroupedRegressor
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "datasets" / "synthetic_cycle.csv"
@@ -44,13 +45,13 @@ def test_fit_writes_model_figure_and_json(tmp_path, capsys):
     assert (out / "fit.png").stat().st_size > 10_000
     result = json.loads((tmp_path / "fit.json").read_text())
     assert SPEC_KEYS <= set(result) and result["search"]["method"] == "exact"
-    model = load_model(out / "model.json")
+    model = ModelFile.load(out / "model.json").to_dict()
     assert model["format"] == "groupfit-model/1" and model["p"] == 2 and len(model["coefficients"]) == 3
     assert model["breaks"] == result["breaks"]
     assert "Rg = " in report and str(model["breaks"]) in report
 
     run = load_run(DATA, temps=model["temps"])
-    residual = run.error - estimator_from_dict(model).predict(run.temps)
+    residual = run.error - GroupedRegressor.from_model_file(model).predict(run.temps)
     assert np.sqrt(np.mean(residual**2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)
     assert np.sum(np.abs(residual)) == pytest.approx(model["objective_value"], rel=1e-9)
 
@@ -80,7 +81,7 @@ def test_config_file_and_command_line_override(tmp_path):
         f'[output]\ndir = "{(tmp_path / "cfg-out").as_posix()}"\n'
     )
     assert main(["fit", str(config), "--p", "1", "--quiet"]) == 0
-    model = load_model(tmp_path / "cfg-out" / "model.json")
+    model = ModelFile.load(tmp_path / "cfg-out" / "model.json").to_dict()
     assert model["p"] == 1 and model["temps"] == ["T1", "T3"]
     assert model["objective"] == "sse" and model["intercept"] is False
 

@@ -15,7 +15,7 @@ from groupfit.features import Feature, lowpass
 from groupfit.heldout.design import group_design
 from groupfit.heldout.folds import Folds, make_folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.modelfile import load_model
+from groupfit.model import ModelFile
 from groupfit.synthetic import simulate_lumped
 
 TEMPS = ["T1", "T2", "T3", "T4"]
@@ -143,7 +143,7 @@ def test_a_grouped_model_gets_the_effect_with_one_coefficient_as_it_was_scored(t
     group refitted by least squares on what the effect leaves; the shared coefficient is the scorer's."""
     frame = with_ambient_effect(lumped())
     path, model_path = fit_model(tmp_path, frame, "amb", p=2)
-    model = load_model(model_path)
+    model = ModelFile.load(model_path).to_dict()
     run = load_run(path, temps=TEMPS)
     feature = Feature("T_amb", "lowpass", tau_s=3600.0)
     augmented = augment_model(model, run, model_inputs(model, run), feature)
@@ -167,7 +167,7 @@ def test_missing_ambient_effect_is_found_and_judged_on_another_run(tmp_path):
     data_path, model_path = fit_model(tmp_path, modelling, "modelling")
     validation_path = tmp_path / "validation.csv"
     validation.to_csv(validation_path, index=False)
-    model = load_model(model_path)
+    model = ModelFile.load(model_path).to_dict()
     result = diagnose(model, load_run(data_path, temps=TEMPS), load_run(validation_path, temps=TEMPS))
     assert [c.feature.column for c in result.added][:1] == ["T_amb"]
     assert result.added[0].feature.transform in ("lowpass", "delay")
@@ -196,7 +196,7 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
 
     frame = sensor_error(lumped())
     data_path, model_path = fit_model(tmp_path, frame, "clean")
-    result = diagnose(load_model(model_path), load_run(data_path, temps=TEMPS))
+    result = diagnose(ModelFile.load(model_path).to_dict(), load_run(data_path, temps=TEMPS))
     assert not result.added and not result.base_check["overfitted"]
     assert result.summary().splitlines()[0].startswith("nothing missing")
     best = replace(result.candidates[0], score=0.93)

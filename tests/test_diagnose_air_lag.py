@@ -21,7 +21,6 @@ from groupfit.features import Feature, lowpass
 from groupfit.grouping import serving_group_index
 from groupfit.heldout.folds import make_folds
 from groupfit.model import model_file_problem
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
@@ -60,7 +59,7 @@ def workshop_run(seed, hours=24.0, ambient_level=20.0, lag_gain=4.0):
 def rises_model(frame, p=0):
     run = load_run(frame, temps=TEMPS, name="modelling")
     referenced = with_reference(run, "T_amb")
-    return model_to_dict(GroupedRegressor(p=p).fit(referenced.temps, referenced.error), referenced), run
+    return GroupedRegressor(p=p).fit(referenced.temps, referenced.error).to_model_file(referenced).to_dict(), run
 
 
 def rises_design(frame, tau_s):

@@ -15,7 +15,6 @@ from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.features import Feature, lowpass
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 
 MEASURED = Path(__file__).resolve().parents[2] / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"
@@ -96,7 +95,7 @@ def test_the_heat_law_on_the_measured_test_is_not_mistaken_for_a_drift():
     cut = int(0.6 * len(frame))
     modelling = load_run(frame.iloc[:cut], temps=SENSORS, error="disp_ch3_um", name="first")
     validation = load_run(frame.iloc[cut:], temps=SENSORS, error="disp_ch3_um", name="rest")
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, [validation])
 
     assert [c.feature.column for c in result.added] == ["spindle_rpm"]

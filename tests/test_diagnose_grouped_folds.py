@@ -9,7 +9,7 @@ from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.modelfile import load_model
+from groupfit.model import ModelFile
 
 
 def test_a_grouped_design_is_scored_only_where_each_group_can_be_fitted():
@@ -52,7 +52,7 @@ def test_a_grouped_design_is_scored_only_where_each_group_can_be_fitted():
 def test_a_grouped_model_that_fits_is_not_called_over_fitted(tmp_path, p):
     """The error is the sensors' own: held out by condition, a grouped model predicts as well as in sample."""
     data_path, model_path = fit_model(tmp_path, sensor_error(lumped()), "clean", p=p)
-    result = diagnose(load_model(model_path), load_run(data_path, temps=TEMPS))
+    result = diagnose(ModelFile.load(model_path).to_dict(), load_run(data_path, temps=TEMPS))
     check = result.base_check
     assert not check["overfitted"] and check["held_out_rms_um"] < 1.5 * check["in_sample_rms_um"]
     assert not result.added and result.summary().startswith("nothing missing")
@@ -60,6 +60,6 @@ def test_a_grouped_model_that_fits_is_not_called_over_fitted(tmp_path, p):
 
 def test_a_missing_effect_is_found_on_a_grouped_model(tmp_path):
     data_path, model_path = fit_model(tmp_path, with_ambient_effect(lumped()), "ambient", p=2)
-    result = diagnose(load_model(model_path), load_run(data_path, temps=TEMPS))
+    result = diagnose(ModelFile.load(model_path).to_dict(), load_run(data_path, temps=TEMPS))
     assert not result.base_check["overfitted"]
     assert result.added and result.added[0].feature.column == "T_amb"

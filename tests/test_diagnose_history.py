@@ -11,7 +11,6 @@ from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.history import COLD_START_NOTE, continues
 from groupfit.diagnose.loop import stacked_residual
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
 
@@ -45,7 +44,7 @@ def test_the_validation_part_of_a_split_log_is_judged_as_if_the_log_were_whole(p
     frame = spindle_run(8, hours=16.0)
     at = int(np.flatnonzero(frame["speed_rpm"].to_numpy() >= 4000.0)[-1]) - 60  # cut while the spindle runs fast
     modelling, validation = split(frame, at)
-    model = model_to_dict(GroupedRegressor(p=p).fit(modelling.temps, modelling.error), modelling)
+    model = GroupedRegressor(p=p).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert result.added and result.added[0].feature.column == "speed_rpm"
     assert any(note.startswith("monday_evening continues monday") for note in result.notes)
@@ -83,7 +82,7 @@ def test_a_validation_run_after_a_gap_starts_from_rest():
     later = frame.iloc[600:].copy()
     later["time_s"] += 3600.0  # the machine stood for an hour: the controller started again
     validation = load_run(later.reset_index(drop=True), temps=TEMPS, name="later")
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert not any(note.startswith("later continues") for note in result.notes)
     np.testing.assert_allclose(
@@ -95,7 +94,7 @@ def test_a_chain_of_files_carries_the_history_through_every_one():
     frame = spindle_run(11, hours=12.0)
     parts = [frame.iloc[a:b].reset_index(drop=True) for a, b in ((0, 700), (700, 1000), (1000, None))]
     modelling, *validation = [load_run(p, temps=TEMPS, name=f"part{k}") for k, p in enumerate(parts)]
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert [n.split(" (")[0] for n in result.notes if "continues" in n] == [
         "part1 continues part0",
@@ -115,7 +114,7 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
     speed = frame["speed_rpm"].to_numpy()
     at = int(np.flatnonzero(speed >= 4000.0)[-1]) - 60
     modelling, _ = split(frame, at)
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
 
     def diagnosed_from(row):
         later = frame.iloc[row:].reset_index(drop=True)

@@ -19,7 +19,6 @@ from groupfit.features import lowpass
 from groupfit.heldout.design import stacked_design
 from groupfit.heldout.folds import Folds, block_labels, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 
 OTHER_SCHEDULE = [[5000.0, 1.0], [3000.0, 0.0], [6000.0, 1.0], [2000.0, 0.0], [30000.0, 1.0]]
@@ -34,7 +33,7 @@ def ambient_run(seed, creep_um=0.0, schedule=None, ambient_phase_h=0.0, n_sample
 
 
 def global_model(run):
-    return model_to_dict(GroupedRegressor(p=0).fit(run.temps, run.error), run)
+    return GroupedRegressor(p=0).fit(run.temps, run.error).to_model_file(run).to_dict()
 
 
 def test_folds_are_whole_conditions_runs_or_blocks():

@@ -8,9 +8,8 @@ import pytest
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
-from groupfit.switching import replay_groups
+from groupfit.runtime import replay_groups
 
 MEASURED = Path(__file__).resolve().parents[2] / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"
 SENSORS = [f"t{k}_C" for k in range(1, 17)]
@@ -34,7 +33,7 @@ def split_runs(frame, first, last):
 
 def sixteen_sensor_model(runs):
     measured = measured_rows(runs[0])
-    return model_to_dict(GroupedRegressor(p=0).fit(measured.temps, measured.error), measured)
+    return GroupedRegressor(p=0).fit(measured.temps, measured.error).to_model_file(measured).to_dict()
 
 
 @pytest.fixture(scope="module")

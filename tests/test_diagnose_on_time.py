@@ -6,7 +6,6 @@ import pandas as pd
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.features import Feature, lowpass
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
 
@@ -36,7 +35,7 @@ def test_a_part_that_grows_with_the_hours_at_speed_is_named_as_speed_times_on_ti
     temps = ["T1", "T2", "T3"]
     modelling = load_run(spindle_run(MODELLING, 1), temps=temps, name="modelling")
     validation = load_run(spindle_run(VALIDATION, 2), temps=temps, name="validation")
-    model = model_to_dict(GroupedRegressor(p=0).fit(modelling.temps, modelling.error), modelling)
+    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
 
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     first = result.added[0].feature

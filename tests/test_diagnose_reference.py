@@ -15,7 +15,6 @@ from groupfit.diagnose.loop import stacked_residual
 from groupfit.features import derived_matrix, lowpass
 from groupfit.heldout.folds import make_folds
 from groupfit.model import model_file_problem
-from groupfit.modelfile import model_to_dict
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
@@ -55,7 +54,7 @@ def workshop_run(seed, hours=24.0, ambient_level=20.0, ambient_swing=2.0, truth=
 def fitted(frame, reference="T_amb"):
     run = load_run(frame, temps=TEMPS, name="modelling")
     referenced = with_reference(run, reference)
-    return model_to_dict(GroupedRegressor(p=0).fit(referenced.temps, referenced.error), referenced), run
+    return GroupedRegressor(p=0).fit(referenced.temps, referenced.error).to_model_file(referenced).to_dict(), run
 
 
 def held_out_rms(design, y, groups):
@@ -148,7 +147,7 @@ def test_a_grouped_model_loses_its_reference_with_its_breaks_kept_and_still_repl
     modelling = workshop_run(2)
     run = load_run(modelling, temps=TEMPS, name="modelling")
     referenced = with_reference(run, "T_amb")
-    model = model_to_dict(GroupedRegressor(p=2).fit(referenced.temps, referenced.error), referenced)
+    model = GroupedRegressor(p=2).fit(referenced.temps, referenced.error).to_model_file(referenced).to_dict()
     validation = load_run(workshop_run(3, ambient_level=23.0), temps=TEMPS, name="warmer_day")
     result = diagnose(model, run, validation, live_rule=replay_groups)
     assert result.reference["dropped"] and result.model.get("reference") is None

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from groupfit.cli import main
-from groupfit.modelfile import load_model
+from groupfit.model import ModelFile
 
 DATA = Path(__file__).resolve().parents[1] / "datasets"
 TEMPS = "T1,T2,T3,T4"
@@ -71,7 +71,7 @@ def test_the_undeclared_effect_is_named_and_validation_rms_falls_40_percent(tmp_
     before, after = result["before"]["validate"]["rms_um"], result["after"]["validate"]["rms_um"]
     assert after <= 0.6 * before and result["improved"] is True
     assert "missing effect" in report
-    augmented = load_model(result["model"])
+    augmented = ModelFile.load(result["model"]).to_dict()
     assert augmented["temps"][:4] == TEMPS.split(",") and augmented["derived_inputs"][0]["column"] == first["column"]
 
 

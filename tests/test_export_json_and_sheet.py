@@ -5,6 +5,7 @@ import math
 
 import pytest
 from json_runtime import run_table
+from support import write_model
 from test_switching_models import augmented_model, derived_streams, streams_for, synthetic_model
 
 from groupfit.cli import main
@@ -18,7 +19,6 @@ from groupfit.export.sheet import (
     sinumerik_temp_comp_type,
     sinumerik_total_um,
 )
-from groupfit.modelfile import save_model
 from groupfit.runtime import RuleTables, SwitchingRule
 
 
@@ -178,7 +178,7 @@ def test_sheet_states_units_sign_limits_and_registers():
 
 def test_export_command_writes_every_target(tmp_path, capsys):
     model, _ = synthetic_model()
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     out = tmp_path / "export"
     assert (
         main(
@@ -214,7 +214,7 @@ def test_export_command_writes_every_target(tmp_path, capsys):
 
 def test_export_refuses_a_bad_block_name_and_writes_nothing(tmp_path, capsys):
     model, _ = synthetic_model()
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     args = ["export", str(tmp_path / "model.json"), "--target", "st", "-o", str(tmp_path / "x"), "--name", "1 bad"]
     status = main(args)
     assert status == 2 and "block name" in capsys.readouterr().err and not (tmp_path / "x").exists()

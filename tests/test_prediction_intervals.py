@@ -9,7 +9,6 @@ import statsmodels.api as sm
 
 from groupfit.data import load_run
 from groupfit.errors import InputError
-from groupfit.modelfile import estimator_from_dict, model_to_dict
 from groupfit.models import MLR, GroupedRegressor
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -85,7 +84,7 @@ def test_model_loaded_from_a_file_has_no_interval_statistics():
     model = GroupedRegressor(n=3, fixed_breaks=[45], objective="sse").fit(X, y)
     frame = pd.DataFrame({"time_s": FRAME["time_s"], "T1": X[:, 0], "T2": X[:, 1], "error_um": y})
     run = load_run(frame, temps=["T1", "T2"], name="noisy")
-    loaded = estimator_from_dict(model_to_dict(model, run))
+    loaded = GroupedRegressor.from_model_file(model.to_model_file(run).to_dict())
     np.testing.assert_allclose(loaded.predict(X), model.predict(X))
     with pytest.raises(InputError, match="refit"):
         loaded.predict(X, return_interval=True)

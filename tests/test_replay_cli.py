@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from support import write_model
 from test_switching_models import (
     DIAG_AMBIENT,
     DIAG_SOURCE,
@@ -21,7 +22,6 @@ from test_switching_models import (
 
 from groupfit.cli import main
 from groupfit.diagnose.residual import predict
-from groupfit.modelfile import save_model
 from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 
 
@@ -29,7 +29,7 @@ from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_gro
 def model_path(tmp_path):
     model, _ = synthetic_model()
     path = tmp_path / "model.json"
-    save_model(model, path)
+    write_model(model, path)
     return path
 
 
@@ -126,7 +126,7 @@ def test_single_precision_replay(tmp_path, model_path):
 
 def test_other_duty_cycle_on_the_eight_sensor_model(tmp_path):
     model, _ = eight_sensor_model()
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     run = eight_sensor_validation()
     run.frame.to_csv(tmp_path / "other.csv", index=False)
     assert replay(tmp_path / "model.json", "--data", tmp_path / "other.csv", "--json", tmp_path / "r.json") == 0
@@ -141,7 +141,7 @@ def test_other_duty_cycle_on_the_eight_sensor_model(tmp_path):
 
 def test_fe_validation_runs_replay(tmp_path):
     model, run = fe_model()
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     runs = fe_validation_runs(model)
     if not runs:
         pytest.skip("no FE validation data set in datasets/")
@@ -168,7 +168,7 @@ def test_fe_validation_runs_replay(tmp_path):
 def test_models_with_derived_inputs_replay_from_the_source_columns(tmp_path, label, which):
     model, run = augmented_model(label)
     data = run if which == "modelling" else augmented_validation(label)
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     assert replay(tmp_path / "model.json", "--data", data.source, "--json", tmp_path / "r.json") == 0
     result = json.loads((tmp_path / "r.json").read_text())
     prediction = np.array([s["prediction_um"] for s in result["samples"]])
@@ -183,7 +183,7 @@ def test_models_with_derived_inputs_replay_from_the_source_columns(tmp_path, lab
 
 def test_missing_source_column_is_named_with_the_input_it_feeds(tmp_path, capsys):
     model, _ = augmented_model("all kinds p=2")
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     data = tmp_path / "no_speed.csv"
     pd.read_csv(DIAG_AMBIENT[1]).drop(columns="speed_rpm").to_csv(data, index=False)
     assert replay(tmp_path / "model.json", "--data", data) == 2
@@ -193,7 +193,7 @@ def test_missing_source_column_is_named_with_the_input_it_feeds(tmp_path, capsys
 
 def test_source_faults_and_a_constant_source_in_a_recorded_run(tmp_path):
     model, _ = augmented_model("on/off p=1")
-    save_model(model, tmp_path / "model.json")
+    write_model(model, tmp_path / "model.json")
     frame = pd.read_csv(DIAG_SOURCE[1])
     frame["src_zscrew_on"] = 0  # never on in this run: a valid reading, not a dead sensor
     frame.loc[10:11, "spindle_on"] = np.nan  # held

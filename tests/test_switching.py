@@ -1,4 +1,4 @@
-"""The run-time switching rule (groupfit.switching) against hand-computed cases and offline serving."""
+"""The run-time switching rule (groupfit.runtime) against hand-computed cases and offline serving."""
 
 import json
 
@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support import write_model
 from test_switching_models import noisy, shifted, synthetic_model
 
 from groupfit.errors import InputError
 from groupfit.grouping import hard_groups, serving_group_index, soft_groups
-from groupfit.modelfile import load_model, save_model
+from groupfit.model import ModelFile
 from groupfit.runtime import (
     FAULT_HELD,
     FAULT_SENSOR,
@@ -277,8 +278,8 @@ def test_older_model_files_without_rule_keys_still_replay(tmp_path):
     full = SwitchingRule(model).replay(run.temps)
     for key in RULE_KEYS:
         del model["switching"][key]
-    save_model(model, tmp_path / "old.json")
-    old = load_model(tmp_path / "old.json")
+    write_model(model, tmp_path / "old.json")
+    old = ModelFile.load(tmp_path / "old.json").to_dict()
     rule = SwitchingRule(old)
     series = model["switching"]["criterion_series"]
     assert rule.tables.thresholds_c == tuple(series[w[0] - 1] for w in full_windows(old))
@@ -302,9 +303,9 @@ def full_windows(model):
 def test_broken_rule_keys_are_refused_on_loading(tmp_path, key, value, message):
     model, _ = synthetic_model()
     model["switching"][key] = value
-    save_model(model, tmp_path / "bad.json")
+    write_model(model, tmp_path / "bad.json")
     with pytest.raises(InputError, match=message):
-        load_model(tmp_path / "bad.json")
+        ModelFile.load(tmp_path / "bad.json").to_dict()
 
 
 def test_noise_estimate_recovers_white_noise_on_a_smooth_curve():

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from support import write_model
 from test_switching_models import (
     HEAT_LAW,
     augmented_model,
@@ -25,7 +26,6 @@ from groupfit.errors import InputError
 from groupfit.features import Feature
 from groupfit.grouping import serving_group_index
 from groupfit.model import ModelFile
-from groupfit.modelfile import load_model, save_model
 from groupfit.runtime import (
     FAULT_HELD,
     FAULT_SENSOR,
@@ -276,8 +276,8 @@ def test_model_files_carry_the_source_ranges_and_reload_to_the_same_rule(tmp_pat
     assert set(model["switching"][SOURCE_RANGES_KEY]) >= {"T_amb", "speed_rpm", "spindle_on", "T5", "T6"}
     assert "time_s" not in model["switching"][SOURCE_RANGES_KEY]
     assert "error_um" not in model["switching"][SOURCE_RANGES_KEY]
-    save_model(model, tmp_path / "m.json")
-    loaded = load_model(tmp_path / "m.json")
+    write_model(model, tmp_path / "m.json")
+    loaded = ModelFile.load(tmp_path / "m.json").to_dict()
     raw = readings(model, run)
     a, b = SwitchingRule(model).replay(raw), SwitchingRule(loaded).replay(raw)
     assert a.prediction_um.tobytes() == b.prediction_um.tobytes()
@@ -285,15 +285,15 @@ def test_model_files_carry_the_source_ranges_and_reload_to_the_same_rule(tmp_pat
 
 def test_power_stage_and_start_round_trip_through_the_model_file(tmp_path):
     model, run = augmented_model("heat law p=2")
-    save_model(model, tmp_path / "m.json")
+    write_model(model, tmp_path / "m.json")
     text = (tmp_path / "m.json").read_text()
     entries = json.loads(text)["derived_inputs"]
     assert entries[0] == {**HEAT_LAW.to_dict(), "name": "(speed_rpm/1000)^1.667~lp1800sr"}
     assert entries[0]["exponent"] == 5 / 3 and entries[0]["scale"] == 1000.0 and entries[0]["start"] == "rest"
     assert "start" not in entries[1] and "exponent" not in entries[2]  # defaults are not written
-    loaded = load_model(tmp_path / "m.json")
+    loaded = ModelFile.load(tmp_path / "m.json").to_dict()
     assert ModelFile.coerce(loaded).derived_inputs[0] == HEAT_LAW
-    save_model(loaded, tmp_path / "again.json")
+    write_model(loaded, tmp_path / "again.json")
     assert (tmp_path / "again.json").read_text() == text
     raw = readings(model, run)
     a, b = SwitchingRule(model).replay(raw), SwitchingRule(loaded).replay(raw)
@@ -303,7 +303,7 @@ def test_power_stage_and_start_round_trip_through_the_model_file(tmp_path):
 def test_files_without_power_or_start_keys_load_unchanged(tmp_path):
     model, _ = augmented_model("all kinds p=2")
     assert not any({"exponent", "scale", "start"} & set(entry) for entry in model["derived_inputs"])
-    save_model(model, tmp_path / "old.json")
+    write_model(model, tmp_path / "old.json")
     text = (tmp_path / "old.json").read_text()
     loaded = ModelFile.load(tmp_path / "old.json")
     assert all(f.exponent is None and f.scale is None and f.start == "steady" for f in loaded.derived_inputs)
@@ -350,7 +350,7 @@ def test_invalid_power_stages_and_starts_are_refused_in_one_line(tmp_path, break
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(model))
     with pytest.raises(InputError, match=message) as caught:
-        load_model(path)
+        ModelFile.load(path).to_dict()
     assert "\n" not in str(caught.value) and str(caught.value).startswith(str(path))
 
 
@@ -359,15 +359,15 @@ def test_older_files_without_source_ranges_or_rule_keys_still_load(tmp_path):
     raw = readings(model, run)
     full = SwitchingRule(model).replay(raw)
     del model["switching"][SOURCE_RANGES_KEY]
-    save_model(model, tmp_path / "old.json")
-    tables = RuleTables.from_model(load_model(tmp_path / "old.json"))
+    write_model(model, tmp_path / "old.json")
+    tables = RuleTables.from_model(ModelFile.load(tmp_path / "old.json").to_dict())
     assert tables.valid_origin[4:] == ("fallback",) * 3
     assert tables.valid_min[4:] == (LEGACY_SOURCE_RANGE[0],) * 3
     assert np.array_equal(SwitchingRule(model).replay(raw).prediction_um, full.prediction_um)
     for key in RULE_KEYS:
         del model["switching"][key]
-    save_model(model, tmp_path / "older.json")
-    older = SwitchingRule(load_model(tmp_path / "older.json")).replay(raw)
+    write_model(model, tmp_path / "older.json")
+    older = SwitchingRule(ModelFile.load(tmp_path / "older.json").to_dict()).replay(raw)
     assert np.array_equal(older.group, full.group)
     assert np.max(np.abs(older.prediction_um - full.prediction_um)) <= 1e-9
 
@@ -422,9 +422,9 @@ def break_ranges(model):
 def test_broken_derived_inputs_are_refused_on_loading(tmp_path, breakage, message):
     model, _ = augmented_model("all kinds p=2")
     breakage(model)
-    save_model(model, tmp_path / "bad.json")
+    write_model(model, tmp_path / "bad.json")
     with pytest.raises(InputError, match=message):
-        load_model(tmp_path / "bad.json")
+        ModelFile.load(tmp_path / "bad.json").to_dict()
 
 
 @pytest.mark.parametrize("shift", [0, 2, -2])

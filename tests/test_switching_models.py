@@ -18,7 +18,6 @@ from groupfit.data import Run, load_run
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
-from groupfit.modelfile import model_to_dict
 from groupfit.models import GroupedRegressor
 from groupfit.runtime import RuleTables
 from groupfit.synthetic import simulate_lumped
@@ -41,7 +40,7 @@ EIGHT_SENSORS = {
 
 def fit_model(run: Run, p: int, n: int = 3) -> dict:
     estimator = GroupedRegressor(p=p, n=n, search="exact").fit(run.temps, run.error)
-    return model_to_dict(estimator, run)
+    return estimator.to_model_file(run).to_dict()
 
 
 @lru_cache(maxsize=None)
@@ -193,7 +192,7 @@ def _augmented(label: str):
         estimator = GroupedRegressor(p=0, n=3, search="exact").fit(run.temps, run.error)
     else:
         estimator = GroupedRegressor(n=3, fixed_breaks=breaks).fit(run.temps, run.error)
-    model = model_to_dict(estimator, run, criterion="T1")
+    model = estimator.to_model_file(run, "T1").to_dict()
     for feature in features:
         model = augment_model(model, run, model_inputs(model, run), feature)
     return model, run, load_run(validation, temps=["T1", "T2", "T3", "T4"], name=names[1])

@@ -26,7 +26,6 @@ from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM,
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
-from groupfit.modelfile import load_model, save_model
 
 
 def add_parser(verbs) -> None:
@@ -164,7 +163,7 @@ def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
 
 
 def run_diagnose(args: argparse.Namespace) -> int:
-    model = load_model(args.model)
+    model = ModelFile.load(args.model).to_dict()
     time = args.time or time_column(model)
     data = [load_measured(path, model, time) for path in args.data]
     validate = [load_measured(path, model, time) for path in args.validate or []]
@@ -210,7 +209,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     written = []
     if result.changed:
         model_path = out_dir / "model_augmented.json"
-        save_model(ModelFile.coerce(result.model), model_path)  # checked: an invalid model is never written
+        ModelFile.coerce(result.model).save(model_path)  # checked: an invalid model is never written
         written.append(model_path)
     from groupfit.plots import plot_diagnosis
 

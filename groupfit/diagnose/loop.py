@@ -88,7 +88,7 @@ from groupfit.heldout.check import overfit_check
 from groupfit.heldout.design import group_index, group_sample_floor, stacked_design
 from groupfit.heldout.folds import Folds, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.modelfile import error_metrics
+from groupfit.metrics import error_metrics
 
 MIN_SCORE = 0.3
 """Least share of the held-out squared error that makes an effect significant."""
