@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 
 from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
+from groupfit.errors import InputError
 from groupfit.export import TARGETS, render, write
 from groupfit.model import ModelFile
+from groupfit.runtime.period import at_period
 
 
 def add_parser(verbs) -> None:
@@ -44,11 +46,23 @@ def add_parser(verbs) -> None:
         metavar="UM",
         help="table: largest interpolation error of the position table (default 0.5 um)",
     )
+    export.add_argument(
+        "--period",
+        type=float,
+        metavar="S",
+        help="the controller's sampling period (s), when it differs from the model's: a model without breaks "
+        "is rescaled to it (its lags keep their time constants); one with breaks is refused",
+    )
     export.set_defaults(handler=run_export)
 
 
 def run_export(args: argparse.Namespace) -> int:
     model = ModelFile.load(args.model)
+    if args.period is not None:
+        try:
+            model = at_period(model, args.period)
+        except InputError as exc:
+            raise InputError(f"{args.model}: {exc}") from None
     out_dir = check_output_dir(args.out)
     targets = TARGETS if args.target == "all" else (args.target,)
     if args.target == "all" and model.position is not None:

@@ -26,6 +26,7 @@ from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
+from groupfit.runtime.period import period_differs
 
 
 def add_parser(verbs) -> None:
@@ -189,6 +190,8 @@ def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, mod
         "run": run.source,
         "n_samples": run.n_samples,
         "sampling_period_s": run.period,
+        "model_period_s": float(model.sampling_period_s),
+        "rescaled": period_differs(model, run.period),
         "samples": samples,
         **metrics,
         "scored_samples": int(scored.size),
@@ -212,8 +215,10 @@ def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, mod
 
 def replay_report(result: dict[str, Any]) -> str:
     """The human-readable summary printed by ``groupfit replay`` (without the files it wrote)."""
+    rescaled = result.get("rescaled", False)
     lines = [
-        f"run      {result['run']}: {result['n_samples']} samples every {result['sampling_period_s']:g} s",
+        f"run      {result['run']}: {result['n_samples']} samples every {result['sampling_period_s']:g} s"
+        + (f" (the model's {result['model_period_s']:g} s rescaled to it)" if rescaled else ""),
         "switches "
         + (
             ", ".join(

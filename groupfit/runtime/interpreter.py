@@ -19,6 +19,7 @@ import numpy as np
 
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
+from groupfit.runtime.period import at_period
 from groupfit.runtime.rule import (
     COUNT_MAX,
     FAULT_HELD,
@@ -98,8 +99,11 @@ class SwitchingRule:
         Double, or IEEE single precision computed operation for operation as
         the C build with ``GF_USE_FLOAT`` and a PLC's REAL compute it.
     period_s : float, optional
-        The live run's sampling period; refused (InputError) when it differs
-        from the model's by more than ``period_tolerance``.
+        The live run's sampling period. Outside the model's
+        ``period_tolerance`` the model is rescaled to it
+        (:func:`groupfit.runtime.period.at_period`: a model without breaks
+        runs at any period, its lags keep their time constants) or refused
+        (InputError) when its counts cannot be rescaled.
     """
 
     def __init__(
@@ -107,10 +111,10 @@ class SwitchingRule:
     ):
         if precision not in ("double", "single"):
             raise ValueError(f"precision must be 'double' or 'single', got {precision!r}")
+        if period_s is not None:
+            model = at_period(model, period_s)
         self.tables = RuleTables.from_model(model)
         self.precision = precision
-        if period_s is not None:
-            check_period(self.tables, period_s)
         real = np.float32 if precision == "single" else float
         t = self.tables
         self._real = real
