@@ -31,6 +31,7 @@ VERBS = {
     "replay": "run the run-time switching rule over a recorded run",
     "export": "write the run-time switching rule as C, Structured Text, JSON or a sheet",
     "screw": "ball-screw temperature-field model: identify, predict, compare",
+    "iso230": "ISO 230-2 evaluation of bidirectional positioning runs",
 }
 """Each verb is a module of :mod:`groupfit.commands` with ``add_parser(verbs)``; the text is its line in --help."""
 
