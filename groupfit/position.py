@@ -243,6 +243,41 @@ def cross_validate_order(
     return {"orders": list(range(1, max_order + 1)), "rms_um": rms, "order": chosen, "folds": "held-out positions"}
 
 
+TABLE_ORDERS = (1, 2, 3, 4, 5)
+"""The orders of the per-order residual table (seed 004 compares orders 1–5 and chooses 4)."""
+
+
+def residual_by_order(model: ModelFile, prun: PositionRun, p0: float, orders=TABLE_ORDERS) -> list[dict]:
+    """Max and mean |residual| (µm) over every row of the position fit of each order (seed 004's table).
+
+    Each order is fitted as :func:`with_position` fits it (per soft group, on
+    the rows of its check runs) and scored on the rows each group serves;
+    orders the positions cannot carry (``order ≥`` number of positions) are
+    left out.
+    """
+    inputs, d = prun.inputs(), prun.position - p0
+    serving = model.serving_groups(prun.run.n_samples)[prun.check]
+    table = []
+    for order in orders:
+        if not 1 <= order < min(len(prun.positions), MAX_POSITION_ORDER + 1):
+            continue
+        residual = np.empty(len(d))
+        for g, (first, last) in enumerate(model.soft_groups):
+            rows = (prun.check >= first - 1) & (prun.check <= last - 1)
+            blocks = fit_blocks(inputs[rows], d[rows], prun.error[rows], order, model.intercept)
+            served = serving == g
+            residual[served] = prun.error[served] - predict_blocks(blocks, inputs[served], d[served], model.intercept)
+        table.append(
+            {
+                "order": int(order),
+                "max_um": float(np.max(np.abs(residual))),
+                "mean_um": float(np.mean(np.abs(residual))),
+                "rms_um": float(np.sqrt(np.mean(residual**2))),
+            }
+        )
+    return table
+
+
 def with_position(
     model: ModelFile,
     prun: PositionRun,
@@ -314,6 +349,7 @@ __all__ = [
     "design",
     "fit_blocks",
     "load_position_run",
+    "residual_by_order",
     "wide_to_long",
     "with_position",
 ]

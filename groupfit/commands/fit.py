@@ -33,6 +33,7 @@ from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.inference.cli import add_interval_options, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
+from groupfit.position_plot import plot_position
 from groupfit.reference import START, with_reference
 
 
@@ -233,8 +234,12 @@ def run_fit(args: argparse.Namespace) -> int:
         f"{estimator.objective} Rg = {estimator.objective_value_:.4g}",
         break_intervals=intervals.intervals,
     )
+    position_figure = None
+    if position_run is not None:
+        position_figure = out_dir / "position.png"
+        plot_position(result.model, position_run, position_figure)
     json_path = write_json(args.json, result.to_json())
-    written = wrote_line([model_path, figure_path, json_path])
+    written = wrote_line([model_path, figure_path, position_figure, json_path])
     print(result.summary() + position_note + "\nwrote   " + written, file=report_stream(args))
     return 0
 
@@ -298,7 +303,7 @@ def load_position_data(config: dict, column: str):
 def position_model(args: argparse.Namespace, model, position_run) -> tuple:
     """The model with its position terms (and dead band), and the report's lines on them."""
     from groupfit.model import DeadBand
-    from groupfit.position import choose_p0, cross_validate_order, with_position
+    from groupfit.position import choose_p0, cross_validate_order, residual_by_order, with_position
 
     p0 = choose_p0(position_run, args.position_ref)
     order = args.position_order if args.position_order is not None else 1
@@ -317,13 +322,21 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
             raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
         dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
     fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
-    training = fitted.training or {}
+    orders = residual_by_order(model, position_run, p0)
+    fitted = fitted.replace(training={**(fitted.training or {}), "position_orders": orders})
+    training = fitted.training
     lines.append(
         f"position {position_run.column}: order {order}, P0 = {p0:g} mm, travel {position_run.travel[0]:g} .. "
         f"{position_run.travel[1]:g} mm, {len(position_run.positions)} positions x {position_run.run.n_samples} "
         f"check runs; residual RMS {training['position_rms_um']:.3g} um, max {training['position_max_um']:.3g} um"
     )
+    lines.append("residual by order (max / mean |e| um): " + order_table_text(orders))
     return fitted, "\n" + "\n".join(lines)
+
+
+def order_table_text(orders: list[dict]) -> str:
+    """The per-order residual table in one line: ``1: 0.53 / 0.19, 2: …``."""
+    return ", ".join(f"{row['order']}: {row['max_um']:.3g} / {row['mean_um']:.3g}" for row in orders)
 
 
 def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tuple[Run, dict]:
