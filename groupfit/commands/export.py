@@ -7,8 +7,11 @@ import argparse
 from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
 from groupfit.errors import InputError
 from groupfit.export import TARGETS, render, write
+from groupfit.export.cec import DEFAULT_MAX_POINTS
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
+
+CEC_KEYS = ("state", "table_index", "input_axis", "output_axis", "step_mm", "max_points")
 
 
 def add_parser(verbs) -> None:
@@ -17,10 +20,11 @@ def add_parser(verbs) -> None:
     export.add_argument(
         "--target",
         required=True,
-        choices=(*TARGETS, "table", "all"),
+        choices=(*TARGETS, "table", "cec", "all"),
         help="c: groupfit_model.h/.c (C99); st: IEC 61131-3 function block; json: tables for any runtime; "
         "sheet: controller sheet (text and JSON); table: the equidistant position table of a position model "
-        "(C, ST and CSV); all: every target (with table for a position model)",
+        "(C, ST and CSV); cec: a SINUMERIK 840D compensation table (NC_CEC.INI) of a position model at one "
+        "thermal state (--state); all: every target (with table for a position model)",
     )
     add_out_option(export, "folder for the exported files (required)", required=True)
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
@@ -44,8 +48,9 @@ def add_parser(verbs) -> None:
         type=float,
         default=0.5,
         metavar="UM",
-        help="table: largest interpolation error of the position table (default 0.5 um)",
+        help="table, cec: largest interpolation error of the position table (default 0.5 um)",
     )
+    add_cec_options(export)
     export.add_argument(
         "--period",
         type=float,
@@ -54,6 +59,28 @@ def add_parser(verbs) -> None:
         "is rescaled to it (its lags keep their time constants); one with breaks is refused",
     )
     export.set_defaults(handler=run_export)
+
+
+def add_cec_options(export) -> None:
+    cec = export.add_argument_group("cec (SINUMERIK compensation table)")
+    cec.add_argument(
+        "--state",
+        metavar="NAME=VALUE,...",
+        help="cec: the thermal state of the table, every model input (rises over the reference when it has one)",
+    )
+    cec.add_argument("--table", dest="table_index", type=int, default=0, metavar="T", help="cec: table index (0)")
+    cec.add_argument("--input-axis", default="AX1", metavar="AXIS", help="cec: the base axis (AX1)")
+    cec.add_argument("--output-axis", metavar="AXIS", help="cec: the compensated axis (default: the base axis)")
+    cec.add_argument(
+        "--step", dest="step_mm", type=float, metavar="MM", help="cec: point spacing (default: from --tolerance-um)"
+    )
+    cec.add_argument(
+        "--max-points",
+        type=int,
+        default=DEFAULT_MAX_POINTS,
+        metavar="N",
+        help=f"cec: most points of a table, MD18342 (default {DEFAULT_MAX_POINTS})",
+    )
 
 
 def run_export(args: argparse.Namespace) -> int:
@@ -78,6 +105,7 @@ def run_export(args: argparse.Namespace) -> int:
                 resolution_um=args.resolution_um,
                 counts_limit=args.counts_limit,
                 tolerance_um=args.tolerance_um,
+                **{key: getattr(args, key) for key in CEC_KEYS},
             )
         )
     written = write(files, out_dir)

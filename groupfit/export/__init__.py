@@ -31,7 +31,10 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
     Options: ``real`` ("REAL" or "LREAL") and ``name`` (block name) for
     ``st``; ``resolution_um`` and ``counts_limit`` for ``sheet``; ``tolerance_um``
     for ``table`` (the equidistant position table of a position model,
-    :func:`groupfit.export.table.render_table`).
+    :func:`groupfit.export.table.render_table`); ``state``, ``table_index``,
+    ``input_axis``, ``output_axis``, ``step_mm``, ``tolerance_um`` and
+    ``max_points`` for ``cec`` (a SINUMERIK compensation table,
+    :func:`groupfit.export.cec.render_cec`).
     """
     tables = RuleTables.from_model(ModelFile.coerce(model).checked())
     if target == "c":
@@ -63,6 +66,10 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
             name=options.get("name", "FB_GroupfitComp"),
             real=options.get("real", "LREAL"),
         )
+    if target == "cec":
+        from groupfit.export.cec import cec_options, render_cec
+
+        return render_cec(ModelFile.coerce(model).checked(), **cec_options(options))
     raise InputError(f"export target {target!r}: choose one of {', '.join(TARGETS)}")
 
 
