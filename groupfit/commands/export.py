@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 
 from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
+from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
 from groupfit.export import TARGETS, render, write
 from groupfit.export.cec import DEFAULT_MAX_POINTS
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
+from groupfit.screw.modelfile import is_screw_file
 
 CEC_KEYS = ("state", "table_index", "input_axis", "output_axis", "step_mm", "max_points")
 
@@ -51,6 +53,7 @@ def add_parser(verbs) -> None:
         help="table, cec: largest interpolation error of the position table (default 0.5 um)",
     )
     add_cec_options(export)
+    export.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
     export.add_argument(
         "--period",
         type=float,
@@ -84,6 +87,8 @@ def add_cec_options(export) -> None:
 
 
 def run_export(args: argparse.Namespace) -> int:
+    if is_screw_file(args.model):
+        return run_screw_export(args)
     model = ModelFile.load(args.model)
     if args.period is not None:
         try:

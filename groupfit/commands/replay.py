@@ -20,6 +20,7 @@ from groupfit.commands.common import (
     write_json,
     wrote_line,
 )
+from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.io import save_figure
@@ -27,6 +28,7 @@ from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
+from groupfit.screw.modelfile import is_screw_file
 
 
 def add_parser(verbs) -> None:
@@ -63,12 +65,15 @@ def add_parser(verbs) -> None:
         metavar="N",
         help="largest magnitude of those counts (default 30000)",
     )
+    replay.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
     add_json_option(replay, "the per-sample result")
     add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
 
 
 def run_replay(args: argparse.Namespace) -> int:
+    if is_screw_file(args.model):
+        return run_screw_replay(args)
     model = ModelFile.load(args.model)
     check_json_target(args)
     out_dir = check_output_dir(args.out) if args.out else None

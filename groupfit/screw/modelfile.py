@@ -68,6 +68,15 @@ def save_model(model_dict: dict[str, Any], path: str | Path) -> None:
     atomic_write_text(path, to_json(model_dict))
 
 
+def is_screw_file(path: str | Path) -> bool:
+    """Whether ``path`` is a readable ball-screw model file (anything else: False, for its own loader to judge)."""
+    try:
+        data = read_json_file(path)
+    except InputError:
+        return False
+    return isinstance(data, dict) and data.get("kind") == KIND
+
+
 def load_model(path: str | Path) -> BallScrewModel:
     """Read a ball-screw model file and rebuild the fitted estimator."""
     path = Path(path)

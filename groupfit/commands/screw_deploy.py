@@ -1,0 +1,119 @@
+"""``replay`` and ``export`` of a ball-screw model file (groupfit.screw.deploy, groupfit.screw.export)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from groupfit.commands.common import check_json_target, check_output_dir, report_stream, write_json, wrote_line
+from groupfit.errors import InputError
+from groupfit.export import write
+from groupfit.metrics import error_metrics
+from groupfit.screw.deploy import ScrewLaw, choose_source
+from groupfit.screw.export import SCREW_TARGETS, check_screw_target, render_screw
+from groupfit.screw.modelfile import load_model
+from groupfit.screw.plots import plot_error
+from groupfit.screw.runs import PROBE_COLUMN, load_screw_run
+
+
+def screw_law(args: argparse.Namespace) -> ScrewLaw:
+    model = load_model(args.model)
+    return ScrewLaw.from_model(model, choose_source(model, getattr(args, "source", None), str(args.model)))
+
+
+def run_screw_replay(args: argparse.Namespace) -> int:
+    """The law sample by sample on a run: the time since its first sample, the probe position, τ0 (line law)."""
+    if args.precision != "double":
+        raise InputError(f"--precision {args.precision}: the ball-screw law is deployed in double precision only")
+    check_json_target(args)
+    out_dir = check_output_dir(args.out) if args.out else None
+    law = screw_law(args)
+    run = load_screw_run(args.data)
+    if run.probe_x is None:
+        raise InputError(
+            f"{run.source}: column '{PROBE_COLUMN}' not found; the ball-screw law gives the error at the probe "
+            "position (m from the source) of every sample"
+        )
+    tau0 = None
+    if law.law == "line":
+        model = load_model(args.model)
+        tau0 = model.reference_rise(run.rises, run.positions, run.source)
+    codes, prediction = law.replay(run.time, run.probe_x, tau0)
+    result = screw_replay_result(law, run, codes, prediction, str(args.model))
+    written = []
+    if out_dir is not None and run.error is not None:
+        figure = out_dir / "replay.png"
+        plot_error(run.time, run.error, {"run-time law": prediction}, figure, title=f"{run.name}: {law.source}")
+        written.append(figure)
+    written.append(write_json(args.json, result))
+    lines = [screw_replay_report(result)] + (["wrote    " + wrote_line(written)] if any(written) else [])
+    print("\n".join(lines), file=report_stream(args))
+    return 0
+
+
+def screw_replay_result(law: ScrewLaw, run, codes, prediction, model_path: str) -> dict[str, Any]:
+    residual = None if run.error is None else run.error - prediction
+    scored = np.empty(0) if residual is None else residual[np.isfinite(residual)]
+    metrics = {key: error_metrics(scored)[key] for key in ("rms_um", "max_um", "R_um")} if scored.size else {}
+    samples = []
+    for k in range(len(run.time)):
+        sample = {
+            "i": k + 1,
+            "time_s": float(run.time[k]),
+            "x_m": float(run.probe_x[k]),
+            "code": int(codes[k]),
+            "prediction_um": None if codes[k] else float(prediction[k]),
+        }
+        if residual is not None:
+            sample["residual_um"] = None if codes[k] else float(residual[k])
+        samples.append(sample)
+    return {
+        "model": model_path,
+        "kind": "ballscrew",
+        "run": run.source,
+        "source": law.source,
+        "alpha_law": law.law,
+        "n_samples": len(run.time),
+        "fault_samples": int(np.sum(codes != 0)),
+        "samples": samples,
+        "rms_um": metrics.get("rms_um"),
+        "max_um": metrics.get("max_um"),
+        "R_um": metrics.get("R_um"),
+        "scored_samples": int(scored.size),
+    }
+
+
+def screw_replay_report(result: dict[str, Any]) -> str:
+    lines = [
+        f"run      {result['run']}: {result['n_samples']} samples, ball-screw law of source {result['source']} "
+        f"(alpha {result['alpha_law']}), {result['fault_samples']} sample(s) with unusable readings"
+    ]
+    if result["rms_um"] is not None:
+        lines.append(
+            f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm "
+            f"over {result['scored_samples']} sample(s)"
+        )
+    else:
+        lines.append("residual none (the run has no error column)")
+    return "\n".join(lines)
+
+
+def run_screw_export(args: argparse.Namespace) -> int:
+    """``export --target c|json|all`` of one source's law; other targets refused with the reason."""
+    out_dir = check_output_dir(args.out)
+    targets = SCREW_TARGETS if args.target == "all" else (args.target,)
+    for target in targets:
+        check_screw_target(target)
+    law = screw_law(args)
+    files: dict[str, str] = {}
+    for target in targets:
+        files.update(render_screw(law, target))
+    written = write(files, Path(out_dir))
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0
+
+
+__all__ = ["run_screw_export", "run_screw_replay", "screw_law"]
