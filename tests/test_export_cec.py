@@ -77,7 +77,7 @@ def test_the_table_interpolates_the_model_within_its_tolerance(tmp_path, model_f
 
 def test_a_given_step_table_number_and_axes_are_written(tmp_path, model_file):
     path, model, prun = model_file
-    args = ["--state", "T1=25,T2=23", "--step", "12.5", "--table", "3", "--input-axis", "X1", "--output-axis", "Z1"]
+    args = ["--state", "T1=25,T2=23", "--step", "12.5", "--table", "3", "--base-axis", "X1", "--comp-axis", "Z1"]
     assert export(path, tmp_path, *args) == 0
     table = parse_cec((tmp_path / "NC_CEC.INI").read_text())[3]
     assert table["AN_CEC_STEP"] == 12.5 and len(table["array"]) == 81
@@ -93,7 +93,7 @@ def test_a_given_step_table_number_and_axes_are_written(tmp_path, model_file):
         (["--state", "T1=25,T2=23", "--tolerance-um", "0.001", "--max-points", "30"], "no table of at most 30"),
         ([], "give it with --state T1=VALUE,T2=VALUE"),
         (["--state", "T1=25"], "no value for the model input(s) T2"),
-        (["--state", "T1=25,T2=23", "--input-axis", "x 1"], "--input-axis 'x 1'"),
+        (["--state", "T1=25,T2=23", "--base-axis", "x 1"], "--base-axis 'x 1'"),
     ],
 )
 def test_bad_requests_are_refused_with_one_line_and_nothing_written(tmp_path, model_file, capsys, options, message):

@@ -72,8 +72,10 @@ def add_cec_options(export) -> None:
         help="cec: the thermal state of the table, every model input (rises over the reference when it has one)",
     )
     cec.add_argument("--table", dest="table_index", type=int, default=0, metavar="T", help="cec: table index (0)")
-    cec.add_argument("--input-axis", default="AX1", metavar="AXIS", help="cec: the base axis (AX1)")
-    cec.add_argument("--output-axis", metavar="AXIS", help="cec: the compensated axis (default: the base axis)")
+    cec.add_argument("--base-axis", dest="input_axis", default="AX1", metavar="AXIS", help="cec: the base axis (AX1)")
+    cec.add_argument(
+        "--comp-axis", dest="output_axis", metavar="AXIS", help="cec: the compensated axis (default: the base axis)"
+    )
     cec.add_argument(
         "--step", dest="step_mm", type=float, metavar="MM", help="cec: point spacing (default: from --tolerance-um)"
     )

@@ -183,7 +183,7 @@ def render_cec(
     if not (math.isfinite(tolerance_um) and tolerance_um > 0):
         raise InputError(f"--tolerance-um {tolerance_um!r}: a positive interpolation error in um")
     output_axis = output_axis or input_axis
-    for option, name in (("--input-axis", input_axis), ("--output-axis", output_axis)):
+    for option, name in (("--base-axis", input_axis), ("--comp-axis", output_axis)):
         if not AXIS_NAME.match(name):
             raise InputError(f"{option} {name!r}: a machine or channel axis name such as AX1, X1 or Z")
     inputs = parse_state(state, model.temps)
