@@ -145,6 +145,16 @@ def wrote_line(paths) -> str:
     return ", ".join(str(p) for p in paths if p is not None)
 
 
+def residual_line(result: dict[str, Any]) -> str:
+    """The replay summary's residual line from ``rms_um``, ``max_um`` and ``scored_samples`` (or none)."""
+    if result["rms_um"] is None:
+        return "residual none (the run has no error column)"
+    return (
+        f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm "
+        f"over {result['scored_samples']} sample(s)"
+    )
+
+
 def report_stream(args: argparse.Namespace):
     """Where the human-readable report goes: stderr when JSON goes to stdout."""
     return sys.stderr if getattr(args, "json", None) == "-" else sys.stdout

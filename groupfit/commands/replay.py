@@ -17,6 +17,7 @@ from groupfit.commands.common import (
     check_json_target,
     check_output_dir,
     report_stream,
+    residual_line,
     write_json,
     wrote_line,
 )
@@ -242,13 +243,7 @@ def replay_report(result: dict[str, Any]) -> str:
             else ""
         ),
     ]
-    if result["rms_um"] is not None:
-        lines.append(
-            f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm "
-            f"over {result['scored_samples']} sample(s)"
-        )
-    else:
-        lines.append("residual none (the run has no error column)")
+    lines.append(residual_line(result))
     return "\n".join(lines)
 
 

@@ -8,7 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_json_target, check_output_dir, report_stream, write_json, wrote_line
+from groupfit.commands.common import (
+    check_json_target,
+    check_output_dir,
+    report_stream,
+    residual_line,
+    write_json,
+    wrote_line,
+)
 from groupfit.errors import InputError
 from groupfit.export import write
 from groupfit.metrics import error_metrics
@@ -91,13 +98,7 @@ def screw_replay_report(result: dict[str, Any]) -> str:
         f"run      {result['run']}: {result['n_samples']} samples, ball-screw law of source {result['source']} "
         f"(alpha {result['alpha_law']}), {result['fault_samples']} sample(s) with unusable readings"
     ]
-    if result["rms_um"] is not None:
-        lines.append(
-            f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm "
-            f"over {result['scored_samples']} sample(s)"
-        )
-    else:
-        lines.append("residual none (the run has no error column)")
+    lines.append(residual_line(result))
     return "\n".join(lines)
 
 
