@@ -26,19 +26,11 @@ from typing import Any
 import numpy as np
 
 from groupfit.errors import InputError
-from groupfit.screw.model import _GAUSS, _PANELS, ALPHA_FLOOR, BallScrewModel
+from groupfit.screw.model import BallScrewModel
+from groupfit.screw.physics import ALPHA_FLOOR, quadrature
 
 FAULT_READING = -1
 """What the law returns for a sample whose readings it cannot use."""
-
-
-def quadrature() -> tuple[np.ndarray, np.ndarray]:
-    """The model's composite Gauss–Legendre nodes ``u`` and weights ``w`` on [0, 1] (as :func:`thermal_error`)."""
-    nodes, weights = _GAUSS
-    edges = np.linspace(0.0, 1.0, _PANELS + 1)
-    u = ((edges[:-1, None] + edges[1:, None]) / 2 + (nodes[None, :] / 2) * np.diff(edges)[:, None]).ravel()
-    w = ((weights[None, :] / 2) * np.diff(edges)[:, None]).ravel()
-    return u, w
 
 
 def choose_source(model: BallScrewModel, source: str | None, label: str) -> str:
@@ -171,4 +163,4 @@ class ScrewLaw:
         }
 
 
-__all__ = ["FAULT_READING", "ScrewLaw", "choose_source", "quadrature"]
+__all__ = ["FAULT_READING", "ScrewLaw", "choose_source"]

@@ -15,7 +15,7 @@ import json
 from groupfit.errors import InputError
 from groupfit.export.literals import double_literal
 from groupfit.screw.deploy import FAULT_READING, ScrewLaw
-from groupfit.screw.model import ALPHA_FLOOR
+from groupfit.screw.physics import ALPHA_FLOOR
 
 SCREW_TARGETS = ("c", "json")
 REFUSED = {

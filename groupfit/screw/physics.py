@@ -65,6 +65,15 @@ def temperature_rise(x, t, c1: float, c2: float, lam: float, alpha, x0: float = 
     return steady_profile(x, c1, c2, lam) * transient_factor(x, t, alpha, x0)
 
 
+def quadrature() -> tuple[np.ndarray, np.ndarray]:
+    """The composite Gauss–Legendre nodes ``u`` and weights ``w`` on [0, 1] of :func:`thermal_error`."""
+    nodes, weights = _GAUSS
+    edges = np.linspace(0.0, 1.0, _PANELS + 1)
+    u = ((edges[:-1, None] + edges[1:, None]) / 2 + (nodes[None, :] / 2) * np.diff(edges)[:, None]).ravel()
+    w = ((weights[None, :] / 2) * np.diff(edges)[:, None]).ravel()
+    return u, w
+
+
 def thermal_error(x, t, c1: float, c2: float, lam: float, alpha, expansion: float, x0: float = 0.0) -> np.ndarray:
     """E(x, t) = ∫₀ˣ a_m·Γ(ξ, t) dξ in µm (eq. 9), one value per sample.
 
@@ -72,10 +81,7 @@ def thermal_error(x, t, c1: float, c2: float, lam: float, alpha, expansion: floa
     shape; the integral is composite Gauss–Legendre (16 panels of 16 points).
     """
     x, t, alpha = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, t, alpha)))
-    nodes, weights = _GAUSS
-    edges = np.linspace(0.0, 1.0, _PANELS + 1)
-    u = ((edges[:-1, None] + edges[1:, None]) / 2 + (nodes[None, :] / 2) * np.diff(edges)[:, None]).ravel()
-    w = ((weights[None, :] / 2) * np.diff(edges)[:, None]).ravel()
+    u, w = quadrature()
     flat_x, flat_t, flat_a = x.ravel(), t.ravel(), alpha.ravel()
     xi = flat_x[:, None] * u[None, :]
     gamma = temperature_rise(xi, flat_t[:, None], c1, c2, lam, flat_a[:, None], x0)
