@@ -81,6 +81,28 @@ def scores(residuals: np.ndarray, position: np.ndarray) -> dict:
     return out
 
 
+def controller_rate(folder: Path, field: pd.DataFrame, label: str) -> str:
+    """The model fitted on the 2 min check runs replayed on the simulation's own 10 s stream.
+
+    The axis visits the measured positions in turn, one per sample; the error
+    is the exact displacement there (no probe noise).
+    """
+    temps = [c for c in field.columns if c.startswith("T") and c.endswith("mm")]
+    stream = field[["time_s", *temps]].copy()
+    mm = np.array([int(round(x * 1000)) for x in POSITIONS_M])
+    at = mm[np.arange(len(stream)) % len(mm)]
+    stream["P_mm"] = at.astype(float)
+    stream["error_um"] = [field[f"u{p}mm_um"].iloc[k] for k, p in enumerate(at)]
+    stream.to_csv(folder / "stream_10s.csv", index=False)
+    argv = [sys.executable, "-m", "groupfit", "replay", str(folder / "model.json"), "--data"]
+    report = subprocess.run([*argv, str(folder / "stream_10s.csv"), "--json", "-"], check=True, capture_output=True)
+    result = json.loads(report.stdout)
+    return (
+        f"{label}: replayed at {result['sampling_period_s']:g} s (fitted at {result['model_period_s']:g} s) on "
+        f"{result['n_samples']} samples: RMS {result['rms_um']:.3f} um, max {result['max_um']:.3f} um"
+    )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--every", type=int, default=12)
@@ -92,7 +114,8 @@ def main() -> int:
     from groupfit.model import ModelFile
     from groupfit.position import fit_blocks, load_position_run
 
-    wide = wide_table(simulate(out), args.every)
+    field = simulate(out)
+    wide = wide_table(field, args.every)
     wide.to_csv(out / "screw_nut_wide.csv", index=False)
     held = wide_table(simulate(out, VALIDATION, "screw_nut_validation"), args.every, seed=14)
     held.to_csv(out / "screw_nut_validation_wide.csv", index=False)
@@ -109,6 +132,7 @@ def main() -> int:
     for label, options in [("K0 + tanb", ("--position-order", "1")), ("auto", ("--position-order", "auto"))]:
         result = fit(out / "screw_nut_wide.csv", out / label.replace(" ", "_"), *options)
         model = ModelFile.from_dict(result["model"])
+        print(controller_rate(out / label.replace(" ", "_"), field, label))
         name = f"{label} (order {model.position.order})"
         for data, r in runs.items():
             prediction = model.predict_position(inputs[data], r.position, np.zeros(len(r.position), dtype=int))
