@@ -12,6 +12,7 @@ import os
 import sys
 from typing import Sequence
 
+from groupfit import __version__
 from groupfit.errors import InputError
 
 
@@ -77,6 +78,4 @@ def _chosen_verb(argv: Sequence[str]) -> str | None:
 
 
 def _version() -> str:
-    from groupfit import __version__
-
     return __version__

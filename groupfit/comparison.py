@@ -23,6 +23,9 @@ import pandas as pd
 
 from groupfit.data import Run
 from groupfit.errors import InputError
+from groupfit.inference import break_intervals
+from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
+from groupfit.inference.prediction import band_for
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, grouped_prediction
 from groupfit.models.ar1 import AR1Model, early_rise
@@ -272,10 +275,6 @@ def compare_models(
         if progress is not None:
             progress("grouped", p / pmax)
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
-    from groupfit.inference import break_intervals
-    from groupfit.inference.cli import AUTO_BUDGET_S
-    from groupfit.inference.prediction import band_for
-
     intervals = {
         p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)
         for p, model in grouped.items()
@@ -385,8 +384,6 @@ def comparison_summary(result: ComparisonResult) -> str:
         cis = [f" {report.text_for(b)}" if report is not None and report.intervals else "" for b in r["breaks"]]
         pairs = ", ".join(f"{b}{ci} ({d})" for b, ci, d in zip(r["breaks"], cis, r["break_distance"]))
         lines.append(f"  p = {r['p']}: {pairs}")
-    from groupfit.inference.cli import interval_notes
-
     lines += interval_notes(result.break_intervals)
     stability = ", ".join(f"p {s['from_p']}→{s['to_p']}: {s['max_shift']}" for s in result.break_stability)
     lines.append(f"break stability (largest move of an existing break when p grows, samples): {stability or '-'}")

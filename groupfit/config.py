@@ -55,7 +55,8 @@ import math
 from pathlib import Path
 from typing import Any, Callable
 
-from groupfit.search.base import GA_DEFAULTS
+from groupfit.grouping import DEFAULT_SOFT_OFFSET, DEFAULT_SPACING
+from groupfit.search.base import DEFAULT_SEED, GA_DEFAULTS
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 
@@ -142,10 +143,18 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
 
 DEFAULTS: dict[str, dict[str, Any]] = {
     "data": {"time": "time_s", "error": "error_um", "validate": []},
-    "model": {"p": 3, "pmax": 6, "p_rule": "bic", "n": 3, "c": 3.0, "objective": "sae", "intercept": True},
+    "model": {
+        "p": 3,
+        "pmax": 6,
+        "p_rule": "bic",
+        "n": DEFAULT_SOFT_OFFSET,
+        "c": DEFAULT_SPACING,
+        "objective": "sae",
+        "intercept": True,
+    },
     "search": {
         "method": "ga",
-        "seed": 0,
+        "seed": DEFAULT_SEED,
         "population_size": GA_DEFAULTS.population_size,
         "max_generations": GA_DEFAULTS.max_generations,
         "stall_generations": GA_DEFAULTS.stall_generations,

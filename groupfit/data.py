@@ -9,6 +9,7 @@ a message that names the file, the column and the row.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
@@ -368,8 +369,6 @@ def load_run(
 
 def measured_rows(run: Run) -> Run:
     """The run restricted to the rows with a measured error (the run itself when every row has one)."""
-    import dataclasses
-
     rows = np.isfinite(run.error)
     if rows.all():
         return run

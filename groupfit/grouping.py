@@ -19,6 +19,11 @@ import numpy as np
 
 from groupfit.errors import InputError
 
+DEFAULT_SOFT_OFFSET = 3
+"""n: samples by which a soft group reaches back into the hard group before it (the paper's n)."""
+DEFAULT_SPACING = 3.0
+"""c: every hard group holds more than c·M samples, M the coefficients per group."""
+
 
 def min_group_size(c: float, n_coef: int, n: int = 0) -> int:
     """Smallest allowed hard-group size: more than ``c·M`` samples, and whatever c, more than ``M``.

@@ -33,6 +33,9 @@ from typing import Sequence
 
 import numpy as np
 
+from groupfit.grouping import served_ranges, soft_groups
+from groupfit.models.ridge import penalty_diagonal, ridge_solve
+
 OBJECTIVES = ("sae", "sse")
 RANK_RTOL = 1e-12
 """Relative pivot tolerance on the standardised Gram matrix (≈ 1e-6 on singular values)."""
@@ -270,8 +273,6 @@ def grouped_residuals(
     residuals : ndarray, shape (N,)
         ``y − ŷ`` where each sample is predicted by the group that serves it.
     """
-    from groupfit.grouping import served_ranges, soft_groups
-
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     n_samples = len(y)
@@ -282,8 +283,6 @@ def grouped_residuals(
     residuals = np.empty(n_samples)
     for (first, last), (s_first, s_last) in zip(soft_groups(breaks, n_samples, n), served_ranges(breaks, n_samples, n)):
         if ridge_alpha > 0:
-            from groupfit.models.ridge import penalty_diagonal, ridge_solve
-
             unit_spreads = np.ones(X.shape[1])  # the standardised inputs
             penalty = penalty_diagonal(unit_spreads, ridge_alpha, last - first + 1, fit_intercept)
             coef = ridge_solve(A[first - 1 : last], t[first - 1 : last], penalty)

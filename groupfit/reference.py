@@ -21,10 +21,12 @@ reading of every sensor for ``start`` (:mod:`groupfit.runtime`).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Sequence
 
 import numpy as np
 
+from groupfit.data import numeric_column
 from groupfit.errors import InputError
 
 START = "start"
@@ -103,8 +105,6 @@ def with_reference(run, reference: str | None):
     Refuses a reference that is one of the inputs, a missing column, and a
     reference column with a non-finite value where the inputs are finite.
     """
-    import dataclasses
-
     reference = parse_reference(reference)
     if reference is None or run.reference == reference:
         return run
@@ -119,8 +119,6 @@ def with_reference(run, reference: str | None):
         if reference not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))
             raise InputError(f"{run.source}: reference column '{reference}' not found; the columns are: {available}")
-        from groupfit.data import numeric_column
-
         numeric_column(run.frame, reference, run.source, allow_nonfinite=bool(np.isnan(run.temps).any()))
     temps = referenced(run.temps, reference, run.frame, run.source)
     return dataclasses.replace(run, temps=temps, reference=reference)

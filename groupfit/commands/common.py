@@ -24,6 +24,9 @@ from groupfit.data import (
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text, check_output_file, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
+from groupfit.model_checks import MAX_RIDGE_ALPHA
+from groupfit.reference import default_reference
+from groupfit.search.exact import estimate_exact_cost, format_seconds
 
 
 def add_data_options(parser: argparse.ArgumentParser) -> None:
@@ -176,8 +179,6 @@ def add_budget_option(parser: argparse.ArgumentParser) -> None:
 
 def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objective: str, pmax: int, what: str) -> None:
     """Refuse, before it starts, an exact search estimated to exceed the budget; one line saying what to do."""
-    from groupfit.search.exact import estimate_exact_cost, format_seconds
-
     if getattr(args, "no_budget", False) or pmax == 0:  # p = 0: one least-squares fit, no search
         return
     cost = estimate_exact_cost(run.n_samples, n_coef, objective, pmax)
@@ -269,8 +270,6 @@ def add_reference_option(parser: argparse.ArgumentParser) -> None:
 
 def configured_reference(args: argparse.Namespace, config: dict, run: Run) -> str | None:
     """The reference of ``--reference``, else ``[model] reference``, else T_amb when ``run`` has it."""
-    from groupfit.reference import default_reference
-
     value = getattr(args, "reference", None)
     if value is None:
         value = config["model"].get("reference")
@@ -285,8 +284,6 @@ def ridge_value(text: str) -> float | str:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number >= 0 or 'auto')") from None
-    from groupfit.model_checks import MAX_RIDGE_ALPHA
-
     if not (0 <= value <= MAX_RIDGE_ALPHA):
         raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number in [0, {MAX_RIDGE_ALPHA:g}] or 'auto')")
     return value

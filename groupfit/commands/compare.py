@@ -26,6 +26,7 @@ from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
 from groupfit.errors import InputError
 from groupfit.inference.cli import add_interval_options, interval_settings
+from groupfit.plots import plot_r_against_p, plot_run_comparison
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
 
@@ -79,8 +80,6 @@ def run_compare(args: argparse.Namespace) -> int:
         result = compare_models(modelling, validation, settings, live_rule=replay_groups, progress=progress)
     finally:
         progress.close()
-
-    from groupfit.plots import plot_r_against_p, plot_run_comparison
 
     written = []
     for run in [modelling, *validation]:

@@ -23,9 +23,12 @@ from groupfit.data import Run, load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
+from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
+from groupfit.plots import plot_diagnosis
+from groupfit.runtime import replay_groups
 
 
 def add_parser(verbs) -> None:
@@ -169,21 +172,15 @@ def run_diagnose(args: argparse.Namespace) -> int:
     validate = [load_measured(path, model, time) for path in args.validate or []]
     out_dir = check_output_dir(args.out)
     check_json_target(args)
-    from groupfit.runtime import replay_groups
-
     start = model
     selection = None
     joint = args.select == "joint"
     if joint and args.ridge is not None:
         raise InputError("--select joint and --ridge: the joint selection fits by least squares; give one of them")
     if args.select and not joint:
-        from groupfit.diagnose.select import select_base_model
-
         start, selection = select_base_model(model, data, args.select)
     ridge = None
     if args.ridge is not None:
-        from groupfit.diagnose.select import ridge_base_model
-
         start, ridge = ridge_base_model(start, data, args.ridge)
     result = diagnose(
         start,
@@ -211,8 +208,6 @@ def run_diagnose(args: argparse.Namespace) -> int:
         model_path = out_dir / "model_augmented.json"
         ModelFile.coerce(result.model).save(model_path)  # checked: an invalid model is never written
         written.append(model_path)
-    from groupfit.plots import plot_diagnosis
-
     figure = out_dir / "diagnose.png"
     runs = {"data": data, **({"validate": validate} if validate else {})}
     plot_diagnosis(result, runs, figure)

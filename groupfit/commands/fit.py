@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 import numpy as np
 
@@ -26,13 +27,17 @@ from groupfit.commands.common import (
     wrote_line,
 )
 from groupfit.config import default_config_path, override
-from groupfit.data import Run, join_runs, measured_rows
+from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C, Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
+from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.inference.cli import add_interval_options, intervals_from_args
+from groupfit.model import DeadBand
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
+from groupfit.plots import plot_fit
+from groupfit.position import choose_p0, cross_validate_order, load_position_run, residual_by_order, with_position
 from groupfit.position_plot import plot_position
 from groupfit.reference import START, with_reference
 
@@ -146,8 +151,6 @@ def run_fit(args: argparse.Namespace) -> int:
     check_measured(run, config["model"]["p"])
     input_selection = None
     if position_run is not None:
-        from dataclasses import replace
-
         position_run = replace(position_run, run=run)
         if args.select:
             raise InputError("--select is not available with --position; name the inputs with --temps")
@@ -182,8 +185,6 @@ def run_fit(args: argparse.Namespace) -> int:
     not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
     if args.ridge is not None:
-        from groupfit.heldout.check import ridge_setting
-
         settings = config["model"]
         ridge = ridge_setting(
             args.ridge, settings["p"], run.temps, run.error, frames, not_conditions, settings["intercept"]
@@ -209,16 +210,12 @@ def run_fit(args: argparse.Namespace) -> int:
         )
     held_out = None
     if position_run is None:
-        from groupfit.heldout.check import held_out_check
-
         alpha = ridge["alpha"] if ridge is not None else 0.0
         intercept = config["model"]["intercept"]
         grouped = model.to_dict() if estimator.p > 0 else None
         held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)
     result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
     run = fit_run
-
-    from groupfit.plots import plot_fit
 
     model_path = out_dir / "model.json"
     figure_path = out_dir / "fit.png"
@@ -280,9 +277,6 @@ def check_position_options(args: argparse.Namespace) -> None:
 
 def load_position_data(config: dict, column: str):
     """The run of ``--position COLUMN`` (long or wide table; :func:`groupfit.position.load_position_run`)."""
-    from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C
-    from groupfit.position import load_position_run
-
     data = config["data"]
     path = data.get("path")
     if not path:
@@ -302,9 +296,6 @@ def load_position_data(config: dict, column: str):
 
 def position_model(args: argparse.Namespace, model, position_run) -> tuple:
     """The model with its position terms (and dead band), and the report's lines on them."""
-    from groupfit.model import DeadBand
-    from groupfit.position import choose_p0, cross_validate_order, residual_by_order, with_position
-
     p0 = choose_p0(position_run, args.position_ref)
     order = args.position_order if args.position_order is not None else 1
     lines = []
@@ -341,10 +332,6 @@ def order_table_text(orders: list[dict]) -> str:
 
 def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tuple[Run, dict]:
     """The run restricted to the inputs ``method`` chooses, scored on held-out conditions or runs."""
-    from dataclasses import replace
-
-    from groupfit.heldout.check import select_inputs
-
     if k is not None and not 1 <= k <= len(run.temp_names):
         raise InputError(f"--sensors {k}: choose 1 to {len(run.temp_names)} of the {len(run.temp_names)} inputs")
     exclude = {run.time_name, run.error_name, *run.temp_names}

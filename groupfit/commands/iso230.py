@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from groupfit.commands.common import (
     add_json_option,
@@ -84,8 +85,6 @@ def iso230_report(data: dict) -> str:
 
 def plot_iso230(result: Iso230Result, path: Path, *, title: str = "") -> None:
     """The mean deviations ↑ and ↓ with their ±2s bands, the mean bidirectional deviation and every run."""
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(8, 4.8), layout="constrained")
     ax = fig.subplots()
     p = result.targets_mm

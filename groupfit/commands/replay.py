@@ -24,6 +24,7 @@ from groupfit.commands.common import (
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
+from groupfit.export.sheet import IntegerForm
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
@@ -80,8 +81,6 @@ def run_replay(args: argparse.Namespace) -> int:
     out_dir = check_output_dir(args.out) if args.out else None
     counts = None
     if args.resolution_um is not None:
-        from groupfit.export.sheet import IntegerForm
-
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"

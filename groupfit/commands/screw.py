@@ -21,6 +21,11 @@ import numpy as np
 
 from groupfit.commands.common import check_output_dir, report_stream, write_json
 from groupfit.errors import InputError
+from groupfit.screw import BallScrewModel
+from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
+from groupfit.screw.modelfile import load_model, model_to_dict, save_model
+from groupfit.screw.plots import plot_error, plot_rises
+from groupfit.screw.runs import load_screw_run
 
 DEFAULT_OUT = "groupfit-out"
 
@@ -90,8 +95,6 @@ def _model_options(parser) -> None:
 
 
 def build_model(args: argparse.Namespace):
-    from groupfit.screw import BallScrewModel
-
     if args.offset == "fit":
         offset: str | float = "fit"
     else:
@@ -127,8 +130,6 @@ def identify_runs(model, runs):
 
 
 def _load_runs(paths, **options):
-    from groupfit.screw.runs import load_screw_run
-
     runs = [load_screw_run(p, **options) for p in paths]
     for run in runs:
         refuse_moving_source(run)
@@ -150,8 +151,6 @@ def refuse_moving_source(run) -> None:
 
 # ----------------------------------------------------------------- identify
 def run_identify(args: argparse.Namespace) -> int:
-    from groupfit.screw.modelfile import model_to_dict, save_model
-
     model = build_model(args)
     runs = _load_runs(args.runs)
     identify_runs(model, runs)
@@ -204,10 +203,6 @@ def _alpha_rows(model) -> str:
 
 # ------------------------------------------------------------------ predict
 def run_predict(args: argparse.Namespace) -> int:
-    from groupfit.screw.compare import paper_bounds, score_screw
-    from groupfit.screw.modelfile import load_model
-    from groupfit.screw.runs import load_screw_run
-
     model = load_model(args.model)
     run = load_screw_run(args.data, probe_x=args.probe_x)
     refuse_moving_source(run)
@@ -291,9 +286,6 @@ def _score_line(score) -> str:
 
 
 def _figures(out_dir: Path, run, rises, errors: dict, title: str) -> list[Path]:
-    from groupfit.screw.compare import paper_columns
-    from groupfit.screw.plots import plot_error, plot_rises
-
     cols = paper_columns(run)[:4]
     rise_path = out_dir / f"screw_rises_{run.name}.png"
     plot_rises(run.time, run.positions[cols], run.rises[:, cols], rises[:, cols], rise_path, title)
@@ -307,9 +299,6 @@ def _figures(out_dir: Path, run, rises, errors: dict, title: str) -> list[Path]:
 
 # ------------------------------------------------------------------ compare
 def run_compare(args: argparse.Namespace) -> int:
-    from groupfit.screw.compare import compare_screw
-    from groupfit.screw.modelfile import model_to_dict, save_model
-
     model = build_model(args)
     runs = _load_runs([args.run, *args.validate], require_error=True)
     for run in runs:

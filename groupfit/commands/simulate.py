@@ -5,9 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from groupfit import fe
 from groupfit.commands.common import add_out_option, add_quiet_option
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text, check_output_file
+from groupfit.plots import plot_dataset
+from groupfit.screw.plots import plot_screw_dataset
+from groupfit.synthetic import simulate_lumped
 from groupfit.tomlconfig import read_toml
 
 
@@ -18,11 +22,7 @@ def read_scenario(path: str | Path) -> dict:
 def simulate_scenario(config: dict, progress: bool):
     kind = config.get("kind", "headstock")
     if kind == "lumped":
-        from groupfit.synthetic import simulate_lumped
-
         return simulate_lumped(config)
-    from groupfit import fe
-
     return fe.simulate_config(config, progress=progress)
 
 
@@ -42,12 +42,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     except InputError as exc:
         raise InputError(f"{args.config}: {exc}") from None
     atomic_write_text(output, frame.to_csv(index=False, float_format="%.7g", lineterminator="\n"))
-    if config.get("kind") == "ballscrew":
-        from groupfit.screw.plots import plot_screw_dataset as plot_dataset
-    else:
-        from groupfit.plots import plot_dataset
-
     figure = output.with_suffix(".png")
-    plot_dataset(frame, figure, title=output.stem)
+    plot = plot_screw_dataset if config.get("kind") == "ballscrew" else plot_dataset
+    plot(frame, figure, title=output.stem)
     print(f"wrote {output} ({len(frame)} samples, {len(frame.columns)} columns) and {figure}")
     return 0

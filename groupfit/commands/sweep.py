@@ -19,6 +19,11 @@ from groupfit.commands.common import (
 )
 from groupfit.errors import InputError
 from groupfit.io import check_output_file
+from groupfit.sweep.config import feasibility, read_study
+from groupfit.sweep.executors import DaskExecutor, LocalExecutor
+from groupfit.sweep.report import write_report
+from groupfit.sweep.store import StudyStore
+from groupfit.sweep.study import run_study
 
 MAX_FAILURES_SHOWN = 5
 
@@ -43,11 +48,6 @@ def add_parser(verbs) -> None:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from groupfit.sweep.config import feasibility, read_study
-    from groupfit.sweep.executors import DaskExecutor, LocalExecutor
-    from groupfit.sweep.store import StudyStore
-    from groupfit.sweep.study import run_study
-
     study = read_study(args.config)
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")
@@ -93,8 +93,6 @@ def run_sweep(args: argparse.Namespace) -> int:
                 bar.close()
             written = []
             if report_dir is not None:
-                from groupfit.sweep.report import write_report
-
                 rows = store.rows([r.run_hash for r in study.runs])
                 written = write_report(rows, report_dir, title=study.name)
     finally:

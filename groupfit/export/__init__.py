@@ -19,6 +19,13 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from groupfit.errors import InputError
+from groupfit.export.c import render_c
+from groupfit.export.cec import cec_options, render_cec
+from groupfit.export.json_table import render_json
+from groupfit.export.sheet import render_sheet
+from groupfit.export.st import render_st
+from groupfit.export.table import DEFAULT_TABLE_TOLERANCE_UM, render_table
+from groupfit.io import atomic_write_files
 from groupfit.model import ModelFile
 from groupfit.runtime import RuleTables
 
@@ -38,28 +45,18 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
     """
     tables = RuleTables.from_model(ModelFile.coerce(model).checked())
     if target == "c":
-        from groupfit.export.c import render_c
-
         return render_c(tables)
     if target == "st":
-        from groupfit.export.st import render_st
-
         return render_st(tables, real=options.get("real", "LREAL"), name=options.get("name", "FB_GroupfitComp"))
     if target == "json":
-        from groupfit.export.json_table import render_json
-
         return render_json(tables)
     if target == "sheet":
-        from groupfit.export.sheet import render_sheet
-
         return render_sheet(
             tables,
             resolution_um=options.get("resolution_um", 0.1),
             counts_limit=options.get("counts_limit", 30000),
         )
     if target == "table":
-        from groupfit.export.table import DEFAULT_TABLE_TOLERANCE_UM, render_table
-
         return render_table(
             ModelFile.coerce(model).checked(),
             tolerance_um=options.get("tolerance_um", DEFAULT_TABLE_TOLERANCE_UM),
@@ -67,16 +64,12 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
             real=options.get("real", "LREAL"),
         )
     if target == "cec":
-        from groupfit.export.cec import cec_options, render_cec
-
         return render_cec(ModelFile.coerce(model).checked(), **cec_options(options))
     raise InputError(f"export target {target!r}: choose one of {', '.join(TARGETS)}")
 
 
 def write(files: dict[str, str], out_dir: str | Path) -> list[Path]:
     """Write rendered files into ``out_dir``; return their paths."""
-    from groupfit.io import atomic_write_files
-
     out_dir = Path(out_dir)
     return atomic_write_files({out_dir / name: text for name, text in files.items()})
 

@@ -47,7 +47,6 @@ from .ballscrew_config import (  # noqa: F401 - the scenario's names, re-exporte
     RESERVED,
     SOURCES,
     BallScrewScenario,
-    Noise,
     Programme,
     Screw,
     Source,

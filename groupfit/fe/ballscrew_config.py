@@ -13,6 +13,7 @@ import numpy as np
 
 from groupfit.errors import InputError
 
+from .noise import MeasurementNoise, read_noise
 from .schedule import StepSchedule
 from .tables import ScenarioTable, fail, on_off, step_schedule
 
@@ -103,17 +104,6 @@ class Source:
 
 
 @dataclass(frozen=True)
-class Noise:
-    """Seeded measurement noise; all zero means exact FE values."""
-
-    seed: int = 0
-    sensor_sd_K: float = 0.0
-    sensor_resolution_K: float = 0.0
-    probe_sd_um: float = 0.0
-    probe_resolution_um: float = 0.0
-
-
-@dataclass(frozen=True)
 class BallScrewScenario:
     screw: Screw = field(default_factory=Screw)
     source: Source = field(default_factory=Source)
@@ -124,7 +114,7 @@ class BallScrewScenario:
     ambient_C: float = 20.0
     sensors: dict = field(default_factory=dict)
     probe: float | str = 0.16  # metres, or "nut"
-    noise: Noise = field(default_factory=Noise)
+    noise: MeasurementNoise = field(default_factory=MeasurementNoise)
     displacements: tuple[float, ...] = ()  # further positions whose exact displacement is written (u<mm>mm_um)
 
 
@@ -205,13 +195,7 @@ def _parse_ballscrew(top: ScenarioTable) -> BallScrewScenario:
     probe_table.finish()
 
     n = top.sub("noise")
-    noise = Noise(
-        seed=n.integer("seed", 0, minimum=0),
-        sensor_sd_K=n.number("sensor_sd_K", 0.0, nonnegative=True),
-        sensor_resolution_K=n.number("sensor_resolution_K", 0.0, nonnegative=True),
-        probe_sd_um=n.number("probe_sd_um", 0.0, nonnegative=True),
-        probe_resolution_um=n.number("probe_resolution_um", 0.0, nonnegative=True),
-    )
+    noise = read_noise(n)
     n.finish()
     return BallScrewScenario(
         screw=screw,

@@ -19,6 +19,7 @@ import numpy as np
 
 from .ballscrew_config import parse_ballscrew
 from .geometry import HousingGeometry, MeshResolution, points_inside
+from .noise import MeasurementNoise, read_noise
 from .schedule import PALMGREN_SPEED_EXPONENT, AmbientProfile, EquilibriumRule, StepSchedule
 from .tables import ScenarioTable, check_alignment, fail, non_negative, on_off, step_schedule
 from .unsensed import HEAT_INPUTS, UnsensedPart
@@ -72,32 +73,6 @@ class HeatSource:
     power_W: float
     region: tuple[tuple[float, float], ...]
     schedule: StepSchedule
-
-
-@dataclass(frozen=True)
-class MeasurementNoise:
-    """Seeded measurement noise of a headstock run (``[noise]``); all zero means the exact FE values.
-
-    Temperature sensors (every sensor column and ``T_amb``): Gaussian noise of
-    ``sensor_sd_K``, then quantisation to ``sensor_resolution_K`` (a PT100 and
-    its transmitter: a few 0.01 K, 0.01 K). Displacement probe: Gaussian noise
-    of ``probe_sd_um``, then quantisation to ``probe_resolution_um``. The draws
-    come from ``numpy.random.default_rng(seed)``, sensors first (row by row),
-    then the probe, so a config always gives the same numbers.
-    ``ambient_drift_K_per_h`` is physics, not a measurement: the ambient air
-    drifts linearly by that much per hour from t = 0 (:class:`AmbientProfile`).
-    """
-
-    sensor_sd_K: float = 0.0
-    sensor_resolution_K: float = 0.0
-    probe_sd_um: float = 0.0
-    probe_resolution_um: float = 0.0
-    seed: int = 0
-    ambient_drift_K_per_h: float = 0.0
-
-    @property
-    def any(self) -> bool:
-        return bool(self.sensor_sd_K or self.sensor_resolution_K or self.probe_sd_um or self.probe_resolution_um)
 
 
 @dataclass(frozen=True)
@@ -275,9 +250,9 @@ def _parse_headstock(top: ScenarioTable) -> HeadstockScenario:
         raise fail("time.equilibrium_window_s", "must be a multiple of sampling_period_s")
 
     ambient = _parse_ambient(top.sub("ambient"), step_s)
-    noise = _parse_noise(top.sub("noise"))
-    if noise.ambient_drift_K_per_h:
-        ambient = dataclasses.replace(ambient, drift_K_per_h=noise.ambient_drift_K_per_h)
+    noise, drift_K_per_h = _parse_noise(top.sub("noise"))
+    if drift_K_per_h:
+        ambient = dataclasses.replace(ambient, drift_K_per_h=drift_K_per_h)
 
     err = top.sub("error")
     direction = err.vector("direction", base.error_direction, 3)
@@ -317,18 +292,13 @@ def _parse_headstock(top: ScenarioTable) -> HeadstockScenario:
     )
 
 
-def _parse_noise(table: ScenarioTable) -> MeasurementNoise:
-    seed = table.integer("seed", 0, minimum=0)
-    noise = MeasurementNoise(
-        sensor_sd_K=table.number("sensor_sd_K", 0.0, nonnegative=True),
-        sensor_resolution_K=table.number("sensor_resolution_K", 0.0, nonnegative=True),
-        probe_sd_um=table.number("probe_sd_um", 0.0, nonnegative=True),
-        probe_resolution_um=table.number("probe_resolution_um", 0.0, nonnegative=True),
-        seed=seed,
-        ambient_drift_K_per_h=table.number("ambient_drift_K_per_h", 0.0),
-    )
+def _parse_noise(table: ScenarioTable) -> tuple[MeasurementNoise, float]:
+    """The instruments' noise and ``ambient_drift_K_per_h``: physics, not a measurement, kept in ``[noise]``
+    where the scenarios have always had it (:class:`AmbientProfile`)."""
+    noise = read_noise(table)
+    drift_K_per_h = table.number("ambient_drift_K_per_h", 0.0)
     table.finish()
-    return noise
+    return noise, drift_K_per_h
 
 
 def _parse_ambient(amb: ScenarioTable, step_s: float) -> AmbientProfile:

@@ -375,18 +375,3 @@ def add_measurement_noise(frame: pd.DataFrame, sensors: list[str], noise) -> pd.
     frame[sensors] = temps
     frame["error_um"] = error
     return frame
-    frame = frame.copy()
-    rng = np.random.default_rng(noise.seed)
-    temps = frame[sensors].to_numpy(dtype=float)
-    error = frame["error_um"].to_numpy(dtype=float)
-    if noise.sensor_sd_K:
-        temps = temps + rng.normal(0.0, noise.sensor_sd_K, temps.shape)
-    if noise.probe_sd_um:
-        error = error + rng.normal(0.0, noise.probe_sd_um, error.shape)
-    if noise.sensor_resolution_K:
-        temps = np.round(temps / noise.sensor_resolution_K) * noise.sensor_resolution_K
-    if noise.probe_resolution_um:
-        error = np.round(error / noise.probe_resolution_um) * noise.probe_resolution_um
-    frame[sensors] = temps
-    frame["error_um"] = error
-    return frame

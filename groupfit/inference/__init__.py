@@ -19,8 +19,10 @@ from typing import Callable
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.inference.bootstrap import BootstrapTooSlow, bootstrap_break_intervals
 from groupfit.inference.break_intervals import BreakInterval, bai_intervals
 from groupfit.objective import design_matrix
+from groupfit.search.base import DEFAULT_SEED
 
 METHODS = ("auto", "bai", "bootstrap", "none")
 
@@ -87,7 +89,7 @@ def break_intervals(
     het: bool = True,
     n_boot: int = 200,
     block: int | None = None,
-    seed: int = 0,
+    seed: int = DEFAULT_SEED,
     budget_s: float | None = None,
     progress: bool | Callable[[str, float], None] = False,
 ) -> BreakIntervalReport:
@@ -143,8 +145,6 @@ def break_intervals(
         raw = bai_intervals(design, y, breaks, level=level, het_reg=het, het_err=het)
         variant = "heteroskedastic regressors and errors" if het else "common Q and sigma"
         return BreakIntervalReport([_clip(i, n_samples) for i in raw], "bai", f"Bai (1997), {variant}", level)
-
-    from groupfit.inference.bootstrap import BootstrapTooSlow, bootstrap_break_intervals
 
     started = time.perf_counter()
     try:

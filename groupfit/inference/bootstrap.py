@@ -13,7 +13,7 @@ break estimates is approximated by resampling:
    time, and form y* = ŷ + e*;
 3. search p breaks on (X, y*) with the same objective, n, c and intercept —
    the exact dynamic programme where it is cheap (the limits of
-   :data:`groupfit.models.grouped.CERTIFY_PAIR_LIMIT`), the genetic algorithm
+   :data:`groupfit.search.exact.CERTIFY_PAIR_LIMIT`), the genetic algorithm
    otherwise;
 4. the interval of break j is the percentile interval
    ``[q_{α/2}, q_{1−α/2}]`` of the replicates b̂*_j (lower and upper order
@@ -37,16 +37,19 @@ seed sequence), so a run is reproducible.
 from __future__ import annotations
 
 import math
+import sys
 import time
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
 
-from groupfit.grouping import Constraints
+from groupfit.grouping import DEFAULT_SOFT_OFFSET, DEFAULT_SPACING, Constraints
 from groupfit.inference.break_intervals import BreakInterval
 from groupfit.objective import SegmentCost, grouped_residuals
-from groupfit.search.exact import solve_exact
+from groupfit.search.base import DEFAULT_SEED
+from groupfit.search.exact import exact_is_cheap, solve_exact
+from groupfit.search.ga import GeneticSearch
 
 
 class BootstrapTooSlow(RuntimeError):
@@ -94,27 +97,20 @@ def block_resample(residuals: np.ndarray, block: int, rng: np.random.Generator) 
     return residuals[index]
 
 
-def exact_is_cheap(n_samples: int, objective: str) -> bool:
-    """Whether the exact search is cheap enough to repeat for every bootstrap series."""
-    from groupfit.models.grouped import CERTIFY_PAIR_LIMIT
-
-    return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[objective]
-
-
 def bootstrap_break_intervals(
     X,
     y,
     breaks: Sequence[int],
     *,
-    n: int = 3,
-    c: float = 3.0,
+    n: int = DEFAULT_SOFT_OFFSET,
+    c: float = DEFAULT_SPACING,
     objective: str = "sae",
     fit_intercept: bool = True,
     level: float = 0.95,
     n_boot: int = 200,
     block: int | None = None,
     search: str = "auto",
-    seed: int = 0,
+    seed: int = DEFAULT_SEED,
     ga_settings: dict | None = None,
     progress: bool | Callable[[str, float], None] = False,
     budget_s: float | None = None,
@@ -187,8 +183,6 @@ def bootstrap_break_intervals(
             if search == "exact":
                 replicates[r] = solve_exact(cost, constraints, p).breaks[p]
             else:
-                from groupfit.search.ga import GeneticSearch
-
                 ga = GeneticSearch(seed=int(ga_seeds[r]), **(ga_settings or {}))
                 replicates[r] = ga.run(cost, constraints, p).breaks
             report(r + 1)
@@ -216,8 +210,6 @@ def percentile_intervals(
 
 def _progress(progress, total: int):
     if progress is True:
-        import sys
-
         from tqdm import tqdm
 
         bar = tqdm(total=total, desc="bootstrap", leave=False, file=sys.stderr)

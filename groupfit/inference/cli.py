@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from groupfit.inference import METHODS, BreakIntervalReport, break_intervals
+from groupfit.search.base import DEFAULT_SEED
 
 AUTO_BUDGET_S = 5.0
 """``--intervals auto`` skips a bootstrap projected to take longer than this."""
@@ -40,7 +41,7 @@ def intervals_from_args(args: argparse.Namespace, estimator, X, y, seed, progres
         het=not args.homoskedastic,
         n_boot=args.bootstrap,
         block=args.block,
-        seed=0 if seed is None else int(seed),
+        seed=DEFAULT_SEED if seed is None else int(seed),
         budget_s=AUTO_BUDGET_S,
         progress=progress if progress is not None else False,
     )

@@ -10,17 +10,26 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_array, check_is_fitted, column_or_1d
 
 from groupfit.errors import InputError
-from groupfit.grouping import Constraints, hard_groups, serving_group_index, soft_groups
+from groupfit.grouping import (
+    DEFAULT_SOFT_OFFSET,
+    DEFAULT_SPACING,
+    Constraints,
+    hard_groups,
+    serving_group_index,
+    soft_groups,
+)
+from groupfit.inference.prediction import estimator_bounds, group_interval_stats
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, Switching, grouped_prediction
+from groupfit.models.ridge import check_ridge_alpha
 from groupfit.objective import OBJECTIVES, SegmentCost, grouped_residuals, residual_sum
+from groupfit.runtime.rule import rule_parameters, source_ranges
 from groupfit.search.base import GA_DEFAULTS, METHODS, GASettings, SearchSettings
-from groupfit.search.exact import solve_exact
+from groupfit.search.exact import exact_is_cheap, solve_exact
+from groupfit.search.ga import GeneticSearch
 
 SEARCHES = METHODS
 DEFAULT_SEARCH = SearchSettings()
-CERTIFY_PAIR_LIMIT = {"sse": 5_000_000, "sae": 200_000}
-"""Largest number of segment pairs (≈ N²/2) for which a GA result is certified automatically."""
 
 
 class GroupedRegressor(RegressorMixin, BaseEstimator):
@@ -106,8 +115,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
     def __init__(
         self,
         p: int = 1,
-        n: int = 3,
-        c: float = 3.0,
+        n: int = DEFAULT_SOFT_OFFSET,
+        c: float = DEFAULT_SPACING,
         objective: str = "sae",
         fit_intercept: bool = True,
         search: str = "ga",
@@ -155,8 +164,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         cls,
         *,
         p: int,
-        n: int = 3,
-        c: float = 3.0,
+        n: int = DEFAULT_SOFT_OFFSET,
+        c: float = DEFAULT_SPACING,
         objective: str = "sae",
         fit_intercept: bool = True,
         search: SearchSettings = DEFAULT_SEARCH,
@@ -224,8 +233,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         if self.search == "exact" or self.p == 0:
             result = solve_exact(cost, constraints, self.p, progress=_stage(progress, "exact")).for_p(self.p)
         else:
-            from groupfit.search.ga import GeneticSearch
-
             ga = GeneticSearch.from_settings(self.ga_settings, seed=self.random_state)
             reporter = None
             if progress is not None:
@@ -275,8 +282,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
-        from groupfit.inference.prediction import group_interval_stats
-
         ridge = float(self.ridge_alpha) > 0
         self.interval_stats_ = None if ridge else group_interval_stats(X, y, self.soft_groups_, self.fit_intercept)
         return self
@@ -310,8 +315,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         prediction = grouped_prediction(self.intercept_, self.coef_, X, group)
         if not return_interval:
             return prediction
-        from groupfit.inference.prediction import estimator_bounds
-
         return (prediction, *estimator_bounds(self, X, group, prediction, level=level, alpha=alpha))
 
     def to_model_file(self, run, criterion: str | None = None) -> ModelFile:
@@ -320,8 +323,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         ``criterion``: the switching criterion sensor (default: the input that
         moves most over the run, :func:`default_criterion`).
         """
-        from groupfit.runtime.rule import rule_parameters, source_ranges
-
         check_is_fitted(self, "breaks_")
         criterion = criterion or default_criterion(run)
         if criterion not in run.temp_names:
@@ -404,8 +405,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             raise InputError(f"n = {self.n!r}: the soft offset must be a whole number ≥ 0")
         if not np.isfinite(self.c) or self.c < 0:
             raise InputError(f"c = {self.c!r}: the spacing coefficient must be a finite number ≥ 0")
-        from groupfit.models.ridge import check_ridge_alpha
-
         if check_ridge_alpha(self.ridge_alpha) > 0 and (self.p != 0 or self.fixed_breaks):
             raise InputError(
                 f"ridge alpha {self.ridge_alpha:g} with p = {self.p}: the ridge penalty is for one global model "
@@ -414,7 +413,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
 
     def _should_certify(self, n_samples: int) -> bool:
         if self.certify == "auto":
-            return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[self.objective]
+            return exact_is_cheap(n_samples, self.objective)
         return bool(self.certify)
 
 

@@ -15,6 +15,9 @@ from typing import Sequence
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.grouping import Constraints
+from groupfit.objective import SegmentCost, grouped_residuals
+from groupfit.search.exact import solve_exact
 
 RULES = ("bic", "target")
 
@@ -91,10 +94,6 @@ def exact_path(X, y, pmax: int, *, n: int, c: float, objective: str, fit_interce
         ``breaks``, ``objective``, ``rss``, ``R`` (lists indexed by p, up to
         the largest feasible p), ``seconds``.
     """
-    from groupfit.grouping import Constraints
-    from groupfit.objective import SegmentCost, grouped_residuals
-    from groupfit.search.exact import solve_exact
-
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     n_coef = X.shape[1] + int(fit_intercept)

@@ -25,10 +25,12 @@ from groupfit.runtime.rule import (
     FAULT_HELD,
     FAULT_POSITION,
     FAULT_SENSOR,
+    LEGACY_SOURCE_RANGE,
     RETURN_SENSOR_FAULT,
     SWITCH_CRITERION,
     SWITCH_FORCED,
     SWITCH_NONE,
+    complete_rule_section,
 )
 from groupfit.runtime.tables import RuleTables
 
@@ -412,8 +414,6 @@ def without_reference(model: ModelFile | Mapping[str, Any]) -> ModelFile:
     model = ModelFile.coerce(model)
     if model.reference is None:
         return model
-    from groupfit.runtime.rule import LEGACY_SOURCE_RANGE, complete_rule_section
-
     section = complete_rule_section(model)
     wide = {
         "temp_min_c": [LEGACY_SOURCE_RANGE[0]] * len(model.temps),

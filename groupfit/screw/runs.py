@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groupfit.data import Run, load_run
+from groupfit.data import Run, load_run, numeric_column, read_table
 from groupfit.errors import InputError
 
 SENSOR_NAME = re.compile(r"^T(\d+(?:\.\d+)?)mm$")
@@ -86,8 +86,6 @@ def load_screw_run(source, *, probe_x: float | None = None, require_error: bool 
     InputError
         No ``T<mm>mm`` columns, two sensors at one position, a bad value.
     """
-    from groupfit.data import read_table
-
     frame, run_name, label = read_table(source, name)
     positions = sensor_positions(frame.columns)
     if not positions:
@@ -103,8 +101,6 @@ def load_screw_run(source, *, probe_x: float | None = None, require_error: bool 
     run = Run(**{**run.__dict__, "source": label})
     ambient = float(frame["T_amb"].iloc[0]) if "T_amb" in frame.columns else float(np.mean(run.temps[0]))
     if PROBE_COLUMN in frame.columns:
-        from groupfit.data import numeric_column
-
         probe = numeric_column(frame, PROBE_COLUMN, label, allow_nonfinite=False)
     elif probe_x is not None:
         probe = np.full(run.n_samples, float(probe_x))

@@ -13,6 +13,10 @@ from typing import Any, Mapping
 METHODS = ("ga", "exact")
 
 
+DEFAULT_SEED = 0
+"""The seed every search, bootstrap and simulation uses unless told otherwise."""
+
+
 @dataclass(frozen=True)
 class GASettings:
     """Settings of the genetic algorithm (:class:`groupfit.search.ga.GeneticSearch`); the defaults live here only.
@@ -59,7 +63,7 @@ class SearchSettings:
     """
 
     method: str = "ga"
-    seed: int | None = 0
+    seed: int | None = DEFAULT_SEED
     ga: GASettings = GA_DEFAULTS
     certify: Any = "auto"
 

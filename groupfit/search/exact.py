@@ -21,6 +21,16 @@ from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
 from groupfit.search.base import SearchResult
 
+CERTIFY_PAIR_LIMIT = {"sse": 5_000_000, "sae": 200_000}
+"""Largest number of segment pairs (≈ N²/2) for which the exact search counts as cheap: a GA result is then
+certified automatically, and the bootstrap repeats the exact search for every series."""
+
+
+def exact_is_cheap(n_samples: int, objective: str) -> bool:
+    """Whether the exact search on ``n_samples`` samples is cheap enough to run without being asked."""
+    return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[objective]
+
+
 GRAM_FLOATS_PER_BATCH = 500_000
 
 

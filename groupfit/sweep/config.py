@@ -55,6 +55,7 @@ from typing import Any, Callable
 
 from groupfit.data import load_run
 from groupfit.errors import InputError
+from groupfit.grouping import Constraints
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import GASettings
@@ -482,8 +483,6 @@ def _selection_option(option: dict, dataset: Dataset, where: str) -> dict:
 
 def infeasible_reason(run: RunSpec, n_samples: int) -> str | None:
     """Why a run cannot fit its p breaks (the constraints of its n, c and inputs), or None when it can."""
-    from groupfit.grouping import Constraints
-
     model, sensors = run.spec["model"], run.spec["sensors"]
     n_inputs = len(sensors["names"]) if "names" in sensors else int(sensors["k"])
     n_coef = n_inputs + int(model["intercept"])

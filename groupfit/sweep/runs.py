@@ -29,9 +29,9 @@ from groupfit.data import Run, load_run
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
 from groupfit.heldout.selection import select_sensors
-from groupfit.models.grouped import CERTIFY_PAIR_LIMIT, GroupedRegressor
+from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
-from groupfit.search.exact import ExactResult, solve_exact
+from groupfit.search.exact import ExactResult, exact_is_cheap, solve_exact
 from groupfit.sweep.config import canonical_json
 
 REFERENCE_PMAX = 8
@@ -134,7 +134,7 @@ def estimator_for(spec: dict) -> GroupedRegressor:
 def wants_reference(certify, n_samples: int, objective: str) -> bool:
     """Whether a GA run is compared with the exact optimum ("auto": when that is cheap)."""
     if certify == "auto":
-        return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[objective]
+        return exact_is_cheap(n_samples, objective)
     return bool(certify)
 
 
