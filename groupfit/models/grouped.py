@@ -26,7 +26,7 @@ from groupfit.objective import OBJECTIVES, SegmentCost, grouped_residuals, resid
 from groupfit.runtime.rule import rule_parameters, source_ranges
 from groupfit.search.base import GA_DEFAULTS, METHODS, GASettings, SearchSettings
 from groupfit.search.exact import exact_is_cheap, solve_exact
-from groupfit.search.ga import GeneticSearch
+from groupfit.search.factory import make_search
 
 SEARCHES = METHODS
 DEFAULT_SEARCH = SearchSettings()
@@ -155,6 +155,12 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         return self.n_features_in_ + int(self.fit_intercept)
 
     @property
+    def search_settings(self) -> SearchSettings:
+        """The search among the parameters (the exact one for p = 0, where there is nothing to search)."""
+        method = "exact" if self.p == 0 else self.search
+        return SearchSettings(method=method, seed=self.random_state, ga=self.ga_settings, certify=self.certify)
+
+    @property
     def ga_settings(self) -> GASettings:
         """The GA settings among the parameters."""
         return GASettings(**{name: getattr(self, name) for name in GA_DEFAULTS.as_dict()})
@@ -230,16 +236,16 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         constraints.require(self.p, self.c, self.n_coef)
 
         cost = SegmentCost(X, y, n=self.n, objective=self.objective, fit_intercept=self.fit_intercept)
-        if self.search == "exact" or self.p == 0:
-            result = solve_exact(cost, constraints, self.p, progress=_stage(progress, "exact")).for_p(self.p)
+        settings = self.search_settings
+        if settings.method == "exact":
+            reporter = _stage(progress, "exact")
         else:
-            ga = GeneticSearch.from_settings(self.ga_settings, seed=self.random_state)
-            reporter = None
-            if progress is not None:
-                reporter = _ga_reporter(progress, self.max_generations, self.stall_generations)
-            result = ga.run(cost, constraints, self.p, progress=reporter)
-            if progress is not None:
-                progress("ga", 1.0)
+            reporter = (
+                None if progress is None else _ga_reporter(progress, self.max_generations, self.stall_generations)
+            )
+        result = make_search(settings).run(cost, constraints, self.p, progress=reporter)
+        if settings.method == "ga" and progress is not None:
+            progress("ga", 1.0)
         breaks, search_value, info = result.breaks, result.objective, result.info()
         if result.method == "ga":
             if self._should_certify(n_samples):
