@@ -23,7 +23,7 @@ C901_EXCEPTIONS = {
     "tests/test_export_st.py",
 }
 """Files with a function over ruff's complexity limit (pyproject's per-file-ignores): entries may only leave."""
-LONG_MODULES = {"groupfit/diagnose/loop.py": 888, "groupfit/export/c.py": 535, "groupfit/sweep/config.py": 509}
+LONG_MODULES = {"groupfit/diagnose/loop.py": 888, "groupfit/export/c.py": 535}
 """Modules over 500 lines and their length today: they may only shrink."""
 KNOWN_CIRCLES = {frozenset({"groupfit.diagnose.loop", "groupfit.diagnose.report"})}
 """Import circles still in the house: entries may only leave."""

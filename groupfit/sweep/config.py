@@ -44,21 +44,19 @@ done. Unknown tables or keys and values of the wrong type or range raise
 
 from __future__ import annotations
 
-import fnmatch
 import hashlib
 import itertools
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from groupfit.data import load_run
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
-from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import GASettings
+from groupfit.sweep.datasets import Dataset, non_empty_string, read_datasets, sensor_option
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 SEARCHES = ("exact", "ga")
@@ -79,36 +77,6 @@ GA_GRID_DEFAULTS: dict[str, list[Any]] = {
     **{key: [value] for key, value in GASettings().as_dict().items()},
 }
 RANGE_KEYS = ("start", "stop", "step")
-
-
-@dataclass(frozen=True)
-class Dataset:
-    """One data file of a study.
-
-    Attributes
-    ----------
-    name : str
-        The file stem.
-    path : Path
-        Absolute path.
-    sha256 : str
-        Hash of the file's bytes.
-    candidates : tuple of str
-        Candidate sensor columns, in file order.
-    n_samples : int
-    columns : tuple of str
-        Every column but time and error.
-    constant : frozenset of str
-        Columns with a single value (never picked by a pattern).
-    """
-
-    name: str
-    path: Path
-    sha256: str
-    candidates: tuple[str, ...]
-    n_samples: int
-    columns: tuple[str, ...] = field(repr=False, default=())
-    constant: frozenset[str] = field(repr=False, default=frozenset())
 
 
 @dataclass(frozen=True)
@@ -157,14 +125,6 @@ def spec_hash(spec: dict) -> str:
     return hashlib.sha256(canonical_json(spec).encode("ascii")).hexdigest()
 
 
-def file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def read_study(path: str | Path) -> Study:
     """Read, check and expand a study file.
 
@@ -188,14 +148,14 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     grid_table = _checked_table(raw, "grid", tuple(GRID_DEFAULTS), label)
     ga_table = _checked_table(raw, "ga", tuple(GA_GRID_DEFAULTS), label)
 
-    name = _string(study_table.get("name", path.stem), "[study] name", label)
+    name = non_empty_string(study_table.get("name", path.stem), "[study] name", label)
     db = study_table.get("db")
-    db_path = (base / _string(db, "[study] db", label)).resolve() if db is not None else None
+    db_path = (base / non_empty_string(db, "[study] db", label)).resolve() if db is not None else None
     certify = study_table.get("certify", "auto")
     if certify != "auto" and not isinstance(certify, bool):
         raise InputError(f'{label}: [study] certify = {certify!r} must be "auto", true or false')
 
-    datasets = _datasets(data_table, base, label)
+    datasets = read_datasets(data_table, base, label)
     time_column = data_table.get("time", "time_s")
     error_column = data_table.get("error", "error_um")
     grid = {key: _dimension(grid_table, key, label, GRID_DEFAULTS[key]) for key in GRID_DEFAULTS}
@@ -205,7 +165,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     seen: set[str] = set()
     for dataset in datasets:
         data = {"sha256": dataset.sha256, "time": time_column, "error": error_column}
-        sensor_options = [_sensor_option(option, dataset, label) for option in grid["sensors"]]
+        sensor_options = [sensor_option(option, dataset, label) for option in grid["sensors"]]
         for sensors, objective, intercept, n, c, p, search in itertools.product(
             sensor_options, grid["objective"], grid["intercept"], grid["n"], grid["c"], grid["p"], grid["search"]
         ):
@@ -244,92 +204,6 @@ def _checked_table(raw: dict, table: str, keys: tuple[str, ...], label: str) -> 
         checked.get(key)
     checked.finish(f"known keys: {', '.join(keys)}")
     return checked.data
-
-
-def _string(value, what: str, label: str) -> str:
-    if not isinstance(value, str) or not value:
-        raise InputError(f"{label}: {what} = {value!r} must be a non-empty string")
-    return value
-
-
-def _datasets(table: dict, base: Path, label: str) -> list[Dataset]:
-    if "path" in table and "paths" in table:
-        raise InputError(f"{label}: [data] has both 'path' and 'paths'; give one of them")
-    if "path" in table:
-        paths = [_string(table["path"], "[data] path", label)]
-    elif "paths" in table:
-        paths = table["paths"]
-        if not isinstance(paths, list) or not paths or not all(isinstance(p, str) and p for p in paths):
-            raise InputError(f"{label}: [data] paths must be a non-empty list of file names")
-    else:
-        raise InputError(f'{label}: no data: set [data] path = "run.csv" or paths = ["a.csv", "b.csv"]')
-    time_column = _string(table.get("time", "time_s"), "[data] time", label)
-    error_column = _string(table.get("error", "error_um"), "[data] error", label)
-    patterns = table.get("temps")
-    datasets = []
-    for entry in paths:
-        file = (base / entry).resolve()
-        if not file.is_file():
-            raise InputError(f"{label}: [data] data file {entry!r} not found (looked for {file})")
-        run = load_run(file, temps=[], time=time_column, error=error_column)
-        usable = tuple(c for c in run.frame.columns if c not in (time_column, error_column))
-        where = f"{label}: {file.name}"
-        constant = frozenset(_constant_columns(run.frame, usable))
-        candidates = _candidates(patterns, usable, constant, where)
-        load_run(file, temps=candidates, time=time_column, error=error_column)
-        datasets.append(
-            Dataset(
-                name=file.stem,
-                path=file,
-                sha256=file_sha256(file),
-                candidates=tuple(candidates),
-                n_samples=run.n_samples,
-                columns=usable,
-                constant=constant,
-            )
-        )
-    names = [d.name for d in datasets]
-    duplicates = sorted({n for n in names if names.count(n) > 1})
-    if duplicates:
-        raise InputError(f"{label}: [data] two data files are named '{duplicates[0]}'; rename one")
-    return datasets
-
-
-def _constant_columns(frame, columns) -> set[str]:
-    """Columns with a single value over the run (dead sensors, fixed settings)."""
-    constant = set()
-    for column in columns:
-        values = frame[column]
-        if values.nunique(dropna=True) <= 1:
-            constant.add(column)
-    return constant
-
-
-def _candidates(patterns, usable, constant, label) -> list[str]:
-    """Candidate sensor columns, in file order.
-
-    Explicit names must exist; glob patterns (``*``, ``?``, ``[…]``) and the
-    default (columns named ``T<digit>…``) leave out constant columns.
-    """
-    if patterns is None:
-        found = [c for c in usable if len(c) > 1 and c[0] in "Tt" and c[1].isdigit() and c not in constant]
-        if not found:
-            raise InputError(f"{label}: no temperature columns found; list them in [data] temps")
-        return found
-    if not isinstance(patterns, list) or not patterns or not all(isinstance(t, str) and t for t in patterns):
-        raise InputError(f"{label}: candidate sensors must be a non-empty list of column names or patterns")
-    chosen: set[str] = set()
-    for pattern in patterns:
-        if any(ch in pattern for ch in "*?["):
-            matches = [c for c in usable if fnmatch.fnmatchcase(c, pattern) and c not in constant]
-            if not matches:
-                raise InputError(f"{label}: sensor pattern {pattern!r} matches no (non-constant) column")
-        elif pattern in usable:
-            matches = [pattern]
-        else:
-            raise InputError(f"{label}: column '{pattern}' not found; the columns are {', '.join(usable)}")
-        chosen.update(matches)
-    return [c for c in usable if c in chosen]
 
 
 def _dimension(table: dict, key: str, label: str, default: list) -> list:
@@ -432,53 +306,6 @@ VALUE_CHECKS: dict[str, Callable] = {
     "local_window": _integer(0),
     "union_crossover": _boolean,
 }
-
-
-def _sensor_option(option, dataset: Dataset, label: str) -> dict:
-    """One value of the sensors dimension, resolved for one data set."""
-    where = f"{label}: [grid] sensors"
-    if option == "all":
-        return {"names": list(dataset.candidates)}
-    if isinstance(option, list):
-        if not option or not all(isinstance(v, str) and v for v in option):
-            raise InputError(f"{where}: {option!r} must be a non-empty list of column names")
-        if len(set(option)) != len(option):
-            raise InputError(f"{where}: {option!r} names a column twice")
-        for name in option:
-            if name not in dataset.columns:
-                raise InputError(f"{where}: column '{name}' is not in {dataset.path.name}")
-        return {"names": list(option)}
-    if isinstance(option, dict):
-        return _selection_option(option, dataset, where)
-    raise InputError(
-        f'{where}: {option!r}: give "all", a list of column names such as ["T1", "T2"], '
-        'or a selection such as {select = "forward", k = 4}'
-    )
-
-
-def _selection_option(option: dict, dataset: Dataset, where: str) -> dict:
-    known = ("select", "k", "candidates", *SELECTION_DEFAULTS)
-    for key in option:
-        if key not in known:
-            raise InputError(f"{where}: unknown key '{key}' in a selection; known keys: {', '.join(known)}")
-    method = option.get("select")
-    if method not in SELECTION_METHODS:
-        raise InputError(f"{where}: select = {method!r}: choose one of {', '.join(SELECTION_METHODS)}")
-    k = option.get("k")
-    if isinstance(k, bool) or not isinstance(k, int) or k < 1:
-        raise InputError(f"{where}: k = {k!r} must be a whole number ≥ 1 (sensors to pick)")
-    candidates = list(dataset.candidates)
-    if "candidates" in option:
-        candidates = _candidates(option["candidates"], dataset.columns, dataset.constant, where)
-    if k > len(candidates):
-        raise InputError(f"{where}: k = {k} but {dataset.path.name} has only {len(candidates)} candidate sensors")
-    selection = {"select": method, "k": k, "candidates": candidates}
-    for key, default in SELECTION_DEFAULTS.items():
-        value = option.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, type(default)):
-            raise InputError(f"{where}: {key} = {value!r} must be a {type(default).__name__}")
-        selection[key] = value
-    return selection
 
 
 def infeasible_reason(run: RunSpec, n_samples: int) -> str | None:
