@@ -42,6 +42,7 @@ from groupfit.model_checks import (
     model_problem,
     rule_section_problem,
 )
+from groupfit.model_recalibration import Recalibration
 from groupfit.reference import referenced
 
 RULE_KEYS = (
@@ -214,6 +215,8 @@ class ModelFile:
     derived_inputs: tuple[Feature, ...] | None = None
     position: Position | None = None
     dead_band: DeadBand | None = None
+    recalibration: Recalibration | None = None
+    """How probe checks correct the compensation at run time (:mod:`groupfit.model_recalibration`)."""
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     # ----------------------------------------------------------------- reading and writing
@@ -230,6 +233,7 @@ class ModelFile:
             "derived_inputs": lambda v: tuple(_parse_derived(v)),
             "position": Position.from_dict,
             "dead_band": DeadBand.from_dict,
+            "recalibration": lambda v: _fields_from_dict(Recalibration, v),
         }
         return _fields_from_dict(cls, data, nested)
 
@@ -433,6 +437,7 @@ __all__ = [
     "FORMAT",
     "MAX_POSITION_ORDER",
     "Position",
+    "Recalibration",
     "MAX_DELAY_SAMPLES",
     "ModelFile",
     "REQUIRED",

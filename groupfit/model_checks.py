@@ -14,6 +14,7 @@ from typing import Any, Mapping, Sequence
 from groupfit.errors import InputError
 from groupfit.features import STARTS, Feature
 from groupfit.grouping import hard_groups, soft_groups
+from groupfit.model_recalibration import recalibration_problem
 from groupfit.reference import reference_problem
 
 FORMAT = "groupfit-model/1"
@@ -86,7 +87,7 @@ def model_problem(model: Any, required: Sequence[str]) -> str | None:
     if missing:
         return f"model file lacks key '{missing[0]}'"
     checks = (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem)
-    for check in (*checks, _reference_check, position_problem, dead_band_problem, ridge_problem):
+    for check in (*checks, _reference_check, position_problem, dead_band_problem, ridge_problem, recalibration_problem):
         problem = check(model)
         if problem:
             return problem

@@ -12,6 +12,7 @@ float32 once.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
@@ -32,7 +33,12 @@ from groupfit.runtime.rule import (
     SWITCH_NONE,
     complete_rule_section,
 )
+from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator
 from groupfit.runtime.tables import RuleTables
+
+
+PROBE_CODE_OFFSET = 2
+""":attr:`Replay.probe` holds a check's return plus this (1 ignored, 2 rejected, 3 applied), 0 without a check."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +81,18 @@ class Replay:
     compensation_um: np.ndarray
     fault: np.ndarray
     switched: np.ndarray
+    probe: np.ndarray | None = None
+    """Per sample: 0 without a check, else :data:`PROBE_CODE_OFFSET` plus what the probe returned."""
+
+    def probe_counts(self) -> dict[str, int]:
+        """Checks applied, rejected by the gate and ignored (no valid prediction)."""
+        code = np.zeros(len(self.group), dtype=int) if self.probe is None else self.probe - PROBE_CODE_OFFSET
+        has = np.zeros(len(self.group), dtype=bool) if self.probe is None else self.probe != 0
+        return {
+            "applied": int(np.sum(has & (code == PROBE_APPLIED))),
+            "rejected": int(np.sum(has & (code == PROBE_REJECTED))),
+            "ignored": int(np.sum(has & (code == PROBE_IGNORED))),
+        }
 
     def switch_samples(self) -> list[dict[str, int | bool]]:
         """Every switch: 1-based sample, groups before and after, whether it was forced."""
@@ -137,6 +155,7 @@ class SwitchingRule:
             self._travel_min = real(t.travel_min_mm)
             self._travel_max = real(t.travel_max_mm)
         self._band = real(t.dead_band_c)
+        self.recal = Recalibrator(t.recalibration, real)
         self.reset()
 
     def reset(self) -> None:
@@ -155,6 +174,7 @@ class SwitchingRule:
         self.band_target = self._zero
         self.k0 = self._zero
         self.slope = self._zero
+        self.recal.reset()
         self._reset_reference()
 
     def step(self, readings: Sequence[float]) -> StepResult:
@@ -191,9 +211,11 @@ class SwitchingRule:
                 switched = SWITCH_CRITERION
 
         clamped = False
+        self.recal.propagate()
         if faulted:
             prediction = self._zero
             target = self._zero
+            self.recal.invalidate()
         else:
             row = self._coef[self.group - 1]
             prediction = row[0]
@@ -209,6 +231,9 @@ class SwitchingRule:
                     self.band_target = target
                 else:
                     target = self.band_target
+            correction = self.recal.correct(prediction, usable=not held)
+            prediction = prediction + correction
+            target = target - correction
         if target > self._comp_max:
             target = self._comp_max
         if target < self._comp_min:
@@ -353,8 +378,21 @@ class SwitchingRule:
             return self.last[r] - self.first[r]
         return self.last[r]
 
-    def replay(self, readings) -> Replay:
-        """Reset, then step through every row of an (N, k) array of readings."""
+    def probe(self, measured_error_um: float) -> int:
+        """A probe check after the last :meth:`step`: the measured thermal error (µm), folded into the correction.
+
+        Returns :data:`~groupfit.runtime.recalibration.PROBE_APPLIED`,
+        ``PROBE_REJECTED`` (the innovation gate; nothing changes) or
+        ``PROBE_IGNORED`` (no valid prediction at that sample, or not a reading).
+        """
+        return self.recal.probe(measured_error_um)
+
+    def replay(self, readings, probes=None) -> Replay:
+        """Reset, then step through every row of an (N, k) array of readings.
+
+        ``probes``: optional length-N array of probe readings (µm), NaN where
+        there is no check; a check at row i follows row i's step.
+        """
         readings = np.asarray(readings, dtype=float)
         if readings.ndim != 2 or readings.shape[1] != self.tables.n_temps:
             raise InputError(
@@ -368,11 +406,15 @@ class SwitchingRule:
         switched = np.empty(n_samples, dtype=int)
         prediction = np.empty(n_samples)
         compensation = np.empty(n_samples)
+        checks = None if probes is None else np.asarray(probes, dtype=float).tolist()
+        probe_code = np.zeros(n_samples, dtype=int)
         for i, row in enumerate(readings.tolist()):
             result = self.step(row)
             group[i], fault[i], switched[i] = result.group, result.fault, result.switched
             prediction[i], compensation[i] = result.prediction_um, result.compensation_um
-        return Replay(group, prediction, compensation, fault, switched)
+            if checks is not None and not math.isnan(checks[i]):
+                probe_code[i] = PROBE_CODE_OFFSET + self.probe(checks[i])
+        return Replay(group, prediction, compensation, fault, switched, probe_code)
 
 
 def replay_groups(model: ModelFile | Mapping[str, Any], inputs) -> np.ndarray:

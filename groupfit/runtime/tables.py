@@ -19,6 +19,7 @@ from groupfit.errors import InputError
 from groupfit.features import HOURS_PER_S
 from groupfit.model import ModelFile
 from groupfit.reference import START, is_column_reference
+from groupfit.runtime.recalibration import RecalTable, model_section
 from groupfit.runtime.rule import DERIVATIVE_SCALE_S, LEGACY_SOURCE_RANGE, complete_rule_section
 
 
@@ -191,6 +192,8 @@ class RuleTables:
     travel_max_mm: float = 0.0
     position_coefficients: np.ndarray | None = field(default=None, repr=False)
     """(G, order, M+1): per group the rows of c_1 … c_order (constant first), or None."""
+    recalibration: RecalTable | None = None
+    """The probe-check filter (:mod:`groupfit.runtime.recalibration`); the default hold without a section."""
 
     @classmethod
     def from_model(cls, model: ModelFile | Mapping[str, Any]) -> "RuleTables":
@@ -288,6 +291,14 @@ class RuleTables:
             reference=model.reference,
             reference_reading=raw.index(model.reference) if is_column_reference(model.reference) else -1,
             **_position_tables(model, raw),
+            recalibration=RecalTable.from_section(
+                model_section(
+                    model,
+                    comp_limit_um=max(-float(section.comp_min_um), float(section.comp_max_um)),
+                    rate_limit_um=float(section.rate_limit_um),
+                ),
+                period,
+            ),
         )
 
     @property

@@ -1,0 +1,298 @@
+"""Choosing the recalibration filter on held-out data: the model refitted on one part, checks replayed on the next.
+
+The filter's noise cannot be read from the modelling run's own residuals:
+they are over-fitted and say nothing about how the error wanders on a new
+day. So every candidate is scored as it would serve: the model's coefficients
+are refitted on the first part of each modelling run (its inputs, derived
+inputs with their whole history, intercept and ridge penalty as the model
+has them; a grouped model as one global fit), the rest of the run is
+predicted, and checks every T (15, 30, 60, 120 min by default) are replayed
+through each candidate filter on that held-out residual. The score is the
+mean over the intervals of log(RMS / RMS of the offset hold); the best
+candidate is kept only if no interval is more than :data:`HOLD_TOLERANCE`
+worse than the hold, else the hold is kept. The innovation gate is part of
+every replay (a candidate whose gate rejects good checks pays for it), and
+the hold's own noise is sized so that its gate passes every held-out check
+with a factor of two to spare.
+
+Every candidate runs through one vectorised replay of the filter of
+:mod:`groupfit.runtime.recalibration` (double precision, without the
+compensation's clamp and rate limit).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from groupfit.model import ModelFile, Recalibration
+
+INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
+CUTS = (0.5, 0.7)
+"""Each modelling run is refitted on its first 50 % and 70 % and the rest of it predicted."""
+HOLD_TOLERANCE = 1.02
+GATE_SIGMAS = 5.0
+CONFIRM_AFTER = 2
+GATE_SPARE = 2.0
+METHODS = ("auto", "hold", "kalman", "none")
+MIN_TRAIN_SAMPLES = 20
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """One held-out stretch: the refitted model's residual and prediction (µm), NaN where not measured."""
+
+    residual: np.ndarray
+    prediction: np.ndarray
+
+
+def held_out_series(model: ModelFile, runs: Sequence, *, cuts: Sequence[float] = CUTS) -> list[HeldOut]:
+    """The held-out residual of the model's inputs refitted on the first part of every run.
+
+    ``runs``: (frame, error) pairs, the frame holding the model's columns and
+    ``error`` the measured error per row (NaN where not measured).
+    """
+    series = []
+    for frame, error in runs:
+        inputs = model.inputs(frame)
+        error = np.asarray(error, dtype=float)
+        design = np.column_stack([np.ones(len(inputs)), inputs]) if model.intercept else inputs
+        for cut in cuts:
+            a = int(round(cut * len(design)))
+            train = np.isfinite(error[:a])
+            if train.sum() < max(MIN_TRAIN_SAMPLES, 2 * design.shape[1]) or a >= len(design) - 1:
+                continue
+            coef = _solve(design[:a][train], error[:a][train], model.ridge_alpha, model.intercept)
+            prediction = design[a:] @ coef
+            series.append(HeldOut(error[a:] - prediction, prediction))
+    return series
+
+
+def _solve(design: np.ndarray, target: np.ndarray, alpha: float | None, intercept: bool) -> np.ndarray:
+    """Least squares, or ridge on the centred, scaled inputs (the intercept unpenalised) as the model was fitted."""
+    if not alpha:
+        return np.linalg.lstsq(design, target, rcond=None)[0]
+    start = 1 if intercept else 0
+    x = design[:, start:]
+    mean = x.mean(axis=0) if intercept else np.zeros(x.shape[1])
+    scale = x.std(axis=0)
+    scale[scale == 0] = 1.0
+    z = (x - mean) / scale
+    offset = target.mean() if intercept else 0.0
+    slopes = np.linalg.solve(z.T @ z + alpha * np.eye(z.shape[1]), z.T @ (target - offset)) / scale
+    return np.concatenate([[offset - mean @ slopes], slopes]) if intercept else slopes
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """Filters to replay at once: one column per candidate (per-hour units, as the section holds them)."""
+
+    terms: list[tuple[str, ...]]
+    offset_sigma: np.ndarray
+    drift_sigma: np.ndarray
+    drift_tau_h: np.ndarray
+    gain_sigma: np.ndarray
+    initial_offset: np.ndarray
+    initial_drift: np.ndarray
+    initial_gain: np.ndarray
+    probe_sigma: np.ndarray
+    gate_sigmas: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.terms)
+
+    def section(self, k: int, *, offset_max_um: float, rate_um: float, chosen: dict) -> Recalibration:
+        terms = self.terms[k]
+        hold = terms == ("offset",) and self.probe_sigma[k] == 0
+        return Recalibration(
+            method="hold" if hold else "kalman",
+            terms=terms,
+            offset_sigma_um_per_sqrt_h=float(self.offset_sigma[k]),
+            drift_sigma_um_per_h_per_sqrt_h=float(self.drift_sigma[k]),
+            drift_tau_h=float(self.drift_tau_h[k]),
+            gain_sigma_per_sqrt_h=float(self.gain_sigma[k]),
+            initial_offset_sigma_um=float(self.initial_offset[k]),
+            initial_drift_sigma_um_per_h=float(self.initial_drift[k]),
+            initial_gain_sigma=float(self.initial_gain[k]),
+            probe_sigma_um=float(self.probe_sigma[k]),
+            gate_sigmas=float(self.gate_sigmas[k]),
+            confirm_after=CONFIRM_AFTER,
+            offset_max_um=float(offset_max_um),
+            drift_max_um_per_h=float(offset_max_um) if "drift" in terms else 0.0,
+            gain_max=1.0 if "gain" in terms else 0.0,
+            rate_um_per_sample=float(rate_um),
+            chosen=chosen,
+        )
+
+
+def candidate_grid(*, hold_sigma: float, initial_offset: float, method: str = "auto") -> Candidates:
+    """The hold (first), then the Kalman filters: offset alone, with a drift, a gain, or both."""
+    rows = [(("offset",), hold_sigma, 0.0, 1.0, 0.0, initial_offset, 0.0, 0.0, 0.0)]
+    if method != "hold":
+        drifts = [(s, tau) for s in (0.3, 1.0, 3.0) for tau in (0.5, 2.0, 8.0)]
+        gains = [(s, g0) for s in (0.0, 0.02) for g0 in (0.1, 0.3, 1.0)]
+        for offset, probe in itertools.product((0.3, 1.0, 3.0, 10.0), (0.1, 0.3, 1.0)):
+            for drift, gain in itertools.product([None, *drifts], [None, *gains]):
+                terms = ("offset",) + (("drift",) if drift else ()) + (("gain",) if gain else ())
+                ds, tau = drift or (0.0, 1.0)
+                gs, g0 = gain or (0.0, 0.0)
+                rows.append((terms, offset, ds, tau, gs, initial_offset, ds * math.sqrt(tau / 2), g0, probe))
+    columns = list(zip(*rows))
+    arrays = [np.asarray(c, dtype=float) for c in columns[1:]]
+    return Candidates(list(columns[0]), *arrays, gate_sigmas=np.full(len(rows), GATE_SIGMAS))
+
+
+def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, period_s: float) -> tuple[np.ndarray, int]:
+    """Sum of squared corrected residuals of every candidate over one stretch, checks every ``every`` samples.
+
+    Returns the sums (one per candidate) and the number of scored samples.
+    """
+    c = candidates
+    h = period_s / 3600.0
+    g = len(c)
+    q = np.stack([c.offset_sigma**2 * h, c.drift_sigma**2 * h**3, c.gain_sigma**2 * h])
+    phi = np.exp(-period_s / (c.drift_tau_h * 3600.0))
+    r = c.probe_sigma**2
+    gate2 = c.gate_sigmas**2
+    offset_max = np.full(g, np.inf)
+    x = np.zeros((3, g))
+    P = np.zeros((3, 3, g))
+    P[0, 0], P[1, 1], P[2, 2] = c.initial_offset**2, (c.initial_drift * h) ** 2, c.initial_gain**2
+    rejected = np.zeros(g)
+    total = np.zeros(g)
+    scored = 0
+    for k, (res, m) in enumerate(zip(held.residual.tolist(), held.prediction.tolist())):
+        x[0] = x[0] + x[1]
+        x[1] = phi * x[1]
+        A = np.stack([P[0] + P[1], phi * P[1], P[2]])
+        P = np.stack([A[:, 0] + A[:, 1], A[:, 1] * phi, A[:, 2]], axis=1)
+        P[0, 0] += q[0]
+        P[1, 1] += q[1]
+        P[2, 2] += q[2]
+        if math.isnan(res):
+            continue
+        error = res - (x[0] + x[2] * m)
+        total += error * error
+        scored += 1
+        if (k + 1) % every:
+            continue
+        ph = P[:, 0] + P[:, 2] * m
+        hp = P[0, :] + P[2, :] * m
+        s = hp[0] + hp[2] * m + r
+        reject = (error * error > gate2 * s) & (rejected < CONFIRM_AFTER)
+        rejected = np.where(reject, rejected + 1, 0)
+        gain = np.where(reject, 0.0, ph / s)
+        x = np.clip(x + gain * error, -offset_max, offset_max)
+        P = P - gain[:, None, :] * hp[None, :, :]
+    return total, scored
+
+
+@dataclass(frozen=True)
+class Tuning:
+    """What :func:`choose_recalibration` found: the section and the held-out table behind it."""
+
+    section: Recalibration | None
+    intervals_s: tuple[float, ...]
+    rms_none_um: float
+    rms_hold_um: tuple[float, ...]
+    rms_chosen_um: tuple[float, ...]
+
+
+def choose_recalibration(
+    model: ModelFile,
+    runs: Sequence,
+    *,
+    method: str = "auto",
+    intervals_s: Sequence[float] = INTERVALS_S,
+    cuts: Sequence[float] = CUTS,
+) -> Tuning:
+    """Choose and tune the recalibration filter of ``model`` on held-out stretches of its modelling ``runs``.
+
+    Parameters
+    ----------
+    model : ModelFile
+    runs : sequence of (frame, error)
+        The modelling runs (the frame with the model's columns, the measured error per row).
+    method : {"auto", "hold", "kalman", "none"}
+        ``auto``: the best on held-out data (the hold unless a Kalman filter
+        beats it); ``kalman``: the best Kalman filter even if the hold does
+        better; ``none``: no section.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    intervals = tuple(float(v) for v in intervals_s)
+    if method == "none":
+        return Tuning(None, intervals, math.nan, (), ())
+    section = model.switching
+    offset_max = float(max(-section.comp_min_um, section.comp_max_um)) if section.comp_max_um else 1000.0
+    rate = float(section.rate_limit_um) if section.rate_limit_um else offset_max
+    period = float(model.sampling_period_s)
+    series = held_out_series(model, runs, cuts=cuts)
+    if not series:
+        return _default(offset_max, rate, intervals, reason="the modelling runs are too short to hold part out")
+    residuals = np.concatenate([s.residual for s in series])
+    rms_none = float(np.sqrt(np.nanmean(residuals**2)))
+    everies = [max(1, int(round(t / period))) for t in intervals]
+    hold_sigma = _hold_sigma(series, everies, period)
+    candidates = candidate_grid(hold_sigma=hold_sigma, initial_offset=max(1.0, 2.0 * rms_none), method=method)
+    rms = np.empty((len(everies), len(candidates)))
+    for i, every in enumerate(everies):
+        totals = [replay_candidates(s, candidates, every=every, period_s=period) for s in series]
+        rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
+    ratio = rms / rms[:, :1]
+    score = np.mean(np.log(ratio), axis=0)
+    allowed = np.all(ratio <= HOLD_TOLERANCE, axis=0) | (method == "kalman")
+    allowed[0] = allowed[0] and method != "kalman"
+    best = int(np.flatnonzero(allowed)[np.argmin(score[allowed])])
+    chosen = {
+        "by": "held-out checks",
+        "method_asked": method,
+        "folds": f"each run refitted on its first {', '.join(f'{100 * c:g} %' for c in cuts)}, the rest predicted",
+        "held_out_samples": int(np.sum(np.isfinite(residuals))),
+        "intervals_s": list(intervals),
+        "rms_none_um": rms_none,
+        "rms_hold_um": [float(v) for v in rms[:, 0]],
+        "rms_chosen_um": [float(v) for v in rms[:, best]],
+        "candidates": len(candidates),
+    }
+    return Tuning(
+        candidates.section(best, offset_max_um=offset_max, rate_um=rate, chosen=chosen),
+        intervals,
+        rms_none,
+        tuple(float(v) for v in rms[:, 0]),
+        tuple(float(v) for v in rms[:, best]),
+    )
+
+
+def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: float) -> float:
+    """The hold's offset noise (µm/√h) whose gate passes every held-out change over a check interval twice over."""
+    worst = 0.0
+    for every in everies:
+        hours = every * period_s / 3600.0
+        for s in series:
+            r = s.residual
+            if len(r) > every:
+                change = np.nanmax(np.abs(r[every:] - r[:-every])) if np.isfinite(r).sum() > every else 0.0
+                worst = max(worst, float(change) / math.sqrt(hours))
+    return max(1.0, GATE_SPARE * worst / GATE_SIGMAS)
+
+
+def _default(offset_max: float, rate: float, intervals, *, reason: str) -> Tuning:
+    section = Recalibration(
+        method="hold",
+        offset_sigma_um_per_sqrt_h=5.0,
+        initial_offset_sigma_um=10.0,
+        gate_sigmas=GATE_SIGMAS,
+        confirm_after=CONFIRM_AFTER,
+        offset_max_um=offset_max,
+        rate_um_per_sample=rate,
+        chosen={"by": "default", "reason": reason},
+    )
+    return Tuning(section, intervals, math.nan, (), ())
+
+
+__all__ = ["CUTS", "INTERVALS_S", "METHODS", "HeldOut", "Tuning", "choose_recalibration", "held_out_series"]

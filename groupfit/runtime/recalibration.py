@@ -1,0 +1,222 @@
+"""Recalibration from probe checks: the filter the run-time rule runs, in the order every export runs it.
+
+The filter carries up to three states ``x = (offset µm, drift µm/sample, gain)``
+and their 3×3 covariance ``P`` (a state the model's ``recalibration`` section
+does not list keeps zero variance and stays exactly 0). Per sample, before the
+prediction (:meth:`Recalibrator.propagate`)::
+
+    x0 = x0 + x1;  x1 = phi·x1                      (the drift moves the offset and decays)
+    A  = F·P:  A0j = P0j + P1j,  A1j = phi·P1j,  A2j = P2j
+    P  = A·Fᵀ: Pi0 = Ai0 + Ai1,  Pi1 = Ai1·phi,  Pi2 = Ai2;  Pii = Pii + q_i
+    clamp x_i to ±x_max_i
+
+After the model's prediction ``m`` (:meth:`Recalibrator.correct`), the target
+correction ``x0 + x2·m``; the applied correction ``c`` moves towards it by at
+most ``rate`` per sample, and the rule predicts ``m + c`` (the compensation is
+``−(m + c)``, clamped and rate-limited as before). Under a sensor fault the
+output is the safe one and ``c`` is left as it is.
+
+A probe check ``z`` (the measured thermal error, µm, after the sample's step;
+:meth:`Recalibrator.probe`) is ignored (:data:`PROBE_IGNORED`) before the first
+sample, after a sample with a held or faulty reading, or when ``z`` is not a
+number within ±:data:`PROBE_LIMIT_UM`. Otherwise, with ``h = (1, 0, m)``::
+
+    nu = (z − m) − (x0 + x2·m)                       (innovation)
+    Ph_i = Pi0 + Pi2·m;  hP_j = P0j + P2j·m;  S = hP0 + hP2·m + r
+    if not S > 0: ignored
+    if nu·nu > gate²·S and rejected-in-a-row < confirm_after: rejected (flagged, nothing changes)
+    K_i = Ph_i / S;  x_i = x_i + K_i·nu;  Pij = Pij − K_i·hP_j;  clamp x;  applied
+
+The hold is the filter with ``x = (offset)``, ``r = 0``: ``K0 = 1``, the
+offset becomes the check's residual and its variance 0, growing by ``q0`` per
+sample until the next check (so its gate widens with the time since a check).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from groupfit.model import ModelFile, Recalibration
+
+PROBE_APPLIED = 1
+PROBE_REJECTED = 0
+PROBE_IGNORED = -1
+PROBE_LIMIT_UM = 1.0e5
+"""A probe reading beyond this (µm) is not a reading (the data's error limit)."""
+N_STATES = 3
+DEFAULT_SECTION = {
+    "method": "hold",
+    "terms": ["offset"],
+    "offset_sigma_um_per_sqrt_h": 5.0,
+    "initial_offset_sigma_um": 10.0,
+    "gate_sigmas": 5.0,
+    "confirm_after": 2,
+    "chosen": {"by": "default: the model file has no recalibration section"},
+}
+"""The filter of a model without a ``recalibration`` section (bounds from its switching rule)."""
+
+
+@dataclass(frozen=True)
+class RecalTable:
+    """The filter's constants, per sample (what every target embeds).
+
+    Attributes
+    ----------
+    method, terms : as in the section
+    q : tuple of 3 float
+        Process variance added per sample to offset (µm²), drift ((µm/sample)²), gain.
+    phi : float
+        Decay of the drift per sample, ``exp(−Δt/τ)``.
+    r : float
+        Variance of one check (µm²).
+    p0 : tuple of 3 float
+        Initial variances.
+    gate2 : float
+        ``gate_sigmas²``.
+    confirm_after : int
+    x_max : tuple of 3 float
+        Bounds of offset (µm), drift (µm/sample), gain.
+    rate_um : float
+        Largest move of the applied correction per sample (µm).
+    """
+
+    method: str
+    terms: tuple[str, ...]
+    q: tuple[float, float, float]
+    phi: float
+    r: float
+    p0: tuple[float, float, float]
+    gate2: float
+    confirm_after: int
+    x_max: tuple[float, float, float]
+    rate_um: float
+
+    @classmethod
+    def from_section(cls, section: Recalibration, period_s: float) -> "RecalTable":
+        """The per-sample constants of a section at the model's sampling period."""
+        h = period_s / 3600.0
+        s = section
+        return cls(
+            method=s.method,
+            terms=tuple(s.terms),
+            q=(s.offset_sigma_um_per_sqrt_h**2 * h, s.drift_sigma_um_per_h_per_sqrt_h**2 * h**3, s.gain_sigma_per_sqrt_h**2 * h),
+            phi=math.exp(-period_s / (s.drift_tau_h * 3600.0)),
+            r=s.probe_sigma_um**2,
+            p0=(s.initial_offset_sigma_um**2, (s.initial_drift_sigma_um_per_h * h) ** 2, s.initial_gain_sigma**2),
+            gate2=s.gate_sigmas**2,
+            confirm_after=int(s.confirm_after),
+            x_max=(s.offset_max_um, s.drift_max_um_per_h * h, s.gain_max),
+            rate_um=s.rate_um_per_sample,
+        )
+
+
+def model_section(model: ModelFile, *, comp_limit_um: float, rate_limit_um: float) -> Recalibration:
+    """The model's section, or :data:`DEFAULT_SECTION` bounded by the rule's clamp and rate limit."""
+    if model.recalibration is not None:
+        return model.recalibration
+    return Recalibration(**{**DEFAULT_SECTION, "terms": ("offset",)}, offset_max_um=comp_limit_um, rate_um_per_sample=rate_limit_um)
+
+
+class Recalibrator:
+    """The filter's state and its three operations, in double or single precision (``real``: float or float32)."""
+
+    def __init__(self, table: RecalTable, real: Any = float):
+        self.table = table
+        self._real = real
+        self._q = [real(v) for v in table.q]
+        self._p0 = [real(v) for v in table.p0]
+        self._phi = real(table.phi)
+        self._r = real(table.r)
+        self._gate2 = real(table.gate2)
+        self._max = [real(v) for v in table.x_max]
+        self._rate = real(table.rate_um)
+        self._limit = real(PROBE_LIMIT_UM)
+        self._zero = real(0.0)
+        self.reset()
+
+    def reset(self) -> None:
+        """No check yet: states 0, initial variances, no correction, no prediction to check against."""
+        zero = self._zero
+        self.x = [zero] * N_STATES
+        self.P = [[self._p0[i] if i == j else zero for j in range(N_STATES)] for i in range(N_STATES)]
+        self.applied = zero
+        self.model_um = zero
+        self.usable = False
+        self.rejected_in_row = 0
+
+    def propagate(self) -> None:
+        """The time update of one sample (before the prediction)."""
+        x, P, phi = self.x, self.P, self._phi
+        x[0] = x[0] + x[1]
+        x[1] = phi * x[1]
+        A = [[P[0][j] + P[1][j] for j in range(N_STATES)], [phi * P[1][j] for j in range(N_STATES)], list(P[2])]
+        for i in range(N_STATES):
+            P[i] = [A[i][0] + A[i][1], A[i][1] * phi, A[i][2]]
+            P[i][i] = P[i][i] + self._q[i]
+        self._clamp()
+
+    def _clamp(self) -> None:
+        for i in range(N_STATES):
+            if self.x[i] > self._max[i]:
+                self.x[i] = self._max[i]
+            if self.x[i] < -self._max[i]:
+                self.x[i] = -self._max[i]
+
+    def correct(self, model_um, *, usable: bool = True):
+        """The applied correction of this sample, after the model's prediction ``model_um`` (rate-limited)."""
+        self.model_um = model_um
+        self.usable = usable
+        target = self.x[0] + self.x[2] * model_um
+        delta = target - self.applied
+        if delta > self._rate:
+            delta = self._rate
+        if delta < -self._rate:
+            delta = -self._rate
+        self.applied = self.applied + delta
+        return self.applied
+
+    def invalidate(self) -> None:
+        """A sample in sensor fault: no prediction a check could be compared with."""
+        self.usable = False
+
+    def innovation(self, measured_um):
+        """``(z − m) − (x0 + x2·m)`` against the last sample's prediction ``m``."""
+        m = self.model_um
+        return (self._real(measured_um) - m) - (self.x[0] + self.x[2] * m)
+
+    def probe(self, measured_um: float) -> int:
+        """Fold one check into the state: :data:`PROBE_APPLIED`, :data:`PROBE_REJECTED` or :data:`PROBE_IGNORED`."""
+        z = float(measured_um)
+        if not self.usable or not (z >= -PROBE_LIMIT_UM and z <= PROBE_LIMIT_UM):
+            return PROBE_IGNORED
+        m, P = self.model_um, self.P
+        nu = self.innovation(z)
+        ph = [P[i][0] + P[i][2] * m for i in range(N_STATES)]
+        hp = [P[0][j] + P[2][j] * m for j in range(N_STATES)]
+        s = hp[0] + hp[2] * m + self._r
+        if not s > self._zero:
+            return PROBE_IGNORED
+        if nu * nu > self._gate2 * s and self.rejected_in_row < self.table.confirm_after:
+            self.rejected_in_row += 1
+            return PROBE_REJECTED
+        self.rejected_in_row = 0
+        gain = [ph[i] / s for i in range(N_STATES)]
+        for i in range(N_STATES):
+            self.x[i] = self.x[i] + gain[i] * nu
+            P[i] = [P[i][j] - gain[i] * hp[j] for j in range(N_STATES)]
+        self._clamp()
+        return PROBE_APPLIED
+
+
+__all__ = [
+    "DEFAULT_SECTION",
+    "PROBE_APPLIED",
+    "PROBE_IGNORED",
+    "PROBE_LIMIT_UM",
+    "PROBE_REJECTED",
+    "RecalTable",
+    "Recalibrator",
+    "model_section",
+]
