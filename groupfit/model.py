@@ -399,6 +399,8 @@ def _frozen(value: Any) -> Any:
 
 def _plain(value: Any) -> Any:
     """Tuples as lists, numpy scalars as Python numbers, objects by their ``to_dict``, all the way down (JSON)."""
+    if isinstance(value, Recalibration):  # a section of its own module: its fields map to keys here too
+        return _fields_to_dict(value)
     if hasattr(value, "to_dict"):
         return value.to_dict()
     if isinstance(value, (list, tuple)):

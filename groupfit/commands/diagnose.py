@@ -19,6 +19,7 @@ from groupfit.commands.common import (
     write_json,
     wrote_line,
 )
+from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.data import Run, load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
@@ -116,6 +117,7 @@ def add_parser(verbs) -> None:
         help="each --validate file is the rest of the recording before it (the last --data file, then the "
         "previous --validate file) even though its clock starts again: judged with that history in front",
     )
+    add_recalibrate_option(parser)
     parser.set_defaults(handler=run_diagnose)
 
 
@@ -204,9 +206,13 @@ def run_diagnose(args: argparse.Namespace) -> int:
 
     model_path = Path(args.model)
     written = []
-    if result.changed:
-        model_path = out_dir / "model_augmented.json"
-        ModelFile.coerce(result.model).save(model_path)  # checked: an invalid model is never written
+    recal_note = ""
+    if result.changed or args.recalibrate != "auto":
+        augmented, recal_note = recalibrated(
+            ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate
+        )
+        model_path = out_dir / ("model_augmented.json" if result.changed else "model_recalibrated.json")
+        augmented.save(model_path)  # checked: an invalid model is never written
         written.append(model_path)
     figure = out_dir / "diagnose.png"
     runs = {"data": data, **({"validate": validate} if validate else {})}
@@ -214,5 +220,5 @@ def run_diagnose(args: argparse.Namespace) -> int:
     written.append(figure)
 
     written.append(write_json(args.json, result.to_json(model_path)))
-    print(result.summary() + "\nwrote   " + wrote_line(written), file=report_stream(args))
+    print(result.summary() + recal_note + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0

@@ -26,6 +26,7 @@ from groupfit.commands.common import (
     write_json,
     wrote_line,
 )
+from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.config import default_config_path, override
 from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C, Run, join_runs, measured_rows
 from groupfit.errors import InputError
@@ -104,6 +105,7 @@ def add_parser(verbs) -> None:
     add_quiet_option(fit)
     add_budget_option(fit)
     add_interval_options(fit)
+    add_recalibrate_option(fit)
     fit.set_defaults(handler=run_fit)
 
 
@@ -214,6 +216,8 @@ def run_fit(args: argparse.Namespace) -> int:
         intercept = config["model"]["intercept"]
         grouped = model.to_dict() if estimator.p > 0 else None
         held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)
+        model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
+        position_note = recal_note + position_note
     result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
     run = fit_run
 

@@ -22,6 +22,13 @@ from groupfit.commands.common import (
     wrote_line,
 )
 from groupfit.commands.screw_deploy import run_screw_replay
+from groupfit.commands.replay_probes import (
+    add_probe_options,
+    probe_report,
+    probe_schedule,
+    probe_summary,
+    sample_probe,
+)
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
@@ -68,6 +75,7 @@ def add_parser(verbs) -> None:
         help="largest magnitude of those counts (default 30000)",
     )
     replay.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
+    add_probe_options(replay)
     add_json_option(replay, "the per-sample result")
     add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
@@ -89,8 +97,14 @@ def run_replay(args: argparse.Namespace) -> int:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
         raise InputError(f"{run.source}: {exc}") from None
-    replay = rule.replay(run.temps)
-    result = ReplayResult(replay_result(model, rule.tables, run, replay, args.model, counts))
+    probes = probe_schedule(args, run)
+    replay = rule.replay(run.temps, probes)
+    data = replay_result(model, rule.tables, run, replay, args.model, counts)
+    if probes is not None:
+        unchecked = residuals(run, rule.replay(run.temps))
+        rms_without = float(np.sqrt(np.nanmean(unchecked**2))) if unchecked is not None else None
+        data["probes"] = probe_summary(args, replay, probes, rms_without)
+    result = ReplayResult(data)
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"
@@ -182,6 +196,8 @@ def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, mod
             sample["compensation_counts"] = counts.counts(replay.compensation_um[k])
         if residual is not None:
             sample["residual_um"] = None if np.isnan(residual[k]) else float(residual[k])
+        if replay.probe is not None and replay.probe[k]:
+            sample["probe"] = sample_probe(replay, k)
         samples.append(sample)
     scored = residual[~np.isnan(residual)] if residual is not None else np.empty(0)
     metrics = (
@@ -243,6 +259,8 @@ def replay_report(result: dict[str, Any]) -> str:
         ),
     ]
     lines.append(residual_line(result))
+    if "probes" in result:
+        lines.append(probe_report(result))
     return "\n".join(lines)
 
 

@@ -32,7 +32,15 @@ float32 value to double and rounds the power to float32 once.
 """
 
 from groupfit.model import MAX_DELAY_SAMPLES, RULE_KEYS, SOURCE_RANGES_KEY
-from groupfit.runtime.interpreter import Replay, StepResult, SwitchingRule, check_period, replay_groups
+from groupfit.runtime.interpreter import (
+    PROBE_CODE_OFFSET,
+    Replay,
+    StepResult,
+    SwitchingRule,
+    check_period,
+    replay_groups,
+)
+from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RecalTable, Recalibrator
 from groupfit.runtime.rule import (
     COUNT_MAX,
     DERIVATIVE_SCALE_S,
@@ -74,6 +82,10 @@ __all__ = [
     "LEGACY_TEMP_RANGE_C",
     "MAX_DELAY_SAMPLES",
     "PERIOD_TOLERANCE",
+    "PROBE_APPLIED",
+    "PROBE_CODE_OFFSET",
+    "PROBE_IGNORED",
+    "PROBE_REJECTED",
     "RETURN_PERIOD_FAULT",
     "RETURN_SENSOR_FAULT",
     "RULE_FORMAT",
@@ -83,6 +95,8 @@ __all__ = [
     "SWITCH_FORCED",
     "SWITCH_NONE",
     "DerivedTable",
+    "RecalTable",
+    "Recalibrator",
     "Replay",
     "RuleSettings",
     "RuleTables",

@@ -101,7 +101,11 @@ class RecalTable:
         return cls(
             method=s.method,
             terms=tuple(s.terms),
-            q=(s.offset_sigma_um_per_sqrt_h**2 * h, s.drift_sigma_um_per_h_per_sqrt_h**2 * h**3, s.gain_sigma_per_sqrt_h**2 * h),
+            q=(
+                s.offset_sigma_um_per_sqrt_h**2 * h,
+                s.drift_sigma_um_per_h_per_sqrt_h**2 * h**3,
+                s.gain_sigma_per_sqrt_h**2 * h,
+            ),
             phi=math.exp(-period_s / (s.drift_tau_h * 3600.0)),
             r=s.probe_sigma_um**2,
             p0=(s.initial_offset_sigma_um**2, (s.initial_drift_sigma_um_per_h * h) ** 2, s.initial_gain_sigma**2),
@@ -116,7 +120,9 @@ def model_section(model: ModelFile, *, comp_limit_um: float, rate_limit_um: floa
     """The model's section, or :data:`DEFAULT_SECTION` bounded by the rule's clamp and rate limit."""
     if model.recalibration is not None:
         return model.recalibration
-    return Recalibration(**{**DEFAULT_SECTION, "terms": ("offset",)}, offset_max_um=comp_limit_um, rate_um_per_sample=rate_limit_um)
+    return Recalibration(
+        **{**DEFAULT_SECTION, "terms": ("offset",)}, offset_max_um=comp_limit_um, rate_um_per_sample=rate_limit_um
+    )
 
 
 class Recalibrator:

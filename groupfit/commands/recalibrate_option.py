@@ -1,0 +1,44 @@
+"""``--recalibrate METHOD|auto`` of ``groupfit fit`` and ``groupfit diagnose``: the model's recalibration section."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Sequence
+
+from groupfit.model import ModelFile
+from groupfit.recalibration_tuning import METHODS, choose_recalibration
+
+
+def add_recalibrate_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--recalibrate",
+        choices=METHODS,
+        default="auto",
+        help="how probe checks correct the compensation at run time (the model file's recalibration section): "
+        "auto (default: the offset hold or a Kalman filter, whichever serves better on held-out stretches of the "
+        "modelling runs with simulated checks every 15 min … 2 h), hold, kalman, or none",
+    )
+
+
+def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFile, str]:
+    """The model with its recalibration section chosen on ``runs`` ((frame, error) pairs), and a report line."""
+    tuning = choose_recalibration(model, runs, method=method)
+    if tuning.section is None:
+        return model.replace(recalibration=None), ""
+    section = tuning.section
+    line = f"\nrecal   {section.description}"
+    if tuning.rms_hold_um:
+        minutes = "/".join(f"{t / 60:g}" for t in tuning.intervals_s)
+        line += (
+            f", chosen on held-out checks; RMS with a check every {minutes} min: "
+            + "/".join(f"{v:.3g}" for v in tuning.rms_chosen_um)
+            + " µm (offset hold "
+            + "/".join(f"{v:.3g}" for v in tuning.rms_hold_um)
+            + f", no checks {tuning.rms_none_um:.3g})"
+        )
+    else:
+        line += f" ({section.chosen.get('reason', 'default')})"
+    return model.replace(recalibration=section), line
+
+
+__all__ = ["add_recalibrate_option", "recalibrated"]

@@ -1,0 +1,100 @@
+"""``groupfit replay --probe-every SECONDS [--probe-column COLUMN]``: a replay with probe checks.
+
+The checks fall every ``SECONDS`` (rounded to whole samples; the first after
+that many samples), reading the run's error column, or ``--probe-column``
+(a logged check with its own error; alone, every row where that column holds
+a number is a check). A check follows its sample's step, as ``gf_probe``
+follows ``gf_step`` on the controller (``docs/recalibration.md``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+import numpy as np
+
+from groupfit.data import numeric_column
+from groupfit.errors import InputError
+from groupfit.runtime import PROBE_CODE_OFFSET, Replay
+from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
+
+PROBE_NAMES = {PROBE_APPLIED: "applied", PROBE_REJECTED: "rejected", PROBE_IGNORED: "ignored"}
+
+
+def add_probe_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--probe-every",
+        type=float,
+        metavar="SECONDS",
+        help="replay a probe check every SECONDS (the error column, or --probe-column, at those samples), "
+        "folded into the compensation by the model's recalibration section",
+    )
+    parser.add_argument(
+        "--probe-column",
+        metavar="COLUMN",
+        help="the probe's reading in µm (default: the run's error column); "
+        "without --probe-every every row where it holds a number is a check",
+    )
+
+
+def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
+    """Per sample the probe reading (µm), NaN where there is no check; None without probe options."""
+    if args.probe_every is None and args.probe_column is None:
+        return None
+    if args.probe_every is not None and not (math.isfinite(args.probe_every) and args.probe_every > 0):
+        raise InputError(f"--probe-every {args.probe_every:g}: must be a number of seconds > 0")
+    if args.probe_column is not None:
+        reading = numeric_column(run.frame, args.probe_column, run.source, allow_nonfinite=True)
+    elif run.error is not None:
+        reading = np.asarray(run.error, dtype=float)
+    else:
+        raise InputError(f"{run.source}: no error column for the probe checks; name one with --probe-column")
+    probes = np.full(run.n_samples, np.nan)
+    if args.probe_every is None:
+        rows = np.arange(run.n_samples)
+    else:
+        every = max(1, int(round(args.probe_every / run.period)))
+        rows = np.arange(every - 1, run.n_samples, every)
+    probes[rows] = reading[rows]
+    return probes
+
+
+def probe_summary(args: argparse.Namespace, replay: Replay, probes: np.ndarray, rms_without: float | None) -> dict:
+    """The ``probes`` object of ``replay --json``: the schedule, the counts and every check's outcome."""
+    counts = replay.probe_counts()
+    checks = []
+    for i in np.flatnonzero(replay.probe):
+        code = int(replay.probe[i]) - PROBE_CODE_OFFSET
+        checks.append({"i": int(i) + 1, "reading_um": float(probes[i]), "result": PROBE_NAMES[code]})
+    return {
+        "every_s": args.probe_every,
+        "column": args.probe_column,
+        **counts,
+        "rms_without_checks_um": rms_without,
+        "checks": checks,
+    }
+
+
+def sample_probe(replay: Replay, k: int) -> str | None:
+    """What the check at sample ``k`` (0-based) came to, or None without one."""
+    if replay.probe is None or not replay.probe[k]:
+        return None
+    return PROBE_NAMES[int(replay.probe[k]) - PROBE_CODE_OFFSET]
+
+
+def probe_report(result: dict[str, Any]) -> str:
+    """The summary line of the checks."""
+    p = result["probes"]
+    schedule = f"every {p['every_s']:g} s" if p["every_s"] is not None else f"logged in '{p['column']}'"
+    line = (
+        f"probes   {len(p['checks'])} check(s) {schedule}: {p['applied']} applied, {p['rejected']} rejected "
+        f"by the gate (flagged, not applied), {p['ignored']} ignored (sensor fault or no reading)"
+    )
+    if p["rms_without_checks_um"] is not None and result["rms_um"] is not None:
+        line += f"; RMS {result['rms_um']:.4g} µm with them, {p['rms_without_checks_um']:.4g} µm without"
+    return line
+
+
+__all__ = ["add_probe_options", "probe_report", "probe_schedule", "probe_summary", "sample_probe"]
