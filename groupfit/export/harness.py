@@ -78,6 +78,7 @@ def build_driver(
     single: bool = False,
     flags: Sequence[str] = ("-O2",),
     compiler: str = "gcc",
+    driver_source: str = DRIVER_C,
 ) -> Path:
     """Compile ``groupfit_model.c`` of ``export_dir`` with the driver; return the executable.
 
@@ -86,7 +87,7 @@ def build_driver(
     """
     export_dir = Path(export_dir)
     driver = export_dir / "groupfit_driver.c"
-    driver.write_text(DRIVER_C, encoding="ascii")
+    driver.write_text(driver_source, encoding="ascii")
     command = [
         compiler,
         *STRICT_FLAGS,

@@ -1,0 +1,214 @@
+"""C pieces of the recalibration from probe checks: ``gf_probe()`` and the filter's state and steps.
+
+:func:`groupfit.export.c.render_c` fills its templates with :func:`probe_header`
+and :func:`probe_source`; the operations are those of
+:class:`groupfit.runtime.recalibration.Recalibrator`, in its order.
+"""
+
+from __future__ import annotations
+
+from string import Template
+
+from groupfit.export.literals import double_literal, real_literal
+from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables
+from groupfit.runtime.recalibration import PROBE_LIMIT_UM
+
+FIELDS = """    gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
+    gf_real rc_P[3][3];         /* their covariance */
+    gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
+    gf_real rc_model_um;        /* the model's own prediction at the last sample (um) */
+    int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
+    int rc_rejected;            /* checks rejected by the gate in a row */
+"""
+
+DECLARATION = """
+/*
+ * Probe checks (docs/recalibration.md of groupfit): after gf_step() of the
+ * sample at which the machine touched its reference artefact, call
+ * gf_probe(s, e) with e the measured thermal error in um - the deviation the
+ * probe saw plus the compensation then active (s->comp_um), i.e. the error the
+ * model predicts, not the residual. It returns GF_PROBE_APPLIED, GF_PROBE_REJECTED
+ * (the innovation gate: a gross reading, flagged and never applied) or
+ * GF_PROBE_IGNORED (that sample was in a sensor fault or on held readings, or e is
+ * not a number within +-GF_PROBE_LIMIT_UM). From the next gf_step() on, the
+ * prediction includes the correction, and s->comp_um with it. On a SINUMERIK the
+ * correction moves the position-independent offset (SD43900) the compensation
+ * already writes; no other datum changes.
+ */
+#define GF_PROBE_APPLIED $applied
+#define GF_PROBE_REJECTED $rejected
+#define GF_PROBE_IGNORED ($ignored)
+#define GF_PROBE_LIMIT_UM $limit
+int gf_probe(gf_state *s, double measured_error_um);
+"""
+
+CONSTANTS = """
+/* Recalibration ($description): per sample process variance q, initial variance p0 (offset um^2,
+ * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, state bounds, rate of the correction. */
+static const gf_real gf_rc_q[3] = { $q };
+static const gf_real gf_rc_p0[3] = { $p0 };
+static const gf_real gf_rc_max[3] = { $x_max };
+static const gf_real gf_rc_phi = $phi;
+static const gf_real gf_rc_r = $r;
+static const gf_real gf_rc_gate2 = $gate2;
+static const gf_real gf_rc_rate = $rate;
+#define GF_RC_CONFIRM_AFTER $confirm
+
+static void gf_rc_reset(gf_state *s)
+{
+    int i, j;
+    for (i = 0; i < 3; i++) {
+        s->rc_x[i] = 0;
+        for (j = 0; j < 3; j++) {
+            s->rc_P[i][j] = (i == j) ? gf_rc_p0[i] : (gf_real)0;
+        }
+    }
+    s->rc_applied_um = 0;
+    s->rc_model_um = 0;
+    s->rc_usable = 0;
+    s->rc_rejected = 0;
+}
+
+static void gf_rc_clamp(gf_state *s)
+{
+    int i;
+    for (i = 0; i < 3; i++) {
+        if (s->rc_x[i] > gf_rc_max[i]) {
+            s->rc_x[i] = gf_rc_max[i];
+        }
+        if (s->rc_x[i] < -gf_rc_max[i]) {
+            s->rc_x[i] = -gf_rc_max[i];
+        }
+    }
+}
+
+/* Time update of one sample: the drift moves the offset and decays; P = F P F' + Q. */
+static void gf_rc_propagate(gf_state *s)
+{
+    gf_real a[3][3];
+    int i, j;
+    s->rc_x[0] = s->rc_x[0] + s->rc_x[1];
+    s->rc_x[1] = gf_rc_phi * s->rc_x[1];
+    for (j = 0; j < 3; j++) {
+        a[0][j] = s->rc_P[0][j] + s->rc_P[1][j];
+        a[1][j] = gf_rc_phi * s->rc_P[1][j];
+        a[2][j] = s->rc_P[2][j];
+    }
+    for (i = 0; i < 3; i++) {
+        s->rc_P[i][0] = a[i][0] + a[i][1];
+        s->rc_P[i][1] = a[i][1] * gf_rc_phi;
+        s->rc_P[i][2] = a[i][2];
+        s->rc_P[i][i] = s->rc_P[i][i] + gf_rc_q[i];
+    }
+    gf_rc_clamp(s);
+}
+
+/* The correction of this sample after the model's prediction: towards offset + gain * prediction, rate-limited. */
+static gf_real gf_rc_correct(gf_state *s, gf_real model_um, int usable)
+{
+    gf_real delta;
+    s->rc_model_um = model_um;
+    s->rc_usable = usable;
+    delta = (s->rc_x[0] + s->rc_x[2] * model_um) - s->rc_applied_um;
+    if (delta > gf_rc_rate) {
+        delta = gf_rc_rate;
+    }
+    if (delta < -gf_rc_rate) {
+        delta = -gf_rc_rate;
+    }
+    s->rc_applied_um = s->rc_applied_um + delta;
+    return s->rc_applied_um;
+}
+"""
+
+FUNCTION = """
+int gf_probe(gf_state *s, double measured_error_um)
+{
+    gf_real m = s->rc_model_um;
+    gf_real nu, sv, ph[3], hp[3], k[3];
+    int i, j;
+    if (!s->rc_usable || !(measured_error_um >= -GF_PROBE_LIMIT_UM && measured_error_um <= GF_PROBE_LIMIT_UM)) {
+        return GF_PROBE_IGNORED;
+    }
+    nu = ((gf_real)measured_error_um - m) - (s->rc_x[0] + s->rc_x[2] * m);
+    for (i = 0; i < 3; i++) {
+        ph[i] = s->rc_P[i][0] + s->rc_P[i][2] * m;
+        hp[i] = s->rc_P[0][i] + s->rc_P[2][i] * m;
+    }
+    sv = hp[0] + hp[2] * m + gf_rc_r;
+    if (!(sv > 0)) {
+        return GF_PROBE_IGNORED;
+    }
+    if (nu * nu > gf_rc_gate2 * sv && s->rc_rejected < GF_RC_CONFIRM_AFTER) {
+        s->rc_rejected++;
+        return GF_PROBE_REJECTED;
+    }
+    s->rc_rejected = 0;
+    for (i = 0; i < 3; i++) {
+        k[i] = ph[i] / sv;
+    }
+    for (i = 0; i < 3; i++) {
+        s->rc_x[i] = s->rc_x[i] + k[i] * nu;
+        for (j = 0; j < 3; j++) {
+            s->rc_P[i][j] = s->rc_P[i][j] - k[i] * hp[j];
+        }
+    }
+    gf_rc_clamp(s);
+    return GF_PROBE_APPLIED;
+}
+"""
+
+
+def _fill(template: str, values: dict) -> str:
+    return Template(template).substitute(values)
+
+
+def probe_header(tables: RuleTables) -> dict[str, str]:
+    """Header pieces: the state's fields and, after the struct, the codes and ``gf_probe``'s declaration."""
+    declaration = _fill(
+        DECLARATION,
+        {
+            "applied": PROBE_APPLIED,
+            "rejected": PROBE_REJECTED,
+            "ignored": PROBE_IGNORED,
+            "limit": double_literal(PROBE_LIMIT_UM),
+        },
+    )
+    return {"probe_fields": FIELDS, "probe_declaration": declaration}
+
+
+def probe_source(tables: RuleTables) -> dict[str, str]:
+    """Source pieces: the constants and helpers, the calls in ``gf_init``/``gf_step``, and ``gf_probe``."""
+    t = tables.recalibration
+    constants = _fill(
+        CONSTANTS,
+        {
+            "description": ", ".join(t.terms) + f" ({t.method})",
+            "q": ", ".join(real_literal(v) for v in t.q),
+            "p0": ", ".join(real_literal(v) for v in t.p0),
+            "x_max": ", ".join(real_literal(v) for v in t.x_max),
+            "phi": real_literal(t.phi),
+            "r": real_literal(t.r),
+            "gate2": real_literal(t.gate2),
+            "rate": real_literal(t.rate_um),
+            "confirm": t.confirm_after,
+        },
+    )
+    return {
+        "probe_constants": constants,
+        "init_probe": "    gf_rc_reset(s);\n",
+        "probe_propagate": "    gf_rc_propagate(s);\n",
+        "probe_invalidate": "        s->rc_usable = 0;\n",
+        "probe_correct": (
+            "        /* the correction from probe checks (0 until the first is applied) */\n"
+            "        {\n"
+            "            gf_real correction = gf_rc_correct(s, prediction, !held);\n"
+            "            prediction = prediction + correction;\n"
+            "            target = target - correction;\n"
+            "        }\n"
+        ),
+        "probe_function": FUNCTION,
+    }
+
+
+__all__ = ["probe_header", "probe_source"]

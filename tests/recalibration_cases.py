@@ -1,0 +1,74 @@
+"""Models with a recalibration section and probe schedules, shared by the recalibration tests."""
+
+from __future__ import annotations
+
+import numpy as np
+from test_switching_models import augmented_model, fault_injected, synthetic_model
+
+KALMAN = {
+    "method": "kalman",
+    "terms": ["offset", "drift", "gain"],
+    "offset_sigma_um_per_sqrt_h": 0.7,
+    "drift_sigma_um_per_h_per_sqrt_h": 0.5,
+    "drift_tau_h": 2.0,
+    "gain_sigma_per_sqrt_h": 0.01,
+    "initial_offset_sigma_um": 2.0,
+    "initial_drift_sigma_um_per_h": 0.5,
+    "initial_gain_sigma": 0.3,
+    "probe_sigma_um": 0.2,
+    "gate_sigmas": 4.0,
+    "confirm_after": 2,
+    "offset_max_um": 30.0,
+    "drift_max_um_per_h": 10.0,
+    "gain_max": 0.5,
+    "rate_um_per_sample": 0.4,
+}
+HOLD = {
+    "method": "hold",
+    "offset_sigma_um_per_sqrt_h": 3.0,
+    "initial_offset_sigma_um": 5.0,
+    "gate_sigmas": 5.0,
+    "confirm_after": 1,
+    "offset_max_um": 20.0,
+    "rate_um_per_sample": 1.0,
+}
+
+
+def with_section(model: dict, section: dict) -> dict:
+    return {**model, "recalibration": dict(section)}
+
+
+def probe_schedule(error: np.ndarray, every: int, *, gross_at: int | None = None, seed: int = 0) -> np.ndarray:
+    """The error every ``every`` samples, 0.1 µm of probe noise, +500 µm at check ``gross_at``; NaN elsewhere."""
+    rng = np.random.default_rng(seed)
+    probes = np.full(len(error), np.nan)
+    rows = np.arange(every - 1, len(error), every)
+    probes[rows] = np.asarray(error, dtype=float)[rows] + rng.normal(0.0, 0.1, len(rows))
+    if gross_at is not None:
+        probes[rows[gross_at]] += 500.0
+    return probes
+
+
+def probe_cases() -> dict[str, tuple[dict, list[np.ndarray], list[np.ndarray]]]:
+    """label: (model, streams of readings, probe schedules), faults and a gross reading included."""
+    cases = {}
+    synthetic, run = synthetic_model()
+    flat, flat_run = augmented_model("lowpass p=0")
+    for label, model, model_run in (("synthetic p=3", synthetic, run), ("lowpass p=0", flat, flat_run)):
+        section = model["switching"]
+        temps = np.asarray(model_run.temps, dtype=float)
+        if label == "lowpass p=0":
+            from test_switching_models import readings
+
+            temps = readings(model, model_run)
+        faulty = fault_injected(temps, section["hold_samples"], section["criterion_index"], seed=2)
+        every = max(2, len(temps) // 25)
+        streams = [temps, faulty, temps]
+        probes = [
+            probe_schedule(model_run.error, every, gross_at=3),
+            probe_schedule(model_run.error, 1, seed=1),  # a check after every sample, faults included
+            probe_schedule(model_run.error + 3.0, every, gross_at=1, seed=2),
+        ]
+        for name, recal in (("kalman", KALMAN), ("hold", HOLD)):
+            cases[f"{label} {name}"] = (with_section(model, recal), streams, probes)
+    return cases
