@@ -37,6 +37,7 @@ from string import Template
 from groupfit.errors import InputError
 from groupfit.export.literals import reading_notes, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
+from groupfit.export.st_probe import probe_pieces
 from groupfit.export.st_terms import input_value, position_pieces, reference_pieces
 from groupfit.runtime import (
     COUNT_MAX,
@@ -80,20 +81,20 @@ $input_lines  Inputs:
     Fault    sum of: $fault_held held reading (last good value used, output
              valid), $fault_sensor sensor fault, $fault_period period fault.
     Switched $switch_criterion: group advanced by the criterion, $switch_forced: forced at the window's end.
-*)
+${probe_doc}*)
 FUNCTION_BLOCK $name
 VAR_INPUT
     Temps : ARRAY[1..$n_temps] OF $real;
     SamplePeriodS : LREAL;
     Reset : BOOL;
-END_VAR
+${probe_inputs}END_VAR
 VAR_OUTPUT
     Group : INT;
     ErrorUm : $real;
     CompUm : $real;
     Fault : INT;
     Switched : INT;
-END_VAR
+${probe_outputs}END_VAR
 VAR
     sampleCount : DINT := 0;
     currentGroup : INT := 1;
@@ -111,7 +112,7 @@ VAR
     prediction : $real;
     target : $real;
     delta : $real;
-${derived_vars}${reference_vars}${position_vars}END_VAR
+${derived_vars}${reference_vars}${position_vars}${probe_vars}END_VAR
 VAR CONSTANT
     N_TEMPS : INT := $n_temps;
     N_GROUPS : INT := $n_groups;
@@ -136,7 +137,7 @@ $coefficients
     COMP_MIN : $real := $comp_min;
     COMP_MAX : $real := $comp_max;
     RATE_LIMIT : $real := $rate;
-${position_constants}END_VAR
+${position_constants}${probe_constants}END_VAR
 
 IF Reset THEN
     sampleCount := 0;
@@ -146,7 +147,7 @@ IF Reset THEN
         badCount[m] := HOLD_SAMPLES + 1;
         lastGood[m] := 0.0;
     END_FOR;
-${reset_derived}${reset_reference}${reset_position}END_IF;
+${reset_derived}${reset_reference}${reset_position}${reset_probe}END_IF;
 
 periodOk := ABS(SamplePeriodS - PERIOD_S) <= PERIOD_TOLERANCE_S;
 held := FALSE;
@@ -156,7 +157,7 @@ IF NOT periodOk THEN
     prediction := 0.0;
     target := 0.0;
     Fault := $fault_period;
-ELSE
+${probe_period_fault}ELSE
     IF sampleCount < COUNT_MAX THEN
         sampleCount := sampleCount + 1;
     END_IF;
@@ -196,15 +197,15 @@ $step_reference$step_derived
             END_IF;
         END_IF;
     END_IF;
-
+${probe_propagate}
     IF faulted THEN
         prediction := 0.0;
         target := 0.0;
-    ELSE
+${probe_invalidate}    ELSE
         prediction := COEF_0[currentGroup];
 $dot_product${position_terms}
         target := -prediction;
-${dead_band}    END_IF;
+${dead_band}${probe_correct}    END_IF;
     Fault := 0;
     IF held THEN
         Fault := Fault + $fault_held;
@@ -237,7 +238,7 @@ ELSIF faulted THEN
 ELSE
     Group := currentGroup;
 END_IF;
-END_FUNCTION_BLOCK
+${probe_check}END_FUNCTION_BLOCK
 """
 )
 
@@ -315,6 +316,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         switch_forced=SWITCH_FORCED,
         **reference_pieces(tables, real),
         **position_pieces(tables, real, literal),
+        **probe_pieces(tables, real, literal),
     )
     return {f"{name}.st": text}
 
