@@ -35,12 +35,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from json_probe_runtime import ProbeFilter
 
 FORMATS = tuple(f"groupfit-runtime/{n}" for n in range(1, 6))
 """The formats this runtime implements; it refuses any other instead of computing wrongly."""
 
 
-def run_table(table: dict, readings: np.ndarray) -> list[tuple[int, int, float, float]]:
+def run_table(
+    table: dict, readings: np.ndarray, probes=None, probe_codes: list | None = None
+) -> list[tuple[int, int, float, float]]:
     """Run the rule of ``table`` on ``readings`` from a reset.
 
     Parameters
@@ -88,8 +91,9 @@ def run_table(table: dict, readings: np.ndarray) -> list[tuple[int, int, float, 
             return last[m] - last[reference["reading"]]
         return last[m] - first[m]
 
+    checks = ProbeFilter(table["recalibration"]) if probes is not None else None
     out = []
-    for x in np.asarray(readings, dtype=float).tolist():
+    for i, x in enumerate(np.asarray(readings, dtype=float).tolist()):
         # count and readings
         count = min(count + 1, table["count_max"])
         for m in range(n_temps):
@@ -150,8 +154,12 @@ def run_table(table: dict, readings: np.ndarray) -> list[tuple[int, int, float, 
 
         # prediction, position terms, dead band
         clamped = False
+        if checks:
+            checks.propagate()
         if faulted:
             prediction = target = 0.0
+            if checks:
+                checks.usable = False
         else:
             inputs = [
                 relative(source["reading"]) if "reading" in source else value[source["derived"]]
@@ -184,6 +192,9 @@ def run_table(table: dict, readings: np.ndarray) -> list[tuple[int, int, float, 
                     band_target = target
                 else:
                     target = band_target
+            if checks:
+                correction = checks.correct(prediction, held)
+                prediction, target = prediction + correction, target - correction
 
         # clamp, rate limit, output
         target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
@@ -193,6 +204,8 @@ def run_table(table: dict, readings: np.ndarray) -> list[tuple[int, int, float, 
         if clamped:
             fault += bits["position"]
         out.append((table["sensor_fault_return"] if faulted else group, fault, prediction, comp))
+        if checks and not math.isnan(probes[i]):
+            probe_codes.append(checks.probe(float(probes[i])))
     return out
 
 

@@ -40,7 +40,7 @@ from groupfit.runtime.interpreter import (
     check_period,
     replay_groups,
 )
-from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RecalTable, Recalibrator
+from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator, RecalTable
 from groupfit.runtime.rule import (
     COUNT_MAX,
     DERIVATIVE_SCALE_S,

@@ -21,6 +21,7 @@ import numpy as np
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
+from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator
 from groupfit.runtime.rule import (
     COUNT_MAX,
     FAULT_HELD,
@@ -33,9 +34,7 @@ from groupfit.runtime.rule import (
     SWITCH_NONE,
     complete_rule_section,
 )
-from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator
 from groupfit.runtime.tables import RuleTables
-
 
 PROBE_CODE_OFFSET = 2
 """:attr:`Replay.probe` holds a check's return plus this (1 ignored, 2 rejected, 3 applied), 0 without a check."""

@@ -1,0 +1,60 @@
+"""The probe-check filter written from the JSON table's ``recalibration`` object alone (its numbers and steps).
+
+Used by :func:`json_runtime.run_table` when it is given probes; like that
+runtime it imports nothing of groupfit and computes on Python floats (IEEE
+double) in the order the steps give.
+"""
+
+from __future__ import annotations
+
+
+class ProbeFilter:
+    def __init__(self, spec: dict):
+        self.spec = spec
+        self.x = [0.0, 0.0, 0.0]
+        self.P = [[spec["p0"][i] if i == j else 0.0 for j in range(3)] for i in range(3)]
+        self.applied = self.model = 0.0
+        self.usable = False
+        self.rejected = 0
+
+    def clamp(self) -> None:
+        for i, bound in enumerate(self.spec["x_max"]):
+            self.x[i] = max(min(self.x[i], bound), -bound)
+
+    def propagate(self) -> None:
+        x, P, phi = self.x, self.P, self.spec["phi"]
+        x[0] = x[0] + x[1]
+        x[1] = phi * x[1]
+        A = [[P[0][j] + P[1][j] for j in range(3)], [phi * P[1][j] for j in range(3)], [P[2][j] for j in range(3)]]
+        for i in range(3):
+            P[i] = [A[i][0] + A[i][1], A[i][1] * phi, A[i][2]]
+            P[i][i] = P[i][i] + self.spec["q"][i]
+        self.clamp()
+
+    def correct(self, prediction: float, held: bool) -> float:
+        self.model, self.usable = prediction, not held
+        rate = self.spec["rate_um"]
+        delta = max(min((self.x[0] + self.x[2] * prediction) - self.applied, rate), -rate)
+        self.applied = self.applied + delta
+        return self.applied
+
+    def probe(self, z: float) -> int:
+        spec, codes, m, P = self.spec, self.spec["codes"], self.model, self.P
+        if not self.usable or not (-spec["probe_limit_um"] <= z <= spec["probe_limit_um"]):
+            return codes["ignored"]
+        nu = (z - m) - (self.x[0] + self.x[2] * m)
+        ph = [P[i][0] + P[i][2] * m for i in range(3)]
+        hp = [P[0][i] + P[2][i] * m for i in range(3)]
+        s = hp[0] + hp[2] * m + spec["r"]
+        if not s > 0:
+            return codes["ignored"]
+        if nu * nu > spec["gate2"] * s and self.rejected < spec["confirm_after"]:
+            self.rejected += 1
+            return codes["rejected"]
+        self.rejected = 0
+        k = [ph[i] / s for i in range(3)]
+        for i in range(3):
+            self.x[i] = self.x[i] + k[i] * nu
+            P[i] = [P[i][j] - k[i] * hp[j] for j in range(3)]
+        self.clamp()
+        return codes["applied"]
