@@ -26,7 +26,7 @@ DECLARATION = """
  * Probe checks (docs/recalibration.md of groupfit): after gf_step() of the
  * sample at which the machine touched its reference artefact, call
  * gf_probe(s, e) with e the measured thermal error in um - the deviation the
- * probe saw plus the compensation then active (s->comp_um), i.e. the error the
+ * probe saw minus the compensation then active (s->comp_um), i.e. the error the
  * model predicts, not the residual. It returns GF_PROBE_APPLIED, GF_PROBE_REJECTED
  * (the innovation gate: a gross reading, flagged and never applied) or
  * GF_PROBE_IGNORED (that sample was in a sensor fault or on held readings, or e is

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 
 from groupfit.errors import InputError
+from groupfit.export.sheet_probe import probe_lines, with_probe
 from groupfit.io import to_json
 from groupfit.runtime import FAULT_POSITION, RuleTables
 
@@ -234,13 +235,13 @@ def sheet_text(sheet: dict) -> str:
     ]
     if integer["clamp_exceeds_register"]:
         lines.append("  WARNING: the clamp range exceeds the register; values beyond it saturate.")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + probe_lines(sheet)) + "\n"
 
 
 def render_sheet(tables: RuleTables, resolution_um: float = 0.1, counts_limit: int = 30000) -> dict[str, str]:
     """``{"groupfit_sheet.txt": …, "groupfit_sheet.json": …}``."""
     sheet = with_reference(controller_sheet(tables, IntegerForm(resolution_um, counts_limit)), tables)
-    sheet = with_position(sheet, tables)
+    sheet = with_probe(with_position(sheet, tables), tables)
     return {"groupfit_sheet.txt": sheet_text(sheet), "groupfit_sheet.json": to_json(sheet)}
 
 

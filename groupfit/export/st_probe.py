@@ -20,7 +20,7 @@ PROBE_NONE = -2
 DOC = """  Probe checks (docs/recalibration.md of groupfit):
     Probe         TRUE on the call of the sample at which the machine touched its reference:
                   after the sample, ProbeErrorUm (LREAL, um) - the measured thermal error, i.e. the
-                  deviation the probe saw plus the compensation then active - corrects the prediction
+                  deviation the probe saw minus CompUm then active - corrects the prediction
                   from the next call on (it moves SD43900, the position-independent offset).
     ProbeResult   $applied applied, $rejected rejected by the innovation gate (flagged, never applied),
                   $ignored ignored (a sensor or period fault, held readings, no reading), $none no check.
