@@ -8,7 +8,8 @@ inputs with their whole history, intercept and ridge penalty as the model
 has them; a grouped model as one global fit), the rest of the run is
 predicted, and checks every T (15, 30, 60, 120 min by default) are replayed
 through each candidate filter on that held-out residual. The score is the
-mean over the intervals of log(RMS / RMS of the offset hold); the best
+mean over the intervals of log(RMS / RMS of the offset hold), the RMS taken
+from each stretch's first check on (before it every filter serves alike); the best
 candidate is kept only if no interval is more than :data:`HOLD_TOLERANCE`
 worse than the hold, else the hold is kept. The innovation gate is part of
 every replay (a candidate whose gate rejects good checks pays for it), and
@@ -149,7 +150,8 @@ def candidate_grid(*, hold_sigma: float, initial_offset: float, method: str = "a
 def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, period_s: float) -> tuple[np.ndarray, int]:
     """Sum of squared corrected residuals of every candidate over one stretch, checks every ``every`` samples.
 
-    Returns the sums (one per candidate) and the number of scored samples.
+    Returns the sums (one per candidate) and the number of scored samples:
+    those after the first check (before it every candidate serves alike).
     """
     c = candidates
     h = period_s / 3600.0
@@ -162,6 +164,7 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
     x = np.zeros((3, g))
     P = np.zeros((3, 3, g))
     P[0, 0], P[1, 1], P[2, 2] = c.initial_offset**2, (c.initial_drift * h) ** 2, c.initial_gain**2
+    P0 = P.copy()
     rejected = np.zeros(g)
     total = np.zeros(g)
     scored = 0
@@ -176,18 +179,24 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
         if math.isnan(res):
             continue
         error = res - (x[0] + x[2] * m)
-        total += error * error
-        scored += 1
+        if k >= every:  # scored from the first check on: before it every filter serves alike
+            total += error * error
+            scored += 1
         if (k + 1) % every:
             continue
         ph = P[:, 0] + P[:, 2] * m
         hp = P[0, :] + P[2, :] * m
         s = hp[0] + hp[2] * m + r
-        reject = (error * error > gate2 * s) & (rejected < CONFIRM_AFTER)
+        outside = error * error > gate2 * s
+        reject = outside & (rejected < CONFIRM_AFTER)
+        fresh = outside & ~reject  # the checks keep disagreeing: the offset takes the change whole
         rejected = np.where(reject, rejected + 1, 0)
-        gain = np.where(reject, 0.0, ph / s)
+        gain = np.where(outside, 0.0, ph / s)
         x = np.clip(x + gain * error, -offset_max, offset_max)
         P = P - gain[:, None, :] * hp[None, :, :]
+        if fresh.any():
+            x[0] = np.where(fresh, x[0] + error, x[0])
+            P = np.where(fresh, P0, P)
     return total, scored
 
 

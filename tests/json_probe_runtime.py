@@ -38,19 +38,29 @@ class ProbeFilter:
         self.applied = self.applied + delta
         return self.applied
 
+    def projections(self):
+        m, P = self.model, self.P
+        ph = [P[i][0] + P[i][2] * m for i in range(3)]
+        hp = [P[0][i] + P[2][i] * m for i in range(3)]
+        return ph, hp, hp[0] + hp[2] * m + self.spec["r"]
+
     def probe(self, z: float) -> int:
         spec, codes, m, P = self.spec, self.spec["codes"], self.model, self.P
         if not self.usable or not (-spec["probe_limit_um"] <= z <= spec["probe_limit_um"]):
             return codes["ignored"]
         nu = (z - m) - (self.x[0] + self.x[2] * m)
-        ph = [P[i][0] + P[i][2] * m for i in range(3)]
-        hp = [P[0][i] + P[2][i] * m for i in range(3)]
-        s = hp[0] + hp[2] * m + spec["r"]
+        ph, hp, s = self.projections()
         if not s > 0:
             return codes["ignored"]
-        if nu * nu > spec["gate2"] * s and self.rejected < spec["confirm_after"]:
-            self.rejected += 1
-            return codes["rejected"]
+        if nu * nu > spec["gate2"] * s:
+            if self.rejected < spec["confirm_after"]:
+                self.rejected += 1
+                return codes["rejected"]
+            self.rejected = 0
+            self.x[0] = self.x[0] + nu
+            self.P = [[spec["p0"][i] if i == j else 0.0 for j in range(3)] for i in range(3)]
+            self.clamp()
+            return codes["applied"]
         self.rejected = 0
         k = [ph[i] / s for i in range(3)]
         for i in range(3):

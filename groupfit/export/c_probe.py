@@ -54,15 +54,35 @@ static const gf_real gf_rc_gate2 = $gate2;
 static const gf_real gf_rc_rate = $rate;
 #define GF_RC_CONFIRM_AFTER $confirm
 
-static void gf_rc_reset(gf_state *s)
+static void gf_rc_reset_covariance(gf_state *s)
 {
     int i, j;
     for (i = 0; i < 3; i++) {
-        s->rc_x[i] = 0;
         for (j = 0; j < 3; j++) {
             s->rc_P[i][j] = (i == j) ? gf_rc_p0[i] : (gf_real)0;
         }
     }
+}
+
+/* P h and h' P for h = (1, 0, m), m the last sample's model prediction; returns S = h' P h + r. */
+static gf_real gf_rc_projections(const gf_state *s, gf_real ph[3], gf_real hp[3])
+{
+    gf_real m = s->rc_model_um;
+    int i;
+    for (i = 0; i < 3; i++) {
+        ph[i] = s->rc_P[i][0] + s->rc_P[i][2] * m;
+        hp[i] = s->rc_P[0][i] + s->rc_P[2][i] * m;
+    }
+    return hp[0] + hp[2] * m + gf_rc_r;
+}
+
+static void gf_rc_reset(gf_state *s)
+{
+    int i;
+    for (i = 0; i < 3; i++) {
+        s->rc_x[i] = 0;
+    }
+    gf_rc_reset_covariance(s);
     s->rc_applied_um = 0;
     s->rc_model_um = 0;
     s->rc_usable = 0;
@@ -131,17 +151,21 @@ int gf_probe(gf_state *s, double measured_error_um)
         return GF_PROBE_IGNORED;
     }
     nu = ((gf_real)measured_error_um - m) - (s->rc_x[0] + s->rc_x[2] * m);
-    for (i = 0; i < 3; i++) {
-        ph[i] = s->rc_P[i][0] + s->rc_P[i][2] * m;
-        hp[i] = s->rc_P[0][i] + s->rc_P[2][i] * m;
-    }
-    sv = hp[0] + hp[2] * m + gf_rc_r;
+    sv = gf_rc_projections(s, ph, hp);
     if (!(sv > 0)) {
         return GF_PROBE_IGNORED;
     }
-    if (nu * nu > gf_rc_gate2 * sv && s->rc_rejected < GF_RC_CONFIRM_AFTER) {
-        s->rc_rejected++;
-        return GF_PROBE_REJECTED;
+    if (nu * nu > gf_rc_gate2 * sv) {
+        if (s->rc_rejected < GF_RC_CONFIRM_AFTER) {
+            s->rc_rejected++;
+            return GF_PROBE_REJECTED;
+        }
+        /* the checks keep disagreeing: a real change, which the offset takes whole (as the hold does) */
+        s->rc_rejected = 0;
+        s->rc_x[0] = s->rc_x[0] + nu;
+        gf_rc_reset_covariance(s);
+        gf_rc_clamp(s);
+        return GF_PROBE_APPLIED;
     }
     s->rc_rejected = 0;
     for (i = 0; i < 3; i++) {

@@ -25,9 +25,10 @@ PROBE_STEPS = (
     "a probe check z (the measured thermal error, um) after a sample: ignored if not usable or not "
     "(-probe_limit_um <= z <= probe_limit_um); nu = (z - model) - (x[0] + x[2] * model); for i in 0..2: "
     "Ph[i] = P[i][0] + P[i][2] * model, hP[i] = P[0][i] + P[2][i] * model; S = hP[0] + hP[2] * model + r; "
-    "ignored unless S > 0; if nu * nu > gate2 * S and rejected < confirm_after: rejected += 1, rejected "
-    "(nothing else changes); else rejected = 0, K[i] = Ph[i] / S, x[i] = x[i] + K[i] * nu, "
-    "P[i][j] = P[i][j] - K[i] * hP[j] for all i, j, clamp x as above: applied",
+    "ignored unless S > 0; if nu * nu > gate2 * S: if rejected < confirm_after: rejected += 1, rejected "
+    "(nothing else changes), else (the checks keep disagreeing: a real change) rejected = 0, x[0] = x[0] + nu, "
+    "P = diag(p0), clamp x as below: applied; otherwise rejected = 0, K[i] = Ph[i] / S, x[i] = x[i] + K[i] * nu, "
+    "P[i][j] = P[i][j] - K[i] * hP[j] for all i, j, clamp x (as in the time update): applied",
 )
 
 

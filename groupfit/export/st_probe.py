@@ -39,6 +39,7 @@ VARS = """    rcX : ARRAY[0..2] OF $real;
     rcNu : $real;
     rcS : $real;
     rcUsable : BOOL := FALSE;
+    rcOutside : BOOL;
     rcRejected : INT := 0;
     rcI : INT;
     rcJ : INT;
@@ -118,13 +119,23 @@ IF Probe THEN
     IF rcUsable AND ProbeErrorUm >= -PROBE_LIMIT AND ProbeErrorUm <= PROBE_LIMIT THEN
         rcZ := $to_real(ProbeErrorUm);
         rcNu := (rcZ - rcModel) - (rcX[0] + rcX[2] * rcModel);
-        FOR rcI := 0 TO 2 DO
-            rcPh[rcI] := rcP[rcI, 0] + rcP[rcI, 2] * rcModel;
-            rcHp[rcI] := rcP[0, rcI] + rcP[2, rcI] * rcModel;
-        END_FOR;
-        rcS := rcHp[0] + rcHp[2] * rcModel + RC_R;
-        IF rcS > RC_ZERO THEN
-            IF rcNu * rcNu > RC_GATE2 * rcS AND rcRejected < RC_CONFIRM THEN
+$projections        rcOutside := rcS > RC_ZERO;
+        IF rcOutside THEN
+            rcOutside := rcNu * rcNu > RC_GATE2 * rcS;
+        END_IF;
+        IF rcOutside AND rcRejected >= RC_CONFIRM THEN
+            (* the checks keep disagreeing: a real change, which the offset takes whole (as the hold does) *)
+            rcRejected := 0;
+            rcX[0] := rcX[0] + rcNu;
+            FOR rcI := 0 TO 2 DO
+                FOR rcJ := 0 TO 2 DO
+                    rcP[rcI, rcJ] := 0.0;
+                END_FOR;
+                rcP[rcI, rcI] := RC_P0[rcI];
+$clamp            END_FOR;
+            ProbeResult := $applied;
+        ELSIF rcS > RC_ZERO THEN
+            IF rcOutside THEN
                 rcRejected := rcRejected + 1;
                 ProbeResult := $rejected;
             ELSE
@@ -143,6 +154,14 @@ $clamp                END_FOR;
         END_IF;
     END_IF;
 END_IF;
+"""
+
+
+PROJECTIONS = """        FOR rcI := 0 TO 2 DO
+            rcPh[rcI] := rcP[rcI, 0] + rcP[rcI, 2] * rcModel;
+            rcHp[rcI] := rcP[0, rcI] + rcP[2, rcI] * rcModel;
+        END_FOR;
+        rcS := rcHp[0] + rcHp[2] * rcModel + RC_R;
 """
 
 
@@ -176,7 +195,9 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         "probe_propagate": Template(PROPAGATE).substitute(clamp=CLAMP),
         "probe_invalidate": "        rcUsable := FALSE;\n",
         "probe_correct": CORRECT,
-        "probe_check": Template(CHECK).substitute(codes, clamp=inner_clamp, to_real=f"TO_{real}"),
+        "probe_check": Template(CHECK).substitute(
+            codes, clamp=inner_clamp, to_real=f"TO_{real}", projections=PROJECTIONS
+        ),
     }
 
 

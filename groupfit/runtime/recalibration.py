@@ -24,7 +24,8 @@ number within ±:data:`PROBE_LIMIT_UM`. Otherwise, with ``h = (1, 0, m)``::
     nu = (z − m) − (x0 + x2·m)                       (innovation)
     Ph_i = Pi0 + Pi2·m;  hP_j = P0j + P2j·m;  S = hP0 + hP2·m + r
     if not S > 0: ignored
-    if nu·nu > gate²·S and rejected-in-a-row < confirm_after: rejected (flagged, nothing changes)
+    if nu·nu > gate²·S: if rejected-in-a-row < confirm_after: rejected (flagged, nothing changes);
+        else (the checks keep disagreeing: a real change) x0 = x0 + nu, P = diag(p0), clamp x: applied
     K_i = Ph_i / S;  x_i = x_i + K_i·nu;  Pij = Pij − K_i·hP_j;  clamp x;  applied
 
 The hold is the filter with ``x = (offset)``, ``r = 0``: ``K0 = 1``, the
@@ -146,11 +147,22 @@ class Recalibrator:
         """No check yet: states 0, initial variances, no correction, no prediction to check against."""
         zero = self._zero
         self.x = [zero] * N_STATES
-        self.P = [[self._p0[i] if i == j else zero for j in range(N_STATES)] for i in range(N_STATES)]
+        self._reset_covariance()
         self.applied = zero
         self.model_um = zero
         self.usable = False
         self.rejected_in_row = 0
+
+    def _reset_covariance(self) -> None:
+        """``P = diag(p0)``."""
+        self.P = [[self._p0[i] if i == j else self._zero for j in range(N_STATES)] for i in range(N_STATES)]
+
+    def _projections(self):
+        """``Ph = P·h``, ``hP = hᵀ·P`` and ``S = hP·h + r`` for ``h = (1, 0, m)``."""
+        m, P = self.model_um, self.P
+        ph = [P[i][0] + P[i][2] * m for i in range(N_STATES)]
+        hp = [P[0][j] + P[2][j] * m for j in range(N_STATES)]
+        return ph, hp, hp[0] + hp[2] * m + self._r
 
     def propagate(self) -> None:
         """The time update of one sample (before the prediction)."""
@@ -197,17 +209,23 @@ class Recalibrator:
         z = float(measured_um)
         if not self.usable or not (z >= -PROBE_LIMIT_UM and z <= PROBE_LIMIT_UM):
             return PROBE_IGNORED
-        m, P = self.model_um, self.P
+        m = self.model_um
         nu = self.innovation(z)
-        ph = [P[i][0] + P[i][2] * m for i in range(N_STATES)]
-        hp = [P[0][j] + P[2][j] * m for j in range(N_STATES)]
-        s = hp[0] + hp[2] * m + self._r
+        ph, hp, s = self._projections()
         if not s > self._zero:
             return PROBE_IGNORED
-        if nu * nu > self._gate2 * s and self.rejected_in_row < self.table.confirm_after:
-            self.rejected_in_row += 1
-            return PROBE_REJECTED
+        if nu * nu > self._gate2 * s:
+            if self.rejected_in_row < self.table.confirm_after:
+                self.rejected_in_row += 1
+                return PROBE_REJECTED
+            # the checks keep disagreeing: a real change, which the offset takes whole (as the hold does)
+            self.rejected_in_row = 0
+            self.x[0] = self.x[0] + nu
+            self._reset_covariance()
+            self._clamp()
+            return PROBE_APPLIED
         self.rejected_in_row = 0
+        P = self.P
         gain = [ph[i] / s for i in range(N_STATES)]
         for i in range(N_STATES):
             self.x[i] = self.x[i] + gain[i] * nu

@@ -1,0 +1,261 @@
+"""Recalibration from probe checks: the section's validation, the filter against a textbook Kalman filter,
+the hold's closed form, the gate, faults, bounds, and the held-out tuning."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from recalibration_cases import HOLD, KALMAN, probe_schedule, with_section
+from test_switching_models import fault_injected, synthetic_model
+
+from groupfit.errors import InputError
+from groupfit.model import ModelFile
+from groupfit.recalibration_tuning import (
+    HeldOut,
+    candidate_grid,
+    choose_recalibration,
+    replay_candidates,
+)
+from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables, SwitchingRule
+from groupfit.runtime.recalibration import RecalTable, Recalibrator
+
+
+def model_with(section: dict) -> dict:
+    model, _ = synthetic_model()
+    return with_section(model, section)
+
+
+# ----------------------------------------------------------------- the section
+
+
+@pytest.mark.parametrize(
+    "change, named",
+    [
+        ({"method": "median"}, "recalibration.method"),
+        ({"terms": ["drift", "offset"]}, "recalibration.terms"),
+        ({"terms": ["offset", "gain", "drift"]}, "recalibration.terms"),
+        ({"terms": ["offset", "offset"]}, "recalibration.terms"),
+        ({"gate_sigmas": 0.0}, "recalibration.gate_sigmas"),
+        ({"offset_sigma_um_per_sqrt_h": -1.0}, "recalibration.offset_sigma_um_per_sqrt_h"),
+        ({"probe_sigma_um": float("nan")}, "recalibration.probe_sigma_um"),
+        ({"offset_max_um": 1e9}, "recalibration.offset_max_um"),
+        ({"drift_tau_h": 0}, "recalibration.drift_tau_h"),
+        ({"confirm_after": 1.5}, "recalibration.confirm_after"),
+        ({"confirm_after": True}, "recalibration.confirm_after"),
+        ({"gain_max": 0.0}, "recalibration.gain_max"),
+        ({"terms": ["offset", "drift"]}, "'gain' is not among the terms"),
+        ({"chosen": [1, 2]}, "recalibration.chosen"),
+        ({"rate_um_per_sample": None}, "recalibration.rate_um_per_sample"),
+    ],
+)
+def test_a_bad_kalman_section_is_refused_naming_its_key(change, named):
+    with pytest.raises(InputError, match=named.replace(".", r"\.").replace("(", r"\(")):
+        ModelFile.from_dict(model_with({**KALMAN, **change}))
+
+
+@pytest.mark.parametrize(
+    "change, named",
+    [
+        ({"terms": ["offset", "drift"]}, "the hold carries the offset only"),
+        ({"probe_sigma_um": 0.5}, "probe_sigma_um must be 0 for the hold"),
+        ({"initial_gain_sigma": 0.5}, "'gain' is not among the terms"),
+    ],
+)
+def test_a_hold_with_filter_terms_is_refused(change, named):
+    with pytest.raises(InputError, match=named):
+        ModelFile.from_dict(model_with({**HOLD, **change}))
+
+
+def test_a_section_lacking_a_key_is_refused_and_the_section_round_trips(tmp_path):
+    section = {key: value for key, value in HOLD.items() if key != "gate_sigmas"}
+    with pytest.raises(InputError, match="recalibration lacks key 'gate_sigmas'"):
+        ModelFile.from_dict(model_with(section))
+    data = model_with({**KALMAN, "chosen": {"by": "hand", "intervals_s": [900.0, 1800.0]}})
+    model = ModelFile.from_dict(data)
+    model.save(tmp_path / "m.json")
+    again = ModelFile.load(tmp_path / "m.json")
+    assert again.to_dict()["recalibration"] == data["recalibration"]
+    assert again.recalibration.terms == ("offset", "drift", "gain")
+
+
+# ----------------------------------------------------------------- the filter
+
+
+def textbook_kalman(residual, prediction, checks, table: RecalTable):
+    """Offset/drift/gain Kalman filter in matrix form (numpy), no gate, no bounds: the correction per sample."""
+    F = np.array([[1.0, 1.0, 0.0], [0.0, table.phi, 0.0], [0.0, 0.0, 1.0]])
+    Q = np.diag(table.q)
+    x = np.zeros(3)
+    P = np.diag(table.p0)
+    out = np.empty(len(residual))
+    for k in range(len(residual)):
+        x = F @ x
+        P = F @ P @ F.T + Q
+        H = np.array([1.0, 0.0, prediction[k]])
+        out[k] = H @ x
+        if checks[k]:
+            S = H @ P @ H + table.r
+            K = P @ H / S
+            x = x + K * (residual[k] - H @ x)
+            P = (np.eye(3) - np.outer(K, H)) @ P
+    return out
+
+
+def test_the_filter_is_the_textbook_kalman_filter_when_no_bound_or_gate_acts():
+    section = {**KALMAN, "gate_sigmas": 1e5, "offset_max_um": 1e5, "drift_max_um_per_h": 1e5, "gain_max": 1e3}
+    section["rate_um_per_sample"] = 1e5
+    model = ModelFile.from_dict(model_with(section))
+    table = RuleTables.from_model(model).recalibration
+    rng = np.random.default_rng(4)
+    n = 300
+    prediction = 5.0 + np.cumsum(rng.normal(0, 0.3, n))
+    residual = 0.8 + 0.01 * np.arange(n) + 0.1 * prediction + rng.normal(0, 0.2, n)
+    checks = np.zeros(n, dtype=bool)
+    checks[9::10] = True
+    expected = textbook_kalman(residual, prediction, checks, table)
+    recal = Recalibrator(table)
+    got = np.empty(n)
+    for k in range(n):
+        recal.propagate()
+        got[k] = recal.correct(prediction[k])
+        if checks[k]:
+            assert recal.probe(prediction[k] + residual[k]) == PROBE_APPLIED
+    assert np.max(np.abs(got - expected)) <= 1e-9 * (1 + np.max(np.abs(expected)))
+    assert np.max(np.abs(got)) > 1.0  # the filter did move
+
+
+def replay_run(model, temps, probes, precision="double"):
+    rule = SwitchingRule(model, precision=precision)
+    return rule.replay(temps, probes)
+
+
+def test_the_hold_makes_the_next_prediction_miss_by_the_change_since_the_check():
+    model, run = synthetic_model()
+    model = with_section(model, {**HOLD, "gate_sigmas": 1e5, "rate_um_per_sample": 1e5})
+    error = run.error + 2.0 + 0.01 * np.arange(run.n_samples)  # a day with an offset and a drift
+    probes = np.full(run.n_samples, np.nan)
+    probes[49::50] = error[49::50]
+    plain = replay_run(model, run.temps, None)
+    checked = replay_run(model, run.temps, probes)
+    applied = np.flatnonzero(~np.isnan(probes))
+    for check, following in zip(applied, list(applied[1:]) + [run.n_samples]):
+        held = error[check] - plain.prediction_um[check]  # the residual at the check becomes the offset
+        np.testing.assert_allclose(
+            checked.prediction_um[check + 1 : following], plain.prediction_um[check + 1 : following] + held, atol=1e-9
+        )
+    assert checked.probe_counts() == {"applied": len(applied), "rejected": 0, "ignored": 0}
+
+
+def test_a_gross_reading_is_rejected_and_changes_nothing():
+    model, run = synthetic_model()
+    model = with_section(model, KALMAN)
+    clean = probe_schedule(run.error, 20)
+    gross = probe_schedule(run.error, 20, gross_at=4)
+    skipped = clean.copy()
+    skipped[np.flatnonzero(~np.isnan(clean))[4]] = np.nan  # the same schedule without that check
+    with_gross = replay_run(model, run.temps, gross)
+    without = replay_run(model, run.temps, skipped)
+    assert with_gross.probe_counts()["rejected"] == 1
+    assert with_gross.prediction_um.tobytes() == without.prediction_um.tobytes()
+
+
+def test_checks_that_keep_disagreeing_are_applied_after_confirm_after_rejections():
+    model, run = synthetic_model()
+    model = ModelFile.from_dict(with_section(model, {**KALMAN, "confirm_after": 2}))
+    rule = SwitchingRule(model)
+    codes = []
+    for k, row in enumerate(run.temps[:60]):
+        rule.step(row)
+        if k in (10, 20, 30, 40):
+            codes.append(rule.probe(run.error[k] + 25.0))  # the machine moved by 25 µm: a real change
+    assert codes == [PROBE_REJECTED, PROBE_REJECTED, PROBE_APPLIED, PROBE_APPLIED]
+
+
+def test_a_check_during_a_sensor_fault_or_on_held_readings_is_ignored_and_changes_nothing():
+    model, run = synthetic_model()
+    section = model["switching"]
+    model = with_section(model, KALMAN)
+    temps = fault_injected(run.temps, section["hold_samples"], section["criterion_index"], seed=2)
+    plain = replay_run(model, temps, None)
+    faulty = np.flatnonzero(plain.fault != 0)
+    assert faulty.size and np.any(plain.fault & 2) and np.any(plain.fault == 1)
+    probes = np.full(run.n_samples, np.nan)
+    probes[faulty] = run.error[faulty]
+    checked = replay_run(model, temps, probes)
+    assert checked.probe_counts() == {"applied": 0, "rejected": 0, "ignored": faulty.size}
+    assert checked.prediction_um.tobytes() == plain.prediction_um.tobytes()
+    for value in (np.inf, -np.inf, 2e5):  # not a reading
+        rule = SwitchingRule(model)
+        rule.step(run.temps[0])
+        assert rule.probe(value) == PROBE_IGNORED
+    assert SwitchingRule(model).probe(1.0) == PROBE_IGNORED  # before the first sample
+
+
+def test_the_correction_is_bounded_and_rate_limited():
+    model, run = synthetic_model()
+    section = {**HOLD, "offset_max_um": 3.0, "rate_um_per_sample": 0.25, "gate_sigmas": 1e5}
+    model = with_section(model, section)
+    probes = np.full(run.n_samples, np.nan)
+    probes[29::30] = run.error[29::30] + 10.0  # 10 µm off: the bound holds the offset at 3 µm
+    plain = replay_run(model, run.temps, None)
+    checked = replay_run(model, run.temps, probes)
+    correction = checked.prediction_um - plain.prediction_um
+    assert np.max(np.abs(correction)) <= 3.0 + 1e-12
+    assert np.max(np.abs(np.diff(correction))) <= 0.25 + 1e-12
+    assert correction[-1] == pytest.approx(3.0)
+
+
+# ----------------------------------------------------------------- the tuning
+
+
+def test_the_vectorised_replay_of_the_tuning_is_the_run_time_filter():
+    rng = np.random.default_rng(7)
+    n, period = 400, 60.0
+    prediction = 3.0 + np.cumsum(rng.normal(0, 0.2, n))
+    residual = np.cumsum(rng.normal(0, 0.15, n)) + 0.05 * prediction
+    held = HeldOut(residual, prediction)
+    candidates = candidate_grid(hold_sigma=2.0, initial_offset=2.0)
+    picks = [0, 1, 50, len(candidates) - 1]
+    totals, scored = replay_candidates(held, candidates, every=15, period_s=period)
+    assert scored == n - 15  # from the first check on
+    for k in picks:
+        section = candidates.section(k, offset_max_um=1e5, rate_um=1e5, chosen={})
+        recal = Recalibrator(RecalTable.from_section(section, period))
+        error = np.empty(n)
+        for i in range(n):
+            recal.propagate()
+            correction = recal.correct(prediction[i])
+            error[i] = residual[i] - correction if i >= 15 else 0.0
+            if (i + 1) % 15 == 0:
+                recal.probe(prediction[i] + residual[i])
+        assert totals[k] == pytest.approx(float(np.sum(error**2)), rel=1e-9)
+
+
+def ramp_run(n: int, *, drift: float, wander: float, seed: int):
+    """Four sensors and an error that is a linear model of them plus a drift per sample and a random walk."""
+    rng = np.random.default_rng(seed)
+    k = np.arange(n)
+    temps = np.column_stack([20 + 4 * np.sin(k / (30.0 + 9 * j)) + rng.normal(0, 0.02, n) for j in range(4)])
+    error = temps @ np.array([2.0, -1.0, 0.5, 1.0]) + drift * k + np.cumsum(rng.normal(0, wander, n))
+    return temps, error
+
+
+def test_tuning_keeps_the_hold_on_a_random_walk_and_takes_a_drift_when_the_error_drifts():
+    import pandas as pd
+
+    model = ModelFile.from_dict(synthetic_model(p=0)[0])  # inputs T1…T4, 100 s per sample
+    ratios, sections = {}, {}
+    for label, drift, wander in (("walk", 0.0, 0.3), ("drift", 0.05, 0.01)):
+        temps, error = ramp_run(1200, drift=drift, wander=wander, seed=5)
+        frame = pd.DataFrame(temps, columns=["T1", "T2", "T3", "T4"])
+        tuning = choose_recalibration(model, [(frame, error)], intervals_s=(1000.0, 2000.0, 4000.0))
+        ratio = [c / h for c, h in zip(tuning.rms_chosen_um, tuning.rms_hold_um)]
+        # never worse than the hold beyond the tolerance, and far better than no checks
+        assert max(ratio) <= 1.02 and max(tuning.rms_chosen_um) < 0.5 * tuning.rms_none_um
+        ratios[label], sections[label] = ratio, tuning.section
+    assert min(ratios["walk"]) > 0.9  # nothing beats holding a random walk by much
+    assert sections["drift"].method == "kalman" and "drift" in sections["drift"].terms
+    assert max(ratios["drift"]) < 0.7 and np.mean(ratios["drift"]) < 0.5  # a drift is extrapolated between checks
+    assert math.isfinite(sections["drift"].chosen["rms_none_um"])
