@@ -19,7 +19,7 @@ from groupfit.recalibration_tuning import (
     replay_candidates,
 )
 from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables, SwitchingRule
-from groupfit.runtime.recalibration import RecalTable, Recalibrator
+from groupfit.runtime.recalibration import Recalibrator, RecalTable
 
 
 def model_with(section: dict) -> dict:

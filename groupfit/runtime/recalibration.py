@@ -209,7 +209,6 @@ class Recalibrator:
         z = float(measured_um)
         if not self.usable or not (z >= -PROBE_LIMIT_UM and z <= PROBE_LIMIT_UM):
             return PROBE_IGNORED
-        m = self.model_um
         nu = self.innovation(z)
         ph, hp, s = self._projections()
         if not s > self._zero:
