@@ -11,7 +11,9 @@ through each candidate filter on that held-out residual. The score is the
 mean over the intervals of log(RMS / RMS of the offset hold), the RMS taken
 from each stretch's first check on (before it every filter serves alike); the best
 candidate is kept only if no interval is more than :data:`HOLD_TOLERANCE`
-worse than the hold, else the hold is kept. The innovation gate is part of
+worse than the hold, else the hold is kept; among the candidates that are
+also never worse than no checks at all (scored on the same samples), when
+some are. The innovation gate is part of
 every replay (a candidate whose gate rejects good checks pays for it), and
 the hold's own noise is sized so that its gate passes every held-out check
 with a factor of two to spare.
@@ -249,13 +251,19 @@ def choose_recalibration(
     hold_sigma = _hold_sigma(series, everies, period)
     candidates = candidate_grid(hold_sigma=hold_sigma, initial_offset=max(1.0, 2.0 * rms_none), method=method)
     rms = np.empty((len(everies), len(candidates)))
+    rms_none_by_interval = np.empty(len(everies))
     for i, every in enumerate(everies):
         totals = [replay_candidates(s, candidates, every=every, period_s=period) for s in series]
         rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
+        unchecked = np.concatenate([s.residual[every:] for s in series])
+        rms_none_by_interval[i] = float(np.sqrt(np.nanmean(unchecked**2)))
     ratio = rms / rms[:, :1]
     score = np.mean(np.log(ratio), axis=0)
     allowed = np.all(ratio <= HOLD_TOLERANCE, axis=0) | (method == "kalman")
     allowed[0] = allowed[0] and method != "kalman"
+    helps = allowed & np.all(rms <= rms_none_by_interval[:, None], axis=0)
+    if helps.any():  # never worse than no checks where some filter manages that
+        allowed = helps
     best = int(np.flatnonzero(allowed)[np.argmin(score[allowed])])
     chosen = {
         "by": "held-out checks",

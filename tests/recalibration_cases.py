@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from test_switching_models import augmented_model, fault_injected, synthetic_model
+from test_switching_models import augmented_model, fault_injected, readings, synthetic_model
 
 KALMAN = {
     "method": "kalman",
@@ -58,8 +58,6 @@ def probe_cases() -> dict[str, tuple[dict, list[np.ndarray], list[np.ndarray]]]:
         section = model["switching"]
         temps = np.asarray(model_run.temps, dtype=float)
         if label == "lowpass p=0":
-            from test_switching_models import readings
-
             temps = readings(model, model_run)
         faulty = fault_injected(temps, section["hold_samples"], section["criterion_index"], seed=2)
         every = max(2, len(temps) // 25)

@@ -27,6 +27,7 @@ from groupfit.config import default_config_path, override
 from groupfit.errors import InputError
 from groupfit.inference.cli import add_interval_options, interval_settings
 from groupfit.plots import plot_r_against_p, plot_run_comparison
+from groupfit.probe_intervals import interval_summary, interval_table, parse_intervals, plot_intervals
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
 
@@ -43,6 +44,13 @@ def add_parser(verbs) -> None:
     add_quiet_option(compare)
     add_budget_option(compare)
     add_interval_options(compare)
+    compare.add_argument(
+        "--probe-every",
+        type=parse_intervals,
+        metavar="T,T,…",
+        help="also the error against a probe check every T (e.g. 5m,15m,30m,60m,120m; s, m, h or seconds) for "
+        "every model on the validation runs, through the offset hold: printed, plotted and in --json",
+    )
     compare.set_defaults(handler=run_compare)
 
 
@@ -98,6 +106,19 @@ def run_compare(args: argparse.Namespace) -> int:
     plot_r_against_p(result.path["R"], result.rows, result.runs, figure)
     written.append(figure)
 
-    written.append(write_json(args.json, result.to_json()))
-    print(result.summary() + "\nwrote   " + wrote_line(written), file=report_stream(args))
+    data, summary = result.to_json(), result.summary()
+    if args.probe_every:
+        checked = validation or [modelling]
+        table = interval_table(
+            {run.name: run.error for run in checked},
+            result.predictions,
+            {run.name: run.period for run in checked},
+            args.probe_every,
+        )
+        figure = out_dir / "error_against_check_interval.png"
+        plot_intervals(table, figure)
+        written.append(figure)
+        data["probe_intervals"], summary = table, summary + "\n\n" + interval_summary(table)
+    written.append(write_json(args.json, data))
+    print(summary + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0

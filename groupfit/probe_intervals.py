@@ -1,0 +1,106 @@
+"""Error against the probe-check interval: ``groupfit compare --probe-every 5m,15m,30m,60m,120m``.
+
+Every compared model's residual on every validation run is replayed with a
+check every T through the offset hold (each check's residual held until the
+next; :mod:`groupfit.runtime.recalibration` with ``method = "hold"`` and no
+bound acting), so a user reads off the longest interval that meets a
+tolerance. The hold is the one filter every model can take without tuning;
+a model file tuned with ``fit --recalibrate`` usually does better
+(``groupfit replay --probe-every``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from groupfit.errors import InputError
+from groupfit.io import save_figure
+
+UNITS_S = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
+
+
+def parse_intervals(text: str) -> list[float]:
+    """``"5m,15m,1h,900"`` as seconds (a bare number: seconds); InputError naming the bad entry."""
+    intervals = []
+    for item in text.split(","):
+        match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|min|m|h)?\s*", item)
+        if not match:
+            raise InputError(f"--probe-every: {item.strip()!r} is not an interval; write e.g. 5m,15m,30m,1h or 900")
+        seconds = float(match.group(1)) * UNITS_S[match.group(2) or ""]
+        if not (math.isfinite(seconds) and seconds > 0):
+            raise InputError(f"--probe-every: {item.strip()!r} must be longer than 0")
+        intervals.append(seconds)
+    return intervals
+
+
+def hold_residual(residual: np.ndarray, every: int) -> np.ndarray:
+    """The residual after a check every ``every`` samples (the first after ``every``), each held until the next."""
+    residual = np.asarray(residual, dtype=float)
+    k = np.arange(len(residual))
+    last_check = (k // every) * every - 1  # the last check strictly before sample k (−1: none yet)
+    offset = np.where(last_check >= 0, residual[np.maximum(last_check, 0)], 0.0)
+    return residual - offset
+
+
+def interval_table(
+    errors: Mapping[str, np.ndarray],
+    predictions: Mapping[str, Mapping[str, np.ndarray]],
+    periods: Mapping[str, float],
+    intervals_s: Sequence[float],
+) -> dict[str, Any]:
+    """Per model and run the RMS without checks and with a check every interval (the ``--json`` object)."""
+    rows = []
+    for run, error in errors.items():
+        for model, prediction in predictions[run].items():
+            residual = np.asarray(error, dtype=float) - np.asarray(prediction, dtype=float)
+            rms = [_rms(hold_residual(residual, max(1, int(round(t / periods[run]))))) for t in intervals_s]
+            rows.append({"model": model, "run": run, "rms_none_um": _rms(residual), "rms_um": rms})
+    return {"method": "offset hold", "intervals_s": [float(t) for t in intervals_s], "rows": rows}
+
+
+def _rms(values: np.ndarray) -> float:
+    values = values[np.isfinite(values)]
+    return float(np.sqrt(np.mean(values**2))) if values.size else math.nan
+
+
+def _label(seconds: float) -> str:
+    return f"{seconds / 3600:g} h" if seconds >= 3600 and seconds % 3600 == 0 else f"{seconds / 60:g} min"
+
+
+def interval_summary(table: Mapping[str, Any]) -> str:
+    """The table ``compare --probe-every`` prints: RMS (µm) against the check interval, per model and run."""
+    heads = ["none"] + [_label(t) for t in table["intervals_s"]]
+    lines = [
+        f"RMS µm with a probe check every T ({table['method']}), per model and validation run",
+        f"{'model':<12} {'run':<20}" + "".join(f"{h:>9}" for h in heads),
+    ]
+    for row in table["rows"]:
+        values = [row["rms_none_um"], *row["rms_um"]]
+        lines.append(f"{row['model']:<12} {row['run']:<20}" + "".join(f"{v:>9.3g}" for v in values))
+    return "\n".join(lines)
+
+
+def plot_intervals(table: Mapping[str, Any], path: Path) -> None:
+    """RMS against the check interval, one line per model and run (the none value at the right edge)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 5), layout="constrained")
+    ax = fig.subplots()
+    minutes = np.asarray(table["intervals_s"]) / 60.0
+    for row in table["rows"]:
+        line = ax.plot(minutes, row["rms_um"], marker="o", lw=1.2, label=f"{row['model']} on {row['run']}")
+        ax.axhline(row["rms_none_um"], color=line[0].get_color(), lw=0.6, ls=":")
+    ax.set_xscale("log")
+    ax.set_xlabel("probe check every (min)")
+    ax.set_ylabel("RMS error with checks (µm); dotted: without")
+    ax.set_title(f"error against the check interval ({table['method']})")
+    ax.legend(fontsize=7, loc="best")
+    save_figure(fig, path, dpi=120)
+
+
+__all__ = ["hold_residual", "interval_summary", "interval_table", "parse_intervals", "plot_intervals"]
