@@ -1,0 +1,134 @@
+"""The command line of probe checks: replay --probe-every/--probe-column, fit/diagnose --recalibrate,
+compare --probe-every, and their bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from recalibration_cases import KALMAN, with_section
+from test_switching_models import SYNTHETIC, synthetic_model
+
+from groupfit.cli import main
+from groupfit.model import ModelFile
+from groupfit.modelfile import save_model
+from groupfit.probe_intervals import hold_residual, parse_intervals
+
+
+@pytest.fixture()
+def model_path(tmp_path):
+    model, _ = synthetic_model()
+    path = tmp_path / "model.json"
+    save_model(with_section(model, KALMAN), path)
+    return path
+
+
+def replay_json(tmp_path, *args):
+    out = tmp_path / "r.json"
+    assert main(["replay", *map(str, args), "--json", str(out)]) == 0
+    return json.loads(out.read_text())
+
+
+def test_replay_with_checks_reports_them_and_scores_the_corrected_prediction(tmp_path, model_path, capsys):
+    plain = replay_json(tmp_path, model_path, "--data", SYNTHETIC)
+    checked = replay_json(tmp_path, model_path, "--data", SYNTHETIC, "--probe-every", 1000)  # 10 samples of 100 s
+    report = capsys.readouterr().out
+    samples = checked["samples"]
+    residual = np.array([s["residual_um"] for s in samples])
+    error = pd.read_csv(SYNTHETIC)["error_um"].to_numpy()
+    assert np.allclose(residual, error - np.array([s["prediction_um"] for s in samples]), atol=1e-12)
+    assert checked["rms_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-12)
+    probes = checked["probes"]
+    checks = [s["i"] for s in samples if "probe" in s]
+    assert checks == list(range(10, len(samples) + 1, 10)) == [c["i"] for c in probes["checks"]]
+    assert probes["applied"] + probes["rejected"] + probes["ignored"] == len(checks)
+    assert probes["rms_without_checks_um"] == pytest.approx(plain["rms_um"], rel=1e-12)
+    assert plain["samples"][9]["prediction_um"] == samples[9]["prediction_um"]  # the first check acts afterwards
+    assert "probes" in report and "applied" in report and "without" in report
+
+
+def test_logged_checks_in_their_own_column(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC)
+    frame["probe_um"] = np.nan
+    frame.loc[[49, 99, 149], "probe_um"] = frame.loc[[49, 99, 149], "error_um"] + np.array([0.5, 500.0, 0.5])
+    data = tmp_path / "logged.csv"
+    frame.to_csv(data, index=False)
+    result = replay_json(tmp_path, model_path, "--data", data, "--probe-column", "probe_um")
+    assert [(c["i"], c["result"]) for c in result["probes"]["checks"]] == [
+        (50, "applied"),
+        (100, "rejected"),
+        (150, "applied"),
+    ]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--probe-every", "0"], "--probe-every 0: must be a number of seconds > 0"),
+        (["--probe-every", "nan"], "must be a number of seconds > 0"),
+        (["--probe-column", "nope"], "column 'nope' not found"),
+    ],
+)
+def test_bad_probe_options_stop_with_one_line(tmp_path, model_path, capsys, args, message):
+    assert main(["replay", str(model_path), "--data", str(SYNTHETIC), *args, "--json", str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_a_model_file_with_a_bad_section_stops_replay_with_one_line(tmp_path, capsys):
+    model, _ = synthetic_model()
+    data = with_section(model, {**KALMAN, "gate_sigmas": -1.0})
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(data))
+    assert main(["replay", str(path), "--data", str(SYNTHETIC), "--probe-every", "1000"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "recalibration.gate_sigmas" in err and str(path) in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("method", ["auto", "hold", "kalman", "none"])
+def test_fit_writes_the_section_it_was_asked_for(tmp_path, method, capsys):
+    out = tmp_path / method
+    code = main(["fit", "--data", str(SYNTHETIC), "--p", "0", "--out", str(out), "--recalibrate", method, "--quiet"])
+    assert code == 0
+    report = capsys.readouterr().out
+    model = ModelFile.load(out / "model.json")
+    if method == "none":
+        assert model.recalibration is None and "recal" not in report
+        return
+    section = model.recalibration
+    assert section.chosen["by"] == "held-out checks" and "recal" in report
+    assert len(section.chosen["rms_hold_um"]) == len(section.chosen["intervals_s"]) == 4
+    if method == "hold":
+        assert section.method == "hold"
+    if method == "kalman":
+        assert section.method == "kalman"
+    if method == "auto":  # never worse than the hold beyond the tolerance on the held-out stretches
+        assert all(c <= 1.02 * h for c, h in zip(section.chosen["rms_chosen_um"], section.chosen["rms_hold_um"]))
+
+
+def test_parse_intervals_and_the_hold_of_compare():
+    assert parse_intervals("5m,15m, 1h,90s,120") == [300.0, 900.0, 3600.0, 90.0, 120.0]
+    for bad in ("5x", "", "-5m", "0"):
+        with pytest.raises(Exception, match="--probe-every"):
+            parse_intervals(bad)
+    residual = np.array([1.0, 2.0, 4.0, 7.0, 11.0, 16.0, 22.0])
+    # checks after samples 3 and 6 (every 3): held from the next sample on
+    assert hold_residual(residual, 3).tolist() == [1.0, 2.0, 4.0, 3.0, 7.0, 12.0, 6.0]
+
+
+def test_compare_prints_and_writes_the_error_against_the_check_interval(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    code = main(
+        ["compare", "--pmax", "1", "--probe-every", "15m,1h", "--out", str(out), "--json", str(tmp_path / "c.json")]
+        + ["--quiet"]
+    )
+    assert code == 0
+    report = capsys.readouterr().out
+    table = json.loads((tmp_path / "c.json").read_text())["probe_intervals"]
+    assert table["intervals_s"] == [900.0, 3600.0] and table["method"] == "offset hold"
+    assert {row["model"] for row in table["rows"]} == {"mlr", "ar1", "grouped1"}
+    assert "RMS µm with a probe check every T" in report
+    assert (out / "error_against_check_interval.png").stat().st_size > 10_000
