@@ -21,7 +21,7 @@ every 5, 15, 30, 60, 120 min (the probe reading: the measured error) and each
 method: no checks, the offset hold, the best Kalman filter the held-out tuning
 finds, and the method ``--recalibrate auto`` chooses. The tuning sees only the
 modelling part. Printed and checked: the chosen method is never worse than no
-checks (within 3 %: see :data:`NONE_TOLERANCE`), and never worse than the hold by more than 5 %; one gross check
+checks (within 5 %: see :data:`NONE_TOLERANCE`), and never worse than the hold by more than 5 %; one gross check
 (+500 µm, the middle check at 30 min) costs at most 10 % of the RMS; a check during
 a sensor fault (a sensor dead for 20 min around one check) is ignored.
 """
@@ -50,8 +50,8 @@ from groupfit.recalibration_tuning import choose_recalibration  # noqa: E402
 from groupfit.runtime import RuleTables, SwitchingRule  # noqa: E402
 
 INTERVALS_MIN = (5, 15, 30, 60, 120)
-NONE_TOLERANCE = 0.03
-""""Never worse than no checks", within 3 %: a model already at the probe's noise floor (the FE runs, 0.15 µm
+NONE_TOLERANCE = 0.05
+""""Never worse than no checks", within 5 %: a model already at the probe's noise floor (the FE runs, 0.15 µm
 against 0.1 µm of probe noise) gains nothing from checks, and a filter that still listens to them moves by a few nm."""
 METHODS = ("none", "hold", "kalman", "auto")
 DATASETS = HERE.parent / "datasets"

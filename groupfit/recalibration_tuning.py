@@ -38,8 +38,6 @@ INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
 CUTS = (0.5, 0.7)
 """Each modelling run is refitted on its first 50 % and 70 % and the rest of it predicted."""
 HOLD_TOLERANCE = 1.02
-EARN = 0.05
-"""A drift or gain term is kept only when it lowers the held-out RMS by 5 % more than the filter without it."""
 GATE_SIGMAS = 5.0
 CONFIRM_AFTER = 2
 GATE_SPARE = 2.0
@@ -269,7 +267,7 @@ def choose_recalibration(
     helps = allowed & np.all(rms <= rms_none_by_interval[:, None], axis=0)
     if helps.any():  # never worse than no checks where some filter manages that
         allowed = helps
-    best = _earned_best(candidates, score, allowed)
+    best = int(np.flatnonzero(allowed)[np.argmin(score[allowed])])
     chosen = {
         "by": "held-out checks",
         "method_asked": method,
@@ -288,24 +286,6 @@ def choose_recalibration(
         tuple(float(v) for v in rms[:, 0]),
         tuple(float(v) for v in rms[:, best]),
     )
-
-
-def _earned_best(candidates: Candidates, score: np.ndarray, allowed: np.ndarray) -> int:
-    """The best allowed candidate, a term beyond the offset kept only where it earns its place.
-
-    Candidates with more terms replace the best with fewer only when their
-    held-out score (mean log RMS ratio to the hold) is lower by at least
-    log(1 + :data:`EARN`): on a stretch the offset already serves, a drift or a
-    gain fitted to the modelling run's own wanderings only adds noise on the next run.
-    """
-    size = np.array([len(t) for t in candidates.terms])
-    best = None
-    for n_terms in sorted(set(size[allowed])):
-        pool = np.flatnonzero(allowed & (size == n_terms))
-        k = int(pool[np.argmin(score[pool])])
-        if best is None or score[k] < score[best] - math.log1p(EARN):
-            best = k
-    return best
 
 
 def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: float) -> float:
