@@ -10,6 +10,7 @@ operation.
 from __future__ import annotations
 
 from string import Template
+from textwrap import dedent, indent
 
 from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables
 from groupfit.runtime.recalibration import PROBE_LIMIT_UM
@@ -182,8 +183,7 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         confirm=t.confirm_after,
         limit=literal_double(PROBE_LIMIT_UM),
     )
-    inner_clamp = "".join("            " + line[8:] + "\n" if line else "" for line in CLAMP.splitlines())
-    inner_clamp = "".join("        " + line + "\n" for line in inner_clamp.splitlines())
+    inner_clamp = indent(dedent(CLAMP), " " * 20)
     return {
         "probe_doc": Template(DOC).substitute(codes),
         "probe_inputs": "    Probe : BOOL;\n    ProbeErrorUm : LREAL;\n",
