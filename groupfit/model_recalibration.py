@@ -123,12 +123,20 @@ def recalibration_problem(model: Mapping[str, Any]) -> str | None:
     if method not in METHODS:
         return f"recalibration.method = {method!r}: must be one of {', '.join(METHODS)}"
     terms = section.get("terms", ["offset"])
+    return _terms_problem(method, terms) or _numbers_problem(section, method, terms) or _rest_problem(section)
+
+
+def _terms_problem(method: str, terms: Any) -> str | None:
     if not isinstance(terms, list) or not terms or terms[0] != "offset" or any(t not in TERMS for t in terms):
         return f"recalibration.terms = {terms!r}: must be 'offset' first, then any of 'drift', 'gain'"
     if len(set(terms)) != len(terms) or terms != [t for t in TERMS if t in terms]:
         return f"recalibration.terms = {terms!r}: each term once, in the order {', '.join(TERMS)}"
     if method == "hold" and terms != ["offset"]:
         return "recalibration: the hold carries the offset only (terms = ['offset']); use method 'kalman'"
+    return None
+
+
+def _numbers_problem(section: Mapping[str, Any], method: str, terms: list) -> str | None:
     for key in NUMBER_KEYS:
         value = section.get(key, OPTIONAL_DEFAULTS.get(key))
         if not _is_number(value) or abs(value) > RECALIBRATION_LIMIT:
@@ -143,6 +151,10 @@ def recalibration_problem(model: Mapping[str, Any]) -> str | None:
     for term, key in (("drift", "drift_max_um_per_h"), ("gain", "gain_max")):
         if term in terms and not section.get(key, 0.0) > 0:
             return f"recalibration.{key} must be > 0 when '{term}' is among the terms"
+    return None
+
+
+def _rest_problem(section: Mapping[str, Any]) -> str | None:
     confirm = section["confirm_after"]
     if not isinstance(confirm, int) or isinstance(confirm, bool) or not 0 <= confirm <= MAX_CONFIRM:
         return f"recalibration.confirm_after = {confirm!r}: must be a whole number 0…{MAX_CONFIRM}"

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from groupfit.errors import InputError
 from groupfit.io import save_figure
@@ -87,8 +88,6 @@ def interval_summary(table: Mapping[str, Any]) -> str:
 
 def plot_intervals(table: Mapping[str, Any], path: Path) -> None:
     """RMS against the check interval, one line per model and run (the none value at the right edge)."""
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(8, 5), layout="constrained")
     ax = fig.subplots()
     minutes = np.asarray(table["intervals_s"]) / 60.0

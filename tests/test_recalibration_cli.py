@@ -13,7 +13,6 @@ from test_switching_models import SYNTHETIC, synthetic_model
 
 from groupfit.cli import main
 from groupfit.model import ModelFile
-from groupfit.modelfile import save_model
 from groupfit.probe_intervals import hold_residual, parse_intervals
 
 
@@ -21,7 +20,7 @@ from groupfit.probe_intervals import hold_residual, parse_intervals
 def model_path(tmp_path):
     model, _ = synthetic_model()
     path = tmp_path / "model.json"
-    save_model(with_section(model, KALMAN), path)
+    ModelFile.from_dict(with_section(model, KALMAN)).save(path)
     return path
 
 

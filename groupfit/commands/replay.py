@@ -21,7 +21,6 @@ from groupfit.commands.common import (
     write_json,
     wrote_line,
 )
-from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.commands.replay_probes import (
     add_probe_options,
     probe_report,
@@ -29,6 +28,7 @@ from groupfit.commands.replay_probes import (
     probe_summary,
     sample_probe,
 )
+from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm

@@ -20,6 +20,7 @@ from typing import Any, Mapping
 
 from groupfit.errors import InputError
 from groupfit.export.c import render_c
+from groupfit.export.c_probe import with_probe
 from groupfit.export.cec import cec_options, render_cec
 from groupfit.export.json_table import render_json
 from groupfit.export.sheet import render_sheet
@@ -45,7 +46,7 @@ def render(model: ModelFile | Mapping[str, Any], target: str, **options) -> dict
     """
     tables = RuleTables.from_model(ModelFile.coerce(model).checked())
     if target == "c":
-        return render_c(tables)
+        return with_probe(render_c(tables), tables)
     if target == "st":
         return render_st(tables, real=options.get("real", "LREAL"), name=options.get("name", "FB_GroupfitComp"))
     if target == "json":

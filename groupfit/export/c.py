@@ -38,7 +38,6 @@ from __future__ import annotations
 
 from string import Template
 
-from groupfit.export.c_probe import probe_header, probe_source
 from groupfit.export.c_terms import position_header, position_source, reference_header, reference_source
 from groupfit.export.literals import c_comment_text as _ascii
 from groupfit.export.literals import c_float_literal, double_literal, reading_notes, real_literal
@@ -123,14 +122,14 @@ typedef struct {
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
-$state_fields$reference_fields$position_fields$probe_fields    gf_real error_um;           /* last prediction, um */
+$state_fields$reference_fields$position_fields$${probe_fields}    gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */
 } gf_state;
 
 void gf_init(gf_state *s);
 int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um);
 int gf_check_period(double period_s);
-$probe_declaration
+$${probe_declaration}
 #endif /* GROUPFIT_MODEL_H */
 """
 )
@@ -167,7 +166,7 @@ static const gf_real gf_margin = $margin;
 /* Valid reading: temp_min <= x <= temp_max (degC, a source in its own unit); NaN and +-inf never are. */
 static const double gf_temp_min[GF_N_TEMPS] = { $temp_min };
 static const double gf_temp_max[GF_N_TEMPS] = { $temp_max };
-$reference_value$position_constants$probe_constants
+$reference_value$position_constants$${probe_constants}
 void gf_init(gf_state *s)
 {
     int m;
@@ -179,7 +178,7 @@ void gf_init(gf_state *s)
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
     }
-$init_derived$init_reference$init_position$init_probe    s->error_um = 0;
+$init_derived$init_reference$init_position$${init_probe}    s->error_um = 0;
     s->comp_um = 0;
 }
 
@@ -242,13 +241,13 @@ $step_reference$step_derived
         }
     }
 
-$probe_propagate    if (faulted) {
+$${probe_propagate}    if (faulted) {
         prediction = 0;
         target = 0;
-$probe_invalidate    } else {
+$${probe_invalidate}    } else {
 $dot_product$position_terms
         target = -prediction;
-$dead_band$probe_correct    }
+$dead_band$${probe_correct}    }
     if (target > GF_COMP_MAX_UM) {
         target = GF_COMP_MAX_UM;
     }
@@ -270,7 +269,7 @@ $dead_band$probe_correct    }
     }
     return faulted ? GF_RET_SENSOR_FAULT : s->group;
 }
-$probe_function"""
+$${probe_function}"""
 )
 
 
@@ -317,7 +316,6 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         rate_d=double_literal(tables.rate_limit_um),
         **reference_header(tables),
         **position_header(tables),
-        **probe_header(tables),
     )
     coefficient_rows = ",\n".join(
         f"    /* group {g + 1} */ {{ " + ", ".join(real_literal(v) for v in row) + " }"
@@ -342,7 +340,6 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         dot_product=dot_product(tables),
         **reference_source(tables),
         **position_source(tables),
-        **probe_source(tables),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
 

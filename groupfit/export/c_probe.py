@@ -235,4 +235,10 @@ def probe_source(tables: RuleTables) -> dict[str, str]:
     }
 
 
-__all__ = ["probe_header", "probe_source"]
+def with_probe(files: dict[str, str], tables: RuleTables) -> dict[str, str]:
+    """The C files of :func:`groupfit.export.c.render_c` with their probe pieces filled in."""
+    pieces = {**probe_header(tables), **probe_source(tables)}
+    return {name: Template(text).safe_substitute(pieces) for name, text in files.items()}  # a "$" in a name stays
+
+
+__all__ = ["probe_header", "probe_source", "with_probe"]
