@@ -26,6 +26,7 @@ def plot_fit(
     path: str | Path,
     title: str = "",
     break_intervals=None,
+    label: str = "grouped model",
 ) -> None:
     """Measured vs predicted error over time, hard and soft breaks marked, residual panel below.
 
@@ -37,7 +38,7 @@ def plot_fit(
         2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]}, constrained_layout=True
     )
     top.plot(hours, measured, color="black", lw=1.6, label="measured")
-    top.plot(hours, predicted, color="tab:red", lw=1.2, ls="--", label="grouped model")
+    top.plot(hours, predicted, color="tab:red", lw=1.2, ls="--", label=label)
     for k, b in enumerate(breaks):
         for axis in (top, bottom):
             axis.axvline(

@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from groupfit.ar1 import cli as ar1_cli
 from groupfit.commands.common import (
     StageProgress,
     add_budget_option,
@@ -106,10 +107,13 @@ def add_parser(verbs) -> None:
     add_budget_option(fit)
     add_interval_options(fit)
     add_recalibrate_option(fit)
+    ar1_cli.add_fit_options(fit)
     fit.set_defaults(handler=run_fit)
 
 
 def run_fit(args: argparse.Namespace) -> int:
+    if args.model == "ar1":
+        return ar1_cli.run_fit(args)
     config = config_with_data_options(args, args.config or default_config_path())
     override(config, "model", "p", args.p)
     override(config, "model", "pmax", args.pmax)

@@ -11,9 +11,12 @@ adds the expansion of a part that follows a sensor directly (the bed in the
 paper, ``g = α·L``); the recursion then runs on the remainder.
 
 C1 and one C2 per distinct non-zero heat level of the modelling run are fitted
-by least squares on one-step-ahead equations. Predictions *free-run*: each
-step starts from the model's own previous prediction, not the measured error,
-as the model would on a machine; only the first sample is taken as measured.
+by least squares on one-step-ahead equations, or (``fit_method="free_run"``)
+by minimising the free-run error itself, starting from the one-step values.
+Predictions *free-run*: each step starts from the model's own previous
+prediction, not the measured error, as the model would on a machine; the
+first sample is the measured error (``start="measured"``) or 0 (``"zero"``,
+the paper's ΔL(0) = 0).
 A heat level not seen in the modelling run gets C2 scaled from the nearest
 fitted level, either by the heat law ``(q/q_ref)^exponent`` or by a given
 ratio of early temperature rise (the paper's rule).
@@ -21,7 +24,11 @@ ratio of early temperature rise (the paper's rule).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from scipy.optimize import least_squares
+from scipy.signal import lfilter
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_array, check_is_fitted
 
@@ -29,6 +36,45 @@ from groupfit.errors import InputError
 from groupfit.metrics import ljung_box
 
 SCALINGS = ("heat_law", "rise")
+FIT_METHODS = ("one_step", "free_run")
+STARTS = ("measured", "zero")
+
+
+def closed_form_coefficients(
+    flux_W_m2: float,
+    *,
+    convection_W_m2K: float,
+    radius_m: float,
+    density_kg_m3: float,
+    heat_capacity_J_kgK: float,
+    expansion_1_K: float,
+    period_s: float,
+) -> tuple[float, float]:
+    """C1 and C2 (µm) of a rod heated at one end by ``flux_W_m2`` (Du et al., eq. 13–14).
+
+    ``b = 2h/(ρcR)``, ``C1 = e^{−bΔτ}``, ``C2(q) = q·α/(ρcb)·(1 − e^{−bΔτ})``.
+    """
+    values = dict(
+        convection_W_m2K=convection_W_m2K,
+        radius_m=radius_m,
+        density_kg_m3=density_kg_m3,
+        heat_capacity_J_kgK=heat_capacity_J_kgK,
+        period_s=period_s,
+    )
+    for name, value in values.items():
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"AR(1) closed form: {name} = {value!r}; give a positive number")
+    b = 2.0 * convection_W_m2K / (density_kg_m3 * heat_capacity_J_kgK * radius_m)
+    c1 = math.exp(-b * period_s)
+    c2 = flux_W_m2 * expansion_1_K / (density_kg_m3 * heat_capacity_J_kgK * b) * (1.0 - c1)
+    return c1, 1e6 * c2
+
+
+def free_run(c1: float, inputs: np.ndarray, initial: float) -> np.ndarray:
+    """``E(0) = initial``, ``E(k) = c1·E(k−1) + inputs[k]``: the free run, as one linear filter."""
+    drive = np.asarray(inputs, dtype=float).copy()
+    drive[0] = initial
+    return lfilter([1.0], [1.0, -c1], drive)
 
 
 def early_rise(temperature: np.ndarray, period_s: float, window_s: float = 6000.0) -> float:
@@ -53,6 +99,12 @@ class AR1Model(RegressorMixin, BaseEstimator):
     heat_exponent : float
         Exponent of the heat law: C2 ∝ q^exponent (5/3 for bearing heat
         against speed, 1 for a heat flux).
+    fit_method : {"one_step", "free_run"}
+        Least squares on the one-step-ahead equations, or on the free-run
+        error (:func:`scipy.optimize.least_squares` from the one-step values).
+    start : {"measured", "zero"}
+        Where the free run of the fit (``residuals_``, and the free-run fit
+        itself) starts: the first measured error, or 0 (ΔL(0) = 0).
 
     Attributes
     ----------
@@ -65,10 +117,20 @@ class AR1Model(RegressorMixin, BaseEstimator):
         Residuals of the one-step-ahead fit (length n − 1).
     """
 
-    def __init__(self, structural_gain: float | None = None, scaling: str = "heat_law", heat_exponent: float = 5 / 3):
+    def __init__(
+        self,
+        structural_gain: float | None = None,
+        scaling: str = "heat_law",
+        heat_exponent: float = 5 / 3,
+        *,
+        fit_method: str = "one_step",
+        start: str = "measured",
+    ):
         self.structural_gain = structural_gain
         self.scaling = scaling
         self.heat_exponent = heat_exponent
+        self.fit_method = fit_method
+        self.start = start
 
     def _split(self, X) -> tuple[np.ndarray, np.ndarray]:
         X = check_array(X, ensure_min_samples=2)
@@ -93,8 +155,13 @@ class AR1Model(RegressorMixin, BaseEstimator):
         y : array-like, shape (n_samples,)
             Thermal error in µm.
         """
-        if self.scaling not in SCALINGS:
-            raise InputError(f"AR(1) scaling {self.scaling!r}: choose one of {', '.join(SCALINGS)}")
+        for name, value, allowed in (
+            ("scaling", self.scaling, SCALINGS),
+            ("fit method", self.fit_method, FIT_METHODS),
+            ("start", self.start, STARTS),
+        ):
+            if value not in allowed:
+                raise InputError(f"AR(1) {name} {value!r}: choose one of {', '.join(allowed)}")
         heat, structural = self._split(X)
         y = check_array(y, ensure_2d=False).ravel()
         remainder = y - structural
@@ -103,11 +170,20 @@ class AR1Model(RegressorMixin, BaseEstimator):
             raise InputError("the modelling run has no heat input (all heat levels are 0): AR(1) cannot be fitted")
         design = np.column_stack([remainder[:-1]] + [(heat[1:] == level).astype(float) for level in levels])
         coef, *_ = np.linalg.lstsq(design, remainder[1:], rcond=None)
+        initial = remainder[0] if self.start == "measured" else 0.0
+        if self.fit_method == "free_run":
+            indicators = design[:, 1:]
+
+            def free_run_error(params):
+                inputs = np.concatenate([[0.0], indicators @ params[1:]])
+                return free_run(params[0], inputs, initial) - remainder
+
+            coef = least_squares(free_run_error, coef, bounds=([0.0] + [-np.inf] * len(levels), np.inf)).x
         self.c1_ = float(coef[0])
         self.c2_ = {float(level): float(c) for level, c in zip(levels, coef[1:])}
         self.one_step_residuals_ = remainder[1:] - design @ coef
         self.n_features_in_ = np.asarray(X).shape[1]
-        self.residuals_ = y - self.predict(X, initial_error=y[0])
+        self.residuals_ = y - self.predict(X, initial_error=y[0] if self.start == "measured" else 0.0)
         return self
 
     def c2_for(self, level: float, rise_ratio: float | None = None) -> float:
@@ -126,7 +202,7 @@ class AR1Model(RegressorMixin, BaseEstimator):
                     "or use the heat-law scaling"
                 )
             return self.c2_[reference] * rise_ratio
-        return self.c2_[reference] * (level / reference) ** self.heat_exponent
+        return self.c2_[reference] * math.pow(level / reference, self.heat_exponent)
 
     def predict(self, X, initial_error: float = 0.0, rise_ratio: float | None = None) -> np.ndarray:
         """Free-run prediction from ``initial_error`` at the first sample."""

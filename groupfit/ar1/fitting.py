@@ -1,0 +1,172 @@
+"""Fit a deployable AR(1) model: the time step Δτ, the fit (one-step, free-run or closed form), the model file."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from groupfit.ar1.modelfile import HEAT_MARGIN, AR1File
+from groupfit.ar1.rule import AR1Rule
+from groupfit.data import PERIOD_TOLERANCE
+from groupfit.errors import InputError
+from groupfit.metrics import error_metrics, prediction_accuracy
+from groupfit.models.ar1 import AR1Model, closed_form_coefficients
+
+ROD_KEYS = ("convection_W_m2K", "radius_m", "density_kg_m3", "heat_capacity_J_kgK", "expansion_1_K")
+"""Keys of a rod configuration's ``[rod]`` table that the closed form needs (configs/rod_ar1.toml)."""
+
+
+def decimation_step(period_s: float, dtau_s: float | None, *, what: str = "--period") -> int:
+    """How many samples of the run make one AR(1) step of ``dtau_s`` seconds (1 without ``dtau_s``).
+
+    ``what`` names the step in the error (the option, or the model's period).
+    """
+    if dtau_s is None:
+        return 1
+    if not (math.isfinite(dtau_s) and dtau_s > 0):
+        raise InputError(f"{what} {dtau_s!r}: give a positive number of seconds")
+    step = dtau_s / period_s
+    if round(step) < 1 or abs(step - round(step)) > PERIOD_TOLERANCE * step:
+        raise InputError(
+            f"{what} {dtau_s:g} s is not a whole multiple of the run's sampling period {period_s:g} s; "
+            f"resample the run, or choose a multiple such as {2 * period_s:g} or {4 * period_s:g}"
+        )
+    return int(round(step))
+
+
+def decimate(values: np.ndarray, step: int) -> np.ndarray:
+    """Every ``step``-th row from the first: the run as a routine called every ``step`` samples sees it.
+
+    The heat reading at a kept row is the level during the interval that ends there (the raw row's value).
+    """
+    return np.asarray(values)[::step]
+
+
+def closed_form_from_toml(path: str | Path) -> dict[str, float]:
+    """The rod constants of a rod configuration's ``[rod]`` table (``--closed-form``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: rod configuration not found (--closed-form)")
+    try:
+        rod = tomllib.loads(path.read_text(encoding="utf-8")).get("rod")
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{path}: not a TOML file ({exc})") from None
+    if not isinstance(rod, dict):
+        raise InputError(f"{path}: no [rod] table; the closed form needs {', '.join(ROD_KEYS)}")
+    missing = [key for key in ROD_KEYS if key not in rod]
+    if missing:
+        raise InputError(f"{path}: [rod] lacks {', '.join(missing)}")
+    try:
+        return {key: float(rod[key]) for key in ROD_KEYS}
+    except (TypeError, ValueError):
+        raise InputError(f"{path}: [rod] values must be numbers") from None
+
+
+@dataclass
+class AR1Fit:
+    """What ``fit --model ar1`` found: the model file, the estimator and the scores on the modelling run."""
+
+    model: AR1File
+    estimator: AR1Model
+    time: np.ndarray
+    error: np.ndarray
+    prediction: np.ndarray
+    scores: dict[str, Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return {**self.model.to_dict(), "scores": self.scores}
+
+    def summary(self) -> str:
+        m, s = self.model, self.scores
+        c2 = ", ".join(f"C2({level:g}) = {value:.5g} µm" for level, value in zip(m.levels, m.c2_um))
+        lines = [
+            f"run     {s['source']}: N = {s['n_samples']} steps of {m.sampling_period_s:g} s "
+            f"(every {s['decimation']} sample(s)); heat {m.heat} -> {m.error}",
+            f"model   AR(1) E(k) = C1 E(k-1) + C2(q_k): C1 = {m.c1:.6f}, {c2}; other levels by (q/level)^"
+            f"{m.heat_exponent:.4g}; {m.fit.replace('_', '-')} fit",
+            f"start   {m.start} (E0 = {'0' if m.start == 'zero' else 'the measured error at the start'})",
+            f"free run RMS {s['rms_um']:.4g} µm, max {s['max_um']:.4g} µm, prediction accuracy "
+            f"{s['accuracy_percent']:.1f} %; one-step RMS {s['one_step_rms_um']:.4g} µm",
+        ]
+        if "closed_form" in s:
+            fitted = s["closed_form"]["least_squares"]
+            c2_fit = ", ".join(f"C2({k}) = {v:.5g}" for k, v in fitted["C2"].items())
+            lines.append(f"physics closed form (eq. 13-14) used; least squares gives C1 = {fitted['C1']:.6f}, {c2_fit}")
+        return "\n".join(lines)
+
+
+def fit_ar1_file(
+    heat: np.ndarray,
+    error: np.ndarray,
+    *,
+    period_s: float,
+    heat_name: str,
+    error_name: str,
+    source: str,
+    time_name: str = "time_s",
+    fit_method: str = "one_step",
+    start: str = "zero",
+    heat_exponent: float = 5 / 3,
+    rod: dict[str, float] | None = None,
+) -> AR1Fit:
+    """Fit C1 and C2 per heat level on a run already at the model's period and write the model file object.
+
+    ``rod``: the rod's constants (:data:`ROD_KEYS`); then C1 and C2 come from the closed form at each
+    fitted level (the heat column is a heat flux in W/m²) and the least-squares values are reported beside.
+    """
+    heat, error = np.asarray(heat, dtype=float), np.asarray(error, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0))
+    if bad.size:
+        raise InputError(
+            f"{source}: row {int(bad[0]) + 1}, column '{heat_name}' = {heat[bad[0]]!r}: "
+            "the heat reading must be a finite number >= 0"
+        )
+    estimator = AR1Model(heat_exponent=heat_exponent, fit_method=fit_method, start=start).fit(heat[:, None], error)
+    c1, c2 = estimator.c1_, dict(estimator.c2_)
+    scores: dict[str, Any] = {"source": source, "n_samples": len(error)}
+    fit = fit_method
+    if rod is not None:
+        scores["closed_form"] = {
+            "rod": rod,
+            "least_squares": {"C1": c1, "C2": {f"{level:g}": value for level, value in c2.items()}},
+        }
+        pairs = {level: closed_form_coefficients(level, period_s=period_s, **rod) for level in c2}
+        c1 = next(iter(pairs.values()))[0]
+        c2 = {level: pair[1] for level, pair in pairs.items()}
+        fit = "closed_form"
+    if not 0.0 < c1 < 1.0:
+        raise InputError(
+            f"{source}: the {fit.replace('_', '-')} fit gives C1 = {c1:.6f}, not below 1: its free run would not "
+            "settle; fit at a longer step (--period) or on the free-run error (--ar1-fit free-run)"
+        )
+    levels = sorted(c2)
+    model = AR1File(
+        sampling_period_s=float(period_s),
+        heat=heat_name,
+        error=error_name,
+        c1=float(c1),
+        levels=tuple(float(v) for v in levels),
+        c2_um=tuple(float(c2[v]) for v in levels),
+        heat_exponent=float(heat_exponent),
+        heat_max=float(max(HEAT_MARGIN * levels[-1], float(np.max(heat)))),
+        start=start,
+        fit=fit,
+        training={"source": source, "n_samples": len(error), "time": time_name},
+    ).checked()
+    prediction = AR1Rule(model).replay(heat, initial_um=error[0] if start == "measured" else 0.0).prediction_um
+    residual = error - prediction
+    one_step = error[1:] - (c1 * error[:-1] + np.array([model.c2_for(q) for q in heat[1:]]))
+    scores.update(
+        error_metrics(residual),
+        accuracy_percent=prediction_accuracy(error, residual),
+        one_step_rms_um=float(np.sqrt(np.mean(one_step**2))),
+    )
+    return AR1Fit(model, estimator, np.arange(len(error)) * period_s, error, prediction, scores)
+
+
+__all__ = ["AR1Fit", "ROD_KEYS", "closed_form_from_toml", "decimate", "decimation_step", "fit_ar1_file"]
