@@ -4,8 +4,9 @@ All models are fitted on the modelling run only; validation runs are
 predicted without any refitting or tuning:
 
 * MLR: the global regression's coefficients on each run's temperatures;
-* AR(1): a free run from the run's first measured error, C2 of unseen heat
-  levels scaled by the heat law or the early-rise ratio;
+* AR(1): a free run from the run's first measured error (``ar1_start =
+  "measured"``) or from 0 (``"zero"``, the paper's ΔL(0) = 0), C2 of unseen
+  heat levels scaled by the heat law or the early-rise ratio;
 * grouped p = 1…P: on the modelling run each sample is served by its group
   (by sample index); on other runs the run-time switching rule
   (:mod:`groupfit.runtime`) chooses the group from the live criterion
@@ -26,7 +27,7 @@ from groupfit.errors import InputError
 from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
 from groupfit.inference.prediction import band_for
-from groupfit.metrics import error_metrics
+from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.model import ModelFile, grouped_prediction
 from groupfit.models.ar1 import AR1Model, early_rise
 from groupfit.models.grouped import GroupedRegressor
@@ -48,6 +49,8 @@ class ComparisonSettings:
     fit_intercept: bool = True
     heat: str = "speed_rpm"
     ar1_scaling: str = "heat_law"
+    ar1_start: str = "measured"
+    """Where each AR(1) free run starts: the run's first measured error, or 0 (``"zero"``)."""
     heat_exponent: float = 5 / 3
     rise_sensor: str | None = None
     rise_window_s: float = 6000.0
@@ -75,6 +78,7 @@ class ComparisonSettings:
             fit_intercept=model["intercept"],
             heat=table["heat"],
             ar1_scaling=table["ar1_scaling"],
+            ar1_start=table.get("ar1_start", "measured"),
             heat_exponent=float(table.get("heat_exponent", 5 / 3)),
             rise_sensor=table.get("rise_sensor"),
             rise_window_s=float(table.get("rise_window_s", 6000.0)),
@@ -212,6 +216,7 @@ def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
         structural_gain=settings.structural_gain_um_per_K if settings.structural_sensor else None,
         scaling=settings.ar1_scaling,
         heat_exponent=settings.heat_exponent,
+        start=settings.ar1_start,
     ).fit(ar1_inputs(run, settings), run.error)
 
 
@@ -294,7 +299,8 @@ def compare_models(
             rise_ratio = early_rise(_column(run, sensor), run.period, settings.rise_window_s) / early_rise(
                 _column(modelling, sensor), modelling.period, settings.rise_window_s
             )
-        preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=run.error[0], rise_ratio=rise_ratio)
+        initial = run.error[0] if settings.ar1_start == "measured" else 0.0
+        preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=initial, rise_ratio=rise_ratio)
         bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
         for p, model in grouped.items():
             groups = None
@@ -314,7 +320,8 @@ def compare_models(
                 row["break_distance"] = distance_to_change(breaks, changes) if is_modelling else None
             else:
                 row = {"model": key, "p": 0 if key == "mlr" else None, "breaks": None, "break_distance": None}
-            row.update({"run": run.name, **metrics, "R_mm": metrics["R_um"] / 1000.0})
+            accuracy = prediction_accuracy(run.error, run.error - prediction)
+            row.update({"run": run.name, **metrics, "accuracy_percent": accuracy, "R_mm": metrics["R_um"] / 1000.0})
             rows.append(row)
 
     selection = {
@@ -334,6 +341,7 @@ def compare_models(
         "scaling": settings.ar1_scaling,
         "ljung_box": ar1.ljung_box(),
         "free_run": True,
+        "start": settings.ar1_start,
     }
     return ComparisonResult(
         runs=names,
@@ -403,7 +411,12 @@ def comparison_summary(result: ComparisonResult) -> str:
     lb = ar1["ljung_box"]
     lines.append(
         f"AR(1): C1 = {ar1['C1']:.5f}, {c2}; unseen levels by {ar1['scaling'].replace('_', ' ')}; "
-        f"free run from each run's first measured error; "
+        + (
+            "free run from each run's first measured error; "
+            if ar1.get("start", "measured") == "measured"
+            else "free run from 0 (ΔL(0) = 0); "
+        )
+        + f"
         f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
     )
     lines.append(
@@ -414,17 +427,19 @@ def comparison_summary(result: ComparisonResult) -> str:
 
 
 def comparison_table(result: ComparisonResult, keys: list[str], index: dict) -> list[str]:
-    """One line per run (its condition, then every model's RMS, R and max |e|), the best model named."""
+    """One line per run (its condition, then every model's RMS, R, max |e| and accuracy %), the best model named."""
     names = [MODEL_LABELS.get(key, f"p = {key[7:]}").replace(" (p = 0)", "").replace(" free run", "") for key in keys]
     width = max(len(run) for run in result.runs)
     reference = result.reference or "none (absolute temperatures)"
     lines = [f"inputs relative to: {reference}"]
-    for title, metric, digits in (("RMS µm", "rms_um", 3), ("R = Σ|e| µm", "R_um", 2), ("max |e| µm", "max_um", 3)):
+    tables = (("RMS µm", "rms_um", 3), ("R = Σ|e| µm", "R_um", 2), ("max |e| µm", "max_um", 3))
+    tables += (("accuracy %", "accuracy_percent", 1),)  # Du et al.: 100·(1 − max|residual| / max|error|)
+    for title, metric, digits in tables:
         lines.append("")
         lines.append(f"{title:<{width}}  {'condition':<15}" + "".join(f"{n:>8}" for n in names) + "  best")
         for run in result.runs:
             values = [index[(key, run)][metric] for key in keys]
-            best = keys[int(np.argmin(values))]
+            best = keys[int(np.argmax(values) if metric == "accuracy_percent" else np.argmin(values))]
             best_name = MODEL_LABELS.get(best, f"grouped p = {best[7:]}")
             condition = result.run_conditions.get(run, "")
             cells = "".join(f"{v:>8.{digits}f}" for v in values)

@@ -37,6 +37,7 @@ A configuration has up to four tables; every key is optional::
     pmax = 4
     heat = "speed_rpm"         # AR(1) heat-level column
     ar1_scaling = "heat_law"   # or "rise": C2 of unseen levels by early temperature rise
+    ar1_start = "measured"     # or "zero": each free run starts from 0 (the paper's ΔL(0) = 0)
     heat_exponent = 1.6667     # heat law C2 ∝ level^exponent
     rise_sensor = "T2"         # with ar1_scaling = "rise"
     rise_window_s = 6000.0
@@ -130,6 +131,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "pmax": _whole,
         "heat": Table.string,
         "ar1_scaling": Table.string,
+        "ar1_start": Table.string,
         "heat_exponent": _number,
         "rise_sensor": Table.string,
         "rise_window_s": _number,

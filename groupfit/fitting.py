@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from groupfit.commands.fit_mlr import backward_summary, statistics_summary
 from groupfit.data import Run
 from groupfit.grouping import served_ranges
 from groupfit.model import ModelFile
@@ -30,6 +31,8 @@ class FitResult:
     """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.ridge_setting`), when it did."""
     held_out: dict[str, Any] | None = None
     """The model's error on held-out conditions or runs (:func:`groupfit.diagnose.select.held_out_check`)."""
+    statistics: dict[str, Any] | None = None
+    """A global regression's tests (:func:`groupfit.models.mlr.ols_statistics`), when p = 0 by least squares."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
@@ -44,6 +47,8 @@ class FitResult:
             result["ridge"] = self.ridge
         if self.held_out is not None:
             result["held_out"] = self.held_out
+        if self.statistics is not None:
+            result["statistics"] = self.statistics
         return result
 
     def summary(self) -> str:
@@ -51,7 +56,9 @@ class FitResult:
         report = fit_report(self.estimator, self.run, self.model, self.intervals)
         if self.selection is not None:
             report = selection_summary(self.selection) + "\n" + report
-        if self.input_selection is not None:
+        if self.input_selection is not None and self.input_selection["method"] == "backward":
+            report = backward_summary(self.input_selection) + "\n" + report
+        elif self.input_selection is not None:
             chosen = self.input_selection
             report = (
                 f"inputs  {chosen['method']} selection ({chosen['folds']}): "
@@ -59,6 +66,8 @@ class FitResult:
             )
         if self.ridge is not None:
             report = ridge_summary(self.ridge) + "\n" + report
+        if self.statistics is not None:
+            report += "\n" + statistics_summary(self.statistics)
         if self.held_out is not None:
             report += "\n" + held_out_summary(self.held_out)
         return report

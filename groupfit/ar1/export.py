@@ -185,6 +185,7 @@ VAR CONSTANT
     C2_UM : ARRAY[1..{k}] OF LREAL := [{c2}];
     HEAT_MAX : LREAL := {shortest_literal(model.heat_max, False)};
     EXPONENT : LREAL := {shortest_literal(model.heat_exponent, False)};
+    NO_HEAT : LREAL := 0.0;
 END_VAR
 
 IF Reset THEN
@@ -192,7 +193,7 @@ IF Reset THEN
     started := FALSE;
 END_IF;
 q := {widen("Heat")};
-IF q >= 0.0 AND q <= HEAT_MAX THEN
+IF q >= NO_HEAT AND q <= HEAT_MAX THEN
     Fault := 0;
 ELSE
     Fault := {FAULT_HEAT};
@@ -200,8 +201,8 @@ END_IF;
 IF NOT started THEN
     started := TRUE;
 ELSIF Fault = 0 THEN
-    IF q = 0.0 THEN
-        c2 := 0.0;
+    IF q = NO_HEAT THEN
+        c2 := NO_HEAT;
     ELSE
         nearest := 1;
         FOR i := 2 TO N_LEVELS DO

@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from groupfit.ar1 import cli as ar1_cli
+from groupfit.commands import fit_mlr
 from groupfit.commands.common import (
     StageProgress,
     add_budget_option,
@@ -108,6 +109,7 @@ def add_parser(verbs) -> None:
     add_interval_options(fit)
     add_recalibrate_option(fit)
     ar1_cli.add_fit_options(fit)
+    fit_mlr.add_options(fit)
     fit.set_defaults(handler=run_fit)
 
 
@@ -166,6 +168,11 @@ def run_fit(args: argparse.Namespace) -> int:
         run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors)
     elif args.sensors is not None:
         raise InputError("--sensors K needs --select forward|lasso|cluster")
+    if args.backward is not None:
+        if args.select or position_run is not None:
+            raise InputError("--backward chooses the inputs itself: not with --select or --position")
+        intercept = config["model"]["intercept"]
+        run, input_selection = fit_mlr.backward_run(run, args.backward, p=config["model"]["p"], fit_intercept=intercept)
     criterion = config["model"].get("criterion")
     if criterion is not None and criterion not in run.temp_names:
         raise InputError(
@@ -223,6 +230,8 @@ def run_fit(args: argparse.Namespace) -> int:
         model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
         position_note = recal_note + position_note
     result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
+    if estimator.p == 0 and ridge is None and position_run is None:
+        result.statistics = fit_mlr.statistics(fit_run, fit_intercept=config["model"]["intercept"])
     run = fit_run
 
     model_path = out_dir / "model.json"

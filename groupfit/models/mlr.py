@@ -3,9 +3,64 @@
 from __future__ import annotations
 
 import numpy as np
+import statsmodels.api as sm
+from scipy import stats
+from scipy.linalg import solve_triangular
 from sklearn.utils.validation import check_array, check_is_fitted
 
+from groupfit.errors import InputError
 from groupfit.models.grouped import GroupedRegressor
+
+
+def ols_statistics(ols, names: list[str], *, fit_intercept: bool) -> dict:
+    """The tests of a fitted statsmodels OLS: t and p per coefficient, F and its p, R² and adjusted R².
+
+    Without an intercept R², adjusted R² and F are statsmodels' uncentred ones (against E = 0).
+    """
+    return {
+        "terms": [
+            {"name": name, "estimate": float(b), "std_error": float(se), "t": float(t), "p_value": float(pv)}
+            for name, b, se, t, pv in zip(names, ols.params, ols.bse, ols.tvalues, ols.pvalues)
+        ],
+        "f_value": float(ols.fvalue) if ols.df_model > 0 else None,
+        "f_p_value": float(ols.f_pvalue) if ols.df_model > 0 else None,
+        "f_dof": [float(ols.df_model), float(ols.df_resid)],
+        "r_squared": float(ols.rsquared),
+        "adjusted_r_squared": float(ols.rsquared_adj),
+        "sigma_um": float(np.sqrt(ols.scale)),
+        "dof": float(ols.df_resid),
+        "centred": bool(fit_intercept),
+    }
+
+
+def design_matrix(X, *, fit_intercept: bool) -> np.ndarray:
+    X = check_array(X)
+    return sm.add_constant(X, has_constant="add") if fit_intercept else X
+
+
+def backward_elimination(X, y, names: list[str], *, alpha: float, fit_intercept: bool = True) -> dict:
+    """Drop inputs by their t-tests, one at a time, until every input's p-value is at most ``alpha``.
+
+    Each round refits the regression (statsmodels OLS) on the inputs left and drops
+    the one with the largest p-value above ``alpha`` (the intercept is never
+    dropped); at least one input stays. Returns the inputs kept, in their order,
+    and each round's dropped input with its t and p.
+    """
+    if not 0 < alpha < 1:
+        raise InputError(f"significance level {alpha!r}: give a number between 0 and 1 (e.g. 0.05)")
+    X, y = check_array(X), np.asarray(y, dtype=float).ravel()
+    keep, dropped = list(range(X.shape[1])), []
+    offset = int(fit_intercept)
+    while len(keep) > 1:
+        ols = sm.OLS(y, design_matrix(X[:, keep], fit_intercept=fit_intercept)).fit()
+        pvalues = np.asarray(ols.pvalues)[offset:]
+        worst = int(np.argmax(pvalues))
+        if not pvalues[worst] > alpha:
+            break
+        t = float(np.asarray(ols.tvalues)[offset + worst])
+        dropped.append({"name": names[keep[worst]], "t": t, "p_value": float(pvalues[worst])})
+        del keep[worst]
+    return {"alpha": alpha, "inputs": [names[j] for j in keep], "dropped": dropped, "candidates": len(names)}
 
 
 class MLR(GroupedRegressor):
@@ -37,36 +92,34 @@ class MLR(GroupedRegressor):
         super().__init__(p=0, n=0, c=0.0, objective=objective, fit_intercept=fit_intercept, search="exact")
 
     def fit(self, X, y, progress=None):
-        import statsmodels.api as sm
-
         super().fit(X, y, progress=progress)
         X = check_array(X)
         y = np.asarray(y, dtype=float).ravel()
-        design = sm.add_constant(X, has_constant="add") if self.fit_intercept else X
+        design = design_matrix(X, fit_intercept=self.fit_intercept)
         self.ols_ = sm.OLS(y, design).fit()
         names = list(getattr(self, "feature_names_in_", [f"x{i + 1}" for i in range(X.shape[1])]))
         names = (["const"] if self.fit_intercept else []) + [str(n) for n in names]
-        self.statistics_ = {
-            "terms": [
-                {"name": name, "estimate": float(b), "std_error": float(se), "t": float(t), "p_value": float(pv)}
-                for name, b, se, t, pv in zip(
-                    names, self.ols_.params, self.ols_.bse, self.ols_.tvalues, self.ols_.pvalues
-                )
-            ],
-            "f_value": float(self.ols_.fvalue) if self.fit_intercept else None,
-            "f_p_value": float(self.ols_.f_pvalue) if self.fit_intercept else None,
-            "r_squared": float(self.ols_.rsquared),
-            "sigma_um": float(np.sqrt(self.ols_.scale)),
-            "dof": float(self.ols_.df_resid),
-        }
+        self.statistics_ = ols_statistics(self.ols_, names, fit_intercept=self.fit_intercept)
+        # R of the design's QR: the leverage of a new row x is |x R^-1|², h = x (XᵀX)^-1 xᵀ
+        self.design_r_ = np.linalg.qr(design, mode="r")
         return self
 
     def prediction_interval(self, X, alpha: float = 0.05) -> np.ndarray:
         """Lower and upper ``1 − alpha`` prediction bounds for new samples, shape (n, 2)."""
-        import statsmodels.api as sm
-
         check_is_fitted(self, "ols_")
-        X = check_array(X)
-        design = sm.add_constant(X, has_constant="add") if self.fit_intercept else X
+        design = design_matrix(X, fit_intercept=self.fit_intercept)
         frame = self.ols_.get_prediction(design).summary_frame(alpha=alpha)
         return frame[["obs_ci_lower", "obs_ci_upper"]].to_numpy()
+
+    def leverage(self, X) -> np.ndarray:
+        """``h = x (XᵀX)^-1 xᵀ`` of each row (on the modelling rows: the hat matrix's diagonal h_ii)."""
+        check_is_fitted(self, "design_r_")
+        design = design_matrix(X, fit_intercept=self.fit_intercept)
+        return np.sum(solve_triangular(self.design_r_, design.T, trans="T") ** 2, axis=0)
+
+    def mean_interval(self, X, alpha: float = 0.05) -> np.ndarray:
+        """Lower and upper ``1 − alpha`` bounds of the mean response, shape (n, 2): ``ŷ ± t·σ·√h``."""
+        check_is_fitted(self, "ols_")
+        prediction = design_matrix(X, fit_intercept=self.fit_intercept) @ np.asarray(self.ols_.params)
+        half = stats.t.ppf(1 - alpha / 2, self.ols_.df_resid) * np.sqrt(self.ols_.scale * self.leverage(X))
+        return np.column_stack([prediction - half, prediction + half])

@@ -1,0 +1,282 @@
+"""The deployable AR(1) model: fit options, model file, replay and the C / ST / JSON routines."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.ar1.export import json_table, render
+from groupfit.ar1.fitting import fit_ar1_file
+from groupfit.ar1.modelfile import AR1File
+from groupfit.ar1.rule import AR1Rule
+from groupfit.cli import main
+from groupfit.export import write
+from groupfit.export.harness import STRICT_FLAGS
+from groupfit.models.ar1 import AR1Model
+
+ROOT = Path(__file__).resolve().parents[1]
+ROD = ROOT / "datasets" / "rod_ar1.csv"
+ROD_CONFIG = ROOT / "configs" / "rod_ar1.toml"
+
+
+def simulated_process(*, noise: float = 0.0, seed: int = 0, n: int = 900):
+    """An exact AR(1) process E(k) = 0.98 E(k-1) + C2(q_k) from E(0) = 0, observed with white noise."""
+    rng = np.random.default_rng(seed)
+    heat = np.repeat(rng.choice([0.0, 1000.0, 2000.0], size=n // 30), 30)
+    c2 = {0.0: 0.0, 1000.0: 0.05, 2000.0: 0.16}
+    true = np.zeros(len(heat))
+    for k in range(1, len(heat)):
+        true[k] = 0.98 * true[k - 1] + c2[heat[k]]
+    return heat, true + noise * rng.standard_normal(len(heat)), true
+
+
+def write_run(path: Path, heat, error, period: float = 15.0) -> Path:
+    pd.DataFrame({"time_s": np.arange(len(heat)) * period, "speed_rpm": heat, "error_um": error}).to_csv(
+        path, index=False
+    )
+    return path
+
+
+# ------------------------------------------------------------------ fitting
+
+
+def test_closed_form_and_least_squares_agree_on_the_rod_as_documented(tmp_path):
+    """docs/fe_model.md: C1 0.990917 (fit) against 0.990903 (closed form); the paper's C2 0.1985 / 0.2977 µm."""
+    for extra, name in (([], "fit"), (["--closed-form", str(ROD_CONFIG)], "closed")):
+        status = main(
+            ["fit", "--model", "ar1", "--data", str(ROD), "--heat", "q_W_m2", "--heat-exponent", "1", "--quiet"]
+            + ["--out", str(tmp_path / name), "--json", str(tmp_path / f"{name}.json")]
+            + extra
+        )
+        assert status == 0
+    fitted = json.loads((tmp_path / "fit.json").read_text())
+    closed = json.loads((tmp_path / "closed.json").read_text())
+    assert closed["fit"] == "closed_form" and fitted["fit"] == "one_step"
+    assert round(fitted["c1"], 6) == 0.990917 and round(closed["c1"], 6) == 0.990903
+    assert closed["c2_um"] == pytest.approx([0.1985, 0.2977], abs=5e-5)
+    assert fitted["c2_um"] == pytest.approx(closed["c2_um"], rel=2e-3)
+    assert closed["scores"]["closed_form"]["least_squares"]["C1"] == fitted["c1"]
+
+
+def test_free_run_fit_beats_the_one_step_fit_on_a_noisy_observation():
+    """Measurement noise biases the one-step regression (errors in variables); the free-run fit is not."""
+    heat, observed, true = simulated_process(noise=0.3, seed=3)
+    one = AR1Model(fit_method="one_step", start="zero").fit(heat[:, None], observed)
+    free = AR1Model(fit_method="free_run", start="zero").fit(heat[:, None], observed)
+    assert abs(free.c1_ - 0.98) < abs(one.c1_ - 0.98)
+    assert abs(free.c1_ - 0.98) < 2e-3
+    rms = lambda m: float(np.sqrt(np.mean(m.residuals_**2)))  # noqa: E731
+    assert rms(free) < rms(one)
+    # the free-run optimum: no small change of one coefficient lowers the free-run error
+    base = np.sum(free.residuals_**2)
+    for name in ("c1_", 1000.0, 2000.0):
+        for delta in (-1e-4, 1e-4):
+            probe = AR1Model(start="zero").fit(heat[:, None], observed)
+            probe.c1_, probe.c2_ = free.c1_, dict(free.c2_)
+            if name == "c1_":
+                probe.c1_ += delta
+            else:
+                probe.c2_[name] += delta
+            assert np.sum((observed - probe.predict(heat[:, None], initial_error=0.0)) ** 2) >= base
+
+
+def test_start_zero_and_measured_differ_only_in_where_the_free_run_starts():
+    heat, observed, _ = simulated_process()
+    shifted = observed + 2.0
+    zero = AR1Model(start="zero").fit(heat[:, None], shifted)
+    measured = AR1Model(start="measured").fit(heat[:, None], shifted)
+    assert zero.c1_ == measured.c1_  # one-step fit: the start plays no part
+    decay = 2.0 * zero.c1_ ** np.arange(len(heat))
+    np.testing.assert_allclose(zero.residuals_ - measured.residuals_, decay, atol=1e-9)
+
+
+def test_period_decimates_the_run_and_must_be_a_whole_multiple(tmp_path, capsys):
+    heat, observed, _ = simulated_process(n=1200)
+    csv = write_run(tmp_path / "run.csv", heat, observed)
+    assert main(["fit", "--model", "ar1", "--data", str(csv), "--heat", "speed_rpm", "--period", "30", "--quiet",
+                 "--out", str(tmp_path / "m"), "--json", str(tmp_path / "m.json")]) == 0  # fmt: skip
+    model = json.loads((tmp_path / "m.json").read_text())
+    direct = AR1Model(start="zero").fit(heat[::2, None], observed[::2])
+    assert model["sampling_period_s"] == 30.0 and model["c1"] == direct.c1_
+    assert main(["fit", "--model", "ar1", "--data", str(csv), "--heat", "speed_rpm", "--period", "20",
+                 "--out", str(tmp_path / "bad")]) == 2  # fmt: skip
+    assert "--period 20 s is not a whole multiple of the run's sampling period 15 s" in capsys.readouterr().err
+    assert not (tmp_path / "bad" / "model.json").exists()
+
+
+def test_an_unstable_fit_is_refused_with_what_to_do():
+    heat = np.repeat([1000.0, 0.0], 50)
+    growing = np.cumsum(np.where(heat > 0, 1.0, 0.5))  # keeps rising at rest: C1 > 1
+    with pytest.raises(Exception, match="not below 1.*--period.*free-run"):
+        fit_ar1_file(heat, growing, period_s=15.0, heat_name="q", error_name="e", source="run.csv")
+
+
+# ------------------------------------------------------------------ model file, replay
+
+
+@pytest.fixture(scope="module")
+def model() -> AR1File:
+    heat, observed, _ = simulated_process(noise=0.05, seed=1)
+    return fit_ar1_file(
+        heat, observed, period_s=15.0, heat_name="speed_rpm", error_name="error_um", source="sim.csv"
+    ).model
+
+
+def stream():
+    """Fitted levels, zero, unseen levels (between, tied, above, below), and readings that must be held."""
+    values = [0.0, 1000.0, 2000.0, 1500.0, 700.0, 2600.0, 1e-3, 1999.9999, 3999.0]
+    values += [float("nan"), -1.0, float("inf"), 1e6, 2000.0, 1234.5678] + list(np.linspace(0, 4000, 40))
+    return np.array(values)
+
+
+def test_replay_follows_the_estimator_and_holds_bad_readings(model):
+    """On good readings the routine is the estimator's free run (its own C2 rule); a bad reading keeps E."""
+    estimator = AR1Model(heat_exponent=model.heat_exponent)
+    estimator.c1_, estimator.c2_ = model.c1, dict(zip(model.levels, model.c2_um))
+    heat = stream()
+    good = np.isfinite(heat) & (heat >= 0) & (heat <= model.heat_max)
+    replay = AR1Rule(model).replay(heat, initial_um=0.7)
+    expected = estimator.predict(heat[good][:, None], initial_error=0.7)
+    np.testing.assert_allclose(replay.prediction_um[good], expected, rtol=1e-13, atol=1e-13)
+    held = np.flatnonzero(~good)
+    np.testing.assert_array_equal(replay.prediction_um[held], replay.prediction_um[held - 1])
+    np.testing.assert_array_equal(replay.fault, (~good).astype(int))
+
+
+def test_model_file_round_trips_and_bad_files_fail_with_the_file_and_key(model, tmp_path, capsys):
+    path = tmp_path / "model.json"
+    model.save(path)
+    assert AR1File.load(path) == model
+    data = json.loads(path.read_text())
+    run = write_run(tmp_path / "run.csv", stream()[:5], np.zeros(5))
+    for key, value, message in (
+        ("c1", 1.01, "c1 = 1.01: a stable AR(1) model has 0 < c1 < 1"),
+        ("levels", [2000.0, 1000.0], "strictly increasing"),
+        ("start", "warm", "start = 'warm'"),
+        ("heat_max", 10.0, "heat_max = 10.0: at least the largest level"),
+    ):
+        broken = tmp_path / f"{key}.json"
+        broken.write_text(json.dumps({**data, key: value}))
+        assert main(["replay", str(broken), "--data", str(run)]) == 2
+        err = capsys.readouterr().err
+        assert str(broken) in err and message in err
+        assert main(["export", str(broken), "--target", "c", "--out", str(tmp_path / key)]) == 2
+        assert not (tmp_path / key).exists() or not any((tmp_path / key).iterdir())
+
+
+def test_replay_of_a_finer_run_takes_every_step(model, tmp_path):
+    heat, observed, _ = simulated_process(n=600)
+    fine = write_run(tmp_path / "fine.csv", np.repeat(heat, 2), np.repeat(observed, 2), period=7.5)
+    path = tmp_path / "m.json"
+    model.save(path)
+    assert main(["replay", str(path), "--data", str(fine), "--json", str(tmp_path / "r.json")]) == 0
+    out = json.loads((tmp_path / "r.json").read_text())
+    assert out["decimation"] == 2 and out["start"] == "zero"
+    np.testing.assert_array_equal(out["prediction_um"], AR1Rule(model).replay(heat).prediction_um)
+
+
+# ------------------------------------------------------------------ C, ST and JSON routines
+
+DRIVER = r"""#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "groupfit_ar1.h"
+int main(void)
+{
+    char line[256];
+    gf_ar1_state state;
+    gf_ar1_init(&state, 0.0);
+    while (fgets(line, (int)sizeof line, stdin) != NULL) {
+        double value = strtod(line + (strncmp(line, "reset", 5) == 0 ? 5 : 0), NULL);
+        double error_um;
+        int code;
+        if (strncmp(line, "reset", 5) == 0) {
+            gf_ar1_init(&state, value);
+            continue;
+        }
+        code = gf_ar1_step(&state, value, &error_um);
+        printf("%d %a\n", code, error_um);
+    }
+    return 0;
+}
+"""
+
+
+def c_run(folder: Path, heat, initial: float, *, single: bool):
+    exe = folder / ("single" if single else "double")
+    if not exe.exists():
+        (folder / "driver.c").write_text(DRIVER)
+        flags = [*STRICT_FLAGS, "-O2", "-ffp-contract=off"] + (["-DGF_USE_FLOAT"] if single else [])
+        sources = [str(folder / "driver.c"), str(folder / "groupfit_ar1.c")]
+        subprocess.run(["gcc", *flags, "-I", str(folder), *sources, "-o", str(exe), "-lm"], check=True)
+    text = f"reset {float(initial).hex()}\n" + "".join(
+        ("nan" if math.isnan(q) else ("inf" if q == math.inf else float(q).hex())) + "\n" for q in heat
+    )
+    out = subprocess.run([str(exe)], input=text, capture_output=True, text=True, check=True).stdout.split("\n")
+    rows = [line.split() for line in out if line]
+    return np.array([int(r[0]) for r in rows]), np.array([float.fromhex(r[1]) for r in rows])
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+@pytest.mark.parametrize("precision", ["double", "single"])
+def test_exported_c_equals_replay_bit_for_bit(model, tmp_path, precision):
+    write(render(model, "c"), tmp_path)
+    heat, observed, _ = simulated_process(n=600, seed=5)
+    for run, initial in ((stream(), 0.0), (heat, 0.3), (heat[::-1].copy(), -1.25)):
+        fault, prediction = c_run(tmp_path, run, initial, single=precision == "single")
+        replay = AR1Rule(model, precision=precision).replay(run, initial_um=initial)
+        np.testing.assert_array_equal(fault, replay.fault)
+        assert prediction.tobytes() == replay.prediction_um.tobytes()
+
+
+def st_block(model: AR1File, real: str):
+    test_export_st = pytest.importorskip("test_export_st")
+    (text,) = render(model, "st", real=real).values()
+    return test_export_st.FunctionBlock(text)
+
+
+@pytest.mark.parametrize("real, precision", [("LREAL", "double"), ("REAL", "single")])
+def test_structured_text_block_equals_replay(model, real, precision):
+    block = st_block(model, real)
+    cast = np.float32 if real == "REAL" else np.float64
+    heat = stream()
+    outputs, faults = [], []
+    for k, q in enumerate(heat):
+        with np.errstate(over="ignore", invalid="ignore"):
+            block.call(Heat=cast(q), Reset=(k == 0), InitialUm=cast(0.4))
+        outputs.append(float(block.vars["ErrorUm"]))
+        faults.append(int(block.vars["Fault"]))
+    replay = AR1Rule(model, precision=precision).replay(heat, initial_um=0.4)
+    assert np.array(outputs).tobytes() == replay.prediction_um.tobytes()
+    np.testing.assert_array_equal(faults, replay.fault)
+
+
+def test_json_table_runs_the_same_steps(model):
+    """A runtime written from the JSON table alone (its numbers and its steps) equals replay."""
+    table = json.loads(json.dumps(json_table(model)))
+    levels, c2 = table["levels"], table["c2_um"]
+
+    def c2_of(q):
+        if q == 0:
+            return 0.0
+        i = min(range(len(levels)), key=lambda j: (abs(levels[j] - q), j))
+        return c2[i] if q == levels[i] else c2[i] * math.pow(q / levels[i], table["heat_exponent"])
+
+    heat, e, out = stream(), 0.9, []
+    for k, q in enumerate(heat):
+        if k and math.isfinite(q) and 0 <= q <= table["heat_max"]:
+            e = table["c1"] * e + c2_of(q)
+        out.append(e)
+    np.testing.assert_array_equal(out, AR1Rule(model).replay(heat, initial_um=0.9).prediction_um)
+
+
+def test_controller_sheet_names_the_setting_data(model):
+    (sheet,) = render(model, "sheet").values()
+    assert "SD43900" in sheet and "MD32750 TEMP_COMP_TYPE = 1" in sheet and "every 15 s" in sheet
