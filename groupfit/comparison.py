@@ -416,8 +416,7 @@ def comparison_summary(result: ComparisonResult) -> str:
             if ar1.get("start", "measured") == "measured"
             else "free run from 0 (ΔL(0) = 0); "
         )
-        + f"
-        f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
+        + f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
     )
     lines.append(
         f"grouped models on validation runs: groups chosen by {result.validation_rule}; "
