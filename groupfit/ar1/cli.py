@@ -136,7 +136,9 @@ def replay(args: argparse.Namespace, data: dict) -> int:
     measured = decimate(run.error, step) if run.error is not None else None
     if model.start == "measured":
         if measured is None or not np.isfinite(measured[0]):
-            raise InputError(f"{run.source}: the model starts from the measured error: column '{error}' row 1 is needed")
+            raise InputError(
+                f"{run.source}: the model starts from the measured error: column '{error}' row 1 is needed"
+            )
         initial = float(measured[0])
     else:
         initial = 0.0

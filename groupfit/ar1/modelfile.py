@@ -106,7 +106,9 @@ class AR1File:
 
 
 def _positive(value: Any, limit: float = RULE_LIMIT) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and 0 < value <= limit
+    return (
+        isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and 0 < value <= limit
+    )
 
 
 def ar1_problem(data: Any) -> str | None:
