@@ -140,8 +140,11 @@ def plot_run_comparison(
 
 
 def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequence[str], path: str | Path) -> None:
-    """The paper's R (µm) against p: the certified optimum and each run's grouped models, MLR and AR(1) marked."""
-    fig, axis = _subplots(figsize=(7, 4.5), constrained_layout=True)
+    """The paper's R (µm) against p: the certified optimum and each run's grouped models, MLR and AR(1) marked.
+
+    The legend stands right of the axes (never over the data) and p is marked at whole numbers only.
+    """
+    fig, axis = _subplots(figsize=(9.5, 4.5), constrained_layout=True)
     axis.plot(range(len(path_R)), path_R, "k-o", lw=1.6, label=f"{runs[0]}: exact optimum")
     markers = "sD^v"
     for i, run in enumerate(runs):
@@ -156,7 +159,45 @@ def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequen
     axis.set_yscale("log")
     axis.set_xlabel("hard break points p")
     axis.set_ylabel("R = Σ|e| (µm)")
-    axis.legend(fontsize=7)
+    axis.set_xticks(range(len(path_R)))
+    axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    save_figure(fig, path, dpi=120)
+
+
+def heating_phases(error: np.ndarray, window: int) -> np.ndarray:
+    """True where the error rises: the sign of its slope over ``window`` samples either side (NaN-free error)."""
+    error = np.asarray(error, dtype=float)
+    index = np.arange(len(error))
+    ahead = error[np.minimum(index + window, len(error) - 1)]
+    behind = error[np.maximum(index - window, 0)]
+    return ahead >= behind
+
+
+def plot_hysteresis(
+    temps: np.ndarray, names: Sequence[str], error: np.ndarray, path: str | Path, title: str = ""
+) -> None:
+    """Error against each input (pseudo-hysteresis, Du et al. Fig. 1), rising and falling error drawn apart.
+
+    Where heating and cooling trace different curves no single temperature maps to the
+    error: the signature of a sensor that leads or lags the deformation.
+    """
+    temps, error = np.asarray(temps, dtype=float), np.asarray(error, dtype=float)
+    count = temps.shape[1]
+    columns = min(count, 3)
+    rows = -(-count // columns)
+    fig, axes = _subplots(rows, columns, figsize=(3.6 * columns, 3.2 * rows), squeeze=False)
+    rising = heating_phases(error, max(1, len(error) // 100))
+    for j, axis in enumerate(axes.ravel()):
+        if j >= count:
+            axis.set_visible(False)
+            continue
+        axis.plot(temps[:, j], error, color="0.8", lw=0.6, zorder=1)
+        axis.scatter(temps[rising, j], error[rising], s=4, color="tab:red", label="error rising", zorder=2)
+        axis.scatter(temps[~rising, j], error[~rising], s=4, color="tab:blue", label="error falling", zorder=2)
+        axis.set_xlabel(names[j])
+        axis.set_ylabel("thermal error (µm)")
+    axes[0, 0].legend(fontsize=7, loc="best")
+    fig.suptitle(title)
     save_figure(fig, path, dpi=120)
 
 

@@ -26,7 +26,7 @@ from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
 from groupfit.errors import InputError
 from groupfit.inference.cli import add_interval_options, interval_settings
-from groupfit.plots import plot_r_against_p, plot_run_comparison
+from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import interval_summary, interval_table, parse_intervals, plot_intervals
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
@@ -104,6 +104,11 @@ def run_compare(args: argparse.Namespace) -> int:
         written.append(figure)
     figure = out_dir / "R_against_p.png"
     plot_r_against_p(result.path["R"], result.rows, result.runs, figure)
+    written.append(figure)
+    figure = out_dir / f"hysteresis_{modelling.name}.png"
+    plot_hysteresis(
+        modelling.temps, modelling.temp_names, modelling.error, figure, f"{modelling.name}: error against inputs"
+    )
     written.append(figure)
 
     data, summary = result.to_json(), result.summary()

@@ -31,6 +31,7 @@ from groupfit.grouping import Constraints
 from groupfit.heldout.selection import select_sensors
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
+from groupfit.reference import default_reference, referenced
 from groupfit.search.exact import ExactResult, exact_is_cheap, solve_exact
 from groupfit.sweep.config import canonical_json
 
@@ -86,7 +87,10 @@ def execute_run(spec: dict, path: str, content: bytes | None = None) -> dict:
 def fit_run(spec: dict, run: Run, sensors: list[str], timings: dict[str, float]) -> dict:
     """Fit the grouped model of one run; with a GA search, also compare with the exact optimum."""
     model, search = spec["model"], spec["search"]
-    X = run.frame[sensors].to_numpy(dtype=float)
+    # the inputs as fit and compare take them: rises over T_amb when the run has it (groupfit.reference)
+    reference = default_reference(run.frame, model.get("reference"))
+    reference = None if reference in sensors else reference  # an input is never its own reference
+    X = referenced(run.frame[sensors].to_numpy(dtype=float), reference, run.frame, str(run.source))
     y = run.error
     estimator = estimator_for(spec)
     mark = time.perf_counter()
@@ -99,6 +103,7 @@ def fit_run(spec: dict, run: Run, sensors: list[str], timings: dict[str, float])
     info = {k: v for k, v in estimator.search_.items() if k != "method"}
     result = {
         "sensors": list(sensors),
+        "reference": reference,
         "n_samples": int(run.n_samples),
         "n_coef": int(estimator.n_coef),
         "objective": float(estimator.objective_value_),
