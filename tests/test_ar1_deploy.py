@@ -237,8 +237,10 @@ def test_exported_c_equals_replay_bit_for_bit(model, tmp_path, precision):
 
 
 def st_block(model: AR1File, real: str):
+    """The block evaluated over blark's tree (tests/test_export_st.py); it must parse with tree-sitter too."""
     test_export_st = pytest.importorskip("test_export_st")
     (text,) = render(model, "st", real=real).values()
+    assert not test_export_st.tree_sitter_errors(text)
     return test_export_st.FunctionBlock(text)
 
 

@@ -2,11 +2,13 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from groupfit.cli import main
 from groupfit.comparison import ComparisonSettings, break_stability, distance_to_change, fit_ar1
 from groupfit.data import load_run
+from groupfit.metrics import prediction_accuracy
 from groupfit.models.ar1 import AR1Model
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,6 +74,23 @@ def test_compare_json_has_one_row_per_model_and_run(comparison):
     for name in result["runs"]:
         assert (out / f"compare_{name}.png").stat().st_size > 10_000
     assert (out / "R_against_p.png").exists()
+
+
+def test_accuracy_percent_and_the_ar1_start_are_reported(comparison):
+    """Du et al.'s accuracy, 100·(1 − max|residual| / max|error|), from each run's file; the AR(1) start named."""
+    out, result = comparison
+    assert result["ar1"]["start"] == "measured"
+    for row in result["rows"]:
+        largest = np.max(np.abs(pd.read_csv(ROOT / "datasets" / f"{row['run']}.csv")["error_um"]))
+        assert row["accuracy_percent"] == pytest.approx(100 * (1 - row["max_um"] / largest), rel=1e-12)
+    assert (out / "hysteresis_paper_cycle.png").exists()
+
+
+def test_prediction_accuracy_reproduces_the_papers_figures():
+    """Seed 000: a 4 µm residual on a run whose error peaks at 13 µm is 69 %; 6 µm is 54 %."""
+    error = np.array([0.0, 6.5, 13.0, 9.0])
+    assert prediction_accuracy(error, np.array([0.0, 4.0, -1.0, 2.0])) == pytest.approx(69.2, abs=0.05)
+    assert prediction_accuracy(error, np.array([0.0, -6.0, 1.0, 2.0])) == pytest.approx(53.8, abs=0.05)
 
 
 def test_every_run_is_labelled_same_or_other_condition(comparison):
