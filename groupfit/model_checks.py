@@ -83,6 +83,8 @@ def model_problem(model: Any, required: Sequence[str]) -> str | None:
     """
     if not isinstance(model, Mapping) or model.get("format") != FORMAT:
         return f"not a {FORMAT} model file (missing or different 'format')"
+    if model.get("kind") == "ar1":
+        return "an AR(1) model file (kind 'ar1'): replay and export read it; this needs a grouped model (groupfit fit)"
     missing = [key for key in required if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"

@@ -282,3 +282,33 @@ def test_json_table_runs_the_same_steps(model):
 def test_controller_sheet_names_the_setting_data(model):
     (sheet,) = render(model, "sheet").values()
     assert "SD43900" in sheet and "MD32750 TEMP_COMP_TYPE = 1" in sheet and "every 15 s" in sheet
+
+
+def test_bad_ar1_fit_inputs_fail_with_one_line_and_write_nothing(tmp_path, capsys):
+    heat, observed, _ = simulated_process(n=300)
+    csv = write_run(tmp_path / "run.csv", heat, observed)
+    negative = write_run(tmp_path / "negative.csv", np.where(np.arange(300) == 40, -5.0, heat), observed)
+    out = ["--out", str(tmp_path / "out")]
+    cases = (
+        (["--data", str(csv)], "--model ar1 needs --heat COLUMN"),
+        (["--data", str(csv), "--heat", "nope"], "'nope'"),
+        (
+            ["--data", str(negative), "--heat", "speed_rpm"],
+            "row 41, column 'speed_rpm' = -5: the heat reading must be a finite number >= 0",
+        ),
+        (["--data", str(csv), "--heat", "speed_rpm", "--p", "2"], "--p is an option of the grouped model"),
+    )
+    for options, message in cases:
+        assert main(["fit", "--model", "ar1", *options, *out]) == 2
+        err = capsys.readouterr().err.strip()
+        assert message in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "out" / "model.json").exists()
+
+
+def test_a_grouped_model_verb_names_the_ar1_file(model, tmp_path):
+    path = tmp_path / "m.json"
+    model.save(path)
+    from groupfit.model import ModelFile
+
+    with pytest.raises(Exception, match="an AR\\(1\\) model file .*needs a grouped model"):
+        ModelFile.load(path)

@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from groupfit.ar1.export import render
-from groupfit.ar1.fitting import closed_form_from_toml, decimate, decimation_step, fit_ar1_file
+from groupfit.ar1.fitting import check_heat, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
 from groupfit.ar1.modelfile import STARTS, AR1File
 from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.commands.common import (
@@ -88,6 +88,7 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError("--model ar1 takes one run (--data CSV)")
     run = load_run(data["path"], temps=[], time=data["time"], error=data["error"], error_limit=data.get("error_limit"))
     heat = numeric_column(run.frame, args.heat, run.source, allow_nonfinite=False)
+    check_heat(heat, source=str(run.source), name=args.heat)
     step = decimation_step(run.period, args.period)
     rod = closed_form_from_toml(args.closed_form) if args.closed_form else None
     result = fit_ar1_file(

@@ -67,6 +67,17 @@ def closed_form_from_toml(path: str | Path) -> dict[str, float]:
         raise InputError(f"{path}: [rod] values must be numbers") from None
 
 
+def check_heat(heat: np.ndarray, *, source: str, name: str) -> None:
+    """Refuse a heat reading that is not finite or below 0, naming its row (1-based) and column."""
+    heat = np.asarray(heat, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0))
+    if bad.size:
+        raise InputError(
+            f"{source}: row {int(bad[0]) + 1}, column '{name}' = {float(heat[bad[0]]):g}: "
+            "the heat reading must be a finite number >= 0"
+        )
+
+
 @dataclass
 class AR1Fit:
     """What ``fit --model ar1`` found: the model file, the estimator and the scores on the modelling run."""
@@ -120,12 +131,7 @@ def fit_ar1_file(
     fitted level (the heat column is a heat flux in W/m²) and the least-squares values are reported beside.
     """
     heat, error = np.asarray(heat, dtype=float), np.asarray(error, dtype=float)
-    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0))
-    if bad.size:
-        raise InputError(
-            f"{source}: row {int(bad[0]) + 1}, column '{heat_name}' = {heat[bad[0]]!r}: "
-            "the heat reading must be a finite number >= 0"
-        )
+    check_heat(heat, source=source, name=heat_name)
     estimator = AR1Model(heat_exponent=heat_exponent, fit_method=fit_method, start=start).fit(heat[:, None], error)
     c1, c2 = estimator.c1_, dict(estimator.c2_)
     scores: dict[str, Any] = {"source": source, "n_samples": len(error)}
@@ -169,4 +175,4 @@ def fit_ar1_file(
     return AR1Fit(model, estimator, np.arange(len(error)) * period_s, error, prediction, scores)
 
 
-__all__ = ["AR1Fit", "ROD_KEYS", "closed_form_from_toml", "decimate", "decimation_step", "fit_ar1_file"]
+__all__ = ["AR1Fit", "ROD_KEYS", "check_heat", "closed_form_from_toml", "decimate", "decimation_step", "fit_ar1_file"]
