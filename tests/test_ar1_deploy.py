@@ -176,7 +176,9 @@ def test_replay_of_a_finer_run_takes_every_step(model, tmp_path):
     fine = write_run(tmp_path / "fine.csv", np.repeat(heat, 2), np.repeat(observed, 2), period=7.5)
     path = tmp_path / "m.json"
     model.save(path)
-    assert main(["replay", str(path), "--data", str(fine), "--json", str(tmp_path / "r.json")]) == 0
+    options = ["--json", str(tmp_path / "r.json"), "--out", str(tmp_path / "fig")]
+    assert main(["replay", str(path), "--data", str(fine), *options]) == 0
+    assert (tmp_path / "fig" / "replay.png").stat().st_size > 10_000
     out = json.loads((tmp_path / "r.json").read_text())
     assert out["decimation"] == 2 and out["start"] == "zero"
     np.testing.assert_array_equal(out["prediction_um"], AR1Rule(model).replay(heat).prediction_um)
@@ -209,15 +211,20 @@ int main(void)
 """
 
 
-def c_run(folder: Path, heat, initial: float, *, single: bool):
-    exe = folder / ("single" if single else "double")
+SANITIZED = ("-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all")
+
+
+def c_run(folder: Path, heat, initial: float, *, single: bool, sanitized: bool = False):
+    exe = folder / (("sanitized_" if sanitized else "") + ("single" if single else "double"))
     if not exe.exists():
         (folder / "driver.c").write_text(DRIVER)
-        flags = [*STRICT_FLAGS, "-O2", "-ffp-contract=off"] + (["-DGF_USE_FLOAT"] if single else [])
+        flags = [*STRICT_FLAGS, *(SANITIZED if sanitized else ("-O2",)), "-ffp-contract=off"]
+        flags += ["-DGF_USE_FLOAT"] if single else []
         sources = [str(folder / "driver.c"), str(folder / "groupfit_ar1.c")]
         subprocess.run(["gcc", *flags, "-I", str(folder), *sources, "-o", str(exe), "-lm"], check=True)
     text = f"reset {float(initial).hex()}\n" + "".join(
-        ("nan" if math.isnan(q) else ("inf" if q == math.inf else float(q).hex())) + "\n" for q in heat
+        ("nan" if math.isnan(q) else ("inf" if q == math.inf else "-inf" if q == -math.inf else float(q).hex())) + "\n"
+        for q in heat
     )
     out = subprocess.run([str(exe)], input=text, capture_output=True, text=True, check=True).stdout.split("\n")
     rows = [line.split() for line in out if line]
@@ -234,6 +241,20 @@ def test_exported_c_equals_replay_bit_for_bit(model, tmp_path, precision):
         replay = AR1Rule(model, precision=precision).replay(run, initial_um=initial)
         np.testing.assert_array_equal(fault, replay.fault)
         assert prediction.tobytes() == replay.prediction_um.tobytes()
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+@pytest.mark.parametrize("precision", ["double", "single"])
+def test_sanitized_c_build_takes_hostile_readings_as_replay_does(model, tmp_path, precision):
+    """NaN, infinities, -0, subnormals, huge and negative readings: no undefined behaviour, the same outputs."""
+    write(render(model, "c"), tmp_path)
+    rng = np.random.default_rng(7)
+    special = [math.nan, math.inf, -math.inf, -0.0, 5e-324, 1e-310, 1e300, -1e300, 3.4e38, 1e39, -1.0]
+    heat = np.array(special * 3 + list(rng.uniform(-100, 5000, 200)) + list(rng.choice(special, 50)))
+    fault, prediction = c_run(tmp_path, heat, 0.25, single=precision == "single", sanitized=True)
+    replay = AR1Rule(model, precision=precision).replay(heat, initial_um=0.25)
+    np.testing.assert_array_equal(fault, replay.fault)
+    assert prediction.tobytes() == replay.prediction_um.tobytes()
 
 
 def st_block(model: AR1File, real: str):

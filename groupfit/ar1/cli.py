@@ -169,9 +169,16 @@ def replay(args: argparse.Namespace, data: dict) -> int:
             f"error   RMS {scores['rms_um']:.4g} µm, max {scores['max_um']:.4g} µm, prediction accuracy "
             f"{scores['accuracy_percent']:.1f} %"
         )
-    written = write_json(args.json, out)
-    if written:
-        lines.append("wrote    " + wrote_line([written]))
+    figures = []
+    if args.out and measured is not None:
+        figure = check_output_dir(args.out) / "replay.png"
+        time_s = decimate(run.time, step)
+        title = f"{run.name}: AR(1) routine, start {model.start}"
+        plot_fit(time_s, measured, result.prediction_um, [], [(1, len(heat))], figure, title=title, label="AR(1)")
+        figures.append(figure)
+    written = [*figures, write_json(args.json, out)]
+    if any(written):
+        lines.append("wrote    " + wrote_line(written))
     print("\n".join(lines), file=report_stream(args))
     return 0
 
