@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from groupfit.commands.fit_mlr import backward_summary, statistics_summary
 from groupfit.data import Run
 from groupfit.grouping import served_ranges
 from groupfit.model import ModelFile
@@ -71,6 +70,29 @@ class FitResult:
         if self.held_out is not None:
             report += "\n" + held_out_summary(self.held_out)
         return report
+
+
+def backward_summary(selection: dict) -> str:
+    dropped = ", ".join(f"{d['name']} (t = {d['t']:.2f}, p = {d['p_value']:.3g})" for d in selection["dropped"])
+    return (
+        f"inputs  backward elimination at alpha = {selection['alpha']:g}: kept {', '.join(selection['inputs'])} "
+        f"of {selection['candidates']}; dropped {dropped or 'none'}"
+    )
+
+
+def statistics_summary(stats: dict) -> str:
+    """The tests as ``fit --p 0`` prints them."""
+    terms = ", ".join(f"{t['name']} t = {t['t']:.3g} (p = {t['p_value']:.3g})" for t in stats["terms"])
+    f_text = (
+        f"F({stats['f_dof'][0]:g}, {stats['f_dof'][1]:g}) = {stats['f_value']:.4g} (p = {stats['f_p_value']:.3g}); "
+        if stats["f_value"] is not None
+        else ""
+    )
+    centred = "" if stats["centred"] else " (uncentred: no intercept)"
+    return (
+        f"tests   {terms}\n        {f_text}R² = {stats['r_squared']:.5f}, adjusted R² = "
+        f"{stats['adjusted_r_squared']:.5f}{centred}, σ = {stats['sigma_um']:.3g} µm"
+    )
 
 
 def ridge_summary(ridge: dict) -> str:

@@ -333,3 +333,13 @@ def test_a_grouped_model_verb_names_the_ar1_file(model, tmp_path):
 
     with pytest.raises(Exception, match="an AR\\(1\\) model file .*needs a grouped model"):
         ModelFile.load(path)
+
+
+def test_export_refuses_another_period_and_a_target_it_has_not(model, tmp_path, capsys):
+    path = tmp_path / "m.json"
+    model.save(path)
+    assert main(["export", str(path), "--target", "c", "--period", "10", "--out", str(tmp_path / "a")]) == 2
+    assert "an AR(1) model steps every 15 s" in capsys.readouterr().err
+    assert main(["export", str(path), "--target", "table", "--out", str(tmp_path / "b")]) == 2
+    assert "export target 'table' for an AR(1) model" in capsys.readouterr().err
+    assert main(["export", str(path), "--target", "c", "--period", "15", "--out", str(tmp_path / "c")]) == 0

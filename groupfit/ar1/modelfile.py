@@ -44,6 +44,14 @@ def is_ar1(data: Any) -> bool:
     return isinstance(data, Mapping) and data.get("kind") == KIND
 
 
+def is_ar1_file(path: str | Path) -> bool:
+    """Whether ``path`` is a readable AR(1) model file (anything else: False, for its own loader to judge)."""
+    try:
+        return is_ar1(read_json_file(path))
+    except InputError:
+        return False
+
+
 @dataclass(frozen=True, kw_only=True)
 class AR1File:
     """An AR(1) model as its file holds it; field names are the file's keys."""
@@ -126,6 +134,18 @@ def ar1_problem(data: Any) -> str | None:
     for key in ("heat", "error"):
         if data.get(key) is not None and (not isinstance(data[key], str) or not data[key]):
             return f"{key} = {data[key]!r}: a column name"
+    problem = _coefficients_problem(data) or _heat_problem(data)
+    if problem:
+        return problem
+    if data["start"] not in STARTS:
+        return f"start = {data['start']!r}: one of {', '.join(STARTS)}"
+    if data["fit"] not in FITS:
+        return f"fit = {data['fit']!r}: one of {', '.join(FITS)}"
+    return None
+
+
+def _coefficients_problem(data: Mapping[str, Any]) -> str | None:
+    """C1 stable, the levels positive and increasing, one finite C2 per level."""
     c1 = data["c1"]
     if not (isinstance(c1, (int, float)) and not isinstance(c1, bool) and math.isfinite(c1) and 0 < c1 < 1):
         return f"c1 = {c1!r}: a stable AR(1) model has 0 < c1 < 1"
@@ -139,6 +159,12 @@ def ar1_problem(data: Any) -> str | None:
     for i, value in enumerate(c2):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and abs(value) <= COEFFICIENT_LIMIT):
             return f"c2_um[{i}] = {value!r}: a finite number of at most {COEFFICIENT_LIMIT:g} µm"
+    return None
+
+
+def _heat_problem(data: Mapping[str, Any]) -> str | None:
+    """The heat law's exponent and the valid heat range."""
+    levels = data["levels"]
     if not _positive(data["heat_exponent"], MAX_HEAT_EXPONENT):
         return f"heat_exponent = {data['heat_exponent']!r}: in (0, {MAX_HEAT_EXPONENT:g}]"
     if not _positive(data["heat_max"]) or data["heat_max"] < levels[-1]:
@@ -148,16 +174,7 @@ def ar1_problem(data: Any) -> str | None:
             f"heat_max = {data['heat_max']!r} is more than {MAX_HEAT_RATIO:g} times the smallest level "
             f"({levels[0]:g}): the heat law would leave single precision; lower heat_max"
         )
-    if data["start"] not in STARTS:
-        return f"start = {data['start']!r}: one of {', '.join(STARTS)}"
-    if data["fit"] not in FITS:
-        return f"fit = {data['fit']!r}: one of {', '.join(FITS)}"
     return None
 
 
-def read_model_object(path: str | Path) -> Any:
-    """The JSON object of a model file of any kind (for verbs that read several kinds)."""
-    return read_json_file(path)
-
-
-__all__ = ["AR1File", "FITS", "HEAT_MARGIN", "KIND", "STARTS", "ar1_problem", "is_ar1", "read_model_object"]
+__all__ = ["AR1File", "FITS", "HEAT_MARGIN", "KIND", "STARTS", "ar1_problem", "is_ar1", "is_ar1_file"]

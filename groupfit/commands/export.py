@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from groupfit.ar1 import cli as ar1_cli
-from groupfit.ar1.modelfile import is_ar1, read_model_object
+from groupfit.ar1.modelfile import is_ar1_file
+from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
 from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
@@ -94,10 +93,9 @@ def add_cec_options(export) -> None:
 def run_export(args: argparse.Namespace) -> int:
     if is_screw_file(args.model):
         return run_screw_export(args)
-    data = read_model_object(args.model)
-    if is_ar1(data):
-        return ar1_cli.export(args, data)
-    model = ModelFile.from_dict(data, source=Path(args.model))
+    if is_ar1_file(args.model):
+        return ar1_commands.run_export(args)
+    model = ModelFile.load(args.model)
     if args.period is not None:
         try:
             model = at_period(model, args.period)

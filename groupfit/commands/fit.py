@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from groupfit.ar1 import cli as ar1_cli
+from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import fit_mlr
 from groupfit.commands.common import (
     StageProgress,
@@ -108,14 +108,14 @@ def add_parser(verbs) -> None:
     add_budget_option(fit)
     add_interval_options(fit)
     add_recalibrate_option(fit)
-    ar1_cli.add_fit_options(fit)
+    ar1_commands.add_fit_options(fit)
     fit_mlr.add_options(fit)
     fit.set_defaults(handler=run_fit)
 
 
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
-        return ar1_cli.run_fit(args)
+        return ar1_commands.run_fit(args)
     config = config_with_data_options(args, args.config or default_config_path())
     override(config, "model", "p", args.p)
     override(config, "model", "pmax", args.pmax)

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.ar1 import cli as ar1_cli
-from groupfit.ar1.modelfile import is_ar1, read_model_object
+from groupfit.ar1.modelfile import is_ar1_file
+from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import (
     add_json_option,
     add_model_argument,
@@ -86,10 +86,9 @@ def add_parser(verbs) -> None:
 def run_replay(args: argparse.Namespace) -> int:
     if is_screw_file(args.model):
         return run_screw_replay(args)
-    data = read_model_object(args.model)
-    if is_ar1(data):
-        return ar1_cli.replay(args, data)
-    model = ModelFile.from_dict(data, source=Path(args.model))
+    if is_ar1_file(args.model):
+        return ar1_commands.run_replay(args)
+    model = ModelFile.load(args.model)
     check_json_target(args)
     out_dir = check_output_dir(args.out) if args.out else None
     counts = None

@@ -1,8 +1,9 @@
-"""The AR(1) model on the command line: ``fit --model ar1``, and ``replay`` / ``export`` of its model file."""
+"""The AR(1) model on the command line (:mod:`groupfit.ar1`): ``fit --model ar1``, ``replay`` and ``export``."""
 
 from __future__ import annotations
 
 import argparse
+import math
 
 import numpy as np
 
@@ -122,9 +123,9 @@ def run_fit(args: argparse.Namespace) -> int:
     return 0
 
 
-def replay(args: argparse.Namespace, data: dict) -> int:
+def run_replay(args: argparse.Namespace) -> int:
     """``groupfit replay`` of an AR(1) model file: the routine over a recorded run, every Δτ."""
-    model = AR1File.from_dict(data, source=args.model)
+    model = AR1File.load(args.model)
     check_json_target(args)
     error = args.error or model.error or "error_um"
     time = args.time or (model.training or {}).get("time") or "time_s"
@@ -183,9 +184,14 @@ def replay(args: argparse.Namespace, data: dict) -> int:
     return 0
 
 
-def export(args: argparse.Namespace, data: dict) -> int:
+def run_export(args: argparse.Namespace) -> int:
     """``groupfit export`` of an AR(1) model file: C, ST, JSON and the controller sheet."""
-    model = AR1File.from_dict(data, source=args.model)
+    model = AR1File.load(args.model)
+    if getattr(args, "period", None) is not None and not math.isclose(args.period, model.sampling_period_s):
+        raise InputError(
+            f"{args.model}: an AR(1) model steps every {model.sampling_period_s:g} s (its C1 and C2 belong to that "
+            f"step): call it at that period, or refit with fit --model ar1 --period {args.period:g}"
+        )
     out_dir = check_output_dir(args.out)
     targets = ("c", "st", "json", "sheet") if args.target == "all" else (args.target,)
     files: dict[str, str] = {}
@@ -196,4 +202,4 @@ def export(args: argparse.Namespace, data: dict) -> int:
     return 0
 
 
-__all__ = ["add_fit_options", "export", "replay", "run_fit"]
+__all__ = ["add_fit_options", "run_export", "run_fit", "run_replay"]
