@@ -70,6 +70,8 @@ class ComparisonSettings:
     def from_config(cls, config: dict) -> "ComparisonSettings":
         """The ``[model]``, ``[search]`` and ``[compare]`` tables of a run configuration."""
         model, table = config["model"], config["compare"]
+        if table.get("ar1_start", "measured") not in ("measured", "zero"):
+            raise InputError(f'[compare] ar1_start = {table["ar1_start"]!r}: choose "measured" or "zero"')
         return cls(
             pmax=table["pmax"],
             n=model["n"],

@@ -164,3 +164,11 @@ def test_ar1_structural_term_is_separated_from_the_recursion():
     np.testing.assert_allclose(model.residuals_, 0.0, atol=1e-8)
     # without the structural term the same data no longer follow an AR(1) law
     assert np.sqrt(np.mean(AR1Model().fit(heat[:, None], error).residuals_ ** 2)) > 0.1
+
+
+def test_a_bad_ar1_start_names_its_key(tmp_path, capsys):
+    config = tmp_path / "c.toml"
+    text = (ROOT / "configs" / "default.toml").read_text(encoding="utf-8").replace("../datasets/", f"{ROOT}/datasets/")
+    config.write_text(text.replace("[compare]", '[compare]\nar1_start = "warm"'), encoding="utf-8")
+    assert main(["compare", str(config), "--quiet", "--out", str(tmp_path / "out")]) == 2
+    assert "[compare] ar1_start = 'warm'" in capsys.readouterr().err
