@@ -51,6 +51,8 @@ class ComparisonSettings:
     ar1_scaling: str = "heat_law"
     ar1_start: str = "measured"
     """Where each AR(1) free run starts: the run's first measured error, or 0 (``"zero"``)."""
+    ar1_fit: str = "one_step"
+    """How the AR(1) model is fitted: on the one-step equations, or on the free-run error (``"free_run"``)."""
     heat_exponent: float = 5 / 3
     rise_sensor: str | None = None
     rise_window_s: float = 6000.0
@@ -81,6 +83,7 @@ class ComparisonSettings:
             heat=table["heat"],
             ar1_scaling=table["ar1_scaling"],
             ar1_start=table.get("ar1_start", "measured"),
+            ar1_fit=table.get("ar1_fit", "one_step"),
             heat_exponent=float(table.get("heat_exponent", 5 / 3)),
             rise_sensor=table.get("rise_sensor"),
             rise_window_s=float(table.get("rise_window_s", 6000.0)),
@@ -219,6 +222,7 @@ def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
         scaling=settings.ar1_scaling,
         heat_exponent=settings.heat_exponent,
         start=settings.ar1_start,
+        fit_method=settings.ar1_fit,
     ).fit(ar1_inputs(run, settings), run.error)
 
 
@@ -344,6 +348,8 @@ def compare_models(
         "ljung_box": ar1.ljung_box(),
         "free_run": True,
         "start": settings.ar1_start,
+        "fit": settings.ar1_fit,
+        "structural_gain_um_per_K": ar1.structural_gain_,
     }
     return ComparisonResult(
         runs=names,
@@ -418,6 +424,7 @@ def comparison_summary(result: ComparisonResult) -> str:
             if ar1.get("start", "measured") == "measured"
             else "free run from 0 (ΔL(0) = 0); "
         )
+        + ("fitted on the free-run error; " if ar1.get("fit") == "free_run" else "")
         + f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
     )
     lines.append(

@@ -38,6 +38,7 @@ A configuration has up to four tables; every key is optional::
     heat = "speed_rpm"         # AR(1) heat-level column
     ar1_scaling = "heat_law"   # or "rise": C2 of unseen levels by early temperature rise
     ar1_start = "measured"     # or "zero": each free run starts from 0 (the paper's ΔL(0) = 0)
+    ar1_fit = "one_step"       # or "free_run": C1, C2 (and the structural gain) on the free-run error
     heat_exponent = 1.6667     # heat law C2 ∝ level^exponent
     rise_sensor = "T2"         # with ar1_scaling = "rise"
     rise_window_s = 6000.0
@@ -132,6 +133,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "heat": Table.string,
         "ar1_scaling": Table.string,
         "ar1_start": Table.string,
+        "ar1_fit": Table.string,
         "heat_exponent": _number,
         "rise_sensor": Table.string,
         "rise_window_s": _number,

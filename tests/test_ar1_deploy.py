@@ -343,3 +343,17 @@ def test_export_refuses_another_period_and_a_target_it_has_not(model, tmp_path, 
     assert main(["export", str(path), "--target", "table", "--out", str(tmp_path / "b")]) == 2
     assert "export target 'table' for an AR(1) model" in capsys.readouterr().err
     assert main(["export", str(path), "--target", "c", "--period", "15", "--out", str(tmp_path / "c")]) == 0
+
+
+def test_free_run_fit_also_fits_the_structural_gain():
+    """E = AR(1) part + g·(T_s − T_s(0)) with g = 3 µm/K; started from g = 2 the free-run fit finds 3."""
+    heat, _, spindle = simulated_process(n=900, seed=4)
+    rng = np.random.default_rng(4)
+    bed = 20 + np.cumsum(rng.normal(0, 0.02, len(heat)))
+    observed = spindle + 3.0 * (bed - bed[0]) + rng.normal(0, 0.05, len(heat))
+    X = np.column_stack([heat, bed])
+    free = AR1Model(structural_gain=2.0, fit_method="free_run", start="zero").fit(X, observed)
+    fixed = AR1Model(structural_gain=2.0, start="zero").fit(X, observed)
+    assert free.structural_gain_ == pytest.approx(3.0, abs=0.05) and fixed.structural_gain_ == 2.0
+    assert free.c1_ == pytest.approx(0.98, abs=2e-3)
+    assert np.sqrt(np.mean(free.residuals_**2)) < 0.5 * np.sqrt(np.mean(fixed.residuals_**2))

@@ -101,7 +101,9 @@ class AR1Model(RegressorMixin, BaseEstimator):
         against speed, 1 for a heat flux).
     fit_method : {"one_step", "free_run"}
         Least squares on the one-step-ahead equations, or on the free-run
-        error (:func:`scipy.optimize.least_squares` from the one-step values).
+        error (:func:`scipy.optimize.least_squares` from the one-step values);
+        the free-run fit also fits the structural gain when there is one
+        (``structural_gain`` is then its starting value).
     start : {"measured", "zero"}
         Where the free run of the fit (``residuals_``, and the free-run fit
         itself) starts: the first measured error, or 0 (ΔL(0) = 0).
@@ -115,6 +117,8 @@ class AR1Model(RegressorMixin, BaseEstimator):
         Free-run residuals on the modelling run.
     one_step_residuals_ : ndarray
         Residuals of the one-step-ahead fit (length n − 1).
+    structural_gain_ : float or None
+        The structural gain in use: as given, or fitted on the free-run error.
     """
 
     def __init__(
@@ -133,15 +137,14 @@ class AR1Model(RegressorMixin, BaseEstimator):
         self.start = start
 
     def _split(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """The heat column and the structural sensor's rise since the first sample (zeros without the term)."""
         X = check_array(X, ensure_min_samples=2)
         heat = X[:, 0]
         if self.structural_gain is None:
-            structural = np.zeros(len(X))
-        else:
-            if X.shape[1] < 2:
-                raise InputError("the structural term needs a second column: the structural sensor's temperature")
-            structural = self.structural_gain * (X[:, 1] - X[0, 1])
-        return heat, structural
+            return heat, np.zeros(len(X))
+        if X.shape[1] < 2:
+            raise InputError("the structural term needs a second column: the structural sensor's temperature")
+        return heat, X[:, 1] - X[0, 1]
 
     def fit(self, X, y):
         """Fit C1 and C2 per heat level.
@@ -162,9 +165,10 @@ class AR1Model(RegressorMixin, BaseEstimator):
         ):
             if value not in allowed:
                 raise InputError(f"AR(1) {name} {value!r}: choose one of {', '.join(allowed)}")
-        heat, structural = self._split(X)
+        heat, rise = self._split(X)
         y = check_array(y, ensure_2d=False).ravel()
-        remainder = y - structural
+        gain = 0.0 if self.structural_gain is None else float(self.structural_gain)
+        remainder = y - gain * rise
         levels = np.unique(heat[1:][heat[1:] != 0])
         if levels.size == 0:
             raise InputError("the modelling run has no heat input (all heat levels are 0): AR(1) cannot be fitted")
@@ -173,12 +177,22 @@ class AR1Model(RegressorMixin, BaseEstimator):
         initial = remainder[0] if self.start == "measured" else 0.0
         if self.fit_method == "free_run":
             indicators = design[:, 1:]
+            structural = self.structural_gain is not None
 
             def free_run_error(params):
-                inputs = np.concatenate([[0.0], indicators @ params[1:]])
-                return free_run(params[0], inputs, initial) - remainder
+                inputs = np.concatenate([[0.0], indicators @ params[1 : 1 + len(levels)]])
+                g = params[-1] if structural else 0.0
+                return free_run(params[0], inputs, initial) + g * rise - y
 
-            coef = least_squares(free_run_error, coef, bounds=([0.0] + [-np.inf] * len(levels), np.inf)).x
+            start = np.concatenate([coef, [gain]]) if structural else coef
+            lower = [0.0] + [-np.inf] * (len(start) - 1)
+            params = least_squares(free_run_error, start, bounds=(lower, np.inf)).x
+            coef = params[: 1 + len(levels)]
+            if structural:
+                gain = float(params[-1])
+                remainder = y - gain * rise
+                design[:, 0] = remainder[:-1]
+        self.structural_gain_ = None if self.structural_gain is None else gain
         self.c1_ = float(coef[0])
         self.c2_ = {float(level): float(c) for level, c in zip(levels, coef[1:])}
         self.one_step_residuals_ = remainder[1:] - design @ coef
@@ -207,7 +221,8 @@ class AR1Model(RegressorMixin, BaseEstimator):
     def predict(self, X, initial_error: float = 0.0, rise_ratio: float | None = None) -> np.ndarray:
         """Free-run prediction from ``initial_error`` at the first sample."""
         check_is_fitted(self, "c1_")
-        heat, structural = self._split(X)
+        heat, rise = self._split(X)
+        structural = rise * (self.structural_gain_ or 0.0)
         inputs = np.array([self.c2_for(level, rise_ratio) for level in heat])
         remainder = np.empty(len(heat))
         remainder[0] = initial_error - structural[0]
