@@ -140,6 +140,7 @@ def test_replay_follows_the_estimator_and_holds_bad_readings(model):
     """On good readings the routine is the estimator's free run (its own C2 rule); a bad reading keeps E."""
     estimator = AR1Model(heat_exponent=model.heat_exponent)
     estimator.c1_, estimator.c2_ = model.c1, dict(zip(model.levels, model.c2_um))
+    estimator.structural_gain_ = None
     heat = stream()
     good = np.isfinite(heat) & (heat >= 0) & (heat <= model.heat_max)
     replay = AR1Rule(model).replay(heat, initial_um=0.7)
