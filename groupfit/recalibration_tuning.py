@@ -260,6 +260,10 @@ def choose_recalibration(
         rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
         unchecked = np.concatenate([s.residual[every:] for s in series])
         rms_none_by_interval[i] = float(np.sqrt(np.nanmean(unchecked**2)))
+    if not np.all(np.isfinite(rms)) or not np.all(rms[:, 0] > 0):
+        return _default(
+            offset_max, rate, intervals, reason="the held-out checks leave nothing to compare the filters on"
+        )
     ratio = rms / rms[:, :1]
     score = np.mean(np.log(ratio), axis=0)
     allowed = np.all(ratio <= HOLD_TOLERANCE, axis=0) | (method == "kalman")

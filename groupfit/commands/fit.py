@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from groupfit.commands import ar1 as ar1_commands
+from groupfit.commands import ar1_fit as ar1_commands
 from groupfit.commands import fit_mlr
 from groupfit.commands.common import (
     StageProgress,

@@ -1,0 +1,116 @@
+"""``groupfit fit --model ar1``: the AR(1) model fitted on a run and written as a model file (:mod:`groupfit.ar1`)."""
+
+from __future__ import annotations
+
+import argparse
+
+from groupfit.ar1.fitting import check_heat, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
+from groupfit.ar1.modelfile import STARTS
+from groupfit.commands.common import (
+    check_json_target,
+    check_output_dir,
+    config_with_data_options,
+    report_stream,
+    write_json,
+    wrote_line,
+)
+from groupfit.config import default_config_path
+from groupfit.data import load_run, numeric_column
+from groupfit.errors import InputError
+from groupfit.plots import plot_fit
+
+AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
+GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion")
+
+
+def add_fit_options(parser: argparse.ArgumentParser) -> None:
+    """The options of ``fit --model ar1``."""
+    parser.add_argument(
+        "--model",
+        choices=("grouped", "ar1"),
+        default="grouped",
+        help="grouped regression (default), or the physics AR(1) model E(k) = C1 E(k-1) + C2(q_k)",
+    )
+    parser.add_argument("--heat", metavar="COLUMN", help="ar1: the heat column (speed, power or heat flux)")
+    parser.add_argument(
+        "--period",
+        type=float,
+        metavar="S",
+        help="ar1: the step Δτ in s, a whole multiple of the run's period (default: the run's period)",
+    )
+    parser.add_argument(
+        "--start",
+        choices=STARTS,
+        default="zero",
+        help="ar1: the free run starts from 0 (the paper's ΔL(0) = 0, default) or from the measured error",
+    )
+    parser.add_argument(
+        "--ar1-fit",
+        choices=tuple(AR1_FITS),
+        default="one-step",
+        help="ar1: least squares on the one-step equations (default) or on the free-run error",
+    )
+    parser.add_argument(
+        "--heat-exponent",
+        type=float,
+        default=5 / 3,
+        metavar="X",
+        help="ar1: C2 of an unseen heat level by (q/level)^X (default 5/3, bearing heat against speed; 1 for a flux)",
+    )
+    parser.add_argument(
+        "--closed-form",
+        metavar="TOML",
+        help="ar1: C1 and C2 from the rod's constants ([rod] table, e.g. configs/rod_ar1.toml; eq. 13-14) "
+        "instead of the fit; the heat column is then a heat flux in W/m²",
+    )
+
+
+def run_fit(args: argparse.Namespace) -> int:
+    """``groupfit fit --model ar1``: fit, write model.json and fit.png, print the summary."""
+    given = [name for name in GROUPED_ONLY if getattr(args, name, None) not in (None, False)]
+    if given:
+        raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
+    if not args.heat:
+        raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
+    config = config_with_data_options(args, args.config or default_config_path())
+    check_json_target(args)
+    out_dir = check_output_dir(args.out or config["output"]["dir"])
+    data = config["data"]
+    if not data.get("path"):
+        raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    if isinstance(data["path"], (list, tuple)):
+        raise InputError("--model ar1 takes one run (--data CSV)")
+    run = load_run(data["path"], temps=[], time=data["time"], error=data["error"], error_limit=data.get("error_limit"))
+    heat = numeric_column(run.frame, args.heat, run.source, allow_nonfinite=False)
+    check_heat(heat, source=str(run.source), name=args.heat)
+    step = decimation_step(run.period, args.period)
+    rod = closed_form_from_toml(args.closed_form) if args.closed_form else None
+    result = fit_ar1_file(
+        decimate(heat, step),
+        decimate(run.error, step),
+        period_s=run.period * step,
+        heat_name=args.heat,
+        error_name=run.error_name,
+        source=str(run.source),
+        time_name=run.time_name,
+        fit_method=AR1_FITS[args.ar1_fit],
+        start=args.start,
+        heat_exponent=args.heat_exponent,
+        rod=rod,
+    )
+    result.scores["decimation"] = step
+    model_path, figure_path = out_dir / "model.json", out_dir / "fit.png"
+    result.model.save(model_path)
+    plot_fit(
+        decimate(run.time, step),
+        result.error,
+        result.prediction,
+        [],
+        [(1, len(result.error))],
+        figure_path,
+        title=f"{run.name}: AR(1), C1 = {result.model.c1:.5f}, start {args.start}",
+        label="AR(1) free run",
+    )
+    json_path = write_json(args.json, result.to_json())
+    print(result.summary() + "\nwrote   " + wrote_line([model_path, figure_path, json_path]), file=report_stream(args))
+    return 0
