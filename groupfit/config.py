@@ -10,6 +10,9 @@ A configuration has up to four tables; every key is optional::
     validate = ["../datasets/other_run.csv"]
     temp_range = [-50, 200]    # plausible temperatures (°C); a reading outside is refused
     error_limit = 1e5          # largest plausible |error| (µm)
+    period_tolerance = 2       # % of the period an interval may deviate by (a jittering clock)
+    resample_s = 60            # average the readings of every 60 s (a gap splits the log)
+    ambient = "T15"            # the ambient sensor, whatever its name
 
     [model]
     p = 3                      # or "auto": choose p by p_rule over 0…pmax
@@ -106,6 +109,9 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "validate": Table.strings,
         "temp_range": _temp_range,
         "error_limit": lambda table, key: table.number(key, positive=True),
+        "period_tolerance": _number,
+        "resample_s": lambda table, key: table.number(key, positive=True),
+        "ambient": Table.string,
     },
     "model": {
         "p": _whole_or_auto,

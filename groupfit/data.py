@@ -18,9 +18,12 @@ import numpy as np
 import pandas as pd
 
 from groupfit.errors import InputError
+from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
+from groupfit.readtable import read_table
+from groupfit.resample import jitter_note, resample_frame
 
-PERIOD_TOLERANCE = 0.01
-"""Largest relative deviation of one sampling interval from the run's period."""
+PERIOD_TOLERANCE = 0.02
+"""Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
 
 DEFAULT_TIME = "time_s"
 DEFAULT_ERROR = "error_um"
@@ -61,6 +64,8 @@ class Run:
         The whole table, including columns that are not model inputs.
     time_name : str
         Name of the time column.
+    notes : tuple of str
+        What loading did to the log, for the verbs to print.
     reference : str or None
         What ``temps`` are relative to (:mod:`groupfit.reference`): None for
         absolute readings (as loaded), a column or ``"start"`` once
@@ -79,86 +84,12 @@ class Run:
     frame: pd.DataFrame = field(repr=False)
     time_name: str = DEFAULT_TIME
     reference: str | None = None
+    notes: tuple[str, ...] = ()
+    """What loading did to the log (a jittering clock accepted, readings resampled), one line each."""
 
     @property
     def n_samples(self) -> int:
         return len(self.time)
-
-
-TABLE_SUFFIXES = {
-    ".csv": "CSV",
-    ".txt": "CSV",
-    ".xlsx": "Excel",
-    ".xlsm": "Excel",
-    ".xls": "Excel",
-    ".parquet": "Parquet",
-}
-"""File types a run is read from, by suffix (anything else is read as CSV)."""
-
-
-def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
-    """Read a run's table (CSV, Excel or Parquet, by suffix) or take a DataFrame; return ``(frame, name, label)``.
-
-    ``label`` names the source in error messages. An Excel workbook is read
-    from its first sheet, with the first row as the header.
-    """
-    if isinstance(source, pd.DataFrame):
-        label = name or "DataFrame"
-        _check_unique_columns(list(source.columns), label)
-        return source.reset_index(drop=True), (name or "data"), label
-    path = Path(source)
-    label = str(path)
-    if not path.is_file():
-        raise InputError(f"{label}: data file not found; check the path given to --data")
-    kind = TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
-    try:
-        frame = _read_by_kind(path, kind)
-    except pd.errors.EmptyDataError:
-        raise InputError(f"{label}: the file is empty; a header line and one row per sample are needed") from None
-    except ImportError as exc:
-        raise InputError(f"{label}: reading {kind} files needs the package '{exc.name}'; pip install it") from None
-    except (pd.errors.ParserError, UnicodeDecodeError, ValueError, OSError) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{label}: not a readable {kind} table ({first})") from None
-    if frame.shape[0] == 0:
-        raise InputError(f"{label}: the table has a header but no rows")
-    header = _raw_header(path, kind) if kind != "Parquet" else list(frame.columns)
-    if header is None or len(header) != frame.shape[1]:
-        header = list(frame.columns)
-    _check_unique_columns(header, label)
-    frame.columns = [str(c).strip() for c in frame.columns]
-    return frame, (name or path.stem), label
-
-
-def _raw_header(path: Path, kind: str) -> list[str] | None:
-    """The header as written in the file (pandas renames a repeated ``T1`` to ``T1.1`` on reading)."""
-    try:
-        if kind == "Excel":
-            return [str(c) for c in pd.read_excel(path, sheet_name=0, header=None, nrows=1).iloc[0].tolist()]
-        return [str(c) for c in pd.read_csv(path, header=None, nrows=1, skipinitialspace=True, dtype=str).iloc[0]]
-    except (ValueError, OSError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
-        return None
-
-
-def _check_unique_columns(header, label: str) -> None:
-    """Refuse a header that names a column twice, naming both positions (1-based)."""
-    seen: dict[str, int] = {}
-    for position, name in enumerate(header, start=1):
-        name = str(name).strip()
-        if name in seen:
-            raise InputError(
-                f"{label}: column '{name}' appears twice (columns {seen[name]} and {position}); "
-                "rename one so that every column name is unique"
-            )
-        seen[name] = position
-
-
-def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
-    if kind == "Excel":
-        return pd.read_excel(path, sheet_name=0)
-    if kind == "Parquet":
-        return pd.read_parquet(path)
-    return pd.read_csv(path, skipinitialspace=True)
 
 
 def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
@@ -231,8 +162,8 @@ def parse_error_limit(text: str | None) -> float | None:
     return limit
 
 
-def check_time(time: np.ndarray, label: str, column: str) -> float:
-    """Check that ``time`` is strictly increasing and uniformly sampled; return the period."""
+def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = PERIOD_TOLERANCE) -> float:
+    """Check that ``time`` is strictly increasing and uniformly sampled within ``tolerance``; return the period."""
     if len(time) < 2:
         raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
     step = np.diff(time)
@@ -241,18 +172,33 @@ def check_time(time: np.ndarray, label: str, column: str) -> float:
         i = int(not_increasing[0]) + 1
         raise InputError(
             f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
-            f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows or remove the duplicate"
+            f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows, remove the duplicate, or average the "
+            "readings of each period with --resample SECONDS"
         )
     period = float(np.median(step))
-    irregular = np.flatnonzero(np.abs(step - period) > PERIOD_TOLERANCE * period)
+    irregular = np.flatnonzero(np.abs(step - period) > tolerance * period)
     if irregular.size:
         i = int(irregular[0]) + 1
         raise InputError(
             f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
-            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance 1 %); "
-            "resample the run to a uniform period or split it at the gap"
+            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
+            "average the readings of each period with --resample SECONDS (a gap then splits the run), "
+            "widen the tolerance with --period-tolerance PERCENT, or split the run at the gap"
         )
     return period
+
+
+def parse_period_tolerance(text: str | float | None) -> float | None:
+    """``--period-tolerance PERCENT`` (or ``[data] period_tolerance``) as a fraction of the period."""
+    if text is None:
+        return None
+    try:
+        percent = float(str(text).strip().rstrip("%"))
+    except ValueError:
+        raise InputError(f"--period-tolerance {text!r}: give a percentage of the period, e.g. 2 or 5%") from None
+    if not (np.isfinite(percent) and 0 <= percent < 50):
+        raise InputError(f"--period-tolerance {text!r}: must be a percentage in [0, 50)")
+    return percent / 100.0
 
 
 def load_run(
@@ -267,6 +213,8 @@ def load_run(
     name: str | None = None,
     temp_range: tuple[float, float] | None = TEMP_RANGE_C,
     error_limit: float | None = ERROR_LIMIT_UM,
+    period_tolerance: float = PERIOD_TOLERANCE,
+    resample: float | None = None,
 ) -> Run:
     """Read and validate a run.
 
@@ -300,15 +248,86 @@ def load_run(
         Largest plausible ``|error|`` in µm (default :data:`ERROR_LIMIT_UM`).
         With ``allow_nonfinite`` neither range is checked: the run-time rule
         treats implausible readings as sensor faults, as it does NaN.
+    period_tolerance : float
+        Largest relative deviation of an interval from the period (default
+        :data:`PERIOD_TOLERANCE`); a jittering clock within it is accepted
+        with a note giving its largest deviation.
+    resample : float, optional
+        Bin the rows into periods of this many seconds first
+        (:mod:`groupfit.resample`); a gap that splits the log is refused here
+        (:func:`load_runs` returns the pieces).
 
     Raises
     ------
     InputError
         On any problem with the file or its values.
     """
+    options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
+    options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
+    runs = load_runs(source, name=name, period_tolerance=period_tolerance, resample=resample, **options)
+    if len(runs) > 1:
+        raise InputError(
+            f"{runs[0].source.split(' (part')[0]}: --resample {resample:g} splits the log into {len(runs)} runs at "
+            "gaps; this takes one run: cut the file at the gap, or give the parts as separate runs"
+        )
+    return runs[0]
+
+
+def load_runs(
+    source: str | Path | pd.DataFrame,
+    *,
+    name: str | None = None,
+    period_tolerance: float = PERIOD_TOLERANCE,
+    resample: float | None = None,
+    **options,
+) -> list[Run]:
+    """Read and validate a log as :func:`load_run` does; with ``resample``, one run per stretch between gaps."""
     frame, run_name, label = read_table(source, name)
+    if resample is None:
+        return [_validated(frame, run_name, label, period_tolerance=period_tolerance, notes=(), **options)]
+    time = options.get("time", DEFAULT_TIME)
+    numeric_column(frame, time, label, allow_nonfinite=False)
+    binned = resample_frame(frame, time=time, period_s=float(resample), label=label)
+    note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
+    if len(binned.pieces) == 1:
+        return [
+            _validated(binned.pieces[0], run_name, label, period_tolerance=period_tolerance, notes=(note,), **options)
+        ]
+    total = len(binned.pieces)
+    return [
+        _validated(
+            piece,
+            f"{run_name}#{k}",
+            f"{label} (part {k} of {total})",
+            period_tolerance=period_tolerance,
+            notes=(note,) if k == 1 else (),
+            **options,
+        )
+        for k, piece in enumerate(binned.pieces, start=1)
+    ]
+
+
+def _validated(
+    frame: pd.DataFrame,
+    run_name: str,
+    label: str,
+    *,
+    temps: Sequence[str] | None = None,
+    time: str = DEFAULT_TIME,
+    error: str | None = DEFAULT_ERROR,
+    require_error: bool = True,
+    allow_nonfinite: bool = False,
+    missing_error: bool = False,
+    temp_range: tuple[float, float] | None = TEMP_RANGE_C,
+    error_limit: float | None = ERROR_LIMIT_UM,
+    period_tolerance: float = PERIOD_TOLERANCE,
+    notes: tuple[str, ...] = (),
+) -> Run:
+    """The checks of :func:`load_run` on a table already read."""
     time_values = numeric_column(frame, time, label, allow_nonfinite=False)
-    period = check_time(time_values, label, time)
+    period = check_time(time_values, label, time, tolerance=period_tolerance)
+    jitter = jitter_note(label, time_values, period)
+    notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
 
     if temps is None:
         temps = default_temperature_columns(frame, exclude=(time, error))
@@ -364,6 +383,7 @@ def load_run(
         period=period,
         frame=frame,
         time_name=time,
+        notes=notes,
     )
 
 
@@ -392,7 +412,7 @@ def join_runs(runs: Sequence[Run]) -> Run:
     for run in runs[1:]:
         if run.temp_names != first.temp_names:
             raise InputError(f"{run.source}: inputs {', '.join(run.temp_names)} differ from {first.source}'s")
-        if abs(run.period - first.period) > PERIOD_TOLERANCE * first.period:
+        if abs(run.period - first.period) > 0.01 * first.period:
             raise InputError(
                 f"{run.source}: sampled every {run.period:g} s but {first.source} every {first.period:g} s; "
                 "resample the runs to one period"
@@ -414,6 +434,7 @@ def join_runs(runs: Sequence[Run]) -> Run:
         frame=pd.concat([run.frame[shared] for run in runs], ignore_index=True),
         time_name=first.time_name,
         reference=_shared_reference(runs),
+        notes=tuple(note for run in runs for note in run.notes),
     )
 
 

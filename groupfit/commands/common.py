@@ -13,11 +13,14 @@ from tqdm import tqdm
 from groupfit.config import override, read_config
 from groupfit.data import (
     ERROR_LIMIT_UM,
+    PERIOD_TOLERANCE,
     TEMP_RANGE_C,
     Run,
     join_runs,
     load_run,
+    load_runs,
     parse_error_limit,
+    parse_period_tolerance,
     parse_temp_range,
     split_names,
 )
@@ -26,6 +29,7 @@ from groupfit.io import atomic_write_text, check_output_file, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 from groupfit.model_checks import MAX_RIDGE_ALPHA
 from groupfit.reference import default_reference
+from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
 
 
@@ -51,6 +55,52 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
         metavar="MAX",
         help="largest plausible |thermal error| in µm (default 1e5); a larger value is refused",
     )
+    add_clock_options(parser)
+
+
+def add_clock_options(parser: argparse.ArgumentParser) -> None:
+    """``--period-tolerance PERCENT`` and ``--resample SECONDS``: how a run's clock is read."""
+    parser.add_argument(
+        "--period-tolerance",
+        metavar="PERCENT",
+        help=f"largest deviation of a sampling interval from the period, in %% (default {100 * PERIOD_TOLERANCE:g}); "
+        "a jittering clock within it is accepted with a note",
+    )
+    parser.add_argument(
+        "--resample",
+        type=resample_seconds,
+        metavar="SECONDS",
+        help="average the readings of every period of this many seconds (the period's centre as its time); "
+        f"up to {GAP_PERIODS} empty periods in a row are interpolated, a longer gap splits the log into runs",
+    )
+
+
+def resample_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give the period in seconds, e.g. 60") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: the period must be a number of seconds > 0")
+    return value
+
+
+def clock_options(args: argparse.Namespace, config: dict | None = None) -> dict[str, Any]:
+    """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run`: the flags, else ``[data]``."""
+    data = (config or {}).get("data", {})
+    tolerance = parse_period_tolerance(getattr(args, "period_tolerance", None))
+    if tolerance is None:
+        tolerance = parse_period_tolerance(data.get("period_tolerance"))
+    resample = getattr(args, "resample", None)
+    if resample is None:
+        resample = data.get("resample_s")
+    return {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": resample}
+
+
+def print_notes(runs, stream=None) -> None:
+    """Print what loading did to each run (a jittering clock, a resampling), one ``note`` line each."""
+    for note in dict.fromkeys(note for run in runs for note in run.notes):
+        print(f"note     {note}", file=stream or sys.stdout)
 
 
 def add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -106,22 +156,39 @@ def config_with_data_options(args: argparse.Namespace, config_path: str | None) 
     override(config, "data", "error", args.error)
     override(config, "data", "temp_range", parse_temp_range(getattr(args, "range_temp", None)))
     override(config, "data", "error_limit", parse_error_limit(getattr(args, "range_error", None)))
+    override(config, "data", "period_tolerance", getattr(args, "period_tolerance", None))
+    override(config, "data", "resample_s", getattr(args, "resample", None))
     return config
 
 
 def load_configured_run(config: dict, path: str | None = None, **options) -> Run:
     """Load the run named by ``path`` (default: the configuration's data path)."""
-    data = config["data"]
-    path = path or data.get("path")
+    runs = load_configured_runs(config, path, **options)
+    if len(runs) > 1 and not isinstance(path or config["data"].get("path"), (list, tuple)):
+        return load_run(path or config["data"]["path"], **_load_options(config, options))  # names the gap
+    return join_runs(runs)
+
+
+def load_configured_runs(config: dict, path: str | None = None, **options) -> list[Run]:
+    """The runs named by ``path`` (default: the configuration's data path), a log split at its gaps by
+    ``--resample`` giving one run per part."""
+    path = path or config["data"].get("path")
     if not path:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    options = _load_options(config, options)
+    paths = path if isinstance(path, (list, tuple)) else [path]
+    return [run for p in paths for run in load_runs(p, **options)]
+
+
+def _load_options(config: dict, options: dict) -> dict:
+    data = config["data"]
+    options = dict(options)
     options.setdefault("temp_range", data.get("temp_range", TEMP_RANGE_C))
     options.setdefault("error_limit", data.get("error_limit", ERROR_LIMIT_UM))
-    if isinstance(path, (list, tuple)):
-        return join_runs(
-            [load_run(p, temps=data.get("temps"), time=data["time"], error=data["error"], **options) for p in path]
-        )
-    return load_run(path, temps=data.get("temps"), time=data["time"], error=data["error"], **options)
+    for key, value in clock_options(argparse.Namespace(), config).items():
+        options.setdefault(key, value)
+    options.update(temps=data.get("temps"), time=data["time"], error=data["error"])
+    return options
 
 
 def write_json(target: str | None, obj: Any) -> Path | None:

@@ -18,6 +18,8 @@ from groupfit.commands.common import (
     config_with_data_options,
     configured_reference,
     load_configured_run,
+    load_configured_runs,
+    print_notes,
     report_stream,
     write_json,
     wrote_line,
@@ -76,7 +78,8 @@ def run_compare(args: argparse.Namespace) -> int:
             "with fit --p 0"
         )
     modelling = load_configured_run(config)
-    validation = [load_configured_run(config, path) for path in config["data"]["validate"]]
+    validation = [run for path in config["data"]["validate"] for run in load_configured_runs(config, path)]
+    print_notes([modelling, *validation], report_stream(args))
     reference = configured_reference(args, config, modelling)
     modelling = with_reference(modelling, reference)
     validation = [with_reference(run, reference) for run in validation]

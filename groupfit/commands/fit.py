@@ -22,7 +22,8 @@ from groupfit.commands.common import (
     check_output_dir,
     config_with_data_options,
     configured_reference,
-    load_configured_run,
+    load_configured_runs,
+    print_notes,
     report_stream,
     ridge_value,
     write_json,
@@ -140,14 +141,12 @@ def run_fit(args: argparse.Namespace) -> int:
         position_run = load_position_data(config, args.position)
         runs = [position_run.run]
     else:
-        runs = (
-            [load_configured_run(config, p, missing_error=True) for p in paths]
-            if isinstance(paths, (list, tuple))
-            else [load_configured_run(config, missing_error=True)]
-        )
+        runs = load_configured_runs(config, missing_error=True)
+    print_notes(runs, report_stream(args))
     if len(runs) > 1 and config["model"]["p"] != 0:
+        split = "" if isinstance(paths, (list, tuple)) else " (--resample split the log at its gaps)"
         raise InputError(
-            f"{len(runs)} runs given: several runs fit a global model, --p 0; a grouped model's "
+            f"{len(runs)} runs given{split}: several runs fit a global model, --p 0; a grouped model's "
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)

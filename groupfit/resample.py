@@ -1,0 +1,195 @@
+"""Resampling a log onto a uniform period: several readings per period averaged, gaps split.
+
+Loggers rarely write one row per period: a 3-D printer homes its probe three
+times 4 s apart once a minute, a data logger writes whenever a value changes.
+:func:`resample_frame` bins the rows into periods of ``period_s`` seconds and
+takes the mean of every numeric column over the rows of a bin (non-finite
+cells left out), the bin's centre as its time. The bins are placed so that the
+readings sit in their middle: their edges lie half a period away from the
+circular mean of the readings' phases (a log whose readings come in bursts
+keeps each burst in one bin, whatever the clock's offset).
+
+A period without a reading is an *empty* bin. A run of at most
+:data:`GAP_PERIODS` empty bins is filled by linear interpolation between the
+bins around it (a missed cycle); a longer run is a *gap*: the log is split
+there into separate runs, never bridged by made-up samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from groupfit.errors import InputError
+
+GAP_PERIODS = 3
+"""More empty periods in a row than this split the log into runs; fewer are interpolated."""
+
+
+@dataclass(frozen=True)
+class Resampled:
+    """A log binned into periods.
+
+    Attributes
+    ----------
+    pieces : list of DataFrame
+        The binned tables, one per stretch between gaps, the time column
+        holding the bins' centres.
+    combined : int
+        Readings (rows of the log) averaged into the bins.
+    empty : int
+        Empty bins filled by interpolation (a gap's bins are not counted).
+    gaps : list of (float, float)
+        Each gap that split the log: the time of the last reading before it
+        and of the first after it (s).
+    """
+
+    pieces: list[pd.DataFrame]
+    combined: int
+    empty: int
+    gaps: list[tuple[float, float]]
+
+    def note(self, label: str, period_s: float, n_bins: int) -> str:
+        """The line a verb prints about the resampling."""
+        text = (
+            f"{label}: resampled to {period_s:g} s: {self.combined} reading(s) averaged into {n_bins} period(s), "
+            f"{self.empty} empty period(s) interpolated"
+        )
+        if self.gaps:
+            where = ", ".join(f"{a:g} s to {b:g} s" for a, b in self.gaps)
+            text += (
+                f"; split into {len(self.pieces)} runs at {len(self.gaps)} gap(s) of more than {GAP_PERIODS} "
+                f"periods ({where})"
+            )
+        return text
+
+
+def bin_phase(time: np.ndarray, period_s: float) -> float:
+    """Where the bins start (s, in ``[0, period)``): half a period from the readings' circular mean phase."""
+    angle = 2.0 * np.pi * np.mod(time - time[0], period_s) / period_s
+    mean = np.arctan2(np.mean(np.sin(angle)), np.mean(np.cos(angle)))
+    centre = (mean / (2.0 * np.pi)) * period_s
+    return float(np.mod(time[0] + centre - 0.5 * period_s, period_s))
+
+
+def resample_frame(frame: pd.DataFrame, *, time: str, period_s: float, label: str) -> Resampled:
+    """Bin ``frame`` into periods of ``period_s`` seconds (see the module).
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The log as read; ``time`` must be numeric, finite and increasing
+        (ties are allowed: several readings with one time stamp).
+    time : str
+        The time column (s).
+    period_s : float
+        The period to resample to (s), > 0.
+    label : str
+        The source, for messages.
+
+    Returns
+    -------
+    Resampled
+        Numeric columns only; a column with no number at all is left out.
+    """
+    if not (np.isfinite(period_s) and period_s > 0):
+        raise InputError(f"--resample {period_s!r}: give the period in seconds, a number > 0")
+    stamps = pd.to_numeric(frame[time], errors="coerce").to_numpy(dtype=float)
+    bad = np.flatnonzero(~np.isfinite(stamps))
+    if bad.size:
+        row = int(bad[0])
+        raise InputError(f"{label}: row {row + 1}, column '{time}': {frame[time].iloc[row]!r} is not a time in s")
+    back = np.flatnonzero(np.diff(stamps) < 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise InputError(
+            f"{label}: column '{time}' goes back at row {i + 1} ({stamps[i]:g} s after {stamps[i - 1]:g} s); "
+            "sort the rows by time before resampling"
+        )
+    numeric = {}
+    for column in frame.columns:
+        if column == time:
+            continue
+        values = pd.to_numeric(frame[column], errors="coerce")
+        if values.notna().any():
+            numeric[column] = values.to_numpy(dtype=float)
+    start = stamps[0] - np.mod(stamps[0] - bin_phase(stamps, period_s), period_s)
+    index = np.floor((stamps - start) / period_s + 1e-9).astype(np.int64)
+    n_bins = int(index[-1]) + 1
+    counts = np.bincount(index, minlength=n_bins)
+    table = {}
+    for column, values in numeric.items():
+        finite = np.isfinite(values)
+        sums = np.bincount(index[finite], weights=values[finite], minlength=n_bins)
+        hits = np.bincount(index[finite], minlength=n_bins)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            table[column] = np.where(hits > 0, sums / np.maximum(hits, 1), np.nan)
+    centres = start + (np.arange(n_bins) + 0.5) * period_s
+    occupied = counts > 0
+    pieces, gaps, empty = [], [], 0
+    first = 0
+    for stop in _stretch_ends(occupied):
+        piece = pd.DataFrame({time: centres[first:stop], **{c: v[first:stop] for c, v in table.items()}})
+        empty += _interpolate_empty(piece, occupied[first:stop], time)
+        pieces.append(piece)
+        following = _next_occupied(occupied, stop)
+        if following is not None:
+            gaps.append((float(stamps[index == stop - 1][-1]), float(stamps[index == following][0])))
+            first = following
+    return Resampled(pieces=pieces, combined=int(len(stamps)), empty=empty, gaps=gaps)
+
+
+def _stretch_ends(occupied: np.ndarray) -> list[int]:
+    """End (exclusive) of every stretch of bins between gaps of more than GAP_PERIODS empty bins."""
+    ends = []
+    k, n = 0, len(occupied)
+    while k < n:
+        if occupied[k]:
+            k += 1
+            continue
+        run_end = k
+        while run_end < n and not occupied[run_end]:
+            run_end += 1
+        if run_end - k > GAP_PERIODS and run_end < n:
+            ends.append(k)
+        k = run_end
+    last = int(np.flatnonzero(occupied)[-1]) + 1
+    return [*ends, last]
+
+
+def _next_occupied(occupied: np.ndarray, stop: int) -> int | None:
+    later = np.flatnonzero(occupied[stop:])
+    return None if later.size == 0 else stop + int(later[0])
+
+
+def _interpolate_empty(piece: pd.DataFrame, occupied: np.ndarray, time: str) -> int:
+    """Fill the empty bins of one stretch linearly from its occupied ones; the number filled."""
+    missing = np.flatnonzero(~occupied)
+    if missing.size == 0:
+        return 0
+    t = piece[time].to_numpy()
+    for column in piece.columns:
+        if column == time:
+            continue
+        values = piece[column].to_numpy(dtype=float).copy()
+        known = occupied & np.isfinite(values)
+        if known.sum() >= 2:
+            values[missing] = np.interp(t[missing], t[known], values[known])
+        piece[column] = values
+    return int(missing.size)
+
+
+def jitter_note(label: str, time: np.ndarray, period_s: float) -> str | None:
+    """A note giving the largest deviation of an interval from the period, when the clock jitters."""
+    step = np.diff(time)
+    deviation = np.abs(step - period_s)
+    worst = int(np.argmax(deviation))
+    if deviation[worst] <= 1e-9 * period_s:
+        return None
+    return (
+        f"{label}: time stamps jitter around the period of {period_s:g} s: largest deviation "
+        f"{deviation[worst]:.4g} s ({100 * deviation[worst] / period_s:.2f} %, rows {worst + 1} to {worst + 2}); "
+        "the samples are taken as one period apart"
+    )
