@@ -17,7 +17,7 @@ predicted without any refitting or tuning:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -47,7 +47,8 @@ class ComparisonSettings:
     c: float = 3.0
     objective: str = "sae"
     fit_intercept: bool = True
-    heat: str = "speed_rpm"
+    heat: str | None = "speed_rpm"
+    """The AR(1) model's heat-level column; None leaves the AR(1) model out (a run without one)."""
     ar1_scaling: str = "heat_law"
     ar1_start: str = "measured"
     """Where each AR(1) free run starts: the run's first measured error, or 0 (``"zero"``)."""
@@ -80,7 +81,7 @@ class ComparisonSettings:
             c=float(model["c"]),
             objective=model["objective"],
             fit_intercept=model["intercept"],
-            heat=table["heat"],
+            heat=None if table["heat"] in (None, "none") else table["heat"],
             ar1_scaling=table["ar1_scaling"],
             ar1_start=table.get("ar1_start", "measured"),
             ar1_fit=table.get("ar1_fit", "one_step"),
@@ -103,7 +104,8 @@ class ComparisonResult:
     path: dict[str, Any]
     selection: dict[str, Any]
     mlr_statistics: dict[str, Any]
-    ar1: dict[str, Any]
+    ar1: dict[str, Any] | None
+    """The AR(1) model's coefficients; None when it was left out (``--heat none``)."""
     break_stability: list[dict[str, Any]]
     condition_changes: list[int]
     grouped_models: dict[int, ModelFile] = field(default_factory=dict)
@@ -201,7 +203,8 @@ def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
 def heat_column(run: Run, settings: ComparisonSettings) -> np.ndarray:
     if settings.heat not in run.frame.columns:
         raise InputError(
-            f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; set [compare] heat"
+            f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; name it with --heat COLUMN "
+            "(or [compare] heat), or leave the AR(1) model out with --heat none"
         )
     return run.frame[settings.heat].to_numpy(dtype=float)
 
@@ -232,6 +235,8 @@ def compare_models(
     settings: ComparisonSettings,
     live_rule: Callable[[ModelFile, np.ndarray], np.ndarray] | None = None,
     progress: Callable[[str, float], None] | None = None,
+    *,
+    histories: Mapping[str, np.ndarray] | None = None,
 ) -> ComparisonResult:
     """Fit every model on ``modelling`` and score it on every run.
 
@@ -240,7 +245,12 @@ def compare_models(
     live_rule : callable, optional
         ``live_rule(model, inputs) -> group index per sample (0-based)``;
         when given, grouped models serve validation runs through it.
+    histories : mapping, optional
+        Per validation run (by name) that continues a recording, the inputs of
+        what came before it: the live rule runs through them first
+        (:mod:`groupfit.continuation`), so its state carries into the run.
     """
+    histories = histories or {}
     for run in validation:
         if run.temp_names != modelling.temp_names:
             raise InputError(f"{run.source}: temperature columns differ from the modelling run's")
@@ -256,7 +266,7 @@ def compare_models(
     X, y = modelling.temps, modelling.error
     named = pd.DataFrame(X, columns=list(modelling.temp_names))
     mlr = MLR(objective=settings.objective, fit_intercept=settings.fit_intercept).fit(named, y)
-    ar1 = fit_ar1(modelling, settings)
+    ar1 = fit_ar1(modelling, settings) if settings.heat is not None else None
 
     path = exact_path(
         X,
@@ -300,20 +310,22 @@ def compare_models(
         preds: dict[str, np.ndarray] = {}
         preds["mlr"] = mlr.predict(run.temps)
         rise_ratio = None
-        if settings.ar1_scaling == "rise":
+        if ar1 is not None and settings.ar1_scaling == "rise":
             sensor = settings.rise_sensor or modelling.temp_names[0]
             rise_ratio = early_rise(_column(run, sensor), run.period, settings.rise_window_s) / early_rise(
                 _column(modelling, sensor), modelling.period, settings.rise_window_s
             )
-        initial = run.error[0] if settings.ar1_start == "measured" else 0.0
-        preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=initial, rise_ratio=rise_ratio)
+        if ar1 is not None:
+            initial = run.error[0] if settings.ar1_start == "measured" else 0.0
+            preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=initial, rise_ratio=rise_ratio)
         bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
         for p, model in grouped.items():
             groups = None
             if is_modelling or live_rule is None:
                 preds[f"grouped{p}"] = model.predict(run.temps)
             else:
-                groups = live_rule(model_files[p], run.temps)
+                history = histories.get(run.name, np.empty((0, run.temps.shape[1])))
+                groups = live_rule(model_files[p], np.vstack([history, run.temps]))[len(history) :]
                 preds[f"grouped{p}"] = grouped_prediction(model.intercept_, model.coef_, run.temps, groups)
             bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
         predictions[run.name] = preds
@@ -341,16 +353,19 @@ def compare_models(
         )
         for rule in ("bic", "target")
     }
-    ar1_summary = {
-        "C1": ar1.c1_,
-        "C2": {f"{level:g}": value for level, value in ar1.c2_.items()},
-        "scaling": settings.ar1_scaling,
-        "ljung_box": ar1.ljung_box(),
-        "free_run": True,
-        "start": settings.ar1_start,
-        "fit": settings.ar1_fit,
-        "structural_gain_um_per_K": ar1.structural_gain_,
-    }
+    ar1_summary = None
+    if ar1 is not None:
+        ar1_summary = {
+            "C1": ar1.c1_,
+            "C2": {f"{level:g}": value for level, value in ar1.c2_.items()},
+            "scaling": settings.ar1_scaling,
+            "ljung_box": ar1.ljung_box(),
+            "free_run": True,
+            "start": settings.ar1_start,
+            "fit": settings.ar1_fit,
+            "structural_gain_um_per_K": ar1.structural_gain_,
+            "heat": settings.heat,
+        }
     return ComparisonResult(
         runs=names,
         rows=rows,
@@ -384,9 +399,10 @@ def _column(run: Run, name: str) -> np.ndarray:
 def comparison_summary(result: ComparisonResult) -> str:
     """The comparison table and its notes, as ``groupfit compare`` prints them."""
     modelling = result.runs[0]
-    keys = ["mlr", "ar1"] + sorted(
+    grouped_keys = sorted(
         {f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:])
     )
+    keys = ["mlr"] + (["ar1"] if result.ar1 is not None else []) + grouped_keys
     index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
     lines = comparison_table(result, keys, index)
     lines += [
@@ -394,7 +410,7 @@ def comparison_summary(result: ComparisonResult) -> str:
         f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
         f"{result.condition_changes}):",
     ]
-    for key in keys[2:]:
+    for key in grouped_keys:
         r = index[(key, modelling)]
         report = result.break_intervals.get(r["p"])
         cis = [f" {report.text_for(b)}" if report is not None and report.intervals else "" for b in r["breaks"]]
@@ -414,24 +430,31 @@ def comparison_summary(result: ComparisonResult) -> str:
     )
     f_text = f"F = {stats['f_value']:.4g} (p = {stats['f_p_value']:.2g}), " if stats["f_value"] is not None else ""
     lines.append(f"MLR: {terms}; {f_text}R² = {stats['r_squared']:.5f}, σ = {stats['sigma_um']:.3g} µm")
-    ar1 = result.ar1
-    c2 = ", ".join(f"C2({level}) = {value:.4g} µm" for level, value in ar1["C2"].items())
-    lb = ar1["ljung_box"]
-    lines.append(
-        f"AR(1): C1 = {ar1['C1']:.5f}, {c2}; unseen levels by {ar1['scaling'].replace('_', ' ')}; "
-        + (
-            "free run from each run's first measured error; "
-            if ar1.get("start", "measured") == "measured"
-            else "free run from 0 (ΔL(0) = 0); "
-        )
-        + ("fitted on the free-run error; " if ar1.get("fit") == "free_run" else "")
-        + f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
-    )
+    lines.append(ar1_line(result.ar1))
     lines.append(
         f"grouped models on validation runs: groups chosen by {result.validation_rule}; "
         "they are fitted to the modelling run's condition and are not retuned."
     )
     return "\n".join(lines)
+
+
+def ar1_line(ar1: dict[str, Any] | None) -> str:
+    """The summary line of the AR(1) model."""
+    if ar1 is None:
+        return "AR(1): left out (--heat none: no heat-level column)"
+    c2 = ", ".join(f"C2({level}) = {value:.4g} µm" for level, value in ar1["C2"].items())
+    lb = ar1["ljung_box"]
+    start = (
+        "free run from each run's first measured error; "
+        if ar1.get("start", "measured") == "measured"
+        else "free run from 0 (ΔL(0) = 0); "
+    )
+    return (
+        f"AR(1) on {ar1['heat']}: C1 = {ar1['C1']:.5f}, {c2}; unseen levels by {ar1['scaling'].replace('_', ' ')}; "
+        + start
+        + ("fitted on the free-run error; " if ar1.get("fit") == "free_run" else "")
+        + f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
+    )
 
 
 def comparison_table(result: ComparisonResult, keys: list[str], index: dict) -> list[str]:
@@ -443,13 +466,14 @@ def comparison_table(result: ComparisonResult, keys: list[str], index: dict) -> 
     tables = (("RMS µm", "rms_um", 3), ("R = Σ|e| µm", "R_um", 2), ("max |e| µm", "max_um", 3))
     tables += (("accuracy %", "accuracy_percent", 1),)  # Du et al.: 100·(1 − max|residual| / max|error|)
     for title, metric, digits in tables:
+        table = [[index[(key, run)][metric] for key in keys] for run in result.runs]
+        column = max([8, *(len(n) + 2 for n in names), *(len(f"{v:.{digits}f}") + 2 for row in table for v in row)])
         lines.append("")
-        lines.append(f"{title:<{width}}  {'condition':<15}" + "".join(f"{n:>8}" for n in names) + "  best")
-        for run in result.runs:
-            values = [index[(key, run)][metric] for key in keys]
+        lines.append(f"{title:<{width}}  {'condition':<15}" + "".join(f"{n:>{column}}" for n in names) + "  best")
+        for run, values in zip(result.runs, table):
             best = keys[int(np.argmax(values) if metric == "accuracy_percent" else np.argmin(values))]
             best_name = MODEL_LABELS.get(best, f"grouped p = {best[7:]}")
             condition = result.run_conditions.get(run, "")
-            cells = "".join(f"{v:>8.{digits}f}" for v in values)
+            cells = "".join(f"{v:>{column}.{digits}f}" for v in values)
             lines.append(f"{run:<{width}}  {condition:<15}{cells}  {best_name}")
     return lines

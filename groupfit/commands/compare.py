@@ -26,6 +26,7 @@ from groupfit.commands.common import (
 )
 from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
+from groupfit.continuation import with_histories
 from groupfit.errors import InputError
 from groupfit.inference.cli import add_interval_options, interval_settings
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
@@ -40,7 +41,18 @@ def add_parser(verbs) -> None:
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
     compare.add_argument("--seed", type=int, help="seed of the genetic algorithm")
+    compare.add_argument(
+        "--heat",
+        metavar="COLUMN|none",
+        help="heat-level column of the AR(1) model (default speed_rpm, or [compare] heat); none leaves it out",
+    )
     add_reference_option(compare)
+    compare.add_argument(
+        "--continues",
+        action="store_true",
+        help="each --validate run is the rest of the recording before it (the modelling run, then the previous "
+        "--validate run) even though its clock starts again; a run whose clock goes on is detected without it",
+    )
     add_json_option(compare)
     add_out_option(compare, "folder for the figures")
     add_quiet_option(compare)
@@ -60,6 +72,7 @@ def run_compare(args: argparse.Namespace) -> int:
     config = config_with_data_options(args, args.config or default_config_path())
     override(config, "data", "validate", args.validate)
     override(config, "compare", "pmax", args.pmax)
+    override(config, "compare", "heat", args.heat)
     override(config, "search", "seed", args.seed)
     override(config, "output", "dir", args.out)
     if config["compare"]["pmax"] < 0:
@@ -78,17 +91,28 @@ def run_compare(args: argparse.Namespace) -> int:
             "with fit --p 0"
         )
     modelling = load_configured_run(config)
+    if args.heat is not None and any(c not in modelling.frame.columns for c in settings.conditions):
+        settings.conditions = (settings.heat,) if settings.heat is not None else ()  # the default speed_rpm is absent
     validation = [run for path in config["data"]["validate"] for run in load_configured_runs(config, path)]
     print_notes([modelling, *validation], report_stream(args))
     reference = configured_reference(args, config, modelling)
     modelling = with_reference(modelling, reference)
     validation = [with_reference(run, reference) for run in validation]
+    joined, skipped, notes = with_histories(validation, [modelling], assume_continued=args.continues)
+    histories = {run.name: whole.temps[:rows] for run, whole, rows in zip(validation, joined, skipped) if rows}
+    for note in notes:
+        print(
+            f"note    {note.replace('derived inputs and run-time state', 'run-time switching')}",
+            file=report_stream(args),
+        )
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
     try:
-        result = compare_models(modelling, validation, settings, live_rule=replay_groups, progress=progress)
+        result = compare_models(
+            modelling, validation, settings, live_rule=replay_groups, progress=progress, histories=histories
+        )
     finally:
         progress.close()
 

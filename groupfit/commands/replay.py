@@ -13,11 +13,14 @@ import numpy as np
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import (
+    add_clock_options,
     add_json_option,
     add_model_argument,
     add_out_option,
     check_json_target,
     check_output_dir,
+    clock_options,
+    print_notes,
     report_stream,
     residual_line,
     write_json,
@@ -31,6 +34,7 @@ from groupfit.commands.replay_probes import (
     sample_probe,
 )
 from groupfit.commands.screw_deploy import run_screw_replay
+from groupfit.continuation import with_histories
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
@@ -57,6 +61,14 @@ def add_parser(verbs) -> None:
         help="time column in seconds (default: the one the model was fitted with, else time_s)",
     )
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
+    replay.add_argument(
+        "--continues",
+        nargs="+",
+        metavar="FILE",
+        help="the recording(s) --data continues, in order: replayed first, so that the rule and the derived "
+        "inputs carry their state into --data as on the controller (only --data's samples are reported)",
+    )
+    add_clock_options(replay)
     replay.add_argument(
         "--precision",
         choices=("double", "single"),
@@ -96,14 +108,34 @@ def run_replay(args: argparse.Namespace) -> int:
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
-    run = load_readings(args.data, tables, time=args.time or time_column(model), error=error)
+    options = dict(time=args.time or time_column(model), error=error, **clock_options(args))
+    run = load_readings(args.data, tables, **options)
+    history = [load_readings(path, tables, **options) for path in args.continues or []]
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
         raise InputError(f"{run.source}: {exc}") from None
     probes = probe_schedule(args, run)
-    replay = rule.replay(run.temps, probes)
-    data = replay_result(model, rule.tables, run, replay, args.model, counts)
+    rows, notes = 0, []
+    if history:
+        if probes is not None:
+            raise InputError(
+                "--probe-every or --probe-column with --continues: replay the whole recording with its checks instead"
+            )
+        joined, skipped, notes = with_histories([*history[1:], run], history[:1], assume_continued=True)
+        rows = skipped[-1]
+        replay = rule.replay(joined[-1].temps).tail(rows)
+    else:
+        replay = rule.replay(run.temps, probes)
+    print_notes([run, *history], report_stream(args))
+    if not history and run.time[0] > 2 * run.period:
+        notes.append(
+            f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
+            "file is the rest of a recording, give the earlier file(s) with --continues FILE"
+        )
+    for note in notes:
+        print(f"note     {note}", file=report_stream(args))
+    data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     if probes is not None:
         unchecked = residuals(run, rule.replay(run.temps))
         rms_without = float(np.sqrt(np.nanmean(unchecked**2))) if unchecked is not None else None
@@ -133,7 +165,7 @@ class ReplayResult:
         return replay_report(self.data)
 
 
-def load_readings(path, tables: RuleTables, *, time: str, error: str) -> Run:
+def load_readings(path, tables: RuleTables, *, time: str, error: str, **clock) -> Run:
     """A recorded run with the rule's readings as its ``temps``: measured inputs, then sources.
 
     The measured inputs load as ``groupfit fit`` loads temperatures; the
@@ -142,7 +174,7 @@ def load_readings(path, tables: RuleTables, *, time: str, error: str) -> Run:
     them as faults), and a missing one is named with the inputs it feeds.
     """
     measured = list(tables.raw_names[: tables.n_measured])
-    run = load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True)
+    run = load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock)
     if not tables.source_names:
         return run
     columns = []
@@ -177,11 +209,15 @@ def offline_groups(model: ModelFile, n_samples: int) -> np.ndarray:
     return model.serving_groups(n_samples) + 1
 
 
-def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, model_path, counts=None) -> dict[str, Any]:
+def replay_result(
+    model: ModelFile, tables: RuleTables, run, replay: Replay, model_path, counts=None, *, history_samples: int = 0
+) -> dict[str, Any]:
     """The ``--json`` object: per-sample decisions plus a summary.
 
     ``counts`` (an :class:`groupfit.export.sheet.IntegerForm`) adds each
-    sample's compensation in integer controller counts.
+    sample's compensation in integer controller counts. ``history_samples``:
+    samples replayed before the run (``--continues``); the rule's sample count
+    at the run's sample ``i`` is ``history_samples + i``.
     """
     residual = residuals(run, replay)
     switch_names = {0: None, 1: "criterion", 2: "forced"}
@@ -209,11 +245,12 @@ def replay_result(model: ModelFile, tables: RuleTables, run, replay: Replay, mod
         if scored.size
         else {"rms_um": None, "max_um": None, "R_um": None}
     )
-    offline = offline_groups(model, run.n_samples)
+    offline = offline_groups(model, history_samples + run.n_samples)[history_samples:]
     return {
         "model": str(model_path),
         "run": run.source,
         "n_samples": run.n_samples,
+        "history_samples": history_samples,
         "sampling_period_s": run.period,
         "model_period_s": float(model.sampling_period_s),
         "rescaled": period_differs(model, run.period),
@@ -243,7 +280,12 @@ def replay_report(result: dict[str, Any]) -> str:
     rescaled = result.get("rescaled", False)
     lines = [
         f"run      {result['run']}: {result['n_samples']} samples every {result['sampling_period_s']:g} s"
-        + (f" (the model's {result['model_period_s']:g} s rescaled to it)" if rescaled else ""),
+        + (f" (the model's {result['model_period_s']:g} s rescaled to it)" if rescaled else "")
+        + (
+            f", after {result['history_samples']} samples of the recording it continues"
+            if result.get("history_samples")
+            else ""
+        ),
         "switches "
         + (
             ", ".join(

@@ -18,114 +18,28 @@ rows before it in front): their derived inputs are those of the whole log.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Sequence
 
 import numpy as np
 import pandas as pd
 
+from groupfit.continuation import continues, preceding_run, restamped, same_recording, with_histories, with_history
 from groupfit.data import Run
-from groupfit.errors import InputError
 from groupfit.features import Feature
+
+__all__ = [
+    "COLD_START_NOTE",
+    "continues",
+    "preceding_run",
+    "restamped",
+    "same_recording",
+    "started_running_notes",
+    "with_histories",
+    "with_history",
+]
 
 COLD_START_NOTE = "starts with a source on,"
 """What a note on a validation run that starts hot without its history says (the report puts it first)."""
-CONTIGUITY_TOLERANCE = 0.5
-"""The gap between the two runs may differ from one sampling period by this share of it."""
-
-
-def same_recording(previous: Run, run: Run) -> bool:
-    """Whether ``run`` could be the rest of ``previous``'s recording: the same columns, inputs and period."""
-    if previous.time_name != run.time_name or previous.temp_names != run.temp_names:
-        return False
-    if set(previous.frame.columns) != set(run.frame.columns):
-        return False
-    return previous.error_name == run.error_name and abs(previous.period - run.period) <= 0.01 * previous.period
-
-
-def continues(previous: Run, run: Run) -> bool:
-    """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period."""
-    if not same_recording(previous, run):
-        return False
-    gap = run.time[0] - previous.time[-1]
-    return bool(abs(gap - previous.period) <= CONTIGUITY_TOLERANCE * previous.period)
-
-
-def restamped(run: Run, previous: Run) -> Run:
-    """``run`` with its time stamps going on one sampling period after ``previous``'s last."""
-    time = run.time - run.time[0] + previous.time[-1] + previous.period
-    frame = run.frame.copy()
-    frame[run.time_name] = time
-    return replace(run, time=time, frame=frame)
-
-
-def preceding_run(run: Run, candidates: Sequence[Run]) -> Run | None:
-    """The run among ``candidates`` that ``run`` continues, if any."""
-    return next((previous for previous in candidates if continues(previous, run)), None)
-
-
-def with_history(run: Run, history: Run | None) -> tuple[Run, int]:
-    """``run`` with ``history`` in front of it, the history's error left empty; and the rows put in front."""
-    if history is None:
-        return run, 0
-    frame = pd.concat([history.frame, run.frame], ignore_index=True)
-    if run.error_name is not None:
-        frame.loc[: len(history.frame) - 1, run.error_name] = np.nan
-    error = None if run.error is None else np.concatenate([np.full(len(history.time), np.nan), run.error])
-    joined = replace(
-        run,
-        time=np.concatenate([history.time, run.time]),
-        temps=np.vstack([history.temps, run.temps]),
-        error=error,
-        frame=frame,
-    )
-    return joined, len(history.time)
-
-
-def with_histories(
-    runs: Sequence[Run], earlier: Sequence[Run], assume_continued: bool = False
-) -> tuple[list[Run], list[int], list[str]]:
-    """Each of ``runs`` with what it continues in front; the rows put in front of each; a note for each.
-
-    A run continues one of ``earlier`` or one of ``runs`` before it (which
-    then brings its own history along). With ``assume_continued`` each run
-    is taken to continue the one before it (the first, the last of
-    ``earlier``) whatever its time stamps (a file whose clock starts again),
-    when the two share columns, inputs and period; its time stamps are then
-    taken to go on from that run's.
-    """
-    joined_of = {id(run): run for run in earlier}  # each run, with its history in front
-    candidates = list(earlier)
-    joined, skipped, notes = [], [], []
-    for run in runs:
-        history = preceding_run(run, candidates)
-        if history is None and assume_continued and candidates:
-            history = candidates[-1]
-            if not same_recording(history, run):
-                raise InputError(
-                    f"{run.source}: --continues, but it cannot be the rest of {history.name}: its columns, "
-                    "inputs or sampling period differ; leave --continues out for a separate run"
-                )
-            run = restamped(run, history)
-            notes.append(
-                f"{run.name} is taken to continue {history.name} (--continues), whatever its time stamps: judged "
-                f"with {history.name} in front, so that its derived inputs and run-time state carry their "
-                "history, as on the controller"
-            )
-            history = joined_of[id(history)]
-        elif history is not None:
-            notes.append(
-                f"{run.name} continues {history.name} (its first time stamp one sampling period after the "
-                f"last): judged with {history.name} in front, so that its derived inputs and run-time state "
-                "carry their history, as on the controller"
-            )
-            history = joined_of[id(history)]
-        run_with_history, rows = with_history(run, history)
-        joined.append(run_with_history)
-        skipped.append(rows)
-        joined_of[id(run)] = run_with_history
-        candidates.append(run)
-    return joined, skipped, notes
 
 
 def started_running_notes(runs: Sequence[Run], skipped: Sequence[int], features: Sequence[Feature]) -> list[str]:
