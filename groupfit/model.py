@@ -97,6 +97,9 @@ class Switching:
     comp_max_um: float | None = None
     rate_limit_um: float | None = None
     period_tolerance: float | None = None
+    blend_samples: int | None = None
+    """Bumpless transfer: samples over which the output moves from the old group's prediction to the new
+    group's after a switch (``fit`` writes the overlap n); absent (files written before it): 0, a hard switch."""
     source_ranges: Mapping[str, tuple[float, float]] | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
 

@@ -113,7 +113,11 @@ def test_switch_sample_of_a_shifted_run_by_hand(shift, expected_sample, expected
 def test_predictions_by_hand():
     temps = tiny_temps()
     replay = SwitchingRule(tiny_model()).replay(temps)
-    expected = [by_hand(1 if i < 8 else 2, *temps[i - 1]) for i in range(1, N_TINY + 1)]
+    expected = []
+    for i in range(1, N_TINY + 1):  # the switch at sample 8, then the bumpless transfer over n = 3 samples
+        old, new = by_hand(1, *temps[i - 1]), by_hand(2, *temps[i - 1])
+        weight = {8: 0.25, 9: 0.5, 10: 0.75}.get(i, 0.0 if i < 8 else 1.0)
+        expected.append(old + weight * (new - old))
     assert replay.prediction_um.tolist() == expected
 
 
@@ -144,6 +148,7 @@ def test_criterion_that_never_arrives_is_forced_at_the_window_end():
 
 def test_rate_limit_and_clamp_by_hand():
     model = tiny_model()
+    model["switching"]["blend_samples"] = 0  # a hard switch: the rate limit spreads the jump
     replay = SwitchingRule(model).replay(tiny_temps())
     # target -57.75 µm at sample 1: the compensation ramps by 3.5 µm per sample
     assert replay.compensation_um[:7].tolist() == [-3.5 * k for k in range(1, 8)]
@@ -222,14 +227,26 @@ def test_model_file_carries_the_rule_and_replays_the_offline_grouping():
         assert threshold == series[first - 1]
         change = series[last - 1] - series[first - 2]
         assert direction == (0 if abs(change) <= section["margin_c"] else np.sign(change))
-    replay = SwitchingRule(model).replay(run.temps)
+    assert section["blend_samples"] == model["n"]
+    hard = SwitchingRule({**model, "switching": {**section, "blend_samples": 0}}).replay(run.temps)
     offline = serving_group_index(model["breaks"], run.n_samples, model["n"]) + 1
-    assert np.array_equal(replay.group, offline)
-    coefficients = np.asarray(model["coefficients"])[offline - 1]
-    expected = coefficients[:, 0] + np.einsum("ij,ij->i", run.temps, coefficients[:, 1:])
-    assert np.max(np.abs(replay.prediction_um - expected)) < 1e-9
-    residual = run.error - replay.prediction_um
+    assert np.array_equal(hard.group, offline)
+    coefficients = np.asarray(model["coefficients"])
+    by_group = coefficients[:, 0][None, :] + run.temps @ coefficients[:, 1:].T  # (N, G): every group's prediction
+    expected = by_group[np.arange(run.n_samples), offline - 1]
+    assert np.max(np.abs(hard.prediction_um - expected)) < 1e-9
+    residual = run.error - hard.prediction_um
     assert np.sqrt(np.mean(residual**2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)
+    # the bumpless rule: the same groups, and k/(n+1) of the way from the old group's prediction at the
+    # switch's k-th sample (k = 1 … n)
+    replay = SwitchingRule(model).replay(run.temps)
+    assert np.array_equal(replay.group, offline)
+    for switch in np.flatnonzero(np.diff(offline)) + 1:
+        for k in range(1, model["n"] + 1):
+            i = switch + k - 1
+            old, new = by_group[i, offline[i] - 2], by_group[i, offline[i] - 1]
+            expected[i] = old + k / (model["n"] + 1) * (new - old)
+    assert np.max(np.abs(replay.prediction_um - expected)) < 1e-9
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -39,6 +39,7 @@ from __future__ import annotations
 from string import Template
 
 from groupfit.export.c_terms import position_header, position_source, reference_header, reference_source
+from groupfit.export.c_transfer import transfer_header, transfer_source
 from groupfit.export.literals import c_comment_text as _ascii
 from groupfit.export.literals import c_float_literal, double_literal, reading_notes, real_literal
 from groupfit.runtime import (
@@ -75,7 +76,8 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
  * fault). The value to hand to the controller is s->comp_um (um):
  * -prediction clamped to [GF_COMP_MIN_UM, GF_COMP_MAX_UM] and moved by at
  * most GF_RATE_LIMIT_UM per sample; under a sensor fault it ramps to 0 at
- * that rate.
+ * that rate. After a switch the prediction moves from the old group's to the
+ * new group's over GF_BLEND_SAMPLES samples (a bumpless transfer).
  * s->fault is a bit mask: GF_FAULT_HELD (a last good value stood in for an
  * invalid reading; the output is valid), GF_FAULT_SENSOR (safe output).
  *
@@ -94,7 +96,7 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
 #define GF_SAMPLING_PERIOD_S $period
 #define GF_PERIOD_TOLERANCE_S $period_tolerance
 #define GF_COUNT_MAX ${count_max}L
-$delay_macros$reference_macros$position_macros
+$transfer_macro$delay_macros$reference_macros$position_macros
 #define GF_FAULT_NONE 0
 #define GF_FAULT_HELD $fault_held
 #define GF_FAULT_SENSOR $fault_sensor
@@ -174,7 +176,7 @@ void gf_init(gf_state *s)
     s->group = 1;
     s->fault = GF_FAULT_NONE;
     s->switched = 0;
-    for (m = 0; m < GF_N_TEMPS; m++) {
+$transfer_init    for (m = 0; m < GF_N_TEMPS; m++) {
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
     }
@@ -240,15 +242,15 @@ $step_reference$step_derived
             }
         }
     }
-
+$transfer_start
 $${probe_propagate}    if (faulted) {
         prediction = 0;
         target = 0;
 $${probe_invalidate}    } else {
-$dot_product$position_terms
+$prediction
         target = -prediction;
 $dead_band$${probe_correct}    }
-    if (target > GF_COMP_MAX_UM) {
+$transfer_end    if (target > GF_COMP_MAX_UM) {
         target = GF_COMP_MAX_UM;
     }
     if (target < GF_COMP_MIN_UM) {
@@ -296,12 +298,13 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         period=double_literal(tables.sampling_period_s),
         period_tolerance=double_literal(tables.period_tolerance_s),
         count_max=COUNT_MAX,
+        **transfer_header(tables),
         delay_macros="".join(
             f"#define GF_DELAY_{k} {d.delay_samples} /* samples of delay of derived input {k} */\n"
             for k, d in enumerate(tables.derived)
             if d.transform == "delay"
         ),
-        state_fields=state_fields(tables),
+        state_fields=transfer_header(tables)["transfer_field"] + state_fields(tables),
         fault_held=FAULT_HELD,
         fault_sensor=FAULT_SENSOR,
         ret_sensor=RETURN_SENSOR_FAULT,
@@ -337,9 +340,8 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         init_derived=init_derived(tables),
         step_locals=("    int j;\n" if has_delay else "") + ("    gf_real v;\n" if has_power else ""),
         step_derived=step_derived(tables),
-        dot_product=dot_product(tables),
         **reference_source(tables),
-        **position_source(tables),
+        **transfer_source(dot_product(tables), position_source(tables)),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
 

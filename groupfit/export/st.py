@@ -39,6 +39,7 @@ from groupfit.export.literals import reading_notes, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
 from groupfit.export.st_probe import probe_pieces
 from groupfit.export.st_terms import input_value, position_pieces, reference_pieces
+from groupfit.export.st_transfer import transfer_pieces
 from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
@@ -112,7 +113,7 @@ VAR
     prediction : $real;
     target : $real;
     delta : $real;
-${derived_vars}${reference_vars}${position_vars}${probe_vars}END_VAR
+${transfer_vars}${derived_vars}${reference_vars}${position_vars}${probe_vars}END_VAR
 VAR CONSTANT
     N_TEMPS : INT := $n_temps;
     N_GROUPS : INT := $n_groups;
@@ -137,13 +138,13 @@ $coefficients
     COMP_MIN : $real := $comp_min;
     COMP_MAX : $real := $comp_max;
     RATE_LIMIT : $real := $rate;
-${position_constants}${probe_constants}END_VAR
+${transfer_constants}${position_constants}${probe_constants}END_VAR
 
 IF Reset THEN
     sampleCount := 0;
     currentGroup := 1;
     comp := 0.0;
-    FOR m := 1 TO N_TEMPS DO
+${transfer_reset}    FOR m := 1 TO N_TEMPS DO
         badCount[m] := HOLD_SAMPLES + 1;
         lastGood[m] := 0.0;
     END_FOR;
@@ -197,16 +198,16 @@ $step_reference$step_derived
             END_IF;
         END_IF;
     END_IF;
+${transfer_start}
 ${probe_propagate}
     IF faulted THEN
         prediction := 0.0;
         target := 0.0;
 ${probe_invalidate}    ELSE
-        prediction := COEF_0[currentGroup];
-$dot_product${position_terms}
+${prediction}
         target := -prediction;
 ${dead_band}${probe_correct}    END_IF;
-    Fault := 0;
+${transfer_end}    Fault := 0;
     IF held THEN
         Fault := Fault + $fault_held;
     END_IF;
@@ -292,7 +293,6 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         period_text=f"{tables.sampling_period_s:g}",
         period_tolerance=shortest_literal(tables.period_tolerance_s, single=False),
         coefficients=coefficients,
-        dot_product=dot_product,
         window_first=", ".join(str(v) for v in (tables.window_first or (COUNT_MAX,))),
         window_last=", ".join(str(v) for v in (tables.window_last or (COUNT_MAX,))),
         directions=", ".join(str(v) for v in (tables.directions or (0,))),
@@ -315,7 +315,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         switch_criterion=SWITCH_CRITERION,
         switch_forced=SWITCH_FORCED,
         **reference_pieces(tables, real),
-        **position_pieces(tables, real, literal),
+        **transfer_pieces(tables, real, literal, dot_product, position_pieces(tables, real, literal)),
         **probe_pieces(tables, real, literal),
     )
     return {f"{name}.st": text}

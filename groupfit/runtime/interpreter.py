@@ -176,6 +176,7 @@ class SwitchingRule:
         self.lines = [[self._zero] * d.delay_samples for d in t.derived]
         self.positions = [0] * len(t.derived)
         self.band_target = self._zero
+        self.blend = 0
         self.k0 = self._zero
         self.slope = self._zero
         self.recal.reset()
@@ -213,6 +214,8 @@ class SwitchingRule:
             elif self.count >= t.window_first[w] and self._criterion_passes(w):
                 self.group += 1
                 switched = SWITCH_CRITERION
+        if switched:
+            self.blend = t.blend_samples
 
         clamped = False
         self.recal.propagate()
@@ -221,14 +224,14 @@ class SwitchingRule:
             target = self._zero
             self.recal.invalidate()
         else:
-            row = self._coef[self.group - 1]
-            prediction = row[0]
-            for j in range(t.n_inputs):
-                r = t.input_reading[j]
-                value = self._value(r) if r >= 0 else self.derived[t.input_derived[j]]
-                prediction = prediction + row[j + 1] * value
-            if t.has_position:
-                prediction, clamped = self._position_terms(prediction)
+            if self.blend > 0:  # bumpless transfer: from the old group's prediction towards the new group's
+                old, clamped = self._group_prediction(self.group - 1)
+                prediction, clamped = self._group_prediction(self.group)
+                span = t.blend_samples + 1
+                weight = self._real(span - self.blend) / self._real(span)
+                prediction = old + weight * (prediction - old)
+            else:
+                prediction, clamped = self._group_prediction(self.group)
             target = -prediction
             if t.has_dead_band:
                 if self._outside_dead_band():
@@ -238,6 +241,8 @@ class SwitchingRule:
             correction = self.recal.correct(prediction, usable=not held)
             prediction = prediction + correction
             target = target - correction
+        if self.blend > 0:
+            self.blend -= 1
         if target > self._comp_max:
             target = self._comp_max
         if target < self._comp_min:
@@ -251,7 +256,21 @@ class SwitchingRule:
         fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
         return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
 
-    def _position_terms(self, prediction):
+    def _group_prediction(self, group: int):
+        """The prediction of 1-based ``group`` from the current inputs (position terms included), and whether
+        the position was clamped."""
+        t = self.tables
+        row = self._coef[group - 1]
+        prediction = row[0]
+        for j in range(t.n_inputs):
+            r = t.input_reading[j]
+            value = self._value(r) if r >= 0 else self.derived[t.input_derived[j]]
+            prediction = prediction + row[j + 1] * value
+        if t.has_position:
+            return self._position_terms(prediction, group)
+        return prediction, False
+
+    def _position_terms(self, prediction, group: int):
         """``K0 + c_1·d + … + c_K·d^K`` (Horner, highest power first), ``d = P − P0``, P clamped to the travel.
 
         Also keeps ``k0`` (the position-free part) and ``slope`` (``c_1``, µm per
@@ -267,7 +286,7 @@ class SwitchingRule:
             position = self._travel_max
             clamped = True
         d = position - self._p0
-        rows = self._pcoef[self.group - 1]
+        rows = self._pcoef[group - 1]
         poly = self._zero
         for k in range(t.position_order - 1, -1, -1):
             row = rows[k]

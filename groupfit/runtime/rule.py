@@ -220,6 +220,7 @@ def rule_parameters(
         "comp_max_um": float(clamp),
         "rate_limit_um": float(rate),
         "period_tolerance": PERIOD_TOLERANCE,
+        "blend_samples": int(model.n),
     }
 
 
@@ -305,5 +306,6 @@ def complete_rule_section(model: ModelFile | Mapping[str, Any]) -> Switching:
             "to derive them from; fit the model again"
         )
     derived = rule_parameters(model, None, criterion_index=int(section.criterion_index))
+    derived.pop("blend_samples")  # a file without it switches hard, as when it was written
     present = {key: getattr(section, key) for key in RULE_KEYS if getattr(section, key) is not None}
     return section.with_rule({**derived, **present})

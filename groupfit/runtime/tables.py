@@ -194,6 +194,9 @@ class RuleTables:
     """(G, order, M+1): per group the rows of c_1 … c_order (constant first), or None."""
     recalibration: RecalTable | None = None
     """The probe-check filter (:mod:`groupfit.runtime.recalibration`); the default hold without a section."""
+    blend_samples: int = 0
+    """Bumpless transfer after a switch: for this many samples the prediction is the old group's moved
+    towards the new group's, by ``k / (blend_samples + 1)`` at the switch's k-th sample; 0: a hard switch."""
 
     @classmethod
     def from_model(cls, model: ModelFile | Mapping[str, Any]) -> "RuleTables":
@@ -290,6 +293,7 @@ class RuleTables:
             error_name=model.error,
             reference=model.reference,
             reference_reading=raw.index(model.reference) if is_column_reference(model.reference) else -1,
+            blend_samples=int(section.blend_samples or 0),
             **_position_tables(model, raw),
             recalibration=RecalTable.from_section(
                 model_section(
