@@ -23,7 +23,9 @@ It implements every format the exporter writes:
   and flagged) and a ``dead_band`` (the target held while every measured
   reading is near the band's reference);
 * ``/5``: an ``ontime`` derived input (the source's value times its count of
-  samples on without a break, times ``scale`` hours).
+  samples on without a break, times ``scale`` hours);
+* ``/6``: a bumpless transfer after a switch: for ``blend_samples`` samples
+  the prediction moves from the old group's to the new group's.
 
 All arithmetic is on Python floats (IEEE double) in the order the steps give
 it, so the results are those of any double-precision runtime that performs
@@ -37,7 +39,7 @@ import math
 import numpy as np
 from json_probe_runtime import ProbeFilter
 
-FORMATS = tuple(f"groupfit-runtime/{n}" for n in range(1, 6))
+FORMATS = tuple(f"groupfit-runtime/{n}" for n in range(1, 7))
 """The formats this runtime implements; it refuses any other instead of computing wrongly."""
 
 
@@ -77,7 +79,8 @@ def run_table(
     measured = [source["reading"] for source in table["inputs"] if "reading" in source]
 
     # state, as after a reset
-    count, group, comp, band_target = 0, 1, 0.0, 0.0
+    count, group, comp, band_target, blend = 0, 1, 0.0, 0.0, 0
+    blend_samples = table.get("blend_samples", 0)
     bad, last = [hold + 1] * n_temps, [0.0] * n_temps
     first, has_first = [0.0] * n_temps, [False] * n_temps
     started, memory, value = [False] * len(derived), [0.0] * len(derived), [0.0] * len(derived)
@@ -139,6 +142,7 @@ def run_table(
                     pos[k] = 0 if pos[k] + 1 == d["delay_samples"] else pos[k] + 1
 
         # switching
+        before = group
         if group < n_groups:
             window_first, window_last = table["windows"][group - 1]
             direction, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
@@ -151,6 +155,9 @@ def run_table(
                 or (direction < 0 and relative(crit) - threshold <= table["margin_c"])
             ):
                 group += 1
+
+        if group != before:  # the bumpless transfer starts
+            blend = blend_samples
 
         # prediction, position terms, dead band
         clamped = False
@@ -165,26 +172,35 @@ def run_table(
                 relative(source["reading"]) if "reading" in source else value[source["derived"]]
                 for source in table["inputs"]
             ]
-            row = table["coefficients"][group - 1]
-            prediction = row[0]
-            for j, x_j in enumerate(inputs):
-                prediction = prediction + row[j + 1] * x_j
-            if position:
-                p = last[position["reading"]]
-                low, high = position["travel_mm"]
-                if p < low:
-                    p, clamped = low, True
-                if p > high:
-                    p, clamped = high, True
-                d = p - position["p0_mm"]
-                poly = 0.0
-                for k in range(position["order"], 0, -1):
-                    row_k = position["coefficients"][group - 1][k - 1]
-                    term = row_k[0]
-                    for j, x_j in enumerate(inputs):
-                        term = term + row_k[j + 1] * x_j
-                    poly = term if k == position["order"] else poly * d + term
-                prediction = prediction + poly * d
+
+            def predict(g: int, inputs=inputs) -> tuple[float, bool]:
+                row = table["coefficients"][g - 1]
+                prediction, clamped = row[0], False
+                for j, x_j in enumerate(inputs):
+                    prediction = prediction + row[j + 1] * x_j
+                if position:
+                    p = last[position["reading"]]
+                    low, high = position["travel_mm"]
+                    if p < low:
+                        p, clamped = low, True
+                    if p > high:
+                        p, clamped = high, True
+                    d = p - position["p0_mm"]
+                    poly = 0.0
+                    for k in range(position["order"], 0, -1):
+                        row_k = position["coefficients"][g - 1][k - 1]
+                        term = row_k[0]
+                        for j, x_j in enumerate(inputs):
+                            term = term + row_k[j + 1] * x_j
+                        poly = term if k == position["order"] else poly * d + term
+                    prediction = prediction + poly * d
+                return prediction, clamped
+
+            prediction, clamped = predict(group)
+            if blend > 0:
+                old, _ = predict(group - 1)
+                w = float(blend_samples + 1 - blend) / float(blend_samples + 1)
+                prediction = old + w * (prediction - old)
             target = -prediction
             if dead:
                 ref = last[dead["reading"]]
@@ -195,6 +211,9 @@ def run_table(
             if checks:
                 correction = checks.correct(prediction, held)
                 prediction, target = prediction + correction, target - correction
+
+        if blend > 0:
+            blend -= 1
 
         # clamp, rate limit, output
         target = max(min(target, table["comp_max_um"]), table["comp_min_um"])

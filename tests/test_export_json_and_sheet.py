@@ -12,6 +12,7 @@ from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.export import render
 from groupfit.export.json_table import STEPS
+from groupfit.export.json_transfer import TRANSFER_STEP
 from groupfit.export.sheet import (
     IntegerForm,
     controller_sheet,
@@ -25,7 +26,9 @@ from groupfit.runtime import RuleTables, SwitchingRule
 def test_json_table_is_enough_to_rebuild_the_rule():
     model, run = synthetic_model()
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/1" and table["temps"] == model["temps"]
+    # the bumpless transfer makes /6: a runtime for /1 … /5 refuses it instead of switching hard
+    assert table["format"] == "groupfit-runtime/6" and table["temps"] == model["temps"]
+    assert table["blend_samples"] == model["n"] and TRANSFER_STEP in table["steps"]
     rule = SwitchingRule(model)
     for temps in streams_for(model, run).values():
         rule.reset()
@@ -38,7 +41,7 @@ def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
     model, run = augmented_model(label)
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
     tables = RuleTables.from_model(model)
-    assert table["format"] == "groupfit-runtime/2" and table["temps"] == list(tables.raw_names)
+    assert table["format"] == "groupfit-runtime/6" and table["temps"] == list(tables.raw_names)
     assert [d["name"] for d in table["derived_inputs"]] == [d["name"] for d in model["derived_inputs"]]
     assert len(table["inputs"]) == len(model["temps"]) == len(table["coefficients"][0]) - 1
     rule = SwitchingRule(model)
@@ -51,7 +54,8 @@ def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
 def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_rebuild_the_rule():
     model, run = augmented_model("heat law p=2")
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/3"  # a runtime for /2 refuses it instead of computing wrongly
+    assert table["format"] == "groupfit-runtime/6"  # a runtime for /2 refuses it instead of computing wrongly
+    table["steps"].remove(TRANSFER_STEP)
     first, identity, delay, steady = table["derived_inputs"]
     assert first["exponent"] == 5 / 3 and first["power_scale"] == 1000.0 and first["start"] == "rest"
     assert identity["start"] == "steady" and identity["exponent"] == 5 / 3
@@ -69,7 +73,7 @@ def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_
 def test_json_table_with_an_on_time_is_format_5_and_enough_to_rebuild_the_rule():
     model, run = augmented_model("on-time p=1")
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/5"  # a runtime for /4 refuses it instead of computing wrongly
+    assert table["format"] == "groupfit-runtime/6"  # a runtime for /4 refuses it instead of computing wrongly
     heat, speed = table["derived_inputs"]
     assert heat["transform"] == speed["transform"] == "ontime" and heat["start"] == "rest"
     assert heat["scale"] == model["sampling_period_s"] / 3600.0 and heat["exponent"] == 5 / 3
@@ -79,16 +83,21 @@ def test_json_table_with_an_on_time_is_format_5_and_enough_to_rebuild_the_rule()
         rule.reset()
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]
         assert run_table(table, temps) == expected
-    # the heat law is formats /3 and /4 as before: only an on-time makes /5
-    assert json.loads(render(augmented_model("heat law p=2")[0], "json")["groupfit_runtime.json"])["format"] == (
-        "groupfit-runtime/3"
-    )
+    # the heat law is formats /3 and /4 as before: only an on-time makes /5 (with a hard switch)
+    hard = augmented_model("heat law p=2")[0]
+    hard["switching"]["blend_samples"] = 0
+    assert json.loads(render(hard, "json")["groupfit_runtime.json"])["format"] == "groupfit-runtime/3"
+    hard = augmented_model("on-time p=1")[0]
+    hard["switching"]["blend_samples"] = 0
+    assert json.loads(render(hard, "json")["groupfit_runtime.json"])["format"] == "groupfit-runtime/5"
 
 
 def test_models_without_power_or_rest_keep_their_json_format_and_steps():
     for label, fmt in [("all kinds p=2", "groupfit-runtime/2"), ("on/off p=1", "groupfit-runtime/2")]:
-        table = json.loads(render(augmented_model(label)[0], "json")["groupfit_runtime.json"])
-        assert table["format"] == fmt and table["steps"] == list(STEPS)
+        model = augmented_model(label)[0]
+        model["switching"]["blend_samples"] = 0  # a model file written before the transfer: a hard switch
+        table = json.loads(render(model, "json")["groupfit_runtime.json"])
+        assert table["format"] == fmt and table["steps"] == list(STEPS) and "blend_samples" not in table
         assert all("exponent" not in d and "start" not in d for d in table["derived_inputs"])
 
 

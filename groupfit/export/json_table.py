@@ -40,6 +40,7 @@ their format, byte for byte.
 from __future__ import annotations
 
 from groupfit.export.json_probe import with_recalibration
+from groupfit.export.json_transfer import with_transfer
 from groupfit.io import to_json
 from groupfit.runtime import (
     COUNT_MAX,
@@ -195,6 +196,7 @@ def runtime_table(tables: RuleTables) -> dict:
 def render_json(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_runtime.json": text}``."""
     table = with_ontime(with_position(with_reference(runtime_table(tables), tables), tables), tables)
+    table = with_transfer(table, tables)
     table = with_recalibration(table, tables)
     return {"groupfit_runtime.json": to_json(table)}
 
