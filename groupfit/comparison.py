@@ -28,7 +28,7 @@ from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
 from groupfit.inference.prediction import band_for
 from groupfit.metrics import error_metrics, prediction_accuracy
-from groupfit.model import ModelFile, grouped_prediction
+from groupfit.model import ModelFile
 from groupfit.models.ar1 import AR1Model, early_rise
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.mlr import MLR
@@ -325,8 +325,10 @@ def compare_models(
                 preds[f"grouped{p}"] = model.predict(run.temps)
             else:
                 history = histories.get(run.name, np.empty((0, run.temps.shape[1])))
-                groups = live_rule(model_files[p], np.vstack([history, run.temps]))[len(history) :]
-                preds[f"grouped{p}"] = grouped_prediction(model.intercept_, model.coef_, run.temps, groups)
+                whole = np.vstack([history, run.temps])
+                groups = live_rule(model_files[p], whole)  # the rule's groups and its bumpless transfer
+                preds[f"grouped{p}"] = model_files[p].predict(whole, groups, transfer=True)[len(history) :]
+                groups = groups[len(history) :]
             bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
         predictions[run.name] = preds
         for key, prediction in preds.items():

@@ -123,3 +123,23 @@ def serving_group_index(breaks: Sequence[int], n_samples: int, n: int, length: i
     starts = np.array([first for first, _ in served_ranges(breaks, n_samples, n)])
     samples = np.arange(1, length + 1)
     return np.searchsorted(starts, samples, side="right") - 1
+
+
+def transfer_weights(groups: np.ndarray, blend_samples: int) -> np.ndarray:
+    """Per sample, the weight of the serving group in the run-time rule's bumpless transfer (1 outside one).
+
+    After a switch (``groups``: 0-based, non-decreasing) the rule serves
+    ``old + w·(new − old)`` for ``blend_samples`` samples, ``w = k / (blend_samples + 1)``
+    at the switch's k-th sample (k = 1 at the switch; docs/switching.md).
+    """
+    groups = np.asarray(groups)
+    weights = np.ones(len(groups))
+    if blend_samples <= 0:
+        return weights
+    for switch in np.flatnonzero(np.diff(groups) != 0) + 1:
+        for k in range(blend_samples):
+            i = switch + k
+            if i >= len(groups) or (k and groups[i] != groups[switch]):
+                break
+            weights[i] = (k + 1) / (blend_samples + 1)
+    return weights

@@ -30,7 +30,7 @@ import numpy as np
 from groupfit.data import DEFAULT_TIME
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
-from groupfit.grouping import serving_group_index
+from groupfit.grouping import serving_group_index, transfer_weights
 from groupfit.io import atomic_write_text, read_json_file, to_json
 from groupfit.model_checks import (
     COEFFICIENT_LIMIT,
@@ -313,11 +313,13 @@ class ModelFile:
         """0-based group serving each sample offline, by sample index (rows past the run: the last group)."""
         return serving_group_index(list(self.breaks), self.n_samples_fit, self.n, n_rows)
 
-    def predict(self, inputs, groups: np.ndarray | None = None) -> np.ndarray:
+    def predict(self, inputs, groups: np.ndarray | None = None, *, transfer: bool = False) -> np.ndarray:
         """Predicted error of every row of the (N, M) input matrix.
 
         Each row is served by ``groups`` (0-based, e.g. from the run-time rule)
         or, by default, by the group that serves its sample index offline.
+        ``transfer``: with the run-time rule's bumpless transfer after each
+        switch (``switching.blend_samples``), as the controller computes it.
         """
         inputs = np.asarray(inputs, dtype=float)
         if inputs.ndim != 2 or inputs.shape[1] != len(self.temps):
@@ -325,9 +327,28 @@ class ModelFile:
         if groups is None:
             groups = self.serving_groups(len(inputs))
         matrix = self.coefficient_matrix()
-        return grouped_prediction(matrix[:, 0], matrix[:, 1:], inputs, groups)
+        prediction = grouped_prediction(matrix[:, 0], matrix[:, 1:], inputs, groups)
+        return self._transferred(prediction, inputs, groups) if transfer else prediction
 
-    def predict_position(self, inputs, positions, groups: np.ndarray | None = None) -> np.ndarray:
+    def _transferred(self, prediction: np.ndarray, inputs: np.ndarray, groups, positions=None) -> np.ndarray:
+        """``prediction`` with the bumpless transfer: the previous group's blended in after each switch."""
+        groups = np.asarray(groups)
+        weights = transfer_weights(groups, int(self.switching.blend_samples or 0))
+        blending = weights < 1.0
+        if not blending.any():
+            return prediction
+        old_groups = groups[blending] - 1
+        if positions is None:
+            old = self.predict(inputs[blending], old_groups)
+        else:
+            old = self.predict_position(inputs[blending], np.asarray(positions)[blending], old_groups)
+        out = np.array(prediction, dtype=float)
+        out[blending] = old + weights[blending] * (out[blending] - old)
+        return out
+
+    def predict_position(
+        self, inputs, positions, groups: np.ndarray | None = None, *, transfer: bool = False
+    ) -> np.ndarray:
         """E(P, T) of every row: ``K0(T)`` (:meth:`predict`) plus the position polynomial in ``d = P − P0``.
 
         Positions outside the travel are clamped to it, as the run-time rule
@@ -347,7 +368,7 @@ class ModelFile:
         poly = terms[:, -1]
         for k in range(terms.shape[1] - 2, -1, -1):
             poly = poly * d + terms[:, k]
-        return k0 + poly * d
+        return self._transferred(k0 + poly * d, inputs, groups, positions) if transfer else k0 + poly * d
 
     def inputs(self, frame, source: str = "the run") -> np.ndarray:
         """The model's input matrix from a table (DataFrame-like): measured columns and derived inputs.

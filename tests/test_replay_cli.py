@@ -22,6 +22,7 @@ from test_switching_models import (
 
 from groupfit.cli import main
 from groupfit.diagnose.residual import predict
+from groupfit.model import ModelFile
 from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 
 
@@ -52,7 +53,19 @@ def test_replay_json_has_the_spec_shape_and_the_residuals(tmp_path, model_path, 
     assert np.allclose(residual, frame["error_um"] - prediction, atol=1e-12)
     assert result["rms_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-12)
     model = json.loads(model_path.read_text())
-    assert result["rms_um"] == pytest.approx(model["training"]["rms_um"], rel=1e-9)  # the modelling run itself
+    # the modelling run itself: the offline grouping, with the bumpless transfer over n samples at each switch
+    coefficients = np.asarray(model["coefficients"])
+    groups = np.asarray([s["group"] for s in result["samples"]]) - 1
+    temps = frame[model["temps"]].to_numpy()
+    offline = coefficients[groups, 0] + np.einsum("ij,ij->i", temps, coefficients[groups, 1:])
+    for switch in np.flatnonzero(np.diff(groups)) + 1:  # k/(n+1) of the way from the old group at sample k
+        for k in range(1, model["n"] + 1):
+            i = switch + k - 1
+            old = coefficients[groups[i] - 1, 0] + temps[i] @ coefficients[groups[i] - 1, 1:]
+            offline[i] = old + k / (model["n"] + 1) * (offline[i] - old)
+    assert np.max(np.abs(prediction - offline)) < 1e-9
+    hard = coefficients[groups, 0] + np.einsum("ij,ij->i", temps, coefficients[groups, 1:])
+    assert np.sqrt(np.mean((frame["error_um"] - hard) ** 2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)
     assert result["offline_breaks"] == model["breaks"] and result["samples_off_offline_group"] == 0
     assert [s["i"] for s in result["switches"]] == [w[0] for w in model["switching"]["windows"]]
     assert (out / "replay.png").stat().st_size > 10_000
@@ -175,10 +188,12 @@ def test_models_with_derived_inputs_replay_from_the_source_columns(tmp_path, lab
     # the model's inputs as groupfit.features computes them, served by the rule's groups
     assert np.max(np.abs(prediction - predict(model, data, live_rule=replay_groups))) <= 1e-9
     assert result["faults"] == {"held_samples": 0, "sensor_fault_samples": 0}
-    if which == "modelling":  # the offline model itself
-        assert np.max(np.abs(prediction - predict(model, data))) <= 1e-9
+    if which == "modelling":  # the offline grouping itself, with the bumpless transfer at its switches
+        offline = ModelFile.coerce(model)
+        inputs = offline.inputs(data.frame, data.source)
+        expected = offline.predict(inputs, offline.serving_groups(len(inputs)), transfer=True)
+        assert np.max(np.abs(prediction - expected)) <= 1e-9
         assert result["samples_off_offline_group"] == 0
-        assert result["rms_um"] == pytest.approx(model["training"]["rms_um"], rel=1e-9)
 
 
 def test_missing_source_column_is_named_with_the_input_it_feeds(tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""C pieces of the bumpless transfer after a switch (:mod:`groupfit.runtime.transfer`).
+"""C pieces of the bumpless transfer after a switch (docs/switching.md).
 
 :func:`groupfit.export.c.render_c` fills its templates with these: the
 transfer's length and state, its start at a switch, and the prediction,

@@ -1,4 +1,4 @@
-"""Structured Text pieces of the bumpless transfer after a switch (:mod:`groupfit.runtime.transfer`).
+"""Structured Text pieces of the bumpless transfer after a switch (docs/switching.md).
 
 :func:`transfer_pieces` fills the block's template: the state and constants
 of the transfer, its start at a switch, and the prediction, computed for the
