@@ -252,14 +252,13 @@ def test_replay_is_the_offline_model_and_a_position_outside_the_travel_is_clampe
     readings = streams(model)["moving"]
     replay = SwitchingRule(model).replay(readings)
     inputs = readings[:, :2] - 0.0
-    offline = loaded.predict_position(inputs, readings[:, 2], replay.group - 1)
+    offline = loaded.predict_position(inputs, readings[:, 2], replay.group - 1, transfer=True)  # bumpless
     assert np.allclose(replay.prediction_um, offline, rtol=0, atol=1e-9)
     outside = (readings[:, 2] < 0) | (readings[:, 2] > 1000)
     assert outside.any()
     assert np.array_equal((replay.fault & FAULT_POSITION) > 0, outside)
-    inside_end = loaded.predict_position(
-        inputs[outside], np.clip(readings[outside, 2], 0, 1000), replay.group[outside] - 1
-    )
+    at_end = np.clip(readings[:, 2], 0, 1000)
+    inside_end = loaded.predict_position(inputs, at_end, replay.group - 1, transfer=True)[outside]
     assert np.allclose(replay.prediction_um[outside], inside_end, atol=1e-9)
 
 

@@ -21,7 +21,6 @@ from test_switching_models import (
 )
 
 from groupfit.cli import main
-from groupfit.diagnose.residual import predict
 from groupfit.model import ModelFile
 from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 
@@ -185,13 +184,13 @@ def test_models_with_derived_inputs_replay_from_the_source_columns(tmp_path, lab
     assert replay(tmp_path / "model.json", "--data", data.source, "--json", tmp_path / "r.json") == 0
     result = json.loads((tmp_path / "r.json").read_text())
     prediction = np.array([s["prediction_um"] for s in result["samples"]])
-    # the model's inputs as groupfit.features computes them, served by the rule's groups
-    assert np.max(np.abs(prediction - predict(model, data, live_rule=replay_groups))) <= 1e-9
+    # the model's inputs as groupfit.features computes them, served by the rule's groups and its transfer
+    served = ModelFile.coerce(model)
+    inputs = served.inputs(data.frame, data.source)
+    assert np.max(np.abs(prediction - served.predict(inputs, replay_groups(served, inputs), transfer=True))) <= 1e-9
     assert result["faults"] == {"held_samples": 0, "sensor_fault_samples": 0}
     if which == "modelling":  # the offline grouping itself, with the bumpless transfer at its switches
-        offline = ModelFile.coerce(model)
-        inputs = offline.inputs(data.frame, data.source)
-        expected = offline.predict(inputs, offline.serving_groups(len(inputs)), transfer=True)
+        expected = served.predict(inputs, served.serving_groups(len(inputs)), transfer=True)
         assert np.max(np.abs(prediction - expected)) <= 1e-9
         assert result["samples_off_offline_group"] == 0
 

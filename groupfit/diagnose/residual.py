@@ -30,7 +30,7 @@ def predict(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np
     X = model.inputs(run.frame, run.source)
     if live_rule is None:
         return model.predict(np.nan_to_num(X)) + np.where(np.isfinite(X).all(axis=1), 0.0, np.nan)
-    return model.predict(X, live_rule(model, X), transfer=True)
+    return model.predict(X, live_rule(model, X))
 
 
 def residual(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:

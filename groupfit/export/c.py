@@ -341,7 +341,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         step_locals=("    int j;\n" if has_delay else "") + ("    gf_real v;\n" if has_power else ""),
         step_derived=step_derived(tables),
         **reference_source(tables),
-        **transfer_source(dot_product(tables), position_source(tables)),
+        **transfer_source(dot_product(tables), position_source(tables), has_position=tables.has_position),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
 

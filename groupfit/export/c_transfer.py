@@ -14,6 +14,8 @@ import textwrap
 
 from groupfit.runtime import RuleTables
 
+OLD_POSITION = "                old_k0 = s->k0_um;\n                old_slope = s->slope_um_per_mm;\n"
+
 
 def transfer_header(tables: RuleTables) -> dict[str, str]:
     """Header pieces: the transfer's length and its state field."""
@@ -26,7 +28,7 @@ def transfer_header(tables: RuleTables) -> dict[str, str]:
     }
 
 
-def transfer_source(dot_product: str, position: dict[str, str]) -> dict[str, str]:
+def transfer_source(dot_product: str, position: dict[str, str], *, has_position: bool) -> dict[str, str]:
     """Source pieces; ``position`` (the position and dead-band pieces) with its terms moved into the group loop."""
 
     def in_loop(code: str) -> str:
@@ -34,6 +36,8 @@ def transfer_source(dot_product: str, position: dict[str, str]) -> dict[str, str
 
     prediction = (
         "        gf_real old = 0;\n"
+        + ("        gf_real old_k0 = 0;\n        gf_real old_slope = 0;\n" if has_position else "")
+        + ""
         "        int g;\n"
         "        prediction = 0;\n"
         "        /* the old group's prediction first while a transfer runs, then the serving group's */\n"
@@ -43,13 +47,24 @@ def transfer_source(dot_product: str, position: dict[str, str]) -> dict[str, str
         + "\n"
         "            if (g < s->group) {\n"
         "                old = prediction;\n"
-        "            }\n"
+        + (
+            "                old_k0 = s->k0_um;\n                old_slope = s->slope_um_per_mm;\n"
+            if has_position
+            else ""
+        )
+        + "            }\n"
         "        }\n"
         "        if (s->blend > 0) {\n"
         "            /* bumpless transfer: (GF_BLEND_SAMPLES + 1 - blend) / (GF_BLEND_SAMPLES + 1) of the way */\n"
         "            gf_real weight = (gf_real)(GF_BLEND_SAMPLES + 1 - s->blend) / (gf_real)(GF_BLEND_SAMPLES + 1);\n"
         "            prediction = old + weight * (prediction - old);\n"
-        "        }"
+        + (
+            "            s->k0_um = old_k0 + weight * (s->k0_um - old_k0);\n"
+            "            s->slope_um_per_mm = old_slope + weight * (s->slope_um_per_mm - old_slope);\n"
+            if has_position
+            else ""
+        )
+        + "        }"
     )
     return {
         **position,

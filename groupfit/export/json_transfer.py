@@ -17,7 +17,8 @@ TRANSFER_STEP = (
     "bumpless transfer: blend starts at 0; when the group advanced at this sample, blend = blend_samples. "
     "While blend > 0 and not faulted, the prediction (position terms included) is computed for group - 1 "
     "(old) and for group (new) and prediction = old + w * (new - old), with w = (blend_samples + 1 - blend) / "
-    "(blend_samples + 1) (whole numbers converted exactly, one division). After the prediction (faulted or "
+    "(blend_samples + 1) (whole numbers converted exactly, one division); k0 and slope of a position model move "
+    "alike, from the old group's. After the prediction (faulted or "
     "not): if blend > 0 then blend -= 1"
 )
 

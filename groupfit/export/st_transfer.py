@@ -27,10 +27,19 @@ def transfer_pieces(tables: RuleTables, real: str, literal, dot_product: str, po
             dot_product.replace("[currentGroup]", "[g]") + position["position_terms"].replace("[currentGroup]", "[g]"),
             "        IF g < currentGroup THEN",
             "            oldPrediction := prediction;",
+            *(["            oldK0 := K0Um;", "            oldSlope := SlopeUmPerMm;"] if tables.has_position else []),
             "        END_IF;",
             "        END_FOR;",
             "        IF blendLeft > 0 THEN",
             "            prediction := oldPrediction + blendStep / BLEND_SPAN * (prediction - oldPrediction);",
+            *(
+                [
+                    "            K0Um := oldK0 + blendStep / BLEND_SPAN * (K0Um - oldK0);",
+                    "            SlopeUmPerMm := oldSlope + blendStep / BLEND_SPAN * (SlopeUmPerMm - oldSlope);",
+                ]
+                if tables.has_position
+                else []
+            ),
             "        END_IF;",
         ]
     )
@@ -41,6 +50,7 @@ def transfer_pieces(tables: RuleTables, real: str, literal, dot_product: str, po
         "transfer_vars": (
             f"    blendLeft : INT := 0;\n    blendStep : {real} := 0.0;\n    oldPrediction : {real};\n"
             "    g : INT;\n    gFirst : INT;\n"
+            + (f"    oldK0 : {real};\n    oldSlope : {real};\n" if tables.has_position else "")
         ),
         "transfer_constants": (
             "    (* Bumpless transfer: after a switch the prediction moves from the old group's to the new group's\n"

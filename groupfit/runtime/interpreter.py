@@ -226,10 +226,14 @@ class SwitchingRule:
         else:
             if self.blend > 0:  # bumpless transfer: from the old group's prediction towards the new group's
                 old, clamped = self._group_prediction(self.group - 1)
+                old_k0, old_slope = self.k0, self.slope
                 prediction, clamped = self._group_prediction(self.group)
                 span = t.blend_samples + 1
                 weight = self._real(span - self.blend) / self._real(span)
                 prediction = old + weight * (prediction - old)
+                if t.has_position:  # K0 and tan(beta) move alike, so that K0 + tan(beta)·(P − P0) stays the output
+                    self.k0 = old_k0 + weight * (self.k0 - old_k0)
+                    self.slope = old_slope + weight * (self.slope - old_slope)
             else:
                 prediction, clamped = self._group_prediction(self.group)
             target = -prediction
