@@ -1,0 +1,213 @@
+"""Logs as loggers write them: a jittering clock, several readings per cycle, a gap, a file that continues.
+
+Every log here is made up to imitate one of a printer's or a spindle's: cycle
+means stamped to the second with cycles 59.3–60.4 s apart; three readings 4 s
+apart once a minute (a 4 s / 4 s / 52 s rhythm); the same with a gap of ten
+minutes; one recording split into two files, the second with its clock going
+on or starting again.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.data import load_run, load_runs
+from groupfit.errors import InputError
+from groupfit.resample import GAP_PERIODS, resample_frame
+
+N = 360
+
+
+def cycle_means(seed: int = 1, n: int = N, *, shift: int = 0) -> pd.DataFrame:
+    """A printer's frame drift as cycle means on the logger's clock: cycles 59.3–60.4 s, stamps to 1 s."""
+    rng = np.random.default_rng(seed)
+    time = np.round(np.concatenate([[0.0], np.cumsum(rng.uniform(59.3, 60.4, n - 1))]))
+    k = np.arange(n) + shift
+    bed_target = np.where((k % 180) < 100, 60.0, 0.0)
+    heat = np.convolve(bed_target / 60.0, np.exp(-np.arange(120) / 25.0), "full")[:n]
+    slow = np.convolve(bed_target / 60.0, np.exp(-np.arange(240) / 70.0), "full")[:n]
+    t1 = 22.0 + 0.12 * heat + rng.normal(0, 0.02, n)
+    t2 = 22.0 + 0.05 * slow + rng.normal(0, 0.02, n)
+    error = 4.0 * (t1 - 22.0) + 6.0 * (t2 - 22.0) + 0.3 * np.sin(k / 15.0) + rng.normal(0, 0.1, n)
+    return pd.DataFrame({"time_s": time, "T1": t1, "T2": t2, "bed_target": bed_target, "error_um": error})
+
+
+def three_per_cycle(means: pd.DataFrame, seed: int = 2) -> pd.DataFrame:
+    """Three readings 4 s apart once a minute (a 4 s / 4 s / 52 s rhythm), each with its own noise."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for k, row in enumerate(means.itertuples(index=False)):
+        for j in range(3):
+            reading = row._asdict()
+            reading["time_s"] = 60.0 * k + 4.0 * j + 7.0
+            for column in ("T1", "T2", "error_um"):
+                reading[column] += rng.normal(0, 0.05)
+            rows.append(reading)
+    return pd.DataFrame(rows)
+
+
+def cli(*args) -> int:
+    return main([str(a) for a in args])
+
+
+# ------------------------------------------------------------------------- a jittering clock
+
+
+def test_a_jittering_clock_within_the_tolerance_is_accepted_with_its_largest_deviation(tmp_path):
+    frame = cycle_means()
+    run = load_run(frame, temps=["T1", "T2"], name="printer")
+    steps = np.diff(frame["time_s"].to_numpy())
+    worst = np.max(np.abs(steps - np.median(steps)))  # brute force
+    assert run.period == 60.0 and steps.min() < 60.0 < steps.max()
+    assert len(run.notes) == 1 and f"largest deviation {worst:.4g} s" in run.notes[0]
+    assert f"({100 * worst / 60.0:.2f} %" in run.notes[0]
+
+
+def test_an_interval_beyond_the_tolerance_is_refused_unless_widened(tmp_path):
+    frame = cycle_means()
+    frame.loc[100:, "time_s"] += 2.0  # one interval of 62 s: 3.3 % off
+    with pytest.raises(InputError, match=r"rows 100 to 101 .*tolerance 2 %.*--resample SECONDS.*--period-tolerance"):
+        load_run(frame, temps=["T1", "T2"])
+    assert load_run(frame, temps=["T1", "T2"], period_tolerance=0.05).period == 60.0
+    path = tmp_path / "late.csv"
+    frame.to_csv(path, index=False)
+    assert cli("fit", "--data", path, "--p", "0", "--out", tmp_path / "a") == 2
+    assert cli("fit", "--data", path, "--p", "0", "--period-tolerance", "5", "--out", tmp_path / "b") == 0
+
+
+def test_cycle_means_on_their_real_clock_fit_without_flags(tmp_path, capsys):
+    path = tmp_path / "printer_a.csv"
+    cycle_means().to_csv(path, index=False)
+    assert cli("fit", "--data", path, "--p", "2", "--json", tmp_path / "m.json", "--out", tmp_path) == 0
+    assert "time stamps jitter around the period of 60 s" in capsys.readouterr().out
+    assert json.loads((tmp_path / "m.json").read_text())["sampling_period_s"] == 60.0
+
+
+# ------------------------------------------------------------------------- several readings per period
+
+
+def test_three_readings_per_cycle_are_averaged_into_their_minute():
+    means = cycle_means()
+    raw = three_per_cycle(means)
+    binned = resample_frame(raw, time="time_s", period_s=60.0, label="raw")
+    (piece,) = binned.pieces
+    assert binned.combined == 3 * N and binned.empty == 0 and not binned.gaps
+    by_cycle = raw.groupby(np.arange(len(raw)) // 3)[["T1", "T2", "error_um"]].mean()  # brute force
+    np.testing.assert_allclose(piece[["T1", "T2", "error_um"]].to_numpy(), by_cycle.to_numpy(), rtol=0, atol=1e-12)
+    # each bin's centre is its time: the middle of its three readings (4 s after the first), 60 s apart
+    np.testing.assert_allclose(piece["time_s"].to_numpy(), 60.0 * np.arange(N) + 11.0, atol=1e-9)
+
+
+def test_the_raw_log_is_refused_as_it_is_and_fits_with_resample(tmp_path, capsys):
+    path = tmp_path / "printer_raw.csv"
+    three_per_cycle(cycle_means()).to_csv(path, index=False)
+    assert cli("fit", "--data", path, "--p", "2", "--out", tmp_path) == 2
+    assert "--resample SECONDS" in capsys.readouterr().err
+    assert (
+        cli("fit", "--data", path, "--p", "2", "--resample", "60", "--json", tmp_path / "m.json", "--out", tmp_path)
+        == 0
+    )
+    assert f"{3 * N} reading(s) averaged into {N} period(s), 0 empty" in capsys.readouterr().out
+    config = tmp_path / "printer.toml"
+    config.write_text(f'[data]\npath = "{path.name}"\ntemps = ["T1", "T2"]\nresample_s = 60\n[model]\np = 2\n')
+    assert cli("fit", config, "--out", tmp_path / "c") == 0
+
+
+def test_a_missed_cycle_is_interpolated_and_a_gap_splits_the_log(tmp_path, capsys):
+    raw = three_per_cycle(cycle_means())
+    cycle = np.arange(len(raw)) // 3
+    one_missed = raw[cycle != 50]
+    binned = resample_frame(one_missed, time="time_s", period_s=60.0, label="raw")
+    (piece,) = binned.pieces
+    assert binned.empty == 1 and len(piece) == N
+    expected = (piece["T1"].iloc[49] + piece["T1"].iloc[51]) / 2  # midway: linear in time
+    assert piece["T1"].iloc[50] == pytest.approx(expected, abs=1e-12)
+    gap = raw[(cycle < 150) | (cycle >= 160)]  # ten minutes without a reading
+    runs = load_runs(gap, temps=["T1", "T2"], resample=60.0, name="gap")
+    assert [r.n_samples for r in runs] == [150, N - 160] and 10 > GAP_PERIODS
+    assert runs[1].time[0] - runs[0].time[-1] == pytest.approx(11 * 60.0)  # not bridged
+    assert "split into 2 runs at 1 gap(s)" in runs[0].notes[0]
+    path = tmp_path / "gap.csv"
+    gap.to_csv(path, index=False)
+    assert cli("fit", "--data", path, "--p", "2", "--resample", "60", "--out", tmp_path) == 2
+    assert "--resample split the log at its gaps" in capsys.readouterr().err
+    assert cli("fit", "--data", path, "--p", "0", "--resample", "60", "--out", tmp_path) == 0
+
+
+# ------------------------------------------------------------------------- a file that continues
+
+
+@pytest.fixture(scope="module")
+def split_recording(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("spindle")
+    whole = cycle_means(seed=5, n=600)
+    whole.to_csv(folder / "whole.csv", index=False)
+    whole.iloc[:330].to_csv(folder / "first.csv", index=False)
+    whole.iloc[330:].to_csv(folder / "rest.csv", index=False)
+    restarted = whole.iloc[330:].copy()
+    restarted["time_s"] -= restarted["time_s"].iloc[0]
+    restarted.to_csv(folder / "rest_restarted.csv", index=False)
+    assert cli("fit", "--data", folder / "first.csv", "--p", "3", "--out", folder, "--quiet") == 0
+    return folder
+
+
+def replayed(folder, *args) -> dict:
+    out = folder / "replay.json"
+    assert cli("replay", folder / "model.json", *args, "--json", out) == 0
+    return json.loads(out.read_text())
+
+
+@pytest.mark.parametrize("rest", ["rest.csv", "rest_restarted.csv"])
+def test_replay_continues_equals_the_whole_recording_on_the_continued_part(split_recording, rest):
+    folder = split_recording
+    whole = replayed(folder, "--data", folder / "whole.csv")["samples"][330:]
+    alone = replayed(folder, "--data", folder / rest)
+    continued = replayed(folder, "--data", folder / rest, "--continues", folder / "first.csv")
+    assert continued["history_samples"] == 330 and len(continued["samples"]) == len(whole)
+    prediction = np.array([s["prediction_um"] for s in continued["samples"]])
+    assert np.max(np.abs(prediction - [s["prediction_um"] for s in whole])) <= 1e-9
+    assert [s["group"] for s in continued["samples"]] == [s["group"] for s in whole]
+    assert alone["samples"][0]["group"] == 1 and whole[0]["group"] > 1  # restarted, the rule starts again
+
+
+def test_compare_detects_a_continuing_clock_and_takes_continues_for_a_restarted_one(split_recording, capsys):
+    folder = split_recording
+    results = {}
+    for rest, extra in (("rest.csv", ()), ("rest_restarted.csv", ("--continues",)), ("rest_restarted.csv", ())):
+        out = folder / "compare.json"
+        args = ("--data", folder / "first.csv", "--validate", folder / rest, "--pmax", "3", "--heat", "bed_target")
+        assert cli("compare", *args, *extra, "--quiet", "--json", out, "--out", folder / "c") == 0
+        rows = json.loads(out.read_text())["rows"]
+        results[(rest, extra)] = next(
+            r for r in rows if r["model"] == "grouped" and r["p"] == 3 and r["run"] != "first"
+        )
+        report = capsys.readouterr().out
+        assert ("continue" in report) == (rest == "rest.csv" or bool(extra))
+    assert results[("rest.csv", ())]["rms_um"] == pytest.approx(
+        results[("rest_restarted.csv", ("--continues",))]["rms_um"]
+    )
+    assert results[("rest.csv", ())]["rms_um"] != results[("rest_restarted.csv", ())]["rms_um"]
+
+
+# ------------------------------------------------------------------------- compare's heat column
+
+
+def test_compare_takes_the_heat_column_by_flag_or_leaves_the_ar1_out(tmp_path, capsys):
+    path = tmp_path / "printer.csv"
+    cycle_means().to_csv(path, index=False)
+    assert cli("compare", "--data", path, "--pmax", "1", "--quiet", "--out", tmp_path) == 2
+    err = capsys.readouterr().err
+    assert "heat column 'speed_rpm'" in err and "--heat COLUMN" in err and "--heat none" in err
+    out = tmp_path / "c.json"
+    assert cli("compare", "--data", path, "--pmax", "1", "--heat", "bed_target", "--quiet", "--json", out) == 0
+    result = json.loads(out.read_text())
+    assert result["ar1"]["heat"] == "bed_target" and any(r["model"] == "ar1" for r in result["rows"])
+    assert cli("compare", "--data", path, "--pmax", "1", "--heat", "none", "--quiet", "--json", out) == 0
+    result = json.loads(out.read_text())
+    assert result["ar1"] is None and not any(r["model"] == "ar1" for r in result["rows"])
+    assert "AR(1): left out" in capsys.readouterr().out
