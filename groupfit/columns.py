@@ -2,7 +2,9 @@
 
 A column is a *cause* the controller can read (a temperature, a speed, the
 on/off of a heat source) unless it is a displacement (another probe's error),
-not numeric, partly non-finite (a failing sensor) or constant (a dead sensor).
+not numeric, partly non-finite (a failing sensor), 0 throughout (a dead sensor)
+or a sample index (it grows by one step every row). A constant other than 0
+is kept: a heater switched on at the start at its set-point heats from rest.
 The diagnosis draws its candidates from these columns and the held-out folds
 (:mod:`groupfit.heldout.folds`) their operating conditions.
 """
@@ -48,8 +50,24 @@ def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], l
             notes.append(f"column '{column}' left out: not numeric or empty")
         elif bad:
             notes.append(f"column '{column}' left out: {bad} non-finite value(s) (a failing sensor?)")
+        elif np.ptp(values) == 0.0 and values[0] == 0.0:
+            notes.append(f"column '{column}' left out: constant 0 (a dead sensor, or a source never on?)")
         elif np.ptp(values) == 0.0:
-            notes.append(f"column '{column}' left out: constant {values[0]:g} (a dead sensor?)")
+            usable.append(column)
+            notes.append(
+                f"column '{column}' kept though constant ({values[0]:g}): a source switched on at the start (a "
+                "set-point) heats from rest, and its lags from rest carry that; a dead sensor shows no effect"
+            )
+        elif is_counter(values):
+            notes.append(f"column '{column}' left out: a sample index or clock (it grows by one step every row)")
         else:
             usable.append(column)
     return usable, notes
+
+
+def is_counter(values: np.ndarray) -> bool:
+    """Whether a column grows by the same step on every row (a sample index, a second clock): not a cause."""
+    if len(values) < 3:
+        return False
+    step = np.diff(values)
+    return bool(step[0] > 0 and np.all(np.abs(step - step[0]) <= 1e-9 * max(abs(step[0]), 1.0)))

@@ -322,15 +322,16 @@ def _validated(
     error_limit: float | None = ERROR_LIMIT_UM,
     period_tolerance: float = PERIOD_TOLERANCE,
     notes: tuple[str, ...] = (),
+    ambient: str | None = None,
 ) -> Run:
-    """The checks of :func:`load_run` on a table already read."""
+    """The checks of :func:`load_run` on a table already read; ``ambient`` is never a default input."""
     time_values = numeric_column(frame, time, label, allow_nonfinite=False)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
 
     if temps is None:
-        temps = default_temperature_columns(frame, exclude=(time, error))
+        temps = default_temperature_columns(frame, exclude=(time, error, ambient))
         if not temps:
             raise InputError(
                 f"{label}: no temperature columns found (named T1, T2 …); name the inputs with --temps A,B,C. "

@@ -158,6 +158,7 @@ def config_with_data_options(args: argparse.Namespace, config_path: str | None) 
     override(config, "data", "error_limit", parse_error_limit(getattr(args, "range_error", None)))
     override(config, "data", "period_tolerance", getattr(args, "period_tolerance", None))
     override(config, "data", "resample_s", getattr(args, "resample", None))
+    override(config, "data", "ambient", getattr(args, "ambient", None))
     return config
 
 
@@ -188,6 +189,8 @@ def _load_options(config: dict, options: dict) -> dict:
     for key, value in clock_options(argparse.Namespace(), config).items():
         options.setdefault(key, value)
     options.update(temps=data.get("temps"), time=data["time"], error=data["error"])
+    if data.get("ambient") is not None:
+        options.setdefault("ambient", data["ambient"])
     return options
 
 
@@ -331,7 +334,13 @@ def add_reference_option(parser: argparse.ArgumentParser) -> None:
         "--reference",
         metavar="COLUMN|start|none",
         help="take every input minus a reference sensor (e.g. T_amb), minus its first reading ('start'), "
-        "or as read ('none'); default: T_amb when the run has that column, else none",
+        "or as read ('none'); default: the --ambient column, else T_amb when the run has that column, else none",
+    )
+    parser.add_argument(
+        "--ambient",
+        metavar="COLUMN",
+        help="the ambient temperature, whatever its name (an air sensor logged as T15): never a default input, "
+        "and the default reference (default: T_amb)",
     )
 
 
@@ -340,6 +349,12 @@ def configured_reference(args: argparse.Namespace, config: dict, run: Run) -> st
     value = getattr(args, "reference", None)
     if value is None:
         value = config["model"].get("reference")
+    ambient = config["data"].get("ambient")
+    if value is None and ambient is not None:
+        if ambient not in run.frame.columns:
+            available = ", ".join(map(str, run.frame.columns))
+            raise InputError(f"{run.source}: --ambient column '{ambient}' not found; the columns are: {available}")
+        value = ambient
     return default_reference(run.frame, value)
 
 

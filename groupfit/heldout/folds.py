@@ -111,11 +111,18 @@ class Folds:
 
 
 def operating_columns(frame: pd.DataFrame, candidates: list[str]) -> list[str]:
-    """Columns among ``candidates`` that look like operating settings: piecewise constant, few levels."""
+    """Columns among ``candidates`` that look like operating settings: piecewise constant, few levels.
+
+    A column constant at a value other than 0 is one too: a heater switched on at the start at its
+    set-point (its lags start from rest).
+    """
     found = []
     for column in candidates:
         values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-        if not np.isfinite(values).all() or np.ptp(values) == 0.0:
+        if not np.isfinite(values).all() or (np.ptp(values) == 0.0 and values[0] == 0.0):
+            continue
+        if np.ptp(values) == 0.0:  # a source on from the start at its set-point: it heats from rest
+            found.append(column)
             continue
         steps = np.abs(np.diff(values))
         steps = steps[steps > 0]
