@@ -193,6 +193,8 @@ def search_summary(search: dict, unit: str) -> str:
             f"; exact optimum {search['exact_objective']:.6g} {unit} at {search['exact_breaks']}, "
             f"GA gap {search['gap_percent']:.3g} %"
         )
+    elif "exact_skipped" in search:
+        text += f"; not checked against the exact optimum: {search['exact_skipped']}"
     return text
 
 

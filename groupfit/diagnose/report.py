@@ -77,7 +77,9 @@ def diagnosis_summary(result) -> str:
                 f"{selection['nested_held_out_rms_um']:.3g} µm RMS; the model as given, "
                 f"{result.base_check['held_out_rms_um']:.3g} µm"
             )
-    if result.ridge is not None:
+    if result.ridge is not None and not result.ridge["alpha"]:
+        lines.append("ridge penalty alpha = 0 chosen (no penalty does best): the model is kept as given")
+    elif result.ridge is not None:
         ridge = result.ridge
         how = "given" if ridge["chosen"] == "given" else f"the least error on {ridge['folds']}"
         lines.append(

@@ -28,6 +28,8 @@ def ridge_base_model(model: dict[str, Any], runs: Sequence[Run], alpha: float | 
     y = np.concatenate([run.error for run in runs])
     frames = [run.frame for run in runs]
     info = ridge_setting(alpha, model["p"], np.vstack(inputs), y, frames, exclude, model["intercept"])
+    if not info["alpha"]:  # no penalty: the model as given
+        return dict(model), info
     ridged = ModelFile.coerce(dict(model, ridge_alpha=info["alpha"] or None))
     return refit_model(ridged, list(runs), inputs, ridged.temps, ridged.derived_inputs or ()), info
 

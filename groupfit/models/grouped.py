@@ -255,6 +255,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
                 info["exact_breaks"] = exact.breaks[self.p]
                 info["exact_seconds"] = exact.seconds
                 info["gap_percent"] = 100.0 * (search_value - best) / best if best > 0 else 0.0
+            else:
+                info["exact_skipped"] = self._certify_skipped(n_samples)
         info["search_objective"] = search_value
         return self._fit_groups(X, y, breaks, info)
 
@@ -416,6 +418,16 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
                 f"ridge alpha {self.ridge_alpha:g} with p = {self.p}: the ridge penalty is for one global model "
                 "(p = 0) on many collinear inputs; a grouped model's groups are fitted by least squares"
             )
+
+    def _certify_skipped(self, n_samples: int) -> str:
+        """Why a GA result was not checked against the exact optimum."""
+        if self.certify != "auto":
+            return "the check is turned off"
+        limit = CERTIFY_PAIR_LIMIT[self.objective]
+        return (
+            f"N = {n_samples} samples give {n_samples * n_samples / 2:.3g} segment pairs, over the {limit:.3g} "
+            f"of an automatic check with the {self.objective} objective; --search exact finds the optimum itself"
+        )
 
     def _should_certify(self, n_samples: int) -> bool:
         if self.certify == "auto":
