@@ -410,13 +410,17 @@ def comparison_summary(result: ComparisonResult) -> str:
     lines += [
         "",
         f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
-        f"{result.condition_changes}):",
+        f"{result.condition_changes}):"
+        if result.condition_changes
+        else f"breaks on {modelling} (no change of operating condition to compare them with):",
     ]
     for key in grouped_keys:
         r = index[(key, modelling)]
         report = result.break_intervals.get(r["p"])
         cis = [f" {report.text_for(b)}" if report is not None and report.intervals else "" for b in r["breaks"]]
-        pairs = ", ".join(f"{b}{ci} ({d})" for b, ci, d in zip(r["breaks"], cis, r["break_distance"]))
+        pairs = ", ".join(
+            f"{b}{ci}" + (f" ({d})" if d is not None else "") for b, ci, d in zip(r["breaks"], cis, r["break_distance"])
+        )
         lines.append(f"  p = {r['p']}: {pairs}")
     lines += interval_notes(result.break_intervals)
     stability = ", ".join(f"p {s['from_p']}→{s['to_p']}: {s['max_shift']}" for s in result.break_stability)
