@@ -37,6 +37,8 @@ HOSTILE = [None, True, False, "text", [], {}, [1, 2], math.nan, math.inf, -math.
 """What a corrupted or hand-edited file may hold in place of any value."""
 FREE = ("coefficients", "derived_inputs")
 """Sections whose whole numbers are free parameters (a delay of 4 samples instead of 3 is another valid model)."""
+BLEND = ("switching", "blend_samples")
+"""The bumpless transfer's length: a free parameter whose absence means a hard switch (tested on its own)."""
 
 
 def _base():
@@ -80,7 +82,9 @@ def mutations(model):
         mutated = copy.deepcopy(model)
         current = _get(model, path)
         kinds = ["replace", "delete"]
-        if isinstance(current, int) and not isinstance(current, bool) and path[0] not in FREE:
+        if path == BLEND:  # a free parameter; without it a file switches hard (a file written before it)
+            kinds = ["replace"]
+        elif isinstance(current, int) and not isinstance(current, bool) and path[0] not in FREE:
             kinds.append("shift")
         if path == ("temps",):
             kinds.append("duplicate")
@@ -106,6 +110,17 @@ def mutations(model):
         return label, mutated
 
     return one()
+
+
+def test_a_model_file_without_blend_samples_switches_hard():
+    legacy = copy.deepcopy(BASE)
+    del legacy["switching"]["blend_samples"]
+    hard = copy.deepcopy(BASE)
+    hard["switching"]["blend_samples"] = 0
+    groups, prediction = decisions(ModelFile.from_dict(legacy), TEMPS)
+    expected_groups, expected_prediction = decisions(ModelFile.from_dict(hard), TEMPS)
+    assert np.array_equal(groups, expected_groups) and np.array_equal(prediction, expected_prediction)
+    assert not np.array_equal(prediction, decisions(BASE, TEMPS)[1])  # the file's own transfer differs
 
 
 def decisions(model, temps):
