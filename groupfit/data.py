@@ -201,6 +201,20 @@ def parse_period_tolerance(text: str | float | None) -> float | None:
     return percent / 100.0
 
 
+LOAD_DEFAULTS = dict(
+    temps=None,
+    time=DEFAULT_TIME,
+    error=DEFAULT_ERROR,
+    require_error=True,
+    allow_nonfinite=False,
+    missing_error=False,
+    ambient=None,
+    temp_range=TEMP_RANGE_C,
+    error_limit=ERROR_LIMIT_UM,
+)
+"""The column and value options of :func:`load_run` and their defaults."""
+
+
 def load_run(
     source: str | Path | pd.DataFrame,
     *,
@@ -312,19 +326,17 @@ def _validated(
     run_name: str,
     label: str,
     *,
-    temps: Sequence[str] | None = None,
-    time: str = DEFAULT_TIME,
-    error: str | None = DEFAULT_ERROR,
-    require_error: bool = True,
-    allow_nonfinite: bool = False,
-    missing_error: bool = False,
-    temp_range: tuple[float, float] | None = TEMP_RANGE_C,
-    error_limit: float | None = ERROR_LIMIT_UM,
     period_tolerance: float = PERIOD_TOLERANCE,
     notes: tuple[str, ...] = (),
-    ambient: str | None = None,
+    **given,
 ) -> Run:
-    """The checks of :func:`load_run` on a table already read; ``ambient`` is never a default input."""
+    """The checks of :func:`load_run` on a table already read (its keywords in ``given``); ``ambient`` (a
+    column) is never a default input."""
+    options = {**LOAD_DEFAULTS, **given}
+    temps, time, error = options["temps"], options["time"], options["error"]
+    require_error, allow_nonfinite = options["require_error"], options["allow_nonfinite"]
+    missing_error, ambient = options["missing_error"], options["ambient"]
+    temp_range, error_limit = options["temp_range"], options["error_limit"]
     time_values = numeric_column(frame, time, label, allow_nonfinite=False)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
