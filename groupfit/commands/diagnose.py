@@ -10,17 +10,20 @@ from typing import Any
 import numpy as np
 
 from groupfit.commands.common import (
+    add_clock_options,
     add_json_option,
     add_out_option,
     check_json_target,
     check_output_dir,
+    clock_options,
+    print_notes,
     report_stream,
     ridge_value,
     write_json,
     wrote_line,
 )
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
-from groupfit.data import Run, load_run
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
@@ -48,6 +51,7 @@ def add_parser(verbs) -> None:
         "--time", metavar="COLUMN", help="time column (default: the one the model was fitted with, else time_s)"
     )
     add_json_option(parser)
+    add_clock_options(parser)
     add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
         "--min-score",
@@ -140,15 +144,15 @@ def heat_exponent(text: str) -> float | str:
     return value
 
 
-def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
+def load_measured(path: str, model: dict[str, Any], time: str, **clock) -> Run:
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
-    run = load_run(path, temps=measured, time=time, error=model["error"], allow_nonfinite=True)
+    run = load_run(path, temps=measured, time=time, error=model["error"], allow_nonfinite=True, **clock)
     period = float(model["sampling_period_s"])
-    if abs(run.period - period) > 0.01 * period:
+    if abs(run.period - period) > PERIOD_TOLERANCE * period:
         raise InputError(
             f"{run.source}: sampled every {run.period:g} s but the model every {period:g} s; "
-            "resample the run to the model's period"
+            "resample the run to the model's period (--resample SECONDS)"
         )
     missing = np.isnan(run.error)
     bad = ~np.isfinite(run.error) & ~missing if model["p"] == 0 else ~np.isfinite(run.error)
@@ -170,8 +174,10 @@ def load_measured(path: str, model: dict[str, Any], time: str) -> Run:
 def run_diagnose(args: argparse.Namespace) -> int:
     model = ModelFile.load(args.model).to_dict()
     time = args.time or time_column(model)
-    data = [load_measured(path, model, time) for path in args.data]
-    validate = [load_measured(path, model, time) for path in args.validate or []]
+    clock = clock_options(args)
+    data = [load_measured(path, model, time, **clock) for path in args.data]
+    validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
+    print_notes([*data, *validate], report_stream(args))
     out_dir = check_output_dir(args.out)
     check_json_target(args)
     start = model
