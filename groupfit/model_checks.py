@@ -212,10 +212,6 @@ def _coefficients_problem(model: Mapping[str, Any]) -> str | None:
     return None
 
 
-MAX_BLEND_SAMPLES = 10_000
-"""Longest bumpless transfer a model file may ask for (samples; a PLC INT holds it)."""
-
-
 def rule_section_problem(model: Mapping[str, Any]) -> str | None:
     """What is wrong with a model file's switching section, or None.
 
@@ -247,10 +243,9 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
         for w in section["windows"]:
             if not (isinstance(w, list) and len(w) == 2 and all(_is_whole(v) for v in w) and 1 <= w[0] <= w[1]):
                 return "switching.windows must be [first, last] sample pairs with 1 ≤ first ≤ last"
-    if "blend_samples" in section and not (
-        _is_whole(section["blend_samples"]) and 0 <= section["blend_samples"] <= MAX_BLEND_SAMPLES
-    ):
-        return f"switching.blend_samples must be a whole number 0…{MAX_BLEND_SAMPLES}"
+    blend = section.get("blend_samples", 0)  # the bumpless transfer's length in samples (a PLC INT holds it)
+    if not (_is_whole(blend) and 0 <= blend <= 10_000):
+        return "switching.blend_samples must be a whole number 0…10000"
     if "rule" in section and section["rule"] != "groupfit-switch/1":
         return f"switching.rule = {section['rule']!r}: this version knows 'groupfit-switch/1'"
     for key in ("noise_c", "margin_c", "comp_min_um", "comp_max_um", "rate_limit_um", "period_tolerance"):

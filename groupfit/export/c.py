@@ -30,8 +30,7 @@ builds: the float build widens the last good reading to double, calls
 same C library. The exponent is a ``volatile`` constant: gcc at ``-O2``
 replaces ``pow(x, 2.0)`` by ``x*x``, which differs from the library's ``pow``
 in the last bit of about 0.1 % of squares. A derived input that starts from rest (``start = "rest"``)
-begins its low-pass output or delay line at 0 at the source's first good
-reading instead of at that reading.
+begins its low-pass output or delay line at 0 at the source's first good reading instead of at that reading.
 """
 
 from __future__ import annotations
@@ -76,8 +75,7 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
  * fault). The value to hand to the controller is s->comp_um (um):
  * -prediction clamped to [GF_COMP_MIN_UM, GF_COMP_MAX_UM] and moved by at
  * most GF_RATE_LIMIT_UM per sample; under a sensor fault it ramps to 0 at
- * that rate. After a switch the prediction moves from the old group's to the
- * new group's over GF_BLEND_SAMPLES samples (a bumpless transfer).
+ * that rate.
  * s->fault is a bit mask: GF_FAULT_HELD (a last good value stood in for an
  * invalid reading; the output is valid), GF_FAULT_SENSOR (safe output).
  *

@@ -25,7 +25,7 @@ from groupfit.models.ridge import check_ridge_alpha
 from groupfit.objective import OBJECTIVES, SegmentCost, grouped_residuals, residual_sum
 from groupfit.runtime.rule import rule_parameters, source_ranges
 from groupfit.search.base import GA_DEFAULTS, METHODS, GASettings, SearchSettings
-from groupfit.search.exact import exact_is_cheap, solve_exact
+from groupfit.search.exact import CERTIFY_PAIR_LIMIT, exact_is_cheap, solve_exact
 from groupfit.search.factory import make_search
 
 SEARCHES = METHODS
