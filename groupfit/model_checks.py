@@ -497,6 +497,3 @@ def _parse_derived(entries: Any) -> list[Feature]:
 
 def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-# --------------------------------------------------------------------- the one place fields map to keys
