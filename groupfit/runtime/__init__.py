@@ -32,13 +32,13 @@ float32 value to double and rounds the power to float32 once.
 """
 
 from groupfit.model import MAX_DELAY_SAMPLES, RULE_KEYS, SOURCE_RANGES_KEY
+from groupfit.runtime.groups import replay_groups
 from groupfit.runtime.interpreter import (
     PROBE_CODE_OFFSET,
     Replay,
     StepResult,
     SwitchingRule,
     check_period,
-    replay_groups,
 )
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator, RecalTable
 from groupfit.runtime.rule import (
