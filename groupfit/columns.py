@@ -2,9 +2,10 @@
 
 A column is a *cause* the controller can read (a temperature, a speed, the
 on/off of a heat source) unless it is a displacement (another probe's error),
-not numeric, partly non-finite (a failing sensor), 0 throughout (a dead sensor)
-or a sample index (it grows by one step every row). A constant other than 0
-is kept: a heater switched on at the start at its set-point heats from rest.
+not numeric, partly non-finite (a failing sensor), 0 throughout (a dead sensor),
+a temperature stuck at one value, or a sample index (it grows by one step every
+row). Another constant is kept: a heater switched on at the start at its
+set-point heats from rest.
 The diagnosis draws its candidates from these columns and the held-out folds
 (:mod:`groupfit.heldout.folds`) their operating conditions.
 """
@@ -30,6 +31,13 @@ def is_sensor_column(column: str) -> bool:
     return len(column) > 1 and lowered[0] == "t" and lowered[1].isdigit() and not is_ambient_name(column)
 
 
+def is_temperature_name(column: str) -> bool:
+    """A temperature reading by its name (``T3``, ``T_stuck``, ``bed_temp``): constant, it is a stuck sensor, not a
+    set-point."""
+    lowered = column.lower()
+    return (len(column) > 1 and lowered[0] == "t" and (lowered[1].isdigit() or lowered[1] == "_")) or "temp" in lowered
+
+
 def is_displacement(column: str) -> bool:
     lowered = column.lower()
     return lowered.endswith(DISPLACEMENT_SUFFIXES) or lowered.startswith(("disp", "error"))
@@ -52,6 +60,8 @@ def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], l
             notes.append(f"column '{column}' left out: {bad} non-finite value(s) (a failing sensor?)")
         elif np.ptp(values) == 0.0 and values[0] == 0.0:
             notes.append(f"column '{column}' left out: constant 0 (a dead sensor, or a source never on?)")
+        elif np.ptp(values) == 0.0 and is_temperature_name(column):
+            notes.append(f"column '{column}' left out: constant {values[0]:g} (a stuck temperature sensor?)")
         elif np.ptp(values) == 0.0:
             usable.append(column)
             notes.append(

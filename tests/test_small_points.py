@@ -24,7 +24,10 @@ def cli(*args) -> int:
 
 def test_the_comparison_table_never_runs_numbers_together():
     values = {"mlr": 1284.3413, "ar1": 13321.68, "grouped1": 987654.321}
-    index = {(key, "run"): {"R_um": v, "rms_um": v / 100, "max_um": v / 10} for key, v in values.items()}
+    index = {
+        (key, "run"): {"R_um": v, "rms_um": v / 100, "max_um": v / 10, "accuracy_percent": 50.0}
+        for key, v in values.items()
+    }
     result = SimpleNamespace(runs=["run"], run_conditions={"run": "modelling"}, reference=None)
     lines = comparison_table(result, list(values), index)
     row = next(line for line in lines if line.startswith("run") and "1284.34" in line)
@@ -46,6 +49,7 @@ def test_a_heater_on_from_the_start_is_kept_and_a_sample_index_left_out():
         {
             "bed_target": np.full(n, 60.0),  # switched on at t = 0, at its set-point
             "dead": np.zeros(n),
+            "T_stuck": np.full(n, 25.0),  # a temperature stuck at one value is a dead sensor, not a set-point
             "sample": np.arange(n) + 1.0,
             "clock_s": 5.0 + 30.0 * np.arange(n),
             "speed": np.where(np.arange(n) < 25, 0.0, 3000.0),
@@ -57,6 +61,7 @@ def test_a_heater_on_from_the_start_is_kept_and_a_sample_index_left_out():
     assert any("'sample' left out: a sample index" in note for note in notes)
     assert any("'clock_s' left out: a sample index or clock" in note for note in notes)
     assert any("'dead' left out: constant 0" in note for note in notes)
+    assert any("'T_stuck' left out: constant 25 (a stuck temperature sensor?)" in note for note in notes)
     assert operating_columns(frame, usable) == ["bed_target", "speed"]  # its lags start from rest
 
 
