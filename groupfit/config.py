@@ -15,9 +15,10 @@ A configuration has up to four tables; every key is optional::
     ambient = "T15"            # the ambient sensor, whatever its name
 
     [model]
-    p = 3                      # or "auto": choose p by p_rule over 0…pmax
-    pmax = 6
-    p_rule = "bic"             # or "target": fewest breaks with R <= p_target
+    p = "auto"                 # or a whole number; "auto": choose p by p_rule over 0…pmax
+    pmax = 3
+    p_rule = "next-run"        # the expected next-run error (one-SE rule); "bic" (in sample); or "target":
+                               # fewest breaks with R <= p_target
     p_target = "20%"           # µm, or a percentage of R at p = 0
     n = 3
     c = 3.0
@@ -154,9 +155,9 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
 DEFAULTS: dict[str, dict[str, Any]] = {
     "data": {"time": "time_s", "error": "error_um", "validate": []},
     "model": {
-        "p": 3,
-        "pmax": 6,
-        "p_rule": "bic",
+        "p": "auto",
+        "pmax": 3,
+        "p_rule": "next-run",
         "n": DEFAULT_SOFT_OFFSET,
         "c": DEFAULT_SPACING,
         "objective": "sae",

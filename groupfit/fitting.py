@@ -7,6 +7,7 @@ from typing import Any
 
 from groupfit.data import Run
 from groupfit.grouping import served_ranges
+from groupfit.heldout.expect import CHOICE_RULE
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
@@ -29,9 +30,11 @@ class FitResult:
     ridge: dict[str, Any] | None = None
     """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.ridge_setting`), when it did."""
     held_out: dict[str, Any] | None = None
-    """The model's error on held-out conditions or runs (:func:`groupfit.diagnose.select.held_out_check`)."""
+    """The model's error on held-out conditions or runs (:func:`groupfit.heldout.check.held_out_check`)."""
     statistics: dict[str, Any] | None = None
     """A global regression's tests (:func:`groupfit.models.mlr.ols_statistics`), when p = 0 by least squares."""
+    expectation: Any = None
+    """The expected next-run error (a :class:`groupfit.heldout.expect.NextRunExpectation`), when estimated."""
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
@@ -48,6 +51,10 @@ class FitResult:
             result["held_out"] = self.held_out
         if self.statistics is not None:
             result["statistics"] = self.statistics
+        if self.expectation is not None:
+            result.update(self.expectation.training())
+            if len(self.expectation.candidates) > 1:
+                result["p_selection"] = {"rule": "next-run", **self.expectation.to_json()}
         return result
 
     def summary(self) -> str:
@@ -67,8 +74,12 @@ class FitResult:
             report = ridge_summary(self.ridge) + "\n" + report
         if self.statistics is not None:
             report += "\n" + statistics_summary(self.statistics)
+        if self.expectation is not None:
+            report = choice_summary(self.expectation) + report
         if self.held_out is not None:
             report += "\n" + held_out_summary(self.held_out)
+        if self.expectation is not None:
+            report += "\n" + self.expectation.line()
         return report
 
 
@@ -95,15 +106,30 @@ def statistics_summary(stats: dict) -> str:
     )
 
 
+def choice_summary(expectation) -> str:
+    """How p was chosen by the expected next-run error, when it was chosen among several (else nothing)."""
+    if len(expectation.candidates) < 2:
+        return ""
+    table = ", ".join(f"p={p}: {expectation.expected(i)[0]:.3g} µm" for i, p in enumerate(expectation.candidates))
+    chosen = expectation.candidates[expectation.chosen]
+    line = f"p       {chosen}: {CHOICE_RULE} (expected next-run RMS {table})\n"
+    if chosen > 0 and chosen == max(expectation.candidates):
+        line += (
+            f"note    p = {chosen} is the largest p tried (the edge of the range): a larger p may hold better; "
+            "raise --pmax to look further\n"
+        )
+    return line
+
+
 def ridge_summary(ridge: dict) -> str:
     """One line on the ridge penalty: given, or chosen on held-out data with the error of every penalty tried."""
     if ridge["chosen"] == "given":
         return f"ridge   penalty alpha = {ridge['alpha']:g} (given)"
     table = ", ".join(f"{row['alpha']:g}: {row['held_out_rms_um']:.3g}" for row in ridge["held_out"])
-    return (
-        f"ridge   penalty alpha = {ridge['alpha']:g}, the least held-out error ({ridge['folds']}; "
-        f"held-out RMS µm by alpha: {table})"
-    )
+    how = "the least held-out error"
+    if ridge["chosen"] == "next-run":
+        how = "the largest within one standard error of the least held-out error"
+    return f"ridge   penalty alpha = {ridge['alpha']:g}, {how} ({ridge['folds']}; held-out RMS µm by alpha: {table})"
 
 
 def held_out_summary(check: dict) -> str:
@@ -127,7 +153,11 @@ def selection_summary(selection: dict) -> str:
     table = ", ".join(
         f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"]))
     )
-    rule = "smallest BIC" if selection["rule"] == "bic" else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
+    rule = (
+        "smallest BIC (in sample)"
+        if selection["rule"] == "bic"
+        else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
+    )
     line = f"p auto  {rule}: p = {selection['p']}  ({table})"
     largest = len(selection["R_um"]) - 1
     if largest > 0 and selection["p"] == largest:

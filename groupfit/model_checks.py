@@ -127,6 +127,26 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     training = model.get("training")
     if training is not None and not isinstance(training, Mapping):
         return "'training' must be an object"
+    return _expectation_problem(training or {})
+
+
+def _expectation_problem(training: Mapping[str, Any]) -> str | None:
+    """The next-run expectation under ``training``: a number ≥ 0, its range [low, high] around it, a method."""
+    if "expected_next_run_rms_um" not in training:
+        return None
+    value = training["expected_next_run_rms_um"]
+    if not _is_number(value) or value < 0:
+        return f"training.expected_next_run_rms_um = {value!r}: must be a finite number ≥ 0"
+    bounds = training.get("expected_next_run_range_um")
+    if (
+        not isinstance(bounds, list)
+        or len(bounds) != 2
+        or not all(_is_number(b) for b in bounds)
+        or not bounds[0] <= value <= bounds[1]
+    ):
+        return f"training.expected_next_run_range_um = {bounds!r}: must be [low, high] with low <= expected <= high"
+    if not isinstance(training.get("expected_next_run_method"), str):
+        return "training.expected_next_run_method must say how the expectation was estimated"
     return None
 
 

@@ -29,6 +29,7 @@ from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.errors import InputError
+from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
 from groupfit.plots import plot_diagnosis
@@ -210,6 +211,13 @@ def run_diagnose(args: argparse.Namespace) -> int:
         result.selection = {**selection, "of": len(model["temps"])}
     result.ridge = ridge
 
+    expectations = {"before": expect_for_model(model, data)}
+    expectations["after"] = expect_for_model(result.model, data) if result.changed else expectations["before"]
+    if result.changed and expectations["after"] is not None:
+        result.model = {
+            **result.model,
+            "training": {**(result.model.get("training") or {}), **expectations["after"].training()},
+        }
     model_path = Path(args.model)
     written = []
     recal_note = ""
@@ -225,6 +233,27 @@ def run_diagnose(args: argparse.Namespace) -> int:
     plot_diagnosis(result, runs, figure)
     written.append(figure)
 
-    written.append(write_json(args.json, result.to_json(model_path)))
-    print(result.summary() + recal_note + "\nwrote   " + wrote_line(written), file=report_stream(args))
+    report = {
+        **result.to_json(model_path),
+        "expected_next_run": {k: e and e.to_json() for k, e in expectations.items()},
+    }
+    written.append(write_json(args.json, report))
+    summary = result.summary() + recal_note + expectation_summary(expectations)
+    print(summary + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0
+
+
+def expectation_summary(expectations: dict) -> str:
+    """The expected next-run error of the model before and after the diagnosis, by the estimate ``fit`` uses."""
+    lines = []
+    for when, expectation in expectations.items():
+        if expectation is None:
+            lines.append(f"expect  {when}: not estimated (a grouped model on several runs, or too few samples)")
+            continue
+        value, (low, high) = expectation.expected()
+        lines.append(f"expect  {when}: about {value:.3g} µm RMS on the next run (range {low:.3g}-{high:.3g} µm)")
+    method = next((e for e in expectations.values() if e is not None), None)
+    if method is not None:
+        lines.append(f"        ({method.method()})")
+        lines += [f"note    {note}" for note in method.notes]
+    return "\n" + "\n".join(lines)

@@ -35,7 +35,10 @@ from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C, Run, join_runs, measured
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
+from groupfit.heldout.expect import NextRunExpectation, expect_next_run
+from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.selection import SELECTION_METHODS
+from groupfit.heldout.span import SPAN_KEY, input_span
 from groupfit.inference.cli import add_interval_options, intervals_from_args
 from groupfit.model import DeadBand
 from groupfit.models.grouped import GroupedRegressor
@@ -45,13 +48,25 @@ from groupfit.position import choose_p0, cross_validate_order, load_position_run
 from groupfit.position_plot import plot_position
 from groupfit.reference import START, with_reference
 
+NEXT_RUN = "next-run"
+P_RULES = (NEXT_RUN, "bic", "target")
+
 
 def add_parser(verbs) -> None:
     fit = verbs.add_parser("fit")
     add_run_options(fit)
-    fit.add_argument("--p", type=p_value, help="number of hard break points, or 'auto'")
-    fit.add_argument("--pmax", type=int, help="largest p tried by --p auto (default 6)")
-    fit.add_argument("--p-rule", choices=("bic", "target"), help="how --p auto chooses (default bic)")
+    fit.add_argument(
+        "--p", type=p_value, help="number of hard break points; default (or 'auto'): chosen by --choose over 0…pmax"
+    )
+    fit.add_argument("--pmax", type=int, help="largest p tried when p is chosen (default 3)")
+    fit.add_argument(
+        "--choose",
+        "--p-rule",
+        dest="p_rule",
+        choices=P_RULES,
+        help="how p is chosen: next-run (default: the least expected next-run error, one-standard-error rule "
+        "toward fewer breaks), bic (in sample), target (fewest breaks with R <= --p-target)",
+    )
     fit.add_argument("--p-target", metavar="R", help="target R for --p-rule target: µm, or a percentage like 20%%")
     fit.add_argument("--n", type=int, help="soft offset: samples shared by neighbouring groups")
     fit.add_argument("--c", type=float, help="spacing coefficient: groups hold more than c·M samples")
@@ -143,6 +158,8 @@ def run_fit(args: argparse.Namespace) -> int:
     else:
         runs = load_configured_runs(config, missing_error=True)
     print_notes(runs, report_stream(args))
+    if config["model"]["p"] == "auto" and (len(runs) > 1 or position_run is not None):
+        config["model"]["p"] = 0  # several runs, or check runs at positions: a global model
     if len(runs) > 1 and config["model"]["p"] != 0:
         split = "" if isinstance(paths, (list, tuple)) else " (--resample split the log at its gaps)"
         raise InputError(
@@ -150,11 +167,14 @@ def run_fit(args: argparse.Namespace) -> int:
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)
-    if len(runs) > 1 and configured_reference(args, config, run) == START:
+    reference = configured_reference(args, config, run)
+    if len(runs) > 1 and reference == START:
         runs = [with_reference(r, START) for r in runs]  # each run's own start
         run = join_runs(runs)
     else:
-        run = with_reference(run, configured_reference(args, config, run))
+        run = with_reference(run, reference)
+    if config["model"]["p"] == "auto" and np.isnan(run.error).any():
+        config["model"]["p"] = 0  # an error not on every row: a global model on the measured rows
     check_measured(run, config["model"]["p"])
     input_selection = None
     if position_run is not None:
@@ -163,31 +183,40 @@ def run_fit(args: argparse.Namespace) -> int:
             raise InputError("--select is not available with --position; name the inputs with --temps")
         if args.ridge is not None:
             raise InputError("--ridge is not available with --position: the position terms are fitted by least squares")
+    estimate_runs = [measured_rows(with_reference(r, reference)) for r in runs] if position_run is None else []
     if args.select:
-        run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors)
+        run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors, estimate_runs)
+        estimate_runs = [with_inputs(r, run.temp_names) for r in estimate_runs]
     elif args.sensors is not None:
         raise InputError("--sensors K needs --select forward|lasso|cluster")
     if args.backward is not None:
         if args.select or position_run is not None:
             raise InputError("--backward chooses the inputs itself: not with --select or --position")
         intercept = config["model"]["intercept"]
+        if config["model"]["p"] == "auto":
+            config["model"]["p"] = 0  # backward elimination is for a global regression
         run, input_selection = fit_mlr.backward_run(run, args.backward, p=config["model"]["p"], fit_intercept=intercept)
+        estimate_runs = [with_inputs(r, run.temp_names) for r in estimate_runs]
     criterion = config["model"].get("criterion")
     if criterion is not None and criterion not in run.temp_names:
         raise InputError(
             f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
         )
     n_coef = run.temps.shape[1] + int(config["model"]["intercept"])
-    if config["model"]["p"] == "auto":
+    if config["model"]["p"] == "auto" and config["model"]["p_rule"] != NEXT_RUN:
         check_exact_budget(
             args, run, n_coef, config["model"]["objective"], max(config["model"]["pmax"], 0), "--p auto's exact path"
         )
     elif config["search"]["method"] == "exact" and isinstance(config["model"]["p"], int):
         check_exact_budget(args, run, n_coef, config["model"]["objective"], config["model"]["p"], "the exact search")
-    selection = None
+    selection = expectation = None
     if config["model"]["p"] == "auto" and config["model"]["pmax"] < 0:
         raise InputError(f"--pmax {config['model']['pmax']}: the largest p tried must be 0 or more")
-    if config["model"]["p"] == "auto":
+    if config["model"]["p"] == "auto" and config["model"]["p_rule"] == NEXT_RUN:
+        p_values = (0,) if args.ridge is not None else tuple(range(config["model"]["pmax"] + 1))
+        expectation = model_expectation(config, estimate_runs, p_values)
+        config["model"]["p"] = expectation.candidates[expectation.chosen]
+    elif config["model"]["p"] == "auto":
         selection = select_breaks(config, run)
         config["model"]["p"] = selection["p"]
     elif not isinstance(config["model"]["p"], int):
@@ -198,8 +227,17 @@ def run_fit(args: argparse.Namespace) -> int:
     ridge = None
     if args.ridge is not None:
         settings = config["model"]
+        splits = next_run_splits(estimate_runs)
         ridge = ridge_setting(
-            args.ridge, settings["p"], run.temps, run.error, frames, not_conditions, settings["intercept"]
+            args.ridge,
+            settings["p"],
+            run.temps,
+            run.error,
+            frames,
+            not_conditions,
+            settings["intercept"],
+            splits=splits,
+            splits_name=f"{len(splits)} folds that imitate a next run",
         )
         estimator.set_params(ridge_alpha=ridge["alpha"])
     out_dir = check_output_dir(config["output"]["dir"])
@@ -213,6 +251,16 @@ def run_fit(args: argparse.Namespace) -> int:
         progress.close()
     model = estimator.to_model_file(run, criterion)  # the valid ranges over every row, measured or not
     position_note = ""
+    if position_run is None and (expectation is None or ridge is not None):
+        alpha = ridge["alpha"] if ridge is not None else 0.0
+        try:
+            expectation = model_expectation(config, estimate_runs, (config["model"]["p"],), alpha)
+        except InputError as exc:
+            position_note += f"\nnote    no next-run estimate: {exc}"
+    training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
+    if expectation is not None:
+        training.update(expectation_training(expectation, config))
+    model = model.replace(training=training)
     if position_run is not None:
         model, position_note = position_model(args, model, position_run)
     if fit_run is not run:
@@ -228,7 +276,9 @@ def run_fit(args: argparse.Namespace) -> int:
         held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)
         model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
         position_note = recal_note + position_note
-    result = FitResult(estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out)
+    result = FitResult(
+        estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out, expectation=expectation
+    )
     if estimator.p == 0 and ridge is None and position_run is None:
         result.statistics = fit_mlr.statistics(fit_run, fit_intercept=config["model"]["intercept"])
     run = fit_run
@@ -255,6 +305,39 @@ def run_fit(args: argparse.Namespace) -> int:
     written = wrote_line([model_path, figure_path, position_figure, json_path])
     print(result.summary() + position_note + "\nwrote   " + written, file=report_stream(args))
     return 0
+
+
+def model_expectation(config: dict, runs: list[Run], p_values, ridge_alpha: float = 0.0) -> NextRunExpectation:
+    """The expected next-run error of the candidates ``p_values`` (:mod:`groupfit.heldout.expect`)."""
+    model = config["model"]
+    try:
+        result = expect_next_run(
+            runs, p_values, n=model["n"], c=float(model["c"]), fit_intercept=model["intercept"], ridge_alpha=ridge_alpha
+        )
+    except ValueError as exc:
+        raise InputError(f"{runs[0].source}: the next-run estimate: {exc}; give --p or record a longer run") from None
+    return result
+
+
+def expectation_training(expectation: NextRunExpectation, config: dict) -> dict:
+    """The model file's ``training`` keys of the next-run expectation and of how p was chosen."""
+    data = expectation.to_json()
+    chosen = config["model"]["p"] if len(expectation.candidates) == 1 else data["chosen"]["p"]
+    return {
+        **expectation.training(),
+        "model_choice": {
+            "p": chosen,
+            "rule": data["chosen"]["rule"] if len(expectation.candidates) > 1 else "given",
+            "candidates": data["candidates"],
+            "notes": data["notes"],
+        },
+    }
+
+
+def with_inputs(run: Run, names) -> Run:
+    """The run restricted to the inputs ``names``."""
+    keep = [run.temp_names.index(name) for name in names]
+    return replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
 
 
 def order_value(text: str) -> int | str:
@@ -346,15 +429,24 @@ def order_table_text(orders: list[dict]) -> str:
     return ", ".join(f"{row['order']}: {row['max_um']:.3g} / {row['mean_um']:.3g}" for row in orders)
 
 
-def select_run_inputs(run: Run, frames: list, method: str, k: int | None) -> tuple[Run, dict]:
-    """The run restricted to the inputs ``method`` chooses, scored on held-out conditions or runs."""
+def select_run_inputs(run: Run, frames: list, method: str, k: int | None, runs: list[Run]) -> tuple[Run, dict]:
+    """The run restricted to the inputs ``method`` chooses, scored on folds that imitate a next run.
+
+    ``runs``: the runs (measured rows, reference applied) the folds are cut from
+    (:func:`groupfit.heldout.nextrun.next_run_splits`).
+    """
     if k is not None and not 1 <= k <= len(run.temp_names):
         raise InputError(f"--sensors {k}: choose 1 to {len(run.temp_names)} of the {len(run.temp_names)} inputs")
     exclude = {run.time_name, run.error_name, *run.temp_names}
-    names, folds = select_inputs(run.temps, run.error, run.temp_names, frames, exclude, method, k)
-    keep = [run.temp_names.index(name) for name in names]
-    selected = replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
-    return selected, {"method": method, "inputs": names, "candidates": len(run.temp_names), "folds": folds.describe()}
+    splits = next_run_splits(runs)
+    names, _ = select_inputs(run.temps, run.error, run.temp_names, frames, exclude, method, k, splits=splits)
+    folds = f"{len(splits)} folds that imitate a next run (forward chaining or leave-one-run-out)"
+    return with_inputs(run, names), {
+        "method": method,
+        "inputs": names,
+        "candidates": len(run.temp_names),
+        "folds": folds,
+    }
 
 
 def p_value(text: str) -> int | str:

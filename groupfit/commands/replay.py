@@ -38,6 +38,7 @@ from groupfit.continuation import with_histories
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
+from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
@@ -140,7 +141,7 @@ def run_replay(args: argparse.Namespace) -> int:
         unchecked = residuals(run, rule.replay(run.temps))
         rms_without = float(np.sqrt(np.nanmean(unchecked**2))) if unchecked is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
-    result = ReplayResult(data)
+    result = ReplayResult({**data, **range_check(model, run)})
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"
@@ -192,6 +193,20 @@ def load_readings(path, tables: RuleTables, *, time: str, error: str, **clock) -
         columns.append(numeric_column(run.frame, name, run.source, allow_nonfinite=True))
     readings = np.column_stack([run.temps, *columns])
     return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
+
+
+def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
+    """The inputs of ``run`` beyond the modelling run's span (kept by ``fit`` in the model file), and a note."""
+    span = (model.training or {}).get(SPAN_KEY)
+    if not span:
+        return {}
+    try:
+        inputs = model.inputs(run.frame, run.source)
+    except InputError:
+        return {}
+    beyond = beyond_span(span, model.temps, inputs)
+    note = span_note(beyond, run.n_samples)
+    return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 
 
 def residuals(run, replay: Replay) -> np.ndarray | None:
@@ -307,6 +322,7 @@ def replay_report(result: dict[str, Any]) -> str:
     lines.append(residual_line(result))
     if "probes" in result:
         lines.append(probe_report(result))
+    lines += [f"note     {note}" for note in result.get("notes", [])]
     return "\n".join(lines)
 
 

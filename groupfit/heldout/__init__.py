@@ -10,7 +10,15 @@ ask of a model before it goes onto the machine:
   the design with one more regressor;
 * :mod:`~groupfit.heldout.selection`: inputs chosen on held-out folds;
 * :mod:`~groupfit.heldout.check`: a model's own held-out check, the ridge penalty
-  chosen on it, and the over-fit warning.
+  chosen on it, and the over-fit warning;
+* :mod:`~groupfit.heldout.nextrun`: folds that imitate a next run (forward chaining
+  over operating segments, leave-one-run-out), scored through the run-time rule;
+* :mod:`~groupfit.heldout.calibration`: the factor and range learned on the
+  calibration panel (``bench/bench_next_run.py``);
+* :mod:`~groupfit.heldout.choice`: the one-standard-error rule;
+* :mod:`~groupfit.heldout.expect`: the expected next-run error of each candidate,
+  the one it chooses and the notes on when not to trust it;
+* :mod:`~groupfit.heldout.span`: a run beyond the modelling run's inputs.
 
 Nothing here imports the commands or the diagnosis.
 """

@@ -14,11 +14,12 @@ import pandas as pd
 
 from groupfit.columns import usable_columns
 from groupfit.errors import InputError
+from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.design import group_design, group_index, group_sample_floor
 from groupfit.heldout.folds import Folds, make_folds
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.heldout.selection import select_sensors
-from groupfit.models.ridge import check_ridge_alpha, choose_ridge_alpha
+from groupfit.models.ridge import RIDGE_GRID, check_ridge_alpha, choose_ridge_alpha, held_out_sse
 
 OVERFIT_RATIO = 3.0
 """The base model is called over-fitted when its held-out RMS exceeds its in-sample RMS by this factor."""
@@ -32,15 +33,20 @@ def select_inputs(
     exclude: set[str],
     method: str,
     k: int | None = None,
+    *,
+    splits: list | None = None,
 ) -> tuple[list[str], Folds]:
     """The inputs ``method`` chooses among ``names`` (columns of X), scored on held-out conditions or runs.
 
     ``frames`` are the runs' tables (stacked in the order of X's rows); the
     folds come from their operating columns, the columns not in ``exclude``.
+    ``splits``: other ``(train, test)`` row indices over the measured rows
+    (e.g. :func:`groupfit.heldout.nextrun.next_run_splits`) to score on instead.
     """
     folds = held_out_folds(frames, exclude, y)
     rows = np.isfinite(y)
-    return select_sensors(X[rows], y[rows], list(names), method, k, splits=folds.index_splits()), folds
+    splits = folds.index_splits() if splits is None else splits
+    return select_sensors(X[rows], y[rows], list(names), method, k, splits=splits), folds
 
 
 def held_out_folds(frames: Sequence[pd.DataFrame], exclude: set[str], y: np.ndarray) -> Folds:
@@ -90,11 +96,17 @@ def ridge_setting(
     frames: Sequence[pd.DataFrame],
     exclude: set[str],
     fit_intercept: bool = True,
+    *,
+    splits: list | None = None,
+    splits_name: str = "",
 ) -> dict[str, Any]:
     """The penalty of ``--ridge ALPHA|auto`` for a global model, and how it was found.
 
     ``auto``: the penalty with the least error on held-out conditions or runs, the rows with a measured
     error ``y``; the result then holds ``held_out`` (the held-out RMS of every penalty tried) and ``folds``.
+    With ``splits`` (``(train, test)`` indices over the measured rows that imitate a next run, named
+    ``splits_name``): the largest penalty within one standard error of the least error on them
+    (:func:`ridge_by_splits`).
     """
     if p != 0:
         raise InputError(
@@ -103,10 +115,27 @@ def ridge_setting(
         )
     if option != "auto":
         return {"alpha": check_ridge_alpha(option), "chosen": "given"}
-    folds = held_out_folds(frames, exclude, y)
     rows = np.isfinite(y)
+    if splits is not None:
+        alpha, table = ridge_by_splits(X[rows], y[rows], splits, fit_intercept)
+        return {"alpha": alpha, "chosen": "next-run", "held_out": table, "folds": splits_name}
+    folds = held_out_folds(frames, exclude, y)
     alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept)
     return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
+
+
+def ridge_by_splits(X: np.ndarray, y: np.ndarray, splits: list, fit_intercept: bool = True) -> tuple[float, list]:
+    """The largest penalty of the grid within one standard error of the least held-out mean squared error.
+
+    The penalties are ordered from the simplest model (the largest penalty) to the least shrunk; each fold's
+    mean squared error is weighted by its samples.
+    """
+    grid = sorted(RIDGE_GRID, reverse=True)
+    counts = np.array([len(test) for _, test in splits], dtype=float)
+    pooled, se = pooled_error(np.array([held_out_sse(X, y, splits, alpha, fit_intercept) for alpha in grid]), counts)
+    chosen = one_standard_error_choice(pooled, se)
+    table = [{"alpha": float(a), "held_out_rms_um": float(np.sqrt(v))} for a, v in zip(grid, pooled)]
+    return float(grid[chosen]), table[::-1]
 
 
 def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> dict[str, Any]:

@@ -1,0 +1,84 @@
+"""The next-run estimate on its calibration panel, and on the shared measured test cut into runs.
+
+Run from the repository root: ``python bench/bench_next_run.py`` (a few minutes).
+Prints, per pair (model run → next run), the raw figure, the expected RMS
+(calibrated), the actual RMS of the chosen model replayed through the run-time
+rule over the next run, their ratio, and whether the chosen p, BIC's p and the
+old default p = 3 are within 1.5× of the best p = 0…3 there. Then derives the
+calibration (:func:`groupfit.heldout.calibration.derive_calibration`) on the
+even-numbered pairs and checks it on the odd-numbered ones, and on the whole panel.
+``--quick`` scores a small subset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import next_run_panel as panel  # noqa: E402
+
+from groupfit.heldout import calibration  # noqa: E402
+
+
+def table(rows: list[dict], title: str) -> None:
+    print(f"\n{title}")
+    print(
+        f"{'pair':<42} {'src':<9} {'p':>2} {'raw':>8} {'expect':>8} {'actual':>8} {'ratio':>6}  "
+        f"{'best':>4} {'bic':>3}  ok(ch/bic/p3)  actual by p"
+    )
+    for r in rows:
+        expected = calibration.expected(r["raw_um"])[0]
+        ratio = r["actual_um"] / expected
+        by_p = " ".join(f"{v:.3g}" for v in r["actual_by_p"].values())
+        ok = "".join("y" if r[k] else "." for k in ("within_chosen", "within_bic", "within_default"))
+        print(
+            f"{r['pair'][:42]:<42} {r['source'][:9]:<9} {r['chosen_p']:>2} {r['raw_um']:>8.3g} {expected:>8.3g} "
+            f"{r['actual_um']:>8.3g} {ratio:>6.2f}  {r['best_p']:>4} {r['bic_p']:>3}  {ok:^13}  {by_p}"
+        )
+    summary(rows, calibration.FACTOR, "all")
+
+
+def summary(rows: list[dict], factor: float, label: str) -> None:
+    if not rows:
+        return
+    ratio = np.array([r["actual_um"] / (factor * r["raw_um"]) for r in rows])
+    inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
+    shares = {k: np.mean([r[k] for r in rows]) for k in ("within_chosen", "within_bic", "within_default")}
+    print(
+        f"{label}: {len(rows)} pairs, factor {factor:.3g}: ratio actual/expected median {np.median(ratio):.2f}, "
+        f"in [0.5, 2]: {100 * inside:.0f} %; within 1.5x of the best p: chosen {100 * shares['within_chosen']:.0f} %, "
+        f"BIC {100 * shares['within_bic']:.0f} %, p = 3 {100 * shares['within_default']:.0f} %"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="a small subset")
+    parser.add_argument("--json", metavar="FILE", help="write every pair's row as JSON")
+    args = parser.parse_args()
+    pairs = panel.simulator_pairs(range(3), range(0)) + panel.fe_pairs()[:2] if args.quick else panel.panel_pairs()
+    rows = [panel.score_pair(pair) for pair in pairs]
+    table(rows, f"calibration panel ({len(rows)} pairs), with the shipped calibration")
+    raw = [r["raw_um"] for r in rows]
+    actual = [r["actual_um"] for r in rows]
+    derived = calibration.derive_calibration(raw[0::2], actual[0::2])
+    print(f"\nderived on the even pairs: {derived}")
+    summary(rows[1::2], derived["factor"], "checked on the odd pairs")
+    summary(rows[0::2], derived["factor"], "on the even pairs themselves")
+    print(f"derived on the whole panel: {calibration.derive_calibration(raw, actual)}")
+    measured = [panel.score_pair(pair) for pair in panel.measured_pairs()]
+    if measured:
+        table(measured, "the shared measured test cut into runs (not used to calibrate)")
+    else:
+        print("\nthe shared measured test is absent (../shared): skipped")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"panel": rows, "measured": measured}, indent=1, default=str))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,190 @@
+"""The calibration panel of the next-run estimate: pairs of runs (model run → next run) and what happened on them.
+
+Every pair is a model run and a later run of the same machine that the model
+never saw. For each pair :func:`score_pair` computes, from the model run alone,
+the raw next-run figure of every p = 0…3 (:func:`groupfit.heldout.nextrun.forward_chaining`)
+and the p it chooses; then it fits every p on the whole model run as ``groupfit
+fit`` does (the exact optimum of the configured objective Σ|e|, groups by least
+squares), replays each through the run-time rule over the next run and records
+the actual RMS, the choice of BIC over p = 0…3 and the best p.
+
+Sources (:func:`panel_pairs`): the independent lumped machine
+(``independent_machine.py``: random machines, schedules and workshop days), the
+finite-element repeats and other-condition runs in ``datasets/``, and the
+diagnosis data sets' model → validate pairs. :func:`measured_pairs` cuts the
+shared measured test (``../shared``) into runs; it is reported apart and never
+used to calibrate.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from groupfit.data import Run, load_run
+from groupfit.heldout.expect import expect_next_run
+from groupfit.heldout.nextrun import rule_prediction, sliced
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.select_p import choose_p, exact_path
+from groupfit.reference import default_reference, with_reference
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import independent_machine as machine  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+DATASETS = ROOT / "datasets"
+MEASURED = ROOT.parent.parent / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"
+if not MEASURED.exists():
+    MEASURED = Path("/work/shared/data/fl_thermal/spindle_step_test.csv")
+P_VALUES = (0, 1, 2, 3)
+DEFAULT_P = 3
+"""The default ``fit`` before the next-run choice."""
+MAX_SAMPLES = 600
+"""Both runs of a pair are thinned by the stride that brings the model run to at most this many samples."""
+SETTINGS = {"n": 3, "c": 3.0, "fit_intercept": True}
+
+FE_PAIRS = [
+    ("paper_cycle", "repeat_timing"),
+    ("paper_cycle", "repeat_ambient25"),
+    ("paper_cycle", "repeat_warm"),
+    ("paper_cycle", "validation_speed"),
+    ("paper_cycle", "validation_timing"),
+    ("repeat_timing", "paper_cycle"),
+    ("repeat_ambient25", "repeat_warm"),
+    ("validation_speed", "paper_cycle"),
+    ("validation_timing", "repeat_timing"),
+]
+DIAG_KINDS = ("none", "ambient", "lag", "source", "speed")
+
+
+@dataclass
+class Pair:
+    name: str
+    source: str
+    model: Run
+    next: Run
+
+
+def thin_pair(model: Run, next_run: Run, max_samples: int = MAX_SAMPLES) -> tuple[Run, Run]:
+    """Both runs with every k-th row, k bringing the model run to at most ``max_samples`` rows."""
+    stride = max(1, int(np.ceil(model.n_samples / max_samples)))
+    if stride == 1:
+        return model, next_run
+    return (
+        sliced(model, np.arange(0, model.n_samples, stride), period=model.period * stride),
+        sliced(next_run, np.arange(0, next_run.n_samples, stride), period=next_run.period * stride),
+    )
+
+
+def frame_run(frame: pd.DataFrame, name: str, temps, error: str = "error_um", time: str = "time_s") -> Run:
+    return load_run(frame, name=name, temps=list(temps), time=time, error=error)
+
+
+def make_pair(name: str, source: str, model: Run, next_run: Run, reference: str | None = "default") -> Pair:
+    if reference == "default":
+        reference = default_reference(model.frame)
+    model, next_run = with_reference(model, reference), with_reference(next_run, reference)
+    model, next_run = thin_pair(model, next_run)
+    return Pair(name, source, model, next_run)
+
+
+def fe_pairs() -> list[Pair]:
+    out = []
+    for a, b in FE_PAIRS:
+        runs = [load_run(DATASETS / f"{x}.csv", temps=["T1", "T2"]) for x in (a, b)]
+        out.append(make_pair(f"{a}→{b}", "FE", *runs))
+    for kind in DIAG_KINDS:
+        runs = [load_run(DATASETS / f"diag_{kind}_{x}.csv", temps=["T1", "T2"]) for x in ("model", "validate")]
+        out.append(make_pair(f"diag_{kind}", "FE diag", *runs))
+    return out
+
+
+def simulator_pairs(seeds=range(14), rises_seeds=range(100, 106)) -> list[Pair]:
+    out = []
+    for truth, seed_range in (("absolute", seeds), ("rises", rises_seeds)):
+        for seed in seed_range:
+            scenario = machine.random_spec(seed, truth).make()
+            model = frame_run(scenario.modelling, f"{scenario.name}_model", scenario.temps)
+            next_run = frame_run(scenario.validation, f"{scenario.name}_next", scenario.temps)
+            out.append(
+                make_pair(f"{scenario.name}{'_rises' if truth == 'rises' else ''}", "simulator", model, next_run)
+            )
+    return out
+
+
+MEASURED_SENSORS = [f"t{k}_C" for k in range(1, 17)]
+MEASURED_CUTS = {
+    "first 60 % → rest": ((0.0, 0.6), (0.6, 1.0)),
+    "first half → second half": ((0.0, 0.5), (0.5, 1.0)),
+    "second half → first half": ((0.5, 1.0), (0.0, 0.5)),
+    "1250-2500 r/min blocks → 3750 r/min block": ((0.0, 0.6), (0.6, 0.83)),
+    "first 40 % → next 30 %": ((0.0, 0.4), (0.4, 0.7)),
+}
+
+
+def measured_pairs() -> list[Pair]:
+    """Cuts of the shared measured test into model and next runs; empty when ``../shared`` is absent."""
+    if not MEASURED.exists():
+        return []
+    whole = load_run(MEASURED, temps=MEASURED_SENSORS, error="disp_ch3_um")
+    n = whole.n_samples
+    out = []
+    for name, ((a0, a1), (b0, b1)) in MEASURED_CUTS.items():
+        model = sliced(whole, slice(int(a0 * n), int(a1 * n)))
+        next_run = sliced(whole, slice(int(b0 * n), int(b1 * n)))
+        out.append(make_pair(name, "measured", model, next_run, reference=None))
+    return out
+
+
+def score_pair(pair: Pair) -> dict:
+    """The estimate, the actual next-run RMS of every p, and the choices of the estimate, BIC and the default."""
+    model, next_run = pair.model, pair.next
+    expectation = expect_next_run([model], P_VALUES, **SETTINGS)
+    path = exact_path(model.temps, model.error, max(P_VALUES), objective="sae", **_path_settings())
+    actual = {}
+    for p in P_VALUES:
+        if p >= len(path["breaks"]):
+            continue
+        estimator = GroupedRegressor(p=p, n=SETTINGS["n"], c=SETTINGS["c"], fixed_breaks=path["breaks"][p] or None)
+        estimator.fit(model.temps, model.error)
+        residual = next_run.error - rule_prediction(estimator, model, next_run.temps)
+        actual[p] = float(np.sqrt(np.mean(residual[np.isfinite(residual)] ** 2)))
+    n_coef = model.temps.shape[1] + 1
+    bic_p = choose_p(path["rss"], path["R"], model.n_samples, n_coef, "bic")["p"]
+    chosen = expectation.candidates[expectation.chosen]
+    raw = float(expectation.scores.raw_rms()[expectation.chosen])
+    best = min(actual.values())
+    default_p = min(DEFAULT_P, max(actual))
+    return {
+        "pair": pair.name,
+        "source": pair.source,
+        "chosen_p": chosen,
+        "raw_um": raw,
+        "actual_um": actual[chosen],
+        "actual_by_p": actual,
+        "best_p": min(actual, key=actual.get),
+        "bic_p": bic_p,
+        "within_chosen": actual[chosen] <= 1.5 * best,
+        "within_bic": actual[bic_p] <= 1.5 * best,
+        "within_default": actual[default_p] <= 1.5 * best,
+        "notes": list(expectation.notes),
+        "in_sample_um": float(np.sqrt(path["rss"][chosen] / model.n_samples)),
+        "error_sd_um": float(np.std(model.error)),
+        "next_error_sd_um": float(np.std(next_run.error)),
+        "raw_by_p": dict(zip(expectation.candidates, map(float, expectation.scores.raw_rms()))),
+        "n_folds": expectation.scores.n_folds,
+        "n_model": model.n_samples,
+        "n_next": next_run.n_samples,
+    }
+
+
+def _path_settings() -> dict:
+    return {"n": SETTINGS["n"], "c": SETTINGS["c"], "fit_intercept": SETTINGS["fit_intercept"]}
+
+
+def panel_pairs() -> list[Pair]:
+    return simulator_pairs() + fe_pairs()

@@ -1,0 +1,46 @@
+"""From the raw next-run figure to the expected error and its range, as learned on the calibration panel.
+
+The raw figure of :mod:`groupfit.heldout.nextrun` imitates a next run within
+the modelling run; a real next run (another day, another programme) is usually
+worse. ``bench/bench_next_run.py`` builds a panel of model run → next run pairs
+(an independent simulator's machines and days, the finite-element repeats and
+other-condition runs, cuts of a measured test), replays every model over its
+next run and derives the factor and the range below from the ratios
+actual / raw (:func:`derive_calibration`), on one half of the panel, checked on
+the other half.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+FACTOR = 3.03
+"""Expected next-run RMS = FACTOR × raw figure: the geometric mean of actual / raw on the panel's 34 pairs
+(3.05 on its even-numbered half alone)."""
+RATIO_RANGE = (0.30, 4.75)
+"""The panel's 10th and 90th percentiles of actual / expected: the range printed with the estimate. It is wide:
+one run cannot show what another day or programme will do (another ambient level, a warm start, an unseen
+speed); a second run (``fit --data A B --p 0``) scores the model on a run it has not seen."""
+LEVELS = (10.0, 90.0)
+
+
+def expected(raw_rms_um: float) -> tuple[float, tuple[float, float]]:
+    """The expected next-run RMS of a raw figure and its range (µm)."""
+    value = FACTOR * float(raw_rms_um)
+    return value, (RATIO_RANGE[0] * value, RATIO_RANGE[1] * value)
+
+
+def derive_calibration(raw: Sequence[float], actual: Sequence[float]) -> dict[str, float]:
+    """The factor (geometric mean of actual / raw) and the 10th / 90th percentiles of actual / (factor × raw)."""
+    raw = np.asarray(raw, dtype=float)
+    actual = np.asarray(actual, dtype=float)
+    if raw.shape != actual.shape or raw.size == 0 or np.any(raw <= 0) or np.any(actual <= 0):
+        raise ValueError("one positive raw figure and one positive actual RMS per pair")
+    factor = float(np.exp(np.mean(np.log(actual / raw))))
+    low, high = np.percentile(actual / (factor * raw), LEVELS)
+    return {"factor": factor, "ratio_low": float(low), "ratio_high": float(high)}
+
+
+__all__ = ["FACTOR", "RATIO_RANGE", "derive_calibration", "expected"]

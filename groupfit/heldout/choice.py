@@ -1,0 +1,44 @@
+"""The candidate chosen by its expected next-run error: the one-standard-error rule toward the simpler model."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+
+def one_standard_error_choice(mean: Sequence[float], standard_error: Sequence[float]) -> int:
+    """Index of the simplest candidate within one standard error of the best.
+
+    Candidates are ordered from the simplest to the most complex. The best is the
+    least ``mean`` (e.g. the expected mean squared error); the choice is the first
+    candidate whose mean is at most the best's mean plus the best's standard error
+    (Hastie, Tibshirani and Friedman, *The Elements of Statistical Learning*, §7.10).
+    """
+    mean = np.asarray(mean, dtype=float)
+    standard_error = np.asarray(standard_error, dtype=float)
+    if mean.ndim != 1 or len(mean) == 0 or mean.shape != standard_error.shape:
+        raise ValueError("one mean and one standard error per candidate, at least one candidate")
+    best = int(np.nanargmin(mean))
+    limit = mean[best] + (standard_error[best] if np.isfinite(standard_error[best]) else 0.0)
+    return int(np.flatnonzero(mean <= limit)[0])
+
+
+def pooled_error(sse: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each candidate's pooled mean squared error over the folds and its standard error.
+
+    ``sse[i, k]``: candidate i's sum of squared errors on fold k, of ``counts[k]`` samples. The standard error
+    is that of a mean of the folds' mean squared errors weighted by their samples (infinite with one fold).
+    """
+    sse = np.atleast_2d(np.asarray(sse, dtype=float))
+    counts = np.asarray(counts, dtype=float)
+    mse = sse / counts[None, :]
+    weights = counts / counts.sum()
+    pooled = mse @ weights
+    if len(counts) < 2:
+        return pooled, np.full(len(pooled), np.inf)
+    spread = ((mse - pooled[:, None]) ** 2) @ weights
+    return pooled, np.sqrt(spread / (len(counts) - 1))
+
+
+__all__ = ["one_standard_error_choice", "pooled_error"]

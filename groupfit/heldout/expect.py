@@ -1,0 +1,195 @@
+"""The error to expect on the next run, per candidate model, the candidate it chooses, and when not to trust it.
+
+``fit``, ``compare`` and ``diagnose`` ask this module; it imports none of them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from groupfit.data import Run
+from groupfit.heldout import calibration
+from groupfit.heldout.choice import one_standard_error_choice
+from groupfit.heldout.nextrun import (
+    LEAVE_ONE_RUN_OUT,
+    MIN_SEGMENTS,
+    NextRunScores,
+    forward_chaining,
+    leave_one_run_out,
+)
+from groupfit.model import ModelFile
+
+CHOICE_RULE = "the simplest model within one standard error of the least expected next-run error"
+
+
+@dataclass(frozen=True)
+class NextRunExpectation:
+    """Every candidate's expected next-run RMS (calibrated), the chosen one and the notes on trust."""
+
+    scores: NextRunScores
+    chosen: int
+    """Index into ``scores.candidates``."""
+    notes: tuple[str, ...]
+
+    @property
+    def candidates(self) -> tuple:
+        return self.scores.candidates
+
+    def expected(self, index: int | None = None) -> tuple[float, tuple[float, float]]:
+        """The expected RMS (µm) of candidate ``index`` (default: the chosen one) and its range."""
+        raw = self.scores.raw_rms()[self.chosen if index is None else index]
+        return calibration.expected(raw)
+
+    def for_candidate(self, candidate) -> tuple[float, tuple[float, float]] | None:
+        """The expected RMS and range of the candidate ``candidate`` (e.g. a p), None when it was not scored."""
+        if candidate not in self.candidates:
+            return None
+        return self.expected(self.candidates.index(candidate))
+
+    def choice_among(self, count: int):
+        """The candidate the one-standard-error rule chooses among the first ``count`` candidates."""
+        mean, error = self.scores.pooled()
+        return self.candidates[one_standard_error_choice(mean[:count], error[:count])]
+
+    def method(self) -> str:
+        return (
+            f"{self.scores.method()}; calibrated ×{calibration.FACTOR:.3g}, range from the calibration panel's "
+            f"{calibration.LEVELS[0]:g}th-{calibration.LEVELS[1]:g}th percentiles"
+        )
+
+    def training(self) -> dict[str, Any]:
+        """The model file's ``training`` keys of the chosen candidate's expectation."""
+        value, (low, high) = self.expected()
+        return {
+            "expected_next_run_rms_um": value,
+            "expected_next_run_range_um": [low, high],
+            "expected_next_run_method": self.method(),
+        }
+
+    def to_json(self, label: str = "p") -> dict[str, Any]:
+        raw = self.scores.raw_rms()
+        se = self.scores.standard_error()
+        table = []
+        for i, candidate in enumerate(self.candidates):
+            expected, (lo, hi) = self.expected(i)
+            table.append(
+                {
+                    label: candidate,
+                    "expected_next_run_rms_um": expected,
+                    "expected_next_run_range_um": [lo, hi],
+                    "raw_rms_um": float(raw[i]),
+                    "mse_standard_error_um2": float(se[i]),
+                }
+            )
+        return {
+            **self.training(),
+            "chosen": {label: self.candidates[self.chosen], "rule": CHOICE_RULE},
+            "candidates": table,
+            "notes": list(self.notes),
+        }
+
+    def line(self) -> str:
+        """``expect about X µm RMS on the next run (range a–b; how it was estimated)`` and the notes."""
+        value, (low, high) = self.expected()
+        text = f"expect  about {value:.3g} µm RMS on the next run (range {low:.3g}-{high:.3g} µm; {self.method()})"
+        return "\n".join([text, *(f"note    {note}" for note in self.notes)])
+
+
+def expect_next_run(
+    runs: Sequence[Run],
+    p_values: Sequence[int] = (0,),
+    *,
+    n: int = 3,
+    c: float = 3.0,
+    fit_intercept: bool = True,
+    ridge_alpha: float = 0.0,
+) -> NextRunExpectation:
+    """The next-run expectation of every p of ``p_values`` (one run) or of the global model (several runs).
+
+    ``runs`` hold the model's inputs (``temps``, the reference applied) and a
+    measured error on every row (:func:`groupfit.data.measured_rows`).
+    """
+    if len(runs) > 1:
+        scores = leave_one_run_out(runs, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha)
+    else:
+        scores = forward_chaining(
+            runs[0], list(p_values), n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
+        )
+    chosen = one_standard_error_choice(*scores.pooled())
+    return NextRunExpectation(scores, chosen, trust_notes(scores))
+
+
+def expect_for_model(model: ModelFile | Mapping[str, Any], runs: Sequence[Run]) -> NextRunExpectation | None:
+    """The expected next-run error of a model file's structure (its inputs, p, penalty) refitted on ``runs``.
+
+    ``runs`` as loaded (readings as recorded); the model's inputs, derived ones
+    included, are computed from each run's table (:meth:`ModelFile.inputs`). None
+    when the estimate cannot be made: a grouped model on several runs, or a run
+    too short for the model's groups.
+    """
+    model = ModelFile.coerce(model)
+    if model.p > 0 and len(runs) > 1:
+        return None
+    prepared = []
+    for run in runs:
+        inputs = model.inputs(run.frame, run.source)
+        rows = np.isfinite(run.error) & np.isfinite(inputs).all(axis=1)
+        prepared.append(
+            dataclasses.replace(
+                run,
+                time=run.time[rows],
+                temps=inputs[rows],
+                temp_names=tuple(model.temps),
+                error=run.error[rows],
+                frame=run.frame.loc[rows].reset_index(drop=True),
+                reference=None,
+            )
+        )
+    try:
+        return expect_next_run(
+            prepared,
+            (model.p,),
+            n=model.n,
+            c=model.c,
+            fit_intercept=model.intercept,
+            ridge_alpha=model.ridge_alpha or 0.0,
+        )
+    except ValueError:
+        return None
+
+
+def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
+    """When the estimate cannot be trusted, and what run to record next."""
+    notes = []
+    if scores.kind == LEAVE_ONE_RUN_OUT:
+        if scores.n_folds < MIN_SEGMENTS:
+            notes.append(
+                f"only {scores.n_folds} runs to leave out: a rough estimate; record another run "
+                "(another day or programme) and fit on all of them"
+            )
+        return tuple(notes)
+    if scores.n_conditions == 1:
+        notes.append(
+            "one run of one operating condition: the estimate only extrapolates this run in time and cannot "
+            "see another programme or day; record a run on another condition (another speed programme or "
+            "another day) and fit on both (--data A B --p 0)"
+        )
+    elif scores.n_conditions < MIN_SEGMENTS:
+        notes.append(
+            f"only {scores.n_conditions} operating conditions in the run: the later segments repeat what the "
+            "model was fitted on, a rough estimate; record a run with more changes of condition, or a second run"
+        )
+    if scores.n_folds < MIN_SEGMENTS:
+        notes.append(
+            f"only {scores.n_folds} segment(s) scored (the last "
+            f"{100 * scores.counts.sum() / max(1, scores.n_samples):.0f} % of the run): a rough estimate; "
+            "record a longer run, or a second run"
+        )
+    return tuple(notes)
+
+
+__all__ = ["CHOICE_RULE", "NextRunExpectation", "expect_for_model", "expect_next_run", "trust_notes"]

@@ -1,0 +1,288 @@
+"""The error to expect on the next run: folds that imitate a new run, scored through the run-time rule.
+
+A model's in-run held-out figures (:mod:`groupfit.heldout.check`) refit on the
+samples around the held-out ones; a next run gives the model no such help. The
+estimate here scores each candidate model only on data that comes *after* what
+it was fitted on, served as a controller serves it:
+
+* two or more runs: leave-one-run-out. The global model (p = 0, the only model
+  fitted on several runs) is fitted on the other runs and replayed over the
+  held-out one.
+* one run: forward chaining over operating segments. The run is cut into its
+  operating segments (:mod:`groupfit.heldout.folds`: where an operating column
+  such as the spindle speed changes, else equal blocks of time). For every
+  segment k that starts after :data:`MIN_TRAIN_FRACTION` of the run, each
+  candidate is fitted on the run up to the start of segment k, the prefix and
+  segment k are replayed through the run-time rule (the group switched by the
+  model's own rule, its state carried from the first sample) and only segment k
+  is scored. The squared errors are pooled over the segments.
+
+A long run is thinned to at most :data:`MAX_SAMPLES` rows for the estimate (the
+break search is the exact one, on Σe², whose cost grows with N²); the figure is
+a raw one, calibrated by :mod:`groupfit.heldout.calibration`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from groupfit.columns import usable_columns
+from groupfit.data import Run, join_runs
+from groupfit.grouping import Constraints
+from groupfit.heldout.choice import pooled_error
+from groupfit.heldout.folds import make_folds
+from groupfit.model import grouped_prediction
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.objective import SegmentCost
+from groupfit.runtime import replay_groups
+from groupfit.search.exact import solve_exact
+
+MAX_SAMPLES = 600
+"""A run longer than this is thinned (every k-th row) for the estimate."""
+MIN_TRAIN_FRACTION = 0.4
+"""Forward chaining scores the segments that start after this share of the run."""
+MIN_SEGMENTS = 3
+"""Fewer scored segments than this make the estimate a rough one (a note says so)."""
+FORWARD = "forward"
+LEAVE_ONE_RUN_OUT = "leave-one-run-out"
+
+
+@dataclass(frozen=True)
+class NextRunScores:
+    """Squared errors of every candidate on folds that imitate a next run.
+
+    ``sse[i, k]`` and ``counts[k]``: candidate ``i``'s sum of squared errors on
+    fold ``k`` and the samples scored there. ``kind`` is :data:`FORWARD` or
+    :data:`LEAVE_ONE_RUN_OUT`.
+    """
+
+    candidates: tuple
+    sse: np.ndarray
+    counts: np.ndarray
+    kind: str
+    segments: str
+    """How the folds were cut (operating columns, blocks of time, runs)."""
+    stride: int = 1
+    n_samples: int = 0
+    """Samples of the (thinned) run the folds were cut from."""
+    n_conditions: int = 0
+    """Stretches of one operating condition in the run (1 with no operating column; 0: not counted)."""
+
+    @property
+    def n_folds(self) -> int:
+        return int(self.sse.shape[1])
+
+    def raw_rms(self) -> np.ndarray:
+        """Each candidate's pooled RMS over the folds (µm)."""
+        return np.sqrt(self.sse.sum(axis=1) / self.counts.sum())
+
+    def pooled(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each candidate's pooled mean squared error and its standard error over the folds."""
+        return pooled_error(self.sse, self.counts)
+
+    def standard_error(self) -> np.ndarray:
+        """Standard error of each candidate's pooled mean squared error, from its spread over the folds."""
+        return self.pooled()[1]
+
+    def method(self) -> str:
+        """One line on how the estimate was made."""
+        if self.kind == LEAVE_ONE_RUN_OUT:
+            return f"leave-one-run-out over {self.n_folds} runs, each replayed through the run-time rule"
+        thinned = f", one sample in {self.stride}" if self.stride > 1 else ""
+        return (
+            f"forward chaining over {self.n_folds} operating segments ({self.segments}{thinned}): fitted on the "
+            "run before each segment, replayed through the run-time rule, scored on the segment"
+        )
+
+
+def thinned(run: Run, max_samples: int = MAX_SAMPLES) -> tuple[Run, int]:
+    """The run with every k-th row, k the least whole number that leaves at most ``max_samples`` rows."""
+    stride = max(1, int(np.ceil(run.n_samples / max_samples)))
+    if stride == 1:
+        return run, 1
+    rows = np.arange(0, run.n_samples, stride)
+    return sliced(run, rows, period=run.period * stride), stride
+
+
+def sliced(run: Run, rows: np.ndarray, *, period: float | None = None) -> Run:
+    """The run restricted to ``rows`` (indices or a slice), as a run of its own."""
+    return dataclasses.replace(
+        run,
+        time=run.time[rows],
+        temps=run.temps[rows],
+        error=None if run.error is None else run.error[rows],
+        frame=run.frame.iloc[rows].reset_index(drop=True),
+        period=run.period if period is None else period,
+    )
+
+
+def segment_starts(run: Run) -> tuple[list[int], str, int]:
+    """First sample of every operating segment of ``run`` (0-based), how they were found, and how many
+    stretches of one operating condition the run holds (a long one is cut into several segments)."""
+    exclude = {run.time_name, run.error_name, *run.temp_names}
+    if run.reference not in (None, "start"):
+        exclude.add(run.reference)
+    columns, _ = usable_columns(run.frame, exclude)
+    folds = make_folds([run.frame], columns)
+    labels = folds.labels
+    starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
+    if folds.kind == "condition":
+        values = run.frame[list(folds.columns)].to_numpy(dtype=float)
+        conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
+        return starts, f"changes of {', '.join(folds.columns)}", conditions
+    return starts, f"{len(starts)} equal blocks of time, no operating column", 1
+
+
+def forward_folds(run: Run, starts: Sequence[int], min_train: float = MIN_TRAIN_FRACTION) -> list[tuple[int, int]]:
+    """``(start, end)`` of the segments scored by forward chaining: those starting after ``min_train`` of the run."""
+    n = run.n_samples
+    edges = [*starts, n]
+    return [(a, b) for a, b in zip(edges[:-1], edges[1:]) if a >= min_train * n and b > a]
+
+
+def feasible_pmax(n_samples: int, *, n: int, c: float, n_coef: int, pmax: int) -> int:
+    """The largest p ≤ ``pmax`` whose groups fit in ``n_samples`` samples (-1: not even p = 0)."""
+    constraints = Constraints.for_model(n_samples, n, c, n_coef)
+    best = -1
+    for p in range(pmax + 1):
+        try:
+            constraints.require(p, c, n_coef)
+        except Exception:
+            break
+        best = p
+    return best
+
+
+def rule_prediction(estimator: GroupedRegressor, fitted_on: Run, temps: np.ndarray) -> np.ndarray:
+    """The prediction a controller makes over ``temps`` from sample 1 on: the group chosen by the model's rule."""
+    if estimator.p == 0 and not estimator.breaks_:
+        return estimator.intercept_[0] + temps @ estimator.coef_[0]
+    groups = replay_groups(estimator.to_model_file(fitted_on), temps)
+    return grouped_prediction(estimator.intercept_, estimator.coef_, temps, groups)
+
+
+def forward_chaining(
+    run: Run,
+    p_values: Sequence[int],
+    *,
+    n: int = 3,
+    c: float = 3.0,
+    fit_intercept: bool = True,
+    ridge_alpha: float = 0.0,
+    max_samples: int = MAX_SAMPLES,
+    min_train: float = MIN_TRAIN_FRACTION,
+) -> NextRunScores:
+    """Every p of ``p_values`` scored by forward chaining over ``run``'s operating segments (module docstring).
+
+    The breaks of each prefix are the exact optimum of Σe² for every p at once;
+    the groups are fitted by least squares (a global model, p = 0, with the
+    ridge penalty ``ridge_alpha``). A p whose groups do not fit in the shortest
+    prefix is left out of ``candidates``.
+    """
+    thin, stride = thinned(run, max_samples)
+    starts, how, conditions = segment_starts(thin)
+    folds = forward_folds(thin, starts, min_train)
+    if not folds:  # a run of one segment: score its last blocks
+        folds = forward_folds(thin, _blocks(thin.n_samples), min_train)
+    n_coef = thin.temps.shape[1] + int(fit_intercept)
+    shortest = min(a for a, _ in folds)
+    top = feasible_pmax(shortest, n=n, c=c, n_coef=n_coef, pmax=max(p_values))
+    candidates = tuple(p for p in p_values if p <= top)
+    if not candidates:
+        tried = ", ".join(str(p) for p in p_values)
+        raise ValueError(f"no model of p = {tried} fits in the {shortest} samples before the first scored segment")
+    sse = np.zeros((len(candidates), len(folds)))
+    counts = np.zeros(len(folds))
+    X, y = thin.temps, thin.error
+    for k, (start, end) in enumerate(folds):
+        prefix = sliced(thin, slice(0, start))
+        breaks = prefix_breaks(prefix, max(candidates), n=n, c=c, fit_intercept=fit_intercept)
+        scored = slice(start, end)
+        counts[k] = end - start
+        for i, p in enumerate(candidates):
+            estimator = candidate_estimator(
+                p, breaks[p], n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
+            )
+            estimator.fit(prefix.temps, prefix.error)
+            prediction = rule_prediction(estimator, prefix, X[:end])
+            sse[i, k] = float(np.sum((y[scored] - prediction[scored]) ** 2))
+    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, thin.n_samples, conditions)
+
+
+def prefix_breaks(prefix: Run, pmax: int, *, n: int, c: float, fit_intercept: bool) -> dict[int, list[int]]:
+    """The exact Σe² optimum of every p up to ``pmax`` on ``prefix`` (p = 0: no break)."""
+    if pmax == 0:
+        return {0: []}
+    cost = SegmentCost(prefix.temps, prefix.error, n=n, objective="sse", fit_intercept=fit_intercept)
+    n_coef = prefix.temps.shape[1] + int(fit_intercept)
+    result = solve_exact(cost, Constraints.for_model(prefix.n_samples, n, c, n_coef), pmax)
+    return {p: list(b) for p, b in result.breaks.items()}
+
+
+def candidate_estimator(
+    p: int, breaks: Sequence[int], *, n: int, c: float, fit_intercept: bool, ridge_alpha: float = 0.0
+) -> GroupedRegressor:
+    """The model of p breaks at ``breaks`` (groups by least squares; p = 0 with the ridge penalty)."""
+    if p == 0:
+        return GroupedRegressor(p=0, n=n, c=c, objective="sse", fit_intercept=fit_intercept, ridge_alpha=ridge_alpha)
+    return GroupedRegressor(p=p, n=n, c=c, objective="sse", fit_intercept=fit_intercept, fixed_breaks=list(breaks))
+
+
+def next_run_splits(runs: Sequence[Run]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(train, test)`` row indices of the runs laid end to end, for a global model (p = 0), whose rule is trivial.
+
+    Several runs: each run held out, the others trained on. One run: forward chaining, the run before each
+    scored segment trained on (:func:`forward_folds`).
+    """
+    lengths = [r.n_samples for r in runs]
+    edges = np.cumsum([0, *lengths])
+    if len(runs) > 1:
+        rows = np.arange(edges[-1])
+        return [
+            (np.r_[rows[: edges[k]], rows[edges[k + 1] :]], rows[edges[k] : edges[k + 1]]) for k in range(len(runs))
+        ]
+    starts, _, _ = segment_starts(runs[0])
+    folds = forward_folds(runs[0], starts) or forward_folds(runs[0], _blocks(runs[0].n_samples))
+    return [(np.arange(a), np.arange(a, b)) for a, b in folds]
+
+
+def _blocks(n_samples: int) -> list[int]:
+    return list(np.linspace(0, n_samples, 7).astype(int)[:-1])
+
+
+def leave_one_run_out(runs: Sequence[Run], *, fit_intercept: bool = True, ridge_alpha: float = 0.0) -> NextRunScores:
+    """The global model (p = 0) fitted on all runs but one and replayed over that one, for every run."""
+    runs = list(runs)
+    sse = np.zeros((1, len(runs)))
+    counts = np.zeros(len(runs))
+    for k, held_out in enumerate(runs):
+        others = join_runs([r for j, r in enumerate(runs) if j != k])
+        rows = np.isfinite(others.error)
+        scored = np.isfinite(held_out.error)
+        estimator = candidate_estimator(0, [], n=0, c=0.0, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha)
+        estimator.fit(others.temps[rows], others.error[rows])
+        prediction = rule_prediction(estimator, others, held_out.temps)
+        sse[0, k] = float(np.sum((held_out.error[scored] - prediction[scored]) ** 2))
+        counts[k] = int(scored.sum())
+    return NextRunScores((0,), sse, counts, LEAVE_ONE_RUN_OUT, f"{len(runs)} runs", 1, int(counts.sum()))
+
+
+__all__ = [
+    "FORWARD",
+    "LEAVE_ONE_RUN_OUT",
+    "MAX_SAMPLES",
+    "MIN_SEGMENTS",
+    "MIN_TRAIN_FRACTION",
+    "NextRunScores",
+    "forward_chaining",
+    "forward_folds",
+    "leave_one_run_out",
+    "next_run_splits",
+    "rule_prediction",
+    "segment_starts",
+    "thinned",
+]

@@ -1,0 +1,63 @@
+"""The modelling run's span of every input, and a next run that leaves it (where no estimate holds)."""
+
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+SPAN_KEY = "input_span"
+"""The model file's ``training`` key: ``{input: [lowest, highest]}`` over the modelling run."""
+TOLERANCE = 0.05
+"""A reading beyond the span by more than this share of the span's width leaves the modelling range."""
+
+
+def input_span(names: Sequence[str], inputs: np.ndarray) -> dict[str, list[float]]:
+    """The lowest and highest finite value of every input column."""
+    inputs = np.asarray(inputs, dtype=float)
+    return {
+        name: [float(np.nanmin(inputs[:, j])), float(np.nanmax(inputs[:, j]))]
+        for j, name in enumerate(names)
+        if np.isfinite(inputs[:, j]).any()
+    }
+
+
+def beyond_span(span: Mapping[str, Sequence[float]], names: Sequence[str], inputs: np.ndarray) -> list[dict[str, Any]]:
+    """The inputs of a run that leave the modelling span: name, span, the run's range, samples outside."""
+    inputs = np.asarray(inputs, dtype=float)
+    out = []
+    for j, name in enumerate(names):
+        if name not in span:
+            continue
+        low, high = (float(v) for v in span[name])
+        margin = TOLERANCE * max(high - low, 1e-9)
+        values = inputs[:, j]
+        outside = np.isfinite(values) & ((values < low - margin) | (values > high + margin))
+        if outside.any():
+            out.append(
+                {
+                    "input": name,
+                    "span": [low, high],
+                    "run": [float(np.nanmin(values)), float(np.nanmax(values))],
+                    "samples": int(outside.sum()),
+                }
+            )
+    return out
+
+
+def span_note(beyond: list[dict[str, Any]], n_samples: int) -> str | None:
+    """A note on a run outside the modelling range, and what run to record next; None when it stays inside."""
+    if not beyond:
+        return None
+    parts = ", ".join(
+        f"{b['input']} {b['run'][0]:.3g}..{b['run'][1]:.3g} (modelled {b['span'][0]:.3g}..{b['span'][1]:.3g}; "
+        f"{b['samples']} of {n_samples} samples outside)"
+        for b in beyond
+    )
+    return (
+        f"this run leaves the modelling range: {parts}; the model extrapolates there and the expected next-run "
+        "error from fit does not cover it; record a modelling run that covers this range and refit"
+    )
+
+
+__all__ = ["SPAN_KEY", "beyond_span", "input_span", "span_note"]

@@ -1,0 +1,223 @@
+"""The expected next-run error: forward chaining and leave-one-run-out against loops written out by hand."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.grouping import Constraints
+from groupfit.heldout import calibration
+from groupfit.heldout.check import ridge_by_splits
+from groupfit.heldout.choice import one_standard_error_choice, pooled_error
+from groupfit.heldout.expect import expect_next_run, trust_notes
+from groupfit.heldout.nextrun import forward_chaining, leave_one_run_out
+from groupfit.model import ModelFile
+from groupfit.model_checks import model_problem
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.ridge import RIDGE_GRID, held_out_sse
+from groupfit.runtime import SwitchingRule
+
+SEGMENT = 20
+SPEEDS = (0, 1000, 2000, 1000, 0, 2000)
+
+
+def tiny_frame(seed: int = 0, speeds=SPEEDS, segment: int = SEGMENT) -> pd.DataFrame:
+    """Two temperatures driven by a stepped speed, an error that follows them with a drift and noise."""
+    rng = np.random.default_rng(seed)
+    speed = np.repeat(speeds, segment).astype(float)
+    n = len(speed)
+    t1 = 20 + np.cumsum(0.002 * speed / 1000 - 0.01 * rng.standard_normal(n)) + 0.02 * rng.standard_normal(n)
+    t2 = 20 + 0.5 * np.cumsum(0.002 * speed / 1000) + 0.3 * np.sin(np.arange(n) / 7) + 0.02 * rng.standard_normal(n)
+    error = 3.0 * (t1 - 20) - 2.0 * (t2 - 20) + 0.02 * np.arange(n) + 0.05 * rng.standard_normal(n)
+    return pd.DataFrame({"time_s": 60.0 * np.arange(n), "T1": t1, "T2": t2, "speed_rpm": speed, "error_um": error})
+
+
+def tiny_run(seed: int = 0, **kwargs):
+    return load_run(tiny_frame(seed, **kwargs), name=f"tiny{seed}", temps=["T1", "T2"])
+
+
+def best_breaks_by_brute_force(X, y, p, n_samples, *, c):
+    """The least Σe² break vector of p ≤ 1 breaks (n = 0: soft groups are the hard groups), every position tried."""
+    if p == 0:
+        return []
+    A = np.column_stack([np.ones(n_samples), X])
+    constraints = Constraints.for_model(n_samples, 0, c, A.shape[1])
+    best, best_sse = None, np.inf
+    for b in range(constraints.lowest_break, constraints.highest_break + 1):
+        sse = 0.0
+        for rows in (slice(0, b), slice(b, n_samples)):
+            coef, *_ = np.linalg.lstsq(A[rows], y[rows], rcond=None)
+            sse += float(np.sum((y[rows] - A[rows] @ coef) ** 2))
+        if sse < best_sse:
+            best, best_sse = [b], sse
+    return best
+
+
+def test_forward_chaining_matches_a_loop_written_out_by_hand():
+    run = tiny_run()
+    c = 1.0
+    scores = forward_chaining(run, [0, 1], n=0, c=c, fit_intercept=True)
+    # the segments by hand: a new one where the speed changes, scored when it starts after 40 % of the run
+    starts = [k * SEGMENT for k in range(len(SPEEDS))]
+    scored = [(a, a + SEGMENT) for a in starts if a >= 0.4 * run.n_samples]
+    assert scores.n_folds == len(scored) == 3 and scores.segments == "changes of speed_rpm"
+    expected = np.zeros((2, len(scored)))
+    for k, (start, end) in enumerate(scored):
+        X, y = run.temps[:start], run.error[:start]
+        for p in (0, 1):
+            breaks = best_breaks_by_brute_force(X, y, p, start, c=c)
+            model = GroupedRegressor(p=p, n=0, c=c, fixed_breaks=breaks or None, search="exact").fit(X, y)
+            prefix = load_run(tiny_frame().iloc[:start], name="prefix", temps=["T1", "T2"])
+            rule = SwitchingRule(model.to_model_file(prefix))  # the controller, from sample 1 to the segment's end
+            prediction = rule.replay(run.temps[:end]).prediction_um
+            expected[p, k] = np.sum((run.error[start:end] - prediction[start:end]) ** 2)
+    assert scores.counts.tolist() == [SEGMENT] * 3
+    np.testing.assert_allclose(scores.sse, expected, rtol=1e-9)
+    np.testing.assert_allclose(scores.raw_rms(), np.sqrt(expected.sum(axis=1) / (3 * SEGMENT)), rtol=1e-9)
+
+
+def write_runs(tmp_path, seeds):
+    paths = []
+    for seed in seeds:
+        path = tmp_path / f"run{seed}.csv"
+        tiny_frame(seed).to_csv(path, index=False)
+        paths.append(str(path))
+    return paths
+
+
+def test_leave_one_run_out_matches_fit_and_replay_run_by_run(tmp_path, capsys):
+    paths = write_runs(tmp_path, (1, 2, 3))
+    sse, count = 0.0, 0
+    for k, held_out in enumerate(paths):
+        others = [p for j, p in enumerate(paths) if j != k]
+        out = tmp_path / f"fit{k}"
+        options = ["--temps", "T1,T2", "--reference", "none", "--quiet", "--p", "0"]
+        assert main(["fit", "--data", *others, *options, "--out", str(out)]) == 0
+        replayed = tmp_path / f"replay{k}.json"
+        assert main(["replay", str(out / "model.json"), "--data", held_out, "--json", str(replayed)]) == 0
+        residual = np.array([s["residual_um"] for s in json.loads(replayed.read_text())["samples"]], dtype=float)
+        sse += float(np.nansum(residual**2))
+        count += int(np.isfinite(residual).sum())
+    capsys.readouterr()
+    result = tmp_path / "all.json"
+    options = ["--temps", "T1,T2", "--reference", "none", "--quiet", "--out", str(tmp_path / "all")]
+    assert main(["fit", "--data", *paths, *options, "--json", str(result)]) == 0
+    fitted = json.loads(result.read_text())
+    assert fitted["p"] == 0
+    assert fitted["expected_next_run_rms_um"] == pytest.approx(calibration.FACTOR * np.sqrt(sse / count), rel=1e-9)
+    assert "leave-one-run-out over 3 runs" in fitted["expected_next_run_method"]
+    low, high = fitted["expected_next_run_range_um"]
+    assert low <= fitted["expected_next_run_rms_um"] <= high
+    saved = ModelFile.load(tmp_path / "all" / "model.json").training
+    assert saved["expected_next_run_rms_um"] == fitted["expected_next_run_rms_um"]
+
+
+def test_leave_one_run_out_scores_each_run_with_the_others_fit():
+    runs = [tiny_run(seed) for seed in (4, 5)]
+    scores = leave_one_run_out(runs)
+    for k in range(2):
+        other = runs[1 - k]
+        A = np.column_stack([np.ones(other.n_samples), other.temps])
+        coef, *_ = np.linalg.lstsq(A, other.error, rcond=None)
+        residual = runs[k].error - np.column_stack([np.ones(runs[k].n_samples), runs[k].temps]) @ coef
+        assert scores.sse[0, k] == pytest.approx(float(residual @ residual), rel=1e-9)
+
+
+def test_one_standard_error_rule_on_constructed_scores():
+    # the best is the last; the second is within one of its standard errors, the first is not
+    assert one_standard_error_choice([5.0, 3.0, 2.9, 2.8], [0.1, 0.1, 0.1, 0.25]) == 1
+    assert one_standard_error_choice([5.0, 3.0, 2.9, 2.8], [0.1, 0.1, 0.1, 0.15]) == 2
+    assert one_standard_error_choice([1.0, 3.0, 2.9], [0.0, 0.1, 0.1]) == 0  # the simplest is the best
+    assert one_standard_error_choice([4.0, 2.0], [np.inf, np.inf]) == 1  # no spread known: the least
+    with pytest.raises(ValueError):
+        one_standard_error_choice([1.0, 2.0], [0.1])
+
+
+def test_pooled_error_is_the_weighted_mean_and_its_standard_error():
+    sse = np.array([[4.0, 9.0, 1.0]])
+    counts = np.array([2.0, 3.0, 1.0])
+    pooled, se = pooled_error(sse, counts)
+    mse = np.array([2.0, 3.0, 1.0])
+    w = counts / counts.sum()
+    assert pooled[0] == pytest.approx(sse.sum() / counts.sum())
+    assert se[0] == pytest.approx(np.sqrt(np.sum(w * (mse - pooled[0]) ** 2) / 2))
+
+
+def test_ridge_by_splits_takes_the_largest_penalty_within_one_standard_error():
+    run = tiny_run(6)
+    splits = [(np.arange(a), np.arange(a, a + SEGMENT)) for a in (60, 80, 100)]
+    alpha, table = ridge_by_splits(run.temps, run.error, splits)
+    counts = np.full(3, float(SEGMENT))
+    by_alpha = {a: pooled_error(held_out_sse(run.temps, run.error, splits, a)[None, :], counts) for a in RIDGE_GRID}
+    best = min(by_alpha, key=lambda a: by_alpha[a][0][0])
+    limit = by_alpha[best][0][0] + by_alpha[best][1][0]
+    assert alpha == max(a for a in RIDGE_GRID if by_alpha[a][0][0] <= limit)
+    assert [row["alpha"] for row in table] == sorted(RIDGE_GRID)
+
+
+def test_calibration_is_the_geometric_mean_and_percentiles_of_the_ratios():
+    raw = np.array([1.0, 2.0, 4.0, 1.0, 3.0])
+    actual = np.array([2.0, 8.0, 4.0, 3.0, 3.0])
+    derived = calibration.derive_calibration(raw, actual)
+    factor = np.prod(actual / raw) ** (1 / len(raw))
+    assert derived["factor"] == pytest.approx(factor)
+    assert derived["ratio_low"] == pytest.approx(np.percentile(actual / raw / factor, 10))
+    value, (low, high) = calibration.expected(2.0)
+    assert value == pytest.approx(2.0 * calibration.FACTOR)
+    assert low == pytest.approx(calibration.RATIO_RANGE[0] * value)
+    assert high == pytest.approx(calibration.RATIO_RANGE[1] * value)
+
+
+def test_a_run_without_operating_columns_is_noted_as_one_condition():
+    frame = tiny_frame(7).drop(columns="speed_rpm")
+    run = load_run(frame, name="one", temps=["T1", "T2"])
+    notes = trust_notes(forward_chaining(run, [0]))
+    assert any("one run of one operating condition" in note and "record a run" in note for note in notes)
+
+
+def test_too_few_conditions_are_noted():
+    run = tiny_run(8, speeds=(0, 1000), segment=60)  # one change of speed: two conditions
+    scores = forward_chaining(run, [0])
+    assert scores.n_conditions == 2
+    assert any("only 2 operating conditions" in note for note in trust_notes(scores))
+    assert trust_notes(forward_chaining(tiny_run(9), [0])) == ()  # six conditions
+
+
+def test_two_runs_left_out_are_noted():
+    expectation = expect_next_run([tiny_run(10), tiny_run(11)])
+    assert any("only 2 runs to leave out" in note for note in expectation.notes)
+
+
+def test_a_model_file_with_an_expectation_outside_its_range_is_refused():
+    run = tiny_run(12)
+    model = GroupedRegressor(p=0).fit(run.temps, run.error).to_model_file(run).to_dict()
+    model["training"].update(
+        expected_next_run_rms_um=1.0, expected_next_run_range_um=[0.5, 2.0], expected_next_run_method="by hand"
+    )
+    assert model_problem(model) is None
+    model["training"]["expected_next_run_range_um"] = [1.5, 2.0]
+    assert "expected_next_run_range_um" in model_problem(model)
+    model["training"]["expected_next_run_rms_um"] = -1.0
+    assert "expected_next_run_rms_um" in model_problem(model)
+
+
+def test_replay_says_when_a_run_leaves_the_modelling_range(tmp_path, capsys):
+    paths = write_runs(tmp_path, (13,))
+    out = tmp_path / "fit"
+    options = ["--temps", "T1,T2", "--reference", "none", "--quiet", "--p", "0", "--out", str(out)]
+    assert main(["fit", "--data", paths[0], *options]) == 0
+    hotter = tiny_frame(14)
+    hotter["T1"] += 0.5 * (tiny_frame(13)["T1"].max() - tiny_frame(13)["T1"].min()) + 1.0  # beyond the span
+    hotter.to_csv(tmp_path / "hotter.csv", index=False)
+    capsys.readouterr()
+    for data, outside in ((paths[0], False), (str(tmp_path / "hotter.csv"), True)):
+        assert main(["replay", str(out / "model.json"), "--data", data, "--json", str(tmp_path / "r.json")]) == 0
+        result = json.loads((tmp_path / "r.json").read_text())
+        names = [b["input"] for b in result["beyond_modelling_range"]]
+        assert names == (["T1"] if outside else [])
+        assert ("leaves the modelling range" in capsys.readouterr().out) == outside
+    span = ModelFile.load(out / "model.json").training["input_span"]["T1"]
+    assert list(span) == [tiny_frame(13)["T1"].min(), tiny_frame(13)["T1"].max()]
