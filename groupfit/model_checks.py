@@ -16,6 +16,8 @@ from groupfit.features import STARTS, Feature
 from groupfit.grouping import hard_groups, soft_groups
 from groupfit.model_recalibration import recalibration_problem
 from groupfit.reference import reference_problem
+from groupfit.training_checks import expectation_problem
+from groupfit.training_checks import is_number as _is_number
 
 FORMAT = "groupfit-model/1"
 SOURCE_RANGES_KEY = "source_ranges"
@@ -127,27 +129,7 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     training = model.get("training")
     if training is not None and not isinstance(training, Mapping):
         return "'training' must be an object"
-    return _expectation_problem(training or {})
-
-
-def _expectation_problem(training: Mapping[str, Any]) -> str | None:
-    """The next-run expectation under ``training``: a number ≥ 0, its range [low, high] around it, a method."""
-    if "expected_next_run_rms_um" not in training:
-        return None
-    value = training["expected_next_run_rms_um"]
-    if not _is_number(value) or value < 0:
-        return f"training.expected_next_run_rms_um = {value!r}: must be a finite number ≥ 0"
-    bounds = training.get("expected_next_run_range_um")
-    if (
-        not isinstance(bounds, list)
-        or len(bounds) != 2
-        or not all(_is_number(b) for b in bounds)
-        or not bounds[0] <= value <= bounds[1]
-    ):
-        return f"training.expected_next_run_range_um = {bounds!r}: must be [low, high] with low <= expected <= high"
-    if not isinstance(training.get("expected_next_run_method"), str):
-        return "training.expected_next_run_method must say how the expectation was estimated"
-    return None
+    return expectation_problem(training or {})
 
 
 def _inputs_problem(model: Mapping[str, Any]) -> str | None:
@@ -513,7 +495,3 @@ def _parse_derived(entries: Any) -> list[Feature]:
             raise InputError(f"{where}: delay of {feature.delay_samples} samples; at most {MAX_DELAY_SAMPLES}")
         features.append(feature)
     return features
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)

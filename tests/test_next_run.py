@@ -15,7 +15,7 @@ from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.expect import expect_next_run, trust_notes
 from groupfit.heldout.nextrun import forward_chaining, leave_one_run_out
 from groupfit.model import ModelFile
-from groupfit.model_checks import model_problem
+from groupfit.model import model_file_problem as model_problem
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.ridge import RIDGE_GRID, held_out_sse
 from groupfit.runtime import SwitchingRule
