@@ -158,13 +158,14 @@ def test_ridge_by_splits_takes_the_largest_penalty_within_one_standard_error():
     assert [row["alpha"] for row in table] == sorted(RIDGE_GRID)
 
 
-def test_calibration_is_the_geometric_mean_and_percentiles_of_the_ratios():
+def test_calibration_is_the_median_and_percentiles_of_the_ratios():
     raw = np.array([1.0, 2.0, 4.0, 1.0, 3.0])
     actual = np.array([2.0, 8.0, 4.0, 3.0, 3.0])
     derived = calibration.derive_calibration(raw, actual)
-    factor = np.prod(actual / raw) ** (1 / len(raw))
+    factor = 2.0  # the ratios 2, 4, 1, 3, 1: the middle one of five
     assert derived["factor"] == pytest.approx(factor)
-    assert derived["ratio_low"] == pytest.approx(np.percentile(actual / raw / factor, 10))
+    assert derived["ratio_low"] == pytest.approx(0.5)  # ratios / 2: 0.5, 0.5, 1, 1.5, 2
+    assert derived["ratio_high"] == pytest.approx(1.8)  # 90th percentile: 1.5 + 0.6 · (2 - 1.5)
     value, (low, high) = calibration.expected(2.0)
     assert value == pytest.approx(2.0 * calibration.FACTOR)
     assert low == pytest.approx(calibration.RATIO_RANGE[0] * value)
