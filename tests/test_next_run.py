@@ -1,6 +1,7 @@
 """The expected next-run error: forward chaining and leave-one-run-out against loops written out by hand."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -222,3 +223,20 @@ def test_replay_says_when_a_run_leaves_the_modelling_range(tmp_path, capsys):
         assert ("leaves the modelling range" in capsys.readouterr().out) == outside
     span = ModelFile.load(out / "model.json").training["input_span"]["T1"]
     assert list(span) == [tiny_frame(13)["T1"].min(), tiny_frame(13)["T1"].max()]
+
+
+def test_diagnose_reports_before_and_after_with_the_estimate_fit_makes(tmp_path, capsys):
+    datasets = Path(__file__).resolve().parents[1] / "datasets"
+    run = str(datasets / "diag_speed_model.csv")
+    out = tmp_path / "fit"
+    assert main(["fit", "--data", run, "--temps", "T1,T2", "--p", "0", "--quiet", "--out", str(out)]) == 0
+    fitted = ModelFile.load(out / "model.json").training
+    capsys.readouterr()
+    assert main(["diagnose", str(out / "model.json"), "--data", run, "--out", str(tmp_path / "d"), "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    expected = json.loads(captured.out)["expected_next_run"]
+    # the same structure refitted by the same estimator, reached from the model file instead of fit's run
+    assert expected["before"]["expected_next_run_rms_um"] == pytest.approx(fitted["expected_next_run_rms_um"], rel=1e-9)
+    augmented = ModelFile.load(tmp_path / "d" / "model_augmented.json").training
+    assert augmented["expected_next_run_rms_um"] == expected["after"]["expected_next_run_rms_um"]
+    assert "expect  before: about" in captured.err and "expect  after: about" in captured.err
