@@ -22,6 +22,8 @@ from groupfit.models.ridge import RIDGE_GRID, held_out_sse
 from groupfit.runtime import SwitchingRule
 
 SEGMENT = 20
+FIT_OPTIONS = ("--temps", "T1,T2", "--reference", "none", "--quiet", "--recalibrate", "none")
+"""Without probe recalibration: its tuning needs runs longer than these two-hour ones."""
 SPEEDS = (0, 1000, 2000, 1000, 0, 2000)
 
 
@@ -95,7 +97,7 @@ def test_leave_one_run_out_matches_fit_and_replay_run_by_run(tmp_path, capsys):
     for k, held_out in enumerate(paths):
         others = [p for j, p in enumerate(paths) if j != k]
         out = tmp_path / f"fit{k}"
-        options = ["--temps", "T1,T2", "--reference", "none", "--quiet", "--p", "0", "--recalibrate", "none"]
+        options = [*FIT_OPTIONS, "--p", "0"]
         assert main(["fit", "--data", *others, *options, "--out", str(out)]) == 0
         replayed = tmp_path / f"replay{k}.json"
         assert main(["replay", str(out / "model.json"), "--data", held_out, "--json", str(replayed)]) == 0
@@ -104,17 +106,7 @@ def test_leave_one_run_out_matches_fit_and_replay_run_by_run(tmp_path, capsys):
         count += int(np.isfinite(residual).sum())
     capsys.readouterr()
     result = tmp_path / "all.json"
-    options = [
-        "--temps",
-        "T1,T2",
-        "--reference",
-        "none",
-        "--quiet",
-        "--recalibrate",
-        "none",
-        "--out",
-        str(tmp_path / "all"),
-    ]
+    options = [*FIT_OPTIONS, "--out", str(tmp_path / "all")]
     assert main(["fit", "--data", *paths, *options, "--json", str(result)]) == 0
     fitted = json.loads(result.read_text())
     assert fitted["p"] == 0
@@ -219,19 +211,7 @@ def test_a_model_file_with_an_expectation_outside_its_range_is_refused():
 def test_replay_says_when_a_run_leaves_the_modelling_range(tmp_path, capsys):
     paths = write_runs(tmp_path, (13,))
     out = tmp_path / "fit"
-    options = [
-        "--temps",
-        "T1,T2",
-        "--reference",
-        "none",
-        "--quiet",
-        "--p",
-        "0",
-        "--recalibrate",
-        "none",
-        "--out",
-        str(out),
-    ]
+    options = [*FIT_OPTIONS, "--p", "0", "--out", str(out)]
     assert main(["fit", "--data", paths[0], *options]) == 0
     hotter = tiny_frame(14)
     hotter["T1"] += 0.5 * (tiny_frame(13)["T1"].max() - tiny_frame(13)["T1"].min()) + 1.0  # beyond the span
