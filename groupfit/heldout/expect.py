@@ -41,7 +41,11 @@ class NextRunExpectation:
 
     def expected(self, index: int | None = None) -> tuple[float, tuple[float, float]]:
         """The expected RMS (µm) of candidate ``index`` (default: the chosen one) and its range."""
-        raw = self.scores.raw_rms()[self.chosen if index is None else index]
+        index = self.chosen if index is None else index
+        raw = float(self.scores.raw_rms()[index])
+        if self.scores.kind == LEAVE_ONE_RUN_OUT:  # each held-out run is a real next run: no factor
+            per_run = np.sqrt(self.scores.sse[index] / self.scores.counts)
+            return raw, (float(min(per_run.min(), raw)), float(max(per_run.max(), raw)))
         return calibration.expected(raw)
 
     def for_candidate(self, candidate) -> tuple[float, tuple[float, float]] | None:
@@ -56,6 +60,8 @@ class NextRunExpectation:
         return self.candidates[one_standard_error_choice(mean[:count], error[:count])]
 
     def method(self) -> str:
+        if self.scores.kind == LEAVE_ONE_RUN_OUT:
+            return f"{self.scores.method()}; range from the best to the worst held-out run"
         return (
             f"{self.scores.method()}; calibrated ×{calibration.FACTOR:.3g}, range from the calibration panel's "
             f"{calibration.LEVELS[0]:g}th-{calibration.LEVELS[1]:g}th percentiles"
