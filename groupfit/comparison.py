@@ -62,8 +62,7 @@ class ComparisonSettings:
     structural_gain_um_per_K: float | None = None
     conditions: tuple[str, ...] = ("speed_rpm",)
     p_target: str | float | None = "20%"
-    fit_pmax: int = 3
-    """The largest p ``groupfit fit`` chooses among (``[model] pmax``): compare marks its choice."""
+    fit_pmax: int = 3  # the largest p ``groupfit fit`` chooses among ([model] pmax): compare marks its choice
     same_condition_samples: int = 2
     """A run is on the modelling run's condition when its condition columns go through the same levels in
     the same order, each change within this many samples of the modelling run's (:func:`run_condition`)."""
@@ -123,9 +122,8 @@ class ComparisonResult:
     reference: str | None = None
     """What the temperature inputs were taken relative to (:mod:`groupfit.reference`)."""
     expectation: NextRunExpectation | None = None
-    """The expected next-run error of p = 0…pmax from the modelling run alone (:mod:`groupfit.heldout.expect`)."""
+    """The expected next-run error of p = 0…pmax (:mod:`groupfit.heldout.expect`); ``fit_choice``: fit's p."""
     fit_choice: int | None = None
-    """The p ``groupfit fit`` would choose by that estimate (over its own 0…pmax)."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -142,9 +140,8 @@ class ComparisonResult:
             "break_intervals": {str(p): report.to_json() for p, report in self.break_intervals.items()},
             "run_conditions": self.run_conditions,
             "reference": self.reference,
-            "expected_next_run": None
-            if self.expectation is None
-            else {**self.expectation.to_json(), "fit_would_choose_p": self.fit_choice},
+            "expected_next_run": self.expectation
+            and {**self.expectation.to_json(), "fit_would_choose_p": self.fit_choice},
         }
 
     def summary(self) -> str:
@@ -366,12 +363,9 @@ def compare_models(
         )
         for rule in ("bic", "target")
     }
+    candidates = range(max(pmax, settings.fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
     expectation = expect_next_run(
-        [modelling],
-        range(max(pmax, settings.fit_pmax) + 1),
-        n=settings.n,
-        c=settings.c,
-        fit_intercept=settings.fit_intercept,
+        [modelling], candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
     )
     ar1_summary = None
     if ar1 is not None:
@@ -450,8 +444,7 @@ def comparison_summary(result: ComparisonResult) -> str:
         f"how many breaks: BIC (in sample) chooses p = {bic['p']}; the target rule (R <= {target['target_um']:.4g} µm) "
         f"chooses p = {target['p'] if target['p'] is not None else 'none up to pmax'}"
     )
-    if result.expectation is not None:
-        lines += expectation_lines(result)
+    lines += result.expectation.candidate_lines(result.runs[0], result.fit_choice) if result.expectation else []
     stats = result.mlr_statistics
     terms = ", ".join(
         f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"]
@@ -483,21 +476,6 @@ def ar1_line(ar1: dict[str, Any] | None) -> str:
         + ("fitted on the free-run error; " if ar1.get("fit") == "free_run" else "")
         + f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
     )
-
-
-def expectation_lines(result: ComparisonResult) -> list[str]:
-    """The expected next-run RMS of every p from the modelling run alone, ``fit``'s choice marked."""
-    expectation = result.expectation
-    value, (low, high) = expectation.expected()
-    cells = []
-    for i, p in enumerate(expectation.candidates):
-        mark = " <- fit's choice" if p == result.fit_choice else ""
-        cells.append(f"p = {p}{' (MLR)' if p == 0 else ''} {expectation.expected(i)[0]:.3g}{mark}")
-    lines = [
-        f"expected next-run RMS µm from {result.runs[0]} alone (range ×{low / value:.2g}-{high / value:.2g}; "
-        f"{expectation.scores.method()}): " + ", ".join(cells)
-    ]
-    return lines + [f"note: {note}" for note in expectation.notes]
 
 
 def comparison_table(result: ComparisonResult, keys: list[str], index: dict) -> list[str]:

@@ -98,6 +98,19 @@ class NextRunExpectation:
             "notes": list(self.notes),
         }
 
+    def candidate_lines(self, run_name: str, marked=None) -> list[str]:
+        """Every candidate's expected RMS on one line (``compare``), ``marked`` (fit's choice) marked, the notes."""
+        value, (low, high) = self.expected()
+        cells = []
+        for i, p in enumerate(self.candidates):
+            mark = " <- fit's choice" if p == marked else ""
+            cells.append(f"p = {p}{' (MLR)' if p == 0 else ''} {self.expected(i)[0]:.3g}{mark}")
+        head = (
+            f"expected next-run RMS µm from {run_name} alone (range ×{low / value:.2g}-{high / value:.2g}; "
+            f"{self.scores.method()}): "
+        )
+        return [head + ", ".join(cells), *(f"note: {note}" for note in self.notes)]
+
     def line(self) -> str:
         """``expect about X µm RMS on the next run (range a–b; how it was estimated)`` and the notes."""
         value, (low, high) = self.expected()

@@ -35,7 +35,6 @@ from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
 from groupfit.heldout.choice import pooled_error
 from groupfit.heldout.folds import make_folds
-from groupfit.model import grouped_prediction
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.runtime import replay_groups
@@ -158,11 +157,12 @@ def feasible_pmax(n_samples: int, *, n: int, c: float, n_coef: int, pmax: int) -
 
 
 def rule_prediction(estimator: GroupedRegressor, fitted_on: Run, temps: np.ndarray) -> np.ndarray:
-    """The prediction a controller makes over ``temps`` from sample 1 on: the group chosen by the model's rule."""
+    """The prediction a controller makes over ``temps`` from sample 1 on: the group chosen by the model's rule,
+    with its bumpless transfer after a switch."""
     if estimator.p == 0 and not estimator.breaks_:
         return estimator.intercept_[0] + temps @ estimator.coef_[0]
-    groups = replay_groups(estimator.to_model_file(fitted_on), temps)
-    return grouped_prediction(estimator.intercept_, estimator.coef_, temps, groups)
+    model = estimator.to_model_file(fitted_on)
+    return model.predict(temps, replay_groups(model, temps), transfer=True)  # with the bumpless transfer
 
 
 def forward_chaining(
