@@ -1,6 +1,6 @@
 """Does ``groupfit diagnose`` name the effect a model misses, on runs from an independent simulator?
 
-The runs come from ``bench/independent_machine.py``, a lumped RC thermal
+The runs come from ``tests/support/independent_machine.py``, a lumped RC thermal
 network of a machine tool written with numpy/scipy only (no code shared with
 ``groupfit.synthetic`` or ``groupfit.fe``). Each scenario is a modelling run
 and a validation run with one known missing effect (an unsensed part that
@@ -30,7 +30,7 @@ It is a measurement, not a test: it exits 0 whatever the verdicts.
     python bench/bench_diagnose_independent.py [--only NAME ...] [--json FILE] [--reference none|default] [--joint]
         [--keep-reference] [--p P] [--random N [--first-seed S] [--truth absolute|rises]]
 
-``--random N`` replaces the fixed set by N randomised scenarios (:func:`independent_machine.random_spec`): the
+``--random N`` replaces the fixed set by N randomised scenarios (:func:`support.independent_machine.random_spec`): the
 missing effect cycles through an ambient, a pump, a speed, an on/off spindle and nothing; every run is a new
 workshop day (ambient level 18 … 24 °C, swing, phase, HVAC step, door), with new schedules, sampling period and
 time constant. ``--truth rises`` makes the error follow the parts' rises over the air instead of their
@@ -48,9 +48,9 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from independent_machine import (  # noqa: E402
+from support.independent_machine import (  # noqa: E402
     RANDOM_KINDS,
     Scenario,
     oracle_rms_um,

@@ -2,7 +2,7 @@ import json
 
 import numpy as np
 import pytest
-from grouped_reference import shared_effect_fit
+from support.grouped_reference import shared_effect_fit
 
 from groupfit.cli import main
 from groupfit.data import load_run

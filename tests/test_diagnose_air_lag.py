@@ -6,10 +6,11 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from bench_modules import load
-from grouped_reference import shared_effect_fit
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+from support import independent_machine as machine
+from support.bench_modules import load
+from support.grouped_reference import shared_effect_fit
 
 from groupfit.cli import main
 from groupfit.data import load_run
@@ -153,7 +154,7 @@ def test_the_cli_names_the_lag_over_the_air_and_the_written_model_replays(tmp_pa
 
 
 def test_the_written_model_runs_on_the_controller_as_in_python(drivers):
-    from test_export_c import assert_same_decisions, python_replay
+    from support.replay import assert_same_decisions, python_replay
 
     from groupfit.export.harness import run_driver
     from groupfit.runtime import RuleTables
@@ -175,7 +176,7 @@ def test_the_lag_is_taken_over_the_air_low_passed_for_a_few_minutes_not_over_eac
     # run r7020 of the independent machine (bench/independent_machine.py), its error on the parts' rises over
     # the air, the unsensed thin part behind the air missing. Over each reading of the air the lag improves
     # only half of the held-out conditions and is refused; over the air low-passed 2 min it improves more.
-    machine, bench = load("independent_machine"), load("bench_diagnose_independent")
+    bench = load("bench_diagnose_independent")
     scenario = machine.random_scenarios(1, first_seed=7020, truth="rises")[0]
     model, modelling, validation = bench.base_model(scenario, "default")
     result = diagnose(model, modelling, validation, live_rule=replay_groups)

@@ -3,14 +3,14 @@
 import dataclasses
 
 import pytest
-from bench_modules import load
+from support import independent_machine as machine
+from support.bench_modules import load
 from test_diagnose import TEMPS, lumped, with_ambient_effect
 
 from groupfit.cli import main
 from groupfit.diagnose import diagnose
 from groupfit.runtime import replay_groups
 
-machine = load("independent_machine")
 bench = load("bench_diagnose_independent")
 
 

@@ -5,9 +5,10 @@ Runs from the independent lumped machine (``bench/independent_machine.py``).
 
 import numpy as np
 import pytest
-from bench_modules import load
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+from support import independent_machine as machine
+from support.bench_modules import load
 
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM
@@ -15,7 +16,6 @@ from groupfit.features import derived_matrix
 from groupfit.heldout.folds import make_folds
 from groupfit.runtime import replay_groups
 
-machine = load("independent_machine")
 bench = load("bench_diagnose_independent")
 
 

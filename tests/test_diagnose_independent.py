@@ -6,9 +6,9 @@ the simulator's, the judge the validation run.
 """
 
 import pytest
-from bench_modules import load
+from support import independent_machine as machine
+from support.bench_modules import load
 
-machine = load("independent_machine")
 bench = load("bench_diagnose_independent")
 
 

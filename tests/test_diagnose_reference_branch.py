@@ -7,9 +7,10 @@ default: the sensors as rises over ``T_amb``.
 
 import numpy as np
 import pytest
-from bench_modules import load
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+from support import independent_machine as machine
+from support.bench_modules import load
 
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.loop import MIN_SCORE, OVERFIT_NOTE
@@ -18,7 +19,6 @@ from groupfit.heldout.design import group_index, group_sample_floor
 from groupfit.heldout.folds import make_folds
 from groupfit.runtime import replay_groups
 
-machine = load("independent_machine")
 bench = load("bench_diagnose_independent")
 
 

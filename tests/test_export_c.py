@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support.replay import assert_same_decisions, python_replay
 from test_switching_models import (
     augmented_model,
     augmented_validation,
@@ -29,36 +30,9 @@ from test_switching_models import (
 from groupfit.export import render, write
 from groupfit.export.harness import STRICT_FLAGS, build_driver, run_driver
 from groupfit.features import Feature
-from groupfit.runtime import RETURN_PERIOD_FAULT, RuleTables, SwitchingRule
+from groupfit.runtime import RETURN_PERIOD_FAULT, RuleTables
 
-pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
-
-
-def python_replay(model, temps, precision="double"):
-    rule = SwitchingRule(model, precision=precision)
-    rule.reset()
-    results = [rule.step(row) for row in temps]
-    return {
-        "code": np.array([r.code for r in results]),
-        "group": np.array([r.group for r in results]),
-        "fault": np.array([r.fault for r in results]),
-        "switched": np.array([r.switched for r in results]),
-        "prediction_um": np.array([r.prediction_um for r in results]),
-        "compensation_um": np.array([r.compensation_um for r in results]),
-    }
-
-
-def assert_same_decisions(c_out, py, tolerance=None):
-    assert np.array_equal(c_out.code, py["code"])
-    assert np.array_equal(c_out.group, py["group"])
-    assert np.array_equal(c_out.fault, py["fault"])
-    assert np.array_equal(c_out.switched, py["switched"])
-    if tolerance is None:  # bit for bit
-        assert c_out.prediction_um.tobytes() == py["prediction_um"].tobytes()
-        assert c_out.compensation_um.tobytes() == py["compensation_um"].tobytes()
-    else:
-        assert np.max(np.abs(c_out.prediction_um - py["prediction_um"])) <= tolerance
-        assert np.max(np.abs(c_out.compensation_um - py["compensation_um"])) <= tolerance
+pytestmark = [pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed"), pytest.mark.toolchain]
 
 
 def cases():

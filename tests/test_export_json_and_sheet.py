@@ -4,8 +4,8 @@ import json
 import math
 
 import pytest
-from json_runtime import run_table
 from support import write_model
+from support.json_runtime import run_table
 from test_switching_models import augmented_model, derived_streams, streams_for, synthetic_model
 
 from groupfit.cli import main

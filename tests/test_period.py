@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from json_runtime import run_table
+from support.json_runtime import run_table
 from test_position import fitted
 from test_switching_models import augmented_model
 

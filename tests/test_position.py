@@ -9,8 +9,8 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 import pytest
-from json_runtime import compensation, run_table
-from test_export_c import assert_same_decisions, python_replay
+from support.json_runtime import compensation, run_table
+from support.replay import assert_same_decisions, python_replay
 
 from groupfit.cli import main
 from groupfit.errors import InputError
@@ -283,8 +283,9 @@ def test_c_build_makes_the_decisions_of_replay_bit_for_bit(drivers, case, single
 
 
 @pytest.mark.parametrize("case", CASES)
+@pytest.mark.toolchain
 def test_lreal_block_matches_replay(case):
-    from test_export_st import assert_lreal_block_replays
+    from support.structured_text import assert_lreal_block_replays
 
     model = model_for(*case)
     assert_lreal_block_replays(model, streams(model).values())
@@ -292,7 +293,7 @@ def test_lreal_block_matches_replay(case):
 
 @pytest.mark.parametrize("case", CASES)
 def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, case):
-    from test_export_st import as_single, assert_same_decisions, run_block
+    from support.structured_text import as_single, assert_same_decisions, run_block
 
     model = model_for(*case)
     (text,) = render(model, "st", real="REAL").values()
@@ -558,6 +559,7 @@ def derived_position_model() -> tuple[dict, dict[str, np.ndarray]]:
 
 
 @pytest.mark.parametrize("single", [False, True])
+@pytest.mark.toolchain
 def test_derived_inputs_with_position_and_dead_band_c_build_is_the_python_rule(tmp_path, single):
     if shutil.which("gcc") is None:
         pytest.skip("gcc is not installed")
@@ -571,8 +573,9 @@ def test_derived_inputs_with_position_and_dead_band_c_build_is_the_python_rule(t
         assert np.all(np.isfinite(c_out.compensation_um))
 
 
+@pytest.mark.toolchain
 def test_derived_inputs_with_position_and_dead_band_lreal_block_is_the_python_rule():
-    from test_export_st import run_block
+    from support.structured_text import run_block
 
     model, chosen = derived_position_model()
     (text,) = render(model, "st", real="LREAL").values()
@@ -595,8 +598,9 @@ def test_derived_inputs_with_position_and_dead_band_json_table_is_enough_to_rebu
 
 
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
+@pytest.mark.toolchain
 def test_the_position_block_and_the_table_parse_as_structured_text(real):
-    from test_export_st import blark_accepts, tree_sitter_errors
+    from support.structured_text import blark_accepts, tree_sitter_errors
 
     model = model_for(3, p=1, dead_band=True)
     texts = [render(model, "st", real=real)["FB_GroupfitComp.st"]]

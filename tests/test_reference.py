@@ -7,8 +7,8 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
-from json_runtime import run_table
-from test_export_c import assert_same_decisions, python_replay
+from support.json_runtime import run_table
+from support.replay import assert_same_decisions, python_replay
 from test_switching_models import DATASETS, noisy, shifted
 
 from groupfit.cli import main
@@ -214,8 +214,9 @@ def test_c_header_names_the_reference():
 
 
 @pytest.mark.parametrize("reference", ["T_amb", "start"])
+@pytest.mark.toolchain
 def test_lreal_block_matches_replay(reference):
-    from test_export_st import assert_lreal_block_replays
+    from support.structured_text import assert_lreal_block_replays
 
     model = model_for(reference)
     assert_lreal_block_replays(model, streams(model).values())
@@ -223,7 +224,7 @@ def test_lreal_block_matches_replay(reference):
 
 @pytest.mark.parametrize("reference", ["T_amb", "start"])
 def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, reference):
-    from test_export_st import as_single, assert_same_decisions, run_block
+    from support.structured_text import as_single, assert_same_decisions, run_block
 
     model = model_for(reference)
     (text,) = render(model, "st", real="REAL").values()
