@@ -4,6 +4,7 @@ import os
 import numpy as np
 import pytest
 from hypothesis import settings
+from support import SHARED_DATA
 
 from groupfit.grouping import Constraints, soft_groups
 from groupfit.synthetic import simulate_lumped
@@ -13,6 +14,36 @@ from groupfit.synthetic import simulate_lumped
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
+
+TOOLCHAIN_FIXTURES = {"drivers", "single_driver"}
+"""Fixtures that build the C export with gcc: a test using one is marked ``toolchain``."""
+
+
+def pytest_collection_modifyitems(items):
+    """Mark what a test needs from its fixtures and skip conditions, so that no test has to repeat it.
+
+    ``toolchain``: the test uses a fixture that builds C with gcc. ``measured``: the test uses
+    :func:`measured_data`, or skips on a condition whose reason names ``shared/data``. Tests that call gcc or
+    the Structured Text parsers themselves, and those that run the command in a subprocess (``cli``), say so
+    with the marker.
+    """
+    for item in items:
+        fixtures = set(getattr(item, "fixturenames", ()))
+        if fixtures & TOOLCHAIN_FIXTURES:
+            item.add_marker(pytest.mark.toolchain)
+        skips_without_data = any(
+            "shared/data" in str(mark.kwargs.get("reason", "")) for mark in item.iter_markers("skipif")
+        )
+        if "measured_data" in fixtures or skips_without_data:
+            item.add_marker(pytest.mark.measured)
+
+
+@pytest.fixture(scope="session")
+def measured_data():
+    """The folder of measured data (``../shared/data``); the test is skipped when it is absent."""
+    if not SHARED_DATA.is_dir():
+        pytest.skip(f"measured data absent: {SHARED_DATA} (a fresh clone has none)")
+    return SHARED_DATA
 
 
 def brute_force_rg(X, y, breaks, n, objective, fit_intercept):

@@ -538,6 +538,7 @@ IDS = [f"{c.kind}: {c.label}" for c in CASES]
 
 
 @pytest.mark.slow
+@pytest.mark.cli
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(outcomes, case):
     if case.needs_permissions and ROOT_USER:

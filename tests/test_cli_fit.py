@@ -94,6 +94,7 @@ def test_bad_config_key_is_one_line(tmp_path, capsys):
     assert len(err) == 1 and "unknown key 'pee' in [model]" in err[0] and "bad.toml" in err[0]
 
 
+@pytest.mark.cli
 def test_module_entry_point_and_usage_errors():
     ok = subprocess.run([sys.executable, "-m", "groupfit", "fit", "--help"], capture_output=True, text=True)
     assert ok.returncode == 0 and "--search" in ok.stdout

@@ -22,11 +22,13 @@ def imported_after(code: str) -> set[str]:
     return set(json.loads(done.stdout.strip().splitlines()[-1]))
 
 
+@pytest.mark.cli
 def test_groupfit_help_imports_neither_sklearn_nor_deap():
     loaded = imported_after("from groupfit.cli import main\ntry:\n    main(['--help'])\nexcept SystemExit:\n    pass")
     assert "groupfit" in loaded and not loaded & set(HEAVY)
 
 
+@pytest.mark.cli
 def test_exports_depend_on_the_runtime_not_on_the_fitting_stack():
     loaded = imported_after(
         "import groupfit.export.json_table, groupfit.export.c, groupfit.export.st, groupfit.runtime"
@@ -34,6 +36,7 @@ def test_exports_depend_on_the_runtime_not_on_the_fitting_stack():
     assert not loaded & set(HEAVY)
 
 
+@pytest.mark.cli
 def test_a_verb_imports_only_what_it_needs():
     loaded = imported_after(
         "from groupfit.cli import main\ntry:\n    main(['export', '--help'])\nexcept SystemExit:\n    pass"

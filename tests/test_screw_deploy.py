@@ -73,6 +73,7 @@ def test_unusable_readings_are_a_fault_and_no_value(model_path):
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+@pytest.mark.toolchain
 def test_the_c_export_equals_the_replay_bit_for_bit(model_path, tmp_path):
     assert main(["export", str(model_path), "--target", "c", "--source", "screw_H", "--out", str(tmp_path)]) == 0
     (tmp_path / "driver.c").write_text(DRIVER)

@@ -55,6 +55,7 @@ def rows_by_hash(db):
 
 
 @pytest.mark.slow
+@pytest.mark.cli
 def test_killed_sweep_resumes_with_nothing_lost_and_nothing_duplicated(tmp_path):
     config = tmp_path / "many.toml"
     config.write_text(MANY_SHORT_RUNS.format(data=DATA.as_posix()), encoding="utf-8")
@@ -107,6 +108,7 @@ def test_killed_sweep_resumes_with_nothing_lost_and_nothing_duplicated(tmp_path)
         np.testing.assert_allclose(resumed_rows[run_hash]["coefficients"], row["coefficients"], rtol=1e-9)
 
 
+@pytest.mark.cli
 def test_two_sweeps_on_one_database_share_the_runs(tmp_path):
     """Started together, two sweeps claim runs from the database: every run executes once."""
     config = tmp_path / "shared.toml"
