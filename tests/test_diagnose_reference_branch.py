@@ -110,6 +110,7 @@ def test_as_well_with_the_airs_weight_fixed_is_taken_over_a_diagnosis_that_freed
     assert difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1)
 
 
+@pytest.mark.slow
 def test_an_over_fitting_model_is_said_to_over_fit_once_when_the_branch_is_taken():
     # a grouped model (p = 3) over-fits on rises and on absolute readings; the report's check is the given
     # model's, and its note is not followed by the start of the second diagnosis's

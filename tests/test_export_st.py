@@ -121,7 +121,11 @@ def single_driver(tmp_path_factory):
 STREAMS = {"synthetic p=3": None, "p=0": ("modelling", "faults"), "8 temps p=6": ("modelling", "faults")}
 
 
-@pytest.mark.parametrize("label", sorted(STREAMS))
+ST_LABELS = [pytest.param(k, marks=pytest.mark.slow) if k == "8 temps p=6" else k for k in sorted(STREAMS)]
+"""The largest block (six breaks on eight sensors) takes the longest to parse: the full suite runs it."""
+
+
+@pytest.mark.parametrize("label", ST_LABELS)
 def test_real_block_matches_the_single_precision_c_build_bit_for_bit(single_driver, label):
     model = models()[label]
     run = eight_sensor_model()[1] if len(model["temps"]) == 8 else synthetic_model()[1]
@@ -278,6 +282,7 @@ def heat_law_streams():
 
 
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
+@pytest.mark.slow
 def test_heat_law_blocks_parse_with_both_parsers(real):
     text = derived_block("heat law p=2", real)
     assert text.isascii() and "EXPT(ABS(" in text and "POWER_EXPONENT_1 : LREAL := 1.6666666666666667;" in text

@@ -270,6 +270,8 @@ def test_a_missing_position_reading_is_held_then_a_sensor_fault():
 
 
 CASES = [(1, 1, False), (3, 1, True), (2, 0, True)]
+ST_CASES = [pytest.param(case, marks=() if case == CASES[1] else pytest.mark.slow) for case in CASES]
+"""The cases of the Structured Text evaluator (a block takes seconds to parse): the fast lane keeps the richest."""
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -282,7 +284,7 @@ def test_c_build_makes_the_decisions_of_replay_bit_for_bit(drivers, case, single
         assert_same_decisions(c_out, python_replay(model, temps, "single" if single else "double"))
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", ST_CASES)
 @pytest.mark.toolchain
 def test_lreal_block_matches_replay(case):
     from support.structured_text import assert_lreal_block_replays
@@ -291,7 +293,7 @@ def test_lreal_block_matches_replay(case):
     assert_lreal_block_replays(model, streams(model).values())
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", ST_CASES)
 def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, case):
     from support.structured_text import as_single, assert_same_decisions, run_block
 
@@ -599,6 +601,7 @@ def test_derived_inputs_with_position_and_dead_band_json_table_is_enough_to_rebu
 
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
 @pytest.mark.toolchain
+@pytest.mark.slow
 def test_the_position_block_and_the_table_parse_as_structured_text(real):
     from support.structured_text import blark_accepts, tree_sitter_errors
 
