@@ -1,11 +1,16 @@
+import contextlib
+import io
 import itertools
+import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import settings
 from support import SHARED_DATA
 
+from groupfit.cli import main
 from groupfit.grouping import Constraints, soft_groups
 from groupfit.synthetic import simulate_lumped
 
@@ -113,11 +118,43 @@ def drivers(tmp_path_factory):
     return get
 
 
+DIAG_SCENARIOS = Path(__file__).resolve().parents[1] / "datasets"
+"""Where the finite-element diagnosis data sets ``diag_<scenario>_model.csv`` / ``_validate.csv`` live."""
+
+
+@pytest.fixture(scope="session")
+def diagnosed_scenario(tmp_path_factory):
+    """``diagnosed_scenario(name)``: ``groupfit fit --p 0 --reference none`` on the FE data set ``diag_<name>_model``,
+    then ``groupfit diagnose`` with ``diag_<name>_validate``, run once per session for each scenario.
+
+    Returns the ``--json`` result (a dict), the model file's path and the printed report. Tests read them and
+    must not change the files.
+    """
+    done = {}
+
+    def get(name):
+        if name not in done:
+            folder = tmp_path_factory.mktemp(f"diag_{name}")
+            data = DIAG_SCENARIOS / f"diag_{name}_model.csv"
+            fit = ["fit", "--data", str(data), "--temps", "T1,T2,T3,T4", "--p", "0", "--reference", "none"]
+            assert main([*fit, "--out", str(folder / "model"), "--quiet"]) == 0
+            validate = DIAG_SCENARIOS / f"diag_{name}_validate.csv"
+            args = ["diagnose", str(folder / "model" / "model.json"), "--data", str(data), "--validate", str(validate)]
+            report = io.StringIO()
+            with contextlib.redirect_stdout(report):
+                status = main([*args, "--out", str(folder / "diagnose"), "--json", str(folder / "diagnose.json")])
+            assert status == 0
+            result = json.loads((folder / "diagnose.json").read_text())
+            done[name] = (result, folder / "model" / "model.json", report.getvalue())
+        return done[name]
+
+    return get
+
+
 @pytest.fixture
 def fitted_on_monday(tmp_path):
     """``fitted_on_monday(monday, tuesday, temps)``: both runs written as CSV and ``groupfit fit --p 0`` run on the
     first with the fit's defaults; returns the two paths and the model file's path."""
-    from groupfit.cli import main
 
     def fit(monday, tuesday, temps):
         data, other = tmp_path / "monday.csv", tmp_path / "tuesday.csv"

@@ -1,14 +1,9 @@
 """The diagnosis on FE data sets with one undeclared effect each (configs/diag_*.toml)."""
 
-import json
-from pathlib import Path
-
 import pytest
 
-from groupfit.cli import main
 from groupfit.model import ModelFile
 
-DATA = Path(__file__).resolve().parents[1] / "datasets"
 TEMPS = "T1,T2,T3,T4"
 EXPECTED = {
     "ambient": {"T_amb"},
@@ -18,52 +13,9 @@ EXPECTED = {
 }
 
 
-def run_diagnosis(tmp_path, scenario):
-    model_dir = tmp_path / "model"
-    assert (
-        main(
-            [
-                "fit",
-                "--data",
-                str(DATA / f"diag_{scenario}_model.csv"),
-                "--temps",
-                TEMPS,
-                "--p",
-                "0",
-                "--reference",
-                "none",  # the scenarios: a model on absolute temperatures that misses one effect
-                "--out",
-                str(model_dir),
-                "--quiet",
-            ]
-        )
-        == 0
-    )
-    out = tmp_path / "diagnose"
-    assert (
-        main(
-            [
-                "diagnose",
-                str(model_dir / "model.json"),
-                "--data",
-                str(DATA / f"diag_{scenario}_model.csv"),
-                "--validate",
-                str(DATA / f"diag_{scenario}_validate.csv"),
-                "--out",
-                str(out),
-                "--json",
-                str(tmp_path / "diagnose.json"),
-            ]
-        )
-        == 0
-    )
-    return json.loads((tmp_path / "diagnose.json").read_text()), model_dir / "model.json"
-
-
 @pytest.mark.parametrize("scenario", sorted(EXPECTED))
-def test_the_undeclared_effect_is_named_and_validation_rms_falls_40_percent(tmp_path, capsys, scenario):
-    result, _ = run_diagnosis(tmp_path, scenario)
-    report = capsys.readouterr().out
+def test_the_undeclared_effect_is_named_and_validation_rms_falls_40_percent(diagnosed_scenario, scenario):
+    result, _, report = diagnosed_scenario(scenario)
     assert result["added"], f"{scenario}: nothing found"
     first = result["added"][0]
     assert first["column"] in EXPECTED[scenario]
@@ -75,20 +27,20 @@ def test_the_undeclared_effect_is_named_and_validation_rms_falls_40_percent(tmp_
     assert augmented["temps"][:4] == TEMPS.split(",") and augmented["derived_inputs"][0]["column"] == first["column"]
 
 
-def test_lag_scenario_finds_the_time_constant_of_the_unsensed_part(tmp_path):
-    result, _ = run_diagnosis(tmp_path, "lag")
+def test_lag_scenario_finds_the_time_constant_of_the_unsensed_part(diagnosed_scenario):
+    result, _, _ = diagnosed_scenario("lag")
     # configs/diag_lag_*.toml: the unsensed part lags the bearing heat with tau = 6 h
     assert result["added"][0]["tau_s"] == pytest.approx(6 * 3600.0, rel=0.35)
 
 
-def test_speed_scenario_finds_the_heat_law_and_the_time_constant(tmp_path):
-    result, _ = run_diagnosis(tmp_path, "speed")
+def test_speed_scenario_finds_the_heat_law_and_the_time_constant(diagnosed_scenario):
+    result, _, _ = diagnosed_scenario("speed")
     # configs/diag_speed_*.toml: bearing heat ∝ speed^(5/3), the unsensed part lags it with tau = 1.5 h
     first = result["added"][0]
     assert first["exponent"] == pytest.approx(5 / 3) and first["tau_s"] == pytest.approx(1.5 * 3600.0, rel=0.35)
 
 
-def test_nothing_missing_on_the_clean_machine(tmp_path, capsys):
-    result, model_path = run_diagnosis(tmp_path, "none")
+def test_nothing_missing_on_the_clean_machine(diagnosed_scenario):
+    result, model_path, report = diagnosed_scenario("none")
     assert result["added"] == [] and result["model"] == str(model_path)
-    assert "nothing missing" in capsys.readouterr().out
+    assert "nothing missing" in report
