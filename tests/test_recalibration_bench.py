@@ -4,7 +4,7 @@ day, and the measured spindle test cut into a modelling 40 % and the next 20 % (
 from __future__ import annotations
 
 import pytest
-from bench_modules import load
+from support.bench_modules import load
 
 bench = load("bench_recalibration")
 
@@ -18,7 +18,7 @@ def run_scenario(name, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["independent:speed_rpm_2h_30s", "measured"])
+@pytest.mark.parametrize("name", ["independent:speed_rpm_2h_30s", pytest.param("measured", marks=pytest.mark.measured)])
 def test_checks_help_the_chosen_filter_beats_the_hold_and_a_gross_check_costs_little(tmp_path, name):
     result = run_scenario(name, tmp_path)
     assert bench.check_claims(result) == []

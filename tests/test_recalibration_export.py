@@ -8,8 +8,8 @@ import shutil
 
 import numpy as np
 import pytest
-from json_runtime import run_table
 from recalibration_cases import probe_cases
+from support.json_runtime import run_table
 
 from groupfit.export import render, write
 from groupfit.export.harness import build_driver
@@ -34,6 +34,7 @@ def test_the_cases_exercise_every_outcome_of_a_check():
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+@pytest.mark.toolchain
 @pytest.mark.parametrize("precision", ["double", "single"])
 @pytest.mark.parametrize("label", sorted(CASES))
 def test_gf_probe_is_the_python_rule_bit_for_bit(tmp_path, label, precision):
@@ -80,9 +81,10 @@ def test_the_sheet_names_the_setting_datum_of_a_probe_cycle(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.toolchain
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
 def test_the_structured_text_block_takes_checks_as_the_python_rule_does(real):
-    blocks = pytest.importorskip("test_export_st")
+    blocks = pytest.importorskip("support.structured_text")
     model, streams, probes = CASES["lowpass p=0 kalman"]
     block = blocks.FunctionBlock(render(model, "st", real=real)["FB_GroupfitComp.st"])
     cast = blocks.FLOATS[real]
