@@ -282,7 +282,6 @@ def heat_law_streams():
 
 
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
-@pytest.mark.slow
 def test_heat_law_blocks_parse_with_both_parsers(real):
     text = derived_block("heat law p=2", real)
     assert text.isascii() and "EXPT(ABS(" in text and "POWER_EXPONENT_1 : LREAL := 1.6666666666666667;" in text
