@@ -233,6 +233,7 @@ def c_run(folder: Path, heat, initial: float, *, single: bool, sanitized: bool =
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+@pytest.mark.toolchain
 @pytest.mark.parametrize("precision", ["double", "single"])
 def test_exported_c_equals_replay_bit_for_bit(model, tmp_path, precision):
     write(render(model, "c"), tmp_path)
@@ -245,6 +246,7 @@ def test_exported_c_equals_replay_bit_for_bit(model, tmp_path, precision):
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+@pytest.mark.toolchain
 @pytest.mark.parametrize("precision", ["double", "single"])
 def test_sanitized_c_build_takes_hostile_readings_as_replay_does(model, tmp_path, precision):
     """NaN, infinities, -0, subnormals, huge and negative readings: no undefined behaviour, the same outputs."""
@@ -259,14 +261,15 @@ def test_sanitized_c_build_takes_hostile_readings_as_replay_does(model, tmp_path
 
 
 def st_block(model: AR1File, real: str):
-    """The block evaluated over blark's tree (tests/test_export_st.py); it must parse with tree-sitter too."""
-    test_export_st = pytest.importorskip("test_export_st")
+    """The block evaluated over blark's tree (tests/support/structured_text.py); it must parse with tree-sitter too."""
+    structured_text = pytest.importorskip("support.structured_text")
     (text,) = render(model, "st", real=real).values()
-    assert not test_export_st.tree_sitter_errors(text)
-    return test_export_st.FunctionBlock(text)
+    assert not structured_text.tree_sitter_errors(text)
+    return structured_text.FunctionBlock(text)
 
 
 @pytest.mark.parametrize("real, precision", [("LREAL", "double"), ("REAL", "single")])
+@pytest.mark.toolchain
 def test_structured_text_block_equals_replay(model, real, precision):
     block = st_block(model, real)
     cast = np.float32 if real == "REAL" else np.float64
