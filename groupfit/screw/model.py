@@ -1,21 +1,7 @@
-"""The analytic ball-screw model of seed 003 and its estimator.
+"""The estimator of the analytic ball-screw model of seed 003: identification on a run and prediction.
 
-Temperature rise at a distance x from the heat source (eq. 7 of the paper)::
-
-    Γ(x, t) = (C1·e^(−λx) + C2·e^(λx)) · [1 − erf((x + x0) / (2·√(α′(τ0)·t)))],
-    λ = √(2h / (k·R0)),   α′(τ0) = a0 + a1·τ0,
-
-the first factor the steady profile of a fin with convection h (eq. 5), the
-second the erf solution of the heat equation without convection behind a
-source whose temperature is held (eq. 3), with the diffusivity replaced by a
-coefficient α′ that follows a reference rise τ0 measured at the source
-(``alpha_law="line"``, the paper's law), or is read from the α′(t) table
-identified on the first source (``alpha_law="table"``, the default).
-``x0`` is the distance from the effective source to the sensor at x = 0 (the
-*reading* of docs/ballscrew.md; x0 = 0 is the paper's formula as printed).
-Thermal error of a screw fixed at x = 0 (eq. 9)::
-
-    E(x, t) = ∫₀ˣ a_m·Γ(ξ, t) dξ.
+The formulas (the temperature rise of eq. 7, the thermal error of eq. 9) are in
+:mod:`groupfit.screw.physics`, which also says how α′ and x0 are read.
 """
 
 from __future__ import annotations
