@@ -29,6 +29,7 @@ cost) those of any least-squares solution.
 
 from __future__ import annotations
 
+import copy
 from typing import Sequence
 
 import numpy as np
@@ -210,13 +211,34 @@ class SegmentCost:
             return np.empty(0)
         self.evaluations += a.size
         lo = self.soft_group_first(a)
-        gram = np.take(self._gram_prefix, b, axis=1) - np.take(self._gram_prefix, lo - 1, axis=1)
-        needs_coef = self.objective == "sae" or self.n > 0
-        coef, sse_fit = ldl_least_squares(gram, coefficients=needs_coef)
+        coef, sse_fit = self.pair_fits(lo, b, coefficients=self.objective == "sae" or self.n > 0)
         if self.objective == "sse":
             cost = sse_fit - self._overlap_sse(b, coef)
             return np.maximum(cost, 0.0) * self.standardiser.y_scale**2
         return self._sae(lo, self.served_last(b), coef) * self.standardiser.y_scale
+
+    def pair_fits(self, lo: np.ndarray, b: np.ndarray, *, coefficients: bool = True):
+        """Least-squares fits of the soft groups on rows ``lo … b`` (1-based), standardised.
+
+        Returns ``(coef, sse)`` as :func:`ldl_least_squares` does; no segment is counted in
+        :attr:`evaluations`.
+        """
+        gram = np.take(self._gram_prefix, b, axis=1) - np.take(self._gram_prefix, lo - 1, axis=1)
+        return ldl_least_squares(gram, coefficients=coefficients)
+
+    def served_sae(self, lo: np.ndarray, b: np.ndarray, coef: np.ndarray) -> np.ndarray:
+        """The ``sae`` cost (units of y) of fits ``coef`` of soft groups ``lo … b``, counted as evaluations."""
+        self.evaluations += len(lo)
+        return self._sae(lo, self.served_last(b), coef) * self.standardiser.y_scale
+
+    def with_objective(self, objective: str) -> "SegmentCost":
+        """The same data and groups scored by another objective (shares the prefix sums; own count)."""
+        if objective not in OBJECTIVES:
+            raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
+        twin = copy.copy(self)
+        twin.objective = objective
+        twin.evaluations = 0
+        return twin
 
     def _overlap_sse(self, b: np.ndarray, coef: np.ndarray) -> np.ndarray:
         """Squared residuals of each fit on the n samples its successor serves."""

@@ -1,29 +1,25 @@
-"""Exact break-point search by dynamic programming.
+"""Exact break-point search: the global optimum of Rg for every p up to pmax.
 
-Rg is a sum of terms that each depend on two consecutive hard breaks (see
-:mod:`groupfit.objective`), so the best break vector with p breaks is a
-shortest path through break positions: ``F[k][b]``, the least cost of k groups
-whose last one ends at sample b, obeys ``F[k][b] = min_a F[k−1][a] + cost(a, b)``.
-Every feasible ``(a, b)`` pair is costed once and serves every k, so one pass
-answers every p up to ``pmax`` (the segment-neighbourhood method; Auger &
-Lawrence 1989, Bai & Perron 2003). Time O(pmax·N²) plus the N²/2 segment costs;
-memory O(pmax·N).
+Both objectives run the dynamic programme of :mod:`groupfit.search.dynprog`.
+``sse`` costs every segment from prefix sums; ``sae`` costs exactly only the
+segments that bounds cannot rule out (:mod:`groupfit.search.bounded`), with
+``method="all-pairs"`` as the reference that costs every one.
 """
 
 from __future__ import annotations
 
-import time as _time
-from dataclasses import dataclass, field
-
-import numpy as np
+from dataclasses import dataclass
+from typing import Mapping, Sequence
 
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
-from groupfit.search.base import SearchResult
+from groupfit.search.bounded import solve_bounded
+from groupfit.search.dynprog import GRAM_FLOATS_PER_BATCH, ExactResult, solve_all_pairs
 
 CERTIFY_PAIR_LIMIT = {"sse": 5_000_000, "sae": 200_000}
 """Largest number of segment pairs (≈ N²/2) for which the exact search counts as cheap: a GA result is then
 certified automatically, and the bootstrap repeats the exact search for every series."""
+EXACT_METHODS = ("auto", "all-pairs", "bounded")
 
 
 def exact_is_cheap(n_samples: int, objective: str) -> bool:
@@ -31,41 +27,16 @@ def exact_is_cheap(n_samples: int, objective: str) -> bool:
     return n_samples * n_samples / 2 <= CERTIFY_PAIR_LIMIT[objective]
 
 
-GRAM_FLOATS_PER_BATCH = 500_000
-
-
-@dataclass
-class ExactResult:
-    """Optimal break vectors for p = 0…pmax.
-
-    Attributes
-    ----------
-    breaks : dict[int, list[int]]
-        The optimal breaks for each feasible p.
-    objective : dict[int, float]
-        Rg of those breaks (from the segment costs).
-    evaluations : int
-        Segment costs computed.
-    seconds : float
-    """
-
-    breaks: dict[int, list[int]] = field(default_factory=dict)
-    objective: dict[int, float] = field(default_factory=dict)
-    evaluations: int = 0
-    seconds: float = 0.0
-
-    def for_p(self, p: int) -> SearchResult:
-        """The optimum for ``p`` breaks in the form every search answers in."""
-        return SearchResult(
-            method="exact",
-            breaks=self.breaks[p],
-            objective=self.objective[p],
-            evaluations=self.evaluations,
-            seconds=self.seconds,
-        )
-
-
-def solve_exact(cost: SegmentCost, constraints: Constraints, pmax: int, progress=None) -> ExactResult:
+def solve_exact(
+    cost: SegmentCost,
+    constraints: Constraints,
+    pmax: int,
+    progress=None,
+    *,
+    incumbents: Mapping[int, Sequence[int]] | None = None,
+    every_p: bool = True,
+    method: str = "auto",
+) -> ExactResult:
     """Globally optimal breaks for every p in 0…pmax.
 
     Parameters
@@ -77,75 +48,19 @@ def solve_exact(cost: SegmentCost, constraints: Constraints, pmax: int, progress
         is left out of the result.
     progress : callable, optional
         Called with the fraction done (0…1) now and then.
+    incumbents : mapping of p to a break vector, optional
+        Break vectors already found (a GA's): the bounded search starts from them.
+    every_p : bool
+        False: only p = pmax is wanted (the bounded search then answers only that p, faster).
+    method : {"auto", "all-pairs", "bounded"}
+        ``"auto"``: bounded for ``sae``, every segment costed for ``sse``.
+        ``"all-pairs"`` costs every segment (the reference); ``"bounded"`` needs ``sae``.
     """
-    start = _time.perf_counter()
-    evaluations_before = cost.evaluations
-    n_samples = constraints.n_samples
-    min_size = constraints.min_size
-    pmax = min(pmax, constraints.max_breaks())
-    result = ExactResult()
-    if pmax < 0:
-        return result
-
-    break_ok = np.zeros(n_samples + 1, dtype=bool)
-    break_ok[constraints.lowest_break : constraints.highest_break + 1] = True
-    end_ok = break_ok.copy()
-    end_ok[n_samples] = True
-
-    levels = pmax + 2
-    best = np.full((levels, n_samples + 1), np.inf)
-    best[0, 0] = 0.0
-    previous = np.full((levels, n_samples + 1), -1, dtype=np.int64)
-
-    starts = np.r_[0, np.flatnonzero(break_ok)] if pmax > 0 else np.array([0])
-    pairs_per_batch = GRAM_FLOATS_PER_BATCH // (cost.n_coef + 1) ** 2
-    batch = max(1, pairs_per_batch // max(1, n_samples))
-    for first in range(0, len(starts), batch):
-        chunk = starts[first : first + batch]
-        row_a, row_b = _feasible_pairs(chunk, min_size, end_ok, n_samples)
-        costs = np.full((len(chunk), n_samples + 1), np.inf)
-        costs[row_a, row_b] = cost.pair_costs(chunk[row_a], row_b)
-        for i, a in enumerate(chunk):
-            for k in [0] if a == 0 else range(1, pmax + 1):
-                if not np.isfinite(best[k, a]):
-                    continue
-                candidate = best[k, a] + costs[i]
-                if k + 1 <= pmax:
-                    improve = candidate < best[k + 1]
-                else:
-                    improve = np.zeros(n_samples + 1, dtype=bool)
-                    improve[n_samples] = candidate[n_samples] < best[k + 1, n_samples]
-                best[k + 1, improve] = candidate[improve]
-                previous[k + 1, improve] = a
-        if progress is not None:
-            progress(min(1.0, (first + len(chunk)) / len(starts)))
-
-    for p in range(pmax + 1):
-        value = best[p + 1, n_samples]
-        if not np.isfinite(value):
-            continue
-        breaks = []
-        position, level = n_samples, p + 1
-        while level > 1:
-            position = int(previous[level, position])
-            breaks.append(position)
-            level -= 1
-        result.breaks[p] = sorted(breaks)
-        result.objective[p] = float(value)
-    result.evaluations = cost.evaluations - evaluations_before
-    result.seconds = _time.perf_counter() - start
-    return result
-
-
-def _feasible_pairs(chunk: np.ndarray, min_size: int, end_ok: np.ndarray, n_samples: int):
-    """Row index into ``chunk`` and end position b of every feasible (a, b) pair."""
-    ends = np.flatnonzero(end_ok)
-    rows, cols = [], []
-    for i, a in enumerate(chunk):
-        b = ends[ends >= a + min_size]
-        rows.append(np.full(len(b), i))
-        cols.append(b)
-    return np.concatenate(rows), np.concatenate(cols)
+    if method not in EXACT_METHODS:
+        raise ValueError(f"method must be one of {EXACT_METHODS}, got {method!r}")
+    if method == "bounded" or (method == "auto" and cost.objective == "sae"):
+        return solve_bounded(cost, constraints, pmax, incumbents=incumbents, every_p=every_p, progress=progress)
+    return solve_all_pairs(cost, constraints, pmax, progress=progress)
 
 
 SSE_SECONDS_PER_PAIR = 1.2e-6
