@@ -261,8 +261,10 @@ def _forward(cost, table: BoundTable, pmax: int, upper: Mapping[int, float], pro
     paths = PathTable(n_samples, pmax)
     starts = table.starts
     costed = 0
-    for first in range(0, len(starts), table.min_size):
-        block = starts[first : first + table.min_size]
+    first = 0
+    while first < len(starts):
+        stop = int(np.searchsorted(starts, starts[first] + table.min_size))  # none of these precedes another
+        block, first = starts[first:stop], stop
         pair_a, pair_b = [], []
         for a in block:
             ends = table.ends_after(int(a))
@@ -278,5 +280,5 @@ def _forward(cost, table: BoundTable, pmax: int, upper: Mapping[int, float], pro
             costs[b_all[mine]] = values[mine]
             paths.relax(int(a), costs)
         if progress is not None:
-            progress(min(1.0, (first + len(block)) / len(starts)))
+            progress(first / len(starts))
     return paths.result(), costed
