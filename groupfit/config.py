@@ -33,6 +33,8 @@ A configuration has up to four tables; every key is optional::
     max_generations = 300
     stall_generations = 30
     polish = true
+    certify = "auto"           # GA: also run the exact search and report the gap; true, false
+                               # or "auto" (when cheap: N²/2 ≤ 5 M segments for sse, 0.2 M for sae)
 
     [output]
     dir = "groupfit-out"
@@ -79,6 +81,13 @@ def _whole_or_auto(table: Table, key: str) -> int | str:
     value = table.get(key)
     if value != "auto" and (isinstance(value, bool) or not isinstance(value, int)):
         raise table.fail(key, f'expected a whole number or "auto", got {value!r}')
+    return value
+
+
+def _certify(table: Table, key: str) -> bool | str:
+    value = table.get(key)
+    if value != "auto" and not isinstance(value, bool):
+        raise table.fail(key, f'expected true, false or "auto", got {value!r}')
     return value
 
 
@@ -133,6 +142,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "max_generations": _whole,
         "stall_generations": _whole,
         "polish": Table.boolean,
+        "certify": _certify,
     },
     "output": {"dir": Table.string},
     "compare": {
@@ -170,6 +180,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "max_generations": GA_DEFAULTS.max_generations,
         "stall_generations": GA_DEFAULTS.stall_generations,
         "polish": GA_DEFAULTS.polish,
+        "certify": "auto",
     },
     "output": {"dir": "groupfit-out"},
     "compare": {

@@ -221,7 +221,7 @@ def search_summary(search: dict, unit: str) -> str:
     if "gap_percent" in search:
         text += (
             f"; exact optimum {search['exact_objective']:.6g} {unit} at {search['exact_breaks']}, "
-            f"GA gap {search['gap_percent']:.3g} %"
+            f"GA gap {search['gap_percent']:.3g} % (certified in {search['exact_seconds']:.1f} s)"
         )
     elif "exact_skipped" in search:
         text += f"; not checked against the exact optimum: {search['exact_skipped']}"

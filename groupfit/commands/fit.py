@@ -74,6 +74,11 @@ def add_parser(verbs) -> None:
     fit.add_argument("--no-intercept", action="store_true", help="fit groups without a constant term")
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
     fit.add_argument("--seed", type=int, help="seed of the genetic algorithm")
+    fit.add_argument(
+        "--certify",
+        choices=("auto", "yes", "no"),
+        help="GA: also run the exact search and print the gap (auto: when cheap; the default)",
+    )
     fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
     add_reference_option(fit)
     fit.add_argument(
@@ -145,6 +150,7 @@ def run_fit(args: argparse.Namespace) -> int:
     override(config, "model", "criterion", args.criterion)
     override(config, "search", "method", args.search)
     override(config, "search", "seed", args.seed)
+    override(config, "search", "certify", {"yes": True, "no": False}.get(args.certify, args.certify))
     override(config, "output", "dir", args.out)
     check_json_target(args)
     check_output_dir(config["output"]["dir"])

@@ -249,7 +249,14 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         breaks, search_value, info = result.breaks, result.objective, result.info()
         if result.method == "ga":
             if self._should_certify(n_samples):
-                exact = solve_exact(cost, constraints, self.p, progress=_stage(progress, "exact"))
+                exact = solve_exact(
+                    cost,
+                    constraints,
+                    self.p,
+                    progress=_stage(progress, "exact"),
+                    incumbents={self.p: breaks},
+                    every_p=False,
+                )
                 best = exact.objective[self.p]
                 info["exact_objective"] = best
                 info["exact_breaks"] = exact.breaks[self.p]
@@ -426,7 +433,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         limit = CERTIFY_PAIR_LIMIT[self.objective]
         return (
             f"N = {n_samples} samples give {n_samples * n_samples / 2:.3g} segment pairs, over the {limit:.3g} "
-            f"of an automatic check with the {self.objective} objective; --search exact finds the optimum itself"
+            f"of an automatic check with the {self.objective} objective; --certify yes runs it, --search exact "
+            "finds the optimum itself"
         )
 
     def _should_certify(self, n_samples: int) -> bool:
