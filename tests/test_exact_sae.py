@@ -93,7 +93,7 @@ def test_bounds_stay_below_costs_and_a_grid_of_single_rows_is_the_cost():
 def test_clear_regimes_leave_few_segments_to_cost():
     X, y = piecewise_run(800, 0)
     result = solve_exact(SegmentCost(X, y, n=0, objective="sae"), Constraints(800, 0, 16), 4)
-    assert result.breaks[4] == [160, 320, 480, 640] or abs(np.subtract(result.breaks[4], [160, 320, 480, 640])).max() < 8
+    assert np.abs(np.subtract(result.breaks[4], [160, 320, 480, 640])).max() < 8
     assert result.evaluations < 0.01 * result.pruning["segments"]
 
 

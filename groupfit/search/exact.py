@@ -86,9 +86,10 @@ class ExactCost:
 def estimate_exact_cost(n_samples: int, n_coef: int, objective: str, pmax: int, min_size: int = 1) -> ExactCost:
     """Time and peak memory of :func:`solve_exact` on ``n_samples`` samples, before running it.
 
-    ``sse`` costs O(N²·M²) time and O(pmax·N) memory; ``sae`` adds residual
-    passes of O(N³·M) time and O(N²) memory at each start (the run that
-    reached 6.4 GB at N = 20 000).
+    ``sse`` costs O(N²·M²) time and O(pmax·N) memory; for ``sae`` this is
+    the worst case, every segment costed (residual passes of O(N³·M) time and
+    O(N²) memory at each start): the bounded search usually costs a few times
+    ``sse`` but how many segments it rules out depends on the data.
     """
     span = max(n_samples - min_size, 1)
     pairs = span * span / 2.0
