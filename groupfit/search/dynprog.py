@@ -152,15 +152,7 @@ def start_chunks(
 def solve_all_pairs(cost: SegmentCost, constraints: Constraints, pmax: int, progress=None) -> ExactResult:
     """Globally optimal breaks for every p in 0…pmax, every feasible segment costed.
 
-    Parameters
-    ----------
-    cost : SegmentCost
-    constraints : Constraints
-    pmax : int
-        Largest number of breaks wanted; p above ``constraints.max_breaks()``
-        is left out of the result.
-    progress : callable, optional
-        Called with the fraction done (0…1) now and then.
+    The parameters are those of :func:`groupfit.search.exact.solve_exact`.
     """
     start = _time.perf_counter()
     evaluations_before = cost.evaluations
