@@ -181,7 +181,7 @@ def bootstrap_break_intervals(
             y_star = fitted + block_resample(centred, block, rng)
             cost = SegmentCost(X, y_star, n=n, objective=objective, fit_intercept=fit_intercept)
             if search == "exact":
-                replicates[r] = solve_exact(cost, constraints, p).breaks[p]
+                replicates[r] = solve_exact(cost, constraints, p, every_p=False).breaks[p]
             else:
                 ga = GeneticSearch(seed=int(ga_seeds[r]), **(ga_settings or {}))
                 replicates[r] = ga.run(cost, constraints, p).breaks

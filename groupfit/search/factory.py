@@ -31,7 +31,7 @@ class ExactSearch:
         progress: Callable[[float], None] | None = None,
     ) -> SearchResult:
         """The optimal p breaks; ``progress(fraction)`` is called now and then."""
-        return solve_exact(cost, constraints, p, progress=progress).for_p(p)
+        return solve_exact(cost, constraints, p, progress=progress, every_p=False).for_p(p)
 
 
 def make_search(settings: SearchSettings, *, seed: int | None = None):
