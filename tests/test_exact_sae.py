@@ -1,10 +1,12 @@
 """The bounded exact search for sae against enumeration, against costing every segment, and in `fit`."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import brute_force_optimum, brute_force_rg
-from test_cli_fit import fit as cli_fit
 
+from groupfit.cli import main
 from groupfit.grouping import Constraints
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
@@ -109,5 +111,7 @@ def test_fit_certifies_the_ga_on_sae_or_says_why_not():
 
 
 def test_fit_prints_why_it_did_not_certify(tmp_path, capsys):
-    status, _ = cli_fit(tmp_path, "--p", "2", "--certify", "no")
+    data = Path(__file__).resolve().parents[1] / "datasets" / "synthetic_cycle.csv"
+    argv = ["fit", "--data", str(data), "--temps", "T1,T2,T3,T4", "--out", str(tmp_path / "out"), "--quiet"]
+    status = main([*argv, "--p", "2", "--certify", "no"])
     assert status == 0 and "not checked against the exact optimum: the check is turned off" in capsys.readouterr().out
