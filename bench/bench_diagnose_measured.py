@@ -48,6 +48,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from groupfit.diagnose.plot import plot_diagnosis
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
@@ -58,7 +59,6 @@ from groupfit.features import Feature
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.models.grouped import GroupedRegressor
-from groupfit.plots import plot_diagnosis
 from groupfit.runtime import replay_groups
 
 MEASURED = Path(__file__).resolve().parents[2] / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"

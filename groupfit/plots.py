@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from groupfit.io import save_figure
 
 
-def _subplots(*grid, figsize, constrained_layout: bool = True, **options):
+def subplots(*grid, figsize, constrained_layout: bool = True, **options):
     """A figure of its own (no pyplot, no global backend) and its axes."""
     fig = Figure(figsize=figsize, layout="constrained" if constrained_layout else None)
     return fig, fig.subplots(*grid, **options)
@@ -34,7 +34,7 @@ def plot_fit(
     """
     hours = np.asarray(time_s, dtype=float) / 3600.0
     residual = np.asarray(measured) - np.asarray(predicted)
-    fig, (top, bottom) = _subplots(
+    fig, (top, bottom) = subplots(
         2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]}, constrained_layout=True
     )
     top.plot(hours, measured, color="black", lw=1.6, label="measured")
@@ -79,7 +79,7 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
     hours = frame["time_s"].to_numpy(dtype=float) / 3600.0
     skip = {"time_s", "error_um", "speed_rpm", "spindle_on", "q_W_m2"}
     temps = [c for c in frame.columns if c not in skip and not c.startswith(("node_", "src_"))]
-    fig, (top, bottom) = _subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    fig, (top, bottom) = subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
     if temps:
         for column in temps[:12]:
             top.plot(hours, frame[column], label=column, linestyle="--" if column == "T_amb" else "-")
@@ -109,7 +109,7 @@ def plot_run_comparison(
     ``bands`` maps a model key to its (lower, upper) prediction band, shaded in the model's colour.
     """
     hours = np.asarray(time_s, dtype=float) / 3600.0
-    fig, (top, bottom) = _subplots(
+    fig, (top, bottom) = subplots(
         2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
     )
     top.plot(hours, measured, color="black", lw=2.0, label="measured")
@@ -144,7 +144,7 @@ def plot_r_against_p(path_R: Sequence[float], rows: Sequence[dict], runs: Sequen
 
     The legend stands right of the axes (never over the data) and p is marked at whole numbers only.
     """
-    fig, axis = _subplots(figsize=(9.5, 4.5), constrained_layout=True)
+    fig, axis = subplots(figsize=(9.5, 4.5), constrained_layout=True)
     axis.plot(range(len(path_R)), path_R, "k-o", lw=1.6, label=f"{runs[0]}: exact optimum")
     markers = "sD^v"
     for i, run in enumerate(runs):
@@ -185,7 +185,7 @@ def plot_hysteresis(
     count = temps.shape[1]
     columns = min(count, 3)
     rows = -(-count // columns)
-    fig, axes = _subplots(rows, columns, figsize=(3.6 * columns, 3.2 * rows), squeeze=False)
+    fig, axes = subplots(rows, columns, figsize=(3.6 * columns, 3.2 * rows), squeeze=False)
     rising = heating_phases(error, max(1, len(error) // 100))
     for j, axis in enumerate(axes.ravel()):
         if j >= count:
@@ -199,56 +199,3 @@ def plot_hysteresis(
     axes[0, 0].legend(fontsize=7, loc="best")
     fig.suptitle(title)
     save_figure(fig, path, dpi=120)
-
-
-def stacked_hours(runs) -> np.ndarray:
-    """Hours along several runs laid end to end (each run's own clock from its start)."""
-    hours, offset = [], 0.0
-    for run in runs:
-        hours.append(offset + (run.time - run.time[0]) / 3600.0)
-        offset = hours[-1][-1] + run.period / 3600.0
-    return np.concatenate(hours)
-
-
-def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
-    """Residual against the winning candidate, and the residual before/after on every run (runs laid end to end)."""
-    runs = {key: [value] if not isinstance(value, (list, tuple)) else list(value) for key, value in runs.items()}
-    fig, axes = _subplots(1 + len(runs), 1, figsize=(9, 3.2 * (1 + len(runs))), constrained_layout=True)
-    data = runs["data"]
-    shown = result.added[0] if result.added else (result.candidates[0] if result.candidates else None)
-    top = axes[0]
-    if shown is not None:
-        from groupfit.diagnose.augment import feature_on_runs, steady_reference
-
-        feature = shown.feature
-        period = float(result.model["sampling_period_s"])  # as the diagnosis computed it
-        values = np.concatenate(feature_on_runs(feature, data, period))
-        if shown.over is not None:  # taken over the model's reference column, as the diagnosis took it
-            steady = steady_reference(shown.over)
-            values = values - np.concatenate(feature_on_runs(steady, data, period))
-        residual = result.residuals_before["data"]
-        top.scatter(values, residual, s=6, c=stacked_hours(data), cmap="viridis")
-        order = np.argsort(values)
-        finite = np.isfinite(residual)
-        fit = np.polyfit(values[finite], residual[finite], 1)
-        top.plot(values[order], np.polyval(fit, values[order]), color="tab:red", lw=1.2)
-        verdict = "added" if result.added else "best candidate, not significant"
-        top.set_title(
-            f"{'+'.join(r.name for r in data)}: residual against {feature.column}, {shown.describe()} ({verdict})",
-            fontsize=9,
-        )
-        top.set_xlabel(feature.name if shown.over is None else f"{feature.name} − {steady.name}")
-    top.set_ylabel("residual before (µm)")
-    for axis, (key, key_runs) in zip(axes[1:], runs.items()):
-        hours = stacked_hours(key_runs)
-        before, after = result.residuals_before[key], result.residuals_after[key]
-        rms = lambda r: float(np.sqrt(np.nanmean(r**2)))  # noqa: E731
-        axis.plot(hours, before, color="tab:gray", lw=1.0, label=f"before (RMS {rms(before):.3g} µm)")
-        axis.plot(hours, after, color="tab:blue", lw=1.0, label=f"after (RMS {rms(after):.3g} µm)")
-        axis.axhline(0.0, color="black", lw=0.5)
-        names = "+".join(r.name for r in key_runs)
-        axis.set_title(f"{names} ({'measured' if key == 'data' else 'validation'}): residual", fontsize=9)
-        axis.set_ylabel("µm")
-        axis.legend(fontsize=8)
-    axes[-1].set_xlabel("time (h)")
-    save_figure(fig, path, dpi=110)

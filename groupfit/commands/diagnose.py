@@ -27,12 +27,12 @@ from groupfit.data import PERIOD_TOLERANCE, Run, load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
+from groupfit.diagnose.plot import plot_diagnosis
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.errors import InputError
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
-from groupfit.plots import plot_diagnosis
 from groupfit.runtime import replay_groups
 
 
