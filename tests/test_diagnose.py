@@ -192,7 +192,9 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     """A refused candidate and an over-fitting base are named at the top, not reported as 'nothing missing'."""
     from dataclasses import replace
 
-    from groupfit.diagnose.loop import OVERFIT_NOTE, Refusal
+    from groupfit.diagnose.notes import OVERFIT, Note
+    from groupfit.diagnose.policy import FOLD_WORSENED, Refusal
+    from groupfit.diagnose.result import Refused
 
     frame = sensor_error(lumped())
     data_path, model_path = fit_model(tmp_path, frame, "clean")
@@ -200,7 +202,7 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     assert not result.added and not result.base_check["overfitted"]
     assert result.summary().splitlines()[0].startswith("nothing missing")
     best = replace(result.candidates[0], score=0.93)
-    refusal = Refusal(best, "makes one held-out condition (fold 4) 3.6 times worse (RMS)")
+    refusal = Refused(best, Refusal(FOLD_WORSENED, "makes one held-out condition (fold 4) 3.6 times worse (RMS)"))
     check = {**result.base_check, "overfitted": True, "held_out_rms_um": 18.8, "in_sample_rms_um": 0.468}
     first, second = replace(result, refused=[refusal], base_check=check).summary().splitlines()[:2]
     assert first == (
@@ -216,11 +218,11 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     assert second.startswith("the model over-fits")
 
     # said once: the note diagnose writes for an over-fitting base is left out where the head says it
-    note = f"{OVERFIT_NOTE} held-out RMS 18.8 µm against 0.468 µm in sample; effects found on it are unreliable"
-    report = replace(result, base_check=check, notes=[note, *result.notes]).summary()
+    note = Note(OVERFIT, "the model over-fits: held-out RMS 18.8 µm against 0.468 µm in sample; effects found on it")
+    report = replace(result, base_check=check, notes=(note, *result.notes)).summary()
     assert report.count("over-fits") == 1 and report.splitlines()[1].startswith("the model over-fits (")
-    with_effect = replace(result, base_check=check, notes=[note], added=result.candidates[:1], steps=[])
-    assert with_effect.summary().count("over-fits") == 1 and f"note: {note}" in with_effect.summary()
+    with_effect = replace(result, base_check=check, notes=(note,), added=result.candidates[:1], steps=())
+    assert with_effect.summary().count("over-fits") == 1 and f"note: {note.text}" in with_effect.summary()
 
 
 def test_measured_data_realities(tmp_path, capsys):

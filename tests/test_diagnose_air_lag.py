@@ -16,7 +16,7 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model_over_reference
-from groupfit.diagnose.loop import stacked_residual
+from groupfit.diagnose.problem import stacked_residual
 from groupfit.diagnose.residual import model_inputs, predict
 from groupfit.features import Feature, lowpass
 from groupfit.grouping import serving_group_index

@@ -9,6 +9,7 @@ from test_diagnose import TEMPS, lumped, with_ambient_effect
 
 from groupfit.cli import main
 from groupfit.diagnose import diagnose
+from groupfit.diagnose.notes import AMBIENT
 from groupfit.runtime import replay_groups
 
 bench = load("bench_diagnose_independent")
@@ -43,8 +44,9 @@ def test_a_declared_ambient_is_diagnosed_as_the_named_one():
     assert first.column == "T_amb" and first.transform == "lowpass"
     # read as a machine sensor, T0 is only tried as measured, and the report says how to declare it
     assert all(c.feature.transform == "identity" for c in undeclared.added if c.feature.column == "T0")
-    assert any("unused sensors (T0) were read as machine sensors" in n and "--ambient" in n for n in undeclared.notes)
-    assert not any("--ambient" in n for n in named.notes + declared.notes)
+    said = undeclared.notes_of(AMBIENT)
+    assert any("unused sensors (T0) were read as machine sensors" in n and "--ambient" in n for n in said)
+    assert not named.notes_of(AMBIENT) and not declared.notes_of(AMBIENT)
     # declared, it is the ambient: the same effect, the same validation, named as the ambient
     assert [dataclasses.replace(c.feature, column="T_amb") for c in declared.added] == [c.feature for c in named.added]
     assert declared.after["validate"]["rms_um"] == pytest.approx(named.after["validate"]["rms_um"], rel=1e-9)

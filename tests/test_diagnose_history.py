@@ -10,7 +10,8 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.history import COLD_START_NOTE, continues
-from groupfit.diagnose.loop import stacked_residual
+from groupfit.diagnose.notes import COLD_START, HISTORY
+from groupfit.diagnose.problem import stacked_residual
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
 
@@ -47,7 +48,7 @@ def test_the_validation_part_of_a_split_log_is_judged_as_if_the_log_were_whole(p
     model = GroupedRegressor(p=p).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert result.added and result.added[0].feature.column == "speed_rpm"
-    assert any(note.startswith("monday_evening continues monday") for note in result.notes)
+    assert any(note.startswith("monday_evening continues monday") for note in result.notes_of(HISTORY))
 
     # the independent path: the whole log, the error of the modelling rows left empty, the first rows dropped
     whole = frame.copy()
@@ -84,7 +85,7 @@ def test_a_validation_run_after_a_gap_starts_from_rest():
     validation = load_run(later.reset_index(drop=True), temps=TEMPS, name="later")
     model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
-    assert not any(note.startswith("later continues") for note in result.notes)
+    assert not any(note.startswith("later continues") for note in result.notes_of(HISTORY))
     np.testing.assert_allclose(
         result.residuals_after["validate"], stacked_residual(result.model, [validation], replay_groups), atol=1e-12
     )
@@ -96,7 +97,7 @@ def test_a_chain_of_files_carries_the_history_through_every_one():
     modelling, *validation = [load_run(p, temps=TEMPS, name=f"part{k}") for k, p in enumerate(parts)]
     model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
-    assert [n.split(" (")[0] for n in result.notes if "continues" in n] == [
+    assert [n.split(" (")[0] for n in result.notes_of(HISTORY) if "continues" in n] == [
         "part1 continues part0",
         "part2 continues part1",
     ]
@@ -123,7 +124,7 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
 
     hot = diagnosed_from(at)
     assert hot.added[0].feature.column == "speed_rpm" and hot.added[0].feature.start == "rest"
-    said = [n for n in hot.notes if COLD_START_NOTE in n]
+    said = hot.notes_of(COLD_START)
     assert len(said) == 1 and said[0].startswith(f"evening {COLD_START_NOTE} speed_rpm = {speed[at]:g}")
     lines = hot.summary().splitlines()
     if lines[0].startswith("the augmented model is worse"):
@@ -132,7 +133,7 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
         assert f"note: {said[0]}" in lines
 
     cold_row = int(np.flatnonzero(speed[:at] == 0.0)[-1])  # a file that starts with the spindle stopped
-    assert not any(COLD_START_NOTE in n for n in diagnosed_from(cold_row).notes)
+    assert not diagnosed_from(cold_row).notes_of(COLD_START)
 
 
 def test_continues_judges_a_restarted_clock_as_the_rest_of_the_recording(tmp_path, capsys):

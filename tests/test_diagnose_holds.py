@@ -12,7 +12,9 @@ from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import candidate_features, rank_candidates
-from groupfit.diagnose.loop import metrics_of, stacked_residual
+from groupfit.diagnose.loop import metrics_of
+from groupfit.diagnose.policy import DRIFT
+from groupfit.diagnose.problem import stacked_residual
 from groupfit.diagnose.report import change_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import lowpass
@@ -164,13 +166,13 @@ def test_worse_on_one_of_several_validation_runs_is_not_reported_as_better():
     # each run's RMS, replayed on its own, against the stacked residuals cut per run
     rms = lambda m, r: metrics_of(stacked_residual(m, [r], None))["rms_um"]  # noqa: E731
     for entry, val in zip(result.validation_runs, validation):
-        assert entry["name"] == val.name
-        assert entry["before"]["rms_um"] == pytest.approx(rms(model, val), rel=1e-12)
-        assert entry["after"]["rms_um"] == pytest.approx(rms(result.model, val), rel=1e-12)
+        assert entry.name == val.name
+        assert entry.before["rms_um"] == pytest.approx(rms(model, val), rel=1e-12)
+        assert entry.after["rms_um"] == pytest.approx(rms(result.model, val), rel=1e-12)
     together_before, together_after = result.before["validate"]["rms_um"], result.after["validate"]["rms_um"]
     assert together_after < together_before  # the pooled RMS alone would call it better
     assert rms(result.model, validation[1]) > rms(model, validation[1])
-    assert result.improved is False and [r["name"] for r in result.worse_runs] == ["without"]
+    assert result.improved is False and [r.name for r in result.worse_runs] == ["without"]
     head = result.summary().splitlines()[0]
     assert head.startswith("the augmented model is worse on without:") and head.endswith("not recommended")
     assert "(the 2 validation runs together:" in head
@@ -311,17 +313,19 @@ def test_compare_takes_one_modelling_run(tmp_path, capsys):
 
 def test_an_effect_that_doubles_the_error_of_one_held_out_condition_is_refused():
     from groupfit.diagnose.candidates import Candidate
-    from groupfit.diagnose.loop import MAX_FOLD_WORSENING, failed_test
+    from groupfit.diagnose.policy import DEFAULT_POLICY, FOLD_WORSENED
     from groupfit.features import Feature
 
     def candidate(worst_ratio):
         ratios = (0.2, 0.3, 0.25, 0.4, worst_ratio)  # four conditions much better, one worse
         return Candidate(Feature("speed", "lowpass", tau_s=3600.0), 0.7, 1.0, 2.0, ratios, ratios)
 
-    limit = MAX_FOLD_WORSENING**2  # the folds hold squared errors
-    assert failed_test(candidate(0.999 * limit), 0.3, further=False) is None
-    reason = failed_test(candidate(1.001 * limit), 0.3, further=False)
-    assert reason == f"makes one held-out condition (fold 5) {np.sqrt(1.001 * limit):.1f} times worse (RMS)"
+    limit = DEFAULT_POLICY.max_fold_worsening**2  # the folds hold squared errors
+    for stage in ("first", "joint", "reference"):  # a further effect must better every fold
+        assert DEFAULT_POLICY.refusal(candidate(0.999 * limit), stage) is None
+        refusal = DEFAULT_POLICY.refusal(candidate(1.001 * limit), stage)
+        assert refusal.rule_id == FOLD_WORSENED
+        assert refusal.reason == f"makes one held-out condition (fold 5) {np.sqrt(1.001 * limit):.1f} times worse (RMS)"
 
 
 @pytest.mark.parametrize(
@@ -350,15 +354,15 @@ def test_an_effect_no_better_than_a_drift_of_the_run_is_not_added():
     run = load_run(frame, temps=TEMPS)
     result = diagnose(global_model(run), run)
     assert not result.added
-    assert any("a straight drift over the run explains" in refusal.reason for refusal in result.refused)
+    assert DRIFT in {refused.rule_id for refused in result.refused}
     # without the creep the same run has nothing to refuse on that ground
     clean = load_run(sensor_error(lumped(seed=5, n_samples=1000)), temps=TEMPS)
     clean_result = diagnose(global_model(clean), clean)
-    assert not any("drift" in refusal.reason for refusal in clean_result.refused)
+    assert DRIFT not in {refused.rule_id for refused in clean_result.refused}
 
 
 def test_an_unused_sensor_that_follows_no_heat_source_is_read_as_the_ambient():
-    from groupfit.diagnose.loop import exogenous_sensors
+    from groupfit.diagnose.problem import exogenous_sensors
 
     frame = lumped(seed=6, n_samples=600)  # T_amb: a daily sine and an HVAC step, not the machine's heat
     frame["T9"] = frame.pop("T_amb")

@@ -10,12 +10,17 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 
 from groupfit.cli import main
 from groupfit.diagnose.joint import JointProblem
+from groupfit.diagnose.policy import AcceptancePolicy
 from groupfit.features import Feature, lowpass
 from groupfit.heldout.folds import make_folds
 from groupfit.heldout.selection import MIN_GAIN
 
 PERIOD = 30.0
 SENSORS = [f"T{k}" for k in range(1, 9)]
+SHARE_ONLY = AcceptancePolicy(
+    min_score=0.3, min_effect_rms_um=0.0, min_folds_improved=-1.0, max_fold_worsening=np.inf, collinear_r=np.inf
+)
+"""A policy that tests an effect's share of the held-out error and nothing else (the reference below does)."""
 
 
 def spindle_run(seed, hours=16.0):
@@ -79,9 +84,7 @@ def test_joint_selection_is_the_forward_search_scikit_learn_scores():
     walk = 20.0 + np.cumsum(rng.normal(scale=0.01, size=len(frame)))  # sensors that carry nothing of the error
     inputs = {"T1": frame["T1"].to_numpy(), "walk": walk, "noise": rng.normal(size=len(frame))}
     folds = make_folds([frame], ["speed_rpm"])
-    chosen = JointProblem(
-        y, inputs, effects, folds, lambda c, drift: None if c.score >= 0.3 else "small", 0 * y
-    ).select()
+    chosen = JointProblem(y, inputs, effects, folds, SHARE_ONLY, 0 * y).select()
 
     X = np.column_stack([*inputs.values(), *(v for _, v in effects)])
     names = [*inputs, *(f.name for f, _ in effects)]
@@ -100,11 +103,7 @@ def test_nested_error_predicts_each_condition_with_a_selection_made_without_it()
     effects = [(heat_law(7200.0), heat_law(7200.0).compute(frame["speed_rpm"].to_numpy(), PERIOD))]
     inputs = {"T1": frame["T1"].to_numpy()}
     folds = make_folds([frame], ["speed_rpm"])
-
-    def test(candidate, drift):
-        return None if candidate.score >= 0.3 else "small"
-
-    problem = JointProblem(y, inputs, effects, folds, test, 0 * y)
+    problem = JointProblem(y, inputs, effects, folds, SHARE_ONLY, 0 * y)
     for train, _ in folds.splits():  # both columns are chosen without any one condition ...
         assert sorted(problem.restricted(train).select().order) == sorted(["T1", heat_law(7200.0).name])
     # ... so the nested error is scikit-learn's leave-one-group-out error of those two columns

@@ -8,6 +8,8 @@ import pytest
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
+from groupfit.diagnose.notes import HISTORY
+from groupfit.diagnose.policy import FOLD_WORSENED
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
 
@@ -74,7 +76,7 @@ def test_an_effect_that_fits_the_other_speeds_at_the_cold_starts_expense_is_refu
     result = diagnose(sixteen_sensor_model(runs), runs, held, live_rule=replay_groups)
     assert result.candidates[0].feature.column == "spindle_rpm" and result.candidates[0].score > 0.3
     assert not result.added and result.after == result.before
-    assert any("times worse (RMS)" in refusal.reason for refusal in result.refused)
+    assert FOLD_WORSENED in {refused.rule_id for refused in result.refused}
     first = result.summary().splitlines()[0]
     assert first.startswith("no effect added: the best candidate, spindle speed") and "was refused: makes one" in first
 
@@ -101,7 +103,7 @@ def test_a_validation_file_that_continues_the_log_is_judged_with_its_history(fra
         second = load_run(shifted, temps=SENSORS, error="disp_ch3_um", name="second")
         results[gap_s] = diagnose(model, first, second, live_rule=replay_groups)
     continuing, restarted = results[0.0], results[3600.0]
-    assert any(note.startswith("second continues first") for note in continuing.notes)
+    assert any(note.startswith("second continues first") for note in continuing.notes_of(HISTORY))
     assert continuing.added[0].feature.column == "spindle_rpm"
     assert continuing.improved is True and restarted.improved is False  # the same effect, judged two ways
     assert continuing.after["validate"]["rms_um"] < 0.7 * continuing.before["validate"]["rms_um"]

@@ -11,7 +11,7 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.loop import stacked_residual
+from groupfit.diagnose.problem import stacked_residual
 from groupfit.features import derived_matrix, lowpass
 from groupfit.heldout.folds import make_folds
 from groupfit.model import model_file_problem

@@ -13,7 +13,8 @@ from support import independent_machine as machine
 from support.bench_modules import load
 
 from groupfit.diagnose import diagnose
-from groupfit.diagnose.loop import MIN_SCORE, OVERFIT_NOTE
+from groupfit.diagnose.loop import MIN_SCORE
+from groupfit.diagnose.notes import OVERFIT
 from groupfit.features import Feature, derived_matrix
 from groupfit.heldout.design import group_index, group_sample_floor
 from groupfit.heldout.folds import make_folds
@@ -117,7 +118,7 @@ def test_an_over_fitting_model_is_said_to_over_fit_once_when_the_branch_is_taken
     _, _, _, result = diagnosed(35, "absolute", p=3)
     assert result.reference["dropped"] and result.reference["branch"]["reason"] is None
     assert result.base_check["overfitted"]
-    overfit = [n for n in result.notes if n.startswith(OVERFIT_NOTE)]
+    overfit = result.notes_of(OVERFIT)
     assert len(overfit) == 1 and f"{result.base_check['held_out_rms_um']:.3g} µm" in overfit[0]
 
 

@@ -6,6 +6,7 @@ from test_diagnose_on_time import spindle_run
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
+from groupfit.diagnose.notes import HISTORY, UNSCORED
 from groupfit.diagnose.residual import residual
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
@@ -33,8 +34,8 @@ def test_a_split_log_is_diagnosed_with_the_history_of_the_files_before():
     design = np.column_stack([np.ones(len(log)), log[TEMPS].to_numpy(float), effect])
     coefficients, *_ = np.linalg.lstsq(design, log["error_um"].to_numpy(float), rcond=None)
     assert np.asarray(result.model["coefficients"])[0] == pytest.approx(coefficients, rel=1e-6, abs=1e-9)
-    assert [n.split(" (")[0] for n in result.notes if " continues " in n] == [
+    assert [n.split(" (")[0] for n in result.notes_of(HISTORY) if " continues " in n] == [
         "part2 continues part1",
         "part3 continues part2",
     ]
-    assert not any("the error is measured on" in n for n in result.notes)
+    assert not result.notes_of(UNSCORED)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -208,8 +209,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
         validation_continues=args.continues,
     )
     if selection is not None:
-        result.selection = {**selection, "of": len(model["temps"])}
-    result.ridge = ridge
+        result = replace(result, selection={**selection, "of": len(model["temps"])})
+    result = replace(result, ridge=ridge)
 
     expectations = {"before": expect_for_model(model, data)}
     expectations["after"] = expect_for_model(result.model, data) if result.changed else expectations["before"]

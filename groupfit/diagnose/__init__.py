@@ -1,5 +1,6 @@
 """Close the loop on measured data: residual → missing effect → augmented model → error before/after."""
 
-from groupfit.diagnose.loop import DiagnosisResult, diagnose
+from groupfit.diagnose.loop import diagnose
+from groupfit.diagnose.result import DiagnosisResult
 
 __all__ = ["DiagnosisResult", "diagnose"]

@@ -10,9 +10,10 @@ law's low-pass and the sensors compete for the same error: each step adds
 whichever of them most lowers the held-out error of the model so far.
 
 The two kinds face different tests. A measured input of the model enters
-while it lowers the held-out squared error by :data:`MIN_GAIN` (the rule of
+while it lowers the held-out squared error by ``policy.joint_min_gain`` (the rule of
 ``fit --select forward``); an effect enters only if it passes the test the
-diagnosis gives a first effect (``effect_test``: the least share of the
+diagnosis gives a first effect (stage ``"joint"`` of the
+:class:`~groupfit.diagnose.policy.AcceptancePolicy`: the least share of the
 held-out error, more than half of the folds improved, no fold more than
 doubled, better than a straight drift), so a cause is never admitted on
 weaker evidence than the diagnosis asks of it elsewhere. One effect per column. At least one measured input
@@ -27,16 +28,17 @@ of the choice too: the error to expect of the procedure on a new condition.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from groupfit.diagnose.candidates import Candidate, score_candidate
 from groupfit.diagnose.drift_guard import DriftGuard
+from groupfit.diagnose.policy import AcceptancePolicy
 from groupfit.features import Feature
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.heldout.selection import MIN_GAIN, cluster_representatives, correlation_clusters
+from groupfit.heldout.selection import cluster_representatives, correlation_clusters
 
 
 @dataclass
@@ -69,15 +71,16 @@ class JointProblem:
     target : ndarray, shape (N,)
         The measured error on the scored rows.
     inputs : mapping of name to ndarray, shape (N,)
-        The model's measured inputs; columns correlated above 0.98 are one
+        The model's measured inputs; columns correlated above ``policy.joint_cluster_r`` are one
         (their representative most correlated with the error stands for them).
     effects : sequence of (Feature, ndarray)
         The candidate effects and their values on the same rows.
     folds : Folds
         The held-out folds (whole conditions or runs) on the same rows.
-    effect_test : callable
-        ``effect_test(candidate, drift) -> reason or None``: why an effect may not enter; ``drift`` is the
-        :class:`~groupfit.diagnose.drift_guard.DriftGuard` of the inputs chosen so far.
+    policy : AcceptancePolicy
+        The rules an effect must pass to enter (stage ``"joint"``, with the
+        :class:`~groupfit.diagnose.drift_guard.DriftGuard` of the inputs chosen so far) and the joint selection's
+        own thresholds.
     drift : ndarray, shape (N,)
         Time since the start of the run: the straight drift an effect must be told from.
     fit_intercept : bool
@@ -87,7 +90,7 @@ class JointProblem:
     inputs: Mapping[str, np.ndarray]
     effects: Sequence[tuple[Feature, np.ndarray]]
     folds: Folds
-    effect_test: Callable[[Candidate, DriftGuard], str | None]
+    policy: AcceptancePolicy
     drift: np.ndarray
     fit_intercept: bool = True
 
@@ -98,7 +101,7 @@ class JointProblem:
             {name: values[rows] for name, values in self.inputs.items()},
             [(feature, values[rows]) for feature, values in self.effects],
             self.folds.restricted(rows),
-            self.effect_test,
+            self.policy,
             self.drift[rows],
             self.fit_intercept,
         )
@@ -109,7 +112,8 @@ class JointProblem:
         names = list(inputs)
         if names:
             X = np.column_stack([inputs[n] for n in names])
-            pool = [names[i] for i in cluster_representatives(X, target, correlation_clusters(X, min_corr=0.98))]
+            clusters = correlation_clusters(X, min_corr=self.policy.joint_cluster_r)
+            pool = [names[i] for i in cluster_representatives(X, target, clusters)]
         else:
             pool = []
         remaining = [(f, v) for f, v in self.effects if np.ptp(v) > 0.0]
@@ -124,11 +128,12 @@ class JointProblem:
             null = DriftGuard(self.drift, scorer, lambda c: values_of[c.feature], "drift")
             for name in pool:
                 candidate = score_candidate(Feature(name), inputs[name], scorer)
-                if candidate.score >= MIN_GAIN and (best is None or candidate.score > best[0].score):
+                if candidate.score >= self.policy.joint_min_gain and (best is None or candidate.score > best[0].score):
                     best = (candidate, inputs[name])
             scored = [(score_candidate(feature, values, scorer), values) for feature, values in remaining]
             for candidate, values in scored:
-                if (best is None or candidate.score > best[0].score) and self.effect_test(candidate, null) is None:
+                better = best is None or candidate.score > best[0].score
+                if better and self.policy.refusal(candidate, "joint", null) is None:
                     best = (candidate, values)
             if not result.effects:
                 result.first_ranking = sorted((c for c, _ in scored), key=lambda c: -c.score)

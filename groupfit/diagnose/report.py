@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from groupfit.columns import is_ambient_name
-from groupfit.diagnose.history import COLD_START_NOTE
-from groupfit.diagnose.loop import OVERFIT_NOTE
+from groupfit.diagnose.notes import COLD_START, OVERFIT
 
 
 def column_words(column: str, ambient: tuple[str, ...] = ()) -> str:
@@ -53,7 +52,7 @@ def diagnosis_summary(result) -> str:
     several = len(result.validation_runs) > 1
     if worse and several and a["rms_um"] < b["rms_um"]:  # better together, worse on some run
         each = "; ".join(
-            f"{r['name']}: {r['before']['rms_um']:.3g} → {r['after']['rms_um']:.3g} µm RMS" for r in result.worse_runs
+            f"{r.name}: {r.before['rms_um']:.3g} → {r.after['rms_um']:.3g} µm RMS" for r in result.worse_runs
         )
         lines.append(
             f"the augmented model is worse on {each} (the {len(result.validation_runs)} validation runs together: "
@@ -63,7 +62,7 @@ def diagnosis_summary(result) -> str:
         lines.append(
             f"the augmented model is worse on {judged}: {b['rms_um']:.3g} → {a['rms_um']:.3g} µm RMS; not recommended"
         )
-        lines += [f"  ({n})" for n in result.notes if COLD_START_NOTE in n]
+        lines += [f"  ({n.text})" for n in result.notes if n.kind == COLD_START]
     selection = result.selection
     if selection is not None:
         how = "together with the effects" if selection["method"] == "joint" else f"by {selection['method']}"
@@ -193,8 +192,8 @@ def diagnosis_summary(result) -> str:
         )
         if key == "validate" and several:
             lines += [
-                f"  {r['name']}: RMS {change_words(r['before']['rms_um'], r['after']['rms_um'])}, max "
-                f"{r['before']['max_um']:.4g} → {r['after']['max_um']:.4g} µm"
+                f"  {r.name}: RMS {change_words(r.before['rms_um'], r.after['rms_um'])}, max "
+                f"{r.before['max_um']:.4g} → {r.after['max_um']:.4g} µm"
                 for r in result.validation_runs
             ]
     lb_b, lb_a = result.checks_before["ljung_box"], result.checks_after["ljung_box"]
@@ -204,9 +203,8 @@ def diagnosis_summary(result) -> str:
         f"drift {dr_b['slope_um_per_h']:.3g} → {dr_a['slope_um_per_h']:.3g} µm/h "
         f"(HAC p {dr_b['p_value']:.2g} → {dr_a['p_value']:.2g})"
     )
-    lines += [
-        f"note: {n}"
-        for n in result.notes
-        if not (overfit_in_head and n.startswith(OVERFIT_NOTE)) and not (worse and COLD_START_NOTE in n)
-    ]
+    left_out = {OVERFIT} if overfit_in_head else set()
+    if worse:
+        left_out.add(COLD_START)
+    lines += [f"note: {n.text}" for n in result.notes if n.kind not in left_out]
     return "\n".join(lines)

@@ -1,0 +1,156 @@
+"""What the diagnosis found and did, as frozen values; dictionaries only for ``diagnose --json``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from groupfit.diagnose.candidates import Candidate
+from groupfit.diagnose.notes import Note
+from groupfit.diagnose.policy import Refusal
+from groupfit.diagnose.report import diagnosis_summary
+
+Metrics = Mapping[str, float]
+"""Error metrics of a residual (``rms_um``, ``max_um``, ``R_um``, …; :func:`groupfit.model.error_metrics`)."""
+JsonRecord = Mapping[str, Any]
+"""A record that goes to ``diagnose --json`` as it is (the over-fit check, the reference check, a selection)."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One accepted effect and what it did on the held-out folds."""
+
+    candidate: Candidate
+    held_out_rms_before: float
+    held_out_rms_after: float
+    alternatives: tuple[Candidate, ...] = ()
+    """Candidates of other columns that explain the held-out error as well (within one standard error)."""
+    joint: bool = False
+    """Chosen together with the inputs (``select_jointly``): scored against the inputs chosen before it."""
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            **self.candidate.to_dict(),
+            "held_out_rms_before_um": self.held_out_rms_before,
+            "held_out_rms_after_um": self.held_out_rms_after,
+            "alternatives": [c.to_dict() for c in self.alternatives],
+            "joint": self.joint,
+        }
+
+
+@dataclass(frozen=True)
+class Refused:
+    """A candidate that scored well enough but failed the rule it faced."""
+
+    candidate: Candidate
+    refusal: Refusal
+
+    @property
+    def rule_id(self) -> str:
+        return self.refusal.rule_id
+
+    @property
+    def reason(self) -> str:
+        return self.refusal.reason
+
+    def to_dict(self) -> dict[str, object]:
+        return {**self.candidate.to_dict(), "reason": self.reason}
+
+
+@dataclass(frozen=True)
+class RunMetrics:
+    """One validation run's error metrics before and after."""
+
+    name: str
+    before: Metrics
+    after: Metrics
+
+    def to_dict(self) -> dict[str, object]:
+        return {"name": self.name, "before": dict(self.before), "after": dict(self.after)}
+
+
+@dataclass(frozen=True)
+class DiagnosisResult:
+    """What the diagnosis found and did."""
+
+    candidates: list[Candidate]
+    added: list[Candidate]
+    before: Mapping[str, Metrics]
+    after: Mapping[str, Metrics]
+    model: JsonRecord
+    notes: tuple[Note, ...] = ()
+    checks_before: Mapping[str, Metrics] = field(default_factory=dict)
+    checks_after: Mapping[str, Metrics] = field(default_factory=dict)
+    residuals_before: Mapping[str, np.ndarray] = field(default_factory=dict)
+    residuals_after: Mapping[str, np.ndarray] = field(default_factory=dict)
+    steps: tuple[Step, ...] = ()
+    refused: tuple[Refused, ...] = ()
+    folds: str = ""
+    base_check: JsonRecord = field(default_factory=dict)
+    run_names: Mapping[str, str] = field(default_factory=dict)
+    """Names of the modelling run(s) (``"data"``) and the validation run(s) (``"validate"``)."""
+    selection: JsonRecord | None = None
+    """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
+    ridge: JsonRecord | None = None
+    """The ridge penalty the model was refitted with before the diagnosis (``diagnose --ridge``), when it was."""
+    reference: JsonRecord | None = None
+    """The check of the model's reference sensor against absolute readings (:mod:`groupfit.diagnose.reference`),
+    when the model has one; ``dropped`` says whether the model was refitted without it."""
+    ambient: tuple[str, ...] = ()
+    """Columns declared ambient temperatures (``diagnose --ambient``), whatever their names."""
+    validation_runs: tuple[RunMetrics, ...] = ()
+    """Each validation run on its own: its name and its error metrics before and after."""
+
+    def summary(self) -> str:
+        """The report, as ``groupfit diagnose`` prints it."""
+        return diagnosis_summary(self)
+
+    def notes_of(self, kind: str) -> list[str]:
+        """The texts of the notes of one kind (:mod:`groupfit.diagnose.notes`)."""
+        return [n.text for n in self.notes if n.kind == kind]
+
+    def to_json(self, model_path: str | None = None) -> dict[str, object]:
+        """The machine-readable result (``diagnose --json``); ``model`` is the model file to use."""
+        return {
+            "candidates": [c.to_dict() for c in self.candidates],
+            "added": [c.to_dict() for c in self.added],
+            "steps": [s.to_dict() for s in self.steps],
+            "refused": [r.to_dict() for r in self.refused],
+            "folds": self.folds,
+            "base_model": self.base_check,
+            "selection": self.selection,
+            "ridge": self.ridge,
+            "reference": self.reference,
+            "before": self.before,
+            "after": self.after,
+            "validation_runs": [r.to_dict() for r in self.validation_runs],
+            "improved": self.improved,
+            "checks": {"before": self.checks_before, "after": self.checks_after},
+            "notes": [n.text for n in self.notes],
+            "model": None if model_path is None else str(model_path),
+        }
+
+    @property
+    def changed(self) -> bool:
+        """Whether the model differs from the one given: an effect added, inputs re-selected, a ridge refit or its
+        reference dropped."""
+        dropped = self.reference is not None and self.reference["dropped"]
+        return bool(self.added) or self.selection is not None or self.ridge is not None or dropped
+
+    @property
+    def improved(self) -> bool | None:
+        """Whether the validation runs got better, together and each one; None without one (or when the model
+        was not changed)."""
+        if "validate" not in self.before or not self.changed:
+            return None
+        together = self.after["validate"]["rms_um"] < self.before["validate"]["rms_um"]
+        return together and not self.worse_runs
+
+    @property
+    def worse_runs(self) -> list[RunMetrics]:
+        """The validation runs on which the changed model's RMS error is not lower (none when it is unchanged)."""
+        if not self.changed:
+            return []
+        return [r for r in self.validation_runs if r.after["rms_um"] >= r.before["rms_um"]]
