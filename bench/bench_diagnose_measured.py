@@ -48,12 +48,14 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from groupfit.diagnose.plot import plot_diagnosis
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import TAUS_S, heat_law_scale, score_candidate, within_one_se
-from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE, failed_test, shortest_adequate_lag
+from groupfit.diagnose.effects import shortest_adequate_lag
+from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_SCORE
+from groupfit.diagnose.plot import plot_diagnosis
+from groupfit.diagnose.policy import DEFAULT_POLICY, FEW_FOLDS
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.features import Feature
 from groupfit.heldout.folds import Folds
@@ -141,8 +143,8 @@ def tau_sweep(frame, label, first, last):
             fate = "added"
         elif candidate.score < MIN_SCORE:
             fate = "below the least score"
-        elif reason := failed_test(candidate, MIN_SCORE, further=False):
-            fate = reason
+        elif refusal := fold_refusal(candidate):
+            fate = refusal.reason
         elif candidate.score > first_score:
             fate = "passes; a shorter lag within one standard error was taken"
         else:
@@ -157,8 +159,11 @@ def tau_sweep(frame, label, first, last):
 
 RULE_EXPONENTS = (1.0, 4.0 / 3.0, 5.0 / 3.0, 2.0, 2.5, 3.0)
 """Heat-law exponents the rule that chooses k too picks from."""
-MAJORITY_TEST = "lowers the error on only"
-"""How the refusal of the majority test begins (:func:`groupfit.diagnose.loop.failed_test`)."""
+
+
+def fold_refusal(candidate):
+    """The tests on the held-out folds a first effect faces, without its drift guard."""
+    return DEFAULT_POLICY.fold_refusal(candidate, further=False, own_transforms=False)
 
 
 def heat_lags(runs, exponent):
@@ -209,8 +214,8 @@ def pick(candidates, prefer, majority=True):
     def passes(c):
         if c.score < MIN_SCORE or c.explained_rms_um < MIN_EFFECT_RMS_UM:
             return False
-        reason = failed_test(c, MIN_SCORE, further=False)
-        return reason is None or (not majority and reason.startswith(MAJORITY_TEST))
+        refusal = fold_refusal(c)
+        return refusal is None or (not majority and refusal.rule_id == FEW_FOLDS)
 
     passing = [c for c in candidates if passes(c)]
     if not passing:

@@ -143,3 +143,17 @@ def transfer_weights(groups: np.ndarray, blend_samples: int) -> np.ndarray:
                 break
             weights[i] = (k + 1) / (blend_samples + 1)
     return weights
+
+
+def block_design(
+    inputs: np.ndarray, groups: np.ndarray, n_groups: int, *, fit_intercept: bool, shared: np.ndarray
+) -> np.ndarray:
+    """Each group's own inputs (and intercept) in its own columns, rows by ``groups``; then the ``shared`` inputs,
+    one column each for every group."""
+    own = inputs[:, ~shared]
+    block = np.column_stack([np.ones(len(inputs)), own]) if fit_intercept else own
+    design = np.zeros((len(inputs), n_groups * block.shape[1]))
+    for g in range(n_groups):
+        rows = groups == g
+        design[rows, g * block.shape[1] : (g + 1) * block.shape[1]] = block[rows]
+    return np.column_stack([design, inputs[:, shared]])

@@ -19,7 +19,6 @@ import pandas as pd
 
 from groupfit.data import Run
 from groupfit.features import Feature
-from groupfit.heldout.design import group_design
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
@@ -103,12 +102,10 @@ def augment_model_over_reference(
         ]
     )
     error = stacked_error(runs)
-    estimator = fitted_groups(model, rises, error, np.append(~measured, True))
-    slopes = estimator.coef_
+    on_rises = fitted_groups(model, rises, error, np.append(~measured, True))
+    slopes = on_rises.coef_
     reference_slope = -slopes[:, :-1][:, measured].sum(axis=1)
-    estimator.coef_ = np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1], -slopes[:, -1]])
-    estimator.n_features_in_ = absolute.shape[1]
-    estimator.interval_stats_ = None  # the rises' intervals, not those of a fit on the absolute readings
+    estimator = on_rises.with_slopes(np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1], -slopes[:, -1]]))
     names = (*model.temps, reference, feature.name, smooth.name)
     derived = (*(model.derived_inputs or ()), feature, smooth)
     return written_model(estimator, model, runs, absolute, error, names, derived, None)
@@ -149,18 +146,8 @@ def fitted_groups(
     not those of a per-group fit, so the estimator carries none.
     """
     measured = np.isfinite(error)  # rows without a measured error only carry the derived inputs' history
-    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks))
-    X, error = X[measured], error[measured]
-    if shared is None or not model.breaks or not np.any(shared):
-        return estimator.fit(X, error)
-    shared = np.asarray(shared, dtype=bool)
-    design = group_design(model.to_dict(), X, shared)
-    gamma = np.linalg.lstsq(design, error, rcond=None)[0][-int(shared.sum()) :]
-    estimator.fit(X[:, ~shared], error - X[:, shared] @ gamma)
-    slopes = np.empty((len(estimator.coef_), X.shape[1]))
-    slopes[:, ~shared], slopes[:, shared] = estimator.coef_, gamma
-    estimator.coef_, estimator.n_features_in_, estimator.interval_stats_ = slopes, X.shape[1], None
-    return estimator
+    estimator = GroupedRegressor.for_model_file(model, fixed_breaks=list(model.breaks), shared_columns=shared)
+    return estimator.fit(X[measured], error[measured])
 
 
 def written_model(

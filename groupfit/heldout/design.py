@@ -17,7 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from groupfit.grouping import serving_group_index
+from groupfit.grouping import block_design, serving_group_index
 
 
 def group_index(model: dict[str, Any], n_rows: int) -> np.ndarray:
@@ -47,15 +47,9 @@ def group_design(model: dict[str, Any], inputs: np.ndarray, shared: np.ndarray |
     """The model's regressors: each group's measured inputs (and intercept) in its own columns, groups by
     sample index, then one column per shared input (``shared``, default :func:`shared_columns`)."""
     shared = shared_columns(model) if shared is None else np.asarray(shared, dtype=bool)
-    own = inputs[:, ~shared]
     groups = group_index(model, len(inputs))
-    block = np.column_stack([np.ones(len(inputs)), own]) if model["intercept"] else own
     n_groups = len(model["breaks"]) + 1
-    design = np.zeros((len(inputs), n_groups * block.shape[1]))
-    for g in range(n_groups):
-        rows = groups == g
-        design[rows, g * block.shape[1] : (g + 1) * block.shape[1]] = block[rows]
-    return np.column_stack([design, inputs[:, shared]])
+    return block_design(inputs, groups, n_groups, fit_intercept=bool(model["intercept"]), shared=shared)
 
 
 def stacked_design(model: dict[str, Any], inputs: Sequence[np.ndarray]) -> np.ndarray:

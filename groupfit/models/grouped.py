@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Any, Callable, Mapping
 
@@ -14,6 +15,7 @@ from groupfit.grouping import (
     DEFAULT_SOFT_OFFSET,
     DEFAULT_SPACING,
     Constraints,
+    block_design,
     hard_groups,
     serving_group_index,
     soft_groups,
@@ -76,6 +78,10 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         with another input); they must increase and lie strictly between n
         and N. ``p`` is then ignored: the model has ``len(fixed_breaks)``
         breaks.
+    shared_columns : sequence of bool or None
+        Inputs with one coefficient for every group (a diagnosis's effects, :mod:`groupfit.heldout.design`):
+        fitted with each group's own on the hard groups, then each soft group refitted on what they leave.
+        Such a fit carries no prediction intervals. Ignored without breaks.
 
     Attributes
     ----------
@@ -130,6 +136,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         random_state: int | None = None,
         fixed_breaks: list[int] | None = None,
         ridge_alpha: float = 0.0,
+        shared_columns=None,
     ):
         self.p = p
         self.n = n
@@ -147,6 +154,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.random_state = random_state
         self.fixed_breaks = fixed_breaks
         self.ridge_alpha = ridge_alpha
+        self.shared_columns = shared_columns
 
     @property
     def n_coef(self) -> int:
@@ -283,23 +291,54 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.n_samples_fit_ = n_samples
         self.hard_groups_ = hard_groups(self.breaks_, n_samples)
         self.soft_groups_ = soft_groups(self.breaks_, n_samples, self.n)
+        serving = serving_group_index(self.breaks_, n_samples, self.n)
+        shared = self._shared_mask(X.shape[1])
+        own, own_y, gamma = X, y, None
+        if shared is not None:
+            design = block_design(X, serving, len(self.breaks_) + 1, fit_intercept=self.fit_intercept, shared=shared)
+            gamma = np.linalg.lstsq(design, y, rcond=None)[0][-int(shared.sum()) :]
+            own, own_y = X[:, ~shared], y - X[:, shared] @ gamma
         coefs, self.residuals_ = grouped_residuals(
-            X, y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept, ridge_alpha=float(self.ridge_alpha)
+            own, own_y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept, ridge_alpha=float(self.ridge_alpha)
         )
         coefs = np.asarray(coefs)
         if self.fit_intercept:
-            self.intercept_, self.coef_ = coefs[:, 0], coefs[:, 1:]
+            self.intercept_, slopes = coefs[:, 0], coefs[:, 1:]
         else:
-            self.intercept_, self.coef_ = np.zeros(len(coefs)), coefs
-        serving = serving_group_index(self.breaks_, n_samples, self.n)
+            self.intercept_, slopes = np.zeros(len(coefs)), coefs
+        if gamma is not None:
+            self.coef_ = np.empty((len(coefs), X.shape[1]))
+            self.coef_[:, ~shared], self.coef_[:, shared] = slopes, gamma
+        else:
+            self.coef_ = slopes
         self.group_objective_ = np.array(
             [residual_sum(self.residuals_[serving == g], self.objective) for g in range(len(coefs))]
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
         ridge = float(self.ridge_alpha) > 0
-        self.interval_stats_ = None if ridge else group_interval_stats(X, y, self.soft_groups_, self.fit_intercept)
+        plain = not ridge and gamma is None
+        self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept) if plain else None
         return self
+
+    def _shared_mask(self, n_features: int) -> np.ndarray | None:
+        """``shared_columns`` as a mask, or None when no column is shared (or the model has one group)."""
+        if self.shared_columns is None or not self.breaks_:
+            return None
+        shared = np.asarray(self.shared_columns, dtype=bool)
+        if shared.shape != (n_features,):
+            raise InputError(f"shared_columns marks {shared.size} columns; X has {n_features}")
+        return shared if shared.any() else None
+
+    def with_slopes(self, coef: np.ndarray) -> "GroupedRegressor":
+        """A copy of this fitted estimator with the slopes ``coef`` (one row per group), groups and intercepts
+        kept: the same model written on other inputs, without prediction intervals (those were of the fit)."""
+        check_is_fitted(self, "coef_")
+        twin = copy.deepcopy(self)
+        twin.coef_ = np.asarray(coef, dtype=float)
+        twin.n_features_in_ = twin.coef_.shape[1]
+        twin.interval_stats_ = None
+        return twin
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
         """0-based index of the group serving each sample (offline, by sample index)."""
