@@ -14,8 +14,6 @@ PACKAGE = ROOT / "groupfit"
 
 C901_EXCEPTIONS = {
     "groupfit/commands/fit.py",
-    "groupfit/diagnose/loop.py",
-    "groupfit/diagnose/report.py",
     "groupfit/model_checks.py",
     "groupfit/runtime/interpreter.py",
     "groupfit/search/ga.py",
@@ -23,11 +21,11 @@ C901_EXCEPTIONS = {
     "tests/support/structured_text.py",
 }
 """Files with a function over ruff's complexity limit (pyproject's per-file-ignores): entries may only leave."""
-LONG_MODULES = {"groupfit/diagnose/loop.py": 888, "groupfit/export/c.py": 535}
+LONG_MODULES = {"groupfit/export/c.py": 535}
 """Modules over 500 lines and their length today: they may only shrink."""
-KNOWN_CIRCLES = {frozenset({"groupfit.diagnose.loop", "groupfit.diagnose.report"})}
+KNOWN_CIRCLES: set[frozenset[str]] = set()
 """Import circles still in the house: entries may only leave."""
-MAX_FUNCTION_LEVEL_OWN_IMPORTS = 2
+MAX_FUNCTION_LEVEL_OWN_IMPORTS = 0
 
 
 def module_name(path: Path) -> str:
