@@ -70,7 +70,7 @@ def derived_model():
         Feature("speed_rpm", exponent=5 / 3, scale=1000.0),
         Feature("T_amb", "delay", delay_samples=3, start="rest"),
     ):
-        model = augment_model(model, run, model_inputs(model, run), feature)
+        model = augment_model(model, run, model_inputs(model, run), feature).to_dict()
     names = RuleTables.from_model(model).raw_names
     return model, np.column_stack([run.frame[name].to_numpy(dtype=float) for name in names])
 

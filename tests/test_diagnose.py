@@ -146,7 +146,7 @@ def test_a_grouped_model_gets_the_effect_with_one_coefficient_as_it_was_scored(t
     model = ModelFile.load(model_path).to_dict()
     run = load_run(path, temps=TEMPS)
     feature = Feature("T_amb", "lowpass", tau_s=3600.0)
-    augmented = augment_model(model, run, model_inputs(model, run), feature)
+    augmented = augment_model(model, run, model_inputs(model, run), feature).to_dict()
     assert augmented["temps"] == TEMPS + ["T_amb~lp3600s"] and augmented["breaks"] == model["breaks"]
     effect = feature.compute(frame["T_amb"].to_numpy(), 100.0)
     y = frame["error_um"].to_numpy()

@@ -113,14 +113,14 @@ def test_without_a_lagging_part_nothing_is_added_over_the_air():
     model, run = rises_model(modelling)
     result = diagnose(model, run, live_rule=replay_groups)
     assert not any(c.over for c in result.added)
-    assert result.model["reference"] == "T_amb"
+    assert result.model.reference == "T_amb"
 
 
 def test_a_grouped_model_keeps_its_breaks_and_the_written_model_predicts_as_its_rises():
     modelling = workshop_run(1)
     model, run = rises_model(modelling, p=2)
     feature = Feature("T_amb", "lowpass", tau_s=LAG_TAU_S)
-    written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature)
+    written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature).to_dict()
     assert written["breaks"] == model["breaks"] and written.get("reference") is None
     assert model_file_problem(written) is None
 
@@ -162,7 +162,7 @@ def test_the_written_model_runs_on_the_controller_as_in_python(drivers):
     modelling = workshop_run(1)
     model, run = rises_model(modelling, p=2)
     feature = Feature("T_amb", "lowpass", tau_s=LAG_TAU_S)
-    written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature)
+    written = augment_model_over_reference(model, [run], [model_inputs(model, run)], feature).to_dict()
     readings = modelling[list(RuleTables.from_model(written).raw_names)].to_numpy(float)
     assert list(RuleTables.from_model(written).raw_names) == [*TEMPS, "T_amb"]  # the air read once, for both inputs
     warmer = workshop_run(2, ambient_level=23.0)[[*TEMPS, "T_amb"]].to_numpy(float)

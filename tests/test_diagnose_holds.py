@@ -103,10 +103,10 @@ def test_a_tempting_but_harmful_second_effect_is_not_added():
 
     first_effect = best_by_blocks(model)
     assert first_effect.feature.column == "T_amb"
-    first = augment_model(model, run, model_inputs(model, run), first_effect.feature)
+    first = augment_model(model, run, model_inputs(model, run), first_effect.feature).to_dict()
     tempting = best_by_blocks(first)
     assert tempting.score >= 0.3 and tempting.feature.column in TEMPS
-    second = augment_model(first, run, model_inputs(first, run), tempting.feature)
+    second = augment_model(first, run, model_inputs(first, run), tempting.feature).to_dict()
     rms = lambda m, r: metrics_of(stacked_residual(m, [r], None))["rms_um"]  # noqa: E731
     assert rms(second, run) < rms(first, run)
     assert rms(second, val) > rms(first, val)

@@ -44,4 +44,4 @@ def test_a_part_that_grows_with_the_hours_at_speed_is_named_as_speed_times_on_ti
     assert after <= 0.4 * before and result.improved is True
     assert "heat law (x/1000)^1.67, times the hours on" in result.summary().splitlines()[0]
     # the augmented model's inputs are those the controller computes: replayed through the rule, as judged
-    assert result.model["derived_inputs"][0]["transform"] == "ontime"
+    assert result.model.derived_inputs[0].transform == "ontime"

@@ -40,7 +40,7 @@ def test_a_pump_the_wrong_reference_hid_is_found_on_absolute_readings():
     scenario, model, modelling, result = diagnosed(26, "absolute")
     check = result.reference
     branch = check["branch"]
-    assert check["dropped"] and result.model.get("reference") is None
+    assert check["dropped"] and result.model.reference is None
     assert branch["effects"]["given"] == [] and branch["reason"] is None
     assert [c.feature.column for c in result.added][:1] == ["pump_on"]
     assert branch["effects"]["absolute"] == [c.feature.name for c in result.added]
@@ -69,7 +69,7 @@ def test_a_branch_that_needs_the_air_itself_keeps_the_reference():
     assert branch["effects"]["absolute"] and all(e.startswith("T_amb") for e in branch["effects"]["absolute"][:1])
     assert branch["score"] >= MIN_SCORE and branch["folds_improved"] == result.reference["n_folds"]
     assert "`T_amb` itself" in branch["reason"]
-    assert not result.reference["dropped"] and result.model["reference"] == "T_amb"
+    assert not result.reference["dropped"] and result.model.reference == "T_amb"
 
 
 def fold_sse(design, y, groups):
@@ -129,8 +129,8 @@ def test_a_grouped_model_is_judged_on_its_reference_as_one_group():
     # µm). Judged as one group, as the reference's physics asks, they win clearly.
     scenario, model, modelling, result = diagnosed(12, "absolute", p=3)
     check = result.reference
-    assert check["dropped"] and check["as_one_group"] and result.model.get("reference") is None
-    assert result.model["breaks"] == model["breaks"]  # the hard breaks kept
+    assert check["dropped"] and check["as_one_group"] and result.model.reference is None
+    assert list(result.model.breaks) == model["breaks"]  # the hard breaks kept
     assert [c.feature.column for c in result.added] == ["spindle_rpm"]
     assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
     assert "judged with the groups as one" in result.summary().splitlines()[0]

@@ -33,7 +33,7 @@ def test_a_split_log_is_diagnosed_with_the_history_of_the_files_before():
     effect = result.added[0].feature.compute(log[result.added[0].feature.column].to_numpy(float), 60.0)
     design = np.column_stack([np.ones(len(log)), log[TEMPS].to_numpy(float), effect])
     coefficients, *_ = np.linalg.lstsq(design, log["error_um"].to_numpy(float), rcond=None)
-    assert np.asarray(result.model["coefficients"])[0] == pytest.approx(coefficients, rel=1e-6, abs=1e-9)
+    assert np.asarray(result.model.coefficients)[0] == pytest.approx(coefficients, rel=1e-6, abs=1e-9)
     assert [n.split(" (")[0] for n in result.notes_of(HISTORY) if " continues " in n] == [
         "part2 continues part1",
         "part3 continues part2",

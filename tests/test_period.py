@@ -132,7 +132,7 @@ def test_hold_and_rate_limit_keep_their_meaning_in_seconds():
 
 def test_a_delay_rescales_to_whole_samples_and_is_refused_otherwise():
     model, run = augmented_model("lowpass p=0")
-    delayed = augment_model(model, run, model_inputs(model, run), Feature("T_amb", "delay", delay_samples=3))
+    delayed = augment_model(model, run, model_inputs(model, run), Feature("T_amb", "delay", delay_samples=3)).to_dict()
     fast = at_period(delayed, 25.0)
     assert fast.temps[-1] == "T_amb~delay12" and fast.derived_inputs[-1].delay_samples == 12
     t = np.arange(0.0, 2000.0, 25.0)

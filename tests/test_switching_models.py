@@ -194,7 +194,7 @@ def _augmented(label: str):
         estimator = GroupedRegressor(n=3, fixed_breaks=breaks).fit(run.temps, run.error)
     model = estimator.to_model_file(run, "T1").to_dict()
     for feature in features:
-        model = augment_model(model, run, model_inputs(model, run), feature)
+        model = augment_model(model, run, model_inputs(model, run), feature).to_dict()
     return model, run, load_run(validation, temps=["T1", "T2", "T3", "T4"], name=names[1])
 
 

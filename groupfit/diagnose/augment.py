@@ -12,7 +12,7 @@ how to compute it from the data's columns.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -24,11 +24,11 @@ from groupfit.models.grouped import GroupedRegressor
 
 
 def augment_model(
-    model: ModelFile | dict[str, Any],
+    model: ModelFile | Mapping[str, Any],
     runs: Run | Sequence[Run],
     inputs: np.ndarray | Sequence[np.ndarray],
     feature: Feature,
-) -> dict[str, Any]:
+) -> ModelFile:
     """The model refitted on ``runs`` with ``feature`` as one more input (a model file object).
 
     Parameters
@@ -48,12 +48,12 @@ def augment_model(
 
 
 def refit_model(
-    model: ModelFile | dict[str, Any],
+    model: ModelFile | Mapping[str, Any],
     runs: Sequence[Run],
     inputs: Sequence[np.ndarray],
     names: Sequence[str],
     derived_inputs: Sequence[Feature],
-) -> dict[str, Any]:
+) -> ModelFile:
     """The model's groups (hard breaks kept) refitted on other inputs, as a model file object."""
     model = ModelFile.coerce(model)
     X, error = np.vstack(inputs), stacked_error(runs)
@@ -63,11 +63,11 @@ def refit_model(
 
 
 def augment_model_over_reference(
-    model: ModelFile | dict[str, Any],
+    model: ModelFile | Mapping[str, Any],
     runs: Sequence[Run],
     inputs: Sequence[np.ndarray],
     feature: Feature,
-) -> dict[str, Any]:
+) -> ModelFile:
     """The model refitted with ``feature`` taken over the model's reference column, written on absolute readings.
 
     A model of rises over a reference ``R`` (the air) reads ``T_i − R``; a part
@@ -159,7 +159,7 @@ def written_model(
     names: Sequence[str],
     derived_inputs: Sequence[Feature],
     reference: str | None,
-) -> dict[str, Any]:
+) -> ModelFile:
     """The model file of ``estimator`` on inputs ``X`` (the runs stacked), its switching criterion kept if it is
     still an input, else the measured input that moves most."""
     time = np.arange(len(error)) * model.sampling_period_s + runs[0].time[0]
@@ -173,4 +173,4 @@ def written_model(
         spans = {name: np.ptp(X[:, j]) for j, name in enumerate(names) if name not in derived}
         criterion = max(spans, key=spans.get) if spans else None
     written = estimator.to_model_file(stacked, criterion=criterion)
-    return written.replace(derived_inputs=tuple(derived_inputs) or None).to_dict()
+    return written.replace(derived_inputs=tuple(derived_inputs) or None)

@@ -77,11 +77,12 @@ from groupfit.diagnose.notes import COLD_START, JOINT, OVERFIT, Note, notes_of
 from groupfit.diagnose.policy import DEFAULT_POLICY, AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem, check_arguments, diagnosis_problem
 from groupfit.diagnose.reference import droppable_reference
-from groupfit.diagnose.residual import LiveRule
+from groupfit.diagnose.residual import LiveRule, ModelLike
 from groupfit.diagnose.result import DiagnosisResult, Metrics, Refused, RunMetrics, Step
 from groupfit.features import derived_matrix
 from groupfit.heldout.check import overfit_check
 from groupfit.metrics import error_metrics
+from groupfit.model import ModelFile
 
 MIN_SCORE = DEFAULT_POLICY.min_score
 MIN_EFFECT_RMS_UM = DEFAULT_POLICY.min_effect_rms_um
@@ -119,7 +120,7 @@ class State:
 
 
 def diagnose(
-    model: Model,
+    model: ModelLike,
     data: Run | Sequence[Run],
     validate: Run | Sequence[Run] | None = None,
     live_rule: LiveRule | None = None,
@@ -130,7 +131,7 @@ def diagnose(
     heat_exponent: float | str = HEAT_EXPONENT,
     own_transforms: bool = False,
     select_jointly: bool = False,
-    baseline: Model | None = None,
+    baseline: ModelLike | None = None,
     check_reference: bool = True,
     min_further_effect_rms_um: float = MIN_FURTHER_EFFECT_RMS_UM,
     ambient: Sequence[str] = (),
@@ -173,12 +174,12 @@ def diagnose(
         live_rule=live_rule,
         heat_exponent=heat_exponent,
         select_jointly=select_jointly,
-        baseline=baseline,
+        baseline=None if baseline is None else ModelFile.coerce(baseline),
         check_reference=check_reference,
         ambient=tuple(ambient),
         validation_continues=validation_continues,
     )
-    return diagnose_with(model, as_runs(data), as_runs(validate), options)
+    return diagnose_with(ModelFile.coerce(model), as_runs(data), as_runs(validate), options)
 
 
 def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], options: DiagnoseOptions):
@@ -204,7 +205,7 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     policy = options.policy
     tried, tried_notes = tried_features(
         problem,
-        model["temps"],
+        model.temps,
         ambient=options.ambient,
         heat_exponent=options.heat_exponent,
         own_transforms=policy.own_transforms,
@@ -245,14 +246,14 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
 def joint_stage(problem: Problem, state: State, policy: AcceptancePolicy, base_check) -> None:
     """Inputs and first effects chosen together (``select_jointly``); the model refitted on them."""
     model = state.current.model
-    temps = model["temps"]
+    temps = model.temps
     causes = [f for f in state.tried.features if f.column not in state.tried.sensor_columns and f.column not in temps]
     stacked = np.vstack(state.current.inputs)[problem.measured]
     values = {name: stacked[:, j] for j, name in enumerate(temps)}
     effects = [(f, problem.values(f)) for f in causes]
     rows = problem.measured
     joint = JointProblem(
-        problem.target[rows], values, effects, problem.folds, policy, problem.ramp, bool(model["intercept"])
+        problem.target[rows], values, effects, problem.folds, policy, problem.ramp, bool(model.intercept)
     )
     chosen = joint.select()
     state.current = problem.fit(joint_model(problem, model, state.current.inputs, chosen))
@@ -282,9 +283,9 @@ def joint_stage(problem: Problem, state: State, policy: AcceptancePolicy, base_c
 
 def joint_model(problem: Problem, model: Model, inputs: list[np.ndarray], chosen: JointSelection) -> Model:
     """The model refitted on the inputs and effects chosen together."""
-    keep = [model["temps"].index(name) for name in chosen.inputs]
+    keep = [model.temps.index(name) for name in chosen.inputs]
     features = [effect.feature for effect in chosen.effects]
-    period = float(model["sampling_period_s"])
+    period = model.sampling_period_s
     runs = problem.data
     columns = [np.column_stack([x[:, keep], derived_matrix(features, r.frame, period)]) for x, r in zip(inputs, runs)]
     return refit_model(model, runs, columns, [*chosen.inputs, *(f.name for f in features)], features)

@@ -29,7 +29,7 @@ def plot_diagnosis(result, runs: dict, path: str | Path) -> None:
     top = axes[0]
     if shown is not None:
         feature = shown.feature
-        period = float(result.model["sampling_period_s"])  # as the diagnosis computed it
+        period = result.model.sampling_period_s  # as the diagnosis computed it
         values = np.concatenate(feature_on_runs(feature, data, period))
         if shown.over is not None:  # taken over the model's reference column, as the diagnosis took it
             steady = steady_reference(shown.over)

@@ -13,7 +13,7 @@ scorer.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 import pandas as pd
@@ -30,9 +30,10 @@ from groupfit.features import Feature
 from groupfit.heldout.design import group_index, group_sample_floor, stacked_design
 from groupfit.heldout.folds import Folds, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
+from groupfit.model import ModelFile
 
-Model = dict[str, Any]
-"""A model file as its JSON record (:class:`groupfit.model.ModelFile` reads and writes it)."""
+Model = ModelFile
+"""The model the diagnosis holds (its JSON object only where it is read or written)."""
 
 
 @dataclass(frozen=True)
@@ -123,8 +124,8 @@ def diagnosis_problem(
     notes += notes_of(HISTORY, chain_notes)
     for run in validate_runs:
         notes += notes_of(INPUTS, check_inputs(model, run, model_inputs(model, run)))
-    used = set(model["temps"]) | {d["column"] for d in model.get("derived_inputs", [])}
-    columns, column_notes = common_usable_columns(data_runs, {data_runs[0].time_name, model["error"]} | used)
+    used = set(model.temps) | {feature.column for feature in model.derived_inputs or ()}
+    columns, column_notes = common_usable_columns(data_runs, {data_runs[0].time_name, model.error} | used)
     notes += notes_of(COLUMNS, column_notes)
     stacked_frame = pd.concat([r.frame[columns] for r in data_runs], ignore_index=True)
     target = np.concatenate([r.error for r in data_runs])
@@ -133,7 +134,7 @@ def diagnosis_problem(
         raise InputError(f"{data_runs[0].source}: the error is measured on no row; diagnose needs it")
     own_rows = len(target) - sum(history_rows)  # the rows of the runs as given, without the histories in front
     if int((~measured).sum()) > sum(history_rows):
-        if model["p"] > 0:
+        if model.p > 0:
             raise InputError(
                 f"{data_runs[0].source}: the error is missing on {int((~measured).sum())} rows; a grouped model's "
                 "breaks are sample indices of a fully measured run: fill or drop those rows"
@@ -146,7 +147,7 @@ def diagnosis_problem(
             )
         )
     folds = make_folds([r.frame for r in data_runs], columns).restricted(measured)
-    if model["p"] > 0:
+    if model.p > 0:
         folds = folds.within_groups(group_index(model, len(target)), group_sample_floor(model))
     if folds.n_folds < 2:
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
@@ -159,15 +160,15 @@ def diagnosis_problem(
     problem = Problem(
         runs=runs,
         skipped=skipped,
-        period=float(model["sampling_period_s"]),
+        period=float(model.sampling_period_s),
         target=target,
         measured=measured,
         folds=folds,
         columns=columns,
         operating=operating_columns(stacked_frame, columns) if columns else [],
-        measured_inputs=[t for t in model["temps"] if all(t in r.frame.columns for r in data_runs)],
+        measured_inputs=[t for t in model.temps if all(t in r.frame.columns for r in data_runs)],
         live_rule=live_rule,
-        grouped=model["p"] > 0,
+        grouped=model.p > 0,
     )
     return problem, notes
 
@@ -181,20 +182,20 @@ def check_arguments(model: Model, data_runs: list[Run], *, ambient: Sequence[str
                 f"{missing[0].source}: --ambient column '{column}' not found; columns: "
                 f"{', '.join(map(str, missing[0].frame.columns))}"
             )
-        if column in model["temps"]:
+        if column in model.temps:
             raise InputError(
                 f"--ambient {column}: the model reads '{column}' as an input; name a column it does not read "
                 "(its transforms would re-weight an input: --own-transforms)"
             )
-    if select_jointly and (model["p"] > 0 or model.get("derived_inputs")):
+    if select_jointly and (model.p > 0 or model.derived_inputs):
         raise InputError(
             "--select joint re-chooses the inputs of a global model (p = 0) without derived inputs; this model "
-            + (f"has p = {model['p']}" if model["p"] > 0 else "already has derived inputs")
+            + (f"has p = {model.p}" if model.p > 0 else "already has derived inputs")
             + ": fit one with --p 0 on the measured sensors"
         )
-    if len(data_runs) > 1 and model["p"] > 0:
+    if len(data_runs) > 1 and model.p > 0:
         raise InputError(
-            f"{len(data_runs)} modelling runs given for a grouped model (p = {model['p']}): its breaks belong to "
+            f"{len(data_runs)} modelling runs given for a grouped model (p = {model.p}): its breaks belong to "
             "one run; diagnose a grouped model on one run, or a global model (p = 0) on several"
         )
 
@@ -202,7 +203,7 @@ def check_arguments(model: Model, data_runs: list[Run], *, ambient: Sequence[str
 def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
     """Refuse runs whose model inputs cannot be evaluated; note dead-looking inputs."""
     notes = []
-    for j, name in enumerate(model["temps"]):
+    for j, name in enumerate(model.temps):
         column = inputs[:, j]
         bad = ~np.isfinite(column)
         if bad.all():
@@ -261,6 +262,6 @@ def stacked_residual(
 
 def model_scorer(model: Model, target: np.ndarray, inputs: list[np.ndarray], folds: Folds, rows: np.ndarray):
     """The held-out scorer of the model's own design on ``rows``, fitted as the model is (least squares or ridge)."""
-    ridge = model.get("ridge_alpha") or 0.0
+    ridge = model.ridge_alpha or 0.0
     design = stacked_design(model, inputs)[rows]
-    return HeldOutScorer(target[rows], design, folds, ridge_alpha=ridge, fit_intercept=model["intercept"])
+    return HeldOutScorer(target[rows], design, folds, ridge_alpha=ridge, fit_intercept=model.intercept)

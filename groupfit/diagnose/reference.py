@@ -32,7 +32,7 @@ the same test (:func:`groupfit.diagnose.loop.absolute_branch`).
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -46,18 +46,18 @@ from groupfit.model import ModelFile
 from groupfit.reference import is_column_reference
 
 
-def droppable_reference(model: dict[str, Any], runs: Sequence[Run]) -> str | None:
+def droppable_reference(model: ModelFile, runs: Sequence[Run]) -> str | None:
     """The model's reference sensor when every run has that column, else None (no reference, or ``start``)."""
-    reference = model.get("reference")
+    reference = model.reference
     if not is_column_reference(reference):
         return None
     return reference if all(reference in run.frame.columns for run in runs) else None
 
 
-def absolute_model(model: dict[str, Any], runs: Sequence[Run]) -> tuple[dict[str, Any], list[np.ndarray]]:
+def absolute_model(model: ModelFile, runs: Sequence[Run]) -> tuple[ModelFile, list[np.ndarray]]:
     """The model refitted on ``runs`` with its measured inputs as read (no reference), hard breaks kept; and
     its inputs on each run."""
-    absolute = ModelFile.coerce(dict(model, reference=None))
+    absolute = model.replace(reference=None)
     inputs = [model_inputs(absolute, run) for run in runs]
     return refit_model(absolute, list(runs), inputs, absolute.temps, absolute.derived_inputs or ()), inputs
 
@@ -67,6 +67,7 @@ def absolute_candidate(reference: str, given: HeldOutScorer, absolute: HeldOutSc
     return candidate_of_fold_sse(Feature(reference), absolute.base_sse, given)
 
 
-def global_view(model: dict[str, Any]) -> dict[str, Any]:
-    """The model's inputs, intercept and effects as one group: the design the reference is judged in."""
-    return dict(model, p=0, breaks=[])
+def global_view(model: ModelFile) -> ModelFile:
+    """The model's inputs, intercept and effects as one group: the design the reference is judged in (a view
+    for :mod:`groupfit.heldout.design`, not a model file to write)."""
+    return model.replace(p=0, breaks=())

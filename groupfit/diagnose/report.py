@@ -188,7 +188,7 @@ def effect_lines(result, judge: str) -> list[str]:
             others = "; ".join(f"{a.feature.column} {a.describe()}" for a in step.alternatives[:3])
             lines.append(f"  as well explained (within one standard error) by: {others}")
     lines.append(change_line(result, judge))
-    if result.model["p"] > 0:
+    if result.model.p > 0:
         lines.append(
             "each effect was added as one more input, with one coefficient for every group; the hard breaks "
             "kept, the groups refitted"

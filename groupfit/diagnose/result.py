@@ -11,6 +11,7 @@ from groupfit.diagnose.candidates import Candidate
 from groupfit.diagnose.notes import Note
 from groupfit.diagnose.policy import Refusal
 from groupfit.diagnose.report import diagnosis_summary
+from groupfit.model import ModelFile
 
 Metrics = Mapping[str, float]
 """Error metrics of a residual (``rms_um``, ``max_um``, ``R_um``, …; :func:`groupfit.model.error_metrics`)."""
@@ -79,7 +80,7 @@ class DiagnosisResult:
     added: list[Candidate]
     before: Mapping[str, Metrics]
     after: Mapping[str, Metrics]
-    model: JsonRecord
+    model: ModelFile
     notes: tuple[Note, ...] = ()
     checks_before: Mapping[str, Metrics] = field(default_factory=dict)
     checks_after: Mapping[str, Metrics] = field(default_factory=dict)

@@ -9,41 +9,44 @@ conditions or whole runs), gives it a base that generalises.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from groupfit.data import Run
 from groupfit.diagnose.augment import refit_model
-from groupfit.diagnose.residual import model_inputs
+from groupfit.diagnose.residual import ModelLike, model_inputs
+from groupfit.diagnose.result import JsonRecord
 from groupfit.errors import InputError
 from groupfit.heldout.check import ridge_setting, select_inputs
 from groupfit.model import ModelFile
 
 
-def ridge_base_model(model: dict[str, Any], runs: Sequence[Run], alpha: float | str) -> tuple[dict[str, Any], dict]:
+def ridge_base_model(model: ModelLike, runs: Sequence[Run], alpha: float | str) -> tuple[ModelFile, JsonRecord]:
     """The global model refitted with a ridge penalty (``"auto"``: chosen on held-out conditions or runs)."""
+    model = ModelFile.coerce(model)
     inputs = [model_inputs(model, run) for run in runs]
-    exclude = {runs[0].time_name, model["error"], *model["temps"]}
+    exclude = {runs[0].time_name, model.error, *model.temps}
     y = np.concatenate([run.error for run in runs])
     frames = [run.frame for run in runs]
-    info = ridge_setting(alpha, model["p"], np.vstack(inputs), y, frames, exclude, model["intercept"])
+    info = ridge_setting(alpha, model.p, np.vstack(inputs), y, frames, exclude, model.intercept)
     if not info["alpha"]:  # no penalty: the model as given
-        return dict(model), info
-    ridged = ModelFile.coerce(dict(model, ridge_alpha=info["alpha"] or None))
+        return model, info
+    ridged = model.replace(ridge_alpha=info["alpha"] or None)
     return refit_model(ridged, list(runs), inputs, ridged.temps, ridged.derived_inputs or ()), info
 
 
-def select_base_model(model: dict[str, Any], runs: Sequence[Run], method: str) -> tuple[dict[str, Any], dict]:
+def select_base_model(model: ModelLike, runs: Sequence[Run], method: str) -> tuple[ModelFile, JsonRecord]:
     """The model refitted on the inputs chosen by ``method``; and what was chosen."""
-    derived = {d["name"] for d in model.get("derived_inputs", [])}
+    model = ModelFile.coerce(model)
+    derived = {feature.name for feature in model.derived_inputs or ()}
     if derived:
         raise InputError("--select re-chooses measured inputs; this model already has derived inputs: select first")
     inputs = [model_inputs(model, run) for run in runs]
-    exclude = {runs[0].time_name, model["error"], *model["temps"]}
+    exclude = {runs[0].time_name, model.error, *model.temps}
     frames = [run.frame for run in runs]
     y = np.concatenate([run.error for run in runs])
-    names, folds = select_inputs(np.vstack(inputs), y, model["temps"], frames, exclude, method)
-    keep = [model["temps"].index(name) for name in names]
+    names, folds = select_inputs(np.vstack(inputs), y, list(model.temps), frames, exclude, method)
+    keep = [model.temps.index(name) for name in names]
     selected = refit_model(model, list(runs), [x[:, keep] for x in inputs], names, [])
     return selected, {"method": method, "inputs": names, "folds": folds.describe()}

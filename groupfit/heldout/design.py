@@ -13,45 +13,55 @@ each stretch of the run anew, from a fraction of its samples. A global model
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from groupfit.grouping import block_design, serving_group_index
+from groupfit.model import ModelFile
+
+ModelLike = ModelFile | Mapping[str, Any]
+"""A model file, or its JSON object (read once, :meth:`ModelFile.coerce`)."""
 
 
-def group_index(model: dict[str, Any], n_rows: int) -> np.ndarray:
+def group_index(model: ModelLike, n_rows: int) -> np.ndarray:
     """The group serving each of ``n_rows`` samples of the modelling run, by sample index."""
-    return serving_group_index(model["breaks"], int(model.get("n_samples", n_rows)), model["n"], n_rows)
+    model = ModelFile.coerce(model)
+    n_samples = n_rows if model.n_samples is None else int(model.n_samples)
+    return serving_group_index(list(model.breaks), n_samples, model.n, n_rows)
 
 
-def group_sample_floor(model: dict[str, Any], effects: int = 1) -> int:
+def group_sample_floor(model: ModelLike, effects: int = 1) -> int:
     """c·M, M the coefficients of a group with ``effects`` more: a group is fitted on more samples than this."""
-    n_coefficients = len(model["temps"]) + int(model["intercept"]) + effects  # temps names the derived inputs too
-    return int(np.floor(float(model["c"]) * n_coefficients))
+    model = ModelFile.coerce(model)
+    n_coefficients = len(model.temps) + int(model.intercept) + effects  # temps names the derived inputs too
+    return int(np.floor(float(model.c) * n_coefficients))
 
 
-def shared_columns(model: dict[str, Any], names: Sequence[str] | None = None) -> np.ndarray:
+def shared_columns(model: ModelLike, names: Sequence[str] | None = None) -> np.ndarray:
     """Which of the inputs ``names`` (default: the model's) have one coefficient for every group.
 
     The derived inputs of a grouped model; none for a global model.
     """
-    names = list(model["temps"] if names is None else names)
-    if not model["breaks"]:
+    model = ModelFile.coerce(model)
+    names = list(model.temps if names is None else names)
+    if not model.breaks:
         return np.zeros(len(names), dtype=bool)
-    derived = {entry["name"] for entry in model.get("derived_inputs") or ()}
+    derived = {feature.name for feature in model.derived_inputs or ()}
     return np.array([name in derived for name in names], dtype=bool)
 
 
-def group_design(model: dict[str, Any], inputs: np.ndarray, shared: np.ndarray | None = None) -> np.ndarray:
+def group_design(model: ModelLike, inputs: np.ndarray, shared: np.ndarray | None = None) -> np.ndarray:
     """The model's regressors: each group's measured inputs (and intercept) in its own columns, groups by
     sample index, then one column per shared input (``shared``, default :func:`shared_columns`)."""
+    model = ModelFile.coerce(model)
     shared = shared_columns(model) if shared is None else np.asarray(shared, dtype=bool)
     groups = group_index(model, len(inputs))
-    n_groups = len(model["breaks"]) + 1
-    return block_design(inputs, groups, n_groups, fit_intercept=bool(model["intercept"]), shared=shared)
+    n_groups = len(model.breaks) + 1
+    return block_design(inputs, groups, n_groups, fit_intercept=bool(model.intercept), shared=shared)
 
 
-def stacked_design(model: dict[str, Any], inputs: Sequence[np.ndarray]) -> np.ndarray:
+def stacked_design(model: ModelLike, inputs: Sequence[np.ndarray]) -> np.ndarray:
     """:func:`group_design` of each run's inputs, stacked."""
+    model = ModelFile.coerce(model)
     return np.vstack([group_design(model, x) for x in inputs])
