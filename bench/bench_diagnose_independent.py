@@ -154,7 +154,7 @@ def measure(
         "validation_rms_after_um": after,
         "change_pct": 100 * (after - before) / before,
         "improved": result.improved,
-        "reference_dropped": bool(result.reference and result.reference["dropped"]),
+        "reference_dropped": bool(result.reference and result.reference.dropped),
         "oracle_rms_um": oracle,
         "verdict": verdict(scenario, added, before, after, result.improved, oracle),
         "report_first_line": result.summary().splitlines()[0],

@@ -39,11 +39,11 @@ def test_a_pump_the_wrong_reference_hid_is_found_on_absolute_readings():
     # neither reading wins before the effect is in, and with the reference kept no pump candidate passes.
     scenario, model, modelling, result = diagnosed(26, "absolute")
     check = result.reference
-    branch = check["branch"]
-    assert check["dropped"] and result.model.reference is None
-    assert branch["effects"]["given"] == [] and branch["reason"] is None
+    branch = check.branch
+    assert check.dropped and result.model.reference is None
+    assert branch.effects["given"] == [] and branch.reason is None
     assert [c.feature.column for c in result.added][:1] == ["pump_on"]
-    assert branch["effects"]["absolute"] == [c.feature.name for c in result.added]
+    assert branch.effects["absolute"] == [c.feature.name for c in result.added]
     assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
     assert result.improved is True
     assert result.summary().splitlines()[0].startswith("reference dropped: the error follows the absolute")
@@ -55,7 +55,7 @@ def test_a_pump_the_wrong_reference_hid_is_found_on_absolute_readings():
     absolute = frame[scenario.temps].to_numpy(float)
     rises = absolute - frame[["T_amb"]].to_numpy(float)
     effects = derived_matrix([c.feature for c in result.added], frame, model["sampling_period_s"])
-    rms = branch["held_out_rms_um"]
+    rms = branch.held_out_rms_um
     assert rms["given"] == pytest.approx(held_out_rms(rises, y, groups), rel=1e-9)
     assert rms["absolute"] == pytest.approx(held_out_rms(np.c_[absolute, effects], y, groups), rel=1e-9)
     assert rms["absolute"] < 0.5 * rms["given"]
@@ -65,11 +65,11 @@ def test_a_branch_that_needs_the_air_itself_keeps_the_reference():
     # the error follows rises over the air and a part that lags the air: on absolute readings a short
     # low-pass of T_amb wins the held-out folds, but it only gives the air a free weight
     _, _, _, result = diagnosed(10, "rises")
-    branch = result.reference["branch"]
-    assert branch["effects"]["absolute"] and all(e.startswith("T_amb") for e in branch["effects"]["absolute"][:1])
-    assert branch["score"] >= MIN_SCORE and branch["folds_improved"] == result.reference["n_folds"]
-    assert "`T_amb` itself" in branch["reason"]
-    assert not result.reference["dropped"] and result.model.reference == "T_amb"
+    branch = result.reference.branch
+    assert branch.effects["absolute"] and all(e.startswith("T_amb") for e in branch.effects["absolute"][:1])
+    assert branch.score >= MIN_SCORE and branch.folds_improved == result.reference.n_folds
+    assert "`T_amb` itself" in branch.reason
+    assert not result.reference.dropped and result.model.reference == "T_amb"
 
 
 def fold_sse(design, y, groups):
@@ -85,9 +85,9 @@ def test_as_well_with_the_airs_weight_fixed_is_taken_over_a_diagnosis_that_freed
     # on rises, the diagnosis first takes T_amb as measured back in (the weight the reference fixed, freed),
     # then the spindle; on absolute readings it finds the spindle alone and predicts within one standard error
     scenario, model, modelling, result = diagnosed(3, "absolute")
-    branch = result.reference["branch"]
-    assert branch["effects"]["given"][0] == "T_amb" and branch["as_well_with_fewer_coefficients"]
-    assert result.reference["dropped"] and branch["score"] < MIN_SCORE
+    branch = result.reference.branch
+    assert branch.effects["given"][0] == "T_amb" and branch.as_well_with_fewer_coefficients
+    assert result.reference.dropped and branch.score < MIN_SCORE
     assert [c.feature.column for c in result.added] == ["spindle_on"]
     assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
     assert "with one coefficient fewer" in result.summary().splitlines()[0]
@@ -96,7 +96,7 @@ def test_as_well_with_the_airs_weight_fixed_is_taken_over_a_diagnosis_that_freed
     frame, y = modelling.frame, modelling.error
     groups = make_folds([frame], ["spindle_on"]).labels
     spindle = Feature("spindle_on", "lowpass", tau_s=result.added[0].feature.tau_s, start="rest")
-    assert branch["effects"]["absolute"] == [spindle.name] and branch["effects"]["given"][1:] == [spindle.name]
+    assert branch.effects["absolute"] == [spindle.name] and branch.effects["given"][1:] == [spindle.name]
     effect = derived_matrix([spindle], frame, model["sampling_period_s"])
     absolute = frame[scenario.temps].to_numpy(float)
     air = frame[["T_amb"]].to_numpy(float)
@@ -104,7 +104,7 @@ def test_as_well_with_the_airs_weight_fixed_is_taken_over_a_diagnosis_that_freed
     on_absolute = fold_sse(np.c_[absolute, effect], y, groups)
     np.testing.assert_allclose(
         [given.sum(), on_absolute.sum()],
-        [branch["held_out_rms_um"][k] ** 2 * len(y) for k in ("given", "absolute")],
+        [branch.held_out_rms_um[k] ** 2 * len(y) for k in ("given", "absolute")],
         rtol=1e-9,
     )
     difference = on_absolute - given
@@ -116,7 +116,7 @@ def test_an_over_fitting_model_is_said_to_over_fit_once_when_the_branch_is_taken
     # a grouped model (p = 3) over-fits on rises and on absolute readings; the report's check is the given
     # model's, and its note is not followed by the start of the second diagnosis's
     _, _, _, result = diagnosed(35, "absolute", p=3)
-    assert result.reference["dropped"] and result.reference["branch"]["reason"] is None
+    assert result.reference.dropped and result.reference.branch.reason is None
     assert result.base_check["overfitted"]
     overfit = result.notes_of(OVERFIT)
     assert len(overfit) == 1 and f"{result.base_check['held_out_rms_um']:.3g} µm" in overfit[0]
@@ -129,7 +129,7 @@ def test_a_grouped_model_is_judged_on_its_reference_as_one_group():
     # µm). Judged as one group, as the reference's physics asks, they win clearly.
     scenario, model, modelling, result = diagnosed(12, "absolute", p=3)
     check = result.reference
-    assert check["dropped"] and check["as_one_group"] and result.model.reference is None
+    assert check.dropped and check.as_one_group and result.model.reference is None
     assert list(result.model.breaks) == model["breaks"]  # the hard breaks kept
     assert [c.feature.column for c in result.added] == ["spindle_rpm"]
     assert result.after["validate"]["rms_um"] < 0.6 * result.before["validate"]["rms_um"]
@@ -139,7 +139,7 @@ def test_a_grouped_model_is_judged_on_its_reference_as_one_group():
     frame, y = modelling.frame, modelling.error
     folds = make_folds([frame], ["spindle_rpm"]).within_groups(group_index(model, len(y)), group_sample_floor(model))
     effects = derived_matrix(
-        [c.feature for c in result.added[: check["after_effects"]]], frame, model["sampling_period_s"]
+        [c.feature for c in result.added[: check.after_effects]], frame, model["sampling_period_s"]
     )
     absolute = frame[scenario.temps].to_numpy(float)
     rises = absolute - frame[["T_amb"]].to_numpy(float)
@@ -152,6 +152,6 @@ def test_a_grouped_model_is_judged_on_its_reference_as_one_group():
             n += len(test)
         return np.sqrt(sse / n)
 
-    rms = check["held_out_rms_um"]
+    rms = check.held_out_rms_um
     assert rms["given"] == pytest.approx(one_group_rms(np.c_[rises, effects]), rel=1e-9)
     assert rms["absolute"] == pytest.approx(one_group_rms(np.c_[absolute, effects]), rel=1e-9)

@@ -10,16 +10,13 @@ and faces the two end models with the same test.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Callable
+from typing import Callable
 
 from groupfit.diagnose.candidates import Candidate, within_one_se
 from groupfit.diagnose.policy import REFERENCE_NEEDED, AcceptancePolicy, Refusal
 from groupfit.diagnose.problem import Fit, Model, Problem
 from groupfit.diagnose.reference import absolute_candidate, absolute_model, global_view
-from groupfit.diagnose.result import DiagnosisResult
-
-ReferenceCheck = dict[str, Any]
-"""The reference check as ``diagnose --json`` writes it (``reference``, ``dropped``, ``held_out_rms_um``, …)."""
+from groupfit.diagnose.result import BranchOutcome, DiagnosisResult, ReferenceCheck
 
 
 def reference_stage(
@@ -34,17 +31,17 @@ def reference_stage(
     judged_scorer = problem.scorer(global_view(absolute) if grouped else absolute, absolute_inputs)
     candidate = absolute_candidate(reference, given_scorer, judged_scorer)
     refusal = policy.refusal(candidate, "reference")
-    check = {
-        "reference": reference,
-        "dropped": refusal is None,
-        "after_effects": after_effects,
-        "held_out_rms_um": {"given": given_scorer.held_out_rms, "absolute": judged_scorer.held_out_rms},
-        "folds_improved": candidate.n_folds_improved,
-        "n_folds": problem.folds.n_folds,
-        "score": candidate.score,
-        "as_one_group": grouped,
-        "reason": None if refusal is None else refusal.reason,
-    }
+    check = ReferenceCheck(
+        reference=reference,
+        dropped=refusal is None,
+        after_effects=after_effects,
+        held_out_rms_um={"given": given_scorer.held_out_rms, "absolute": judged_scorer.held_out_rms},
+        folds_improved=candidate.n_folds_improved,
+        n_folds=problem.folds.n_folds,
+        score=candidate.score,
+        as_one_group=grouped,
+        reason=None if refusal is None else refusal.reason,
+    )
     if refusal is not None:
         return current, check
     scorer = problem.scorer(absolute, absolute_inputs) if grouped else judged_scorer
@@ -78,7 +75,7 @@ def absolute_branch(
     evidence against the reference: it gives the air a free weight, which
     the diagnosis on rises already tried as a lag over the reference.
     """
-    reference, scorer = check["reference"], current.scorer
+    reference, scorer = check.reference, current.scorer
     start, _ = absolute_model(model, problem.data)
     branch = diagnose_from(start)
     branch_scorer = problem.scorer(branch.model, problem.inputs(branch.model))
@@ -100,26 +97,23 @@ def absolute_branch(
     )
     if as_well:
         refusal = None
-    outcome = {
-        "effects": {
-            "given": [c.feature.name for c in added],
-            "absolute": [c.feature.name for c in branch.added],
-        },
-        "held_out_rms_um": {"given": scorer.held_out_rms, "absolute": branch_scorer.held_out_rms},
-        "folds_improved": candidate.n_folds_improved,
-        "score": candidate.score,
-        "as_well_with_fewer_coefficients": as_well,
-        "reason": None if refusal is None else refusal.reason,
-    }
-    check = {**check, "branch": outcome}
+    outcome = BranchOutcome(
+        effects={"given": [c.feature.name for c in added], "absolute": [c.feature.name for c in branch.added]},
+        held_out_rms_um={"given": scorer.held_out_rms, "absolute": branch_scorer.held_out_rms},
+        folds_improved=candidate.n_folds_improved,
+        score=candidate.score,
+        as_well_with_fewer_coefficients=as_well,
+        reason=None if refusal is None else refusal.reason,
+    )
+    check = replace(check, branch=outcome)
     if refusal is not None:
         return None, check
-    adopted = {
-        **check,
-        "dropped": True,
-        "held_out_rms_um": outcome["held_out_rms_um"],
-        "folds_improved": candidate.n_folds_improved,
-        "score": candidate.score,
-        "reason": None,
-    }
+    adopted = replace(
+        check,
+        dropped=True,
+        held_out_rms_um=outcome.held_out_rms_um,
+        folds_improved=candidate.n_folds_improved,
+        score=candidate.score,
+        reason=None,
+    )
     return replace(branch, reference=adopted), check

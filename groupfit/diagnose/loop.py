@@ -66,7 +66,7 @@ import numpy as np
 
 from groupfit.data import Run
 from groupfit.diagnose.augment import augment_model, augment_model_over_reference, refit_model
-from groupfit.diagnose.branch import ReferenceCheck, absolute_branch, reference_stage
+from groupfit.diagnose.branch import absolute_branch, reference_stage
 from groupfit.diagnose.candidates import HEAT_EXPONENT, Candidate
 from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.drift_guard import DriftGuard
@@ -78,7 +78,7 @@ from groupfit.diagnose.policy import DEFAULT_POLICY, AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem, check_arguments, diagnosis_problem
 from groupfit.diagnose.reference import droppable_reference
 from groupfit.diagnose.residual import LiveRule, ModelLike
-from groupfit.diagnose.result import DiagnosisResult, Metrics, Refused, RunMetrics, Step
+from groupfit.diagnose.result import DiagnosisResult, Metrics, ReferenceCheck, Refused, RunMetrics, Step
 from groupfit.features import derived_matrix
 from groupfit.heldout.check import overfit_check
 from groupfit.metrics import error_metrics
@@ -217,7 +217,7 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     if options.select_jointly:
         joint_stage(problem, state, policy, base_check)
     effect_loop(problem, state, policy)
-    if state.reference is not None and not state.reference["dropped"] and not options.select_jointly:
+    if state.reference is not None and not state.reference.dropped and not options.select_jointly:
         baseline = model if options.baseline is None else options.baseline
         on_absolute, state.reference = absolute_branch(
             model,
@@ -318,7 +318,7 @@ def effect_loop(problem: Problem, state: State, policy: AcceptancePolicy) -> Non
         if check is not None and droppable_reference(state.current.model, problem.data) is not None:
             # an effect the reference's misfit hid may now be in
             state.current, state.reference = reference_stage(
-                problem, state.current, check["reference"], after_effects=len(state.added), policy=policy
+                problem, state.current, check.reference, after_effects=len(state.added), policy=policy
             )
 
 

@@ -117,34 +117,34 @@ def ridge_lines(result) -> list[str]:
 
 def reference_lines(result) -> list[str]:
     reference = result.reference
-    if reference is None or not reference["dropped"]:
+    if reference is None or not reference.dropped:
         return []
-    branch = reference.get("branch")
-    if branch is not None and branch["reason"] is None:
+    branch = reference.branch
+    if branch is not None and branch.reason is None:
         return [branch_line(reference, branch)]
-    rms = reference["held_out_rms_um"]
-    effects = reference["after_effects"]
+    rms = reference.held_out_rms_um
+    effects = reference.after_effects
     when = f" (checked again with the first {effect_count(effects)} in)" if effects else ""
     grouped = (
         "judged with the groups as one, since each group's own intercept would absorb the air's level; "
-        if reference.get("as_one_group")
+        if reference.as_one_group
         else ""
     )
     return [
         f"reference dropped{when}: the error follows the absolute temperatures, not their rises over "
-        f"`{reference['reference']}` ({grouped}held-out RMS {change_words(rms['given'], rms['absolute'])}, "
-        f"better on {reference['folds_improved']} of {reference['n_folds']} held-out folds); the model was "
+        f"`{reference.reference}` ({grouped}held-out RMS {change_words(rms['given'], rms['absolute'])}, "
+        f"better on {reference.folds_improved} of {reference.n_folds} held-out folds); the model was "
         "refitted on absolute readings"
     ]
 
 
 def branch_line(reference, branch) -> str:
     """The reference dropped because the diagnosis on absolute readings beat the one on rises."""
-    rms = branch["held_out_rms_um"]
-    n_given = len(branch["effects"]["given"])
+    rms = branch.held_out_rms_um
+    n_given = len(branch.effects["given"])
     given = f"the {effect_count(n_given)} found on it" if n_given else "no effect"
-    name = reference["reference"]
-    if branch.get("as_well_with_fewer_coefficients"):
+    name = reference.reference
+    if branch.as_well_with_fewer_coefficients:
         how = (
             f"the diagnosis on rises took `{name}` as measured back in, which frees the weight the reference "
             f"fixes; diagnosed again on absolute readings, the model predicts the held-out conditions as well "
@@ -155,7 +155,7 @@ def branch_line(reference, branch) -> str:
         how = (
             f"diagnosed again on absolute readings, the model with its effects predicts the held-out conditions "
             f"with RMS {change_words(rms['given'], rms['absolute'])} against the model as given with {given} "
-            f"(better on {branch['folds_improved']} of {reference['n_folds']} held-out folds)"
+            f"(better on {branch.folds_improved} of {reference.n_folds} held-out folds)"
         )
     return (
         f"reference dropped: the error follows the absolute temperatures, not their rises over `{name}`: {how}; "

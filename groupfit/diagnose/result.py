@@ -61,6 +61,68 @@ class Refused:
 
 
 @dataclass(frozen=True)
+class BranchOutcome:
+    """The diagnosis from absolute readings against the one on rises, each with its effects
+    (:func:`groupfit.diagnose.branch.absolute_branch`)."""
+
+    effects: Mapping[str, list[str]]
+    """The effects' names found on rises (``given``) and on absolute readings (``absolute``)."""
+    held_out_rms_um: Mapping[str, float]
+    """The held-out RMS of the two end models (``given``, ``absolute``)."""
+    folds_improved: int
+    score: float
+    as_well_with_fewer_coefficients: bool
+    reason: str | None
+    """Why absolute readings were not taken; None when they were."""
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "effects": {key: list(names) for key, names in self.effects.items()},
+            "held_out_rms_um": dict(self.held_out_rms_um),
+            "folds_improved": self.folds_improved,
+            "score": self.score,
+            "as_well_with_fewer_coefficients": self.as_well_with_fewer_coefficients,
+            "reason": self.reason,
+        }
+
+
+@dataclass(frozen=True)
+class ReferenceCheck:
+    """The check of the model's reference sensor against absolute readings (:mod:`groupfit.diagnose.reference`)."""
+
+    reference: str
+    dropped: bool
+    """Whether the model was refitted on absolute readings."""
+    after_effects: int
+    """How many effects were in when the check was made."""
+    held_out_rms_um: Mapping[str, float]
+    """The held-out RMS of the model as given and on absolute readings (``given``, ``absolute``)."""
+    folds_improved: int
+    n_folds: int
+    score: float
+    as_one_group: bool
+    """A grouped model judged with its groups as one."""
+    reason: str | None
+    """Why the reference was kept; None when it was dropped."""
+    branch: BranchOutcome | None = None
+    """The diagnosis from absolute readings, when the reference survived the diagnosis on rises."""
+
+    def to_dict(self) -> dict[str, object]:
+        out = {
+            "reference": self.reference,
+            "dropped": self.dropped,
+            "after_effects": self.after_effects,
+            "held_out_rms_um": dict(self.held_out_rms_um),
+            "folds_improved": self.folds_improved,
+            "n_folds": self.n_folds,
+            "score": self.score,
+            "as_one_group": self.as_one_group,
+            "reason": self.reason,
+        }
+        return out if self.branch is None else {**out, "branch": self.branch.to_dict()}
+
+
+@dataclass(frozen=True)
 class RunMetrics:
     """One validation run's error metrics before and after."""
 
@@ -96,9 +158,8 @@ class DiagnosisResult:
     """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
     ridge: JsonRecord | None = None
     """The ridge penalty the model was refitted with before the diagnosis (``diagnose --ridge``), when it was."""
-    reference: JsonRecord | None = None
-    """The check of the model's reference sensor against absolute readings (:mod:`groupfit.diagnose.reference`),
-    when the model has one; ``dropped`` says whether the model was refitted without it."""
+    reference: ReferenceCheck | None = None
+    """The check of the model's reference sensor, when the model has one."""
     ambient: tuple[str, ...] = ()
     """Columns declared ambient temperatures (``diagnose --ambient``), whatever their names."""
     validation_runs: tuple[RunMetrics, ...] = ()
@@ -123,7 +184,7 @@ class DiagnosisResult:
             "base_model": self.base_check,
             "selection": self.selection,
             "ridge": self.ridge,
-            "reference": self.reference,
+            "reference": None if self.reference is None else self.reference.to_dict(),
             "before": self.before,
             "after": self.after,
             "validation_runs": [r.to_dict() for r in self.validation_runs],
@@ -137,7 +198,7 @@ class DiagnosisResult:
     def changed(self) -> bool:
         """Whether the model differs from the one given: an effect added, inputs re-selected, a ridge refit or its
         reference dropped."""
-        dropped = self.reference is not None and self.reference["dropped"]
+        dropped = self.reference is not None and self.reference.dropped
         return bool(self.added) or self.selection is not None or self.ridge is not None or dropped
 
     @property
