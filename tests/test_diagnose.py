@@ -2,6 +2,7 @@ import json
 
 import numpy as np
 import pytest
+from support.diagnose_scenarios import TEMPS, fit_model, lumped, sensor_error, with_ambient_effect
 from support.grouped_reference import shared_effect_fit
 
 from groupfit.cli import main
@@ -16,61 +17,6 @@ from groupfit.heldout.design import group_design
 from groupfit.heldout.folds import Folds, make_folds
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
-from groupfit.synthetic import simulate_lumped
-
-TEMPS = ["T1", "T2", "T3", "T4"]
-
-
-def lumped(seed=0, n_samples=400, schedule=None, ambient_phase_h=0.0):
-    config = {"seed": seed, "n_samples": n_samples}
-    if schedule is not None:
-        config["schedule"] = schedule
-    frame = simulate_lumped(config)
-    hours = frame["time_s"].to_numpy() / 3600.0
-    frame["T_amb"] = 20.0 + 2.0 * np.sin(2 * np.pi * (hours - ambient_phase_h) / 24.0) + 1.5 * (hours > 6.0)
-    return frame
-
-
-def sensor_error(frame, seed=2):
-    """An error the sensors explain completely, plus noise (the lumped network's own has an unsensed part)."""
-    frame = frame.copy()
-    rng = np.random.default_rng(seed)
-    frame["error_um"] = frame[TEMPS].to_numpy() @ [0.8, 0.5, 1.1, 2.0] - 80.0 + rng.normal(scale=0.05, size=len(frame))
-    return frame
-
-
-def with_ambient_effect(frame, gain=1.2, tau=3600.0):
-    frame = sensor_error(frame)
-    frame["error_um"] = frame["error_um"] + gain * lowpass(frame["T_amb"].to_numpy() - 20.0, tau, 100.0)
-    return frame
-
-
-def fit_model(tmp_path, frame, name, p=0):
-    path = tmp_path / f"{name}.csv"
-    frame.to_csv(path, index=False)
-    out = tmp_path / f"{name}-model"
-    assert (
-        main(
-            [
-                "fit",
-                "--data",
-                str(path),
-                "--temps",
-                ",".join(TEMPS),
-                "--p",
-                str(p),
-                "--search",
-                "exact",
-                "--reference",
-                "none",  # the lumped machine's error is defined on absolute readings
-                "--out",
-                str(out),
-                "--quiet",
-            ]
-        )
-        == 0
-    )
-    return path, out / "model.json"
 
 
 def test_held_out_scorer_equals_a_least_squares_refit_on_every_fold():

@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 from support import independent_machine as machine
 from support.bench_modules import load
-from test_diagnose import TEMPS, lumped, with_ambient_effect
+from support.diagnose_scenarios import TEMPS, lumped, with_ambient_effect
 
 from groupfit.cli import main
 from groupfit.diagnose import diagnose

@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+from support.diagnose_scenarios import global_model
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
@@ -15,7 +16,6 @@ from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.features import Feature, lowpass
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.models.grouped import GroupedRegressor
 
 MEASURED = Path(__file__).resolve().parents[2] / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"
 SENSORS = [f"t{k}_C" for k in range(1, 17)]
@@ -95,7 +95,7 @@ def test_the_heat_law_on_the_measured_test_is_not_mistaken_for_a_drift():
     cut = int(0.6 * len(frame))
     modelling = load_run(frame.iloc[:cut], temps=SENSORS, error="disp_ch3_um", name="first")
     validation = load_run(frame.iloc[cut:], temps=SENSORS, error="disp_ch3_um", name="rest")
-    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
+    model = global_model(modelling)
     result = diagnose(model, modelling, [validation])
 
     assert [c.feature.column for c in result.added] == ["spindle_rpm"]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from sklearn.linear_model import LinearRegression
-from test_diagnose import TEMPS, fit_model, lumped, sensor_error, with_ambient_effect
+from support.diagnose_scenarios import TEMPS, fit_model, lumped, sensor_error, with_ambient_effect
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose

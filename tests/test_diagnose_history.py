@@ -4,7 +4,8 @@ import json
 
 import numpy as np
 import pytest
-from test_diagnose_joint import SENSORS, spindle_run
+from support.diagnose_scenarios import SPINDLE_SENSORS as SENSORS
+from support.diagnose_scenarios import global_model, spindle_run
 
 from groupfit.cli import main
 from groupfit.data import load_run
@@ -83,7 +84,7 @@ def test_a_validation_run_after_a_gap_starts_from_rest():
     later = frame.iloc[600:].copy()
     later["time_s"] += 3600.0  # the machine stood for an hour: the controller started again
     validation = load_run(later.reset_index(drop=True), temps=TEMPS, name="later")
-    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
+    model = global_model(modelling)
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert not any(note.startswith("later continues") for note in result.notes_of(HISTORY))
     np.testing.assert_allclose(
@@ -95,7 +96,7 @@ def test_a_chain_of_files_carries_the_history_through_every_one():
     frame = spindle_run(11, hours=12.0)
     parts = [frame.iloc[a:b].reset_index(drop=True) for a, b in ((0, 700), (700, 1000), (1000, None))]
     modelling, *validation = [load_run(p, temps=TEMPS, name=f"part{k}") for k, p in enumerate(parts)]
-    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
+    model = global_model(modelling)
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     assert [n.split(" (")[0] for n in result.notes_of(HISTORY) if "continues" in n] == [
         "part1 continues part0",
@@ -115,7 +116,7 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
     speed = frame["speed_rpm"].to_numpy()
     at = int(np.flatnonzero(speed >= 4000.0)[-1]) - 60
     modelling, _ = split(frame, at)
-    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
+    model = global_model(modelling)
 
     def diagnosed_from(row):
         later = frame.iloc[row:].reset_index(drop=True)

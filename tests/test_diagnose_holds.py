@@ -5,14 +5,14 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from test_diagnose import TEMPS, lumped, sensor_error
+from support.diagnose_scenarios import TEMPS, global_model, lumped, sensor_error
 
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import candidate_features, rank_candidates
-from groupfit.diagnose.loop import metrics_of
+from groupfit.diagnose.measures import metrics_of
 from groupfit.diagnose.policy import DRIFT
 from groupfit.diagnose.problem import stacked_residual
 from groupfit.diagnose.report import change_words
@@ -21,7 +21,6 @@ from groupfit.features import lowpass
 from groupfit.heldout.design import stacked_design
 from groupfit.heldout.folds import Folds, block_labels, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
-from groupfit.models.grouped import GroupedRegressor
 
 OTHER_SCHEDULE = [[5000.0, 1.0], [3000.0, 0.0], [6000.0, 1.0], [2000.0, 0.0], [30000.0, 1.0]]
 
@@ -32,10 +31,6 @@ def ambient_run(seed, creep_um=0.0, schedule=None, ambient_phase_h=0.0, n_sample
     hours = frame["time_s"].to_numpy() / 3600.0
     frame["error_um"] += 1.2 * lowpass(frame["T_amb"].to_numpy() - 20.0, 3600.0, 100.0) + creep_um * hours / hours[-1]
     return frame
-
-
-def global_model(run):
-    return GroupedRegressor(p=0).fit(run.temps, run.error).to_model_file(run).to_dict()
 
 
 def test_folds_are_whole_conditions_runs_or_blocks():

@@ -3,45 +3,24 @@
 import json
 
 import numpy as np
-import pandas as pd
 import pytest
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+from support.diagnose_scenarios import SPINDLE_PERIOD_S, SPINDLE_SENSORS, spindle_run
 
 from groupfit.cli import main
 from groupfit.diagnose.joint import JointProblem
 from groupfit.diagnose.policy import AcceptancePolicy
-from groupfit.features import Feature, lowpass
+from groupfit.features import Feature
 from groupfit.heldout.folds import make_folds
 from groupfit.heldout.selection import MIN_GAIN
 
-PERIOD = 30.0
-SENSORS = [f"T{k}" for k in range(1, 9)]
+PERIOD = SPINDLE_PERIOD_S
+SENSORS = SPINDLE_SENSORS
 SHARE_ONLY = AcceptancePolicy(
     min_score=0.3, min_effect_rms_um=0.0, min_folds_improved=-1.0, max_fold_worsening=np.inf, collinear_r=np.inf
 )
 """A policy that tests an effect's share of the held-out error and nothing else (the reference below does)."""
-
-
-def spindle_run(seed, hours=16.0):
-    """Speed steps of an hour; T1 follows the bearings and the air, T2…T8 are near copies of it; the error lags more.
-
-    The error is 3 µm/K of T1 plus a part no sensor sees: the heat law (n/1000)^(5/3) low-passed with τ = 2 h.
-    """
-    rng = np.random.default_rng(seed)
-    n = int(hours * 3600 / PERIOD)
-    speed = np.repeat(rng.choice([0.0, 1000.0, 2000.0, 3000.0, 4000.0, 5000.0, 6000.0], size=int(hours)), 120)[:n]
-    heat = (speed / 1000.0) ** (5 / 3)
-    frame = pd.DataFrame({"time_s": np.arange(n) * PERIOD, "speed_rpm": speed})
-    ambient = 1.5 * np.sin(2 * np.pi * (frame["time_s"] / 86400.0 + rng.uniform()))  # the speed does not say it
-    bearings = 0.4 * lowpass(heat, 1200.0, PERIOD, before=0.0)
-    frame["T1"] = 20.0 + ambient + bearings + rng.normal(scale=0.02, size=n)
-    for k in range(2, 9):  # copies that drift apart a little: a base model on all of them over-fits
-        walk = np.cumsum(rng.normal(scale=0.004, size=n))
-        frame[f"T{k}"] = frame["T1"] + walk + rng.normal(scale=0.02, size=n)
-    unsensed = 0.8 * lowpass(heat, 7200.0, PERIOD, before=0.0)
-    frame["error_um"] = 3.0 * (frame["T1"] - 20.0) + unsensed + rng.normal(scale=0.05, size=n)
-    return frame
 
 
 def heat_law(tau):

@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from support.diagnose_scenarios import global_model
 
 from groupfit.data import load_run, measured_rows
 from groupfit.diagnose import diagnose
@@ -35,7 +36,7 @@ def split_runs(frame, first, last):
 
 def sixteen_sensor_model(runs):
     measured = measured_rows(runs[0])
-    return GroupedRegressor(p=0).fit(measured.temps, measured.error).to_model_file(measured).to_dict()
+    return global_model(measured)
 
 
 @pytest.fixture(scope="module")

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pandas as pd
+from support.diagnose_scenarios import global_model
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.features import Feature, lowpass
-from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
 
 ON_TIME = Feature("speed_rpm", "ontime", exponent=5 / 3, scale=1000.0, start="rest")
@@ -35,7 +35,7 @@ def test_a_part_that_grows_with_the_hours_at_speed_is_named_as_speed_times_on_ti
     temps = ["T1", "T2", "T3"]
     modelling = load_run(spindle_run(MODELLING, 1), temps=temps, name="modelling")
     validation = load_run(spindle_run(VALIDATION, 2), temps=temps, name="validation")
-    model = GroupedRegressor(p=0).fit(modelling.temps, modelling.error).to_model_file(modelling).to_dict()
+    model = global_model(modelling)
 
     result = diagnose(model, modelling, validation, live_rule=replay_groups)
     first = result.added[0].feature

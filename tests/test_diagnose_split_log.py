@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
+from support.diagnose_scenarios import global_model
 from test_diagnose_on_time import spindle_run
 
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.notes import HISTORY, UNSCORED
 from groupfit.diagnose.residual import residual
-from groupfit.models.grouped import GroupedRegressor
 from groupfit.runtime import replay_groups
 
 TEMPS = ["T1", "T2", "T3"]
@@ -21,7 +21,7 @@ def test_a_split_log_is_diagnosed_with_the_history_of_the_files_before():
     cuts = [0, 200, 450, len(log)]  # each file after the first starts with the spindle at speed, the machine hot
     parts = [load_run(log.iloc[a:b], temps=TEMPS, name=f"part{k + 1}") for k, (a, b) in enumerate(zip(cuts, cuts[1:]))]
     assert log["speed_rpm"].iloc[200] > 0 and log["speed_rpm"].iloc[450] > 0
-    model = GroupedRegressor(p=0).fit(whole.temps, whole.error).to_model_file(whole).to_dict()
+    model = global_model(whole)
 
     result = diagnose(model, parts, live_rule=replay_groups)
     assert result.added and result.added[0].feature.start == "rest"

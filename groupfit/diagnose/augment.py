@@ -12,19 +12,20 @@ how to compute it from the data's columns.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Mapping, Sequence
+from typing import Sequence
 
 import numpy as np
 import pandas as pd
 
 from groupfit.data import Run
+from groupfit.diagnose.residual import ModelLike
 from groupfit.features import Feature
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
 
 def augment_model(
-    model: ModelFile | Mapping[str, Any],
+    model: ModelLike,
     runs: Run | Sequence[Run],
     inputs: np.ndarray | Sequence[np.ndarray],
     feature: Feature,
@@ -48,7 +49,7 @@ def augment_model(
 
 
 def refit_model(
-    model: ModelFile | Mapping[str, Any],
+    model: ModelLike,
     runs: Sequence[Run],
     inputs: Sequence[np.ndarray],
     names: Sequence[str],
@@ -63,7 +64,7 @@ def refit_model(
 
 
 def augment_model_over_reference(
-    model: ModelFile | Mapping[str, Any],
+    model: ModelLike,
     runs: Sequence[Run],
     inputs: Sequence[np.ndarray],
     feature: Feature,

@@ -32,10 +32,15 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from groupfit.diagnose.augment import refit_model
 from groupfit.diagnose.candidates import Candidate, score_candidate
 from groupfit.diagnose.drift_guard import DriftGuard
+from groupfit.diagnose.effects import Tried
+from groupfit.diagnose.notes import JOINT, Note
 from groupfit.diagnose.policy import AcceptancePolicy
-from groupfit.features import Feature
+from groupfit.diagnose.problem import Fit, Model, Problem
+from groupfit.diagnose.result import Step
+from groupfit.features import Feature, derived_matrix
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.heldout.selection import cluster_representatives, correlation_clusters
@@ -181,3 +186,61 @@ class JointProblem:
             error = self.target[test] - design[test] @ coef
             squared += float(error @ error)
         return float(np.sqrt(squared / len(self.target)))
+
+
+@dataclass(frozen=True)
+class JointStart:
+    """The model refitted on the inputs and first effects chosen together, and what to report of the choice."""
+
+    current: Fit
+    selection: dict[str, object]
+    """What ``diagnose --json`` writes under ``selection``."""
+    effects: tuple[Candidate, ...]
+    first_ranking: list[Candidate]
+    steps: tuple[Step, ...]
+    notes: tuple[Note, ...]
+
+
+def joint_start(problem: Problem, current: Fit, tried: Tried, policy: AcceptancePolicy, base_check) -> JointStart:
+    """Inputs and first effects chosen together (``select_jointly``), the model refitted on them."""
+    model = current.model
+    temps = model.temps
+    causes = [f for f in tried.features if f.column not in tried.sensor_columns and f.column not in temps]
+    stacked = np.vstack(current.inputs)[problem.measured]
+    values = {name: stacked[:, j] for j, name in enumerate(temps)}
+    effects = [(f, problem.values(f)) for f in causes]
+    target, intercept = problem.target[problem.measured], bool(model.intercept)
+    joint = JointProblem(target, values, effects, problem.folds, policy, problem.ramp, intercept)
+    chosen = joint.select()
+    refitted = problem.fit(joint_model(problem, model, current.inputs, chosen))
+    nested = joint.nested_held_out_rms()
+    selection = {
+        "method": "joint",
+        "inputs": chosen.inputs,
+        "of": len(temps),
+        "order": chosen.order,
+        "folds": problem.folds.describe(),
+        "nested_held_out_rms_um": nested,
+    }
+    notes = ()
+    if nested >= base_check["held_out_rms_um"]:
+        notes = (
+            Note(
+                JOINT,
+                f"the joint selection is not expected to carry to a new condition: chosen again without each "
+                f"held-out condition, it predicts it with {nested:.3g} µm RMS, the "
+                f"model as given with {base_check['held_out_rms_um']:.3g} µm",
+            ),
+        )
+    steps = tuple(Step(c, *chosen.held_out_around(c), joint=True) for c in chosen.effects)
+    return JointStart(refitted, selection, tuple(chosen.effects), chosen.first_ranking, steps, notes)
+
+
+def joint_model(problem: Problem, model: Model, inputs: list[np.ndarray], chosen: JointSelection) -> Model:
+    """The model refitted on the inputs and effects chosen together."""
+    keep = [model.temps.index(name) for name in chosen.inputs]
+    features = [effect.feature for effect in chosen.effects]
+    period = model.sampling_period_s
+    runs = problem.data
+    columns = [np.column_stack([x[:, keep], derived_matrix(features, r.frame, period)]) for x, r in zip(inputs, runs)]
+    return refit_model(model, runs, columns, [*chosen.inputs, *(f.name for f in features)], features)

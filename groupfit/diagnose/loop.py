@@ -65,23 +65,21 @@ from typing import Sequence
 import numpy as np
 
 from groupfit.data import Run
-from groupfit.diagnose.augment import augment_model, augment_model_over_reference, refit_model
+from groupfit.diagnose.augment import augment_model, augment_model_over_reference
 from groupfit.diagnose.branch import absolute_branch, reference_stage
 from groupfit.diagnose.candidates import HEAT_EXPONENT, Candidate
-from groupfit.diagnose.checks import drift, ljung_box
 from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.diagnose.effects import Tried, choose, ranking, tried_features
 from groupfit.diagnose.history import started_running_notes
-from groupfit.diagnose.joint import JointProblem, JointSelection
-from groupfit.diagnose.notes import COLD_START, JOINT, OVERFIT, Note, notes_of
+from groupfit.diagnose.joint import joint_start
+from groupfit.diagnose.measures import joint_name, metrics_of, metrics_per_run, residual_checks
+from groupfit.diagnose.notes import COLD_START, OVERFIT, Note, notes_of
 from groupfit.diagnose.policy import DEFAULT_POLICY, AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem, check_arguments, diagnosis_problem
 from groupfit.diagnose.reference import droppable_reference
 from groupfit.diagnose.residual import LiveRule, ModelLike
-from groupfit.diagnose.result import DiagnosisResult, Metrics, ReferenceCheck, Refused, RunMetrics, Step
-from groupfit.features import derived_matrix
+from groupfit.diagnose.result import DiagnosisResult, ReferenceCheck, Refused, Step
 from groupfit.heldout.check import overfit_check
-from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile
 
 MIN_SCORE = DEFAULT_POLICY.min_score
@@ -215,7 +213,12 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     if reference is not None:
         state.current, state.reference = reference_stage(problem, current, reference, after_effects=0, policy=policy)
     if options.select_jointly:
-        joint_stage(problem, state, policy, base_check)
+        start = joint_start(problem, state.current, state.tried, policy, base_check)
+        state.current, state.selection, state.first_ranking = start.current, start.selection, start.first_ranking
+        state.added, state.steps = list(start.effects), list(start.steps)
+        taken = {c.feature.column for c in state.added}
+        state.tried = replace(state.tried, features=[f for f in state.tried.features if f.column not in taken])
+        state.notes += start.notes
     effect_loop(problem, state, policy)
     if state.reference is not None and not state.reference.dropped and not options.select_jointly:
         baseline = model if options.baseline is None else options.baseline
@@ -241,54 +244,6 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
         features = [c.feature for c in state.added]
         state.notes += notes_of(COLD_START, started_running_notes(validate_runs, problem.skipped["validate"], features))
     return result_of(problem, state, before=before, base_check=base_check, ambient=options.ambient)
-
-
-def joint_stage(problem: Problem, state: State, policy: AcceptancePolicy, base_check) -> None:
-    """Inputs and first effects chosen together (``select_jointly``); the model refitted on them."""
-    model = state.current.model
-    temps = model.temps
-    causes = [f for f in state.tried.features if f.column not in state.tried.sensor_columns and f.column not in temps]
-    stacked = np.vstack(state.current.inputs)[problem.measured]
-    values = {name: stacked[:, j] for j, name in enumerate(temps)}
-    effects = [(f, problem.values(f)) for f in causes]
-    rows = problem.measured
-    joint = JointProblem(
-        problem.target[rows], values, effects, problem.folds, policy, problem.ramp, bool(model.intercept)
-    )
-    chosen = joint.select()
-    state.current = problem.fit(joint_model(problem, model, state.current.inputs, chosen))
-    state.selection = {
-        "method": "joint",
-        "inputs": chosen.inputs,
-        "of": len(temps),
-        "order": chosen.order,
-        "folds": problem.folds.describe(),
-        "nested_held_out_rms_um": joint.nested_held_out_rms(),
-    }
-    state.added, state.first_ranking = list(chosen.effects), chosen.first_ranking
-    state.steps = [Step(c, *chosen.held_out_around(c), joint=True) for c in state.added]
-    taken = {c.feature.column for c in state.added}
-    state.tried = replace(state.tried, features=[f for f in state.tried.features if f.column not in taken])
-    nested = state.selection["nested_held_out_rms_um"]
-    if nested >= base_check["held_out_rms_um"]:
-        state.notes.append(
-            Note(
-                JOINT,
-                f"the joint selection is not expected to carry to a new condition: chosen again without each "
-                f"held-out condition, it predicts it with {nested:.3g} µm RMS, the "
-                f"model as given with {base_check['held_out_rms_um']:.3g} µm",
-            )
-        )
-
-
-def joint_model(problem: Problem, model: Model, inputs: list[np.ndarray], chosen: JointSelection) -> Model:
-    """The model refitted on the inputs and effects chosen together."""
-    keep = [model.temps.index(name) for name in chosen.inputs]
-    features = [effect.feature for effect in chosen.effects]
-    period = model.sampling_period_s
-    runs = problem.data
-    columns = [np.column_stack([x[:, keep], derived_matrix(features, r.frame, period)]) for x, r in zip(inputs, runs)]
-    return refit_model(model, runs, columns, [*chosen.inputs, *(f.name for f in features)], features)
 
 
 def effect_loop(problem: Problem, state: State, policy: AcceptancePolicy) -> None:
@@ -354,33 +309,7 @@ def result_of(problem: Problem, state: State, *, before, base_check, ambient: tu
     )
 
 
-def metrics_of(res: np.ndarray) -> dict[str, float]:
-    return error_metrics(res[np.isfinite(res)])
-
-
-def metrics_per_run(
-    runs: Sequence[Run], skipped: Sequence[int], before: np.ndarray, after: np.ndarray
-) -> tuple[RunMetrics, ...]:
-    """The error metrics of each of ``runs`` before and after, cut from the stacked residuals (a run's history
-    rows, ``skipped``, are not in them); runs without a measured error are left out."""
-    edges = np.cumsum([0, *(len(run.time) - skip for run, skip in zip(runs, skipped))])
-    out = []
-    for run, start, end in zip(runs, edges[:-1], edges[1:]):
-        if np.isfinite(before[start:end]).any():
-            out.append(RunMetrics(run.name, metrics_of(before[start:end]), metrics_of(after[start:end])))
-    return tuple(out)
-
-
 def as_runs(runs: Run | Sequence[Run] | None) -> list[Run]:
     if runs is None:
         return []
     return [runs] if isinstance(runs, Run) else list(runs)
-
-
-def joint_name(runs: list[Run]) -> str:
-    return runs[0].name if len(runs) == 1 else "+".join(r.name for r in runs)
-
-
-def residual_checks(res: np.ndarray, time_s: np.ndarray) -> dict[str, Metrics]:
-    rows = np.isfinite(res)
-    return {"ljung_box": ljung_box(res[rows]), "drift": drift(res[rows], time_s[rows])}
