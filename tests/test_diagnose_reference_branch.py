@@ -15,6 +15,7 @@ from support.bench_modules import load
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.loop import MIN_SCORE
 from groupfit.diagnose.notes import OVERFIT
+from groupfit.diagnose.policy import REFERENCE_NEEDED
 from groupfit.features import Feature, derived_matrix
 from groupfit.heldout.design import group_index, group_sample_floor
 from groupfit.heldout.folds import make_folds
@@ -68,7 +69,7 @@ def test_a_branch_that_needs_the_air_itself_keeps_the_reference():
     branch = result.reference.branch
     assert branch.effects["absolute"] and all(e.startswith("T_amb") for e in branch.effects["absolute"][:1])
     assert branch.score >= MIN_SCORE and branch.folds_improved == result.reference.n_folds
-    assert "`T_amb` itself" in branch.reason
+    assert branch.rule_id == REFERENCE_NEEDED and "`T_amb` itself" in branch.reason
     assert not result.reference.dropped and result.model.reference == "T_amb"
 
 

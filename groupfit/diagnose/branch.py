@@ -104,6 +104,7 @@ def absolute_branch(
         score=candidate.score,
         as_well_with_fewer_coefficients=as_well,
         reason=None if refusal is None else refusal.reason,
+        rule_id=None if refusal is None else refusal.rule_id,
     )
     check = replace(check, branch=outcome)
     if refusal is not None:

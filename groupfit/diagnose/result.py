@@ -74,6 +74,8 @@ class BranchOutcome:
     as_well_with_fewer_coefficients: bool
     reason: str | None
     """Why absolute readings were not taken; None when they were."""
+    rule_id: str | None = None
+    """The rule that refused them (:mod:`groupfit.diagnose.policy`); not written to ``--json``."""
 
     def to_dict(self) -> dict[str, object]:
         return {
