@@ -79,9 +79,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         and N. ``p`` is then ignored: the model has ``len(fixed_breaks)``
         breaks.
     shared_columns : sequence of bool or None
-        Inputs with one coefficient for every group (a diagnosis's effects, :mod:`groupfit.heldout.design`):
-        fitted with each group's own on the hard groups, then each soft group refitted on what they leave.
-        Such a fit carries no prediction intervals. Ignored without breaks.
+        Inputs with one coefficient for every group (a diagnosis's effects, :mod:`groupfit.heldout.design`), fitted
+        with each group's own on the hard groups, each soft group then refitted on what they leave; no intervals.
 
     Attributes
     ----------
@@ -306,18 +305,16 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             self.intercept_, slopes = coefs[:, 0], coefs[:, 1:]
         else:
             self.intercept_, slopes = np.zeros(len(coefs)), coefs
+        self.coef_ = slopes
         if gamma is not None:
             self.coef_ = np.empty((len(coefs), X.shape[1]))
             self.coef_[:, ~shared], self.coef_[:, shared] = slopes, gamma
-        else:
-            self.coef_ = slopes
         self.group_objective_ = np.array(
             [residual_sum(self.residuals_[serving == g], self.objective) for g in range(len(coefs))]
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
-        ridge = float(self.ridge_alpha) > 0
-        plain = not ridge and gamma is None
+        plain = not float(self.ridge_alpha) > 0 and gamma is None
         self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept) if plain else None
         return self
 
@@ -331,13 +328,11 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         return shared if shared.any() else None
 
     def with_slopes(self, coef: np.ndarray) -> "GroupedRegressor":
-        """A copy of this fitted estimator with the slopes ``coef`` (one row per group), groups and intercepts
-        kept: the same model written on other inputs, without prediction intervals (those were of the fit)."""
+        """The same fit written on other inputs: slopes ``coef`` (one row per group), no prediction intervals."""
         check_is_fitted(self, "coef_")
         twin = copy.deepcopy(self)
-        twin.coef_ = np.asarray(coef, dtype=float)
+        twin.coef_, twin.interval_stats_ = np.asarray(coef, dtype=float), None
         twin.n_features_in_ = twin.coef_.shape[1]
-        twin.interval_stats_ = None
         return twin
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
