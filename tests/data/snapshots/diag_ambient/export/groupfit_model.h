@@ -88,6 +88,12 @@ typedef struct {
     int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */
     gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */
     gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; on-time: samples on */
+    gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
+    gf_real rc_P[3][3];         /* their covariance */
+    gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
+    gf_real rc_model_um;        /* the model's own prediction at the last sample (um) */
+    int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
+    int rc_rejected;            /* checks rejected by the gate in a row */
     gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */
 } gf_state;
@@ -95,5 +101,24 @@ typedef struct {
 void gf_init(gf_state *s);
 int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um);
 int gf_check_period(double period_s);
+
+/*
+ * Probe checks (docs/recalibration.md of groupfit): after gf_step() of the
+ * sample at which the machine touched its reference artefact, call
+ * gf_probe(s, e) with e the measured thermal error in um - the deviation the
+ * probe saw minus the compensation then active (s->comp_um), i.e. the error the
+ * model predicts, not the residual. It returns GF_PROBE_APPLIED, GF_PROBE_REJECTED
+ * (the innovation gate: a gross reading, flagged and never applied) or
+ * GF_PROBE_IGNORED (that sample was in a sensor fault or on held readings, or e is
+ * not a number within +-GF_PROBE_LIMIT_UM). From the next gf_step() on, the
+ * prediction includes the correction, and s->comp_um with it. On a SINUMERIK the
+ * correction moves the position-independent offset (SD43900) the compensation
+ * already writes; no other datum changes.
+ */
+#define GF_PROBE_APPLIED 1
+#define GF_PROBE_REJECTED 0
+#define GF_PROBE_IGNORED (-1)
+#define GF_PROBE_LIMIT_UM 1.00000000000000000e+05
+int gf_probe(gf_state *s, double measured_error_um);
 
 #endif /* GROUPFIT_MODEL_H */

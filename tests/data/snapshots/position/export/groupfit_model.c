@@ -42,6 +42,103 @@ static const gf_real gf_p0 = GF_R(2.50000000000000000e+02, 2.500000000e+02f); /*
 static const gf_real gf_travel_min = GF_R(0.00000000000000000e+00, 0.000000000e+00f); /* modelled travel, mm */
 static const gf_real gf_travel_max = GF_R(5.00000000000000000e+02, 5.000000000e+02f);
 
+/* Recalibration (offset (hold)): per sample process variance q, initial variance p0 (offset um^2,
+ * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, state bounds, rate of the correction. */
+static const gf_real gf_rc_q[3] = { GF_R(4.16666666666666607e+00, 4.166666508e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_p0[3] = { GF_R(1.00000000000000000e+02, 1.000000000e+02f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_max[3] = { GF_R(3.60000000000000000e+01, 3.600000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_phi = GF_R(8.46481724890614129e-01, 8.464817405e-01f);
+static const gf_real gf_rc_r = GF_R(0.00000000000000000e+00, 0.000000000e+00f);
+static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
+static const gf_real gf_rc_rate = GF_R(3.37000000000000028e+01, 3.370000076e+01f);
+#define GF_RC_CONFIRM_AFTER 2
+
+static void gf_rc_reset_covariance(gf_state *s)
+{
+    int i, j;
+    for (i = 0; i < 3; i++) {
+        for (j = 0; j < 3; j++) {
+            s->rc_P[i][j] = (i == j) ? gf_rc_p0[i] : (gf_real)0;
+        }
+    }
+}
+
+/* P h and h' P for h = (1, 0, m), m the last sample's model prediction; returns S = h' P h + r. */
+static gf_real gf_rc_projections(const gf_state *s, gf_real ph[3], gf_real hp[3])
+{
+    gf_real m = s->rc_model_um;
+    int i;
+    for (i = 0; i < 3; i++) {
+        ph[i] = s->rc_P[i][0] + s->rc_P[i][2] * m;
+        hp[i] = s->rc_P[0][i] + s->rc_P[2][i] * m;
+    }
+    return hp[0] + hp[2] * m + gf_rc_r;
+}
+
+static void gf_rc_reset(gf_state *s)
+{
+    int i;
+    for (i = 0; i < 3; i++) {
+        s->rc_x[i] = 0;
+    }
+    gf_rc_reset_covariance(s);
+    s->rc_applied_um = 0;
+    s->rc_model_um = 0;
+    s->rc_usable = 0;
+    s->rc_rejected = 0;
+}
+
+static void gf_rc_clamp(gf_state *s)
+{
+    int i;
+    for (i = 0; i < 3; i++) {
+        if (s->rc_x[i] > gf_rc_max[i]) {
+            s->rc_x[i] = gf_rc_max[i];
+        }
+        if (s->rc_x[i] < -gf_rc_max[i]) {
+            s->rc_x[i] = -gf_rc_max[i];
+        }
+    }
+}
+
+/* Time update of one sample: the drift moves the offset and decays; P = F P F' + Q. */
+static void gf_rc_propagate(gf_state *s)
+{
+    gf_real a[3][3];
+    int i, j;
+    s->rc_x[0] = s->rc_x[0] + s->rc_x[1];
+    s->rc_x[1] = gf_rc_phi * s->rc_x[1];
+    for (j = 0; j < 3; j++) {
+        a[0][j] = s->rc_P[0][j] + s->rc_P[1][j];
+        a[1][j] = gf_rc_phi * s->rc_P[1][j];
+        a[2][j] = s->rc_P[2][j];
+    }
+    for (i = 0; i < 3; i++) {
+        s->rc_P[i][0] = a[i][0] + a[i][1];
+        s->rc_P[i][1] = a[i][1] * gf_rc_phi;
+        s->rc_P[i][2] = a[i][2];
+        s->rc_P[i][i] = s->rc_P[i][i] + gf_rc_q[i];
+    }
+    gf_rc_clamp(s);
+}
+
+/* The correction of this sample after the model's prediction: towards offset + gain * prediction, rate-limited. */
+static gf_real gf_rc_correct(gf_state *s, gf_real model_um, int usable)
+{
+    gf_real delta;
+    s->rc_model_um = model_um;
+    s->rc_usable = usable;
+    delta = (s->rc_x[0] + s->rc_x[2] * model_um) - s->rc_applied_um;
+    if (delta > gf_rc_rate) {
+        delta = gf_rc_rate;
+    }
+    if (delta < -gf_rc_rate) {
+        delta = -gf_rc_rate;
+    }
+    s->rc_applied_um = s->rc_applied_um + delta;
+    return s->rc_applied_um;
+}
+
 void gf_init(gf_state *s)
 {
     int m;
@@ -55,6 +152,7 @@ void gf_init(gf_state *s)
     }
     s->k0_um = 0;
     s->slope_um_per_mm = 0;
+    gf_rc_reset(s);
     s->error_um = 0;
     s->comp_um = 0;
 }
@@ -120,9 +218,11 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         }
     }
 
+    gf_rc_propagate(s);
     if (faulted) {
         prediction = 0;
         target = 0;
+        s->rc_usable = 0;
     } else {
         const gf_real *row = gf_coef[s->group - 1];
         prediction = row[0];
@@ -162,6 +262,12 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
             prediction = prediction + poly * d;
         }
         target = -prediction;
+        /* the correction from probe checks (0 until the first is applied) */
+        {
+            gf_real correction = gf_rc_correct(s, prediction, !held);
+            prediction = prediction + correction;
+            target = target - correction;
+        }
     }
     if (target > GF_COMP_MAX_UM) {
         target = GF_COMP_MAX_UM;
@@ -183,4 +289,43 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         *error_um = (double)prediction;
     }
     return faulted ? GF_RET_SENSOR_FAULT : s->group;
+}
+
+int gf_probe(gf_state *s, double measured_error_um)
+{
+    gf_real m = s->rc_model_um;
+    gf_real nu, sv, ph[3], hp[3], k[3];
+    int i, j;
+    if (!s->rc_usable || !(measured_error_um >= -GF_PROBE_LIMIT_UM && measured_error_um <= GF_PROBE_LIMIT_UM)) {
+        return GF_PROBE_IGNORED;
+    }
+    nu = ((gf_real)measured_error_um - m) - (s->rc_x[0] + s->rc_x[2] * m);
+    sv = gf_rc_projections(s, ph, hp);
+    if (!(sv > 0)) {
+        return GF_PROBE_IGNORED;
+    }
+    if (nu * nu > gf_rc_gate2 * sv) {
+        if (s->rc_rejected < GF_RC_CONFIRM_AFTER) {
+            s->rc_rejected++;
+            return GF_PROBE_REJECTED;
+        }
+        /* the checks keep disagreeing: a real change, which the offset takes whole (as the hold does) */
+        s->rc_rejected = 0;
+        s->rc_x[0] = s->rc_x[0] + nu;
+        gf_rc_reset_covariance(s);
+        gf_rc_clamp(s);
+        return GF_PROBE_APPLIED;
+    }
+    s->rc_rejected = 0;
+    for (i = 0; i < 3; i++) {
+        k[i] = ph[i] / sv;
+    }
+    for (i = 0; i < 3; i++) {
+        s->rc_x[i] = s->rc_x[i] + k[i] * nu;
+        for (j = 0; j < 3; j++) {
+            s->rc_P[i][j] = s->rc_P[i][j] - k[i] * hp[j];
+        }
+    }
+    gf_rc_clamp(s);
+    return GF_PROBE_APPLIED;
 }
