@@ -157,3 +157,24 @@ def block_design(
         rows = groups == g
         design[rows, g * block.shape[1] : (g + 1) * block.shape[1]] = block[rows]
     return np.column_stack([design, inputs[:, shared]])
+
+
+def shared_mask(shared_columns, n_features: int, breaks: Sequence[int]) -> np.ndarray | None:
+    """``shared_columns`` as a mask, or None when no column is shared (or the model has one group)."""
+    if shared_columns is None or not breaks:
+        return None
+    shared = np.asarray(shared_columns, dtype=bool)
+    if shared.shape != (n_features,):
+        raise InputError(f"shared_columns marks {shared.size} columns; X has {n_features}")
+    return shared if shared.any() else None
+
+
+def shared_fit(X: np.ndarray, y: np.ndarray, groups: np.ndarray, n_groups: int, shared, intercept: bool):
+    """The shared inputs' coefficients fitted with each group's own on the groups ``groups``; and the own inputs
+    with what the shared ones leave of ``y``, for each group's refit: ``(own, rest, gamma)``; ``(X, y, None)``
+    when nothing is shared (``shared`` None)."""
+    if shared is None:
+        return X, y, None
+    design = block_design(X, groups, n_groups, fit_intercept=intercept, shared=shared)
+    gamma = np.linalg.lstsq(design, y, rcond=None)[0][-int(shared.sum()) :]
+    return X[:, ~shared], y - X[:, shared] @ gamma, gamma

@@ -201,7 +201,7 @@ class DiagnosisResult:
         """Whether the model differs from the one given: an effect added, inputs re-selected, a ridge refit or its
         reference dropped."""
         dropped = self.reference is not None and self.reference.dropped
-        return bool(self.added) or self.selection is not None or self.ridge is not None or dropped
+        return bool(self.added) or self.selection is not None or bool(self.ridge and self.ridge["alpha"]) or dropped
 
     @property
     def improved(self) -> bool | None:

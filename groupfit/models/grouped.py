@@ -15,9 +15,10 @@ from groupfit.grouping import (
     DEFAULT_SOFT_OFFSET,
     DEFAULT_SPACING,
     Constraints,
-    block_design,
     hard_groups,
     serving_group_index,
+    shared_fit,
+    shared_mask,
     soft_groups,
 )
 from groupfit.inference.prediction import estimator_bounds, group_interval_stats
@@ -291,12 +292,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.hard_groups_ = hard_groups(self.breaks_, n_samples)
         self.soft_groups_ = soft_groups(self.breaks_, n_samples, self.n)
         serving = serving_group_index(self.breaks_, n_samples, self.n)
-        shared = self._shared_mask(X.shape[1])
-        own, own_y, gamma = X, y, None
-        if shared is not None:
-            design = block_design(X, serving, len(self.breaks_) + 1, fit_intercept=self.fit_intercept, shared=shared)
-            gamma = np.linalg.lstsq(design, y, rcond=None)[0][-int(shared.sum()) :]
-            own, own_y = X[:, ~shared], y - X[:, shared] @ gamma
+        shared = shared_mask(self.shared_columns, X.shape[1], self.breaks_)
+        own, own_y, gamma = shared_fit(X, y, serving, len(self.breaks_) + 1, shared, self.fit_intercept)
         coefs, self.residuals_ = grouped_residuals(
             own, own_y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept, ridge_alpha=float(self.ridge_alpha)
         )
@@ -317,15 +314,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         plain = not float(self.ridge_alpha) > 0 and gamma is None
         self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept) if plain else None
         return self
-
-    def _shared_mask(self, n_features: int) -> np.ndarray | None:
-        """``shared_columns`` as a mask, or None when no column is shared (or the model has one group)."""
-        if self.shared_columns is None or not self.breaks_:
-            return None
-        shared = np.asarray(self.shared_columns, dtype=bool)
-        if shared.shape != (n_features,):
-            raise InputError(f"shared_columns marks {shared.size} columns; X has {n_features}")
-        return shared if shared.any() else None
 
     def with_slopes(self, coef: np.ndarray) -> "GroupedRegressor":
         """The same fit written on other inputs: slopes ``coef`` (one row per group), no prediction intervals."""
