@@ -141,6 +141,7 @@ void gf_init(gf_state *s)
     s->group = 1;
     s->fault = GF_FAULT_NONE;
     s->switched = 0;
+    s->blend = 0;
     for (m = 0; m < GF_N_TEMPS; m++) {
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
@@ -221,6 +222,9 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
             }
         }
     }
+    if (s->switched) {
+        s->blend = GF_BLEND_SAMPLES;
+    }
 
     gf_rc_propagate(s);
     if (faulted) {
@@ -228,16 +232,30 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         target = 0;
         s->rc_usable = 0;
     } else {
-        const gf_real *row = gf_coef[s->group - 1];
-        gf_real x[GF_N_INPUTS];
-        x[0] = GF_VALUE(0);
-        x[1] = GF_VALUE(1);
-        x[2] = GF_VALUE(2);
-        x[3] = GF_VALUE(3);
-        x[4] = s->derived[0];
-        prediction = row[0];
-        for (m = 0; m < GF_N_INPUTS; m++) {
-            prediction = prediction + row[m + 1] * x[m];
+        gf_real old = 0;
+        int g;
+        prediction = 0;
+        /* the old group's prediction first while a transfer runs, then the serving group's */
+        for (g = (s->blend > 0) ? s->group - 1 : s->group; g <= s->group; g++) {
+            const gf_real *row = gf_coef[g - 1];
+            gf_real x[GF_N_INPUTS];
+            x[0] = GF_VALUE(0);
+            x[1] = GF_VALUE(1);
+            x[2] = GF_VALUE(2);
+            x[3] = GF_VALUE(3);
+            x[4] = s->derived[0];
+            prediction = row[0];
+            for (m = 0; m < GF_N_INPUTS; m++) {
+                prediction = prediction + row[m + 1] * x[m];
+            }
+            if (g < s->group) {
+                old = prediction;
+            }
+        }
+        if (s->blend > 0) {
+            /* bumpless transfer: (GF_BLEND_SAMPLES + 1 - blend) / (GF_BLEND_SAMPLES + 1) of the way */
+            gf_real weight = (gf_real)(GF_BLEND_SAMPLES + 1 - s->blend) / (gf_real)(GF_BLEND_SAMPLES + 1);
+            prediction = old + weight * (prediction - old);
         }
         target = -prediction;
         /* the correction from probe checks (0 until the first is applied) */
@@ -246,6 +264,9 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
             prediction = prediction + correction;
             target = target - correction;
         }
+    }
+    if (s->blend > 0) {
+        s->blend--;
     }
     if (target > GF_COMP_MAX_UM) {
         target = GF_COMP_MAX_UM;

@@ -57,6 +57,7 @@
 #define GF_SAMPLING_PERIOD_S 1.00000000000000000e+02
 #define GF_PERIOD_TOLERANCE_S 1.00000000000000000e+00
 #define GF_COUNT_MAX 2000000000L
+#define GF_BLEND_SAMPLES 3 /* bumpless transfer after a switch, samples (0: a hard switch) */
 
 #define GF_FAULT_NONE 0
 #define GF_FAULT_HELD 1
@@ -85,6 +86,7 @@ typedef struct {
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
+    int blend;                  /* samples of the bumpless transfer still to go */
     int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */
     gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */
     gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; on-time: samples on */

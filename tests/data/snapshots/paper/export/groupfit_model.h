@@ -45,6 +45,7 @@
 #define GF_SAMPLING_PERIOD_S 1.00000000000000000e+02
 #define GF_PERIOD_TOLERANCE_S 1.00000000000000000e+00
 #define GF_COUNT_MAX 2000000000L
+#define GF_BLEND_SAMPLES 3 /* bumpless transfer after a switch, samples (0: a hard switch) */
 #define GF_REFERENCE 4 /* temps[GF_REFERENCE] (T_amb): every measured input is taken minus it */
 
 #define GF_FAULT_NONE 0
@@ -74,6 +75,7 @@ typedef struct {
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
+    int blend;                  /* samples of the bumpless transfer still to go */
     gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
     gf_real rc_P[3][3];         /* their covariance */
     gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */

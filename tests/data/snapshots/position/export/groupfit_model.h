@@ -43,6 +43,7 @@
 #define GF_SAMPLING_PERIOD_S 6.00000000000000000e+02
 #define GF_PERIOD_TOLERANCE_S 6.00000000000000000e+00
 #define GF_COUNT_MAX 2000000000L
+#define GF_BLEND_SAMPLES 3 /* bumpless transfer after a switch, samples (0: a hard switch) */
 #define GF_POSITION 2 /* temps[GF_POSITION] (P_mm): axis position, mm */
 #define GF_POSITION_ORDER 1 /* highest power of (P - P0) */
 #define GF_FAULT_POSITION 8 /* position outside the travel, clamped (output valid) */
@@ -74,6 +75,7 @@ typedef struct {
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
     int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
+    int blend;                  /* samples of the bumpless transfer still to go */
     gf_real k0_um;              /* K0(T), um: the position-free part (SD43900 takes -k0_um / 1000) */
     gf_real slope_um_per_mm;    /* c1(T) = tan(beta), um/mm (SD43910 takes -slope / 1000) */
     gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
