@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
-from test_diagnose_joint import SENSORS, spindle_run
+from support.diagnose_scenarios import SPINDLE_SENSORS as SENSORS
+from support.diagnose_scenarios import spindle_run
 
 from groupfit.cli import main
 from groupfit.grouping import serving_group_index

@@ -215,10 +215,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     expectations = {"before": expect_for_model(model, data)}
     expectations["after"] = expect_for_model(result.model, data) if result.changed else expectations["before"]
     if result.changed and expectations["after"] is not None:
-        result.model = {
-            **result.model,
-            "training": {**(result.model.get("training") or {}), **expectations["after"].training()},
-        }
+        training = {**(result.model.training or {}), **expectations["after"].training()}
+        result = replace(result, model=result.model.replace(training=training))
     model_path = Path(args.model)
     written = []
     recal_note = ""
