@@ -5,6 +5,7 @@ import pytest
 
 from groupfit.errors import InputError
 from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.rewritten import with_slopes
 
 
 def block_problem(seed=0, n_samples=240, breaks=(80, 170)):
@@ -56,7 +57,7 @@ def test_with_slopes_writes_the_same_model_on_other_inputs_and_leaves_the_fit_al
     rises = X[:, :2] - X[:, [2]]
     on_rises = GroupedRegressor(n=3, c=0.0, fixed_breaks=[80, 170]).fit(rises, y)
     slopes = on_rises.coef_.copy()
-    absolute = on_rises.with_slopes(np.column_stack([slopes, -slopes.sum(axis=1)]))
+    absolute = with_slopes(on_rises, np.column_stack([slopes, -slopes.sum(axis=1)]))
     assert absolute.predict(X) == pytest.approx(on_rises.predict(rises), abs=1e-9)
     assert np.array_equal(on_rises.coef_, slopes) and on_rises.n_features_in_ == 2
     assert absolute.interval_stats_ is None and on_rises.interval_stats_ is not None

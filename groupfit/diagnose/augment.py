@@ -22,6 +22,7 @@ from groupfit.diagnose.residual import ModelLike
 from groupfit.features import Feature
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
+from groupfit.models.rewritten import with_slopes
 
 
 def augment_model(
@@ -106,7 +107,7 @@ def augment_model_over_reference(
     on_rises = fitted_groups(model, rises, error, np.append(~measured, True))
     slopes = on_rises.coef_
     reference_slope = -slopes[:, :-1][:, measured].sum(axis=1)
-    estimator = on_rises.with_slopes(np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1], -slopes[:, -1]]))
+    estimator = with_slopes(on_rises, np.column_stack([slopes[:, :-1], reference_slope, slopes[:, -1], -slopes[:, -1]]))
     names = (*model.temps, reference, feature.name, smooth.name)
     derived = (*(model.derived_inputs or ()), feature, smooth)
     return written_model(estimator, model, runs, absolute, error, names, derived, None)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import math
 from typing import Any, Callable, Mapping
 
@@ -314,14 +313,6 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         plain = not float(self.ridge_alpha) > 0 and gamma is None
         self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept) if plain else None
         return self
-
-    def with_slopes(self, coef: np.ndarray) -> "GroupedRegressor":
-        """The same fit written on other inputs: slopes ``coef`` (one row per group), no prediction intervals."""
-        check_is_fitted(self, "coef_")
-        twin = copy.deepcopy(self)
-        twin.coef_, twin.interval_stats_ = np.asarray(coef, dtype=float), None
-        twin.n_features_in_ = twin.coef_.shape[1]
-        return twin
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
         """0-based index of the group serving each sample (offline, by sample index)."""
