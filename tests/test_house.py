@@ -21,7 +21,7 @@ C901_EXCEPTIONS = {
     "tests/support/structured_text.py",
 }
 """Files with a function over ruff's complexity limit (pyproject's per-file-ignores): entries may only leave."""
-LONG_MODULES = {"groupfit/export/c.py": 535}
+LONG_MODULES: dict[str, int] = {}
 """Modules over 500 lines and their length today: they may only shrink."""
 KNOWN_CIRCLES: set[frozenset[str]] = set()
 """Import circles still in the house: entries may only leave."""
