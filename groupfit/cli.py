@@ -14,6 +14,7 @@ from typing import Sequence
 
 from groupfit import __version__
 from groupfit.errors import InputError
+from groupfit.outputs import OutputPlan
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -57,7 +58,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "out_required", False) and args.out is None:
         parser.error(f"{args.verb}: the following argument is required: --out")
     try:
-        return int(args.handler(args) or 0)
+        with OutputPlan(force=getattr(args, "force", False)).active():  # every output written together or none
+            return int(args.handler(args) or 0)
     except InputError as exc:
         print(f"groupfit {args.verb}: error: {exc}", file=sys.stderr)
         return 2

@@ -16,6 +16,7 @@ predicted without any refitting or tuning:
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -237,6 +238,22 @@ def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
     ).fit(ar1_inputs(run, settings), run.error)
 
 
+def _check_projection(p: int, first_s: float, pmax: int, asked: int, budget_s: float | None, estimate) -> None:
+    """After the first GA fit (p = 1, ``first_s`` seconds), the projected time of p = 1…pmax; refused over
+    ``budget_s``."""
+    if p != 1:
+        return
+    projected = first_s * pmax * (pmax + 1) / 2
+    capped = f" (the largest feasible p; --pmax {asked} asked)" if asked > pmax else ""
+    line = f"grouped models p = 1…{pmax}{capped} by the GA: about {projected / 60:.0f} min"
+    if budget_s is not None and projected > budget_s:
+        raise InputError(
+            f"{line}, over the budget of {budget_s / 60:.0f} min: lower --pmax, or --no-budget runs it anyway"
+        )
+    if estimate is not None and projected > 60:
+        estimate(line)
+
+
 def compare_models(
     modelling: Run,
     validation: list[Run],
@@ -245,6 +262,8 @@ def compare_models(
     progress: Callable[[str, float], None] | None = None,
     *,
     histories: Mapping[str, np.ndarray] | None = None,
+    budget_s: float | None = None,
+    estimate: Callable[[str], None] | None = None,
 ) -> ComparisonResult:
     """Fit every model on ``modelling`` and score it on every run.
 
@@ -257,6 +276,11 @@ def compare_models(
         Per validation run (by name) that continues a recording, the inputs of
         what came before it: the live rule runs through them first
         (:mod:`groupfit.continuation`), so its state carries into the run.
+    budget_s : float, optional
+        Refuse (InputError) when, after the GA fit of p = 1, the fits of every p up to pmax project to take
+        longer (a GA fit's time taken to grow as p: the whole as p(p+1)/2 times the first).
+    estimate : callable, optional
+        Gets one line with that projection when it is over a minute.
     """
     histories = histories or {}
     for run in validation:
@@ -288,6 +312,7 @@ def compare_models(
     pmax = len(path["breaks"]) - 1
     grouped: dict[int, GroupedRegressor] = {}
     search = settings.search.replace(method="ga", certify=False)
+    started = time.perf_counter()
     for p in range(1, pmax + 1):
         grouped[p] = GroupedRegressor.from_settings(
             p=p,
@@ -303,6 +328,7 @@ def compare_models(
         grouped[p].search_["gap_percent"] = 100.0 * (grouped[p].search_["search_objective"] - exact_value) / exact_value
         if progress is not None:
             progress("grouped", p / pmax)
+        _check_projection(p, time.perf_counter() - started, pmax, settings.pmax, budget_s, estimate)
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
     intervals = {
         p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)

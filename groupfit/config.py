@@ -72,6 +72,21 @@ def _whole(table: Table, key: str) -> int:
     return table.integer(key, minimum=None)
 
 
+def _seed(table: Table, key: str) -> int:
+    return table.integer(key, minimum=0)
+
+
+def _columns(table: Table, key: str) -> list[str]:
+    names = table.strings(key)
+    if not names:
+        raise table.fail(key, "expected one or more column names; leave the key out to take the T1, T2 … columns")
+    return names
+
+
+def _positive(table: Table, key: str) -> float:
+    return table.number(key, positive=True)
+
+
 def _number(table: Table, key: str) -> int | float:
     table.number(key)
     return table.data[key]
@@ -114,7 +129,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     "data": {
         "path": Table.string,
         "time": Table.string,
-        "temps": Table.strings,
+        "temps": _columns,
         "error": Table.string,
         "validate": Table.strings,
         "temp_range": _temp_range,
@@ -137,7 +152,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     },
     "search": {
         "method": Table.string,
-        "seed": _whole,
+        "seed": _seed,
         "population_size": _whole,
         "max_generations": _whole,
         "stall_generations": _whole,
@@ -151,7 +166,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "ar1_scaling": Table.string,
         "ar1_start": Table.string,
         "ar1_fit": Table.string,
-        "heat_exponent": _number,
+        "heat_exponent": _positive,
         "rise_sensor": Table.string,
         "rise_window_s": _number,
         "structural_sensor": Table.string,

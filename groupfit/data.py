@@ -19,7 +19,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
-from groupfit.readtable import read_table
+from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import jitter_note, resample_frame
 
 PERIOD_TOLERANCE = 0.02
@@ -162,6 +162,23 @@ def parse_error_limit(text: str | None) -> float | None:
     return limit
 
 
+MAX_TIME_S = 1e11
+"""Largest plausible time stamp in seconds (some 3000 years): a larger one is a corrupt cell."""
+
+
+def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
+    """The time column in seconds (date-times from the first row), a bad or implausible cell named with its row."""
+    datetimes_to_seconds(frame, column, label)
+    values = numeric_column(frame, column, label, allow_nonfinite=False)
+    huge = np.flatnonzero(np.abs(values) > MAX_TIME_S)
+    if huge.size:
+        raise InputError(
+            f"{label}: row {huge[0] + 1}, column '{column}': {values[huge[0]]:g} s is not a plausible time (beyond "
+            f"{MAX_TIME_S:g} s); repair that cell"
+        )
+    return values
+
+
 def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = PERIOD_TOLERANCE) -> float:
     """Check that ``time`` is strictly increasing and uniformly sampled within ``tolerance``; return the period."""
     if len(time) < 2:
@@ -300,7 +317,7 @@ def load_runs(
     if resample is None:
         return [_validated(frame, run_name, label, period_tolerance=period_tolerance, notes=(), **options)]
     time = options.get("time", DEFAULT_TIME)
-    numeric_column(frame, time, label, allow_nonfinite=False)
+    time_seconds(frame, time, label)
     binned = resample_frame(frame, time=time, period_s=float(resample), label=label)
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
     if len(binned.pieces) == 1:
@@ -337,7 +354,7 @@ def _validated(
     require_error, allow_nonfinite = options["require_error"], options["allow_nonfinite"]
     missing_error, ambient = options["missing_error"], options["ambient"]
     temp_range, error_limit = options["temp_range"], options["error_limit"]
-    time_values = numeric_column(frame, time, label, allow_nonfinite=False)
+    time_values = time_seconds(frame, time, label)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())

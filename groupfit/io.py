@@ -14,6 +14,7 @@ creating anything.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import json
 import os
 import tempfile
@@ -21,6 +22,27 @@ from pathlib import Path
 from typing import Any, Iterator, Mapping
 
 from groupfit.errors import InputError
+
+STAGE: contextvars.ContextVar = contextvars.ContextVar("groupfit_output_stage", default=None)
+"""The active output plan (:class:`groupfit.outputs.OutputPlan`), or None: while one is active, the writers
+below leave each file as a complete temporary file beside its target and hand it to the plan (``stage``), which
+renames them all together when it commits; every file read is noted with it (``note_read``)."""
+
+
+def note_read(path: str | Path) -> None:
+    """Tell the active output plan (if any) that ``path`` was read: no output of the command may replace it."""
+    plan = STAGE.get()
+    if plan is not None:
+        plan.read(path)
+
+
+def _make_folder(folder: Path) -> None:
+    """Create ``folder`` and its missing parents; the active plan removes them again if it does not commit."""
+    missing = [f for f in (folder, *folder.parents) if not f.exists()]
+    folder.mkdir(parents=True, exist_ok=True)
+    plan = STAGE.get()
+    if plan is not None:
+        plan.made.extend(missing)
 
 
 def _file_mode() -> int:
@@ -97,7 +119,7 @@ def _temporary_for(path: Path) -> Path:
 
 
 def _write_failed(path: Path, exc: OSError) -> InputError:
-    return InputError(f"{path}: cannot write ({_reason(exc)}); nothing was written there")
+    return InputError(f"{path}: cannot write ({_reason(exc)}); that file was left as it was")
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
@@ -119,7 +141,7 @@ def atomic_write_files(files: Mapping[str | Path, str]) -> list[Path]:
         for target, text in files.items():
             target = Path(target)
             try:
-                target.parent.mkdir(parents=True, exist_ok=True)
+                _make_folder(target.parent)
                 temporary = _temporary_for(target)
             except OSError as exc:
                 raise _write_failed(target, exc) from None
@@ -130,6 +152,11 @@ def atomic_write_files(files: Mapping[str | Path, str]) -> list[Path]:
                 os.chmod(temporary, mode)
             except OSError as exc:
                 raise _write_failed(target, exc) from None
+        plan = STAGE.get()
+        if plan is not None:
+            for temporary, target in staged:
+                plan.stage(temporary, target)
+            return [target for _, target in staged]
         for temporary, target in staged:
             try:
                 os.replace(temporary, target)
@@ -151,20 +178,26 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
     """
     path = Path(path)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        _make_folder(path.parent)
         handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}")
         os.close(handle)
     except OSError as exc:
         raise _write_failed(path, exc) from None
     temporary = Path(name)
+    plan = STAGE.get()
     try:
         yield temporary
         os.chmod(temporary, _file_mode())
-        os.replace(temporary, path)
+        if plan is not None:
+            plan.stage(temporary, path)
+            temporary = None
+        else:
+            os.replace(temporary, path)
     except OSError as exc:
         raise _write_failed(path, exc) from None
     finally:
-        temporary.unlink(missing_ok=True)
+        if temporary is not None:
+            temporary.unlink(missing_ok=True)
 
 
 def to_json(obj: Any) -> str:
@@ -183,7 +216,10 @@ def read_json_file(path: str | Path, what: str = "model file") -> Any:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: {what} not found")
+    note_read(path)
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not a JSON {what} ({exc})") from None
+    except RecursionError:
+        raise InputError(f"{path}: not a {what} (its JSON is nested too deeply to read)") from None

@@ -451,7 +451,7 @@ def _fields_from_dict(cls, data: Mapping[str, Any], nested: Mapping[str, Any] = 
     names = [f.name for f in dataclasses.fields(cls) if f.name != "extra"]
     values = {}
     for key in names:
-        if key in data:
+        if key in data and not (key in nested and data[key] is None):  # an optional section of null is absent
             values[key] = nested[key](data[key]) if key in nested else _frozen(data[key])
     extra = {key: data[key] for key in data if key not in names}
     return cls(**values, extra=extra)

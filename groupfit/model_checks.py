@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
+from groupfit.controller_limits import MAX_HOLD_SAMPLES as HOLD
 from groupfit.errors import InputError
 from groupfit.features import STARTS, Feature
 from groupfit.grouping import hard_groups, soft_groups
@@ -265,8 +266,8 @@ def rule_section_problem(model: Mapping[str, Any]) -> str | None:
         return "switching.rate_limit_um must be positive"
     if "comp_min_um" in section and "comp_max_um" in section and section["comp_min_um"] > section["comp_max_um"]:
         return "switching.comp_min_um must not exceed comp_max_um"
-    if "hold_samples" in section and (not _is_whole(section["hold_samples"]) or section["hold_samples"] < 0):
-        return "switching.hold_samples must be a whole number ≥ 0"
+    if "hold_samples" in section and not (_is_whole(section["hold_samples"]) and 0 <= section["hold_samples"] <= HOLD):
+        return f"switching.hold_samples must be a whole number in 0…{HOLD} (a controller's 32-bit counter)"
     if "period_tolerance" in section and not 0 < section["period_tolerance"] < 1:
         return "switching.period_tolerance must lie between 0 and 1 (a fraction of the period)"
     if "temp_min_c" in section and "temp_max_c" in section:

@@ -35,6 +35,7 @@ from groupfit.data import (
     ERROR_LIMIT_UM,
     TEMP_RANGE_C,
     Run,
+    default_temperature_columns,
     load_run,
     numeric_column,
     read_table,
@@ -87,9 +88,31 @@ class PositionRun:
         return self.run.temps[self.check]
 
 
-def wide_columns(frame: pd.DataFrame) -> dict[str, float]:
-    """The wide table's error columns and their positions (mm), in column order."""
-    return {str(c): float(m.group(1)) for c in frame.columns if (m := WIDE_COLUMN.match(str(c)))}
+MAX_POSITION_MM = 1e6
+"""Largest plausible axis position in mm (a kilometre): a larger one is a corrupt cell."""
+
+
+def wide_columns(frame: pd.DataFrame, label: str = "the wide table") -> dict[str, float]:
+    """The wide table's error columns and their positions (mm), in column order.
+
+    A column that starts with ``err_P`` but names no position, and two columns of one position
+    (``err_P100`` beside ``err_P0100``), are refused.
+    """
+    columns: dict[str, float] = {}
+    for c in map(str, frame.columns):
+        if not c.startswith(WIDE_PREFIX):
+            continue
+        match = WIDE_COLUMN.match(c)
+        if match is None:
+            raise InputError(
+                f"{label}: column '{c}' starts with {WIDE_PREFIX} but names no position in mm (e.g. "
+                f"{WIDE_PREFIX}0100); rename it"
+            )
+        twin = next((name for name, mm in columns.items() if mm == float(match.group(1))), None)
+        if twin is not None:
+            raise InputError(f"{label}: columns '{twin}' and '{c}' are both at {float(match.group(1)):g} mm; keep one")
+        columns[c] = float(match.group(1))
+    return columns
 
 
 def wide_to_long(frame: pd.DataFrame, position: str, error: str = DEFAULT_ERROR) -> pd.DataFrame:
@@ -137,8 +160,14 @@ def load_position_run(
     order. Missing or non-numeric positions are refused with the row.
     """
     frame, run_name, label = read_table(source, name)
+    inputs = temps if temps is not None else default_temperature_columns(frame, exclude=(time, error))
+    if position in inputs:
+        raise InputError(
+            f"{label}: --position '{position}' is also a temperature input; the axis position needs a column of "
+            "its own (name the inputs with --temps)"
+        )
     if position not in frame.columns:
-        if wide_columns(frame):
+        if wide_columns(frame, label):
             frame = wide_to_long(frame, position, error)
         else:
             raise InputError(
@@ -146,6 +175,12 @@ def load_position_run(
                 f"({WIDE_PREFIX}<mm>). The columns are: {', '.join(map(str, frame.columns))}"
             )
     positions = numeric_column(frame, position, label, allow_nonfinite=False)
+    huge = np.flatnonzero(np.abs(positions) > MAX_POSITION_MM)
+    if huge.size:
+        raise InputError(
+            f"{label}: row {huge[0] + 1}, column '{position}': {positions[huge[0]]:g} mm is not a plausible axis "
+            f"position (beyond {MAX_POSITION_MM:g} mm); repair that cell"
+        )
     times = numeric_column(frame, time, label, allow_nonfinite=False)
     order = np.argsort(times, kind="stable")
     frame = frame.iloc[order].reset_index(drop=True)
@@ -211,6 +246,11 @@ def choose_p0(prun: PositionRun, text: str | float | None) -> float:
         raise InputError(f"--position-ref {text!r}: a position in mm, or middle, min or max") from None
     if not math.isfinite(value):
         raise InputError(f"--position-ref {text!r}: a finite position in mm")
+    if not low - (high - low) <= value <= high + (high - low):
+        raise InputError(
+            f"--position-ref {value:g}: far outside the measured travel {low:g}…{high:g} mm (more than its length); "
+            "give a position near the travel, or middle, min or max"
+        )
     return value
 
 

@@ -1,12 +1,18 @@
-"""Reading a run's table: CSV, Excel or Parquet by suffix, or a DataFrame, with a header checked for repeats."""
+"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel or Parquet by suffix, or a DataFrame.
+
+Every problem is one line naming the file: a folder or a device given as a
+file, an empty or unreadable file, a column named twice.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from groupfit.errors import InputError
+from groupfit.io import note_read
 
 TABLE_SUFFIXES = {
     ".csv": "CSV",
@@ -31,11 +37,18 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         return source.reset_index(drop=True), (name or "data"), label
     path = Path(source)
     label = str(path)
+    if path.is_dir():
+        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel or Parquet)")
+    if path.exists() and not path.is_file():
+        raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
     if not path.is_file():
         raise InputError(f"{label}: data file not found; check the path given to --data")
+    note_read(path)
     kind = TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
     try:
         frame = _read_by_kind(path, kind)
+    except InputError:
+        raise
     except pd.errors.EmptyDataError:
         raise InputError(f"{label}: the file is empty; a header line and one row per sample are needed") from None
     except ImportError as exc:
@@ -45,7 +58,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: not a readable {kind} table ({first})") from None
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
-    header = _raw_header(path, kind) if kind != "Parquet" else list(frame.columns)
+    header = _raw_header(path, kind) if kind != "Parquet" else _parquet_header(path)
     if header is None or len(header) != frame.shape[1]:
         header = list(frame.columns)
     _check_unique_columns(header, label)
@@ -58,9 +71,39 @@ def _raw_header(path: Path, kind: str) -> list[str] | None:
     try:
         if kind == "Excel":
             return [str(c) for c in pd.read_excel(path, sheet_name=0, header=None, nrows=1).iloc[0].tolist()]
-        return [str(c) for c in pd.read_csv(path, header=None, nrows=1, skipinitialspace=True, dtype=str).iloc[0]]
+        options = {"sep": delimiter(path), "skipinitialspace": True}
+        return [str(c) for c in pd.read_csv(path, header=None, nrows=1, dtype=str, **options).iloc[0]]
     except (ValueError, OSError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
         return None
+
+
+def _parquet_header(path: Path) -> list[str] | None:
+    """The column names of a Parquet file's schema (a repeated name is refused before pyarrow reads it)."""
+    try:
+        import pyarrow.parquet
+
+        return list(pyarrow.parquet.read_schema(path).names)
+    except (ImportError, OSError, ValueError):
+        return None
+
+
+DELIMITERS = (",", ";", "\t")
+"""Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
+
+
+def delimiter(path: Path) -> str:
+    """The field separator of a text table: a comma, a semicolon or a tab, whichever its header uses most."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as stream:
+            first = stream.readline()
+    except OSError:
+        return ","
+    return header_delimiter(first)
+
+
+def header_delimiter(line: str) -> str:
+    """The separator a table's header line uses most of (a comma on a tie)."""
+    return max(DELIMITERS, key=lambda d: (line.count(d), d == ","))
 
 
 def _check_unique_columns(header, label: str) -> None:
@@ -80,5 +123,25 @@ def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
     if kind == "Excel":
         return pd.read_excel(path, sheet_name=0)
     if kind == "Parquet":
+        header = _parquet_header(path)
+        if header is not None:
+            _check_unique_columns(header, str(path))
         return pd.read_parquet(path)
-    return pd.read_csv(path, skipinitialspace=True)
+    return pd.read_csv(path, sep=delimiter(path), skipinitialspace=True)
+
+
+def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
+    """A date-time column (a Parquet or Excel time stamp) as the seconds since its first row, a duration as its
+    seconds, in place; other columns are left as they are."""
+    if column not in frame.columns:
+        return
+    raw = frame[column]
+    if pd.api.types.is_datetime64_any_dtype(raw) or pd.api.types.is_timedelta64_dtype(raw):
+        missing = np.flatnonzero(raw.isna().to_numpy())
+        if missing.size:
+            raise InputError(f"{label}: row {missing[0] + 1}, column '{column}' is empty; fix or remove that row")
+        start = raw.iloc[0] if pd.api.types.is_datetime64_any_dtype(raw) else pd.Timedelta(0)
+        frame[column] = (raw - start).dt.total_seconds()
+
+
+__all__ = ["DELIMITERS", "TABLE_SUFFIXES", "datetimes_to_seconds", "delimiter", "header_delimiter", "read_table"]

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from groupfit.errors import InputError
+from groupfit.io import note_read
 
 
 def read_toml(path: str | Path, what: str = "configuration file") -> dict[str, Any]:
@@ -22,6 +23,7 @@ def read_toml(path: str | Path, what: str = "configuration file") -> dict[str, A
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: {what} not found")
+    note_read(path)
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:

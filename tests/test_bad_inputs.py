@@ -25,9 +25,18 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 from test_switching_models import SYNTHETIC, synthetic_model
+
+from groupfit.screw import BallScrewModel
+from groupfit.screw.modelfile import model_to_dict
+from groupfit.screw.runs import load_screw_run
+
+SCREW_RUN = SYNTHETIC.parent / "screw_A.csv"
 
 WORKERS = 2
 KINDS = ("data", "parameters", "model files", "outputs", "configs", "sweep")
@@ -46,7 +55,8 @@ class Case:
     needs_permissions: bool = False
     """The case relies on a read-only path (skipped for the superuser)."""
     prepare: str | None = None
-    """Something to create in the case's folder before the run: 'file', 'readonly-dir', 'readonly-file'."""
+    """Something to create in the case's folder before the run: 'file', 'readonly-dir', 'readonly-file',
+    'dir:PATH' (a folder where an output would go) or 'file:PATH' (a small CSV there)."""
 
 
 def fit(*args):
@@ -59,6 +69,138 @@ def data_fit(name, *args):
 
 def position_fit(name, *args):
     return fit("--data", f"{{in}}/{name}", "--temps", "T1,T2", "--p", "0", "--position", "P_mm", *args)
+
+
+def screw_predict(model, *args):
+    return ("screw", "predict", f"{{in}}/{model}", "--data", "{in}/screw.csv", "--json", "{out}/p.json", *args)
+
+
+def configured(verb, name):
+    return (verb, f"{{in}}/{name}", "--quiet", "--out", "{out}/r")
+
+
+def swept(name):
+    return ("sweep", f"{{in}}/{name}", "--db", "{out}/s.sqlite", "--quiet")
+
+
+def diagnose(*args):
+    return ("diagnose", "{in}/model.json", "--data", "{in}/good.csv", "--out", "{out}/d", *args)
+
+
+NEW_CASES = [
+    # data: files that are not tables, tables read wrongly, cells beyond any plausible value
+    Case("data", "a folder as --data", data_fit("."), "is a folder"),
+    Case("data", "/dev/null as --data", fit("--data", "/dev/null", "--temps", "T1"), "not a regular file"),
+    Case("data", "Parquet column named twice", data_fit("duplicate.parquet"), "appears twice (columns 2 and 4)"),
+    Case("data", "time of 1e300", data_fit("time_huge.csv"), "row 41, column 'time_s'"),
+    Case("data", "position of 1e300", position_fit("position_huge.csv"), "row 31, column 'P_mm'"),
+    Case("data", "--position an input", position_fit("position.csv", "--position", "T1"), "also a temperature input"),
+    Case("data", "wide column without a position", position_fit("wide_abc.csv"), "err_Pabc"),
+    Case("data", "two wide columns at one position", position_fit("wide_twin.csv"), "both at 100 mm"),
+    # parameters that mean nothing
+    Case("parameters", "--seed -1", data_fit("good.csv", "--seed", "-1"), "invalid seed"),
+    Case(
+        "parameters",
+        "bootstrap block as long as the run",
+        data_fit("good.csv", "--intervals", "bootstrap", "--block", "300"),
+        "--block 300",
+    ),
+    Case("parameters", "diagnose --min-score 2", diagnose("--min-score", "2"), "--min-score"),
+    Case("parameters", "diagnose --min-effect -1", diagnose("--min-effect", "-1"), "--min-effect"),
+    Case("parameters", "diagnose --heat-exponent -5", diagnose("--heat-exponent", "-5"), "--heat-exponent"),
+    Case(
+        "parameters",
+        "--dead-band-ref an input",
+        position_fit("position.csv", "--dead-band", "1", "--dead-band-ref", "T2"),
+        "a model input",
+    ),
+    Case(
+        "parameters",
+        "--position-ref far outside the travel",
+        position_fit("position.csv", "--position-ref", "1e9"),
+        "far outside the measured travel",
+    ),
+    Case(
+        "parameters",
+        "reserved word as the block name",
+        ("export", "{in}/model.json", "--target", "st", "--name", "END_FUNCTION_BLOCK", "--out", "{out}/e"),
+        "reserved word",
+    ),
+    Case(
+        "parameters",
+        "screw --probe-x off the screw",
+        screw_predict("screw_model.json", "--probe-x=-1"),
+        "off the screw",
+    ),
+    # model files
+    *[
+        Case("model files", f"JSON nested 100 000 deep ({verb})", argv, "nested too deeply")
+        for verb, argv in [
+            ("replay", ("replay", "{in}/deep.json", "--data", "{in}/good.csv")),
+            ("export", ("export", "{in}/deep.json", "--target", "all", "--out", "{out}/e")),
+        ]
+    ],
+    Case(
+        "model files",
+        "hold beyond a 32-bit counter",
+        ("export", "{in}/hold_huge.json", "--target", "st", "--out", "{out}/e"),
+        "32-bit counter",
+    ),
+    *[
+        Case("model files", f"screw model: {label}", screw_predict(f"screw_{name}.json"), expect)
+        for label, name, expect in [
+            ("NaN lambda", "lambda_nan", "lambda_1_m"),
+            ("negative lambda", "lambda_negative", "lambda_1_m"),
+            ("negative source offset", "offset_negative", "source_offset_m"),
+            ("negative h", "h_negative", "h_W_m2K"),
+            ("C1 missing", "c1_missing", "C1 and C2"),
+        ]
+    ],
+    # outputs that would lose data or be half-written
+    Case("outputs", "fit --json the run", data_fit("good.csv", "--json", "{in}/good.csv"), "a file this command reads"),
+    Case(
+        "outputs",
+        "diagnose --json the run",
+        diagnose("--json", "{in}/good.csv"),
+        "a file this command reads",
+    ),
+    Case(
+        "outputs",
+        "replay --json the model",
+        ("replay", "{in}/model.json", "--data", "{in}/good.csv", "--json", "{in}/model.json"),
+        "a file this command reads",
+    ),
+    Case(
+        "outputs",
+        "simulate --out its own config",
+        ("simulate", "{in}/lumped.toml", "--out", "{in}/lumped.toml"),
+        "a file this command reads",
+    ),
+    Case(
+        "outputs",
+        "simulate --out an existing run",
+        ("simulate", "{in}/lumped.toml", "--out", "{out}/run.csv"),
+        "--force",
+        prepare="file:run.csv",
+    ),
+    Case("outputs", "fit --out ''", data_fit("good.csv", "--out", ""), "empty path"),
+    Case(
+        "outputs",
+        "export: one of the files is a folder",
+        ("export", "{in}/model.json", "--target", "all", "--out", "{out}/e"),
+        "groupfit_model.c",
+        prepare="dir:e/groupfit_model.c",
+    ),
+    Case("outputs", "fit: fit.png is a folder", data_fit("good.csv"), "fit.png", prepare="dir:result/fit.png"),
+    # configs
+    Case("configs", "seed -1 in the config", configured("fit", "seed_negative.toml"), "seed"),
+    Case("configs", "temps = [] in the config", configured("fit", "temps_empty.toml"), "temps"),
+    Case("configs", "heat_exponent = -5 in the config", configured("compare", "heat_negative.toml"), "heat_exponent"),
+    # sweep
+    Case("sweep", "a million runs", swept("sweep_million.toml"), "100000"),
+    Case("sweep", "mostly infeasible", swept("sweep_mostly_infeasible.toml"), "cannot fit their breaks"),
+    Case("sweep", "exact searches over the budget", (*swept("sweep_slow.toml"), "--workers", "1"), "over the budget"),
+]
 
 
 CASES = [
@@ -381,6 +523,7 @@ CASES = [
         ("sweep", "{in}/sweep_ok.toml", "--db", "{out}/s.sqlite", "--workers", "0", "--quiet"),
         "--workers 0",
     ),
+    *NEW_CASES,
 ]
 
 
@@ -425,8 +568,25 @@ def _write_inputs(folder: Path) -> None:
     text_position.to_csv(folder / "position_text.csv", index=False)
     positions[positions.P_mm == 0.0].to_csv(folder / "position_one.csv", index=False)
 
+    changed("time_huge.csv", "time_s", 40, 1e300)
+    long = pd.concat([good] * 17, ignore_index=True)  # 5100 samples: each exact search some 7 min by the estimate
+    long.assign(time_s=good["time_s"].iloc[0] + 100.0 * np.arange(len(long))).to_csv(folder / "long.csv", index=False)
+    huge_position = positions.reset_index(drop=True)
+    huge_position.loc[30, "P_mm"] = 1e300
+    huge_position.to_csv(folder / "position_huge.csv", index=False)
+    wide = good.drop(columns="error_um").assign(err_P0000=good["error_um"], err_P0100=good["error_um"] + 1)
+    wide.assign(err_Pabc=good["error_um"]).to_csv(folder / "wide_abc.csv", index=False)
+    wide.assign(err_P100=good["error_um"]).to_csv(folder / "wide_twin.csv", index=False)
+    columns = [pa.array(good[c]) for c in ("time_s", "T1", "T2", "T1", "error_um")]
+    pq.write_table(pa.table(columns, names=["time_s", "T1", "T2", "T1", "error_um"]), folder / "duplicate.parquet")
+    (folder / "deep.json").write_text("[" * 100_000 + "]" * 100_000)
+    _write_screw_inputs(folder)
+
     model, _ = synthetic_model(p=3, n=3)
     (folder / "model.json").write_text(json.dumps(model))
+    (folder / "hold_huge.json").write_text(
+        json.dumps({**model, "switching": {**model["switching"], "hold_samples": 2**31}})
+    )
     b = model["breaks"]
     mutations = {
         "breaks_order": lambda m: m.update(breaks=[b[1], b[0], b[2]]),
@@ -471,9 +631,38 @@ def _write_inputs(folder: Path) -> None:
         "sweep_infeasible.toml": f"[data]\n{data}\n[grid]\np = [200]\n",
         "sweep_unknown.toml": f"[data]\n{data}\n[grid]\np = [1]\nlayers = [2]\n",
         "sweep_sensor.toml": f'[data]\n{data}\n[grid]\np = [1]\nsensors = [["T1", "T9"]]\n',
+        "sweep_million.toml": f"[data]\n{data}\n[grid]\np = {{start = 0, stop = 1000000}}\n",
+        "sweep_slow.toml": f'[data]\npath = "{(folder / "long.csv").as_posix()}"\n[grid]\np = [1, 2, 3]\n'
+        'search = ["exact"]\n',
+        "sweep_mostly_infeasible.toml": f"[data]\n{data}\n[grid]\np = {{start = 0, stop = 2000}}\n",
+        "seed_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[search]\nseed = -1\n',
+        "temps_empty.toml": f"[data]\n{data}\ntemps = []\n",
+        "heat_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\nheat_exponent = -5\n',
     }
     for name, text in configs.items():
         (folder / name).write_text(text)
+
+
+def _write_screw_inputs(folder: Path) -> None:
+    """A ball-screw run (the shipped run's first 1000 s without its probe column), the model file identified on
+    the whole run, and that file broken five ways."""
+    frame = pd.read_csv(SCREW_RUN)
+    frame = frame[frame["time_s"] <= 1000].drop(columns="probe_x_m")
+    frame.to_csv(folder / "screw.csv", index=False)
+    model = BallScrewModel()
+    run = load_screw_run(SCREW_RUN)
+    model.fit(run.rises, run.time, run.positions, source=run.name, label=run.source)
+    good = model_to_dict(model)
+    (folder / "screw_model.json").write_text(json.dumps(good))
+    mutations = {
+        "lambda_nan": {"lambda_1_m": float("nan")},
+        "lambda_negative": {"lambda_1_m": -8.0},
+        "offset_negative": {"source_offset_m": -0.1},
+        "h_negative": {"h_W_m2K": -3.0},
+        "c1_missing": {"sources": [{"name": "screw", "C2": 0.05}]},
+    }
+    for name, change in mutations.items():
+        (folder / f"screw_{name}.json").write_text(json.dumps({**good, **change}))
 
 
 def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
@@ -481,7 +670,11 @@ def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
 
 
 def _prepare(folder: Path, what: str | None) -> None:
-    if what == "file":
+    if what and what.startswith("dir:"):
+        (folder / what[4:]).mkdir(parents=True)
+    elif what and what.startswith("file:"):
+        (folder / what[5:]).write_text("time_s,T1\n0,20\n")
+    elif what == "file":
         (folder / "file").write_text("not a folder\n")
     elif what == "readonly-dir":
         (folder / "readonly").mkdir()

@@ -153,7 +153,8 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     first, second = replace(result, refused=[refusal], base_check=check).summary().splitlines()[:2]
     assert first == (
         f"no effect added: the best candidate, {column_words(best.feature.column)}, {best.describe()} "
-        "(removes 93 % of the held-out error), was refused: makes one held-out condition (fold 4) 3.6 times worse (RMS)"
+        "(removes 93 % of the held-out mean-square error), was refused: makes one held-out condition (fold 4) "
+        "3.6 times worse (RMS)"
     )
     assert second == (
         "the model over-fits (held-out RMS 18.8 µm against 0.468 µm in sample): start from a selected model "

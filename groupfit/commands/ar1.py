@@ -15,8 +15,8 @@ from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands.common import (
-    check_json_target,
-    check_output_dir,
+    commit_outputs,
+    plan_outputs,
     report_stream,
     write_json,
     wrote_line,
@@ -33,8 +33,8 @@ GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "crit
 
 def run_replay(args: argparse.Namespace) -> int:
     """``groupfit replay`` of an AR(1) model file: the routine over a recorded run, every Δτ."""
+    out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     model = AR1File.load(args.model)
-    check_json_target(args)
     error = args.error or model.error or "error_um"
     time = args.time or (model.training or {}).get("time") or "time_s"
     run = load_run(args.data, temps=[], time=time, error=error, require_error=False)
@@ -79,13 +79,14 @@ def run_replay(args: argparse.Namespace) -> int:
             f"{scores['accuracy_percent']:.1f} %"
         )
     figures = []
-    if args.out and measured is not None:
-        figure = check_output_dir(args.out) / "replay.png"
+    if out_dir is not None and measured is not None:
+        figure = out_dir / "replay.png"
         time_s = decimate(run.time, step)
         title = f"{run.name}: AR(1) routine, start {model.start}"
         plot_fit(time_s, measured, result.prediction_um, [], [(1, len(heat))], figure, title=title, label="AR(1)")
         figures.append(figure)
     written = [*figures, write_json(args.json, out)]
+    commit_outputs()
     if any(written):
         lines.append("wrote    " + wrote_line(written))
     print("\n".join(lines), file=report_stream(args))
@@ -100,12 +101,13 @@ def run_export(args: argparse.Namespace) -> int:
             f"{args.model}: an AR(1) model steps every {model.sampling_period_s:g} s (its C1 and C2 belong to that "
             f"step): call it at that period, or refit with fit --model ar1 --period {args.period:g}"
         )
-    out_dir = check_output_dir(args.out)
+    plan_outputs(args, args.model, folder=args.out)
     targets = ("c", "st", "json", "sheet") if args.target == "all" else (args.target,)
     files: dict[str, str] = {}
     for target in targets:
         files.update(render(model, target, real=args.real, name=args.name))
-    written = write(files, out_dir)
+    written = write(files, plan_outputs(args, folder=args.out, files=files))
+    commit_outputs()
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 

@@ -7,9 +7,9 @@ import argparse
 from groupfit.ar1.fitting import check_heat, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
 from groupfit.ar1.modelfile import STARTS
 from groupfit.commands.common import (
-    check_json_target,
-    check_output_dir,
+    commit_outputs,
     config_with_data_options,
+    plan_outputs,
     report_stream,
     write_json,
     wrote_line,
@@ -72,9 +72,16 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
     if not args.heat:
         raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
-    config = config_with_data_options(args, args.config or default_config_path())
-    check_json_target(args)
-    out_dir = check_output_dir(args.out or config["output"]["dir"])
+    config_path = args.config or default_config_path()
+    config = config_with_data_options(args, config_path)
+    out_dir = plan_outputs(
+        args,
+        config_path,
+        config["data"].get("path"),
+        args.closed_form,
+        folder=args.out or config["output"]["dir"],
+        files=("model.json", "fit.png"),
+    )
     data = config["data"]
     if not data.get("path"):
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
@@ -112,5 +119,6 @@ def run_fit(args: argparse.Namespace) -> int:
         label="AR(1) free run",
     )
     json_path = write_json(args.json, result.to_json())
+    commit_outputs()
     print(result.summary() + "\nwrote   " + wrote_line([model_path, figure_path, json_path]), file=report_stream(args))
     return 0

@@ -25,9 +25,11 @@ from groupfit.data import (
     split_names,
 )
 from groupfit.errors import InputError
-from groupfit.io import atomic_write_text, check_output_file, to_json
+from groupfit.io import atomic_write_text, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 from groupfit.model_checks import MAX_RIDGE_ALPHA
+from groupfit.outputs import commit_outputs as commit_outputs  # the verbs import it from here
+from groupfit.outputs import current_plan
 from groupfit.reference import default_reference
 from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
@@ -131,6 +133,32 @@ def add_out_option(
         parser.add_argument(*aliases, dest="out", metavar=metavar, help=argparse.SUPPRESS)
     if required:
         parser.set_defaults(out_required=True)
+    add_force_option(parser)
+
+
+def add_force_option(parser: argparse.ArgumentParser) -> None:
+    """``--force``: replace an existing data file (CSV, Excel, Parquet, TOML) named as an output."""
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing data file named as an output (never one the command reads)",
+    )
+
+
+def plan_outputs(
+    args: argparse.Namespace, *inputs, folder: str | Path | None = None, files=(), option: str = "--out"
+) -> Path | None:
+    """Declare what a verb reads and writes, and check every output before any work (one line when refused).
+
+    ``inputs`` are the files the verb reads (paths or lists of paths; None
+    skipped); the outputs are ``--json`` and the files ``files`` in ``folder``
+    (``option`` names it). An output that is an input, an existing data file
+    without ``--force``, or an empty path is refused
+    (:class:`groupfit.outputs.OutputPlan`). Returns the folder (None when none).
+    """
+    plan = current_plan(force=getattr(args, "force", False)).read(*inputs)
+    plan.file(getattr(args, "json", None), "--json")
+    return plan.folder(folder, option, files)
 
 
 def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
@@ -204,13 +232,6 @@ def write_json(target: str | None, obj: Any) -> Path | None:
         return None
     atomic_write_text(target, text)
     return Path(target)
-
-
-def check_json_target(args: argparse.Namespace) -> None:
-    """Check before any work that ``--json FILE`` can be written (its folder exists or can be made, writable)."""
-    target = getattr(args, "json", None)
-    if target is not None and target != "-":
-        check_output_file(target, "--json")
 
 
 def wrote_line(paths) -> str:
@@ -356,6 +377,17 @@ def configured_reference(args: argparse.Namespace, config: dict, run: Run) -> st
             raise InputError(f"{run.source}: --ambient column '{ambient}' not found; the columns are: {available}")
         value = ambient
     return default_reference(run.frame, value)
+
+
+def seed_value(text: str) -> int:
+    """--seed: a whole number ≥ 0 (what numpy's generators take)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid seed: {text!r} (a whole number >= 0)") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"invalid seed: {text!r} (a whole number >= 0)")
+    return value
 
 
 def ridge_value(text: str) -> float | str:

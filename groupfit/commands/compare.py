@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 from groupfit.commands.common import (
+    EXACT_BUDGET_SECONDS,
     StageProgress,
     add_budget_option,
     add_json_option,
@@ -13,14 +16,16 @@ from groupfit.commands.common import (
     add_reference_option,
     add_run_options,
     check_exact_budget,
-    check_json_target,
     check_output_dir,
+    commit_outputs,
     config_with_data_options,
     configured_reference,
     load_configured_run,
     load_configured_runs,
+    plan_outputs,
     print_notes,
     report_stream,
+    seed_value,
     write_json,
     wrote_line,
 )
@@ -28,7 +33,7 @@ from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
-from groupfit.inference.cli import add_interval_options, interval_settings
+from groupfit.inference.cli import add_interval_options, check_block, interval_settings
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import interval_summary, interval_table, parse_intervals, plot_intervals
 from groupfit.reference import with_reference
@@ -40,7 +45,7 @@ def add_parser(verbs) -> None:
     add_run_options(compare)
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
-    compare.add_argument("--seed", type=int, help="seed of the genetic algorithm")
+    compare.add_argument("--seed", type=seed_value, help="seed of the genetic algorithm")
     compare.add_argument(
         "--heat",
         metavar="COLUMN|none",
@@ -69,7 +74,8 @@ def add_parser(verbs) -> None:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    config = config_with_data_options(args, args.config or default_config_path())
+    config_path = args.config or default_config_path()
+    config = config_with_data_options(args, config_path)
     override(config, "data", "validate", args.validate)
     override(config, "compare", "pmax", args.pmax)
     override(config, "compare", "heat", args.heat)
@@ -77,8 +83,15 @@ def run_compare(args: argparse.Namespace) -> int:
     override(config, "output", "dir", args.out)
     if config["compare"]["pmax"] < 0:
         raise InputError(f"--pmax {config['compare']['pmax']}: the largest p compared must be 0 or more")
-    check_json_target(args)
-    check_output_dir(config["output"]["dir"])
+    runs = [p for p in [config["data"].get("path"), *config["data"]["validate"]] if isinstance(p, (str, Path))]
+    plan_outputs(
+        args,
+        config_path,
+        config["data"].get("path"),
+        config["data"]["validate"],
+        folder=config["output"]["dir"],
+        files=["R_against_p.png", "error_against_check_interval.png", *(f"compare_{Path(p).stem}.png" for p in runs)],
+    )
     settings = ComparisonSettings.from_config(config)
     settings.intervals = interval_settings(args)
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
@@ -105,13 +118,21 @@ def run_compare(args: argparse.Namespace) -> int:
             f"note    {note.replace('derived inputs and run-time state', 'run-time switching')}",
             file=report_stream(args),
         )
+    check_block(args, modelling.n_samples)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
     try:
         result = compare_models(
-            modelling, validation, settings, live_rule=replay_groups, progress=progress, histories=histories
+            modelling,
+            validation,
+            settings,
+            live_rule=replay_groups,
+            progress=progress,
+            histories=histories,
+            budget_s=None if args.no_budget else EXACT_BUDGET_SECONDS,
+            estimate=lambda line: print(f"estimate {line}", file=sys.stderr, flush=True),
         )
     finally:
         progress.close()
@@ -152,5 +173,6 @@ def run_compare(args: argparse.Namespace) -> int:
         written.append(figure)
         data["probe_intervals"], summary = table, summary + "\n\n" + interval_summary(table)
     written.append(write_json(args.json, data))
+    commit_outputs()
     print(summary + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
@@ -14,9 +15,10 @@ from groupfit.commands.common import (
     add_clock_options,
     add_json_option,
     add_out_option,
-    check_json_target,
     check_output_dir,
     clock_options,
+    commit_outputs,
+    plan_outputs,
     print_notes,
     report_stream,
     ridge_value,
@@ -57,21 +59,21 @@ def add_parser(verbs) -> None:
     add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
         "--min-score",
-        type=float,
+        type=share_value,
         default=MIN_SCORE,
         metavar="F",
         help=f"least out-of-sample share of the residual an effect must explain (default {MIN_SCORE})",
     )
     parser.add_argument(
         "--min-effect",
-        type=float,
+        type=rms_value,
         default=MIN_EFFECT_RMS_UM,
         metavar="UM",
         help=f"least residual RMS in µm the first effect must remove out of sample (default {MIN_EFFECT_RMS_UM})",
     )
     parser.add_argument(
         "--min-further-effect",
-        type=float,
+        type=rms_value,
         default=MIN_FURTHER_EFFECT_RMS_UM,
         metavar="UM",
         help="least residual RMS in µm every further effect must remove out of sample, at least --min-effect "
@@ -134,6 +136,27 @@ def column_list(text: str) -> tuple[str, ...]:
     return columns
 
 
+def _bounded(low: float, high: float, what: str):
+    """An argparse type: a number in [low, high), else one line saying what it must be."""
+
+    def value(text: str) -> float:
+        try:
+            number = float(text)
+        except ValueError:
+            number = math.nan
+        if not low <= number < high:
+            raise argparse.ArgumentTypeError(f"{text!r}: {what}")
+        return number
+
+    return value
+
+
+share_value = _bounded(0.0, 1.0, "a share of the residual, 0 ≤ F < 1 (e.g. 0.1)")
+"""--min-score: a share of the residual in [0, 1)."""
+rms_value = _bounded(0.0, math.inf, "an RMS in µm, a finite number ≥ 0")
+"""--min-effect, --min-further-effect: an RMS in µm, ≥ 0."""
+
+
 def heat_exponent(text: str) -> float | str:
     if text == "fit":
         return text
@@ -174,6 +197,14 @@ def load_measured(path: str, model: dict[str, Any], time: str, **clock) -> Run:
 
 
 def run_diagnose(args: argparse.Namespace) -> int:
+    plan_outputs(
+        args,
+        args.model,
+        args.data,
+        args.validate,
+        folder=args.out,
+        files=("model_augmented.json", "diagnose.png"),
+    )
     model = ModelFile.load(args.model).to_dict()
     time = args.time or time_column(model)
     clock = clock_options(args)
@@ -181,7 +212,6 @@ def run_diagnose(args: argparse.Namespace) -> int:
     validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
     print_notes([*data, *validate], report_stream(args))
     out_dir = check_output_dir(args.out)
-    check_json_target(args)
     start = model
     selection = None
     joint = args.select == "joint"
@@ -237,6 +267,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         "expected_next_run": {k: e and e.to_json() for k, e in expectations.items()},
     }
     written.append(write_json(args.json, report))
+    commit_outputs()
     summary = result.summary() + recal_note + expectation_summary(expectations)
     print(summary + "\nwrote   " + wrote_line(written), file=report_stream(args))
     return 0

@@ -6,7 +6,7 @@ import argparse
 
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
-from groupfit.commands.common import add_model_argument, add_out_option, check_output_dir
+from groupfit.commands.common import add_model_argument, add_out_option, commit_outputs, plan_outputs
 from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
 from groupfit.export import TARGETS, render, write
@@ -95,13 +95,13 @@ def run_export(args: argparse.Namespace) -> int:
         return run_screw_export(args)
     if is_ar1_file(args.model):
         return ar1_commands.run_export(args)
+    plan_outputs(args, args.model, folder=args.out)
     model = ModelFile.load(args.model)
     if args.period is not None:
         try:
             model = at_period(model, args.period)
         except InputError as exc:
             raise InputError(f"{args.model}: {exc}") from None
-    out_dir = check_output_dir(args.out)
     targets = TARGETS if args.target == "all" else (args.target,)
     if args.target == "all" and model.position is not None:
         targets = (*TARGETS, "table")
@@ -119,7 +119,9 @@ def run_export(args: argparse.Namespace) -> int:
                 **{key: getattr(args, key) for key in CEC_KEYS},
             )
         )
+    out_dir = plan_outputs(args, folder=args.out, files=files)
     written = write(files, out_dir)
+    commit_outputs()
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 

@@ -18,14 +18,16 @@ from groupfit.commands.common import (
     add_reference_option,
     add_run_options,
     check_exact_budget,
-    check_json_target,
     check_output_dir,
+    commit_outputs,
     config_with_data_options,
     configured_reference,
     load_configured_runs,
+    plan_outputs,
     print_notes,
     report_stream,
     ridge_value,
+    seed_value,
     write_json,
     wrote_line,
 )
@@ -39,7 +41,7 @@ from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.heldout.span import SPAN_KEY, input_span
-from groupfit.inference.cli import add_interval_options, intervals_from_args
+from groupfit.inference.cli import add_interval_options, check_block, intervals_from_args
 from groupfit.model import DeadBand
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
@@ -73,7 +75,7 @@ def add_parser(verbs) -> None:
     fit.add_argument("--objective", choices=("sae", "sse"), help="residual sum to minimise")
     fit.add_argument("--no-intercept", action="store_true", help="fit groups without a constant term")
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
-    fit.add_argument("--seed", type=int, help="seed of the genetic algorithm")
+    fit.add_argument("--seed", type=seed_value, help="seed of the genetic algorithm")
     fit.add_argument(
         "--certify",
         choices=("auto", "yes", "no"),
@@ -137,7 +139,8 @@ def add_parser(verbs) -> None:
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
-    config = config_with_data_options(args, args.config or default_config_path())
+    config_path = args.config or default_config_path()
+    config = config_with_data_options(args, config_path)
     override(config, "model", "p", args.p)
     override(config, "model", "pmax", args.pmax)
     override(config, "model", "p_rule", args.p_rule)
@@ -152,8 +155,13 @@ def run_fit(args: argparse.Namespace) -> int:
     override(config, "search", "seed", args.seed)
     override(config, "search", "certify", {"yes": True, "no": False}.get(args.certify, args.certify))
     override(config, "output", "dir", args.out)
-    check_json_target(args)
-    check_output_dir(config["output"]["dir"])
+    plan_outputs(
+        args,
+        config_path,
+        config["data"].get("path"),
+        folder=config["output"]["dir"],
+        files=("model.json", "fit.png", "position.png"),
+    )
 
     paths = config["data"].get("path")
     position_run = None
@@ -182,6 +190,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if config["model"]["p"] == "auto" and np.isnan(run.error).any():
         config["model"]["p"] = 0  # an error not on every row: a global model on the measured rows
     check_measured(run, config["model"]["p"])
+    check_block(args, run.n_samples)
     input_selection = None
     if position_run is not None:
         position_run = replace(position_run, run=run)
@@ -308,6 +317,7 @@ def run_fit(args: argparse.Namespace) -> int:
         position_figure = out_dir / "position.png"
         plot_position(result.model, position_run, position_figure)
     json_path = write_json(args.json, result.to_json())
+    commit_outputs()
     written = wrote_line([model_path, figure_path, position_figure, json_path])
     print(result.summary() + position_note + "\nwrote   " + written, file=report_stream(args))
     return 0
@@ -416,6 +426,11 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
             raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
         if reference not in position_run.run.frame.columns:
             raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
+        if reference in model.temps:
+            raise InputError(
+                f"--dead-band-ref '{reference}': a model input; the dead band compares the inputs with a sensor of "
+                "its own (the ambient air, e.g. T_amb)"
+            )
         dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
     fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
     orders = residual_by_order(model, position_run, p0)

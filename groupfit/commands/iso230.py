@@ -11,8 +11,8 @@ from matplotlib.figure import Figure
 from groupfit.commands.common import (
     add_json_option,
     add_out_option,
-    check_json_target,
-    check_output_dir,
+    commit_outputs,
+    plan_outputs,
     report_stream,
     write_json,
     wrote_line,
@@ -42,8 +42,7 @@ def add_parser(verbs) -> None:
 
 
 def run_iso230(args: argparse.Namespace) -> int:
-    check_json_target(args)
-    out_dir = check_output_dir(args.out) if args.out else None
+    out_dir = plan_outputs(args, args.run, folder=args.out, files=("iso230.png",))
     result = load_runs(args.run, target=args.target, direction=args.direction, deviation=args.deviation)
     data = {"run": str(args.run), **result.to_json()}
     written = []
@@ -52,6 +51,7 @@ def run_iso230(args: argparse.Namespace) -> int:
         plot_iso230(result, figure, title=Path(args.run).name)
         written.append(figure)
     written.append(write_json(args.json, data))
+    commit_outputs()
     lines = [iso230_report(data)] + (["wrote    " + wrote_line(written)] if any(written) else [])
     print("\n".join(lines), file=report_stream(args))
     return 0

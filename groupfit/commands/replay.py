@@ -17,9 +17,9 @@ from groupfit.commands.common import (
     add_json_option,
     add_model_argument,
     add_out_option,
-    check_json_target,
-    check_output_dir,
     clock_options,
+    commit_outputs,
+    plan_outputs,
     print_notes,
     report_stream,
     residual_line,
@@ -97,13 +97,12 @@ def add_parser(verbs) -> None:
 
 
 def run_replay(args: argparse.Namespace) -> int:
+    out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     if is_screw_file(args.model):
         return run_screw_replay(args)
     if is_ar1_file(args.model):
         return ar1_commands.run_replay(args)
     model = ModelFile.load(args.model)
-    check_json_target(args)
-    out_dir = check_output_dir(args.out) if args.out else None
     counts = None
     if args.resolution_um is not None:
         counts = IntegerForm(args.resolution_um, args.counts_limit)
@@ -148,6 +147,7 @@ def run_replay(args: argparse.Namespace) -> int:
         plot_replay(run, rule.tables, replay, model, figure)
         written.append(figure)
     written.append(write_json(args.json, result.to_json()))
+    commit_outputs()
     lines = [result.summary()] + (["wrote    " + wrote_line(written)] if any(written) else [])
     print("\n".join(lines), file=report_stream(args))
     return 0

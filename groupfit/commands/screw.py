@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import check_output_dir, report_stream, write_json
+from groupfit.commands.common import add_force_option, commit_outputs, plan_outputs, report_stream, write_json
 from groupfit.errors import InputError
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
@@ -39,6 +39,7 @@ def add_parser(verbs) -> None:
     _model_options(identify)
     identify.add_argument("--json", metavar="FILE", help="write the model as JSON also here ('-' for stdout)")
     identify.add_argument("--out", metavar="DIR", help=f"folder for screw_model.json (default {DEFAULT_OUT})")
+    add_force_option(identify)
     identify.set_defaults(handler=run_identify)
 
     predict = sub.add_parser("predict", help="temperature field and thermal error of a run, with the seed's metrics")
@@ -56,6 +57,7 @@ def add_parser(verbs) -> None:
     )
     predict.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-' for stdout)")
     predict.add_argument("--out", metavar="DIR", help="folder for the figures")
+    add_force_option(predict)
     predict.set_defaults(handler=run_predict)
 
     compare = sub.add_parser("compare", help="screw model vs MLR on the same sensors, on runs not used to identify")
@@ -64,6 +66,7 @@ def add_parser(verbs) -> None:
     _model_options(compare)
     compare.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     compare.add_argument("--out", metavar="DIR", help=f"folder for the figures and the model (default {DEFAULT_OUT})")
+    add_force_option(compare)
     compare.set_defaults(handler=run_compare)
 
 
@@ -151,14 +154,15 @@ def refuse_moving_source(run) -> None:
 
 # ----------------------------------------------------------------- identify
 def run_identify(args: argparse.Namespace) -> int:
+    out_dir = plan_outputs(args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",))
     model = build_model(args)
     runs = _load_runs(args.runs)
     identify_runs(model, runs)
-    out_dir = check_output_dir(args.out or DEFAULT_OUT)
     data = model_to_dict(model, runs={r.name: r.source for r in runs})
     path = out_dir / "screw_model.json"
     save_model(data, path)
     write_json(args.json, data)
+    commit_outputs()
     print(identify_report(model, path), file=report_stream(args))
     return 0
 
@@ -203,6 +207,14 @@ def _alpha_rows(model) -> str:
 
 # ------------------------------------------------------------------ predict
 def run_predict(args: argparse.Namespace) -> int:
+    stem = Path(args.data).stem
+    out_dir = plan_outputs(
+        args,
+        args.model,
+        args.data,
+        folder=args.out,
+        files=(f"screw_rises_{stem}.png", f"screw_error_{stem}.png"),
+    )
     model = load_model(args.model)
     run = load_screw_run(args.data, probe_x=args.probe_x)
     refuse_moving_source(run)
@@ -216,7 +228,6 @@ def run_predict(args: argparse.Namespace) -> int:
             model.fit_source(run.rises, run.time, run.positions, source=source, label=run.source)
             reidentified = True
     at = _positions(args.at)
-    out_dir = check_output_dir(args.out) if args.out else None
     score, rises, error = score_screw(model, run, source)
     written = []
     if out_dir is not None:
@@ -246,6 +257,7 @@ def run_predict(args: argparse.Namespace) -> int:
             "error_um": np.column_stack([model.predict_error(run.time, x, tau0, source) for x in at]).tolist(),
         }
     write_json(args.json, _finite(result))
+    commit_outputs()
     print(predict_report(score, source, reidentified, model, written), file=report_stream(args))
     return 0
 
@@ -299,13 +311,20 @@ def _figures(out_dir: Path, run, rises, errors: dict, title: str) -> list[Path]:
 
 # ------------------------------------------------------------------ compare
 def run_compare(args: argparse.Namespace) -> int:
+    names = [Path(p).stem for p in [args.run, *args.validate]]
+    out_dir = plan_outputs(
+        args,
+        args.run,
+        args.validate,
+        folder=args.out or DEFAULT_OUT,
+        files=["screw_model.json", *(f"screw_{kind}_{n}.png" for n in names for kind in ("rises", "error"))],
+    )
     model = build_model(args)
     runs = _load_runs([args.run, *args.validate], require_error=True)
     for run in runs:
         if run.probe_x is None:
             raise InputError(f"{run.source}: no probe_x_m column; the probe position is needed to score the error")
     result = compare_screw(model, runs[0], runs[1:])
-    out_dir = check_output_dir(args.out or DEFAULT_OUT)
     written = []
     for run in runs:
         pred = result.predictions[run.name]
@@ -321,6 +340,7 @@ def run_compare(args: argparse.Namespace) -> int:
     save_model(model_to_dict(model, runs={r.name: r.source for r in runs}), model_path)
     written.append(model_path)
     write_json(args.json, _finite(compare_json(result, runs)))
+    commit_outputs()
     print(compare_report(result, runs, written), file=report_stream(args))
     return 0
 

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from groupfit.commands.common import (
-    check_json_target,
-    check_output_dir,
+    commit_outputs,
+    plan_outputs,
     report_stream,
     residual_line,
     write_json,
@@ -35,8 +34,7 @@ def run_screw_replay(args: argparse.Namespace) -> int:
     """The law sample by sample on a run: the time since its first sample, the probe position, τ0 (line law)."""
     if args.precision != "double":
         raise InputError(f"--precision {args.precision}: the ball-screw law is deployed in double precision only")
-    check_json_target(args)
-    out_dir = check_output_dir(args.out) if args.out else None
+    out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     law = screw_law(args)
     run = load_screw_run(args.data)
     if run.probe_x is None:
@@ -56,6 +54,7 @@ def run_screw_replay(args: argparse.Namespace) -> int:
         plot_error(run.time, run.error, {"run-time law": prediction}, figure, title=f"{run.name}: {law.source}")
         written.append(figure)
     written.append(write_json(args.json, result))
+    commit_outputs()
     lines = [screw_replay_report(result)] + (["wrote    " + wrote_line(written)] if any(written) else [])
     print("\n".join(lines), file=report_stream(args))
     return 0
@@ -104,7 +103,7 @@ def screw_replay_report(result: dict[str, Any]) -> str:
 
 def run_screw_export(args: argparse.Namespace) -> int:
     """``export --target c|json|all`` of one source's law; other targets refused with the reason."""
-    out_dir = check_output_dir(args.out)
+    plan_outputs(args, args.model, folder=args.out)
     targets = SCREW_TARGETS if args.target == "all" else (args.target,)
     for target in targets:
         check_screw_target(target)
@@ -112,7 +111,8 @@ def run_screw_export(args: argparse.Namespace) -> int:
     files: dict[str, str] = {}
     for target in targets:
         files.update(render_screw(law, target))
-    written = write(files, Path(out_dir))
+    written = write(files, plan_outputs(args, folder=args.out, files=files))
+    commit_outputs()
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 

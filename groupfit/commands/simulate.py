@@ -6,9 +6,10 @@ import argparse
 from pathlib import Path
 
 from groupfit import fe
-from groupfit.commands.common import add_out_option, add_quiet_option
+from groupfit.commands.common import add_out_option, add_quiet_option, commit_outputs
 from groupfit.errors import InputError
-from groupfit.io import atomic_write_text, check_output_file
+from groupfit.io import atomic_write_text
+from groupfit.outputs import current_plan
 from groupfit.plots import plot_dataset
 from groupfit.screw.plots import plot_screw_dataset
 from groupfit.synthetic import simulate_lumped
@@ -35,15 +36,19 @@ def add_parser(verbs) -> None:
 
 
 def run_simulate(args: argparse.Namespace) -> int:
+    if args.out == "-":
+        raise InputError("--out -: simulate writes a data set and its figure; name a CSV file")
+    plan = current_plan(force=args.force).read(args.config)
+    output = plan.file(args.out, "--out", data=True)
+    figure = plan.file(output.with_suffix(".png"), "--out (its figure)")
     config = read_scenario(args.config)
-    output = check_output_file(args.out, "--out")
     try:
         frame = simulate_scenario(config, progress=not args.quiet)
     except InputError as exc:
         raise InputError(f"{args.config}: {exc}") from None
     atomic_write_text(output, frame.to_csv(index=False, float_format="%.7g", lineterminator="\n"))
-    figure = output.with_suffix(".png")
     plot = plot_screw_dataset if config.get("kind") == "ballscrew" else plot_dataset
     plot(frame, figure, title=output.stem)
+    commit_outputs()
     print(f"wrote {output} ({len(frame)} samples, {len(frame.columns)} columns) and {figure}")
     return 0

@@ -3,24 +3,28 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from tqdm import tqdm
 
 from groupfit.commands.common import (
+    EXACT_BUDGET_SECONDS,
+    add_budget_option,
     add_json_option,
     add_out_option,
     add_quiet_option,
-    check_json_target,
-    check_output_dir,
+    commit_outputs,
+    plan_outputs,
     report_stream,
     write_json,
 )
 from groupfit.errors import InputError
-from groupfit.io import check_output_file
-from groupfit.sweep.config import feasibility, read_study
+from groupfit.outputs import current_plan
+from groupfit.sweep.config import read_study
 from groupfit.sweep.executors import DaskExecutor, LocalExecutor
+from groupfit.sweep.feasibility import check_exact_time, check_feasible
 from groupfit.sweep.report import write_report
 from groupfit.sweep.store import StudyStore
 from groupfit.sweep.study import run_study
@@ -44,6 +48,7 @@ def add_parser(verbs) -> None:
     add_out_option(sweep, "write a summary table and figures to DIR", aliases=("--report",))
     add_json_option(sweep, "counts and the database path")
     add_quiet_option(sweep)
+    add_budget_option(sweep)
     sweep.set_defaults(handler=run_sweep)
 
 
@@ -51,18 +56,21 @@ def run_sweep(args: argparse.Namespace) -> int:
     study = read_study(args.config)
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")
-    feasible, infeasible = feasibility(study)
-    if not feasible:
-        raise InputError(
-            f"{args.config}: none of the {len(study.runs)} runs can fit its breaks ({infeasible[0][1]}); "
-            "lower p, n or c in [grid], or use fewer sensors"
-        )
+    feasible, infeasible = check_feasible(study, args.config)
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers}: give 1 or more worker processes")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
-    check_output_file(db, "--db")
-    report_dir = check_output_dir(args.out) if args.out else None
-    check_json_target(args)
+    report_dir = plan_outputs(
+        args,
+        args.config,
+        [d.path for d in study.datasets],
+        folder=args.out,
+        files=("runs.csv", "summary.csv", "summary.md"),
+    )
+    current_plan().file(db, "--db")
+    if not args.scheduler:  # a cluster's size is known only once connected
+        budget = None if args.no_budget else EXACT_BUDGET_SECONDS
+        check_exact_time(study, feasible, args.config, budget_s=budget, workers=args.workers or os.cpu_count() or 1)
     if args.scheduler:
         executor = DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
     else:
@@ -114,6 +122,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             file=out,
         )
     if written:
+        commit_outputs()
         print("  report " + ", ".join(str(p) for p in written), file=out)
     json_path = write_json(
         args.json,
@@ -132,6 +141,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             "report": [str(p) for p in written],
         },
     )
+    commit_outputs()
     if json_path is not None:
         print(f"  wrote {json_path}", file=out)
     return 0

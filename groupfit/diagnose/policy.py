@@ -123,8 +123,8 @@ class AcceptancePolicy:
             if candidate.score < self.min_score:
                 return Refusal(
                     REFERENCE_SHARE,
-                    f"removes {100 * candidate.score:.0f} % of the held-out error; a change of reference needs "
-                    f"{100 * self.min_score:.0f} %",
+                    f"removes {100 * candidate.score:.0f} % of the held-out mean-square error; a change of "
+                    f"reference needs {100 * self.min_score:.0f} %",
                 )
             return self.fold_refusal(candidate, further=False, own_transforms=False)
         refusal = self.fold_refusal(candidate, further=stage == "further", own_transforms=self.own_transforms)
@@ -152,7 +152,7 @@ class AcceptancePolicy:
             return Refusal(
                 COLLINEAR,
                 f"collinear with a model input (|r| {candidate.collinearity:.2f}): it must remove "
-                f"{100 * self.collinear_factor * self.min_score:.0f} % of the held-out error",
+                f"{100 * self.collinear_factor * self.min_score:.0f} % of the held-out mean-square error",
             )
         worst = int(np.argmax(candidate.fold_ratios))
         if candidate.fold_ratios[worst] > self.max_fold_worsening**2:

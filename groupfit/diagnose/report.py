@@ -181,7 +181,7 @@ def effect_lines(result, judge: str) -> list[str]:
         kind = "effect chosen with the inputs" if step.joint else "missing effect"
         lines.append(
             f"{kind}: {column_words(c.feature.column, result.ambient)}, {c.describe()} "
-            f"(removes {100 * c.score:.0f} % of the held-out error, better on {better} held-out folds; "
+            f"(removes {100 * c.score:.0f} % of the held-out mean-square error, better on {better} held-out folds; "
             f"held-out RMS {held_out}{' against the inputs chosen before it' if step.joint else ''})"
         )
         if step.alternatives:
@@ -206,7 +206,7 @@ def outcome_lines(result, judge: str) -> list[str]:
         c = refusal.candidate
         lines = [
             f"no effect added: the best candidate, {column_words(c.feature.column, result.ambient)}, {c.describe()} "
-            f"(removes {100 * c.score:.0f} % of the held-out error), was refused: {refusal.reason}"
+            f"(removes {100 * c.score:.0f} % of the held-out mean-square error), was refused: {refusal.reason}"
         ]
     elif check.get("overfitted"):  # a model that over-fits hides what is missing
         lines = ["no effect added: no candidate explains a significant part of the held-out error"]
@@ -223,7 +223,7 @@ def outcome_lines(result, judge: str) -> list[str]:
 
 
 def candidate_table(candidates) -> list[str]:
-    lines = [f"{'candidate':<24} {'transform':<40} {'score':>6} {'folds':>6} {'removes RMS µm':>15}"]
+    lines = [f"{'candidate':<24} {'transform':<40} {'score':>6} {'folds':>6} {'explained µm':>15}"]
     for c in candidates:
         lines.append(
             f"{c.feature.column:<24} {c.describe():<40} {c.score:>6.3f} "

@@ -91,7 +91,7 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
 #define GF_N_GROUPS $n_groups
 #define GF_N_WINDOWS $n_windows_declared /* $n_windows switch window(s); at least 1 entry */
 #define GF_CRITERION $criterion_index
-#define GF_HOLD_SAMPLES $hold
+#define GF_HOLD_SAMPLES ${hold}L
 #define GF_SAMPLING_PERIOD_S $period
 #define GF_PERIOD_TOLERANCE_S $period_tolerance
 #define GF_COUNT_MAX ${count_max}L
@@ -121,7 +121,7 @@ typedef struct {
     int group;                  /* 1-based group in service (tracked through faults) */
     int fault;                  /* bit mask of the last sample: GF_FAULT_HELD, GF_FAULT_SENSOR */
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
-    int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
+    long bad[GF_N_TEMPS];       /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
 $state_fields$reference_fields$position_fields$${probe_fields}    gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */

@@ -34,6 +34,7 @@ from __future__ import annotations
 import re
 from string import Template
 
+from groupfit.controller_limits import check_st_name, st_integer_type
 from groupfit.errors import InputError
 from groupfit.export.literals import reading_notes, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
@@ -53,7 +54,6 @@ from groupfit.runtime import (
 )
 
 REAL_TYPES = ("REAL", "LREAL")
-IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 
 BLOCK = Template(
     """(*
@@ -99,7 +99,7 @@ ${probe_outputs}END_VAR
 VAR
     sampleCount : DINT := 0;
     currentGroup : INT := 1;
-    badCount : ARRAY[1..$n_temps] OF INT := [$bad_init];
+    badCount : ARRAY[1..$n_temps] OF $hold_type := [$bad_init];
     lastGood : ARRAY[1..$n_temps] OF $real;
     comp : $real := 0.0;
     m : INT;
@@ -118,7 +118,7 @@ VAR CONSTANT
     N_TEMPS : INT := $n_temps;
     N_GROUPS : INT := $n_groups;
     CRITERION : INT := $criterion_number;
-    HOLD_SAMPLES : INT := $hold;
+    HOLD_SAMPLES : $hold_type := $hold;
     COUNT_MAX : DINT := $count_max;
     PERIOD_S : LREAL := $period;
     PERIOD_TOLERANCE_S : LREAL := $period_tolerance;
@@ -256,8 +256,6 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
     """
     if real not in REAL_TYPES:
         raise InputError(f"Structured Text real type {real!r}: choose REAL or LREAL")
-    if not IDENTIFIER.match(name):
-        raise InputError(f"block name {name!r}: use letters, digits and '_' (a letter or '_' first, at most 64)")
 
     def literal(value: float) -> str:
         return shortest_literal(value, single=(real == "REAL"))
@@ -288,6 +286,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         step_derived=step_derived(tables, real),
         criterion_number=tables.criterion_reading + 1,
         hold=tables.hold_samples,
+        hold_type=st_integer_type(tables.hold_samples + 1, "switching.hold_samples + 1"),
         count_max=COUNT_MAX,
         period=shortest_literal(tables.sampling_period_s, single=False),
         period_text=f"{tables.sampling_period_s:g}",
@@ -318,6 +317,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         **transfer_pieces(tables, real, literal, dot_product, position_pieces(tables, real, literal)),
         **probe_pieces(tables, real, literal),
     )
+    check_st_name(name, used=frozenset(re.findall(r"^\s*([A-Za-z_]\w*)\s*:", text, flags=re.M)))
     return {f"{name}.st": text}
 
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from groupfit.controller_limits import check_st_name
 from groupfit.errors import InputError
 from groupfit.export.literals import shortest_literal
 from groupfit.model import ModelFile
@@ -137,6 +138,7 @@ def render_table(
 
 def table_files(table: PositionTable, name: str, real: str = "LREAL") -> dict[str, str]:
     """The table as a C array, an ST array and a controller table file (CSV), ``{file name: text}``."""
+    check_st_name(name)
     order = table.values.shape[1]
     n = len(table.nodes_mm)
     header = (

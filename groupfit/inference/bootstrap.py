@@ -44,6 +44,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from groupfit.errors import InputError
 from groupfit.grouping import DEFAULT_SOFT_OFFSET, DEFAULT_SPACING, Constraints
 from groupfit.inference.break_intervals import BreakInterval
 from groupfit.objective import SegmentCost, grouped_residuals
@@ -157,7 +158,12 @@ def bootstrap_break_intervals(
     n_samples, p = len(y), len(breaks)
     block = default_block(n_samples) if block is None else int(block)
     if block < 1:
-        raise ValueError(f"block length {block} must be at least 1")
+        raise InputError(f"--block {block}: the bootstrap block length must be at least 1 sample")
+    if block >= n_samples:
+        raise InputError(
+            f"--block {block}: the bootstrap block must be shorter than the run (N = {n_samples} samples); with "
+            "L ≥ N every replicate is the run itself and the intervals have width zero"
+        )
     if search == "auto":
         search = "exact" if exact_is_cheap(n_samples, objective) else "ga"
     n_coef = X.shape[1] + int(fit_intercept)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from groupfit.errors import InputError
 from groupfit.inference import METHODS, BreakIntervalReport, break_intervals
 from groupfit.search.base import DEFAULT_SEED
 
@@ -28,6 +29,15 @@ def add_interval_options(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="Bai's interval with one Q and sigma over the run (strucchange het.reg = het.err = FALSE)",
     )
+
+
+def check_block(args: argparse.Namespace, n_samples: int) -> None:
+    """Refuse before any work a ``--block`` no shorter than the run (every replicate would be the run itself)."""
+    if getattr(args, "block", None) is not None and not 1 <= args.block < n_samples:
+        raise InputError(
+            f"--block {args.block}: the bootstrap block must be 1 to {n_samples - 1} samples (the run has "
+            f"N = {n_samples}); with L ≥ N every replicate is the run itself and the intervals have width zero"
+        )
 
 
 def intervals_from_args(args: argparse.Namespace, estimator, X, y, seed, progress=None) -> BreakIntervalReport:

@@ -106,6 +106,15 @@ def load_screw_run(source, *, probe_x: float | None = None, require_error: bool 
         probe = np.full(run.n_samples, float(probe_x))
     else:
         probe = None
+    reach = 2.0 * float(xs[-1])
+    for where, values in (("--probe-x", None if probe_x is None else np.array([probe_x])), (PROBE_COLUMN, probe)):
+        outside = np.array([]) if values is None else np.flatnonzero(~((values >= 0) & (values <= reach)))
+        if outside.size:
+            at = f"row {outside[0] + 1}, column '{where}'" if where == PROBE_COLUMN else where
+            raise InputError(
+                f"{label}: {at}: a probe at {values[outside[0]]:g} m is off the screw (x from the source, "
+                f"0…{reach:g} m: twice the furthest sensor)"
+            )
     return ScrewRun(
         name=run_name,
         source=label,

@@ -53,7 +53,6 @@ from pathlib import Path
 from typing import Any, Callable
 
 from groupfit.errors import InputError
-from groupfit.grouping import Constraints
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import GASettings
 from groupfit.sweep.datasets import Dataset, non_empty_string, read_datasets, sensor_option
@@ -77,6 +76,8 @@ GA_GRID_DEFAULTS: dict[str, list[Any]] = {
     **{key: [value] for key, value in GASettings().as_dict().items()},
 }
 RANGE_KEYS = ("start", "stop", "step")
+MAX_STUDY_RUNS = 100_000
+"""Most runs a study may hold (every combination of its grid): a larger one is refused before it is expanded."""
 
 
 @dataclass(frozen=True)
@@ -161,6 +162,11 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     grid = {key: _dimension(grid_table, key, label, GRID_DEFAULTS[key]) for key in GRID_DEFAULTS}
     ga = {key: _dimension(ga_table, key, label, GA_GRID_DEFAULTS[key]) for key in GA_GRID_DEFAULTS}
 
+    size = len(datasets) * math.prod(map(len, grid.values())) * math.prod(map(len, ga.values()))
+    if size > MAX_STUDY_RUNS:
+        raise InputError(
+            f"{label}: the grid makes up to {size:g} runs, more than {MAX_STUDY_RUNS}: narrow [grid] or [ga]"
+        )
     runs: list[RunSpec] = []
     seen: set[str] = set()
     for dataset in datasets:
@@ -254,6 +260,10 @@ def _expand_range(raw: dict, what: str, label: str) -> list:
     if stop < start:
         raise InputError(f"{label}: {what}: range stop = {stop!r} is below start = {start!r}")
     count = int(math.floor((stop - start) / step + 1e-9)) + 1
+    if count > MAX_STUDY_RUNS:
+        raise InputError(
+            f"{label}: {what}: the range holds {count:g} values, more than a study's {MAX_STUDY_RUNS} runs"
+        )
     if all(isinstance(v, int) for v in (start, stop, step)):
         return [start + i * step for i in range(count)]
     return [round(start + i * step, 12) for i in range(count)]
@@ -306,31 +316,3 @@ VALUE_CHECKS: dict[str, Callable] = {
     "local_window": _integer(0),
     "union_crossover": _boolean,
 }
-
-
-def infeasible_reason(run: RunSpec, n_samples: int) -> str | None:
-    """Why a run cannot fit its p breaks (the constraints of its n, c and inputs), or None when it can."""
-    model, sensors = run.spec["model"], run.spec["sensors"]
-    n_inputs = len(sensors["names"]) if "names" in sensors else int(sensors["k"])
-    n_coef = n_inputs + int(model["intercept"])
-    constraints = Constraints.for_model(n_samples, model["n"], model["c"], n_coef)
-    largest = constraints.max_breaks()
-    if model["p"] <= largest:
-        return None
-    return (
-        f"p = {model['p']} with n = {model['n']}, c = {model['c']:g}, M = {n_coef} on {run.dataset} "
-        f"(N = {n_samples}): at most p = {largest} fits"
-    )
-
-
-def feasibility(study: Study) -> tuple[list[RunSpec], list[tuple[RunSpec, str]]]:
-    """The study's runs that can fit their breaks, and those that cannot with the reason."""
-    sizes = {str(d.path): d.n_samples for d in study.datasets}
-    feasible, infeasible = [], []
-    for run in study.runs:
-        reason = infeasible_reason(run, sizes[run.path])
-        if reason is None:
-            feasible.append(run)
-        else:
-            infeasible.append((run, reason))
-    return feasible, infeasible

@@ -31,6 +31,7 @@ from groupfit.grouping import Constraints
 from groupfit.heldout.selection import select_sensors
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
+from groupfit.readtable import header_delimiter
 from groupfit.reference import default_reference, referenced
 from groupfit.search.exact import ExactResult, exact_is_cheap, solve_exact
 from groupfit.sweep.config import canonical_json
@@ -199,6 +200,7 @@ def _parsed_run(sha256: str, time_column: str, error_column: str, path: str, con
             raise InputError(f"{path}: cannot read the data file ({exc.strerror})") from None
     if hashlib.sha256(content).hexdigest() != sha256:
         raise InputError(f"{path}: the data file has changed since the study was read; start the sweep again")
-    frame = pd.read_csv(io.BytesIO(content), skipinitialspace=True)
+    first = content.split(b"\n", 1)[0].decode("utf-8", errors="replace")
+    frame = pd.read_csv(io.BytesIO(content), sep=header_delimiter(first), skipinitialspace=True)
     frame.columns = [str(c).strip() for c in frame.columns]
     return load_run(frame, temps=[], time=time_column, error=error_column, name=Path(path).stem)

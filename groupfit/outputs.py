@@ -1,0 +1,190 @@
+"""An output plan: what a command writes, checked against what it reads before anything is written.
+
+Every verb declares its inputs (:meth:`OutputPlan.read`) and its outputs
+(:meth:`OutputPlan.file`, :meth:`OutputPlan.folder`) before it starts its
+work; each output is checked at once against the file system and against
+every input, so a run that would lose data stops in one line before it
+begins. While the plan is active (``with plan.active():``, which the command
+line opens around every verb), the writers of :mod:`groupfit.io` leave each
+file complete under a temporary name beside its target; :meth:`commit`
+checks every target once more against every file the command read and then
+renames them all together. A refused or failed command leaves none of its
+outputs behind.
+
+The rules:
+
+* an output that resolves to an input (same path after following symbolic
+  links, or the same file under another name) is refused;
+* an existing data file named as an output (CSV, TSV, Excel, Parquet, TOML,
+  or the data set of ``simulate --out``) is replaced only with ``--force``
+  (the files a verb writes into its ``--out`` folder are its own, replaced
+  on every run);
+* an empty path (``--out ""``) is refused instead of meaning the current folder;
+* two outputs may not name one file (``--json DIR/model.json`` beside ``--out DIR``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+from typing import Iterable, Iterator
+
+from groupfit.errors import InputError
+from groupfit.io import STAGE, check_output_dir, check_output_file
+
+DATA_SUFFIXES = frozenset({".csv", ".tsv", ".xlsx", ".xls", ".parquet", ".pq", ".toml"})
+"""Files an output named on the command line replaces only with ``--force``: the kinds a run or a
+configuration is read from (the files a verb writes into its ``--out`` folder are its own and replaced)."""
+
+
+def _resolved(path: str | Path) -> Path:
+    return Path(os.path.abspath(Path(path).expanduser())).resolve()
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+class OutputPlan:
+    """The inputs and outputs of one command; see the module docstring.
+
+    Parameters
+    ----------
+    force : bool
+        Replace existing data files (``--force``).
+    """
+
+    def __init__(self, *, force: bool = False):
+        self.force = force
+        self.inputs: dict[Path, str] = {}
+        self.staged: list[tuple[Path, Path]] = []
+        self.outputs: dict[Path, str] = {}
+        """Every declared output file and the option that names it: two options may not name one file."""
+        self.made: list[Path] = []
+        """Folders created for staged files (deepest first), removed again when the plan is discarded."""
+
+    # ------------------------------------------------------------ declaring
+    def read(self, *paths) -> OutputPlan:
+        """Note files the command reads (None, ``-``, folders and in-memory tables are skipped)."""
+        for path in paths:
+            if isinstance(path, (list, tuple)):
+                self.read(*path)
+            elif isinstance(path, (str, Path)) and str(path) not in ("", "-"):
+                self.inputs.setdefault(_resolved(path), str(path))
+        return self
+
+    def file(self, path: str | Path | None, option: str, *, data: bool = False) -> Path | None:
+        """Check that ``path`` (an output file) may be written; None and ``-`` (stdout) pass.
+
+        ``data`` marks a data set the command writes (``simulate --out``): an existing file there is
+        replaced only with ``--force``, whatever its suffix.
+        """
+        if path is None or str(path) == "-":
+            return None
+        target = self._target(path, option)
+        self._check_input(target, option)
+        self._claim(target, option)
+        if target.is_file() and (data or target.suffix.lower() in DATA_SUFFIXES) and not self.force:
+            raise InputError(
+                f"{target}: {option} would replace an existing data file; choose another {option}, or pass --force "
+                "to replace it"
+            )
+        return check_output_file(target, option)
+
+    def folder(self, path: str | Path | None, option: str, files: Iterable[str] = ()) -> Path | None:
+        """Check that ``path`` (an output folder) may hold ``files``; None passes (no such output)."""
+        if path is None:
+            return None
+        folder = check_output_dir(self._target(path, option), option)
+        for name in files:
+            target = folder / name
+            self._check_input(target, option)
+            self._claim(target, option)
+            check_output_file(target, option)
+        return folder
+
+    def _target(self, path: str | Path, option: str) -> Path:
+        if not str(path).strip():
+            raise InputError(f"{option} '': an empty path; name a file or folder (use . for the current folder)")
+        return Path(path)
+
+    def _claim(self, target: Path, option: str) -> None:
+        """Refuse a file two outputs would both write (``--json DIR/model.json`` beside ``--out DIR``)."""
+        other = self.outputs.setdefault(_resolved(target), option)
+        if other != option:
+            raise InputError(f"{target}: {option} names a file {other} writes too; choose another {option}")
+
+    def _check_input(self, target: Path, option: str) -> None:
+        resolved = _resolved(target)
+        for source, given in self.inputs.items():
+            if resolved == source or _same_file(resolved, source):
+                raise InputError(
+                    f"{target}: {option} names a file this command reads ({given}); choose another {option}"
+                )
+
+    # ------------------------------------------------------------ writing
+    @contextlib.contextmanager
+    def active(self) -> Iterator[OutputPlan]:
+        """Stage every file written inside the block; commit on success, discard on any exception."""
+        token = STAGE.set(self)
+        try:
+            yield self
+            self.commit()
+        finally:
+            STAGE.reset(token)
+            self.discard()
+
+    def stage(self, temporary: Path, target: Path) -> None:
+        """A complete file at ``temporary`` to be renamed over ``target`` on :meth:`commit`."""
+        self.staged = [(t, g) for t, g in self.staged if _resolved(g) != _resolved(target)] + [(temporary, target)]
+
+    def commit(self) -> list[Path]:
+        """Check every staged target against every input, then rename them all; return the files written."""
+        for _, target in self.staged:
+            self._check_input(target, "the output")
+            if target.is_dir():
+                raise InputError(f"{target}: is a folder; nothing was written (choose another output)")
+        written = []
+        try:
+            for temporary, target in self.staged:
+                os.replace(temporary, target)
+                written.append(target)
+            self.made = []  # the folders now hold the outputs
+        except OSError as exc:
+            done = f"; written before it: {', '.join(map(str, written))}" if written else "; nothing was written"
+            raise InputError(f"{target}: cannot write ({exc.strerror or type(exc).__name__}){done}") from None
+        finally:
+            self.discard()
+        return written
+
+    def discard(self) -> None:
+        """Remove every staged file not yet renamed, and the folders made for them when left empty."""
+        for temporary, _ in self.staged:
+            temporary.unlink(missing_ok=True)
+        self.staged = []
+        for folder in sorted(set(self.made), key=lambda f: len(f.parts), reverse=True):
+            with contextlib.suppress(OSError):
+                folder.rmdir()  # only an empty folder goes
+        self.made = []
+
+
+def current_plan(*, force: bool = False) -> OutputPlan:
+    """The active plan (the command line's), else a new one that only checks (files are then written at once)."""
+    plan = STAGE.get()
+    if plan is None:
+        return OutputPlan(force=force)
+    plan.force = plan.force or force
+    return plan
+
+
+def commit_outputs() -> list[Path]:
+    """Write now every file staged so far (before a verb reports what it wrote); nothing when no plan is active."""
+    plan = STAGE.get()
+    return plan.commit() if plan is not None else []
+
+
+__all__ = ["DATA_SUFFIXES", "OutputPlan", "commit_outputs", "current_plan"]

@@ -1,0 +1,202 @@
+"""No command writes to a path it read, replaces a data file without --force, or leaves part of its outputs.
+
+Every verb with an output option is run in process with that output naming
+one of its inputs (as given, through a symbolic link, and through a hard
+link): each must exit 2 with one line and leave every file as it was.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+
+import matplotlib
+import pandas as pd
+import pytest
+from test_switching_models import SYNTHETIC, synthetic_model
+
+from groupfit.cli import main
+from groupfit.errors import InputError
+from groupfit.io import atomic_write_text, note_read, save_figure
+from groupfit.outputs import OutputPlan
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+SCREW_RUN = SYNTHETIC.parent / "screw_A.csv"
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("plan_inputs")
+    pd.read_csv(SYNTHETIC).iloc[:200].to_csv(folder / "run.csv", index=False)
+    model, _ = synthetic_model(p=3, n=3)
+    (folder / "model.json").write_text(json.dumps(model))
+    (folder / "model_augmented.json").write_text(json.dumps(model))
+    (folder / "lumped.toml").write_text('kind = "lumped"\nn_samples = 50\n')
+    (folder / "fit.toml").write_text(f'[data]\npath = "{(folder / "run.csv").as_posix()}"\ntemps = ["T1", "T2"]\n')
+    (folder / "sweep.toml").write_text(f'[data]\npath = "{(folder / "run.csv").as_posix()}"\n[grid]\np = [1]\n')
+    (folder / "screw_model.json").write_text('{"format": "groupfit-screw-model/1"}\n')
+    if SCREW_RUN.exists():
+        shutil.copy(SCREW_RUN, folder / "screw_A.csv")
+    return folder
+
+
+def _fit(*extra):
+    return ("fit", "--quiet", "--data", "{in}/run.csv", "--temps", "T1,T2", "--p", "1", "--out", "{tmp}/o", *extra)
+
+
+# (verb and options, the input the output names); {in} is the inputs folder, {tmp} the test's own
+CLOBBERS = [
+    (_fit("--json", "{in}/run.csv"), "run.csv"),
+    (("fit", "{in}/fit.toml", "--quiet", "--json", "{in}/fit.toml", "--out", "{tmp}/o"), "fit.toml"),
+    (("fit", "{in}/fit.toml", "--quiet", "--json", "{in}/run.csv", "--out", "{tmp}/o"), "run.csv"),
+    (("diagnose", "{in}/model_augmented.json", "--data", "{in}/run.csv", "--out", "{in}"), "model_augmented.json"),
+    (("compare", "--quiet", "--data", "{in}/run.csv", "--temps", "T1,T2", "--json", "{in}/run.csv"), "run.csv"),
+    (("diagnose", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{in}/run.csv", "--out", "{tmp}"), "run.csv"),
+    (("diagnose", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{in}/model.json"), "model.json"),
+    (("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{in}/model.json"), "model.json"),
+    (("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{in}/run.csv"), "run.csv"),
+    (("simulate", "{in}/lumped.toml", "--out", "{in}/lumped.toml", "--force"), "lumped.toml"),
+    (("sweep", "{in}/sweep.toml", "--db", "{tmp}/s.sqlite", "--json", "{in}/sweep.toml", "--quiet"), "sweep.toml"),
+    (("sweep", "{in}/sweep.toml", "--db", "{in}/run.csv", "--quiet"), "run.csv"),
+    (("iso230", "{in}/run.csv", "--json", "{in}/run.csv"), "run.csv"),
+    (
+        ("replay", "{in}/screw_model.json", "--data", "{in}/run.csv", "--json", "{in}/screw_model.json"),
+        "screw_model.json",
+    ),
+    (("screw", "predict", "{in}/screw_model.json", "--data", "{in}/run.csv", "--json", "{in}/run.csv"), "run.csv"),
+    (("screw", "identify", "{in}/screw_A.csv", "--json", "{in}/screw_A.csv", "--out", "{tmp}"), "screw_A.csv"),
+    (("screw", "compare", "{in}/screw_A.csv", "--validate", "{in}/run.csv", "--json", "{in}/run.csv"), "run.csv"),
+]
+IDS = [" ".join(a[:2]) + " → " + name for a, name in CLOBBERS]
+
+
+def _snapshot(*folders):
+    return {p: (p.stat().st_size, p.stat().st_mtime_ns) for f in folders for p in f.rglob("*")}
+
+
+def _run(argv, inputs, tmp_path, capsys):
+    argv = [a.replace("{in}", str(inputs)).replace("{tmp}", str(tmp_path)) for a in argv]
+    before = _snapshot(inputs, tmp_path)
+    capsys.readouterr()
+    try:
+        status = main(argv)
+    except SystemExit as exc:
+        status = exc.code
+    err = capsys.readouterr().err.strip().splitlines()
+    return status, err, before == _snapshot(inputs, tmp_path)
+
+
+@pytest.mark.parametrize("link", ["as given", "symbolic link", "hard link"])
+@pytest.mark.parametrize("argv, name", CLOBBERS, ids=IDS)
+def test_no_command_writes_to_a_path_it_read(inputs, tmp_path, capsys, argv, name, link):
+    if "screw_A.csv" in " ".join(argv) and not (inputs / "screw_A.csv").exists():
+        pytest.skip("the shipped ball-screw run is not there")
+    if link != "as given":
+        # the output names the input under another name: a link beside the inputs, pointing at it
+        named = [i for i, a in enumerate(argv) if a == f"{{in}}/{name}" and argv[i - 1] in ("--json", "--db", "--out")]
+        if not named:
+            pytest.skip("the output is a folder: the file it would replace is named by the verb")
+        alias = inputs / f"alias_{tmp_path.name}{(inputs / name).suffix}"
+        (os.symlink if link == "symbolic link" else os.link)(inputs / name, alias)
+        last = named[-1]
+        argv = (*argv[:last], str(alias), *argv[last + 1 :])
+    try:
+        status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    finally:
+        if link != "as given":
+            alias.unlink()
+    assert status == 2 and len(err) == 1, err
+    assert "a file this command reads" in err[0] and name in err[0], err[0]
+    assert unchanged
+
+
+def test_an_existing_data_file_is_replaced_only_with_force(inputs, tmp_path, capsys):
+    (tmp_path / "old.csv").write_text("time_s,T1\n0,20\n")
+    argv = ("simulate", "{in}/lumped.toml", "--out", "{tmp}/old.csv")
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and "--force" in err[0] and unchanged
+    status, err, unchanged = _run((*argv, "--force"), inputs, tmp_path, capsys)
+    assert status == 0 and not unchanged
+    assert len(pd.read_csv(tmp_path / "old.csv")) == 50
+    # the same for --json naming an existing table that is not an input
+    argv = ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{tmp}/old.csv")
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and "--force" in err[0] and unchanged
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (_fit("--json", "{tmp}/o/model.json"), "--json writes too"),
+        (("simulate", "{in}/lumped.toml", "--out", "{tmp}/run.png"), "--out writes too"),
+    ],
+    ids=["fit --json over the model", "simulate --out over its figure"],
+)
+def test_two_outputs_may_not_name_one_file(inputs, tmp_path, capsys, argv, words):
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and words in err[0] and unchanged, err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        _fit("--out", ""),
+        ("export", "{in}/model.json", "--target", "c", "--out", ""),
+        ("simulate", "{in}/lumped.toml", "--out", ""),
+        ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", ""),
+    ],
+    ids=["fit", "export", "simulate", "replay --json"],
+)
+def test_an_empty_output_path_is_refused(inputs, tmp_path, capsys, argv):
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and "empty path" in err[0] and unchanged
+
+
+@pytest.mark.parametrize(
+    "argv, blocker",
+    [
+        (("export", "{in}/model.json", "--target", "all", "--out", "{tmp}/e"), "e/FB_GroupfitComp.st"),
+        (_fit("--json", "{tmp}/r.json"), "o/fit.png"),
+        (
+            ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{tmp}/r.json", "--out", "{tmp}/o"),
+            "o/replay.png",
+        ),
+        (("simulate", "{in}/lumped.toml", "--out", "{tmp}/run.csv"), "run.png"),
+    ],
+    ids=["export", "fit", "replay", "simulate"],
+)
+def test_one_output_that_cannot_be_written_stops_every_output(inputs, tmp_path, capsys, argv, blocker):
+    (tmp_path / blocker).mkdir(parents=True)
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and blocker.split("/")[-1] in err[0], err
+    assert unchanged and [p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file()] == []
+
+
+def test_the_plan_writes_all_or_none_and_refuses_what_was_read_on_the_way(tmp_path):
+    read = tmp_path / "read.csv"
+    read.write_text("a\n1\n")
+    plan = OutputPlan()
+    with pytest.raises(InputError, match="a file this command reads"):
+        with plan.active():
+            atomic_write_text(tmp_path / "first.json", "{}")
+            note_read(read)  # a file read by a loader the verb did not declare
+            atomic_write_text(read, "{}")
+    assert read.read_text() == "a\n1\n" and sorted(p.name for p in tmp_path.iterdir()) == ["read.csv"]
+    # a failure after staging (a figure, then an error) leaves nothing either
+    figure = plt.figure()
+    with pytest.raises(RuntimeError):
+        with OutputPlan().active():
+            save_figure(figure, tmp_path / "f.png")
+            atomic_write_text(tmp_path / "new" / "x.json", "{}")
+            atomic_write_text(tmp_path / "new" / "deeper" / "y.json", "{}")
+            assert (tmp_path / "new" / "deeper").is_dir()  # made for the staged file
+            raise RuntimeError("the work failed after the first outputs")
+    plt.close(figure)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["read.csv"]  # no file, and no folder made for one
+    with OutputPlan().active():
+        atomic_write_text(tmp_path / "x.json", "{}")
+        assert not (tmp_path / "x.json").exists()  # staged, not yet there
+    assert (tmp_path / "x.json").read_text() == "{}"

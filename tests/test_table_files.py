@@ -1,0 +1,73 @@
+"""Tables read as the user wrote them: any of three delimiters, date-time time columns, Parquet headers;
+and the compare verb's projection of its GA fits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_switching_models import SYNTHETIC
+
+from groupfit.comparison import _check_projection
+from groupfit.data import load_run
+from groupfit.errors import InputError
+from groupfit.readtable import delimiter
+
+TEMPS = ["T1", "T2", "T3", "T4"]
+
+
+@pytest.fixture(scope="module")
+def comma():
+    return load_run(SYNTHETIC, temps=TEMPS)
+
+
+@pytest.mark.parametrize("sep, suffix", [(";", ".csv"), ("\t", ".tsv"), ("\t", ".txt"), (",", ".csv")])
+def test_a_semicolon_or_tab_table_reads_as_the_comma_one(tmp_path, comma, sep, suffix):
+    path = tmp_path / f"run{suffix}"
+    pd.read_csv(SYNTHETIC).to_csv(path, sep=sep, index=False)
+    assert delimiter(path) == sep
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_array_equal(run.temps, comma.temps)
+    np.testing.assert_array_equal(run.error, comma.error)
+    assert run.period == comma.period
+
+
+def test_a_decimal_comma_does_not_take_the_comma_as_delimiter(tmp_path):
+    # a European export: the header decides (semicolons), though the numbers below carry decimal commas
+    (tmp_path / "eu.csv").write_text("time_s;T1;error_um\n0;20,5;1,0\n")
+    assert delimiter(tmp_path / "eu.csv") == ";"
+
+
+@pytest.mark.parametrize("unit", ["datetime", "timedelta"])
+def test_a_date_time_column_is_read_as_seconds(tmp_path, comma, unit):
+    frame = pd.read_csv(SYNTHETIC)
+    offset = pd.to_timedelta(frame["time_s"], unit="s")
+    frame["time_s"] = pd.Timestamp("2024-03-01 06:00", tz="UTC") + offset if unit == "datetime" else offset
+    frame.to_parquet(tmp_path / "run.parquet")
+    run = load_run(tmp_path / "run.parquet", temps=TEMPS)
+    # a date-time counts from the first row; a duration is its own seconds
+    expected = comma.time - comma.time[0] if unit == "datetime" else comma.time
+    np.testing.assert_allclose(run.time, expected, rtol=0, atol=1e-9)
+    assert run.period == pytest.approx(comma.period)
+
+
+def test_a_missing_date_time_is_named_with_its_row(tmp_path):
+    frame = pd.read_csv(SYNTHETIC)
+    frame["time_s"] = pd.Timestamp("2024-03-01") + pd.to_timedelta(frame["time_s"], unit="s")
+    frame.loc[7, "time_s"] = pd.NaT
+    frame.to_parquet(tmp_path / "run.parquet")
+    with pytest.raises(InputError, match="row 8, column 'time_s' is empty"):
+        load_run(tmp_path / "run.parquet", temps=TEMPS)
+
+
+def test_the_projection_of_the_ga_fits():
+    lines = []
+    # 2 s for p = 1, 23 feasible breaks: 2 · 23 · 24 / 2 = 552 s, under 900 s: said, not refused
+    _check_projection(1, 2.0, 23, 50, 900.0, lines.append)
+    assert lines == ["grouped models p = 1…23 (the largest feasible p; --pmax 50 asked) by the GA: about 9 min"]
+    with pytest.raises(InputError, match="about 18 min, over the budget of 15 min: lower --pmax"):
+        _check_projection(1, 4.0, 23, 23, 900.0, lines.append)
+    _check_projection(1, 4.0, 23, 23, None, lines.append)  # --no-budget: said, run
+    _check_projection(1, 0.1, 4, 4, 900.0, lines.append)  # 1 s: nothing said
+    _check_projection(2, 100.0, 23, 23, 900.0, lines.append)  # projected once, after the first fit only
+    assert len(lines) == 2
