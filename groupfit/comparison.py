@@ -25,6 +25,7 @@ import pandas as pd
 
 from groupfit.data import Run
 from groupfit.errors import InputError
+from groupfit.fit_budget import check_projection
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
@@ -238,22 +239,6 @@ def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
     ).fit(ar1_inputs(run, settings), run.error)
 
 
-def _check_projection(p: int, first_s: float, pmax: int, asked: int, budget_s: float | None, estimate) -> None:
-    """After the first GA fit (p = 1, ``first_s`` seconds), the projected time of p = 1…pmax; refused over
-    ``budget_s``."""
-    if p != 1:
-        return
-    projected = first_s * pmax * (pmax + 1) / 2
-    capped = f" (the largest feasible p; --pmax {asked} asked)" if asked > pmax else ""
-    line = f"grouped models p = 1…{pmax}{capped} by the GA: about {projected / 60:.0f} min"
-    if budget_s is not None and projected > budget_s:
-        raise InputError(
-            f"{line}, over the budget of {budget_s / 60:.0f} min: lower --pmax, or --no-budget runs it anyway"
-        )
-    if estimate is not None and projected > 60:
-        estimate(line)
-
-
 def compare_models(
     modelling: Run,
     validation: list[Run],
@@ -328,7 +313,9 @@ def compare_models(
         grouped[p].search_["gap_percent"] = 100.0 * (grouped[p].search_["search_objective"] - exact_value) / exact_value
         if progress is not None:
             progress("grouped", p / pmax)
-        _check_projection(p, time.perf_counter() - started, pmax, settings.pmax, budget_s, estimate)
+        check_projection(
+            p, time.perf_counter() - started, pmax=pmax, asked=settings.pmax, budget_s=budget_s, estimate=estimate
+        )
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
     intervals = {
         p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)

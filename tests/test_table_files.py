@@ -8,9 +8,9 @@ import pandas as pd
 import pytest
 from test_switching_models import SYNTHETIC
 
-from groupfit.comparison import _check_projection
 from groupfit.data import load_run
 from groupfit.errors import InputError
+from groupfit.fit_budget import check_projection
 from groupfit.readtable import delimiter
 
 TEMPS = ["T1", "T2", "T3", "T4"]
@@ -63,11 +63,11 @@ def test_a_missing_date_time_is_named_with_its_row(tmp_path):
 def test_the_projection_of_the_ga_fits():
     lines = []
     # 2 s for p = 1, 23 feasible breaks: 2 · 23 · 24 / 2 = 552 s, under 900 s: said, not refused
-    _check_projection(1, 2.0, 23, 50, 900.0, lines.append)
+    check_projection(1, 2.0, pmax=23, asked=50, budget_s=900.0, estimate=lines.append)
     assert lines == ["grouped models p = 1…23 (the largest feasible p; --pmax 50 asked) by the GA: about 9 min"]
     with pytest.raises(InputError, match="about 18 min, over the budget of 15 min: lower --pmax"):
-        _check_projection(1, 4.0, 23, 23, 900.0, lines.append)
-    _check_projection(1, 4.0, 23, 23, None, lines.append)  # --no-budget: said, run
-    _check_projection(1, 0.1, 4, 4, 900.0, lines.append)  # 1 s: nothing said
-    _check_projection(2, 100.0, 23, 23, 900.0, lines.append)  # projected once, after the first fit only
+        check_projection(1, 4.0, pmax=23, asked=23, budget_s=900.0, estimate=lines.append)
+    check_projection(1, 4.0, pmax=23, asked=23, budget_s=None, estimate=lines.append)  # --no-budget: said, run
+    check_projection(1, 0.1, pmax=4, asked=4, budget_s=900.0, estimate=lines.append)  # 1 s: nothing said
+    check_projection(2, 100.0, pmax=23, asked=23, budget_s=900.0, estimate=lines.append)  # after p = 1 only
     assert len(lines) == 2
