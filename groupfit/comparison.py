@@ -16,7 +16,6 @@ predicted without any refitting or tuning:
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -25,7 +24,6 @@ import pandas as pd
 
 from groupfit.data import Run
 from groupfit.errors import InputError
-from groupfit.fit_budget import check_projection
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
@@ -247,8 +245,6 @@ def compare_models(
     progress: Callable[[str, float], None] | None = None,
     *,
     histories: Mapping[str, np.ndarray] | None = None,
-    budget_s: float | None = None,
-    estimate: Callable[[str], None] | None = None,
 ) -> ComparisonResult:
     """Fit every model on ``modelling`` and score it on every run.
 
@@ -261,11 +257,6 @@ def compare_models(
         Per validation run (by name) that continues a recording, the inputs of
         what came before it: the live rule runs through them first
         (:mod:`groupfit.continuation`), so its state carries into the run.
-    budget_s : float, optional
-        Refuse (InputError) when, after the GA fit of p = 1, the fits of every p up to pmax project to take
-        longer (a GA fit's time taken to grow as p: the whole as p(p+1)/2 times the first).
-    estimate : callable, optional
-        Gets one line with that projection when it is over a minute.
     """
     histories = histories or {}
     for run in validation:
@@ -297,7 +288,6 @@ def compare_models(
     pmax = len(path["breaks"]) - 1
     grouped: dict[int, GroupedRegressor] = {}
     search = settings.search.replace(method="ga", certify=False)
-    started = time.perf_counter()
     for p in range(1, pmax + 1):
         grouped[p] = GroupedRegressor.from_settings(
             p=p,
@@ -313,9 +303,6 @@ def compare_models(
         grouped[p].search_["gap_percent"] = 100.0 * (grouped[p].search_["search_objective"] - exact_value) / exact_value
         if progress is not None:
             progress("grouped", p / pmax)
-        check_projection(
-            p, time.perf_counter() - started, pmax=pmax, asked=settings.pmax, budget_s=budget_s, estimate=estimate
-        )
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
     intervals = {
         p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)

@@ -1,15 +1,16 @@
-"""What a run of many GA fits will take, projected from the first one: said, or refused over a budget."""
+"""What the GA fits of p = 1…pmax will take, projected from the first one: said, or refused over a budget."""
 
 from __future__ import annotations
+
+import time
+from typing import Callable
 
 from groupfit.errors import InputError
 
 
-def check_projection(p: int, first_s: float, *, pmax: int, asked: int, budget_s: float | None, estimate) -> None:
-    """After the first GA fit (p = 1, ``first_s`` seconds), the projected time of p = 1…pmax; refused over
-    ``budget_s``."""
-    if p != 1:
-        return
+def check_projection(first_s: float, *, pmax: int, asked: int, budget_s: float | None, estimate) -> None:
+    """The projected time of the GA fits p = 1…pmax from the first one's ``first_s`` (a fit's time taken to grow
+    as p: the whole as p(p+1)/2 times the first); refused over ``budget_s``, said when over a minute."""
     projected = first_s * pmax * (pmax + 1) / 2
     capped = f" (the largest feasible p; --pmax {asked} asked)" if asked > pmax else ""
     line = f"grouped models p = 1…{pmax}{capped} by the GA: about {projected / 60:.0f} min"
@@ -21,4 +22,24 @@ def check_projection(p: int, first_s: float, *, pmax: int, asked: int, budget_s:
         estimate(line)
 
 
-__all__ = ["check_projection"]
+def projecting(progress: Callable[[str, float], None], *, asked: int, budget_s: float | None, estimate):
+    """A progress callback that passes every call on and checks the projection of the GA fits once the second
+    one is done: the ``grouped`` stage steps by 1/pmax after each fit, and fit p takes about p times the first."""
+    first: dict[str, float] = {}
+
+    def call(stage: str, fraction: float) -> None:
+        progress(stage, fraction)
+        if stage != "grouped" or fraction <= 0:
+            return
+        if not first:
+            first.update(t=time.perf_counter(), fraction=fraction)
+        elif "done" not in first:
+            first["done"] = 1.0
+            pmax = round(1 / first["fraction"])
+            one_fit = (time.perf_counter() - first["t"]) / round(fraction * pmax)  # fit p = 2 takes twice p = 1
+            check_projection(one_fit, pmax=pmax, asked=asked, budget_s=budget_s, estimate=estimate)
+
+    return call
+
+
+__all__ = ["check_projection", "projecting"]

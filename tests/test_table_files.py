@@ -10,7 +10,7 @@ from test_switching_models import SYNTHETIC
 
 from groupfit.data import load_run
 from groupfit.errors import InputError
-from groupfit.fit_budget import check_projection
+from groupfit.fit_budget import check_projection, projecting
 from groupfit.readtable import delimiter
 
 TEMPS = ["T1", "T2", "T3", "T4"]
@@ -63,11 +63,19 @@ def test_a_missing_date_time_is_named_with_its_row(tmp_path):
 def test_the_projection_of_the_ga_fits():
     lines = []
     # 2 s for p = 1, 23 feasible breaks: 2 · 23 · 24 / 2 = 552 s, under 900 s: said, not refused
-    check_projection(1, 2.0, pmax=23, asked=50, budget_s=900.0, estimate=lines.append)
+    check_projection(2.0, pmax=23, asked=50, budget_s=900.0, estimate=lines.append)
     assert lines == ["grouped models p = 1…23 (the largest feasible p; --pmax 50 asked) by the GA: about 9 min"]
     with pytest.raises(InputError, match="about 18 min, over the budget of 15 min: lower --pmax"):
-        check_projection(1, 4.0, pmax=23, asked=23, budget_s=900.0, estimate=lines.append)
-    check_projection(1, 4.0, pmax=23, asked=23, budget_s=None, estimate=lines.append)  # --no-budget: said, run
-    check_projection(1, 0.1, pmax=4, asked=4, budget_s=900.0, estimate=lines.append)  # 1 s: nothing said
-    check_projection(2, 100.0, pmax=23, asked=23, budget_s=900.0, estimate=lines.append)  # after p = 1 only
+        check_projection(4.0, pmax=23, asked=23, budget_s=900.0, estimate=lines.append)
+    check_projection(4.0, pmax=23, asked=23, budget_s=None, estimate=lines.append)  # --no-budget: said, run
+    check_projection(0.1, pmax=4, asked=4, budget_s=900.0, estimate=lines.append)  # 1 s: nothing said
     assert len(lines) == 2
+    # through compare's progress: timed from the first GA fit's end to the second's (fit 2 takes twice fit 1)
+    seen = []
+    call = projecting(lambda *a: seen.append(a), asked=23, budget_s=1e-9, estimate=lines.append)
+    call("exact path", 1.0)
+    call("grouped", 1 / 23)
+    with pytest.raises(InputError, match="p = 1…23 by the GA"):
+        call("grouped", 2 / 23)
+    call("grouped", 3 / 23)  # projected once only
+    assert seen == [("exact path", 1.0), ("grouped", 1 / 23), ("grouped", 2 / 23), ("grouped", 3 / 23)]

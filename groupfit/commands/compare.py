@@ -33,6 +33,7 @@ from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.config import default_config_path, override
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
+from groupfit.fit_budget import projecting
 from groupfit.inference.cli import add_interval_options, check_block, interval_settings
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import interval_summary, interval_table, parse_intervals, plot_intervals
@@ -129,10 +130,13 @@ def run_compare(args: argparse.Namespace) -> int:
             validation,
             settings,
             live_rule=replay_groups,
-            progress=progress,
+            progress=projecting(
+                progress,
+                asked=settings.pmax,
+                budget_s=None if args.no_budget else EXACT_BUDGET_SECONDS,
+                estimate=lambda line: print(f"estimate {line}", file=sys.stderr, flush=True),
+            ),
             histories=histories,
-            budget_s=None if args.no_budget else EXACT_BUDGET_SECONDS,
-            estimate=lambda line: print(f"estimate {line}", file=sys.stderr, flush=True),
         )
     finally:
         progress.close()

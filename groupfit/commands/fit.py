@@ -136,6 +136,10 @@ def add_parser(verbs) -> None:
     fit.set_defaults(handler=run_fit)
 
 
+FIT_FILES = ("model.json", "fit.png", "position.png")
+"""What fit writes into --out (position.png for a position model)."""
+
+
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
@@ -155,13 +159,7 @@ def run_fit(args: argparse.Namespace) -> int:
     override(config, "search", "seed", args.seed)
     override(config, "search", "certify", {"yes": True, "no": False}.get(args.certify, args.certify))
     override(config, "output", "dir", args.out)
-    plan_outputs(
-        args,
-        config_path,
-        config["data"].get("path"),
-        folder=config["output"]["dir"],
-        files=("model.json", "fit.png", "position.png"),
-    )
+    plan_outputs(args, config_path, config["data"].get("path"), folder=config["output"]["dir"], files=FIT_FILES)
 
     paths = config["data"].get("path")
     position_run = None
