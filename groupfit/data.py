@@ -170,13 +170,18 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
     """The time column in seconds (date-times from the first row), a bad or implausible cell named with its row."""
     datetimes_to_seconds(frame, column, label)
     values = numeric_column(frame, column, label, allow_nonfinite=False)
-    huge = np.flatnonzero(np.abs(values) > MAX_TIME_S)
+    refuse_beyond(values, MAX_TIME_S, column, label, "s is not a plausible time")
+    return values
+
+
+def refuse_beyond(values: np.ndarray, limit: float, column: str, label: str, what: str) -> None:
+    """One line naming the first cell whose magnitude exceeds ``limit`` (``what``: its unit and what it is not)."""
+    huge = np.flatnonzero(np.abs(values) > limit)
     if huge.size:
         raise InputError(
-            f"{label}: row {huge[0] + 1}, column '{column}': {values[huge[0]]:g} s is not a plausible time (beyond "
-            f"{MAX_TIME_S:g} s); repair that cell"
+            f"{label}: row {huge[0] + 1}, column '{column}': {values[huge[0]]:g} {what} (beyond {limit:g}); "
+            "repair that cell"
         )
-    return values
 
 
 def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = PERIOD_TOLERANCE) -> float:

@@ -39,6 +39,7 @@ from groupfit.data import (
     load_run,
     numeric_column,
     read_table,
+    refuse_beyond,
 )
 from groupfit.errors import InputError
 from groupfit.export.table import position_coefficients
@@ -175,12 +176,7 @@ def load_position_run(
                 f"({WIDE_PREFIX}<mm>). The columns are: {', '.join(map(str, frame.columns))}"
             )
     positions = numeric_column(frame, position, label, allow_nonfinite=False)
-    huge = np.flatnonzero(np.abs(positions) > MAX_POSITION_MM)
-    if huge.size:
-        raise InputError(
-            f"{label}: row {huge[0] + 1}, column '{position}': {positions[huge[0]]:g} mm is not a plausible axis "
-            f"position (beyond {MAX_POSITION_MM:g} mm); repair that cell"
-        )
+    refuse_beyond(positions, MAX_POSITION_MM, position, label, "mm is not a plausible axis position")
     times = numeric_column(frame, time, label, allow_nonfinite=False)
     order = np.argsort(times, kind="stable")
     frame = frame.iloc[order].reset_index(drop=True)
