@@ -333,6 +333,11 @@ def with_position(
     """
     if not 1 <= order <= MAX_POSITION_ORDER:
         raise InputError(f"--position-order {order}: choose 1…{MAX_POSITION_ORDER} or auto")
+    if dead_band is not None and dead_band.reference in model.temps:
+        raise InputError(
+            f"--dead-band-ref '{dead_band.reference}': a model input; the dead band compares the inputs with a "
+            "sensor of its own (the ambient air, e.g. T_amb)"
+        )
     n_positions = len(prun.positions)
     if order >= n_positions:
         raise InputError(f"--position-order {order}: {n_positions} positions fit at most order {n_positions - 1}")

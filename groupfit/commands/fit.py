@@ -424,11 +424,6 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
             raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
         if reference not in position_run.run.frame.columns:
             raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
-        if reference in model.temps:
-            raise InputError(
-                f"--dead-band-ref '{reference}': a model input; the dead band compares the inputs with a sensor of "
-                "its own (the ambient air, e.g. T_amb)"
-            )
         dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
     fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
     orders = residual_by_order(model, position_run, p0)
