@@ -39,7 +39,7 @@
 #define GF_N_GROUPS 1
 #define GF_N_WINDOWS 1 /* 0 switch window(s); at least 1 entry */
 #define GF_CRITERION 0
-#define GF_HOLD_SAMPLES 1
+#define GF_HOLD_SAMPLES 1L
 #define GF_SAMPLING_PERIOD_S 6.00000000000000000e+02
 #define GF_PERIOD_TOLERANCE_S 6.00000000000000000e+00
 #define GF_COUNT_MAX 2000000000L
@@ -73,7 +73,7 @@ typedef struct {
     int group;                  /* 1-based group in service (tracked through faults) */
     int fault;                  /* bit mask of the last sample: GF_FAULT_HELD, GF_FAULT_SENSOR */
     int switched;               /* 0, GF_SWITCH_CRITERION or GF_SWITCH_FORCED at the last sample */
-    int bad[GF_N_TEMPS];        /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
+    long bad[GF_N_TEMPS];       /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
     int blend;                  /* samples of the bumpless transfer still to go */
     gf_real k0_um;              /* K0(T), um: the position-free part (SD43900 takes -k0_um / 1000) */
