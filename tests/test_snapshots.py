@@ -4,8 +4,7 @@ rewrites them when a change is meant to alter an output)."""
 import difflib
 
 import pytest
-
-from tests.snapshots import FAST, SCENARIOS, produce, stored
+from snapshots import FAST, SCENARIOS, produce, stored
 
 
 def assert_same(name: str) -> None:
