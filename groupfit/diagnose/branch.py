@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Callable
 
-from groupfit.diagnose.candidates import Candidate, within_one_se
+from groupfit.diagnose.candidates import Candidate
 from groupfit.diagnose.policy import REFERENCE_NEEDED, AcceptancePolicy, Refusal
 from groupfit.diagnose.problem import Fit, Model, Problem
 from groupfit.diagnose.reference import absolute_candidate, absolute_model, global_view
@@ -93,7 +93,7 @@ def absolute_branch(
         refusal is not None
         and not needs_reference
         and frees_reference
-        and within_one_se(candidate, absolute_candidate(reference, scorer, scorer))
+        and policy.as_good_as(candidate, absolute_candidate(reference, scorer, scorer))
     )
     if as_well:
         refusal = None

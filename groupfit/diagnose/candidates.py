@@ -179,15 +179,15 @@ def speed_like(frame: pd.DataFrame, operating: Sequence[str]) -> list[str]:
     return out
 
 
-def within_one_se(candidate: Candidate, best: Candidate) -> bool:
-    """Whether ``candidate``'s held-out error is within one standard error of ``best``'s.
+def within_one_se(candidate: Candidate, best: Candidate, standard_errors: float = 1.0) -> bool:
+    """Whether ``candidate``'s held-out error is within ``standard_errors`` standard errors of ``best``'s.
 
     The standard error of the summed fold-by-fold differences, √K·sd(d).
     """
     difference = np.subtract(candidate.fold_sse, best.fold_sse)
     if len(difference) < 2:
         return bool(difference.sum() <= 0.0)
-    return bool(difference.sum() <= np.sqrt(len(difference)) * np.std(difference, ddof=1))
+    return bool(difference.sum() <= standard_errors * np.sqrt(len(difference)) * np.std(difference, ddof=1))
 
 
 def rank_candidates(

@@ -55,9 +55,12 @@ class DriftGuard:
             self._with_drift = self.scorer.with_regressor(self.ramp)
         return score_candidate(candidate.feature, self.values_of(candidate), self._with_drift)
 
-    def refusal(self, candidate: Candidate, min_score: float) -> str | None:
-        """Why ``candidate`` cannot be told from the drift; None when it can, or the drift explains too little."""
-        if self.null.score < min_score or not within_one_se(self.null, candidate):
+    def refusal(self, candidate: Candidate, min_score: float, *, as_good=within_one_se) -> str | None:
+        """Why ``candidate`` cannot be told from the drift; None when it can, or the drift explains too little.
+
+        ``as_good(a, b)``: whether the folds cannot tell a's held-out error from b's.
+        """
+        if self.null.score < min_score or not as_good(self.null, candidate):
             return None
         beyond = self.over_drift(candidate)
         if beyond.score >= min_score:

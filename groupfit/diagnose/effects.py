@@ -18,7 +18,7 @@ from typing import Sequence
 import numpy as np
 
 from groupfit.columns import is_ambient_name, is_sensor_column
-from groupfit.diagnose.candidates import EXOGENOUS_R, Candidate, candidate_features, rank_candidates, within_one_se
+from groupfit.diagnose.candidates import EXOGENOUS_R, Candidate, candidate_features, rank_candidates
 from groupfit.diagnose.drift_guard import DriftGuard
 from groupfit.diagnose.notes import AMBIENT, SCOPE, Note
 from groupfit.diagnose.policy import AcceptancePolicy, Stage
@@ -140,18 +140,18 @@ def choose(
         return Choice(None, tuple(refused), ())
     causes = [c for c in passing if c.feature.column not in sensor_columns]
     best = causes[0] if causes else passing[0]
-    chosen = shortest_adequate_lag(best, [c for c in passing if c.family() == best.family()])
+    chosen = shortest_adequate_lag(best, [c for c in passing if c.family() == best.family()], policy)
     alternatives, seen = [], {chosen.feature.column}
     for c in passing:
-        if c.feature.column not in seen and within_one_se(c, passing[0]):
+        if c.feature.column not in seen and policy.as_good_as(c, passing[0]):
             alternatives.append(c)
             seen.add(c.feature.column)
     return Choice(chosen, tuple(refused), tuple(alternatives))
 
 
-def shortest_adequate_lag(best: Candidate, family: list[Candidate]) -> Candidate:
-    """The shortest low-pass of ``family`` whose held-out error is within one standard error of ``best``'s."""
+def shortest_adequate_lag(best: Candidate, family: list[Candidate], policy: AcceptancePolicy) -> Candidate:
+    """The shortest low-pass of ``family`` whose held-out error the folds cannot tell from ``best``'s."""
     if best.feature.transform != "lowpass":
         return best
-    adequate = [best, *(c for c in family if c.feature.transform == "lowpass" and within_one_se(c, best))]
+    adequate = [best, *(c for c in family if c.feature.transform == "lowpass" and policy.as_good_as(c, best))]
     return min(adequate, key=lambda c: c.feature.tau_s)

@@ -33,7 +33,7 @@ from typing import Literal
 
 import numpy as np
 
-from groupfit.diagnose.candidates import COLLINEAR_R, Candidate
+from groupfit.diagnose.candidates import COLLINEAR_R, Candidate, within_one_se
 from groupfit.heldout.selection import MIN_GAIN
 
 Stage = Literal["first", "further", "joint", "reference"]
@@ -100,6 +100,16 @@ class AcceptancePolicy:
     """In the joint selection, an input enters while it lowers the held-out squared error by this share (the
     rule of the forward input selection, :data:`groupfit.heldout.selection.MIN_GAIN`)."""
 
+    as_good_standard_errors: float = 1.0
+    """Two candidates whose held-out errors differ by less than this many standard errors of their fold-by-fold
+    difference are as good as each other: the shorter low-pass, the drift against an effect, the absolute
+    readings against a freed reference and the alternatives listed beside a choice are all judged so (the
+    one-standard-error rule: what the folds cannot tell apart is decided by simplicity)."""
+
+    def as_good_as(self, candidate: Candidate, best: Candidate) -> bool:
+        """Whether the folds cannot tell ``candidate``'s held-out error from ``best``'s."""
+        return within_one_se(candidate, best, self.as_good_standard_errors)
+
     def least_rms(self, stage: Stage) -> float:
         """The least RMS (µm) an effect of ``stage`` must remove."""
         if stage == "further":
@@ -129,7 +139,7 @@ class AcceptancePolicy:
             return self.fold_refusal(candidate, further=False, own_transforms=False)
         refusal = self.fold_refusal(candidate, further=stage == "further", own_transforms=self.own_transforms)
         if refusal is None and drift is not None:
-            reason = drift.refusal(candidate, self.min_score)
+            reason = drift.refusal(candidate, self.min_score, as_good=self.as_good_as)
             refusal = None if reason is None else Refusal(DRIFT, reason)
         return refusal
 
