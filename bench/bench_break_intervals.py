@@ -49,7 +49,7 @@ def synthetic(rng: np.random.Generator, n_samples: int, true_changes, rho: float
     for i in range(1, n_samples):
         noise[i] = rho * noise[i - 1] + innovations[i]
     regime = np.searchsorted(np.asarray(true_changes), np.arange(1, n_samples + 1), side="left")
-    y = np.einsum("ij,ij->i", design_matrix(X, True), COEFFICIENTS[regime]) + noise
+    y = np.einsum("ij,ij->i", design_matrix(X, fit_intercept=True), COEFFICIENTS[regime]) + noise
     return X, y
 
 
@@ -94,9 +94,9 @@ def main() -> None:
                 counted["bootstrap vs s0"] += 1
                 widths.append(interval.upper - interval.lower)
             if objective == "sse" and n == 0:
-                design = design_matrix(X, True)
+                design = design_matrix(X, fit_intercept=True)
                 for key, het in (("bai het", True), ("bai hom", False)):
-                    for interval, b0 in zip(bai_intervals(design, y, breaks, 0.95, het, het), truth):
+                    for interval, b0 in zip(bai_intervals(design, y, breaks, 0.95, het_reg=het, het_err=het), truth):
                         if interval.lower is not None:
                             covered[key] += interval.lower <= b0 <= interval.upper
                             counted[key] += 1

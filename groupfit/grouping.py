@@ -169,7 +169,7 @@ def shared_mask(shared_columns, n_features: int, breaks: Sequence[int]) -> np.nd
     return shared if shared.any() else None
 
 
-def shared_fit(X: np.ndarray, y: np.ndarray, groups: np.ndarray, n_groups: int, shared, intercept: bool):
+def shared_fit(X: np.ndarray, y: np.ndarray, groups: np.ndarray, n_groups: int, shared, *, intercept: bool):
     """The shared inputs' coefficients fitted with each group's own on the groups ``groups``; and the own inputs
     with what the shared ones leave of ``y``, for each group's refit: ``(own, rest, gamma)``; ``(X, y, None)``
     when nothing is shared (``shared`` None)."""

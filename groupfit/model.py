@@ -149,7 +149,7 @@ class Position:
     def from_dict(cls, data: Mapping[str, Any]) -> "Position":
         return _fields_from_dict(cls, data)
 
-    def coefficient_array(self, intercept: bool = True) -> np.ndarray:
+    def coefficient_array(self, *, intercept: bool = True) -> np.ndarray:
         """(G, order, M+1): the rows of ``c_1 … c_order`` per group, constant first (0 without an intercept)."""
         rows = np.asarray(self.coefficients, dtype=float)
         if not intercept:
@@ -363,7 +363,7 @@ class ModelFile:
             groups = self.serving_groups(len(inputs))
         low, high = self.position.travel_mm
         d = np.clip(np.asarray(positions, dtype=float), low, high) - self.position.p0_mm
-        rows = self.position.coefficient_array(self.intercept)[np.asarray(groups)]
+        rows = self.position.coefficient_array(intercept=self.intercept)[np.asarray(groups)]
         terms = rows[:, :, 0] + np.einsum("ikj,ij->ik", rows[:, :, 1:], inputs)
         poly = terms[:, -1]
         for k in range(terms.shape[1] - 2, -1, -1):

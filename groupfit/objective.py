@@ -44,7 +44,7 @@ LSTSQ_RCOND = 1e-6
 """Singular-value cut-off, relative to the largest, for the final minimum-norm fits."""
 
 
-def design_matrix(X: np.ndarray, fit_intercept: bool) -> np.ndarray:
+def design_matrix(X: np.ndarray, *, fit_intercept: bool) -> np.ndarray:
     """The regression design: a leading column of ones when there is an intercept."""
     X = np.asarray(X, dtype=float)
     if fit_intercept:
@@ -59,7 +59,7 @@ class Standardiser:
     by ``y_scale``; the fitted values of every range are unchanged.
     """
 
-    def __init__(self, X: np.ndarray, y: np.ndarray, fit_intercept: bool):
+    def __init__(self, X: np.ndarray, y: np.ndarray, *, fit_intercept: bool):
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
         if fit_intercept:
@@ -77,7 +77,9 @@ class Standardiser:
         self.fit_intercept = fit_intercept
 
     def design(self, X: np.ndarray) -> np.ndarray:
-        return design_matrix((np.asarray(X, dtype=float) - self.x_shift) / self.x_scale, self.fit_intercept)
+        return design_matrix(
+            (np.asarray(X, dtype=float) - self.x_shift) / self.x_scale, fit_intercept=self.fit_intercept
+        )
 
     def target(self, y: np.ndarray) -> np.ndarray:
         return (np.asarray(y, dtype=float) - self.y_shift) / self.y_scale
@@ -93,7 +95,7 @@ def packed_index(m: int) -> np.ndarray:
 
 
 def ldl_least_squares(
-    gram: np.ndarray, rank_rtol: float = RANK_RTOL, coefficients: bool = True
+    gram: np.ndarray, rank_rtol: float = RANK_RTOL, *, coefficients: bool = True
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """Least squares from stacked augmented Gram matrices.
 
@@ -179,7 +181,7 @@ class SegmentCost:
         self.n = int(n)
         self.objective = objective
         self.fit_intercept = fit_intercept
-        self.standardiser = Standardiser(X, y, fit_intercept)
+        self.standardiser = Standardiser(X, y, fit_intercept=fit_intercept)
         self.design = self.standardiser.design(X)
         self.target = self.standardiser.target(y)
         self.n_samples, self.n_coef = self.design.shape
@@ -298,7 +300,7 @@ def grouped_residuals(
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     n_samples = len(y)
-    std = Standardiser(X, y, fit_intercept)
+    std = Standardiser(X, y, fit_intercept=fit_intercept)
     A = std.design(X)
     t = std.target(y)
     coefs = []
@@ -306,7 +308,7 @@ def grouped_residuals(
     for (first, last), (s_first, s_last) in zip(soft_groups(breaks, n_samples, n), served_ranges(breaks, n_samples, n)):
         if ridge_alpha > 0:
             unit_spreads = np.ones(X.shape[1])  # the standardised inputs
-            penalty = penalty_diagonal(unit_spreads, ridge_alpha, last - first + 1, fit_intercept)
+            penalty = penalty_diagonal(unit_spreads, ridge_alpha, last - first + 1, fit_intercept=fit_intercept)
             coef = ridge_solve(A[first - 1 : last], t[first - 1 : last], penalty)
         else:
             coef = min_norm_lstsq(A[first - 1 : last], t[first - 1 : last])

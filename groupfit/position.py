@@ -208,23 +208,23 @@ def load_position_run(
 # --------------------------------------------------------------------- the fit
 
 
-def design(inputs: np.ndarray, d: np.ndarray, order: int, intercept: bool = True) -> np.ndarray:
+def design(inputs: np.ndarray, d: np.ndarray, order: int, *, intercept: bool = True) -> np.ndarray:
     """Columns of the least-squares fit: for k = 0…order, ``d^k`` times (1 and) every input."""
     inputs = np.asarray(inputs, dtype=float)
     base = np.column_stack([np.ones(len(inputs)), inputs]) if intercept else inputs
     return np.column_stack([base * (d**k)[:, None] for k in range(order + 1)])
 
 
-def fit_blocks(inputs, d, error, order: int, intercept: bool = True) -> np.ndarray:
+def fit_blocks(inputs, d, error, order: int, *, intercept: bool = True) -> np.ndarray:
     """Least-squares coefficients, shape (order + 1, M (+1)): row k the coefficients of ``c_k`` (row 0: K0)."""
-    matrix = design(inputs, d, order, intercept)
+    matrix = design(inputs, d, order, intercept=intercept)
     scale = np.maximum(np.abs(matrix).max(axis=0), 1e-300)
     solution, *_ = np.linalg.lstsq(matrix / scale, np.asarray(error, dtype=float), rcond=None)
     return (solution / scale).reshape(order + 1, -1)
 
 
-def predict_blocks(blocks: np.ndarray, inputs, d, intercept: bool = True) -> np.ndarray:
-    return design(inputs, d, blocks.shape[0] - 1, intercept) @ blocks.ravel()
+def predict_blocks(blocks: np.ndarray, inputs, d, *, intercept: bool = True) -> np.ndarray:
+    return design(inputs, d, blocks.shape[0] - 1, intercept=intercept) @ blocks.ravel()
 
 
 def choose_p0(prun: PositionRun, text: str | float | None) -> float:
@@ -251,7 +251,7 @@ def choose_p0(prun: PositionRun, text: str | float | None) -> float:
 
 
 def cross_validate_order(
-    prun: PositionRun, max_order: int = 4, p0: float | None = None, intercept: bool = True
+    prun: PositionRun, max_order: int = 4, p0: float | None = None, *, intercept: bool = True
 ) -> dict:
     """Out-of-sample RMS of every order 1…max_order, the folds being the held-out positions (a global fit).
 
@@ -271,8 +271,8 @@ def cross_validate_order(
         residuals = np.empty(len(d))
         for held in positions:
             out = prun.position == held
-            blocks = fit_blocks(inputs[~out], d[~out], prun.error[~out], order, intercept)
-            residuals[out] = prun.error[out] - predict_blocks(blocks, inputs[out], d[out], intercept)
+            blocks = fit_blocks(inputs[~out], d[~out], prun.error[~out], order, intercept=intercept)
+            residuals[out] = prun.error[out] - predict_blocks(blocks, inputs[out], d[out], intercept=intercept)
         rms.append(float(np.sqrt(np.mean(residuals**2))))
     best = min(rms)
     chosen = next(k for k, value in enumerate(rms, start=1) if value <= 1.05 * best)
@@ -300,9 +300,11 @@ def residual_by_order(model: ModelFile, prun: PositionRun, p0: float, orders=TAB
         residual = np.empty(len(d))
         for g, (first, last) in enumerate(model.soft_groups):
             rows = (prun.check >= first - 1) & (prun.check <= last - 1)
-            blocks = fit_blocks(inputs[rows], d[rows], prun.error[rows], order, model.intercept)
+            blocks = fit_blocks(inputs[rows], d[rows], prun.error[rows], order, intercept=model.intercept)
             served = serving == g
-            residual[served] = prun.error[served] - predict_blocks(blocks, inputs[served], d[served], model.intercept)
+            residual[served] = prun.error[served] - predict_blocks(
+                blocks, inputs[served], d[served], intercept=model.intercept
+            )
         table.append(
             {
                 "order": int(order),
@@ -346,7 +348,7 @@ def with_position(
     k0 = []
     for first, last in model.soft_groups:
         mask = (prun.check >= first - 1) & (prun.check <= last - 1)
-        blocks = fit_blocks(inputs[mask], d[mask], prun.error[mask], order, model.intercept)
+        blocks = fit_blocks(inputs[mask], d[mask], prun.error[mask], order, intercept=model.intercept)
         k0.append(tuple(float(v) for v in blocks[0]))
         rows.append(tuple(tuple(float(v) for v in block) for block in blocks[1:]))
     position = Position(

@@ -124,6 +124,7 @@ def candidate_features(
     frame: pd.DataFrame,
     operating: Sequence[str] = (),
     heat_exponent: float | str = HEAT_EXPONENT,
+    *,
     sensor_transforms: bool = True,
     sensor_columns: frozenset[str] | None = None,
 ) -> list[Feature]:
@@ -238,11 +239,16 @@ def rank_candidates(
 
 
 def score_candidate(
-    feature: Feature, values: np.ndarray, scorer: HeldOutScorer, own_input: bool = False, collinearity: float = 0.0
+    feature: Feature, values: np.ndarray, scorer: HeldOutScorer, *, own_input: bool = False, collinearity: float = 0.0
 ) -> Candidate:
     """``values`` (one per sample of the scorer's target) scored as one more regressor: a :class:`Candidate`."""
     return candidate_of_fold_sse(
-        feature, scorer.fold_sse(values), scorer, scorer.coefficient(values), own_input, collinearity
+        feature,
+        scorer.fold_sse(values),
+        scorer,
+        scorer.coefficient(values),
+        own_input=own_input,
+        collinearity=collinearity,
     )
 
 
@@ -251,6 +257,7 @@ def candidate_of_fold_sse(
     sse: np.ndarray,
     scorer: HeldOutScorer,
     coefficient: float = 0.0,
+    *,
     own_input: bool = False,
     collinearity: float = 0.0,
 ) -> Candidate:

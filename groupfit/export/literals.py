@@ -38,7 +38,7 @@ def integer_literal(value: int) -> str:
     return str(int(value))
 
 
-def shortest_literal(value: float, single: bool) -> str:
+def shortest_literal(value: float, *, single: bool) -> str:
     """The shortest decimal literal that reads back to ``value`` (as a double, or rounded to single).
 
     Always has a decimal point, as IEC 61131-3 real literals need

@@ -53,7 +53,7 @@ class PositionTable:
 
 def position_coefficients(model: ModelFile, inputs, groups) -> np.ndarray:
     """(N, order): ``c_1(T) … c_order(T)`` of every row."""
-    rows = model.position.coefficient_array(model.intercept)[np.asarray(groups)]
+    rows = model.position.coefficient_array(intercept=model.intercept)[np.asarray(groups)]
     return rows[:, :, 0] + np.einsum("ikj,ij->ik", rows[:, :, 1:], np.asarray(inputs, dtype=float))
 
 

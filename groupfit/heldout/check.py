@@ -120,7 +120,7 @@ def ridge_setting(
         alpha, table = ridge_by_splits(X[rows], y[rows], splits, fit_intercept)
         return {"alpha": alpha, "chosen": "next-run", "held_out": table, "folds": splits_name}
     folds = held_out_folds(frames, exclude, y)
-    alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept)
+    alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept=fit_intercept)
     return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
 
 
@@ -132,7 +132,9 @@ def ridge_by_splits(X: np.ndarray, y: np.ndarray, splits: list, fit_intercept: b
     """
     grid = sorted(RIDGE_GRID, reverse=True)
     counts = np.array([len(test) for _, test in splits], dtype=float)
-    pooled, se = pooled_error(np.array([held_out_sse(X, y, splits, alpha, fit_intercept) for alpha in grid]), counts)
+    pooled, se = pooled_error(
+        np.array([held_out_sse(X, y, splits, alpha, fit_intercept=fit_intercept) for alpha in grid]), counts
+    )
     chosen = one_standard_error_choice(pooled, se)
     table = [{"alpha": float(a), "held_out_rms_um": float(np.sqrt(v))} for a, v in zip(grid, pooled)]
     return float(grid[chosen]), table[::-1]

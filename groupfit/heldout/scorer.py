@@ -63,7 +63,9 @@ class HeldOutScorer:
         norms = np.where(norms > 0, norms, 1.0)
         self.design = design / norms
         # the ridge penalty of each column, per training row, on the norm-scaled design
-        self.penalty_per_row = self.ridge_alpha * input_spreads(design, self.fit_intercept) ** 2 / norms**2
+        self.penalty_per_row = (
+            self.ridge_alpha * input_spreads(design, fit_intercept=self.fit_intercept) ** 2 / norms**2
+        )
         everything = np.ones(len(target), dtype=bool)
         self.splits = [*folds.splits(), (everything, np.zeros_like(everything))]
         self.fits = []
@@ -85,7 +87,7 @@ class HeldOutScorer:
         """The candidate's ridge penalty per training row: penalised like the inputs (0 for least squares)."""
         if self.ridge_alpha == 0:
             return 0.0
-        return self.ridge_alpha * float(input_spreads(values[:, None], self.fit_intercept)[0]) ** 2
+        return self.ridge_alpha * float(input_spreads(values[:, None], fit_intercept=self.fit_intercept)[0]) ** 2
 
     def _update(self, values: np.ndarray, fold: int, penalty_per_row: float) -> tuple[float, np.ndarray]:
         """Coefficient of ``values`` fitted with the design on the fold's training rows, and its design part."""

@@ -86,6 +86,7 @@ def break_intervals(
     y,
     method: str = "auto",
     level: float = 0.95,
+    *,
     het: bool = True,
     n_boot: int = 200,
     block: int | None = None,
@@ -141,7 +142,7 @@ def break_intervals(
     y = np.asarray(y, dtype=float).ravel()
     n_samples = len(y)
     if method == "bai" or (method == "auto" and applies):
-        design = design_matrix(X, estimator.fit_intercept)
+        design = design_matrix(X, fit_intercept=estimator.fit_intercept)
         raw = bai_intervals(design, y, breaks, level=level, het_reg=het, het_err=het)
         variant = "heteroskedastic regressors and errors" if het else "common Q and sigma"
         return BreakIntervalReport([_clip(i, n_samples) for i in raw], "bai", f"Bai (1997), {variant}", level)

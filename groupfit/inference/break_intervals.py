@@ -130,6 +130,7 @@ def bai_intervals(
     y,
     breaks: Sequence[int],
     level: float = 0.95,
+    *,
     het_reg: bool = True,
     het_err: bool = True,
 ) -> list[BreakInterval]:

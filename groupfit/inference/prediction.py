@@ -54,7 +54,7 @@ class GroupIntervalStats:
     dof: np.ndarray
 
 
-def group_interval_stats(X, y, soft_groups: Sequence[Sequence[int]], fit_intercept: bool) -> GroupIntervalStats:
+def group_interval_stats(X, y, soft_groups: Sequence[Sequence[int]], *, fit_intercept: bool) -> GroupIntervalStats:
     """Residual variance, degrees of freedom and leverage basis of every soft group's fit.
 
     Parameters
@@ -67,7 +67,7 @@ def group_interval_stats(X, y, soft_groups: Sequence[Sequence[int]], fit_interce
     """
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float).ravel()
-    std = Standardiser(X, y, fit_intercept)
+    std = Standardiser(X, y, fit_intercept=fit_intercept)
     A, t = std.design(X), std.target(y)
     bases, sigma, dof = [], [], []
     for first, last in soft_groups:

@@ -123,6 +123,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         n: int = DEFAULT_SOFT_OFFSET,
         c: float = DEFAULT_SPACING,
         objective: str = "sae",
+        *,
         fit_intercept: bool = True,
         search: str = "ga",
         population_size: int = GA_DEFAULTS.population_size,
@@ -292,7 +293,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         self.soft_groups_ = soft_groups(self.breaks_, n_samples, self.n)
         serving = serving_group_index(self.breaks_, n_samples, self.n)
         shared = shared_mask(self.shared_columns, X.shape[1], self.breaks_)
-        own, own_y, gamma = shared_fit(X, y, serving, len(self.breaks_) + 1, shared, self.fit_intercept)
+        own, own_y, gamma = shared_fit(X, y, serving, len(self.breaks_) + 1, shared, intercept=self.fit_intercept)
         coefs, self.residuals_ = grouped_residuals(
             own, own_y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept, ridge_alpha=float(self.ridge_alpha)
         )
@@ -310,8 +311,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
-        plain = not float(self.ridge_alpha) > 0 and gamma is None
-        self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, self.fit_intercept) if plain else None
+        stats = group_interval_stats if not float(self.ridge_alpha) > 0 and gamma is None else None
+        self.interval_stats_ = stats and stats(X, y, self.soft_groups_, fit_intercept=self.fit_intercept)
         return self
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
@@ -319,7 +320,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "breaks_")
         return serving_group_index(self.breaks_, self.n_samples_fit_, self.n, n_samples)
 
-    def predict(self, X, return_interval: bool = False, level: float | None = None, alpha: float | None = None):
+    def predict(self, X, *, return_interval: bool = False, level: float | None = None, alpha: float | None = None):
         """Predict the error of a run sampled like the modelling run, by sample index.
 
         Row i of X is served by the group that serves sample i of the

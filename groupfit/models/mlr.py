@@ -88,7 +88,7 @@ class MLR(GroupedRegressor):
         ``f_value``, ``f_p_value``, ``r_squared``, ``sigma_um``, ``dof``.
     """
 
-    def __init__(self, objective: str = "sae", fit_intercept: bool = True):
+    def __init__(self, objective: str = "sae", *, fit_intercept: bool = True):
         super().__init__(p=0, n=0, c=0.0, objective=objective, fit_intercept=fit_intercept, search="exact")
 
     def fit(self, X, y, progress=None):

@@ -31,7 +31,7 @@ RIDGE_GRID = (0.0, 1e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1, 3e-1, 1.0)
 """The penalties ``--ridge auto`` tries."""
 
 
-def input_spreads(X: np.ndarray, fit_intercept: bool) -> np.ndarray:
+def input_spreads(X: np.ndarray, *, fit_intercept: bool) -> np.ndarray:
     """Each column's spread sⱼ: standard deviation with an intercept, RMS without (0 for a constant with one)."""
     X = np.asarray(X, dtype=float)
     if fit_intercept:
@@ -39,7 +39,7 @@ def input_spreads(X: np.ndarray, fit_intercept: bool) -> np.ndarray:
     return np.sqrt(np.mean(X**2, axis=0))
 
 
-def penalty_diagonal(spreads: np.ndarray, alpha: float, n_rows: int, fit_intercept: bool) -> np.ndarray:
+def penalty_diagonal(spreads: np.ndarray, alpha: float, n_rows: int, *, fit_intercept: bool) -> np.ndarray:
     """The diagonal of the penalty on the design ``[1, X]`` (or ``X``): α·m·sⱼ², none on the constant."""
     slopes = alpha * n_rows * np.asarray(spreads, dtype=float) ** 2
     return np.r_[0.0, slopes] if fit_intercept else slopes
@@ -75,6 +75,7 @@ def held_out_sse(
     y: np.ndarray,
     splits: Sequence[tuple[np.ndarray, np.ndarray]],
     alpha: float,
+    *,
     fit_intercept: bool = True,
 ) -> np.ndarray:
     """Held-out squared error per fold of the ridge fit with penalty ``alpha`` on each fold's complement.
@@ -84,10 +85,10 @@ def held_out_sse(
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     A = np.column_stack([np.ones(len(X)), X]) if fit_intercept else X
-    spreads = input_spreads(X, fit_intercept)
+    spreads = input_spreads(X, fit_intercept=fit_intercept)
     sse = np.empty(len(splits))
     for k, (train, test) in enumerate(splits):
-        penalty = penalty_diagonal(spreads, alpha, len(train), fit_intercept)
+        penalty = penalty_diagonal(spreads, alpha, len(train), fit_intercept=fit_intercept)
         coef = ridge_solve(A[train], y[train], penalty)
         error = y[test] - A[test] @ coef
         sse[k] = float(error @ error)
@@ -98,6 +99,7 @@ def choose_ridge_alpha(
     X: np.ndarray,
     y: np.ndarray,
     splits: Sequence[tuple[np.ndarray, np.ndarray]],
+    *,
     fit_intercept: bool = True,
     grid: Sequence[float] = RIDGE_GRID,
 ) -> tuple[float, list[dict[str, float]]]:
@@ -108,7 +110,7 @@ def choose_ridge_alpha(
     n_test = sum(len(test) for _, test in splits)
     table = []
     for alpha in grid:
-        sse = held_out_sse(X, y, splits, alpha, fit_intercept)
+        sse = held_out_sse(X, y, splits, alpha, fit_intercept=fit_intercept)
         table.append({"alpha": float(alpha), "held_out_rms_um": float(np.sqrt(sse.sum() / n_test))})
     best = min(table, key=lambda row: (row["held_out_rms_um"], row["alpha"]))
     return best["alpha"], table

@@ -407,7 +407,7 @@ def _position_tables(model: ModelFile, raw: list[str]) -> dict[str, Any]:
             p0_mm=float(position.p0_mm),
             travel_min_mm=float(position.travel_mm[0]),
             travel_max_mm=float(position.travel_mm[1]),
-            position_coefficients=position.coefficient_array(model.intercept),
+            position_coefficients=position.coefficient_array(intercept=model.intercept),
         )
     return out
 

@@ -196,6 +196,7 @@ class GeneticSearch:
         mutation_prob: float = 0.4,
         elite: int = 2,
         tournament_size: int = 3,
+        *,
         polish: bool = GA_DEFAULTS.polish,
         seed: int | None = None,
         local_window: int = GA_DEFAULTS.local_window,
