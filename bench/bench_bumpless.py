@@ -19,7 +19,11 @@ Per model and run, for every switch:
   10 samples (``check``);
 
 and the RMS of measured minus prediction on the whole next run, hard and
-bumpless. Run from the repository root::
+bumpless. Harder cases follow: the FE models with their groups 10 times
+further apart (each group's coefficients group 1's plus ten times their own
+difference from it, constants 10 µm further apart each way) replayed on the
+FE repeats with noise of 0.05 °C added to every input. Run from the
+repository root::
 
     python bench/bench_bumpless.py            # FE repeats and four independent scenarios, p = 3 and 4
     python bench/bench_bumpless.py --quick    # p = 3, the FE repeats only
@@ -29,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -49,12 +54,28 @@ FE_NEXT = ["repeat_timing.csv", "repeat_ambient25.csv", "repeat_warm.csv", "vali
 FE_TEMPS = ["T1", "T2"]
 SCENARIOS = ["none_30s", "amb_T_amb_30s", "speed_rpm_2h_30s", "pump_45min_30s"]
 AROUND = 10
+APART = 10.0
+NOISE_C = 0.05
 
 
 def fitted(run, p: int, n: int) -> ModelFile:
     search = SearchSettings(method="ga", seed=0, certify=False)
     estimator = GroupedRegressor.from_settings(p=p, n=n, search=search).fit(run.temps, run.error)
     return ModelFile.coerce(estimator.to_model_file(run))
+
+
+def apart(model: ModelFile, scale: float) -> ModelFile:
+    """The model with its groups ``scale`` times further apart (constants ``scale`` µm more, alternating)."""
+    coefficients = np.asarray(model.coefficients, dtype=float)
+    spread = coefficients[0] + scale * (coefficients - coefficients[0])
+    spread[:, 0] += scale * (-1.0) ** np.arange(len(spread))
+    return model.replace(coefficients=tuple(tuple(row) for row in spread.tolist()))
+
+
+def noisy(run, noise_c: float, seed: int = 3):
+    """The run with Gaussian noise of ``noise_c`` °C added to every input."""
+    temps = run.temps + np.random.default_rng(seed).normal(0.0, noise_c, run.temps.shape)
+    return replace(run, temps=temps, name=f"{run.name}+noise")
 
 
 def hard(model: ModelFile) -> ModelFile:
@@ -96,15 +117,18 @@ def compare_on(model: ModelFile, run) -> dict:
 
 
 def pairs(quick: bool):
+    """(source, modelling run, next runs, how far apart the groups are pulled: 1 as fitted)."""
     datasets = ROOT / "datasets"
     modelling = load_run(datasets / FE_MODELLING, temps=FE_TEMPS)
-    yield "FE", modelling, [load_run(datasets / name, temps=FE_TEMPS) for name in FE_NEXT]
+    nexts = [load_run(datasets / name, temps=FE_TEMPS) for name in FE_NEXT]
+    yield "FE", modelling, nexts, 1.0
     if quick:
         return
     for scenario in scenarios(SCENARIOS):
         a = load_run(scenario.modelling, temps=scenario.temps, name=f"{scenario.name}:A")
         b = load_run(scenario.validation, temps=scenario.temps, name=f"{scenario.name}:B")
-        yield scenario.name, a, [b]
+        yield scenario.name, a, [b], 1.0
+    yield f"FE x{APART:g} apart", modelling, [noisy(run, NOISE_C) for run in nexts], APART
 
 
 def main() -> None:
@@ -119,9 +143,9 @@ def main() -> None:
     worst = {"hard": 0.0, "bumpless": 0.0}
     worst_check = {"hard": 0.0, "bumpless": 0.0}
     rms_rows = []
-    for source, modelling, nexts in pairs(args.quick):
+    for source, modelling, nexts, scale in pairs(args.quick):
         for p in orders:
-            model = fitted(modelling, p, 3)
+            model = apart(fitted(modelling, p, 3), scale)
             for run in nexts:
                 result = compare_on(model, run)
                 rms_rows.append((source, run.name, p, result["hard"]["rms"], result["bumpless"]["rms"]))

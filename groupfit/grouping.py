@@ -125,24 +125,28 @@ def serving_group_index(breaks: Sequence[int], n_samples: int, n: int, length: i
     return np.searchsorted(starts, samples, side="right") - 1
 
 
-def transfer_weights(groups: np.ndarray, blend_samples: int) -> np.ndarray:
-    """Per sample, the weight of the serving group in the run-time rule's bumpless transfer (1 outside one).
+def bumpless(prediction: np.ndarray, groups: np.ndarray, blend_samples: int) -> np.ndarray:
+    """``prediction`` (each sample's serving group's) with the run-time rule's bumpless transfer after each switch.
 
-    After a switch (``groups``: 0-based, non-decreasing) the rule serves
-    ``old + w·(new − old)`` for ``blend_samples`` samples, ``w = k / (blend_samples + 1)``
-    at the switch's k-th sample (k = 1 at the switch; docs/switching.md).
+    At a switch at sample s (``groups``: 0-based, non-decreasing) the rule
+    keeps the gap ``g`` from its last output to the new group's prediction
+    and serves ``prediction + (B − k) / (B + 1) · g`` at the switch's sample
+    s + k, k = 0 … B − 1 (``B = blend_samples``; docs/switching.md), in the
+    rule's order of operations, so that the result is the rule's in double
+    precision.
     """
+    out = np.array(prediction, dtype=float)
     groups = np.asarray(groups)
-    weights = np.ones(len(groups))
     if blend_samples <= 0:
-        return weights
+        return out
     for switch in np.flatnonzero(np.diff(groups) != 0) + 1:
+        gap = out[switch - 1] - out[switch]
         for k in range(blend_samples):
             i = switch + k
             if i >= len(groups) or (k and groups[i] != groups[switch]):
                 break
-            weights[i] = (k + 1) / (blend_samples + 1)
-    return weights
+            out[i] = out[i] + float(blend_samples - k) / float(blend_samples + 1) * gap
+    return out
 
 
 def block_design(

@@ -30,7 +30,7 @@ import numpy as np
 from groupfit.data import DEFAULT_TIME
 from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
-from groupfit.grouping import serving_group_index, transfer_weights
+from groupfit.grouping import bumpless, serving_group_index
 from groupfit.io import atomic_write_text, read_json_file, to_json
 from groupfit.model_checks import (
     COEFFICIENT_LIMIT,
@@ -328,23 +328,11 @@ class ModelFile:
             groups = self.serving_groups(len(inputs))
         matrix = self.coefficient_matrix()
         prediction = grouped_prediction(matrix[:, 0], matrix[:, 1:], inputs, groups)
-        return self._transferred(prediction, inputs, groups) if transfer else prediction
+        return self._transferred(prediction, groups) if transfer else prediction
 
-    def _transferred(self, prediction: np.ndarray, inputs: np.ndarray, groups, positions=None) -> np.ndarray:
-        """``prediction`` with the bumpless transfer: the previous group's blended in after each switch."""
-        groups = np.asarray(groups)
-        weights = transfer_weights(groups, int(self.switching.blend_samples or 0))
-        blending = weights < 1.0
-        if not blending.any():
-            return prediction
-        old_groups = groups[blending] - 1
-        if positions is None:
-            old = self.predict(inputs[blending], old_groups)
-        else:
-            old = self.predict_position(inputs[blending], np.asarray(positions)[blending], old_groups)
-        out = np.array(prediction, dtype=float)
-        out[blending] = old + weights[blending] * (out[blending] - old)
-        return out
+    def _transferred(self, prediction: np.ndarray, groups) -> np.ndarray:
+        """``prediction`` with the bumpless transfer after each switch (:func:`groupfit.grouping.bumpless`)."""
+        return bumpless(prediction, groups, int(self.switching.blend_samples or 0))
 
     def predict_position(
         self, inputs, positions, groups: np.ndarray | None = None, *, transfer: bool = False
@@ -368,7 +356,7 @@ class ModelFile:
         poly = terms[:, -1]
         for k in range(terms.shape[1] - 2, -1, -1):
             poly = poly * d + terms[:, k]
-        return self._transferred(k0 + poly * d, inputs, groups, positions) if transfer else k0 + poly * d
+        return self._transferred(k0 + poly * d, groups) if transfer else k0 + poly * d
 
     def inputs(self, frame, source: str = "the run") -> np.ndarray:
         """The model's input matrix from a table (DataFrame-like): measured columns and derived inputs.

@@ -33,6 +33,7 @@ from groupfit.data import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
     ERROR_LIMIT_UM,
+    PERIOD_TOLERANCE,
     TEMP_RANGE_C,
     Run,
     default_temperature_columns,
@@ -153,14 +154,24 @@ def load_position_run(
     temp_range: tuple[float, float] | None = TEMP_RANGE_C,
     error_limit: float | None = ERROR_LIMIT_UM,
     name: str | None = None,
+    period_tolerance: float = PERIOD_TOLERANCE,
+    resample: float | None = None,
 ) -> PositionRun:
     """Read a long or wide position run (module docstring) and check it.
 
     The check runs (distinct time stamps) must be uniformly sampled, as a
-    run's samples are; the rows of one check run may come in any position
-    order. Missing or non-numeric positions are refused with the row.
+    run's samples are, within ``period_tolerance``; the rows of one check run
+    may come in any position order. Missing or non-numeric positions are
+    refused with the row, and so is ``resample``: the rows of one check run
+    share its time stamp already, and averaging over a period would mix the
+    positions.
     """
     frame, run_name, label = read_table(source, name)
+    if resample is not None:
+        raise InputError(
+            f"{label}: --resample {resample:g} averages the readings of each period, which would mix a check run's "
+            "positions; a position run is one check run per time stamp: leave --resample out"
+        )
     inputs = temps if temps is not None else default_temperature_columns(frame, exclude=(time, error))
     if position in inputs:
         raise InputError(
@@ -197,6 +208,7 @@ def load_position_run(
         name=run_name,
         temp_range=temp_range,
         error_limit=error_limit,
+        period_tolerance=period_tolerance,
     )
     run = replace(run, source=f"{label} (check runs)")
     if error_limit is not None and np.any(np.abs(error_values) > error_limit):

@@ -331,6 +331,7 @@ def exposing_power(model: dict, k: int, exponent: float) -> dict:
     width = len(model["coefficients"][0])
     model["coefficients"] = [[1.0 if m == j + 1 else 0.0 for m in range(width)] for _ in model["coefficients"]]
     model["switching"]["comp_min_um"], model["switching"]["comp_max_um"] = -1e6, 1e6
+    model["switching"]["blend_samples"] = 0  # a switch's transfer would spread the input's own step
     return model
 
 

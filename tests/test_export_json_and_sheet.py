@@ -27,7 +27,7 @@ def test_json_table_is_enough_to_rebuild_the_rule():
     model, run = synthetic_model()
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
     # the bumpless transfer makes /6: a runtime for /1 … /5 refuses it instead of switching hard
-    assert table["format"] == "groupfit-runtime/6" and table["temps"] == model["temps"]
+    assert table["format"] == "groupfit-runtime/7" and table["temps"] == model["temps"]
     assert table["blend_samples"] == model["n"] and TRANSFER_STEP in table["steps"]
     rule = SwitchingRule(model)
     for temps in streams_for(model, run).values():
@@ -41,7 +41,7 @@ def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
     model, run = augmented_model(label)
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
     tables = RuleTables.from_model(model)
-    assert table["format"] == "groupfit-runtime/6" and table["temps"] == list(tables.raw_names)
+    assert table["format"] == "groupfit-runtime/7" and table["temps"] == list(tables.raw_names)
     assert [d["name"] for d in table["derived_inputs"]] == [d["name"] for d in model["derived_inputs"]]
     assert len(table["inputs"]) == len(model["temps"]) == len(table["coefficients"][0]) - 1
     rule = SwitchingRule(model)
@@ -54,7 +54,7 @@ def test_json_table_with_derived_inputs_is_enough_to_rebuild_the_rule(label):
 def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_rebuild_the_rule():
     model, run = augmented_model("heat law p=2")
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/6"  # a runtime for /2 refuses it instead of computing wrongly
+    assert table["format"] == "groupfit-runtime/7"  # a runtime for /2 refuses it instead of computing wrongly
     table["steps"].remove(TRANSFER_STEP)
     first, identity, delay, steady = table["derived_inputs"]
     assert first["exponent"] == 5 / 3 and first["power_scale"] == 1000.0 and first["start"] == "rest"
@@ -73,7 +73,7 @@ def test_json_table_with_a_power_stage_and_rest_start_is_format_3_and_enough_to_
 def test_json_table_with_an_on_time_is_format_5_and_enough_to_rebuild_the_rule():
     model, run = augmented_model("on-time p=1")
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/6"  # a runtime for /4 refuses it instead of computing wrongly
+    assert table["format"] == "groupfit-runtime/7"  # a runtime for /4 refuses it instead of computing wrongly
     heat, speed = table["derived_inputs"]
     assert heat["transform"] == speed["transform"] == "ontime" and heat["start"] == "rest"
     assert heat["scale"] == model["sampling_period_s"] / 3600.0 and heat["exponent"] == 5 / 3

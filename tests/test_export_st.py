@@ -77,7 +77,7 @@ BREAKAGES = {
 MORE_BREAKAGES = {
     "missing END_IF": lambda s: s.replace("END_IF;", "", 1),
     "misspelt END_FOR": lambda s: s.replace("END_FOR;", "END_FRO;", 1),
-    "unbalanced bracket in the body": lambda s: s.replace("COEF_0[g]", "COEF_0[g", 1),
+    "unbalanced bracket in the body": lambda s: s.replace("COEF_0[currentGroup]", "COEF_0[currentGroup", 1),
     "dangling operator": lambda s: s.replace("delta := target - comp;", "delta := target - ;", 1),
 }
 

@@ -309,7 +309,7 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, ca
 def test_the_json_table_is_format_4_and_enough_to_rebuild_the_rule(case):
     model = model_for(*case)
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == ("groupfit-runtime/6" if table.get("blend_samples") else "groupfit-runtime/4")
+    assert table["format"] == ("groupfit-runtime/7" if table.get("blend_samples") else "groupfit-runtime/4")
     assert table["fault_bits"]["position"] == FAULT_POSITION and table["position"]["order"] == case[0]
     for temps in streams(model).values():
         py = python_replay(model, temps)["compensation_um"]
@@ -592,7 +592,7 @@ def test_derived_inputs_with_position_and_dead_band_lreal_block_is_the_python_ru
 def test_derived_inputs_with_position_and_dead_band_json_table_is_enough_to_rebuild_the_rule():
     model, chosen = derived_position_model()
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/6" and table["derived_inputs"] and table["dead_band"]
+    assert table["format"] == "groupfit-runtime/7" and table["derived_inputs"] and table["dead_band"]
     for temps in chosen.values():
         rule = SwitchingRule(model)
         expected = [(r.code, r.fault, r.prediction_um, r.compensation_um) for r in map(rule.step, temps)]

@@ -238,7 +238,7 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(drivers, re
 def test_json_table_is_enough_to_rebuild_the_rule_with_a_reference(reference):
     model = model_for(reference)
     table = json.loads(render(model, "json")["groupfit_runtime.json"])
-    assert table["format"] == "groupfit-runtime/6" and table["reference"]["kind"] in ("column", "start")
+    assert table["format"] == "groupfit-runtime/7" and table["reference"]["kind"] in ("column", "start")
     assert any(step.startswith("reference") for step in table["steps"])
     rule = SwitchingRule(model)
     for temps in streams(model).values():

@@ -57,11 +57,10 @@ def test_replay_json_has_the_spec_shape_and_the_residuals(tmp_path, model_path, 
     groups = np.asarray([s["group"] for s in result["samples"]]) - 1
     temps = frame[model["temps"]].to_numpy()
     offline = coefficients[groups, 0] + np.einsum("ij,ij->i", temps, coefficients[groups, 1:])
-    for switch in np.flatnonzero(np.diff(groups)) + 1:  # k/(n+1) of the way from the old group at sample k
+    for switch in np.flatnonzero(np.diff(groups)) + 1:  # at sample k, (n+1-k)/(n+1) of the gap from the last output
+        gap = offline[switch - 1] - offline[switch]
         for k in range(1, model["n"] + 1):
-            i = switch + k - 1
-            old = coefficients[groups[i] - 1, 0] + temps[i] @ coefficients[groups[i] - 1, 1:]
-            offline[i] = old + k / (model["n"] + 1) * (offline[i] - old)
+            offline[switch + k - 1] += (model["n"] + 1 - k) / (model["n"] + 1) * gap
     assert np.max(np.abs(prediction - offline)) < 1e-9
     hard = coefficients[groups, 0] + np.einsum("ij,ij->i", temps, coefficients[groups, 1:])
     assert np.sqrt(np.mean((frame["error_um"] - hard) ** 2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)

@@ -115,9 +115,11 @@ def test_predictions_by_hand():
     replay = SwitchingRule(tiny_model()).replay(temps)
     expected = []
     for i in range(1, N_TINY + 1):  # the switch at sample 8, then the bumpless transfer over n = 3 samples
-        old, new = by_hand(1, *temps[i - 1]), by_hand(2, *temps[i - 1])
-        weight = {8: 0.25, 9: 0.5, 10: 0.75}.get(i, 0.0 if i < 8 else 1.0)
-        expected.append(old + weight * (new - old))
+        new = by_hand(1 if i < 8 else 2, *temps[i - 1])
+        if i == 8:
+            gap = expected[-1] - new  # from the last output to the new group's first prediction
+        share = {8: 0.75, 9: 0.5, 10: 0.25}.get(i, 0.0)
+        expected.append(new + share * gap if share else new)
     assert replay.prediction_um.tolist() == expected
 
 
@@ -237,15 +239,14 @@ def test_model_file_carries_the_rule_and_replays_the_offline_grouping():
     assert np.max(np.abs(hard.prediction_um - expected)) < 1e-9
     residual = run.error - hard.prediction_um
     assert np.sqrt(np.mean(residual**2)) == pytest.approx(model["training"]["rms_um"], rel=1e-9)
-    # the bumpless rule: the same groups, and k/(n+1) of the way from the old group's prediction at the
-    # switch's k-th sample (k = 1 … n)
+    # the bumpless rule: the same groups, and at the switch's k-th sample (k = 1 … n) the new group's
+    # prediction plus (n + 1 - k)/(n + 1) of the gap from the last output before the switch to it
     replay = SwitchingRule(model).replay(run.temps)
     assert np.array_equal(replay.group, offline)
     for switch in np.flatnonzero(np.diff(offline)) + 1:
+        gap = expected[switch - 1] - expected[switch]
         for k in range(1, model["n"] + 1):
-            i = switch + k - 1
-            old, new = by_group[i, offline[i] - 2], by_group[i, offline[i] - 1]
-            expected[i] = old + k / (model["n"] + 1) * (new - old)
+            expected[switch + k - 1] += (model["n"] + 1 - k) / (model["n"] + 1) * gap
     assert np.max(np.abs(replay.prediction_um - expected)) < 1e-9
 
 

@@ -24,7 +24,7 @@ from test_switching_models import (
 from groupfit.diagnose.residual import model_inputs, predict, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature
-from groupfit.grouping import serving_group_index, transfer_weights
+from groupfit.grouping import bumpless, serving_group_index
 from groupfit.model import ModelFile
 from groupfit.runtime import (
     FAULT_HELD,
@@ -144,16 +144,15 @@ def test_a_held_or_faulty_source_feeds_its_transform_with_the_last_good_value(la
     assert all(results[k].prediction_um == 0.0 for k in range(200 + hold, 200 + hold + 4))
     assert fault[200 + hold + 4] == 0 or fault[200 + hold + 4] == FAULT_HELD  # recovered (speed may be held)
     assert fault[300] & FAULT_HELD and fault[301] & FAULT_HELD  # out of range: held
-    # a valid output is the model with the rule's own inputs (blended with the old group after a switch)
+    # a valid output is the model with the rule's own inputs (with the bumpless transfer after a switch)
     coefficients = np.asarray(model["coefficients"])
     groups = np.array([r.group for r in results]) - 1
-    weights = transfer_weights(groups, model["n"])
-    for k in range(len(raw)):
-        if not fault[k] & FAULT_SENSOR:
-            new = coefficients[groups[k], 0] + coefficients[groups[k], 1:] @ inputs[k]
-            old = coefficients[groups[k] - 1, 0] + coefficients[groups[k] - 1, 1:] @ inputs[k]
-            expected = new if weights[k] == 1.0 else old + weights[k] * (new - old)
-            assert results[k].prediction_um == pytest.approx(expected, abs=1e-9)
+    served = coefficients[groups, 0] + np.einsum("ij,ij->i", coefficients[groups, 1:], inputs)
+    switches = np.flatnonzero(np.diff(groups)) + 1
+    assert not any((fault[s - 1 : s + model["n"]] & FAULT_SENSOR).any() for s in switches)  # as offline: no fault there
+    expected = bumpless(served, groups, model["n"])
+    valid = (fault & FAULT_SENSOR) == 0
+    np.testing.assert_allclose(np.array([r.prediction_um for r in results])[valid], expected[valid], rtol=0, atol=1e-9)
 
 
 def test_source_invalid_at_the_start_starts_its_transforms_at_its_first_good_reading():

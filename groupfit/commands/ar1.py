@@ -15,8 +15,10 @@ from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands.common import (
+    clock_options,
     commit_outputs,
     plan_outputs,
+    print_notes,
     report_stream,
     write_json,
     wrote_line,
@@ -37,7 +39,8 @@ def run_replay(args: argparse.Namespace) -> int:
     model = AR1File.load(args.model)
     error = args.error or model.error or "error_um"
     time = args.time or (model.training or {}).get("time") or "time_s"
-    run = load_run(args.data, temps=[], time=time, error=error, require_error=False)
+    run = load_run(args.data, temps=[], time=time, error=error, require_error=False, **clock_options(args))
+    print_notes([run], report_stream(args))
     try:
         step = decimation_step(run.period, model.sampling_period_s, what="the model's step")
     except InputError as exc:

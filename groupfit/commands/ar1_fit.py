@@ -7,9 +7,11 @@ import argparse
 from groupfit.ar1.fitting import check_heat, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
 from groupfit.ar1.modelfile import STARTS
 from groupfit.commands.common import (
+    clock_options,
     commit_outputs,
     config_with_data_options,
     plan_outputs,
+    print_notes,
     report_stream,
     write_json,
     wrote_line,
@@ -87,7 +89,11 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
     if isinstance(data["path"], (list, tuple)):
         raise InputError("--model ar1 takes one run (--data CSV)")
-    run = load_run(data["path"], temps=[], time=data["time"], error=data["error"], error_limit=data.get("error_limit"))
+    clock = clock_options(args, config)
+    run = load_run(
+        data["path"], temps=[], time=data["time"], error=data["error"], error_limit=data.get("error_limit"), **clock
+    )
+    print_notes([run], report_stream(args))
     heat = numeric_column(run.frame, args.heat, run.source, allow_nonfinite=False)
     check_heat(heat, source=str(run.source), name=args.heat)
     step = decimation_step(run.period, args.period)

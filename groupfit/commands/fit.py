@@ -19,6 +19,7 @@ from groupfit.commands.common import (
     add_run_options,
     check_exact_budget,
     check_output_dir,
+    clock_options,
     commit_outputs,
     config_with_data_options,
     configured_reference,
@@ -396,15 +397,13 @@ def load_position_data(config: dict, column: str):
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
     if isinstance(path, (list, tuple)):
         raise InputError("--position takes one run (a long or wide table of check runs)")
-    return load_position_run(
-        path,
-        column,
-        temps=data.get("temps"),
-        time=data["time"],
-        error=data["error"],
-        temp_range=data.get("temp_range", TEMP_RANGE_C),
-        error_limit=data.get("error_limit", ERROR_LIMIT_UM),
-    )
+    limits = {
+        "temp_range": data.get("temp_range", TEMP_RANGE_C),
+        "error_limit": data.get("error_limit", ERROR_LIMIT_UM),
+    }
+    clock = clock_options(argparse.Namespace(), config)
+    columns = {"temps": data.get("temps"), "time": data["time"], "error": data["error"]}
+    return load_position_run(path, column, **columns, **limits, **clock)
 
 
 def position_model(args: argparse.Namespace, model, position_run) -> tuple:

@@ -19,7 +19,16 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import add_force_option, commit_outputs, plan_outputs, report_stream, write_json
+from groupfit.commands.common import (
+    add_clock_options,
+    add_force_option,
+    clock_options,
+    commit_outputs,
+    plan_outputs,
+    print_notes,
+    report_stream,
+    write_json,
+)
 from groupfit.errors import InputError
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
@@ -40,6 +49,7 @@ def add_parser(verbs) -> None:
     identify.add_argument("--json", metavar="FILE", help="write the model as JSON also here ('-' for stdout)")
     identify.add_argument("--out", metavar="DIR", help=f"folder for screw_model.json (default {DEFAULT_OUT})")
     add_force_option(identify)
+    add_clock_options(identify)
     identify.set_defaults(handler=run_identify)
 
     predict = sub.add_parser("predict", help="temperature field and thermal error of a run, with the seed's metrics")
@@ -58,6 +68,7 @@ def add_parser(verbs) -> None:
     predict.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-' for stdout)")
     predict.add_argument("--out", metavar="DIR", help="folder for the figures")
     add_force_option(predict)
+    add_clock_options(predict)
     predict.set_defaults(handler=run_predict)
 
     compare = sub.add_parser("compare", help="screw model vs MLR on the same sensors, on runs not used to identify")
@@ -67,6 +78,7 @@ def add_parser(verbs) -> None:
     compare.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
     compare.add_argument("--out", metavar="DIR", help=f"folder for the figures and the model (default {DEFAULT_OUT})")
     add_force_option(compare)
+    add_clock_options(compare)
     compare.set_defaults(handler=run_compare)
 
 
@@ -132,8 +144,10 @@ def identify_runs(model, runs):
     return model
 
 
-def _load_runs(paths, **options):
-    runs = [load_screw_run(p, **options) for p in paths]
+def _load_runs(args: argparse.Namespace, paths, **options):
+    """The screw runs ``paths``, read with the clock options of ``args``; what loading did printed as notes."""
+    runs = [load_screw_run(p, **clock_options(args), **options) for p in paths]
+    print_notes([run.run for run in runs], report_stream(args))
     for run in runs:
         refuse_moving_source(run)
     names = [r.name for r in runs]
@@ -156,7 +170,7 @@ def refuse_moving_source(run) -> None:
 def run_identify(args: argparse.Namespace) -> int:
     out_dir = plan_outputs(args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",))
     model = build_model(args)
-    runs = _load_runs(args.runs)
+    runs = _load_runs(args, args.runs)
     identify_runs(model, runs)
     data = model_to_dict(model, runs={r.name: r.source for r in runs})
     path = out_dir / "screw_model.json"
@@ -216,8 +230,7 @@ def run_predict(args: argparse.Namespace) -> int:
         files=(f"screw_rises_{stem}.png", f"screw_error_{stem}.png"),
     )
     model = load_model(args.model)
-    run = load_screw_run(args.data, probe_x=args.probe_x)
-    refuse_moving_source(run)
+    (run,) = _load_runs(args, [args.data], probe_x=args.probe_x)
     source = args.source
     if source is not None and source not in model.sources_:
         raise InputError(f"--source {source}: not in {args.model}; it has {', '.join(model.sources_)}")
@@ -320,7 +333,7 @@ def run_compare(args: argparse.Namespace) -> int:
         files=["screw_model.json", *(f"screw_{kind}_{n}.png" for n in names for kind in ("rises", "error"))],
     )
     model = build_model(args)
-    runs = _load_runs([args.run, *args.validate], require_error=True)
+    runs = _load_runs(args, [args.run, *args.validate], require_error=True)
     for run in runs:
         if run.probe_x is None:
             raise InputError(f"{run.source}: no probe_x_m column; the probe position is needed to score the error")

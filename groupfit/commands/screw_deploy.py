@@ -8,8 +8,10 @@ from typing import Any
 import numpy as np
 
 from groupfit.commands.common import (
+    clock_options,
     commit_outputs,
     plan_outputs,
+    print_notes,
     report_stream,
     residual_line,
     write_json,
@@ -36,7 +38,8 @@ def run_screw_replay(args: argparse.Namespace) -> int:
         raise InputError(f"--precision {args.precision}: the ball-screw law is deployed in double precision only")
     out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     law = screw_law(args)
-    run = load_screw_run(args.data)
+    run = load_screw_run(args.data, **clock_options(args))
+    print_notes([run.run], report_stream(args))
     if run.probe_x is None:
         raise InputError(
             f"{run.source}: column '{PROBE_COLUMN}' not found; the ball-screw law gives the error at the probe "

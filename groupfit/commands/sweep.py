@@ -12,11 +12,13 @@ from tqdm import tqdm
 from groupfit.commands.common import (
     EXACT_BUDGET_SECONDS,
     add_budget_option,
+    add_clock_options,
     add_json_option,
     add_out_option,
     add_quiet_option,
     commit_outputs,
     plan_outputs,
+    print_notes,
     report_stream,
     write_json,
 )
@@ -49,11 +51,12 @@ def add_parser(verbs) -> None:
     add_json_option(sweep, "counts and the database path")
     add_quiet_option(sweep)
     add_budget_option(sweep)
+    add_clock_options(sweep)  # in place of the study's [data] period_tolerance and resample_s
     sweep.set_defaults(handler=run_sweep)
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    study = read_study(args.config)
+    study = read_study(args.config, {"period_tolerance": args.period_tolerance, "resample_s": args.resample})
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")
     feasible, infeasible = check_feasible(study, args.config)
@@ -83,6 +86,7 @@ def run_sweep(args: argparse.Namespace) -> int:
                 file=out,
                 flush=True,
             )
+            print_notes(study.datasets, out)
             if infeasible:
                 print(
                     f"  {len(feasible)} run(s) will fit; {len(infeasible)} cannot fit their breaks and will be "

@@ -25,12 +25,13 @@ def model_inputs(model: ModelLike, run: Run) -> np.ndarray:
 
 
 def predict(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
-    """Predicted error: groups by the run-time rule when given, else by sample index."""
+    """Predicted error: groups by the run-time rule when given, with its bumpless transfer after each switch (what
+    ``groupfit replay`` computes), else by sample index (the offline model, as fitted)."""
     model = ModelFile.coerce(model)
     X = model.inputs(run.frame, run.source)
     if live_rule is None:
         return model.predict(np.nan_to_num(X)) + np.where(np.isfinite(X).all(axis=1), 0.0, np.nan)
-    return model.predict(X, live_rule(model, X))
+    return model.predict(X, live_rule(model, X), transfer=True)
 
 
 def residual(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:

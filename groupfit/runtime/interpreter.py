@@ -175,6 +175,9 @@ class SwitchingRule:
         self.positions = [0] * len(t.derived)
         self.band_target = self._zero
         self.blend = 0
+        self.gap = self._zero
+        self.previous = self._zero
+        self.has_previous = False
         self.k0 = self._zero
         self.slope = self._zero
         self.recal.reset()
@@ -214,6 +217,7 @@ class SwitchingRule:
                 switched = SWITCH_CRITERION
         if switched:
             self.blend = t.blend_samples
+            self.gap = self._zero
 
         clamped = False
         self.recal.propagate()
@@ -221,19 +225,18 @@ class SwitchingRule:
             prediction = self._zero
             target = self._zero
             self.recal.invalidate()
+            self.has_previous = False
         else:
-            if self.blend > 0:  # bumpless transfer: from the old group's prediction towards the new group's
-                old, clamped = self._group_prediction(self.group - 1)
-                old_k0, old_slope = self.k0, self.slope
-                prediction, clamped = self._group_prediction(self.group)
-                span = t.blend_samples + 1
-                weight = self._real(span - self.blend) / self._real(span)
-                prediction = old + weight * (prediction - old)
-                if t.has_position:  # K0 and tan(beta) move alike, so that K0 + tan(beta)·(P − P0) stays the output
-                    self.k0 = old_k0 + weight * (self.k0 - old_k0)
-                    self.slope = old_slope + weight * (self.slope - old_slope)
-            else:
-                prediction, clamped = self._group_prediction(self.group)
+            prediction, clamped = self._group_prediction(self.group)
+            if switched and self.has_previous:  # bumpless transfer: the gap from the last output to the new group
+                self.gap = self.previous - prediction
+            if self.blend > 0:  # closed by one share of blend_samples + 1 per sample
+                share = self._real(self.blend) / self._real(t.blend_samples + 1) * self.gap
+                prediction = prediction + share
+                if t.has_position:  # carried by K0, so that K0 + tan(beta)·(P − P0) stays the output
+                    self.k0 = self.k0 + share
+            self.previous = prediction
+            self.has_previous = True
             target = -prediction
             if t.has_dead_band:
                 if self._outside_dead_band():

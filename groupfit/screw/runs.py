@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groupfit.data import Run, load_run, numeric_column, read_table
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run, numeric_column, read_table
 from groupfit.errors import InputError
 
 SENSOR_NAME = re.compile(r"^T(\d+(?:\.\d+)?)mm$")
@@ -70,7 +70,15 @@ def sensor_positions(columns) -> dict[str, float]:
     return {c: float(m.group(1)) / 1000.0 for c in columns if (m := SENSOR_NAME.match(str(c)))}
 
 
-def load_screw_run(source, *, probe_x: float | None = None, require_error: bool = False, name=None) -> ScrewRun:
+def load_screw_run(
+    source,
+    *,
+    probe_x: float | None = None,
+    require_error: bool = False,
+    name=None,
+    period_tolerance: float = PERIOD_TOLERANCE,
+    resample: float | None = None,
+) -> ScrewRun:
     """Load and check a screw run.
 
     Parameters
@@ -80,6 +88,9 @@ def load_screw_run(source, *, probe_x: float | None = None, require_error: bool 
         Probe position (m) when the run has no ``probe_x_m`` column.
     require_error : bool
         Refuse a run without ``error_um``.
+    period_tolerance, resample
+        How the run's clock is read, as by :func:`groupfit.data.load_run`
+        (a resampled run's ambient and probe position are its periods' means).
 
     Raises
     ------
@@ -97,8 +108,16 @@ def load_screw_run(source, *, probe_x: float | None = None, require_error: bool 
     if np.any(np.diff(xs) == 0):
         dup = order[int(np.flatnonzero(np.diff(xs) == 0)[0]) + 1]
         raise InputError(f"{label}: column '{dup}' is at the same position as another sensor")
-    run = load_run(frame, temps=order, require_error=require_error, name=run_name)
+    run = load_run(
+        frame,
+        temps=order,
+        require_error=require_error,
+        name=run_name,
+        period_tolerance=period_tolerance,
+        resample=resample,
+    )
     run = Run(**{**run.__dict__, "source": label})
+    frame = run.frame
     ambient = float(frame["T_amb"].iloc[0]) if "T_amb" in frame.columns else float(np.mean(run.temps[0]))
     if PROBE_COLUMN in frame.columns:
         probe = numeric_column(frame, PROBE_COLUMN, label, allow_nonfinite=False)

@@ -15,6 +15,8 @@ A study file has up to four tables::
     error = "error_um"
     temps = ["T1", "T2", "node_*"]   # candidate sensors: names or glob patterns
                                      # (default: the columns named T<digit>…)
+    period_tolerance = 2             # % an interval may deviate from the period (a jittering clock)
+    resample_s = 60                  # average the readings of every 60 s (optional)
 
     [grid]                        # one run per combination of these
     p = {start = 0, stop = 4}     # a range (stop included, optional step) …
@@ -61,7 +63,7 @@ from groupfit.tomlconfig import Table, check_tables, read_toml
 SEARCHES = ("exact", "ga")
 TABLES = ("study", "data", "grid", "ga")
 STUDY_KEYS = ("name", "db", "certify")
-DATA_KEYS = ("path", "paths", "time", "error", "temps")
+DATA_KEYS = ("path", "paths", "time", "error", "temps", "period_tolerance", "resample_s")
 GRID_DEFAULTS: dict[str, list[Any]] = {
     "p": [3],
     "n": [3],
@@ -126,8 +128,9 @@ def spec_hash(spec: dict) -> str:
     return hashlib.sha256(canonical_json(spec).encode("ascii")).hexdigest()
 
 
-def read_study(path: str | Path) -> Study:
-    """Read, check and expand a study file.
+def read_study(path: str | Path, data: dict | None = None) -> Study:
+    """Read, check and expand a study file; ``data``: keys of its ``[data]`` table given on the command line
+    (None values left out), in place of the file's.
 
     Raises
     ------
@@ -136,6 +139,9 @@ def read_study(path: str | Path) -> Study:
     """
     path = Path(path)
     raw = read_toml(path, "sweep configuration")
+    given = {key: value for key, value in (data or {}).items() if value is not None}
+    if given:
+        raw = {**raw, "data": {**raw.get("data", {}), **given}}
     return study_from_dict(raw, path)
 
 
@@ -170,7 +176,7 @@ def study_from_dict(raw: dict, path: Path) -> Study:
     runs: list[RunSpec] = []
     seen: set[str] = set()
     for dataset in datasets:
-        data = {"sha256": dataset.sha256, "time": time_column, "error": error_column}
+        data = {"sha256": dataset.sha256, "time": time_column, "error": error_column, **dataset.clock_spec}
         sensor_options = [sensor_option(option, dataset, label) for option in grid["sensors"]]
         for sensors, objective, intercept, n, c, p, search in itertools.product(
             sensor_options, grid["objective"], grid["intercept"], grid["n"], grid["c"], grid["p"], grid["search"]

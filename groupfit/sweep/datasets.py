@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import fnmatch
 import hashlib
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from groupfit.data import load_run
+from groupfit.data import PERIOD_TOLERANCE, load_run, parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 
@@ -32,6 +33,10 @@ class Dataset:
         Every column but time and error.
     constant : frozenset of str
         Columns with a single value (never picked by a pattern).
+    clock : dict
+        ``period_tolerance`` and ``resample`` as :func:`groupfit.data.load_run` takes them.
+    notes : tuple of str
+        What loading did to the log (a jittering clock accepted, readings resampled).
     """
 
     name: str
@@ -41,6 +46,19 @@ class Dataset:
     n_samples: int
     columns: tuple[str, ...] = field(repr=False, default=())
     constant: frozenset[str] = field(repr=False, default=frozenset())
+    clock: dict = field(repr=False, default_factory=lambda: {"period_tolerance": PERIOD_TOLERANCE, "resample": None})
+    notes: tuple[str, ...] = field(repr=False, default=())
+
+    @property
+    def clock_spec(self) -> dict:
+        """The clock settings that differ from the defaults, as a run's ``data`` holds them (none: no key, so
+        that a study without them keeps its runs' hashes)."""
+        spec = {}
+        if self.clock["period_tolerance"] != PERIOD_TOLERANCE:
+            spec["period_tolerance"] = self.clock["period_tolerance"]
+        if self.clock["resample"] is not None:
+            spec["resample_s"] = self.clock["resample"]
+        return spec
 
 
 def file_sha256(path: Path) -> str:
@@ -71,17 +89,18 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
     time_column = non_empty_string(table.get("time", "time_s"), "[data] time", label)
     error_column = non_empty_string(table.get("error", "error_um"), "[data] error", label)
     patterns = table.get("temps")
+    clock = clock_settings(table, label)
     datasets = []
     for entry in paths:
         file = (base / entry).resolve()
         if not file.is_file():
             raise InputError(f"{label}: [data] data file {entry!r} not found (looked for {file})")
-        run = load_run(file, temps=[], time=time_column, error=error_column)
+        run = load_run(file, temps=[], time=time_column, error=error_column, **clock)
         usable = tuple(c for c in run.frame.columns if c not in (time_column, error_column))
         where = f"{label}: {file.name}"
         constant = frozenset(_constant_columns(run.frame, usable))
         candidates = candidate_columns(patterns, usable, constant, where)
-        load_run(file, temps=candidates, time=time_column, error=error_column)
+        load_run(file, temps=candidates, time=time_column, error=error_column, **clock)
         datasets.append(
             Dataset(
                 name=file.stem,
@@ -91,6 +110,8 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
                 n_samples=run.n_samples,
                 columns=usable,
                 constant=constant,
+                clock=clock,
+                notes=run.notes,
             )
         )
     names = [d.name for d in datasets]
@@ -98,6 +119,21 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
     if duplicates:
         raise InputError(f"{label}: [data] two data files are named '{duplicates[0]}'; rename one")
     return datasets
+
+
+def clock_settings(table: dict, label: str) -> dict:
+    """``[data] period_tolerance`` (percent) and ``resample_s`` (seconds) as :func:`groupfit.data.load_run`
+    takes them (``groupfit sweep --period-tolerance`` and ``--resample`` replace them)."""
+    tolerance = parse_period_tolerance(table.get("period_tolerance"))
+    resample = table.get("resample_s")
+    if resample is not None and (
+        isinstance(resample, bool) or not isinstance(resample, (int, float)) or not 0 < resample < math.inf
+    ):
+        raise InputError(f"{label}: [data] resample_s = {resample!r} must be a period in seconds > 0, e.g. 60")
+    return {
+        "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
+        "resample": None if resample is None else float(resample),
+    }
 
 
 def _constant_columns(frame, columns) -> set[str]:

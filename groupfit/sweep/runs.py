@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from groupfit.data import Run, load_run
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
 from groupfit.heldout.selection import select_sensors
@@ -188,11 +188,14 @@ def _selected(sha256: str, selection_json: str, run: Run) -> tuple[str, ...]:
 
 def _load(spec: dict, path: str, content: bytes | None) -> Run:
     data = spec["data"]
-    return _parsed_run(data["sha256"], data["time"], data["error"], path, content)
+    clock = (data.get("period_tolerance", PERIOD_TOLERANCE), data.get("resample_s"))
+    return _parsed_run(data["sha256"], data["time"], data["error"], clock, path, content)
 
 
 @lru_cache(maxsize=4)
-def _parsed_run(sha256: str, time_column: str, error_column: str, path: str, content: bytes | None) -> Run:
+def _parsed_run(
+    sha256: str, time_column: str, error_column: str, clock: tuple, path: str, content: bytes | None
+) -> Run:
     if content is None:
         try:
             content = Path(path).read_bytes()
@@ -203,4 +206,13 @@ def _parsed_run(sha256: str, time_column: str, error_column: str, path: str, con
     first = content.split(b"\n", 1)[0].decode("utf-8", errors="replace")
     frame = pd.read_csv(io.BytesIO(content), sep=header_delimiter(first), skipinitialspace=True)
     frame.columns = [str(c).strip() for c in frame.columns]
-    return load_run(frame, temps=[], time=time_column, error=error_column, name=Path(path).stem)
+    tolerance, resample = clock
+    return load_run(
+        frame,
+        temps=[],
+        time=time_column,
+        error=error_column,
+        name=Path(path).stem,
+        period_tolerance=tolerance,
+        resample=resample,
+    )

@@ -24,8 +24,10 @@ It implements every format the exporter writes:
   reading is near the band's reference);
 * ``/5``: an ``ontime`` derived input (the source's value times its count of
   samples on without a break, times ``scale`` hours);
-* ``/6``: a bumpless transfer after a switch: for ``blend_samples`` samples
-  the prediction moves from the old group's to the new group's.
+* ``/7``: a bumpless transfer after a switch: for ``blend_samples`` samples
+  the prediction is the new group's plus a closing share of its gap from the
+  last output before the switch (``/6``, a blend of the old and the new
+  group's predictions, is no longer written and not implemented).
 
 All arithmetic is on Python floats (IEEE double) in the order the steps give
 it, so the results are those of any double-precision runtime that performs
@@ -39,7 +41,7 @@ import math
 import numpy as np
 from json_probe_runtime import ProbeFilter
 
-FORMATS = tuple(f"groupfit-runtime/{n}" for n in range(1, 7))
+FORMATS = tuple(f"groupfit-runtime/{n}" for n in (1, 2, 3, 4, 5, 7))
 """The formats this runtime implements; it refuses any other instead of computing wrongly."""
 
 
@@ -80,6 +82,7 @@ def run_table(
 
     # state, as after a reset
     count, group, comp, band_target, blend = 0, 1, 0.0, 0.0, 0
+    previous, gap, has_previous = 0.0, 0.0, False
     blend_samples = table.get("blend_samples", 0)
     bad, last = [hold + 1] * n_temps, [0.0] * n_temps
     first, has_first = [0.0] * n_temps, [False] * n_temps
@@ -157,7 +160,7 @@ def run_table(
                 group += 1
 
         if group != before:  # the bumpless transfer starts
-            blend = blend_samples
+            blend, gap = blend_samples, 0.0
 
         # prediction, position terms, dead band
         clamped = False
@@ -197,10 +200,11 @@ def run_table(
                 return prediction, clamped
 
             prediction, clamped = predict(group)
+            if group != before and has_previous:
+                gap = previous - prediction
             if blend > 0:
-                old, _ = predict(group - 1)
-                w = float(blend_samples + 1 - blend) / float(blend_samples + 1)
-                prediction = old + w * (prediction - old)
+                prediction = prediction + float(blend) / float(blend_samples + 1) * gap
+            previous, has_previous = prediction, True
             target = -prediction
             if dead:
                 ref = last[dead["reading"]]
@@ -212,6 +216,8 @@ def run_table(
                 correction = checks.correct(prediction, held)
                 prediction, target = prediction + correction, target - correction
 
+        if faulted:
+            has_previous = False
         if blend > 0:
             blend -= 1
 

@@ -142,6 +142,9 @@ void gf_init(gf_state *s)
     s->fault = GF_FAULT_NONE;
     s->switched = 0;
     s->blend = 0;
+    s->has_previous = 0;
+    s->previous = 0;
+    s->gap = 0;
     for (m = 0; m < GF_N_TEMPS; m++) {
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
@@ -224,6 +227,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
     }
     if (s->switched) {
         s->blend = GF_BLEND_SAMPLES;
+        s->gap = 0;
     }
 
     gf_rc_propagate(s);
@@ -232,31 +236,28 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         target = 0;
         s->rc_usable = 0;
     } else {
-        gf_real old = 0;
-        int g;
-        prediction = 0;
-        /* the old group's prediction first while a transfer runs, then the serving group's */
-        for (g = (s->blend > 0) ? s->group - 1 : s->group; g <= s->group; g++) {
-            const gf_real *row = gf_coef[g - 1];
-            gf_real x[GF_N_INPUTS];
-            x[0] = GF_VALUE(0);
-            x[1] = GF_VALUE(1);
-            x[2] = GF_VALUE(2);
-            x[3] = GF_VALUE(3);
-            x[4] = s->derived[0];
-            prediction = row[0];
-            for (m = 0; m < GF_N_INPUTS; m++) {
-                prediction = prediction + row[m + 1] * x[m];
-            }
-            if (g < s->group) {
-                old = prediction;
-            }
+        const gf_real *row = gf_coef[s->group - 1];
+        gf_real x[GF_N_INPUTS];
+        x[0] = GF_VALUE(0);
+        x[1] = GF_VALUE(1);
+        x[2] = GF_VALUE(2);
+        x[3] = GF_VALUE(3);
+        x[4] = s->derived[0];
+        prediction = row[0];
+        for (m = 0; m < GF_N_INPUTS; m++) {
+            prediction = prediction + row[m + 1] * x[m];
+        }
+        if (s->switched && s->has_previous) {
+            /* bumpless transfer: the gap from the last output to the new group's prediction */
+            s->gap = s->previous - prediction;
         }
         if (s->blend > 0) {
-            /* bumpless transfer: (GF_BLEND_SAMPLES + 1 - blend) / (GF_BLEND_SAMPLES + 1) of the way */
-            gf_real weight = (gf_real)(GF_BLEND_SAMPLES + 1 - s->blend) / (gf_real)(GF_BLEND_SAMPLES + 1);
-            prediction = old + weight * (prediction - old);
+            /* blend / (GF_BLEND_SAMPLES + 1) of the gap: it closes by one share per sample */
+            gf_real share = (gf_real)s->blend / (gf_real)(GF_BLEND_SAMPLES + 1) * s->gap;
+            prediction = prediction + share;
         }
+        s->previous = prediction;
+        s->has_previous = 1;
         target = -prediction;
         /* the correction from probe checks (0 until the first is applied) */
         {
@@ -264,6 +265,9 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
             prediction = prediction + correction;
             target = target - correction;
         }
+    }
+    if (faulted) {
+        s->has_previous = 0;
     }
     if (s->blend > 0) {
         s->blend--;

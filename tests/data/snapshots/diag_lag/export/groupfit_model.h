@@ -87,6 +87,9 @@ typedef struct {
     long bad[GF_N_TEMPS];       /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
     int blend;                  /* samples of the bumpless transfer still to go */
+    int has_previous;           /* 1 when the last sample computed a prediction (no sensor fault) */
+    gf_real previous;           /* that prediction, um */
+    gf_real gap;                /* last output before the switch minus the new group's first, um */
     int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */
     gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */
     gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; on-time: samples on */

@@ -147,6 +147,9 @@ void gf_init(gf_state *s)
     s->fault = GF_FAULT_NONE;
     s->switched = 0;
     s->blend = 0;
+    s->has_previous = 0;
+    s->previous = 0;
+    s->gap = 0;
     for (m = 0; m < GF_N_TEMPS; m++) {
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
@@ -220,6 +223,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
     }
     if (s->switched) {
         s->blend = GF_BLEND_SAMPLES;
+        s->gap = 0;
     }
 
     gf_rc_propagate(s);
@@ -228,63 +232,55 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         target = 0;
         s->rc_usable = 0;
     } else {
-        gf_real old = 0;
-        gf_real old_k0 = 0;
-        gf_real old_slope = 0;
-        int g;
-        prediction = 0;
-        /* the old group's prediction first while a transfer runs, then the serving group's */
-        for (g = (s->blend > 0) ? s->group - 1 : s->group; g <= s->group; g++) {
-            const gf_real *row = gf_coef[g - 1];
-            prediction = row[0];
-            for (m = 0; m < GF_N_INPUTS; m++) {
-                prediction = prediction + row[m + 1] * GF_VALUE(m);
+        const gf_real *row = gf_coef[s->group - 1];
+        prediction = row[0];
+        for (m = 0; m < GF_N_INPUTS; m++) {
+            prediction = prediction + row[m + 1] * GF_VALUE(m);
+        }
+        {
+            /* position: P clamped to the travel, d = P - P0, Horner from the highest power */
+            gf_real position = s->last[GF_POSITION];
+            gf_real d;
+            gf_real poly = 0;
+            if (position < gf_travel_min) {
+                position = gf_travel_min;
+                clamped = 1;
             }
-            {
-                /* position: P clamped to the travel, d = P - P0, Horner from the highest power */
-                gf_real position = s->last[GF_POSITION];
-                gf_real d;
-                gf_real poly = 0;
-                if (position < gf_travel_min) {
-                    position = gf_travel_min;
-                    clamped = 1;
-                }
-                if (position > gf_travel_max) {
-                    position = gf_travel_max;
-                    clamped = 1;
-                }
-                d = position - gf_p0;
-                for (k = GF_POSITION_ORDER - 1; k >= 0; k--) {
-                    const gf_real *prow = gf_position_coef[g - 1][k];
-                    gf_real term = prow[0];
-                    for (m = 0; m < GF_N_INPUTS; m++) {
-                        term = term + prow[m + 1] * GF_VALUE(m);
-                    }
-                    if (k == GF_POSITION_ORDER - 1) {
-                        poly = term;
-                    } else {
-                        poly = poly * d + term;
-                    }
-                    if (k == 0) {
-                        s->slope_um_per_mm = term;
-                    }
-                }
-                s->k0_um = prediction;
-                prediction = prediction + poly * d;
+            if (position > gf_travel_max) {
+                position = gf_travel_max;
+                clamped = 1;
             }
-            if (g < s->group) {
-                old = prediction;
-                old_k0 = s->k0_um;
-                old_slope = s->slope_um_per_mm;
+            d = position - gf_p0;
+            for (k = GF_POSITION_ORDER - 1; k >= 0; k--) {
+                const gf_real *prow = gf_position_coef[s->group - 1][k];
+                gf_real term = prow[0];
+                for (m = 0; m < GF_N_INPUTS; m++) {
+                    term = term + prow[m + 1] * GF_VALUE(m);
+                }
+                if (k == GF_POSITION_ORDER - 1) {
+                    poly = term;
+                } else {
+                    poly = poly * d + term;
+                }
+                if (k == 0) {
+                    s->slope_um_per_mm = term;
+                }
             }
+            s->k0_um = prediction;
+            prediction = prediction + poly * d;
+        }
+        if (s->switched && s->has_previous) {
+            /* bumpless transfer: the gap from the last output to the new group's prediction */
+            s->gap = s->previous - prediction;
         }
         if (s->blend > 0) {
-            /* bumpless transfer: (GF_BLEND_SAMPLES + 1 - blend) / (GF_BLEND_SAMPLES + 1) of the way */
-            gf_real weight = (gf_real)(GF_BLEND_SAMPLES + 1 - s->blend) / (gf_real)(GF_BLEND_SAMPLES + 1);
-            prediction = old + weight * (prediction - old);
-            s->k0_um = old_k0 + weight * (s->k0_um - old_k0);
-            s->slope_um_per_mm = old_slope + weight * (s->slope_um_per_mm - old_slope);
+            /* blend / (GF_BLEND_SAMPLES + 1) of the gap: it closes by one share per sample */
+            gf_real share = (gf_real)s->blend / (gf_real)(GF_BLEND_SAMPLES + 1) * s->gap;
+            prediction = prediction + share;
+            s->k0_um = s->k0_um + share; /* K0 + tan(beta) (P - P0) stays the prediction */
         }
+        s->previous = prediction;
+        s->has_previous = 1;
         target = -prediction;
         /* the correction from probe checks (0 until the first is applied) */
         {
@@ -292,6 +288,9 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
             prediction = prediction + correction;
             target = target - correction;
         }
+    }
+    if (faulted) {
+        s->has_previous = 0;
     }
     if (s->blend > 0) {
         s->blend--;

@@ -76,6 +76,9 @@ typedef struct {
     long bad[GF_N_TEMPS];       /* invalid samples in a row per sensor (GF_HOLD_SAMPLES + 1: none good yet) */
     gf_real last[GF_N_TEMPS];   /* last good reading per sensor */
     int blend;                  /* samples of the bumpless transfer still to go */
+    int has_previous;           /* 1 when the last sample computed a prediction (no sensor fault) */
+    gf_real previous;           /* that prediction, um */
+    gf_real gap;                /* last output before the switch minus the new group's first, um */
     gf_real k0_um;              /* K0(T), um: the position-free part (SD43900 takes -k0_um / 1000) */
     gf_real slope_um_per_mm;    /* c1(T) = tan(beta), um/mm (SD43910 takes -slope / 1000) */
     gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
