@@ -18,8 +18,9 @@ held-out residual no filter can follow: its sample-to-sample scatter
 checks looks good on a quiet stretch and cannot follow a new day's offset).
 And a new day may wander more than the stretch did: among the candidates
 whose score is within :data:`INDIFFERENCE` of the best (the held-out data do
-not tell them apart), the most responsive is kept (the hold first, then the
-largest offset noise, then the fewest terms). Every Kalman candidate applies
+not tell them apart), the most responsive Kalman filter is kept (the largest
+offset noise, then the fewest terms); the hold, which assumes checks without
+noise, only when no Kalman filter comes within that band. Every Kalman candidate applies
 a correction only when it stands out of its own noise by
 :data:`SIGNIFICANCE_SIGMAS` (:mod:`groupfit.runtime.recalibration`), so a
 model at its noise floor is left as it is while an error the checks keep
@@ -276,7 +277,8 @@ def choose_recalibration(
         The modelling runs (the frame with the model's columns, the measured error per row).
     method : {"auto", "hold", "kalman", "none"}
         ``auto``: the best on held-out data, the most responsive of those the
-        data do not tell apart (the hold first); ``kalman``: the same among the
+        data do not tell apart (the hold only when no Kalman filter is among
+        them); ``kalman``: the same among the
         Kalman filters even if the hold does better; ``none``: no section.
     """
     if method not in METHODS:
@@ -338,14 +340,16 @@ def choose_recalibration(
 def _most_responsive_of_the_best(candidates: Candidates, score: np.ndarray, *, kalman: bool) -> int:
     """The candidate kept: among those within :data:`INDIFFERENCE` of the best score, the most responsive.
 
-    The hold takes every check whole (the most responsive of all); a Kalman
-    filter the more, the larger its offset noise against its check noise; on
-    a tie the first (the fewest terms). ``kalman``: the hold is left out.
+    A Kalman filter is the more responsive, the larger its offset noise
+    against its check noise; on a tie the first (the fewest terms). The hold
+    assumes checks without noise, which the measured check noise contradicts:
+    it is kept only when no Kalman filter comes within the band.
+    ``kalman``: the hold is left out.
     """
     score = np.where(np.arange(len(candidates)) == 0, np.inf, score) if kalman else score
     near = np.flatnonzero(score <= np.min(score) + INDIFFERENCE)
     responsiveness = np.where(
-        candidates.probe_sigma > 0, candidates.offset_sigma / np.maximum(candidates.probe_sigma, 1e-300), np.inf
+        candidates.probe_sigma > 0, candidates.offset_sigma / np.maximum(candidates.probe_sigma, 1e-300), -np.inf
     )
     return int(near[np.argmax(responsiveness[near])])
 
