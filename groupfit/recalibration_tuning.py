@@ -179,11 +179,12 @@ def candidate_grid(*, hold_sigma: float, initial_offset: float, probe_sigma: flo
 def white_sigma(series: Sequence[HeldOut]) -> float:
     """The noise of one check (µm): the held-out residual's sample-to-sample scatter, ``√(½·mean(Δr²))``.
 
+    ``Δr``: the steps between consecutive measured samples (rows without a
+    measured error are skipped).
     For a residual that is a slow error plus white noise this is the white
     noise, the part no filter can follow, which a check carries as well.
     """
-    steps = np.concatenate([np.diff(s.residual) for s in series])
-    steps = steps[np.isfinite(steps)]
+    steps = np.concatenate([np.diff(s.residual[np.isfinite(s.residual)]) for s in series])
     if not steps.size:
         return MIN_PROBE_SIGMA_UM
     return max(MIN_PROBE_SIGMA_UM, float(np.sqrt(0.5 * np.mean(steps**2))))

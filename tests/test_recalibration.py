@@ -244,6 +244,10 @@ def test_the_noise_of_a_check_is_the_white_part_of_the_held_out_residual():
         residual = slow + rng.normal(0.0, sigma, n)
         residual[::97] = np.nan  # samples not measured
         assert white_sigma([HeldOut(residual, np.zeros(n))]) == pytest.approx(sigma, rel=0.06)
+        sparse = np.full(n, np.nan)
+        sparse[::5] = residual[::5]  # the error measured on one row in five: steps span five samples
+        expected = math.sqrt(sigma**2 + 0.5 * np.mean(np.diff(slow[::5]) ** 2))
+        assert white_sigma([HeldOut(sparse, np.zeros(n))]) == pytest.approx(expected, rel=0.1)
 
 
 # ----------------------------------------------------------------- the tuning
