@@ -2,7 +2,7 @@
 
 Usage::
 
-    python bench/bench_recalibration.py [--json FILE] [--only NAME ...]
+    python bench/bench_recalibration.py [--json FILE] [--only NAME ...] [--wide]
 
 Every scenario is a model built the way a user builds it (``groupfit fit --p 0``,
 then ``groupfit diagnose`` where the runs carry more than the sensors) on a
@@ -15,6 +15,11 @@ modelling part, and a next part it never saw:
 * ``measured``: the shared spindle test (``../shared/data/fl_thermal``, skipped when
   absent), the model on its first 40 % (two thirds of the file) and the checks on
   40–60 % (the rest of the file, replayed as the continuation it is).
+
+``--wide`` adds a wider panel (about a minute more): more scenarios of the
+independent simulator, the FE model on its other validation runs
+(``validation_speed``, ``validation_timing``) and the five ``diag_*`` pairs
+(modelling and validation run of one machine each).
 
 Per scenario the next part is replayed through the run-time rule with a check
 every 5, 15, 30, 60, 120 min (the probe reading: the measured error) and each
@@ -60,6 +65,17 @@ MEASURED = next(
     None,
 )
 INDEPENDENT = ("speed_rpm_2h_30s", "amb_T_amb_30s")
+WIDE_INDEPENDENT = (
+    "pump_45min_30s",
+    "hydraulic_2h_60s_pure",
+    "spindle_on_1.5h_30s_pure",
+    "none_drift_60s",
+    "amb_T_room_60s",
+    "speed_reverse_2h_30s_pure",
+    "none_30s",
+)
+WIDE_FE = ("validation_speed", "validation_timing")
+WIDE_DIAG = ("none", "ambient", "lag", "source", "speed")
 
 
 def quiet_main(args: list[str], log: Path) -> None:
@@ -138,21 +154,11 @@ def scenario_result(name: str, model_path: Path, modelling_frames, next_path: Pa
     }
 
 
-def scenarios_to_run(only, workdir: Path):
+def scenarios_to_run(only, workdir: Path, *, wide: bool = False):
     """(name, model builder, modelling frames, next run path, first scored row) per scenario."""
-    for scenario in scenarios(list(INDEPENDENT)):
-        name = f"independent:{scenario.name}"
-        if only and name not in only:
-            continue
-        folder = workdir / scenario.name
-        folder.mkdir()
-        modelling, following = folder / "modelling.csv", folder / "next.csv"
-        scenario.modelling.to_csv(modelling, index=False)
-        scenario.validation.to_csv(following, index=False)
-        model = build_model(folder, modelling, temps=scenario.temps, error="error_um", diagnose=True)
-        yield name, model, [scenario.modelling], following, 0
+    yield from independent_scenarios(only, workdir, INDEPENDENT + (WIDE_INDEPENDENT if wide else ()))
     fe_model = None
-    for repeat in ("repeat_timing", "repeat_ambient25", "repeat_warm"):
+    for repeat in ("repeat_timing", "repeat_ambient25", "repeat_warm") + (WIDE_FE if wide else ()):
         name = f"fe:{repeat}"
         if only and name not in only:
             continue
@@ -161,6 +167,15 @@ def scenarios_to_run(only, workdir: Path):
             folder.mkdir()
             fe_model = build_model(folder, DATASETS / "paper_cycle.csv", temps=None, error="error_um", diagnose=False)
         yield name, fe_model, [pd.read_csv(DATASETS / "paper_cycle.csv")], DATASETS / f"{repeat}.csv", 0
+    for kind in WIDE_DIAG if wide else ():
+        name = f"diag:{kind}"
+        if only and name not in only:
+            continue
+        folder = workdir / f"diag_{kind}"
+        folder.mkdir()
+        modelling = DATASETS / f"diag_{kind}_model.csv"
+        model = build_model(folder, modelling, temps=None, error="error_um", diagnose=True)
+        yield name, model, [pd.read_csv(modelling)], DATASETS / f"diag_{kind}_validate.csv", 0
     if MEASURED is not None and MEASURED.exists() and (not only or "measured" in only):
         folder = workdir / "measured"
         folder.mkdir()
@@ -171,6 +186,21 @@ def scenarios_to_run(only, workdir: Path):
         sensors = [f"t{k}_C" for k in range(1, 17)]
         model = build_model(folder, modelling, temps=sensors, error="disp_ch3_um", diagnose=True)
         yield "measured", model, [frame.iloc[:cut]], MEASURED, cut
+
+
+def independent_scenarios(only, workdir: Path, names):
+    """The modelling and validation run of the independent simulator, per scenario named."""
+    for scenario in scenarios(list(names)):
+        name = f"independent:{scenario.name}"
+        if only and name not in only:
+            continue
+        folder = workdir / scenario.name
+        folder.mkdir()
+        modelling, following = folder / "modelling.csv", folder / "next.csv"
+        scenario.modelling.to_csv(modelling, index=False)
+        scenario.validation.to_csv(following, index=False)
+        model = build_model(folder, modelling, temps=scenario.temps, error="error_um", diagnose=True)
+        yield name, model, [scenario.modelling], following, 0
 
 
 def check_claims(result: dict) -> list[str]:
@@ -208,17 +238,30 @@ def report(result: dict) -> str:
     return "\n".join(lines)
 
 
+def summary(results: list[dict]) -> str:
+    """One line per scenario: the chosen method's worst ratio to no checks and to the hold over the intervals."""
+    lines = [f"{'scenario':<44}{'chosen / none':>14}{'chosen / hold':>14}  chosen"]
+    for result in results:
+        table = result["rms_um"]
+        to_none = max(a / n for a, n in zip(table["auto"], table["none"]))
+        to_hold = max(a / h for a, h in zip(table["auto"], table["hold"]))
+        lines.append(f"{result['scenario']:<44}{to_none:>14.3f}{to_hold:>14.3f}  {result['chosen']}")
+    return "\n".join(lines)
+
+
 def run(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", help="write the results here")
-    parser.add_argument("--only", nargs="+", help="scenario names (independent:NAME, fe:RUN, measured)")
+    parser.add_argument("--only", nargs="+", help="scenario names (independent:NAME, fe:RUN, diag:KIND, measured)")
+    parser.add_argument("--wide", action="store_true", help="add the wider panel of scenarios")
     args = parser.parse_args(argv)
     started = time.perf_counter()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, model, frames, following, scored_from in scenarios_to_run(args.only, Path(tmp)):
+        for name, model, frames, following, scored_from in scenarios_to_run(args.only, Path(tmp), wide=args.wide):
             results.append(scenario_result(name, model, frames, following, scored_from))
             print(report(results[-1]) + "\n", flush=True)
+    print(summary(results))
     print(f"{len(results)} scenario(s) in {time.perf_counter() - started:.0f} s")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))

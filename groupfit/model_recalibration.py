@@ -22,7 +22,9 @@ robustness
     ``gate_sigmas``: a check whose innovation exceeds this many of its
     standard deviations is rejected and flagged, never applied, unless
     ``confirm_after`` checks in a row were rejected before it (a real change,
-    not a chip on the artefact). ``offset_max_um``, ``drift_max_um_per_h``,
+    not a chip on the artefact). ``significance_sigmas`` (optional, 0 when
+    absent): a correction is applied only when the filter's estimate of it
+    exceeds this many of its own standard deviations after the last check. ``offset_max_um``, ``drift_max_um_per_h``,
     ``gain_max`` bound the states; ``rate_um_per_sample`` limits how fast the
     applied correction moves.
 ``chosen``
@@ -53,6 +55,7 @@ NUMBER_KEYS = (
     "initial_gain_sigma",
     "probe_sigma_um",
     "gate_sigmas",
+    "significance_sigmas",
     "offset_max_um",
     "drift_max_um_per_h",
     "gain_max",
@@ -82,6 +85,7 @@ class Recalibration:
     initial_gain_sigma: float = 0.0
     probe_sigma_um: float = 0.0
     gate_sigmas: float
+    significance_sigmas: float = 0.0
     confirm_after: int
     offset_max_um: float
     drift_max_um_per_h: float = 0.0

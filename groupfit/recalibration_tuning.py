@@ -9,14 +9,25 @@ has them; a grouped model as one global fit), the rest of the run is
 predicted, and checks every T (15, 30, 60, 120 min by default) are replayed
 through each candidate filter on that held-out residual. The score is the
 mean over the intervals of log(RMS / RMS of the offset hold), the RMS taken
-from each stretch's first check on (before it every filter serves alike); the best
-candidate is kept only if no interval is more than :data:`HOLD_TOLERANCE`
-worse than the hold, else the hold is kept; among the candidates that are
-also never worse than no checks at all (scored on the same samples), when
-some are. The innovation gate is part of
-every replay (a candidate whose gate rejects good checks pays for it), and
-the hold's own noise is sized so that its gate passes every held-out check
-with a factor of two to spare.
+from each stretch's first check on (before it every filter serves alike).
+
+Two things a held-out stretch of the modelling run cannot show are settled
+by principle, not by the score. The noise of one check is the part of the
+held-out residual no filter can follow: its sample-to-sample scatter
+(:func:`white_sigma`), not a free parameter (a filter tuned to distrust its
+checks looks good on a quiet stretch and cannot follow a new day's offset).
+And a new day may wander more than the stretch did: among the candidates
+whose score is within :data:`INDIFFERENCE` of the best (the held-out data do
+not tell them apart), the most responsive Kalman filter is kept (the largest
+offset noise, then the fewest terms); the hold, which assumes checks without
+noise, only when no Kalman filter comes within that band. Every Kalman candidate applies
+a correction only when it stands out of its own noise by
+:data:`SIGNIFICANCE_SIGMAS` (:mod:`groupfit.runtime.recalibration`), so a
+model at its noise floor is left as it is while an error the checks keep
+showing is taken up. The innovation gate is part of every replay (a
+candidate whose gate rejects good checks pays for it), and the hold's own
+noise is sized so that its gate passes every held-out check with a factor of
+two to spare.
 
 Every candidate runs through one vectorised replay of the filter of
 :mod:`groupfit.runtime.recalibration` (double precision, without the
@@ -37,7 +48,11 @@ from groupfit.model import ModelFile, Recalibration
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
 CUTS = (0.5, 0.7)
 """Each modelling run is refitted on its first 50 % and 70 % and the rest of it predicted."""
-HOLD_TOLERANCE = 1.02
+INDIFFERENCE = 0.02
+"""Held-out scores (mean log RMS ratios) closer than this to the best are not told apart."""
+SIGNIFICANCE_SIGMAS = 2.0
+"""A Kalman candidate applies a correction only beyond this many standard deviations of its estimate."""
+MIN_PROBE_SIGMA_UM = 0.01
 GATE_SIGMAS = 5.0
 CONFIRM_AFTER = 2
 GATE_SPARE = 2.0
@@ -104,6 +119,7 @@ class Candidates:
     initial_gain: np.ndarray
     probe_sigma: np.ndarray
     gate_sigmas: np.ndarray
+    significance_sigmas: np.ndarray
 
     def __len__(self) -> int:
         return len(self.terms)
@@ -123,6 +139,7 @@ class Candidates:
             initial_gain_sigma=float(self.initial_gain[k]),
             probe_sigma_um=float(self.probe_sigma[k]),
             gate_sigmas=float(self.gate_sigmas[k]),
+            significance_sigmas=float(self.significance_sigmas[k]),
             confirm_after=CONFIRM_AFTER,
             offset_max_um=float(offset_max_um),
             drift_max_um_per_h=float(offset_max_um) if "drift" in terms else 0.0,
@@ -132,24 +149,45 @@ class Candidates:
         )
 
 
-def candidate_grid(*, hold_sigma: float, initial_offset: float, method: str = "auto") -> Candidates:
-    """The hold (first), then the Kalman filters: offset alone, with a drift, a gain, or both."""
-    rows = [(("offset",), hold_sigma, 0.0, 1.0, 0.0, initial_offset, 0.0, 0.0, 0.0)]
+def candidate_grid(*, hold_sigma: float, initial_offset: float, probe_sigma: float, method: str = "auto") -> Candidates:
+    """The hold (first), then the Kalman filters: offset alone, with a drift, a gain, or both.
+
+    ``probe_sigma``: the noise of one check (µm, :func:`white_sigma`), the
+    same for every Kalman candidate; they differ in how the error wanders.
+    """
+    rows = [(("offset",), hold_sigma, 0.0, 1.0, 0.0, initial_offset, 0.0, 0.0, 0.0, 0.0)]
     if method != "hold":
         drifts = [(s, tau) for s in (0.3, 1.0, 3.0) for tau in (0.5, 2.0, 8.0)]
         gains = [(s, g0) for s in (0.0, 0.02) for g0 in (0.1, 0.3, 1.0)]
-        for offset, probe in itertools.product((0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0), (0.1, 0.3, 1.0, 3.0, 10.0)):
-            quiet = offset < 0.1 or probe > 3.0  # a model at its noise floor: checks may only nudge it
+        for offset in (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0):
             for drift, gain in itertools.product([None, *drifts], [None, *gains]):
-                if quiet and (drift or gain):
-                    continue
                 terms = ("offset",) + (("drift",) if drift else ()) + (("gain",) if gain else ())
                 ds, tau = drift or (0.0, 1.0)
                 gs, g0 = gain or (0.0, 0.0)
-                rows.append((terms, offset, ds, tau, gs, initial_offset, ds * math.sqrt(tau / 2), g0, probe))
+                row = (terms, offset, ds, tau, gs, initial_offset, ds * math.sqrt(tau / 2), g0, probe_sigma)
+                rows.append(row + (SIGNIFICANCE_SIGMAS,))
     columns = list(zip(*rows))
-    arrays = [np.asarray(c, dtype=float) for c in columns[1:]]
-    return Candidates(list(columns[0]), *arrays, gate_sigmas=np.full(len(rows), GATE_SIGMAS))
+    arrays = [np.asarray(c, dtype=float) for c in columns[1:-1]]
+    return Candidates(
+        list(columns[0]),
+        *arrays,
+        gate_sigmas=np.full(len(rows), GATE_SIGMAS),
+        significance_sigmas=np.array(columns[-1]),
+    )
+
+
+def white_sigma(series: Sequence[HeldOut]) -> float:
+    """The noise of one check (µm): the held-out residual's sample-to-sample scatter, ``√(½·mean(Δr²))``.
+
+    ``Δr``: the steps between consecutive measured samples (rows without a
+    measured error are skipped).
+    For a residual that is a slow error plus white noise this is the white
+    noise, the part no filter can follow, which a check carries as well.
+    """
+    steps = np.concatenate([np.diff(s.residual[np.isfinite(s.residual)]) for s in series])
+    if not steps.size:
+        return MIN_PROBE_SIGMA_UM
+    return max(MIN_PROBE_SIGMA_UM, float(np.sqrt(0.5 * np.mean(steps**2))))
 
 
 def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, period_s: float) -> tuple[np.ndarray, int]:
@@ -165,6 +203,8 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
     phi = np.exp(-period_s / (c.drift_tau_h * 3600.0))
     r = c.probe_sigma**2
     gate2 = c.gate_sigmas**2
+    significance2 = c.significance_sigmas**2
+    significant = np.zeros(g, dtype=bool)
     offset_max = np.full(g, np.inf)
     x = np.zeros((3, g))
     P = np.zeros((3, 3, g))
@@ -183,10 +223,12 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
         P[2, 2] += q[2]
         if math.isnan(res):
             continue
-        error = res - (x[0] + x[2] * m)
+        target = x[0] + x[2] * m
+        served = res - np.where(significant | (significance2 == 0), target, 0.0)
         if k >= every:  # scored from the first check on: before it every filter serves alike
-            total += error * error
+            total += served * served
             scored += 1
+        error = res - target
         if (k + 1) % every:
             continue
         ph = P[:, 0] + P[:, 2] * m
@@ -202,6 +244,9 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
         if fresh.any():
             x[0] = np.where(fresh, x[0] + error, x[0])
             P = np.where(fresh, P0, P)
+        target = x[0] + x[2] * m
+        spread = P[0, 0] + P[2, 0] * m + (P[0, 2] + P[2, 2] * m) * m
+        significant = np.where(reject, significant, fresh | (target * target > significance2 * spread))
     return total, scored
 
 
@@ -232,9 +277,10 @@ def choose_recalibration(
     runs : sequence of (frame, error)
         The modelling runs (the frame with the model's columns, the measured error per row).
     method : {"auto", "hold", "kalman", "none"}
-        ``auto``: the best on held-out data (the hold unless a Kalman filter
-        beats it); ``kalman``: the best Kalman filter even if the hold does
-        better; ``none``: no section.
+        ``auto``: the best on held-out data, the most responsive of those the
+        data do not tell apart (the hold only when no Kalman filter is among
+        them); ``kalman``: the same among the
+        Kalman filters even if the hold does better; ``none``: no section.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -251,27 +297,24 @@ def choose_recalibration(
     residuals = np.concatenate([s.residual for s in series])
     rms_none = float(np.sqrt(np.nanmean(residuals**2)))
     everies = [max(1, int(round(t / period))) for t in intervals]
-    hold_sigma = _hold_sigma(series, everies, period)
-    candidates = candidate_grid(hold_sigma=hold_sigma, initial_offset=max(1.0, 2.0 * rms_none), method=method)
+    probe_sigma = white_sigma(series)
+    candidates = candidate_grid(
+        hold_sigma=_hold_sigma(series, everies, period),
+        initial_offset=max(1.0, 2.0 * rms_none),
+        probe_sigma=probe_sigma,
+        method=method,
+    )
     rms = np.empty((len(everies), len(candidates)))
-    rms_none_by_interval = np.empty(len(everies))
     for i, every in enumerate(everies):
         totals = [replay_candidates(s, candidates, every=every, period_s=period) for s in series]
         rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
-        unchecked = np.concatenate([s.residual[every:] for s in series])
-        rms_none_by_interval[i] = float(np.sqrt(np.nanmean(unchecked**2)))
     if not np.all(np.isfinite(rms)) or not np.all(rms[:, 0] > 0):
         return _default(
             offset_max, rate, intervals, reason="the held-out checks leave nothing to compare the filters on"
         )
-    ratio = rms / rms[:, :1]
-    score = np.mean(np.log(ratio), axis=0)
-    allowed = np.all(ratio <= HOLD_TOLERANCE, axis=0) | (method == "kalman")
-    allowed[0] = allowed[0] and method != "kalman"
-    helps = allowed & np.all(rms <= rms_none_by_interval[:, None], axis=0)
-    if helps.any():  # never worse than no checks where some filter manages that
-        allowed = helps
-    best = int(np.flatnonzero(allowed)[np.argmin(score[allowed])])
+    best = _most_responsive_of_the_best(
+        candidates, np.mean(np.log(rms / rms[:, :1]), axis=0), kalman=method == "kalman"
+    )
     chosen = {
         "by": "held-out checks",
         "method_asked": method,
@@ -279,6 +322,9 @@ def choose_recalibration(
         "held_out_samples": int(np.sum(np.isfinite(residuals))),
         "intervals_s": list(intervals),
         "rms_none_um": rms_none,
+        "probe_sigma_um": probe_sigma,
+        "probe_sigma_from": "the held-out residual's sample-to-sample scatter",
+        "indifference": INDIFFERENCE,
         "rms_hold_um": [float(v) for v in rms[:, 0]],
         "rms_chosen_um": [float(v) for v in rms[:, best]],
         "candidates": len(candidates),
@@ -290,6 +336,23 @@ def choose_recalibration(
         tuple(float(v) for v in rms[:, 0]),
         tuple(float(v) for v in rms[:, best]),
     )
+
+
+def _most_responsive_of_the_best(candidates: Candidates, score: np.ndarray, *, kalman: bool) -> int:
+    """The candidate kept: among those within :data:`INDIFFERENCE` of the best score, the most responsive.
+
+    A Kalman filter is the more responsive, the larger its offset noise
+    against its check noise; on a tie the first (the fewest terms). The hold
+    assumes checks without noise, which the measured check noise contradicts:
+    it is kept only when no Kalman filter comes within the band.
+    ``kalman``: the hold is left out.
+    """
+    score = np.where(np.arange(len(candidates)) == 0, np.inf, score) if kalman else score
+    near = np.flatnonzero(score <= np.min(score) + INDIFFERENCE)
+    responsiveness = np.where(
+        candidates.probe_sigma > 0, candidates.offset_sigma / np.maximum(candidates.probe_sigma, 1e-300), -np.inf
+    )
+    return int(near[np.argmax(responsiveness[near])])
 
 
 def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: float) -> float:
@@ -319,4 +382,13 @@ def _default(offset_max: float, rate: float, intervals, *, reason: str) -> Tunin
     return Tuning(section, intervals, math.nan, (), ())
 
 
-__all__ = ["CUTS", "INTERVALS_S", "METHODS", "HeldOut", "Tuning", "choose_recalibration", "held_out_series"]
+__all__ = [
+    "CUTS",
+    "INTERVALS_S",
+    "METHODS",
+    "HeldOut",
+    "Tuning",
+    "choose_recalibration",
+    "held_out_series",
+    "white_sigma",
+]

@@ -16,6 +16,7 @@ class ProbeFilter:
         self.applied = self.model = 0.0
         self.usable = False
         self.rejected = 0
+        self.significant = False
 
     def clamp(self) -> None:
         for i, bound in enumerate(self.spec["x_max"]):
@@ -34,7 +35,10 @@ class ProbeFilter:
     def correct(self, prediction: float, held: bool) -> float:
         self.model, self.usable = prediction, not held
         rate = self.spec["rate_um"]
-        delta = max(min((self.x[0] + self.x[2] * prediction) - self.applied, rate), -rate)
+        target = self.x[0] + self.x[2] * prediction
+        if self.spec["significance2"] > 0 and not self.significant:
+            target = 0.0
+        delta = max(min(target - self.applied, rate), -rate)
         self.applied = self.applied + delta
         return self.applied
 
@@ -60,6 +64,7 @@ class ProbeFilter:
             self.x[0] = self.x[0] + nu
             self.P = [[spec["p0"][i] if i == j else 0.0 for j in range(3)] for i in range(3)]
             self.clamp()
+            self.significant = True
             return codes["applied"]
         self.rejected = 0
         k = [ph[i] / s for i in range(3)]
@@ -67,4 +72,7 @@ class ProbeFilter:
             self.x[i] = self.x[i] + k[i] * nu
             P[i] = [P[i][j] - k[i] * hp[j] for j in range(3)]
         self.clamp()
+        t = self.x[0] + self.x[2] * m
+        _, hp, _ = self.projections()
+        self.significant = t * t > spec["significance2"] * (hp[0] + hp[2] * m)
         return codes["applied"]

@@ -17,6 +17,7 @@ KALMAN = {
     "initial_gain_sigma": 0.3,
     "probe_sigma_um": 0.2,
     "gate_sigmas": 4.0,
+    "significance_sigmas": 2.0,
     "confirm_after": 2,
     "offset_max_um": 30.0,
     "drift_max_um_per_h": 10.0,

@@ -17,6 +17,7 @@ from groupfit.recalibration_tuning import (
     candidate_grid,
     choose_recalibration,
     replay_candidates,
+    white_sigma,
 )
 from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables, SwitchingRule
 from groupfit.runtime.recalibration import Recalibrator, RecalTable
@@ -105,6 +106,7 @@ def textbook_kalman(residual, prediction, checks, table: RecalTable):
 
 def test_the_filter_is_the_textbook_kalman_filter_when_no_bound_or_gate_acts():
     section = {**KALMAN, "gate_sigmas": 1e5, "offset_max_um": 1e5, "drift_max_um_per_h": 1e5, "gain_max": 1e3}
+    section["significance_sigmas"] = 0.0
     section["rate_um_per_sample"] = 1e5
     model = ModelFile.from_dict(model_with(section))
     table = RuleTables.from_model(model).recalibration
@@ -207,6 +209,47 @@ def test_the_correction_is_bounded_and_rate_limited():
     assert correction[-1] == pytest.approx(3.0)
 
 
+def test_a_correction_is_applied_only_once_the_average_of_the_checks_stands_out_of_its_noise():
+    """Offset alone, no wander: the estimate after n checks is their shrunk mean with variance r/(n + r/p0)."""
+    section = {**KALMAN, "terms": ["offset"], "offset_sigma_um_per_sqrt_h": 1e-9}
+    section.update(drift_sigma_um_per_h_per_sqrt_h=0.0, initial_drift_sigma_um_per_h=0.0)
+    section.update(gain_sigma_per_sqrt_h=0.0, initial_gain_sigma=0.0, gain_max=0.0)
+    section.update(gate_sigmas=1e5, rate_um_per_sample=1e5, significance_sigmas=2.0, drift_max_um_per_h=0.0)
+    model = ModelFile.from_dict(model_with(section))
+    table = RuleTables.from_model(model).recalibration
+    r, p0 = table.r, table.p0[0]
+    rng = np.random.default_rng(3)
+    checks = 0.12 + rng.normal(0.0, math.sqrt(r), 40)  # a small offset under noise of 0.2 µm
+    recal = Recalibrator(table)
+    outcomes = set()
+    for n, z in enumerate(checks, start=1):
+        recal.propagate()
+        recal.correct(0.0)
+        recal.probe(z)
+        recal.propagate()
+        applied = recal.correct(0.0)
+        estimate = float(np.sum(checks[:n])) / (n + r / p0)
+        deviation2 = r / (n + r / p0)
+        stands_out = estimate**2 > 4.0 * deviation2
+        assert applied == pytest.approx(estimate if stands_out else 0.0, abs=1e-6)
+        outcomes.add(stands_out)
+    assert outcomes == {True, False}  # both sides of the test were met
+
+
+def test_the_noise_of_a_check_is_the_white_part_of_the_held_out_residual():
+    rng = np.random.default_rng(11)
+    n = 4000
+    slow = 3.0 * np.sin(np.arange(n) / 300.0)
+    for sigma in (0.05, 0.3):
+        residual = slow + rng.normal(0.0, sigma, n)
+        residual[::97] = np.nan  # samples not measured
+        assert white_sigma([HeldOut(residual, np.zeros(n))]) == pytest.approx(sigma, rel=0.06)
+        sparse = np.full(n, np.nan)
+        sparse[::5] = residual[::5]  # the error measured on one row in five: steps span five samples
+        expected = math.sqrt(sigma**2 + 0.5 * np.mean(np.diff(slow[::5]) ** 2))
+        assert white_sigma([HeldOut(sparse, np.zeros(n))]) == pytest.approx(expected, rel=0.1)
+
+
 # ----------------------------------------------------------------- the tuning
 
 
@@ -216,7 +259,8 @@ def test_the_vectorised_replay_of_the_tuning_is_the_run_time_filter():
     prediction = 3.0 + np.cumsum(rng.normal(0, 0.2, n))
     residual = np.cumsum(rng.normal(0, 0.15, n)) + 0.05 * prediction
     held = HeldOut(residual, prediction)
-    candidates = candidate_grid(hold_sigma=2.0, initial_offset=2.0)
+    candidates = candidate_grid(hold_sigma=2.0, initial_offset=2.0, probe_sigma=0.3)
+    assert {bool(v) for v in candidates.significance_sigmas[1:] > 0} == {True}
     picks = [0, 1, 50, len(candidates) - 1]
     totals, scored = replay_candidates(held, candidates, every=15, period_s=period)
     assert scored == n - 15  # from the first check on

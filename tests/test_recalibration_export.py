@@ -14,7 +14,7 @@ from support.json_runtime import run_table
 from groupfit.export import render, write
 from groupfit.export.harness import build_driver
 from groupfit.export.probe_harness import PROBE_DRIVER_C, run_probe_driver
-from groupfit.runtime import PROBE_CODE_OFFSET, SwitchingRule
+from groupfit.runtime import PROBE_APPLIED, PROBE_CODE_OFFSET, SwitchingRule
 
 CASES = probe_cases()
 
@@ -31,6 +31,20 @@ def test_the_cases_exercise_every_outcome_of_a_check():
             for key, count in python_replay(model, temps, checks)[0].probe_counts().items():
                 seen[key] += count
     assert all(count > 0 for count in seen.values()), seen
+
+
+def test_the_kalman_cases_leave_corrections_both_applied_and_held_back_as_not_significant():
+    states = set()
+    for label, (model, streams, probes) in CASES.items():
+        if not label.endswith("kalman"):
+            continue
+        for temps, checks in zip(streams, probes):
+            rule = SwitchingRule(model)
+            for row, check in zip(temps, checks):
+                rule.step(row)
+                if not np.isnan(check) and rule.probe(check) == PROBE_APPLIED:
+                    states.add(rule.recal.significant)
+    assert states == {True, False}
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")

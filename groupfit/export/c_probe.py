@@ -19,6 +19,7 @@ FIELDS = """    gf_real rc_x[3];            /* recalibration: offset (um), drift
     gf_real rc_model_um;        /* the model's own prediction at the last sample (um) */
     int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
     int rc_rejected;            /* checks rejected by the gate in a row */
+    int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
 """
 
 DECLARATION = """
@@ -44,13 +45,15 @@ int gf_probe(gf_state *s, double measured_error_um);
 
 CONSTANTS = """
 /* Recalibration ($description): per sample process variance q, initial variance p0 (offset um^2,
- * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, state bounds, rate of the correction. */
+ * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, significance^2 (0: every correction
+ * is applied), state bounds, rate of the correction. */
 static const gf_real gf_rc_q[3] = { $q };
 static const gf_real gf_rc_p0[3] = { $p0 };
 static const gf_real gf_rc_max[3] = { $x_max };
 static const gf_real gf_rc_phi = $phi;
 static const gf_real gf_rc_r = $r;
 static const gf_real gf_rc_gate2 = $gate2;
+static const gf_real gf_rc_sig2 = $sig2;
 static const gf_real gf_rc_rate = $rate;
 #define GF_RC_CONFIRM_AFTER $confirm
 
@@ -87,6 +90,7 @@ static void gf_rc_reset(gf_state *s)
     s->rc_model_um = 0;
     s->rc_usable = 0;
     s->rc_rejected = 0;
+    s->rc_significant = 0;
 }
 
 static void gf_rc_clamp(gf_state *s)
@@ -123,13 +127,18 @@ static void gf_rc_propagate(gf_state *s)
     gf_rc_clamp(s);
 }
 
-/* The correction of this sample after the model's prediction: towards offset + gain * prediction, rate-limited. */
+/* The correction of this sample after the model's prediction: towards offset + gain * prediction (0 while it
+ * does not stand out of its noise), rate-limited. */
 static gf_real gf_rc_correct(gf_state *s, gf_real model_um, int usable)
 {
-    gf_real delta;
+    gf_real target, delta;
     s->rc_model_um = model_um;
     s->rc_usable = usable;
-    delta = (s->rc_x[0] + s->rc_x[2] * model_um) - s->rc_applied_um;
+    target = s->rc_x[0] + s->rc_x[2] * model_um;
+    if (gf_rc_sig2 > 0 && !s->rc_significant) {
+        target = 0;
+    }
+    delta = target - s->rc_applied_um;
     if (delta > gf_rc_rate) {
         delta = gf_rc_rate;
     }
@@ -145,7 +154,7 @@ FUNCTION = """
 int gf_probe(gf_state *s, double measured_error_um)
 {
     gf_real m = s->rc_model_um;
-    gf_real nu, sv, ph[3], hp[3], k[3];
+    gf_real nu, sv, target, ph[3], hp[3], k[3];
     int i, j;
     if (!s->rc_usable || !(measured_error_um >= -GF_PROBE_LIMIT_UM && measured_error_um <= GF_PROBE_LIMIT_UM)) {
         return GF_PROBE_IGNORED;
@@ -165,6 +174,7 @@ int gf_probe(gf_state *s, double measured_error_um)
         s->rc_x[0] = s->rc_x[0] + nu;
         gf_rc_reset_covariance(s);
         gf_rc_clamp(s);
+        s->rc_significant = 1;
         return GF_PROBE_APPLIED;
     }
     s->rc_rejected = 0;
@@ -178,6 +188,10 @@ int gf_probe(gf_state *s, double measured_error_um)
         }
     }
     gf_rc_clamp(s);
+    /* the correction stands out when it exceeds significance sigmas of its deviation after the check */
+    target = s->rc_x[0] + s->rc_x[2] * m;
+    (void)gf_rc_projections(s, ph, hp);
+    s->rc_significant = target * target > gf_rc_sig2 * (hp[0] + hp[2] * m);
     return GF_PROBE_APPLIED;
 }
 """
@@ -214,6 +228,7 @@ def probe_source(tables: RuleTables) -> dict[str, str]:
             "phi": real_literal(t.phi),
             "r": real_literal(t.r),
             "gate2": real_literal(t.gate2),
+            "sig2": real_literal(t.significance2),
             "rate": real_literal(t.rate_um),
             "confirm": t.confirm_after,
         },

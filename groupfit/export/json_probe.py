@@ -17,18 +17,21 @@ PROBE_STEPS = (
     "x[0] = x[0] + x[1]; x[1] = phi * x[1]; for j in 0..2: A[0][j] = P[0][j] + P[1][j], A[1][j] = phi * P[1][j], "
     "A[2][j] = P[2][j]; then for i in 0..2: P[i][0] = A[i][0] + A[i][1], P[i][1] = A[i][1] * phi, "
     "P[i][2] = A[i][2], P[i][i] = P[i][i] + q[i]; then clamp every x[i] to [-x_max[i], x_max[i]] (upper first). "
-    "x starts at 0, P at diag(p0), applied and model at 0, usable false, rejected 0",
+    "x starts at 0, P at diag(p0), applied and model at 0, usable false, rejected 0, significant false",
     "under a sensor fault: usable = false (prediction and target 0 as before; applied unchanged)",
     "otherwise, after target = -prediction (and the dead band): model = prediction; usable = not held; "
-    "delta = (x[0] + x[2] * prediction) - applied limited to [-rate_um, rate_um]; applied = applied + delta; "
+    "t = x[0] + x[2] * prediction, then t = 0 if significance2 > 0 and not significant; "
+    "delta = t - applied limited to [-rate_um, rate_um]; applied = applied + delta; "
     "prediction = prediction + applied; target = target - applied; then the clamp and rate limit as before",
     "a probe check z (the measured thermal error, um) after a sample: ignored if not usable or not "
     "(-probe_limit_um <= z <= probe_limit_um); nu = (z - model) - (x[0] + x[2] * model); for i in 0..2: "
     "Ph[i] = P[i][0] + P[i][2] * model, hP[i] = P[0][i] + P[2][i] * model; S = hP[0] + hP[2] * model + r; "
     "ignored unless S > 0; if nu * nu > gate2 * S: if rejected < confirm_after: rejected += 1, rejected "
     "(nothing else changes), else (the checks keep disagreeing: a real change) rejected = 0, x[0] = x[0] + nu, "
-    "P = diag(p0), clamp x as below: applied; otherwise rejected = 0, K[i] = Ph[i] / S, x[i] = x[i] + K[i] * nu, "
-    "P[i][j] = P[i][j] - K[i] * hP[j] for all i, j, clamp x (as in the time update): applied",
+    "P = diag(p0), clamp x as below, significant = true: applied; otherwise rejected = 0, K[i] = Ph[i] / S, "
+    "x[i] = x[i] + K[i] * nu, P[i][j] = P[i][j] - K[i] * hP[j] for all i, j, clamp x (as in the time update), "
+    "then with the new P: t = x[0] + x[2] * model, hP[i] = P[0][i] + P[2][i] * model, "
+    "significant = t * t > significance2 * (hP[0] + hP[2] * model): applied",
 )
 
 
@@ -40,6 +43,7 @@ def with_recalibration(table: dict, tables: RuleTables) -> dict:
         "terms": list(t.terms),
         "note": "states x = (offset um, drift um per sample, gain); q: process variance per sample; p0: initial "
         "variance; phi: drift decay per sample; r: variance of one check (um^2); gate2: squared innovation gate; "
+        "significance2: squared significance a correction needs to be applied (0: always applied); "
         "x_max: bounds of x; rate_um: largest move of the applied correction per sample. A check follows its "
         "sample's step (docs/recalibration.md)",
         "q": list(t.q),
@@ -47,6 +51,7 @@ def with_recalibration(table: dict, tables: RuleTables) -> dict:
         "phi": t.phi,
         "r": t.r,
         "gate2": t.gate2,
+        "significance2": t.significance2,
         "confirm_after": t.confirm_after,
         "x_max": list(t.x_max),
         "rate_um": t.rate_um,

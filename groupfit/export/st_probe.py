@@ -42,18 +42,22 @@ VARS = """    rcX : ARRAY[0..2] OF $real;
     rcUsable : BOOL := FALSE;
     rcOutside : BOOL;
     rcRejected : INT := 0;
+    rcSignificant : BOOL := FALSE;
+    rcTarget : $real;
     rcI : INT;
     rcJ : INT;
 """
 
 CONSTANTS = """    (* Recalibration ($description): per-sample process variance, initial variance and bound of
-       offset (um), drift (um per sample) and gain; drift decay; check variance; gate^2; rate (um per call). *)
+       offset (um), drift (um per sample) and gain; drift decay; check variance; gate^2; significance^2
+       (0: every correction is applied); rate (um per call). *)
     RC_Q : ARRAY[0..2] OF $real := [$q];
     RC_P0 : ARRAY[0..2] OF $real := [$p0];
     RC_MAX : ARRAY[0..2] OF $real := [$x_max];
     RC_PHI : $real := $phi;
     RC_R : $real := $r;
     RC_GATE2 : $real := $gate2;
+    RC_SIG2 : $real := $sig2;
     RC_RATE : $real := $rate;
     RC_ZERO : $real := 0.0;
     RC_CONFIRM : INT := $confirm;
@@ -64,6 +68,7 @@ RESET = """    rcApplied := 0.0;
     rcModel := 0.0;
     rcUsable := FALSE;
     rcRejected := 0;
+    rcSignificant := FALSE;
     FOR rcI := 0 TO 2 DO
         rcX[rcI] := 0.0;
         FOR rcJ := 0 TO 2 DO
@@ -98,10 +103,15 @@ PROPAGATE = """
 $clamp    END_FOR;
 """
 
-CORRECT = """        (* the correction from probe checks, towards offset + gain * prediction, rate-limited *)
+CORRECT = """        (* the correction from probe checks, towards offset + gain * prediction (0 while it does not
+           stand out of its noise), rate-limited *)
         rcModel := prediction;
         rcUsable := NOT held;
-        rcDelta := (rcX[0] + rcX[2] * prediction) - rcApplied;
+        rcTarget := rcX[0] + rcX[2] * prediction;
+        IF RC_SIG2 > RC_ZERO AND NOT rcSignificant THEN
+            rcTarget := RC_ZERO;
+        END_IF;
+        rcDelta := rcTarget - rcApplied;
         IF rcDelta > RC_RATE THEN
             rcDelta := RC_RATE;
         END_IF;
@@ -134,6 +144,7 @@ $projections        rcOutside := rcS > RC_ZERO;
                 END_FOR;
                 rcP[rcI, rcI] := RC_P0[rcI];
 $clamp            END_FOR;
+            rcSignificant := TRUE;
             ProbeResult := $applied;
         ELSIF rcS > RC_ZERO THEN
             IF rcOutside THEN
@@ -150,6 +161,9 @@ $clamp            END_FOR;
                         rcP[rcI, rcJ] := rcP[rcI, rcJ] - rcK[rcI] * rcHp[rcJ];
                     END_FOR;
 $clamp                END_FOR;
+                (* the correction stands out when it exceeds significance sigmas of its deviation after the check *)
+                rcTarget := rcX[0] + rcX[2] * rcModel;
+$inner_projections                rcSignificant := rcTarget * rcTarget > RC_SIG2 * (rcHp[0] + rcHp[2] * rcModel);
                 ProbeResult := $applied;
             END_IF;
         END_IF;
@@ -179,6 +193,7 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         phi=literal(t.phi),
         r=literal(t.r),
         gate2=literal(t.gate2),
+        sig2=literal(t.significance2),
         rate=literal(t.rate_um),
         confirm=t.confirm_after,
         limit=literal_double(PROBE_LIMIT_UM),
@@ -196,7 +211,11 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         "probe_invalidate": "        rcUsable := FALSE;\n",
         "probe_correct": CORRECT,
         "probe_check": Template(CHECK).substitute(
-            codes, clamp=inner_clamp, to_real=f"TO_{real}", projections=PROJECTIONS
+            codes,
+            clamp=inner_clamp,
+            to_real=f"TO_{real}",
+            projections=PROJECTIONS,
+            inner_projections=indent(dedent(PROJECTIONS), " " * 16),
         ),
     }
 

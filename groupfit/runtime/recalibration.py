@@ -11,7 +11,8 @@ prediction (:meth:`Recalibrator.propagate`)::
     clamp x_i to ±x_max_i
 
 After the model's prediction ``m`` (:meth:`Recalibrator.correct`), the target
-correction ``x0 + x2·m``; the applied correction ``c`` moves towards it by at
+correction ``x0 + x2·m`` (0 while the last applied check left it not
+significant, see below); the applied correction ``c`` moves towards it by at
 most ``rate`` per sample, and the rule predicts ``m + c`` (the compensation is
 ``−(m + c)``, clamped and rate-limited as before). Under a sensor fault the
 output is the safe one and ``c`` is left as it is.
@@ -26,7 +27,15 @@ number within ±:data:`PROBE_LIMIT_UM`. Otherwise, with ``h = (1, 0, m)``::
     if not S > 0: ignored
     if nu·nu > gate²·S: if rejected-in-a-row < confirm_after: rejected (flagged, nothing changes);
         else (the checks keep disagreeing: a real change) x0 = x0 + nu, P = diag(p0), clamp x: applied
-    K_i = Ph_i / S;  x_i = x_i + K_i·nu;  Pij = Pij − K_i·hP_j;  clamp x;  applied
+    K_i = Ph_i / S;  x_i = x_i + K_i·nu;  Pij = Pij − K_i·hP_j;  clamp x;
+    significant = t·t > sig2·v  with  t = x0 + x2·m,  v = hP0 + hP2·m  (hP of the new P):  applied
+
+A check taken as a real change leaves the correction significant. With
+``sig2 = significance_sigmas² > 0`` a correction the checks do not tell apart
+from their own noise (``|t|`` within ``significance_sigmas`` standard
+deviations of the estimate) is not applied: a model already at its noise floor
+stays as it is, while an error the checks keep showing is taken up as soon as
+their average stands out. ``sig2 = 0`` applies every correction.
 
 The hold is the filter with ``x = (offset)``, ``r = 0``: ``K0 = 1``, the
 offset becomes the check's residual and its variance 0, growing by ``q0`` per
@@ -76,6 +85,8 @@ class RecalTable:
         Initial variances.
     gate2 : float
         ``gate_sigmas²``.
+    significance2 : float
+        ``significance_sigmas²`` (0: every correction is applied).
     confirm_after : int
     x_max : tuple of 3 float
         Bounds of offset (µm), drift (µm/sample), gain.
@@ -90,6 +101,7 @@ class RecalTable:
     r: float
     p0: tuple[float, float, float]
     gate2: float
+    significance2: float
     confirm_after: int
     x_max: tuple[float, float, float]
     rate_um: float
@@ -111,6 +123,7 @@ class RecalTable:
             r=s.probe_sigma_um**2,
             p0=(s.initial_offset_sigma_um**2, (s.initial_drift_sigma_um_per_h * h) ** 2, s.initial_gain_sigma**2),
             gate2=s.gate_sigmas**2,
+            significance2=s.significance_sigmas**2,
             confirm_after=int(s.confirm_after),
             x_max=(s.offset_max_um, s.drift_max_um_per_h * h, s.gain_max),
             rate_um=s.rate_um_per_sample,
@@ -137,6 +150,7 @@ class Recalibrator:
         self._phi = real(table.phi)
         self._r = real(table.r)
         self._gate2 = real(table.gate2)
+        self._significance2 = real(table.significance2)
         self._max = [real(v) for v in table.x_max]
         self._rate = real(table.rate_um)
         self._limit = real(PROBE_LIMIT_UM)
@@ -152,6 +166,7 @@ class Recalibrator:
         self.model_um = zero
         self.usable = False
         self.rejected_in_row = 0
+        self.significant = False
 
     def _reset_covariance(self) -> None:
         """``P = diag(p0)``."""
@@ -187,6 +202,8 @@ class Recalibrator:
         self.model_um = model_um
         self.usable = usable
         target = self.x[0] + self.x[2] * model_um
+        if self._significance2 > self._zero and not self.significant:
+            target = self._zero
         delta = target - self.applied
         if delta > self._rate:
             delta = self._rate
@@ -222,6 +239,7 @@ class Recalibrator:
             self.x[0] = self.x[0] + nu
             self._reset_covariance()
             self._clamp()
+            self.significant = True
             return PROBE_APPLIED
         self.rejected_in_row = 0
         P = self.P
@@ -230,7 +248,15 @@ class Recalibrator:
             self.x[i] = self.x[i] + gain[i] * nu
             P[i] = [P[i][j] - gain[i] * hp[j] for j in range(N_STATES)]
         self._clamp()
+        self.significant = self._stands_out()
         return PROBE_APPLIED
+
+    def _stands_out(self) -> bool:
+        """Whether the target correction ``t = x0 + x2·m`` exceeds ``significance_sigmas`` of its deviation."""
+        m = self.model_um
+        target = self.x[0] + self.x[2] * m
+        _, hp, _ = self._projections()
+        return bool(target * target > self._significance2 * (hp[0] + hp[2] * m))
 
 
 __all__ = [

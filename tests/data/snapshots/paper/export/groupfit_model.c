@@ -36,14 +36,16 @@ static const double gf_temp_max[GF_N_TEMPS] = { 4.50000000000000000e+01, 4.50000
 /* A measured reading as the model takes it: its last good value minus the reference's. */
 #define GF_VALUE(m) (s->last[m] - s->last[GF_REFERENCE])
 
-/* Recalibration (offset, drift (kalman)): per sample process variance q, initial variance p0 (offset um^2,
- * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, state bounds, rate of the correction. */
-static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999962e-03, 2.499999944e-03f), GF_R(2.14334705075445767e-05, 2.143347047e-05f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
-static const gf_real gf_rc_p0[3] = { GF_R(1.00000000000000000e+00, 1.000000000e+00f), GF_R(1.92901234567901224e-04, 1.929012360e-04f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
-static const gf_real gf_rc_max[3] = { GF_R(4.80000000000000000e+01, 4.800000000e+01f), GF_R(1.33333333333333326e+00, 1.333333373e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
-static const gf_real gf_rc_phi = GF_R(9.45959468906765411e-01, 9.459594488e-01f);
-static const gf_real gf_rc_r = GF_R(9.00000000000000000e+00, 9.000000000e+00f);
+/* Recalibration (offset (kalman)): per sample process variance q, initial variance p0 (offset um^2,
+ * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, significance^2 (0: every correction
+ * is applied), state bounds, rate of the correction. */
+static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999978e-05, 2.499999937e-05f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_p0[3] = { GF_R(1.00000000000000000e+00, 1.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_max[3] = { GF_R(4.80000000000000000e+01, 4.800000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
+static const gf_real gf_rc_r = GF_R(2.70012538092759720e-02, 2.700125426e-02f);
 static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
+static const gf_real gf_rc_sig2 = GF_R(4.00000000000000000e+00, 4.000000000e+00f);
 static const gf_real gf_rc_rate = GF_R(1.19999999999999996e+00, 1.200000048e+00f);
 #define GF_RC_CONFIRM_AFTER 2
 
@@ -80,6 +82,7 @@ static void gf_rc_reset(gf_state *s)
     s->rc_model_um = 0;
     s->rc_usable = 0;
     s->rc_rejected = 0;
+    s->rc_significant = 0;
 }
 
 static void gf_rc_clamp(gf_state *s)
@@ -116,13 +119,18 @@ static void gf_rc_propagate(gf_state *s)
     gf_rc_clamp(s);
 }
 
-/* The correction of this sample after the model's prediction: towards offset + gain * prediction, rate-limited. */
+/* The correction of this sample after the model's prediction: towards offset + gain * prediction (0 while it
+ * does not stand out of its noise), rate-limited. */
 static gf_real gf_rc_correct(gf_state *s, gf_real model_um, int usable)
 {
-    gf_real delta;
+    gf_real target, delta;
     s->rc_model_um = model_um;
     s->rc_usable = usable;
-    delta = (s->rc_x[0] + s->rc_x[2] * model_um) - s->rc_applied_um;
+    target = s->rc_x[0] + s->rc_x[2] * model_um;
+    if (gf_rc_sig2 > 0 && !s->rc_significant) {
+        target = 0;
+    }
+    delta = target - s->rc_applied_um;
     if (delta > gf_rc_rate) {
         delta = gf_rc_rate;
     }
@@ -277,7 +285,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
 int gf_probe(gf_state *s, double measured_error_um)
 {
     gf_real m = s->rc_model_um;
-    gf_real nu, sv, ph[3], hp[3], k[3];
+    gf_real nu, sv, target, ph[3], hp[3], k[3];
     int i, j;
     if (!s->rc_usable || !(measured_error_um >= -GF_PROBE_LIMIT_UM && measured_error_um <= GF_PROBE_LIMIT_UM)) {
         return GF_PROBE_IGNORED;
@@ -297,6 +305,7 @@ int gf_probe(gf_state *s, double measured_error_um)
         s->rc_x[0] = s->rc_x[0] + nu;
         gf_rc_reset_covariance(s);
         gf_rc_clamp(s);
+        s->rc_significant = 1;
         return GF_PROBE_APPLIED;
     }
     s->rc_rejected = 0;
@@ -310,5 +319,9 @@ int gf_probe(gf_state *s, double measured_error_um)
         }
     }
     gf_rc_clamp(s);
+    /* the correction stands out when it exceeds significance sigmas of its deviation after the check */
+    target = s->rc_x[0] + s->rc_x[2] * m;
+    (void)gf_rc_projections(s, ph, hp);
+    s->rc_significant = target * target > gf_rc_sig2 * (hp[0] + hp[2] * m);
     return GF_PROBE_APPLIED;
 }
