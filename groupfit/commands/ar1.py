@@ -27,9 +27,6 @@ from groupfit.export import write
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.plots import plot_fit
 
-AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
-GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion")
-
 
 def run_replay(args: argparse.Namespace) -> int:
     """``groupfit replay`` of an AR(1) model file: the routine over a recorded run, every Δτ."""

@@ -41,7 +41,7 @@ from groupfit.export.c_derived import derived_constants, init_derived, state_fie
 from groupfit.export.c_terms import position_header, position_source, reference_header, reference_source
 from groupfit.export.c_transfer import transfer_header, transfer_source
 from groupfit.export.literals import c_comment_text as _ascii
-from groupfit.export.literals import c_float_literal, double_literal, reading_notes, real_literal
+from groupfit.export.literals import c_float_literal, double_literal, reading_comments, real_literal
 from groupfit.runtime import (
     COUNT_MAX,
     FAULT_HELD,
@@ -347,13 +347,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
 
 def reading_lines(tables: RuleTables) -> str:
     """Header lines: every reading, its valid range, unit and what it feeds."""
-    lines = [
-        f" *   temps[{r}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}\n"
-        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, "criterion"))
-    ]
-    if tables.source_names:
-        lines.append(" *   (temperatures in degC; a source in the unit of its column in the modelling data)\n")
-    return "".join(lines)
+    return "".join(f" *   {line}\n" for line in reading_comments(tables, "criterion", "temps", 0, _ascii))
 
 
 def input_lines(tables: RuleTables) -> str:

@@ -36,7 +36,7 @@ from string import Template
 
 from groupfit.controller_limits import check_st_name, st_integer_type
 from groupfit.errors import InputError
-from groupfit.export.literals import reading_notes, shortest_literal
+from groupfit.export.literals import reading_comments, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
 from groupfit.export.st_probe import probe_pieces
 from groupfit.export.st_terms import input_value, position_pieces, reference_pieces
@@ -322,13 +322,8 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
 
 
 def reading_lines(tables: RuleTables) -> str:
-    lines = [
-        f"    Temps[{r + 1}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}"
-        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, "switching criterion"))
-    ]
-    if tables.source_names:
-        lines.append("    (temperatures in degC; a source in the unit of its column in the modelling data)")
-    return "\n".join(lines)
+    """Comment lines: every reading, its valid range, unit and what it feeds."""
+    return "\n".join(f"    {line}" for line in reading_comments(tables, "switching criterion", "Temps", 1, _ascii))
 
 
 def input_lines(tables: RuleTables) -> str:
