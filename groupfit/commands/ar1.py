@@ -16,10 +16,8 @@ from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands.common import (
     commit_outputs,
+    finish_outputs,
     plan_outputs,
-    report_stream,
-    write_json,
-    wrote_line,
 )
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
@@ -82,11 +80,7 @@ def run_replay(args: argparse.Namespace) -> int:
         title = f"{run.name}: AR(1) routine, start {model.start}"
         plot_fit(time_s, measured, result.prediction_um, [], [(1, len(heat))], figure, title=title, label="AR(1)")
         figures.append(figure)
-    written = [*figures, write_json(args.json, out)]
-    commit_outputs()
-    if any(written):
-        lines.append("wrote    " + wrote_line(written))
-    print("\n".join(lines), file=report_stream(args))
+    finish_outputs(args, "\n".join(lines), out, figures)
     return 0
 
 

@@ -18,13 +18,11 @@ from groupfit.commands.common import (
     add_model_argument,
     add_out_option,
     clock_options,
-    commit_outputs,
+    finish_outputs,
     plan_outputs,
     print_notes,
     report_stream,
     residual_line,
-    write_json,
-    wrote_line,
 )
 from groupfit.commands.replay_probes import (
     add_probe_options,
@@ -146,10 +144,7 @@ def run_replay(args: argparse.Namespace) -> int:
         figure = out_dir / "replay.png"
         plot_replay(run, rule.tables, replay, model, figure)
         written.append(figure)
-    written.append(write_json(args.json, result.to_json()))
-    commit_outputs()
-    lines = [result.summary()] + (["wrote    " + wrote_line(written)] if any(written) else [])
-    print("\n".join(lines), file=report_stream(args))
+    finish_outputs(args, result.summary(), result.to_json(), written)
     return 0
 
 

@@ -283,7 +283,7 @@ def padded(values, fill) -> list:
 def render_c(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_model.h": …, "groupfit_model.c": …}`` of a model's rule tables."""
     header = HEADER.substitute(
-        temp_lines=reading_lines(tables),
+        temp_lines="".join(f" *   {line}\n" for line in reading_comments(tables, "criterion", "temps", 0, _ascii)),
         input_lines=input_lines(tables),
         criterion=_ascii(tables.criterion),
         n_temps=tables.n_temps,
@@ -343,11 +343,6 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         **transfer_source(dot_product(tables), position_source(tables), has_position=tables.has_position),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
-
-
-def reading_lines(tables: RuleTables) -> str:
-    """Header lines: every reading, its valid range, unit and what it feeds."""
-    return "".join(f" *   {line}\n" for line in reading_comments(tables, "criterion", "temps", 0, _ascii))
 
 
 def input_lines(tables: RuleTables) -> str:

@@ -263,7 +263,9 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
     def row(values) -> str:
         return ", ".join(literal(v) for v in values)
 
-    temp_lines = reading_lines(tables)
+    temp_lines = "\n".join(
+        f"    {line}" for line in reading_comments(tables, "switching criterion", "Temps", 1, _ascii)
+    )
     coefficients = "\n".join(
         f"    COEF_{k} : ARRAY[1..{tables.n_groups}] OF {real} := [{row(tables.coefficients[:, k])}];"
         for k in range(tables.n_inputs + 1)
@@ -319,11 +321,6 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
     )
     check_st_name(name, used=frozenset(re.findall(r"^\s*([A-Za-z_]\w*)\s*:", text, flags=re.M)))
     return {f"{name}.st": text}
-
-
-def reading_lines(tables: RuleTables) -> str:
-    """Comment lines: every reading, its valid range, unit and what it feeds."""
-    return "\n".join(f"    {line}" for line in reading_comments(tables, "switching criterion", "Temps", 1, _ascii))
 
 
 def input_lines(tables: RuleTables) -> str:
