@@ -42,16 +42,8 @@ from groupfit.export.c_terms import position_header, position_source, reference_
 from groupfit.export.c_transfer import transfer_header, transfer_source
 from groupfit.export.literals import c_comment_text as _ascii
 from groupfit.export.literals import c_float_literal, double_literal, reading_comments, real_literal
-from groupfit.runtime import (
-    COUNT_MAX,
-    FAULT_HELD,
-    FAULT_SENSOR,
-    RETURN_PERIOD_FAULT,
-    RETURN_SENSOR_FAULT,
-    SWITCH_CRITERION,
-    SWITCH_FORCED,
-    RuleTables,
-)
+from groupfit.export.rule_codes import RULE_CODES
+from groupfit.runtime import COUNT_MAX, RuleTables
 
 HEADER = Template(
     r"""/*
@@ -296,7 +288,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         hold=tables.hold_samples,
         period=double_literal(tables.sampling_period_s),
         period_tolerance=double_literal(tables.period_tolerance_s),
-        count_max=COUNT_MAX,
+        **RULE_CODES,
         **transfer_header(tables),
         delay_macros="".join(
             f"#define GF_DELAY_{k} {d.delay_samples} /* samples of delay of derived input {k} */\n"
@@ -304,12 +296,6 @@ def render_c(tables: RuleTables) -> dict[str, str]:
             if d.transform == "delay"
         ),
         state_fields=transfer_header(tables)["transfer_field"] + state_fields(tables),
-        fault_held=FAULT_HELD,
-        fault_sensor=FAULT_SENSOR,
-        ret_sensor=RETURN_SENSOR_FAULT,
-        ret_period=RETURN_PERIOD_FAULT,
-        switch_criterion=SWITCH_CRITERION,
-        switch_forced=SWITCH_FORCED,
         comp_min_f=c_float_literal(tables.comp_min_um),
         comp_max_f=c_float_literal(tables.comp_max_um),
         rate_f=c_float_literal(tables.rate_limit_um),
