@@ -117,6 +117,20 @@ def add_model_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
 
 
+def add_model_time_option(parser: argparse.ArgumentParser) -> None:
+    """``--time COLUMN`` of a verb that reads a run against a model: the model's time column by default."""
+    parser.add_argument(
+        "--time",
+        metavar="COLUMN",
+        help="time column in seconds (default: the one the model was fitted with, else time_s)",
+    )
+
+
+def add_source_option(parser: argparse.ArgumentParser) -> None:
+    """``--source NAME``: the heat source of a ball-screw model."""
+    parser.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
+
+
 def add_out_option(
     parser: argparse.ArgumentParser,
     help: str,

@@ -16,7 +16,9 @@ from groupfit.commands.common import (
     add_clock_options,
     add_json_option,
     add_model_argument,
+    add_model_time_option,
     add_out_option,
+    add_source_option,
     clock_options,
     finish_outputs,
     plan_outputs,
@@ -54,11 +56,7 @@ def add_parser(verbs) -> None:
         metavar="CSV",
         help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
     )
-    replay.add_argument(
-        "--time",
-        metavar="COLUMN",
-        help="time column in seconds (default: the one the model was fitted with, else time_s)",
-    )
+    add_model_time_option(replay)
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
     replay.add_argument(
         "--continues",
@@ -87,7 +85,7 @@ def add_parser(verbs) -> None:
         metavar="N",
         help="largest magnitude of those counts (default 30000)",
     )
-    replay.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
+    add_source_option(replay)
     add_probe_options(replay)
     add_json_option(replay, "the per-sample result")
     add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
