@@ -76,15 +76,13 @@ def check_output_dir(path: str | Path, option: str = "--out") -> Path:
     leaves nothing behind).
     """
     path = Path(path)
-    if path.exists():
-        if not path.is_dir():
-            raise InputError(f"{path}: output path exists and is not a folder; choose another {option}")
-        if not os.access(path, os.W_OK | os.X_OK):
-            raise InputError(f"{path}: the output folder is not writable; choose another {option}")
-        return path
-    _, why = _creatable(path)
-    if why:
-        raise InputError(f"{path}: cannot create the output folder ({why}); choose another {option}")
+    _check_folder(
+        path,
+        option,
+        not_folder=f"{path}: output path exists and is not a folder",
+        not_writable=f"{path}: the output folder is not writable",
+        not_creatable=f"{path}: cannot create the output folder ({{why}})",
+    )
     return path
 
 
@@ -100,16 +98,32 @@ def check_output_file(path: str | Path, option: str) -> Path:
     if path.exists() and not os.access(path, os.W_OK):
         raise InputError(f"{path}: the file is read-only; choose another {option}")
     folder = path.parent
+    _check_folder(
+        folder,
+        option,
+        not_folder=f"{path}: {folder} is not a folder",
+        not_writable=f"{path}: the folder {folder} is not writable",
+        not_creatable=f"{path}: cannot create its folder {folder} ({{why}})",
+    )
+    return path
+
+
+def _check_folder(folder: Path, option: str, *, not_folder: str, not_writable: str, not_creatable: str) -> None:
+    """Refuse ``folder`` unless it is a writable folder or can be created below one: the message that applies
+    (``{why}`` in ``not_creatable`` says why it cannot be created) and ``; choose another {option}``."""
     if folder.exists():
         if not folder.is_dir():
-            raise InputError(f"{path}: {folder} is not a folder; choose another {option}")
-        if not os.access(folder, os.W_OK | os.X_OK):
-            raise InputError(f"{path}: the folder {folder} is not writable; choose another {option}")
-        return path
-    _, why = _creatable(folder)
-    if why:
-        raise InputError(f"{path}: cannot create its folder {folder} ({why}); choose another {option}")
-    return path
+            problem = not_folder
+        elif not os.access(folder, os.W_OK | os.X_OK):
+            problem = not_writable
+        else:
+            return
+    else:
+        _, why = _creatable(folder)
+        if not why:
+            return
+        problem = not_creatable.format(why=why)
+    raise InputError(f"{problem}; choose another {option}")
 
 
 def _temporary_for(path: Path) -> Path:
@@ -211,14 +225,23 @@ def save_figure(figure, path: str | Path, **options) -> None:
         figure.savefig(temporary, **options)
 
 
-def read_json_file(path: str | Path, what: str = "model file") -> Any:
-    """The JSON value in ``path``; one line naming the file when it is missing or not JSON."""
+def read_input_text(path: str | Path, what: str) -> str:
+    """The UTF-8 text of the input file ``path``, noted as read; one line naming the file when it is missing.
+
+    A UnicodeDecodeError is left to the caller, which says what the file should have been.
+    """
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: {what} not found")
     note_read(path)
+    return path.read_text(encoding="utf-8")
+
+
+def read_json_file(path: str | Path, what: str = "model file") -> Any:
+    """The JSON value in ``path``; one line naming the file when it is missing or not JSON."""
+    path = Path(path)
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        return json.loads(read_input_text(path, what))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not a JSON {what} ({exc})") from None
     except RecursionError:

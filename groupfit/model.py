@@ -23,7 +23,7 @@ import dataclasses
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Self
 
 import numpy as np
 
@@ -71,8 +71,19 @@ def grouped_prediction(
     return intercepts[groups] + np.einsum("ij,ij->i", inputs, slopes[groups])
 
 
+class _Section:
+    """A section of the model file, read from and written to its JSON object; unknown keys are kept in ``extra``."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return _fields_to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Self:
+        return _fields_from_dict(cls, data)
+
+
 @dataclass(frozen=True, kw_only=True)
-class Switching:
+class Switching(_Section):
     """The ``switching`` section: the criterion of the run-time rule and, when derived, its parameters.
 
     Older files may hold only the criterion and its series; the rule then
@@ -112,16 +123,9 @@ class Switching:
         """This section with the rule parameters of :func:`groupfit.runtime.rule_parameters` (keys of RULE_KEYS)."""
         return dataclasses.replace(self, **{key: _frozen(value) for key, value in parameters.items()})
 
-    def to_dict(self) -> dict[str, Any]:
-        return _fields_to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> "Switching":
-        return _fields_from_dict(cls, data)
-
 
 @dataclass(frozen=True, kw_only=True)
-class Position:
+class Position(_Section):
     """The ``position`` section: the error's dependence on an axis position (docs/position.md).
 
     ``E(P, T) = K0(T) + c1(T)·d + … + c_order(T)·d^order`` with ``d = P − P0``
@@ -142,13 +146,6 @@ class Position:
     coefficient_ranges: tuple[tuple[float, float], ...] | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
-    def to_dict(self) -> dict[str, Any]:
-        return _fields_to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> "Position":
-        return _fields_from_dict(cls, data)
-
     def coefficient_array(self, *, intercept: bool = True) -> np.ndarray:
         """(G, order, M+1): the rows of ``c_1 … c_order`` per group, constant first (0 without an intercept)."""
         rows = np.asarray(self.coefficients, dtype=float)
@@ -158,7 +155,7 @@ class Position:
 
 
 @dataclass(frozen=True, kw_only=True)
-class DeadBand:
+class DeadBand(_Section):
     """The ``dead_band`` section: no update while every measured input is within ``threshold_c`` of ``reference``.
 
     Seed 001's rule: the compensation is only updated while some
@@ -169,13 +166,6 @@ class DeadBand:
     reference: str
     threshold_c: float
     extra: Mapping[str, Any] = field(default_factory=dict, repr=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        return _fields_to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> "DeadBand":
-        return _fields_from_dict(cls, data)
 
 
 def time_column(model: "ModelFile | Mapping[str, Any]") -> str:

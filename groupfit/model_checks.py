@@ -16,6 +16,7 @@ from groupfit.errors import InputError
 from groupfit.features import STARTS, Feature
 from groupfit.grouping import hard_groups, soft_groups
 from groupfit.model_recalibration import recalibration_problem
+from groupfit.model_sections import section_shape_problem
 from groupfit.reference import reference_problem
 from groupfit.training_checks import expectation_problem
 from groupfit.training_checks import is_number as _is_number
@@ -361,14 +362,10 @@ MAX_POSITION_ORDER = 8
 
 def position_problem(model: Mapping[str, Any]) -> str | None:
     """What is wrong with the optional ``position`` section, or None."""
+    problem = section_shape_problem(model, "position", ("column", "p0_mm", "order", "travel_mm", "coefficients"))
     section = model.get("position")
-    if section is None:
-        return None
-    if not isinstance(section, Mapping):
-        return "'position' must be an object"
-    for key in ("column", "p0_mm", "order", "travel_mm", "coefficients"):
-        if key not in section:
-            return f"position lacks key '{key}'"
+    if problem or section is None:
+        return problem
     column = section["column"]
     if not isinstance(column, str) or not column.strip():
         return "position.column must be a column name"

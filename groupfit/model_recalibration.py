@@ -38,6 +38,8 @@ import math
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, Mapping
 
+from groupfit.model_sections import section_shape_problem
+
 METHODS = ("hold", "kalman")
 TERMS = ("offset", "drift", "gain")
 """States a filter may carry, in the order of its state vector."""
@@ -109,20 +111,24 @@ OPTIONAL_DEFAULTS = {
 }
 
 
+REQUIRED_KEYS = (
+    "method",
+    "offset_sigma_um_per_sqrt_h",
+    "initial_offset_sigma_um",
+    "gate_sigmas",
+    "confirm_after",
+    "offset_max_um",
+    "rate_um_per_sample",
+)
+"""The keys every ``recalibration`` section holds, in the order a missing one is named."""
+
+
 def recalibration_problem(model: Mapping[str, Any]) -> str | None:
     """What is wrong with the optional ``recalibration`` section, or None."""
+    problem = section_shape_problem(model, "recalibration", REQUIRED_KEYS)
     section = model.get("recalibration")
-    if section is None:
-        return None
-    if not isinstance(section, Mapping):
-        return "'recalibration' must be an object"
-    for key in ("method", "offset_sigma_um_per_sqrt_h", "initial_offset_sigma_um", "gate_sigmas") + (
-        "confirm_after",
-        "offset_max_um",
-        "rate_um_per_sample",
-    ):
-        if key not in section:
-            return f"recalibration lacks key '{key}'"
+    if problem or section is None:
+        return problem
     method = section["method"]
     if method not in METHODS:
         return f"recalibration.method = {method!r}: must be one of {', '.join(METHODS)}"

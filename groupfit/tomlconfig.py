@@ -15,17 +15,14 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from groupfit.errors import InputError
-from groupfit.io import note_read
+from groupfit.io import read_input_text
 
 
 def read_toml(path: str | Path, what: str = "configuration file") -> dict[str, Any]:
     """The parsed file; InputError when it is missing, not UTF-8 or not valid TOML."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: {what} not found")
-    note_read(path)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(read_input_text(path, what))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{path}: not valid TOML ({exc})") from None
     except UnicodeDecodeError:

@@ -17,20 +17,16 @@ from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands.common import (
     clock_options,
     commit_outputs,
+    finish_outputs,
     plan_outputs,
     print_notes,
     report_stream,
-    write_json,
-    wrote_line,
 )
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export import write
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.plots import plot_fit
-
-AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
-GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion")
 
 
 def run_replay(args: argparse.Namespace) -> int:
@@ -88,11 +84,7 @@ def run_replay(args: argparse.Namespace) -> int:
         title = f"{run.name}: AR(1) routine, start {model.start}"
         plot_fit(time_s, measured, result.prediction_um, [], [(1, len(heat))], figure, title=title, label="AR(1)")
         figures.append(figure)
-    written = [*figures, write_json(args.json, out)]
-    commit_outputs()
-    if any(written):
-        lines.append("wrote    " + wrote_line(written))
-    print("\n".join(lines), file=report_stream(args))
+    finish_outputs(args, "\n".join(lines), out, figures)
     return 0
 
 

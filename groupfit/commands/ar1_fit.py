@@ -16,7 +16,6 @@ from groupfit.commands.common import (
     write_json,
     wrote_line,
 )
-from groupfit.config import default_config_path
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.plots import plot_fit
@@ -74,8 +73,7 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
     if not args.heat:
         raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
-    config_path = args.config or default_config_path()
-    config = config_with_data_options(args, config_path)
+    config_path, config = config_with_data_options(args)
     out_dir = plan_outputs(
         args,
         config_path,

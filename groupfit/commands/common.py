@@ -10,7 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from groupfit.config import override, read_config
+from groupfit.config import default_config_path, override, read_config
 from groupfit.data import (
     ERROR_LIMIT_UM,
     PERIOD_TOLERANCE,
@@ -117,6 +117,20 @@ def add_model_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
 
 
+def add_model_time_option(parser: argparse.ArgumentParser) -> None:
+    """``--time COLUMN`` of a verb that reads a run against a model: the model's time column by default."""
+    parser.add_argument(
+        "--time",
+        metavar="COLUMN",
+        help="time column in seconds (default: the one the model was fitted with, else time_s)",
+    )
+
+
+def add_source_option(parser: argparse.ArgumentParser) -> None:
+    """``--source NAME``: the heat source of a ball-screw model."""
+    parser.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
+
+
 def add_out_option(
     parser: argparse.ArgumentParser,
     help: str,
@@ -170,8 +184,10 @@ def add_quiet_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def config_with_data_options(args: argparse.Namespace, config_path: str | None) -> dict[str, dict[str, Any]]:
-    """The configuration file merged with --data, --time, --temps, --error."""
+def config_with_data_options(args: argparse.Namespace) -> tuple[str | Path | None, dict[str, dict[str, Any]]]:
+    """The run configuration's path (CONFIG, else configs/default.toml) and the configuration merged with --data,
+    --time, --temps, --error and the other data options."""
+    config_path = args.config or default_config_path()
     config = read_config(config_path)
     if args.data and getattr(args, "config", None) is None:
         # a run given on the command line does not inherit the default configuration's runs and columns:
@@ -187,7 +203,7 @@ def config_with_data_options(args: argparse.Namespace, config_path: str | None) 
     override(config, "data", "period_tolerance", getattr(args, "period_tolerance", None))
     override(config, "data", "resample_s", getattr(args, "resample", None))
     override(config, "data", "ambient", getattr(args, "ambient", None))
-    return config
+    return config_path, config
 
 
 def load_configured_run(config: dict, path: str | None = None, **options) -> Run:
@@ -237,6 +253,15 @@ def write_json(target: str | None, obj: Any) -> Path | None:
 def wrote_line(paths) -> str:
     """The files a verb wrote, comma separated (None entries left out)."""
     return ", ".join(str(p) for p in paths if p is not None)
+
+
+def finish_outputs(args: argparse.Namespace, report: str, data: Any, figures) -> None:
+    """Write ``data`` to ``--json``, commit the outputs, then print ``report`` and a ``wrote`` line naming the
+    files written (none when nothing was)."""
+    written = [*figures, write_json(args.json, data)]
+    commit_outputs()
+    lines = [report] + (["wrote    " + wrote_line(written)] if any(written) else [])
+    print("\n".join(lines), file=report_stream(args))
 
 
 def residual_line(result: dict[str, Any]) -> str:

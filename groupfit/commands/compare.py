@@ -30,7 +30,7 @@ from groupfit.commands.common import (
     wrote_line,
 )
 from groupfit.comparison import ComparisonSettings, compare_models
-from groupfit.config import default_config_path, override
+from groupfit.config import override
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
@@ -75,8 +75,7 @@ def add_parser(verbs) -> None:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    config_path = args.config or default_config_path()
-    config = config_with_data_options(args, config_path)
+    config_path, config = config_with_data_options(args)
     override(config, "data", "validate", args.validate)
     override(config, "compare", "pmax", args.pmax)
     override(config, "compare", "heat", args.heat)

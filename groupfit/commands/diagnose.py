@@ -14,6 +14,8 @@ import numpy as np
 from groupfit.commands.common import (
     add_clock_options,
     add_json_option,
+    add_model_argument,
+    add_model_time_option,
     add_out_option,
     check_output_dir,
     clock_options,
@@ -41,7 +43,7 @@ from groupfit.runtime import replay_groups
 
 def add_parser(verbs) -> None:
     parser = verbs.add_parser("diagnose", help="trace a model's residual on measured data to a missing effect")
-    parser.add_argument("model", metavar="MODEL", help="model file (groupfit-model/1 JSON)")
+    add_model_argument(parser)
     parser.add_argument(
         "--data",
         required=True,
@@ -51,9 +53,7 @@ def add_parser(verbs) -> None:
         "one at a time",
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
-    parser.add_argument(
-        "--time", metavar="COLUMN", help="time column (default: the one the model was fitted with, else time_s)"
-    )
+    add_model_time_option(parser)
     add_json_option(parser)
     add_clock_options(parser)
     add_out_option(parser, "folder for figures and the new model", default="groupfit-out")

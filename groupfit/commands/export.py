@@ -6,7 +6,13 @@ import argparse
 
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
-from groupfit.commands.common import add_model_argument, add_out_option, commit_outputs, plan_outputs
+from groupfit.commands.common import (
+    add_model_argument,
+    add_out_option,
+    add_source_option,
+    commit_outputs,
+    plan_outputs,
+)
 from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
 from groupfit.export import TARGETS, render, write
@@ -55,7 +61,7 @@ def add_parser(verbs) -> None:
         help="table, cec: largest interpolation error of the position table (default 0.5 um)",
     )
     add_cec_options(export)
-    export.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
+    add_source_option(export)
     export.add_argument(
         "--period",
         type=float,

@@ -33,7 +33,7 @@ from groupfit.commands.common import (
     wrote_line,
 )
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
-from groupfit.config import default_config_path, override
+from groupfit.config import override
 from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C, Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
@@ -59,7 +59,9 @@ def add_parser(verbs) -> None:
     fit = verbs.add_parser("fit")
     add_run_options(fit)
     fit.add_argument(
-        "--p", type=p_value, help="number of hard break points; default (or 'auto'): chosen by --choose over 0…pmax"
+        "--p",
+        type=whole_or_auto("p"),
+        help="number of hard break points; default (or 'auto'): chosen by --choose over 0…pmax",
     )
     fit.add_argument("--pmax", type=int, help="largest p tried when p is chosen (default 3)")
     fit.add_argument(
@@ -105,7 +107,7 @@ def add_parser(verbs) -> None:
     )
     fit.add_argument(
         "--position-order",
-        type=order_value,
+        type=whole_or_auto("order"),
         metavar="N|auto",
         help="with --position: polynomial order in P (default 1: K0 + tanb (P - P0)); auto: chosen by "
         "cross-validation over held-out positions",
@@ -144,8 +146,7 @@ FIT_FILES = ("model.json", "fit.png", "position.png")
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
-    config_path = args.config or default_config_path()
-    config = config_with_data_options(args, config_path)
+    config_path, config = config_with_data_options(args)
     override(config, "model", "p", args.p)
     override(config, "model", "pmax", args.pmax)
     override(config, "model", "p_rule", args.p_rule)
@@ -355,14 +356,18 @@ def with_inputs(run: Run, names) -> Run:
     return replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
 
 
-def order_value(text: str) -> int | str:
-    """--position-order: a whole number or 'auto'."""
-    if text == "auto":
-        return text
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid order: {text!r} (a whole number or 'auto')") from None
+def whole_or_auto(what: str):
+    """The argparse type of an option taking a whole number or 'auto' (``what`` names it in the message)."""
+
+    def value(text: str) -> int | str:
+        if text == "auto":
+            return text
+        try:
+            return int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"invalid {what}: {text!r} (a whole number or 'auto')") from None
+
+    return value
 
 
 def check_measured(run: Run, p) -> None:
@@ -460,16 +465,6 @@ def select_run_inputs(run: Run, frames: list, method: str, k: int | None, runs: 
         "candidates": len(run.temp_names),
         "folds": folds,
     }
-
-
-def p_value(text: str) -> int | str:
-    """--p: a whole number or 'auto'."""
-    if text == "auto":
-        return text
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid p: {text!r} (a whole number or 'auto')") from None
 
 
 def select_breaks(config: dict, run: Run) -> dict:

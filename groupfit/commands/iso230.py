@@ -11,11 +11,8 @@ from matplotlib.figure import Figure
 from groupfit.commands.common import (
     add_json_option,
     add_out_option,
-    commit_outputs,
+    finish_outputs,
     plan_outputs,
-    report_stream,
-    write_json,
-    wrote_line,
 )
 from groupfit.io import save_figure
 from groupfit.iso230 import STANDARD_REPEATS, Iso230Result, load_runs
@@ -50,10 +47,7 @@ def run_iso230(args: argparse.Namespace) -> int:
         figure = out_dir / "iso230.png"
         plot_iso230(result, figure, title=Path(args.run).name)
         written.append(figure)
-    written.append(write_json(args.json, data))
-    commit_outputs()
-    lines = [iso230_report(data)] + (["wrote    " + wrote_line(written)] if any(written) else [])
-    print("\n".join(lines), file=report_stream(args))
+    finish_outputs(args, iso230_report(data), data, written)
     return 0
 
 

@@ -16,15 +16,15 @@ from groupfit.commands.common import (
     add_clock_options,
     add_json_option,
     add_model_argument,
+    add_model_time_option,
     add_out_option,
+    add_source_option,
     clock_options,
-    commit_outputs,
+    finish_outputs,
     plan_outputs,
     print_notes,
     report_stream,
     residual_line,
-    write_json,
-    wrote_line,
 )
 from groupfit.commands.replay_probes import (
     add_probe_options,
@@ -56,11 +56,7 @@ def add_parser(verbs) -> None:
         metavar="CSV",
         help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
     )
-    replay.add_argument(
-        "--time",
-        metavar="COLUMN",
-        help="time column in seconds (default: the one the model was fitted with, else time_s)",
-    )
+    add_model_time_option(replay)
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
     replay.add_argument(
         "--continues",
@@ -89,7 +85,7 @@ def add_parser(verbs) -> None:
         metavar="N",
         help="largest magnitude of those counts (default 30000)",
     )
-    replay.add_argument("--source", metavar="NAME", help="ball-screw model: the heat source (default: its only one)")
+    add_source_option(replay)
     add_probe_options(replay)
     add_json_option(replay, "the per-sample result")
     add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
@@ -146,10 +142,7 @@ def run_replay(args: argparse.Namespace) -> int:
         figure = out_dir / "replay.png"
         plot_replay(run, rule.tables, replay, model, figure)
         written.append(figure)
-    written.append(write_json(args.json, result.to_json()))
-    commit_outputs()
-    lines = [result.summary()] + (["wrote    " + wrote_line(written)] if any(written) else [])
-    print("\n".join(lines), file=report_stream(args))
+    finish_outputs(args, result.summary(), result.to_json(), written)
     return 0
 
 

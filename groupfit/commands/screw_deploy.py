@@ -10,12 +10,11 @@ import numpy as np
 from groupfit.commands.common import (
     clock_options,
     commit_outputs,
+    finish_outputs,
     plan_outputs,
     print_notes,
     report_stream,
     residual_line,
-    write_json,
-    wrote_line,
 )
 from groupfit.errors import InputError
 from groupfit.export import write
@@ -56,10 +55,7 @@ def run_screw_replay(args: argparse.Namespace) -> int:
         figure = out_dir / "replay.png"
         plot_error(run.time, run.error, {"run-time law": prediction}, figure, title=f"{run.name}: {law.source}")
         written.append(figure)
-    written.append(write_json(args.json, result))
-    commit_outputs()
-    lines = [screw_replay_report(result)] + (["wrote    " + wrote_line(written)] if any(written) else [])
-    print("\n".join(lines), file=report_stream(args))
+    finish_outputs(args, screw_replay_report(result), result, written)
     return 0
 
 

@@ -41,17 +41,9 @@ from groupfit.export.c_derived import derived_constants, init_derived, state_fie
 from groupfit.export.c_terms import position_header, position_source, reference_header, reference_source
 from groupfit.export.c_transfer import transfer_header, transfer_source
 from groupfit.export.literals import c_comment_text as _ascii
-from groupfit.export.literals import c_float_literal, double_literal, reading_notes, real_literal
-from groupfit.runtime import (
-    COUNT_MAX,
-    FAULT_HELD,
-    FAULT_SENSOR,
-    RETURN_PERIOD_FAULT,
-    RETURN_SENSOR_FAULT,
-    SWITCH_CRITERION,
-    SWITCH_FORCED,
-    RuleTables,
-)
+from groupfit.export.literals import c_float_literal, double_literal, reading_comments, real_literal
+from groupfit.export.rule_codes import RULE_CODES
+from groupfit.runtime import COUNT_MAX, RuleTables
 
 HEADER = Template(
     r"""/*
@@ -283,7 +275,7 @@ def padded(values, fill) -> list:
 def render_c(tables: RuleTables) -> dict[str, str]:
     """``{"groupfit_model.h": …, "groupfit_model.c": …}`` of a model's rule tables."""
     header = HEADER.substitute(
-        temp_lines=reading_lines(tables),
+        temp_lines="".join(f" *   {line}\n" for line in reading_comments(tables, "criterion", "temps", 0, _ascii)),
         input_lines=input_lines(tables),
         criterion=_ascii(tables.criterion),
         n_temps=tables.n_temps,
@@ -296,7 +288,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         hold=tables.hold_samples,
         period=double_literal(tables.sampling_period_s),
         period_tolerance=double_literal(tables.period_tolerance_s),
-        count_max=COUNT_MAX,
+        **RULE_CODES,
         **transfer_header(tables),
         delay_macros="".join(
             f"#define GF_DELAY_{k} {d.delay_samples} /* samples of delay of derived input {k} */\n"
@@ -304,12 +296,6 @@ def render_c(tables: RuleTables) -> dict[str, str]:
             if d.transform == "delay"
         ),
         state_fields=transfer_header(tables)["transfer_field"] + state_fields(tables),
-        fault_held=FAULT_HELD,
-        fault_sensor=FAULT_SENSOR,
-        ret_sensor=RETURN_SENSOR_FAULT,
-        ret_period=RETURN_PERIOD_FAULT,
-        switch_criterion=SWITCH_CRITERION,
-        switch_forced=SWITCH_FORCED,
         comp_min_f=c_float_literal(tables.comp_min_um),
         comp_max_f=c_float_literal(tables.comp_max_um),
         rate_f=c_float_literal(tables.rate_limit_um),
@@ -343,17 +329,6 @@ def render_c(tables: RuleTables) -> dict[str, str]:
         **transfer_source(dot_product(tables), position_source(tables), has_position=tables.has_position),
     )
     return {"groupfit_model.h": header, "groupfit_model.c": source}
-
-
-def reading_lines(tables: RuleTables) -> str:
-    """Header lines: every reading, its valid range, unit and what it feeds."""
-    lines = [
-        f" *   temps[{r}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}\n"
-        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, "criterion"))
-    ]
-    if tables.source_names:
-        lines.append(" *   (temperatures in degC; a source in the unit of its column in the modelling data)\n")
-    return "".join(lines)
 
 
 def input_lines(tables: RuleTables) -> str:

@@ -70,6 +70,19 @@ class DriverOutput:
     prediction_um: np.ndarray
     compensation_um: np.ndarray
 
+    @classmethod
+    def from_rows(cls, rows: Sequence[Sequence[str]]) -> "DriverOutput":
+        """The decisions of the driver's sample lines, each ``code group fault switched prediction compensation``
+        (the two reals in hexadecimal)."""
+        return cls(
+            code=np.array([int(r[0]) for r in rows]),
+            group=np.array([int(r[1]) for r in rows]),
+            fault=np.array([int(r[2]) for r in rows]),
+            switched=np.array([int(r[3]) for r in rows]),
+            prediction_um=np.array([float.fromhex(r[4]) for r in rows]),
+            compensation_um=np.array([float.fromhex(r[5]) for r in rows]),
+        )
+
 
 def build_driver(
     export_dir: str | Path,
@@ -134,16 +147,7 @@ def run_driver(executable: str | Path, streams: Sequence[np.ndarray], timeout: f
     for readings in streams:
         chunk = rows[start : start + len(readings)]
         start += len(readings)
-        outputs.append(
-            DriverOutput(
-                code=np.array([int(r[0]) for r in chunk]),
-                group=np.array([int(r[1]) for r in chunk]),
-                fault=np.array([int(r[2]) for r in chunk]),
-                switched=np.array([int(r[3]) for r in chunk]),
-                prediction_um=np.array([float.fromhex(r[4]) for r in chunk]),
-                compensation_um=np.array([float.fromhex(r[5]) for r in chunk]),
-            )
-        )
+        outputs.append(DriverOutput.from_rows(chunk))
     if start != len(rows):
         raise RuntimeError(f"driver printed {len(rows)} lines for {start} samples")
     return outputs

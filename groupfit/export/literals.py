@@ -91,6 +91,18 @@ def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]
     return notes_per_reading
 
 
+def reading_comments(tables, criterion_word: str, array: str, first_index: int, comment_text) -> list[str]:
+    """One comment line a reading, ``array[index] = name  [low, high] unit  (notes)``, and a line on the units
+    where sources are read; ``comment_text`` makes a name fit the comment, the caller adds the comment markers."""
+    lines = [
+        f"{array}[{r + first_index}] = {comment_text(name)}  {valid}{unit}{comment_text(note)}"
+        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, criterion_word))
+    ]
+    if tables.source_names:
+        lines.append("(temperatures in degC; a source in the unit of its column in the modelling data)")
+    return lines
+
+
 def real_literal(value: float) -> str:
     """``GF_R(double, float)``: a C table entry of one real number (double and single literal)."""
     return f"GF_R({double_literal(value)}, {c_float_literal(value)})"

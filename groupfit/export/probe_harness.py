@@ -59,15 +59,7 @@ def run_probe_driver(
         start += n_lines
         samples = [r for r in chunk if r[0] != "P"]
         codes = np.array([int(r[1]) for r in chunk if r[0] == "P"], dtype=int)
-        output = DriverOutput(
-            code=np.array([int(r[0]) for r in samples]),
-            group=np.array([int(r[1]) for r in samples]),
-            fault=np.array([int(r[2]) for r in samples]),
-            switched=np.array([int(r[3]) for r in samples]),
-            prediction_um=np.array([float.fromhex(r[4]) for r in samples]),
-            compensation_um=np.array([float.fromhex(r[5]) for r in samples]),
-        )
-        out.append((output, codes))
+        out.append((DriverOutput.from_rows(samples), codes))
     return out
 
 

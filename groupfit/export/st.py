@@ -36,22 +36,13 @@ from string import Template
 
 from groupfit.controller_limits import check_st_name, st_integer_type
 from groupfit.errors import InputError
-from groupfit.export.literals import reading_notes, shortest_literal
+from groupfit.export.literals import reading_comments, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
+from groupfit.export.rule_codes import RULE_CODES
 from groupfit.export.st_probe import probe_pieces
 from groupfit.export.st_terms import input_value, position_pieces, reference_pieces
 from groupfit.export.st_transfer import transfer_pieces
-from groupfit.runtime import (
-    COUNT_MAX,
-    FAULT_HELD,
-    FAULT_PERIOD,
-    FAULT_SENSOR,
-    RETURN_PERIOD_FAULT,
-    RETURN_SENSOR_FAULT,
-    SWITCH_CRITERION,
-    SWITCH_FORCED,
-    RuleTables,
-)
+from groupfit.runtime import COUNT_MAX, RuleTables
 
 REAL_TYPES = ("REAL", "LREAL")
 
@@ -263,7 +254,9 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
     def row(values) -> str:
         return ", ".join(literal(v) for v in values)
 
-    temp_lines = reading_lines(tables)
+    temp_lines = "\n".join(
+        f"    {line}" for line in reading_comments(tables, "switching criterion", "Temps", 1, _ascii)
+    )
     coefficients = "\n".join(
         f"    COEF_{k} : ARRAY[1..{tables.n_groups}] OF {real} := [{row(tables.coefficients[:, k])}];"
         for k in range(tables.n_inputs + 1)
@@ -287,7 +280,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         criterion_number=tables.criterion_reading + 1,
         hold=tables.hold_samples,
         hold_type=st_integer_type(tables.hold_samples + 1, "switching.hold_samples + 1"),
-        count_max=COUNT_MAX,
+        **RULE_CODES,
         period=shortest_literal(tables.sampling_period_s, single=False),
         period_text=f"{tables.sampling_period_s:g}",
         period_tolerance=shortest_literal(tables.period_tolerance_s, single=False),
@@ -306,29 +299,12 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         comp_max_text=f"{tables.comp_max_um:g}",
         rate_text=f"{tables.rate_limit_um:g}",
         bad_init=", ".join([str(tables.hold_samples + 1)] * tables.n_temps),
-        fault_held=FAULT_HELD,
-        fault_sensor=FAULT_SENSOR,
-        fault_period=FAULT_PERIOD,
-        ret_sensor=RETURN_SENSOR_FAULT,
-        ret_period=RETURN_PERIOD_FAULT,
-        switch_criterion=SWITCH_CRITERION,
-        switch_forced=SWITCH_FORCED,
         **reference_pieces(tables, real),
         **transfer_pieces(tables, real, literal, dot_product, position_pieces(tables, real, literal)),
         **probe_pieces(tables, real, literal),
     )
     check_st_name(name, used=frozenset(re.findall(r"^\s*([A-Za-z_]\w*)\s*:", text, flags=re.M)))
     return {f"{name}.st": text}
-
-
-def reading_lines(tables: RuleTables) -> str:
-    lines = [
-        f"    Temps[{r + 1}] = {_ascii(name)}  {valid}{unit}{_ascii(note)}"
-        for r, (name, valid, unit, note) in enumerate(reading_notes(tables, "switching criterion"))
-    ]
-    if tables.source_names:
-        lines.append("    (temperatures in degC; a source in the unit of its column in the modelling data)")
-    return "\n".join(lines)
 
 
 def input_lines(tables: RuleTables) -> str:

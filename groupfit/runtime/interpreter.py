@@ -21,6 +21,7 @@ import numpy as np
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
+from groupfit.runtime.rate import rate_limited
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator
 from groupfit.runtime.rule import (
     COUNT_MAX,
@@ -252,12 +253,7 @@ class SwitchingRule:
             target = self._comp_max
         if target < self._comp_min:
             target = self._comp_min
-        delta = target - self.compensation
-        if delta > self._rate:
-            delta = self._rate
-        if delta < -self._rate:
-            delta = -self._rate
-        self.compensation = self.compensation + delta
+        self.compensation = rate_limited(self.compensation, target, self._rate)
         fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
         return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
 

@@ -49,6 +49,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from groupfit.model import ModelFile, Recalibration
+from groupfit.runtime.rate import rate_limited
 
 PROBE_APPLIED = 1
 PROBE_REJECTED = 0
@@ -204,12 +205,7 @@ class Recalibrator:
         target = self.x[0] + self.x[2] * model_um
         if self._significance2 > self._zero and not self.significant:
             target = self._zero
-        delta = target - self.applied
-        if delta > self._rate:
-            delta = self._rate
-        if delta < -self._rate:
-            delta = -self._rate
-        self.applied = self.applied + delta
+        self.applied = rate_limited(self.applied, target, self._rate)
         return self.applied
 
     def invalidate(self) -> None:
