@@ -243,8 +243,7 @@ def test_reset_restarts_the_derived_inputs():
     assert again == first and block.vars["delayPos2"] == 40 % 10
 
 
-def test_on_time_blocks_match_the_c_build_and_the_python_rule(single_driver):
-    """REAL: bit for bit with the single-precision C build; LREAL: the Python rule's decisions."""
+def test_on_time_real_block_matches_the_single_precision_c_build_bit_for_bit(single_driver):
     model, run = augmented_model("on-time p=1")
     streams = derived_streams(model, run)
     text = derived_block("on-time p=1", "REAL")
@@ -252,6 +251,13 @@ def test_on_time_blocks_match_the_c_build_and_the_python_rule(single_driver):
     single = as_single(list(streams.values()))
     st_out = run_block(text, single, model["sampling_period_s"], "REAL")
     assert_same_decisions(st_out, run_driver(single_driver("derived on-time", model), single))
+
+
+@pytest.mark.slow
+def test_on_time_lreal_block_makes_the_python_rules_decisions():
+    """Another case of the LREAL evaluation of derived inputs (the fast lane's is the on/off block)."""
+    model, run = augmented_model("on-time p=1")
+    streams = derived_streams(model, run)
     rule = SwitchingRule(model)
     outputs = run_block(derived_block("on-time p=1", "LREAL"), list(streams.values()), 100.0, "LREAL")
     for temps, out in zip(streams.values(), outputs):

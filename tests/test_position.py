@@ -576,6 +576,7 @@ def test_derived_inputs_with_position_and_dead_band_c_build_is_the_python_rule(t
 
 
 @pytest.mark.toolchain
+@pytest.mark.slow
 def test_derived_inputs_with_position_and_dead_band_lreal_block_is_the_python_rule():
     from support.structured_text import run_block
 

@@ -27,7 +27,7 @@ def test_sweep_records_one_row_per_run_and_a_second_sweep_skips_them(tmp_path, c
     config = write_study(
         tmp_path,
         'p = {start = 0, stop = 3}\nsearch = ["exact", "ga"]\nobjective = ["sae", "sse"]',
-        "seed = [0, 1]\nmax_generations = [30]",
+        "seed = [0, 1]\nmax_generations = [10]",
     )
     db = tmp_path / "study.sqlite"
     assert sweep(config, db, "--workers", "2", "--json", str(tmp_path / "first.json")) == 0
@@ -82,7 +82,7 @@ def test_failed_runs_are_recorded_not_fatal_and_tried_again(tmp_path, capsys):
 
 def test_report_writes_tables_and_figures(tmp_path):
     config = write_study(
-        tmp_path, 'p = [0, 1, 2]\nsearch = ["exact", "ga"]\nn = [1, 3]', "seed = [0, 1]\nmax_generations = [5, 40]"
+        tmp_path, 'p = [0, 1, 2]\nsearch = ["exact", "ga"]\nn = [1, 3]', "seed = [0, 1]\nmax_generations = [5, 20]"
     )
     report = tmp_path / "report"
     assert sweep(config, tmp_path / "s.sqlite", "--workers", "2", "--report", str(report)) == 0
@@ -107,7 +107,7 @@ def test_report_writes_tables_and_figures(tmp_path):
         for line in text.split("## GA success against budget")[1].splitlines()
         if line.startswith("| yes | 60 ")
     ]
-    assert sorted({int(cells[3]) for cells in success_rows}) == [300, 2400]  # population 60 × 5 and × 40
+    assert sorted({int(cells[3]) for cells in success_rows}) == [300, 1200]  # population 60 × 5 and × 20
     assert {int(cells[4]) for cells in success_rows} == {1, 2}  # p = 0 has no GA runs
 
 
