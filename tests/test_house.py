@@ -21,6 +21,18 @@ C901_EXCEPTIONS = {
     "tests/support/structured_text.py",
 }
 """Files with a function over ruff's complexity limit (pyproject's per-file-ignores): entries may only leave."""
+FBT_EXCEPTIONS = {
+    "groupfit/commands/common.py",
+    "groupfit/commands/simulate.py",
+    "groupfit/continuation.py",
+    "groupfit/export/sheet.py",
+    "groupfit/heldout/check.py",
+    "groupfit/heldout/scorer.py",
+    "groupfit/recalibration_tuning.py",
+    "groupfit/screw/model.py",
+}
+"""Library files that still take a boolean positionally (ruff FBT001/FBT002 in pyproject's per-file-ignores): entries
+may only leave."""
 LONG_MODULES: dict[str, int] = {}
 """Modules over 500 lines and their length today: they may only shrink."""
 KNOWN_CIRCLES: set[frozenset[str]] = set()
@@ -131,5 +143,9 @@ def test_a_module_holds_at_most_500_lines(name):
 def test_lint_exceptions_only_shrink():
     ignores = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["ruff"]["lint"]["per-file-ignores"]
     assert {path for path, rules in ignores.items() if "C901" in rules} <= C901_EXCEPTIONS
+    library = {path for path in ignores if not path.startswith(("tests/", "bench/"))}
+    assert {path for path in library if "FBT001" in ignores[path] or "FBT002" in ignores[path]} <= FBT_EXCEPTIONS
     settings = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["ruff"]["lint"]
-    assert settings["mccabe"]["max-complexity"] <= 15 and {"C901", "PLC0415"} <= set(settings["select"])
+    assert settings["mccabe"]["max-complexity"] <= 15 and {"C901", "PLC0415", "FBT001", "FBT002"} <= set(
+        settings["select"]
+    )
