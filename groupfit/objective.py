@@ -228,11 +228,6 @@ class SegmentCost:
         gram = np.take(self._gram_prefix, b, axis=1) - np.take(self._gram_prefix, lo - 1, axis=1)
         return ldl_least_squares(gram, coefficients=coefficients)
 
-    def served_sae(self, lo: np.ndarray, b: np.ndarray, coef: np.ndarray) -> np.ndarray:
-        """The ``sae`` cost (units of y) of fits ``coef`` of soft groups ``lo … b``, counted as evaluations."""
-        self.evaluations += len(lo)
-        return self._sae(lo, self.served_last(b), coef) * self.standardiser.y_scale
-
     def with_objective(self, objective: str) -> "SegmentCost":
         """The same data and groups scored by another objective (shares the prefix sums; own count)."""
         if objective not in OBJECTIVES:
