@@ -298,10 +298,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             own, own_y, self.breaks_, n=self.n, fit_intercept=self.fit_intercept, ridge_alpha=float(self.ridge_alpha)
         )
         coefs = np.asarray(coefs)
-        if self.fit_intercept:
-            self.intercept_, slopes = coefs[:, 0], coefs[:, 1:]
-        else:
-            self.intercept_, slopes = np.zeros(len(coefs)), coefs
+        self.intercept_, slopes = (coefs[:, 0], coefs[:, 1:]) if self.fit_intercept else (np.zeros(len(coefs)), coefs)
         self.coef_ = slopes
         if gamma is not None:
             self.coef_ = np.empty((len(coefs), X.shape[1]))
@@ -311,8 +308,9 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
         )
         self.objective_value_ = float(self.group_objective_.sum())
         self.search_ = info
-        stats = group_interval_stats if not float(self.ridge_alpha) > 0 and gamma is None else None
-        self.interval_stats_ = stats and stats(X, y, self.soft_groups_, fit_intercept=self.fit_intercept)
+        self.interval_stats_ = None
+        if not float(self.ridge_alpha) > 0 and gamma is None:
+            self.interval_stats_ = group_interval_stats(X, y, self.soft_groups_, fit_intercept=self.fit_intercept)
         return self
 
     def serving_groups(self, n_samples: int | None = None) -> np.ndarray:
