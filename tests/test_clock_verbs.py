@@ -181,7 +181,7 @@ def test_a_sweep_study_resamples_by_its_data_key_or_the_flag(tmp_path, capsys):
     assert "--resample SECONDS" in refused(capsys, *sweep)
     done, report = run_json(capsys, *sweep, "--resample", period)
     assert done["done"] == 1 and done["failed"] == 0 and "averaged" in report
-    with pytest.raises(InputError, match=r"resample_s = -1 must be a period in seconds > 0"):
+    with pytest.raises(InputError, match=r"config key 'data.resample_s': must be positive, got -1"):
         read_study(write_study(tmp_path, three, "resample_s = -1"))
 
 

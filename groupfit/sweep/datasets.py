@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import fnmatch
 import hashlib
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from groupfit.data import PERIOD_TOLERANCE, load_run, parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
+from groupfit.tomlconfig import Table
 
 
 @dataclass(frozen=True)
@@ -125,15 +125,10 @@ def clock_settings(table: dict, label: str) -> dict:
     """``[data] period_tolerance`` (percent) and ``resample_s`` (seconds) as :func:`groupfit.data.load_run`
     takes them (``groupfit sweep --period-tolerance`` and ``--resample`` replace them)."""
     tolerance = parse_period_tolerance(table.get("period_tolerance"))
-    resample = table.get("resample_s")
-    if resample is not None and (
-        isinstance(resample, bool) or not isinstance(resample, (int, float)) or not 0 < resample < math.inf
-    ):
-        raise InputError(f"{label}: [data] resample_s = {resample!r} must be a period in seconds > 0, e.g. 60")
-    return {
-        "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
-        "resample": None if resample is None else float(resample),
-    }
+    resample = (
+        None if table.get("resample_s") is None else Table(table, "data", label).number("resample_s", positive=True)
+    )
+    return {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": resample}
 
 
 def _constant_columns(frame, columns) -> set[str]:
