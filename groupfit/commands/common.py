@@ -89,14 +89,23 @@ def resample_seconds(text: str) -> float:
 
 def clock_options(args: argparse.Namespace, config: dict | None = None) -> dict[str, Any]:
     """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run`: the flags, else ``[data]``."""
-    data = (config or {}).get("data", {})
+    options = configured_clock(config or {})
     tolerance = parse_period_tolerance(getattr(args, "period_tolerance", None))
-    if tolerance is None:
-        tolerance = parse_period_tolerance(data.get("period_tolerance"))
-    resample = getattr(args, "resample", None)
-    if resample is None:
-        resample = data.get("resample_s")
-    return {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": resample}
+    if tolerance is not None:
+        options["period_tolerance"] = tolerance
+    if getattr(args, "resample", None) is not None:
+        options["resample"] = args.resample
+    return options
+
+
+def configured_clock(config: dict) -> dict[str, Any]:
+    """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run` from the configuration's ``[data]``."""
+    data = config.get("data", {})
+    tolerance = parse_period_tolerance(data.get("period_tolerance"))
+    return {
+        "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
+        "resample": data.get("resample_s"),
+    }
 
 
 def print_notes(runs, stream=None) -> None:
@@ -230,7 +239,7 @@ def _load_options(config: dict, options: dict) -> dict:
     options = dict(options)
     options.setdefault("temp_range", data.get("temp_range", TEMP_RANGE_C))
     options.setdefault("error_limit", data.get("error_limit", ERROR_LIMIT_UM))
-    for key, value in clock_options(argparse.Namespace(), config).items():
+    for key, value in configured_clock(config).items():
         options.setdefault(key, value)
     options.update(temps=data.get("temps"), time=data["time"], error=data["error"])
     if data.get("ambient") is not None:

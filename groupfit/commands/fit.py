@@ -19,9 +19,9 @@ from groupfit.commands.common import (
     add_run_options,
     check_exact_budget,
     check_output_dir,
-    clock_options,
     commit_outputs,
     config_with_data_options,
+    configured_clock,
     configured_reference,
     load_configured_runs,
     plan_outputs,
@@ -406,7 +406,7 @@ def load_position_data(config: dict, column: str):
         "temp_range": data.get("temp_range", TEMP_RANGE_C),
         "error_limit": data.get("error_limit", ERROR_LIMIT_UM),
     }
-    clock = clock_options(argparse.Namespace(), config)
+    clock = configured_clock(config)
     columns = {"temps": data.get("temps"), "time": data["time"], "error": data["error"]}
     return load_position_run(path, column, **columns, **limits, **clock)
 
