@@ -334,7 +334,7 @@ def main(argv=None) -> int:
                 selection = result.selection
                 extra = (
                     f"  [inputs {','.join(selection['inputs'])}; nested held-out "
-                    f"{selection['nested_held_out_rms_um']:.2f} vs {result.base_check['held_out_rms_um']:.2f} µm]"
+                    f"{selection['nested_held_out_rms_um']:.2f} vs {result.base_check.held_out_rms_um:.2f} µm]"
                 )
             print(row(label, result) + extra)
             suffix = {"16 sensors": "", "16 sensors, ridge (auto)": "_ridge", "16 sensors, joint selection": "_joint"}

@@ -8,6 +8,7 @@ from typing import Any
 from groupfit.data import Run
 from groupfit.grouping import served_ranges
 from groupfit.heldout.expect import CHOICE_RULE
+from groupfit.heldout.records import OverfitCheck, RidgeSetting
 from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 
@@ -27,9 +28,9 @@ class FitResult:
     input_selection: dict[str, Any] | None = None
     intervals: Any = None
     """The breaks' confidence intervals (a :class:`groupfit.inference.BreakIntervalReport`), when computed."""
-    ridge: dict[str, Any] | None = None
+    ridge: RidgeSetting | None = None
     """How ``--ridge`` set the penalty (:func:`groupfit.diagnose.select.ridge_setting`), when it did."""
-    held_out: dict[str, Any] | None = None
+    held_out: OverfitCheck | None = None
     """The model's error on held-out conditions or runs (:func:`groupfit.heldout.check.held_out_check`)."""
     statistics: dict[str, Any] | None = None
     """A global regression's tests (:func:`groupfit.models.mlr.ols_statistics`), when p = 0 by least squares."""
@@ -46,9 +47,9 @@ class FitResult:
         if self.input_selection is not None:
             result["input_selection"] = self.input_selection
         if self.ridge is not None:
-            result["ridge"] = self.ridge
+            result["ridge"] = self.ridge.to_json()
         if self.held_out is not None:
-            result["held_out"] = self.held_out
+            result["held_out"] = self.held_out.to_json()
         if self.statistics is not None:
             result["statistics"] = self.statistics
         if self.expectation is not None:
@@ -121,26 +122,26 @@ def choice_summary(expectation) -> str:
     return line
 
 
-def ridge_summary(ridge: dict) -> str:
+def ridge_summary(ridge: RidgeSetting) -> str:
     """One line on the ridge penalty: given, or chosen on held-out data with the error of every penalty tried."""
-    if ridge["chosen"] == "given":
-        return f"ridge   penalty alpha = {ridge['alpha']:g} (given)"
-    table = ", ".join(f"{row['alpha']:g}: {row['held_out_rms_um']:.3g}" for row in ridge["held_out"])
+    if ridge.chosen == "given":
+        return f"ridge   penalty alpha = {ridge.alpha:g} (given)"
+    table = ", ".join(f"{row.alpha:g}: {row.held_out_rms_um:.3g}" for row in ridge.held_out)
     how = "the least held-out error"
-    if ridge["chosen"] == "next-run":
+    if ridge.chosen == "next-run":
         how = "the largest within one standard error of the least held-out error"
-    return f"ridge   penalty alpha = {ridge['alpha']:g}, {how} ({ridge['folds']}; held-out RMS µm by alpha: {table})"
+    return f"ridge   penalty alpha = {ridge.alpha:g}, {how} ({ridge.folds}; held-out RMS µm by alpha: {table})"
 
 
-def held_out_summary(check: dict) -> str:
+def held_out_summary(check: OverfitCheck) -> str:
     """The held-out line of a model, with a note when it over-fits."""
     line = (
-        f"check   held-out RMS {check['held_out_rms_um']:.4g} µm against {check['in_sample_rms_um']:.4g} µm in sample "
-        f"({check['folds']})"
+        f"check   held-out RMS {check.held_out_rms_um:.4g} µm against {check.in_sample_rms_um:.4g} µm in sample "
+        f"({check.folds})"
     )
-    if check["overfitted"]:
+    if check.overfitted:
         hold_better = "fewer inputs (--select forward) or a ridge penalty (--ridge auto) hold better"
-        if check.get("grouped"):
+        if check.grouped:
             hold_better = "try fewer groups (--p 0) or fewer inputs (--select forward)"
         line += (
             "\nnote    the model over-fits: expect the held-out error on the next run, not the in-sample one; "

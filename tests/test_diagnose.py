@@ -145,11 +145,11 @@ def test_when_nothing_is_added_the_first_line_says_why(tmp_path):
     frame = sensor_error(lumped())
     data_path, model_path = fit_model(tmp_path, frame, "clean")
     result = diagnose(ModelFile.load(model_path).to_dict(), load_run(data_path, temps=TEMPS))
-    assert not result.added and not result.base_check["overfitted"]
+    assert not result.added and not result.base_check.overfitted
     assert result.summary().splitlines()[0].startswith("nothing missing")
     best = replace(result.candidates[0], score=0.93)
     refusal = Refused(best, Refusal(FOLD_WORSENED, "makes one held-out condition (fold 4) 3.6 times worse (RMS)"))
-    check = {**result.base_check, "overfitted": True, "held_out_rms_um": 18.8, "in_sample_rms_um": 0.468}
+    check = replace(result.base_check, overfitted=True, held_out_rms_um=18.8, in_sample_rms_um=0.468)
     first, second = replace(result, refused=[refusal], base_check=check).summary().splitlines()[:2]
     assert first == (
         f"no effect added: the best candidate, {column_words(best.feature.column)}, {best.describe()} "

@@ -54,12 +54,12 @@ def test_a_grouped_model_that_fits_is_not_called_over_fitted(tmp_path, p):
     data_path, model_path = fit_model(tmp_path, sensor_error(lumped()), "clean", p=p)
     result = diagnose(ModelFile.load(model_path).to_dict(), load_run(data_path, temps=TEMPS))
     check = result.base_check
-    assert not check["overfitted"] and check["held_out_rms_um"] < 1.5 * check["in_sample_rms_um"]
+    assert not check.overfitted and check.held_out_rms_um < 1.5 * check.in_sample_rms_um
     assert not result.added and result.summary().startswith("nothing missing")
 
 
 def test_a_missing_effect_is_found_on_a_grouped_model(tmp_path):
     data_path, model_path = fit_model(tmp_path, with_ambient_effect(lumped()), "ambient", p=2)
     result = diagnose(ModelFile.load(model_path).to_dict(), load_run(data_path, temps=TEMPS))
-    assert not result.base_check["overfitted"]
+    assert not result.base_check.overfitted
     assert result.added and result.added[0].feature.column == "T_amb"

@@ -48,7 +48,7 @@ def test_spindle_speed_is_the_effect_named_first(frame):
     run = load_run(frame, temps=SENSORS, error="disp_ch3_um", name="spindle_step_test")
     result = diagnose(sixteen_sensor_model([run]), run, live_rule=replay_groups)
     assert result.folds.startswith("leave-one-condition-out over 7 operating segments")
-    assert result.base_check["overfitted"]  # 16 collinear sensors: the warning is given
+    assert result.base_check.overfitted  # 16 collinear sensors: the warning is given
     assert result.candidates[0].feature.column == "spindle_rpm"
     assert result.added and result.added[0].feature.column == "spindle_rpm"
     assert result.added[0].feature.exponent == pytest.approx(5 / 3)
@@ -88,7 +88,7 @@ def test_joint_selection_on_the_whole_test_forecasts_less_than_the_given_model(f
     result = diagnose(sixteen_sensor_model([run]), run, live_rule=replay_groups, select_jointly=True)
     assert result.added[0].feature.column == "spindle_rpm" and result.added[0].feature.exponent == pytest.approx(5 / 3)
     assert 1 <= len(result.selection["inputs"]) < len(SENSORS)
-    assert result.selection["nested_held_out_rms_um"] < result.base_check["held_out_rms_um"]
+    assert result.selection["nested_held_out_rms_um"] < result.base_check.held_out_rms_um
     assert list(result.model.temps[: len(result.selection["inputs"])]) == result.selection["inputs"]
 
 

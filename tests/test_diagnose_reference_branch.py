@@ -118,9 +118,9 @@ def test_an_over_fitting_model_is_said_to_over_fit_once_when_the_branch_is_taken
     # model's, and its note is not followed by the start of the second diagnosis's
     _, _, _, result = diagnosed(35, "absolute", p=3)
     assert result.reference.dropped and result.reference.branch.reason is None
-    assert result.base_check["overfitted"]
+    assert result.base_check.overfitted
     overfit = result.notes_of(OVERFIT)
-    assert len(overfit) == 1 and f"{result.base_check['held_out_rms_um']:.3g} µm" in overfit[0]
+    assert len(overfit) == 1 and f"{result.base_check.held_out_rms_um:.3g} µm" in overfit[0]
 
 
 def test_a_grouped_model_is_judged_on_its_reference_as_one_group():

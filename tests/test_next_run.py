@@ -160,7 +160,7 @@ def test_ridge_by_splits_takes_the_largest_penalty_within_one_standard_error():
     best = min(by_alpha, key=lambda a: by_alpha[a][0][0])
     limit = by_alpha[best][0][0] + by_alpha[best][1][0]
     assert alpha == max(a for a in RIDGE_GRID if by_alpha[a][0][0] <= limit)
-    assert [row["alpha"] for row in table] == sorted(RIDGE_GRID)
+    assert [row.alpha for row in table] == sorted(RIDGE_GRID)
 
 
 def test_calibration_is_the_median_and_percentiles_of_the_ratios():

@@ -254,7 +254,7 @@ def run_fit(args: argparse.Namespace) -> int:
             splits=splits,
             splits_name=f"{len(splits)} folds that imitate a next run",
         )
-        estimator.set_params(ridge_alpha=ridge["alpha"])
+        estimator.set_params(ridge_alpha=ridge.alpha)
     out_dir = check_output_dir(config["output"]["dir"])
     progress = StageProgress(enabled=not args.quiet)
     fit_run = measured_rows(run)
@@ -267,7 +267,7 @@ def run_fit(args: argparse.Namespace) -> int:
     model = estimator.to_model_file(run, criterion)  # the valid ranges over every row, measured or not
     position_note = ""
     if position_run is None and (expectation is None or ridge is not None):
-        alpha = ridge["alpha"] if ridge is not None else 0.0
+        alpha = ridge.alpha if ridge is not None else 0.0
         try:
             expectation = model_expectation(config, estimate_runs, (config["model"]["p"],), alpha)
         except InputError as exc:
@@ -285,7 +285,7 @@ def run_fit(args: argparse.Namespace) -> int:
         )
     held_out = None
     if position_run is None:
-        alpha = ridge["alpha"] if ridge is not None else 0.0
+        alpha = ridge.alpha if ridge is not None else 0.0
         intercept = config["model"]["intercept"]
         grouped = model.to_dict() if estimator.p > 0 else None
         held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)

@@ -42,6 +42,7 @@ from groupfit.diagnose.problem import Fit, Model, Problem
 from groupfit.diagnose.result import Step
 from groupfit.features import Feature, derived_matrix
 from groupfit.heldout.folds import Folds
+from groupfit.heldout.records import OverfitCheck
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.heldout.selection import cluster_representatives, correlation_clusters
 
@@ -201,7 +202,9 @@ class JointStart:
     notes: tuple[Note, ...]
 
 
-def joint_start(problem: Problem, current: Fit, tried: Tried, policy: AcceptancePolicy, base_check) -> JointStart:
+def joint_start(
+    problem: Problem, current: Fit, tried: Tried, policy: AcceptancePolicy, base_check: OverfitCheck
+) -> JointStart:
     """Inputs and first effects chosen together (``select_jointly``), the model refitted on them."""
     model = current.model
     temps = model.temps
@@ -223,13 +226,13 @@ def joint_start(problem: Problem, current: Fit, tried: Tried, policy: Acceptance
         "nested_held_out_rms_um": nested,
     }
     notes = ()
-    if nested >= base_check["held_out_rms_um"]:
+    if nested >= base_check.held_out_rms_um:
         notes = (
             Note(
                 JOINT,
                 f"the joint selection is not expected to carry to a new condition: chosen again without each "
                 f"held-out condition, it predicts it with {nested:.3g} µm RMS, the "
-                f"model as given with {base_check['held_out_rms_um']:.3g} µm",
+                f"model as given with {base_check.held_out_rms_um:.3g} µm",
             ),
         )
     steps = tuple(Step(c, *chosen.held_out_around(c), joint=True) for c in chosen.effects)

@@ -191,13 +191,13 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     residuals = dict(before) if options.baseline is None else problem.residuals(model)
     current = Fit(model, inputs, residuals, problem.scorer(model, inputs))
     base_check = overfit_check(current.scorer, problem.folds, problem.grouped)
-    if base_check["overfitted"]:
+    if base_check.overfitted:
         notes.append(
             Note(
                 OVERFIT,
-                f"the model over-fits: held-out RMS {base_check['held_out_rms_um']:.3g} µm against "
-                f"{base_check['in_sample_rms_um']:.3g} µm in sample ({problem.folds.describe()}); effects found on "
-                f"it are unreliable: {base_check['advice']}",
+                f"the model over-fits: held-out RMS {base_check.held_out_rms_um:.3g} µm against "
+                f"{base_check.in_sample_rms_um:.3g} µm in sample ({problem.folds.describe()}); effects found on "
+                f"it are unreliable: {base_check.advice}",
             )
         )
     policy = options.policy

@@ -45,7 +45,7 @@ def diagnosis_summary(result) -> str:
     judge = "validate" if validate else "data"
     b, a = result.before[judge], result.after[judge]
     worse = result.improved is False or (validate and result.changed and a["rms_um"] >= b["rms_um"])
-    overfit_in_head = not result.added and result.base_check.get("overfitted")
+    overfit_in_head = not result.added and result.base_check is not None and result.base_check.overfitted
     lines = worse_lines(result, judge) if worse else []
     lines += selection_lines(result) + ridge_lines(result) + reference_lines(result)
     lines += effect_lines(result, judge) if result.added else outcome_lines(result, judge)
@@ -97,7 +97,7 @@ def selection_lines(result) -> list[str]:
         lines.append(
             f"  chosen again without each held-out condition, the selection predicts it with "
             f"{selection['nested_held_out_rms_um']:.3g} µm RMS; the model as given, "
-            f"{result.base_check['held_out_rms_um']:.3g} µm"
+            f"{result.base_check.held_out_rms_um:.3g} µm"
         )
     return lines
 
@@ -106,11 +106,11 @@ def ridge_lines(result) -> list[str]:
     ridge = result.ridge
     if ridge is None:
         return []
-    if not ridge["alpha"]:
+    if not ridge.alpha:
         return ["ridge penalty alpha = 0 chosen (no penalty does best): the model is kept as given"]
-    how = "given" if ridge["chosen"] == "given" else f"the least error on {ridge['folds']}"
+    how = "given" if ridge.chosen == "given" else f"the least error on {ridge.folds}"
     return [
-        f"coefficients refitted with the ridge penalty alpha = {ridge['alpha']:g} ({how}); "
+        f"coefficients refitted with the ridge penalty alpha = {ridge.alpha:g} ({how}); "
         "before/after compare with the model as given"
     ]
 
@@ -200,7 +200,7 @@ def effect_lines(result, judge: str) -> list[str]:
 
 def outcome_lines(result, judge: str) -> list[str]:
     """Why no effect was added: the best candidate refused, an over-fitting model, or nothing missing."""
-    check = result.base_check
+    overfitted = result.base_check is not None and result.base_check.overfitted
     if result.refused:
         refusal = result.refused[0]
         c = refusal.candidate
@@ -208,14 +208,15 @@ def outcome_lines(result, judge: str) -> list[str]:
             f"no effect added: the best candidate, {column_words(c.feature.column, result.ambient)}, {c.describe()} "
             f"(removes {100 * c.score:.0f} % of the held-out mean-square error), was refused: {refusal.reason}"
         ]
-    elif check.get("overfitted"):  # a model that over-fits hides what is missing
+    elif overfitted:  # a model that over-fits hides what is missing
         lines = ["no effect added: no candidate explains a significant part of the held-out error"]
     else:
         lines = ["nothing missing: no candidate explains a significant part of the held-out error; no effect added"]
-    if check.get("overfitted"):
+    if overfitted:
+        check = result.base_check
         lines.append(
-            f"the model over-fits (held-out RMS {check['held_out_rms_um']:.3g} µm against "
-            f"{check['in_sample_rms_um']:.3g} µm in sample): {check['advice']}"
+            f"the model over-fits (held-out RMS {check.held_out_rms_um:.3g} µm against "
+            f"{check.in_sample_rms_um:.3g} µm in sample): {check.advice}"
         )
     if result.changed:
         lines.append(change_line(result, judge))

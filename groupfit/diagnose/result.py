@@ -11,6 +11,7 @@ from groupfit.diagnose.candidates import Candidate
 from groupfit.diagnose.notes import Note
 from groupfit.diagnose.policy import Refusal
 from groupfit.diagnose.report import diagnosis_summary
+from groupfit.heldout.records import OverfitCheck, RidgeSetting
 from groupfit.model import ModelFile
 
 Metrics = Mapping[str, float]
@@ -153,12 +154,12 @@ class DiagnosisResult:
     steps: tuple[Step, ...] = ()
     refused: tuple[Refused, ...] = ()
     folds: str = ""
-    base_check: JsonRecord = field(default_factory=dict)
+    base_check: OverfitCheck | None = None
     run_names: Mapping[str, str] = field(default_factory=dict)
     """Names of the modelling run(s) (``"data"``) and the validation run(s) (``"validate"``)."""
     selection: JsonRecord | None = None
     """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
-    ridge: JsonRecord | None = None
+    ridge: RidgeSetting | None = None
     """The ridge penalty the model was refitted with before the diagnosis (``diagnose --ridge``), when it was."""
     reference: ReferenceCheck | None = None
     """The check of the model's reference sensor, when the model has one."""
@@ -183,9 +184,9 @@ class DiagnosisResult:
             "steps": [s.to_dict() for s in self.steps],
             "refused": [r.to_dict() for r in self.refused],
             "folds": self.folds,
-            "base_model": self.base_check,
+            "base_model": self.base_check.to_json() if self.base_check is not None else {},
             "selection": self.selection,
-            "ridge": self.ridge,
+            "ridge": self.ridge.to_json() if self.ridge is not None else None,
             "reference": None if self.reference is None else self.reference.to_dict(),
             "before": self.before,
             "after": self.after,
@@ -201,7 +202,7 @@ class DiagnosisResult:
         """Whether the model differs from the one given: an effect added, inputs re-selected, a ridge refit or its
         reference dropped."""
         dropped = self.reference is not None and self.reference.dropped
-        return bool(self.added) or self.selection is not None or bool(self.ridge and self.ridge["alpha"]) or dropped
+        return bool(self.added) or self.selection is not None or bool(self.ridge and self.ridge.alpha) or dropped
 
     @property
     def improved(self) -> bool | None:

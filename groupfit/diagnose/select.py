@@ -19,10 +19,11 @@ from groupfit.diagnose.residual import ModelLike, model_inputs
 from groupfit.diagnose.result import JsonRecord
 from groupfit.errors import InputError
 from groupfit.heldout.check import ridge_setting, select_inputs
+from groupfit.heldout.records import RidgeSetting
 from groupfit.model import ModelFile
 
 
-def ridge_base_model(model: ModelLike, runs: Sequence[Run], alpha: float | str) -> tuple[ModelFile, JsonRecord]:
+def ridge_base_model(model: ModelLike, runs: Sequence[Run], alpha: float | str) -> tuple[ModelFile, RidgeSetting]:
     """The global model refitted with a ridge penalty (``"auto"``: chosen on held-out conditions or runs)."""
     model = ModelFile.coerce(model)
     inputs = [model_inputs(model, run) for run in runs]
@@ -30,9 +31,9 @@ def ridge_base_model(model: ModelLike, runs: Sequence[Run], alpha: float | str) 
     y = np.concatenate([run.error for run in runs])
     frames = [run.frame for run in runs]
     info = ridge_setting(alpha, model.p, np.vstack(inputs), y, frames, exclude, model.intercept)
-    if not info["alpha"]:  # no penalty: the model as given
+    if not info.alpha:  # no penalty: the model as given
         return model, info
-    ridged = model.replace(ridge_alpha=info["alpha"] or None)
+    ridged = model.replace(ridge_alpha=info.alpha or None)
     return refit_model(ridged, list(runs), inputs, ridged.temps, ridged.derived_inputs or ()), info
 
 

@@ -17,6 +17,7 @@ from groupfit.errors import InputError
 from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.design import group_design, group_index, group_sample_floor
 from groupfit.heldout.folds import Folds, make_folds
+from groupfit.heldout.records import OverfitCheck, RidgeScore, RidgeSetting
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.heldout.selection import select_sensors
 from groupfit.models.ridge import RIDGE_GRID, check_ridge_alpha, choose_ridge_alpha, held_out_sse
@@ -63,14 +64,13 @@ def held_out_check(
     fit_intercept: bool = True,
     ridge_alpha: float = 0.0,
     grouped: dict[str, Any] | None = None,
-) -> dict[str, Any] | None:
+) -> OverfitCheck | None:
     """A model's RMS in sample and on the diagnosis's held-out folds; None with fewer than two folds.
 
     The rows with a measured error ``y`` are fitted and scored; a global model is fitted as ``fit --p 0``
     fits it (least squares, or the ridge penalty ``ridge_alpha``). ``grouped``: the model file (as a dict)
     of a grouped model on a fully measured run, its groups refitted on each fold with the breaks kept
-    and scored where they keep enough samples (:meth:`Folds.within_groups`). ``overfitted`` is the
-    diagnosis's warning.
+    and scored where they keep enough samples (:meth:`Folds.within_groups`).
     """
     rows = np.isfinite(y)
     folds = held_out_folds(frames, exclude, y)
@@ -99,11 +99,11 @@ def ridge_setting(
     *,
     splits: list | None = None,
     splits_name: str = "",
-) -> dict[str, Any]:
+) -> RidgeSetting:
     """The penalty of ``--ridge ALPHA|auto`` for a global model, and how it was found.
 
     ``auto``: the penalty with the least error on held-out conditions or runs, the rows with a measured
-    error ``y``; the result then holds ``held_out`` (the held-out RMS of every penalty tried) and ``folds``.
+    error ``y``.
     With ``splits`` (``(train, test)`` indices over the measured rows that imitate a next run, named
     ``splits_name``): the largest penalty within one standard error of the least error on them
     (:func:`ridge_by_splits`).
@@ -114,17 +114,20 @@ def ridge_setting(
             "inputs; a grouped model's groups are fitted by least squares"
         )
     if option != "auto":
-        return {"alpha": check_ridge_alpha(option), "chosen": "given"}
+        return RidgeSetting(check_ridge_alpha(option), "given")
     rows = np.isfinite(y)
     if splits is not None:
         alpha, table = ridge_by_splits(X[rows], y[rows], splits, fit_intercept)
-        return {"alpha": alpha, "chosen": "next-run", "held_out": table, "folds": splits_name}
+        return RidgeSetting(alpha, "next-run", table, splits_name)
     folds = held_out_folds(frames, exclude, y)
     alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept=fit_intercept)
-    return {"alpha": alpha, "chosen": "held-out", "held_out": table, "folds": folds.describe()}
+    scores = tuple(RidgeScore(row["alpha"], row["held_out_rms_um"]) for row in table)
+    return RidgeSetting(alpha, "held-out", scores, folds.describe())
 
 
-def ridge_by_splits(X: np.ndarray, y: np.ndarray, splits: list, fit_intercept: bool = True) -> tuple[float, list]:
+def ridge_by_splits(
+    X: np.ndarray, y: np.ndarray, splits: list, fit_intercept: bool = True
+) -> tuple[float, tuple[RidgeScore, ...]]:
     """The largest penalty of the grid within one standard error of the least held-out mean squared error.
 
     The penalties are ordered from the simplest model (the largest penalty) to the least shrunk; each fold's
@@ -136,11 +139,11 @@ def ridge_by_splits(X: np.ndarray, y: np.ndarray, splits: list, fit_intercept: b
         np.array([held_out_sse(X, y, splits, alpha, fit_intercept=fit_intercept) for alpha in grid]), counts
     )
     chosen = one_standard_error_choice(pooled, se)
-    table = [{"alpha": float(a), "held_out_rms_um": float(np.sqrt(v))} for a, v in zip(grid, pooled)]
+    table = tuple(RidgeScore(float(a), float(np.sqrt(v))) for a, v in zip(grid, pooled))
     return float(grid[chosen]), table[::-1]
 
 
-def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> dict[str, Any]:
+def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> OverfitCheck:
     """The model's own regression: in-sample RMS against held-out RMS on the folds, and what to do about it.
 
     A grouped model's groups are stretches of the modelling run: a held-out fold that takes most of a
@@ -150,11 +153,11 @@ def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) ->
     advice = "start from a selected model (groupfit fit --select forward, or diagnose --select forward)"
     if grouped:
         advice = "refit with fewer groups (groupfit fit --p 0) or " + advice
-    return {
-        "in_sample_rms_um": in_sample,
-        "held_out_rms_um": held_out,
-        "folds": folds.describe(),
-        "overfitted": bool(held_out > OVERFIT_RATIO * max(in_sample, 1e-12)),
-        "grouped": grouped,
-        "advice": advice,
-    }
+    return OverfitCheck(
+        in_sample_rms_um=in_sample,
+        held_out_rms_um=held_out,
+        folds=folds.describe(),
+        overfitted=bool(held_out > OVERFIT_RATIO * max(in_sample, 1e-12)),
+        grouped=grouped,
+        advice=advice,
+    )
