@@ -295,7 +295,8 @@ def choose_recalibration(
     if not series:
         return _default(offset_max, rate, intervals, reason="the modelling runs are too short to hold part out")
     residuals = np.concatenate([s.residual for s in series])
-    rms_none = float(np.sqrt(np.nanmean(residuals**2)))
+    measured = residuals[np.isfinite(residuals)]
+    rms_none = float(np.sqrt(np.mean(measured**2))) if measured.size else math.nan
     everies = [max(1, int(round(t / period))) for t in intervals]
     probe_sigma = white_sigma(series)
     candidates = candidate_grid(
@@ -362,9 +363,11 @@ def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: flo
         hours = every * period_s / 3600.0
         for s in series:
             r = s.residual
-            if len(r) > every:
-                change = np.nanmax(np.abs(r[every:] - r[:-every])) if np.isfinite(r).sum() > every else 0.0
-                worst = max(worst, float(change) / math.sqrt(hours))
+            if np.isfinite(r).sum() > every:
+                changes = np.abs(r[every:] - r[:-every])
+                changes = changes[np.isfinite(changes)]  # between measured samples only
+                if changes.size:
+                    worst = max(worst, float(changes.max()) / math.sqrt(hours))
     return max(1.0, GATE_SPARE * worst / GATE_SIGMAS)
 
 

@@ -89,7 +89,7 @@ def test_config_file_and_command_line_override(tmp_path):
 def test_bad_config_key_is_one_line(tmp_path, capsys):
     config = tmp_path / "bad.toml"
     config.write_text("[model]\npee = 2\n")
-    assert main(["fit", str(config), "--data", str(DATA), "--quiet"]) == 2
+    assert main(["fit", str(config), "--data", str(DATA), "--quiet", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown key 'pee' in [model]" in err[0] and "bad.toml" in err[0]
 

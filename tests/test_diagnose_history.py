@@ -154,7 +154,10 @@ def test_continues_judges_a_restarted_clock_as_the_rest_of_the_recording(tmp_pat
 
     def diagnosed(validation, *flags):
         args = ["diagnose", str(tmp_path / "m" / "model.json"), "--data", str(paths["modelling"])]
-        assert main([*args, "--validate", str(paths[validation]), *flags, "--json", "-"]) == 0
+        assert (
+            main([*args, "--validate", str(paths[validation]), *flags, "--json", "-", "--out", str(tmp_path / "d")])
+            == 0
+        )
         return json.loads(capsys.readouterr().out)
 
     as_logged = diagnosed("continuing")

@@ -218,7 +218,8 @@ def test_several_runs_are_held_out_one_at_a_time(tmp_path, capsys):
     np.testing.assert_allclose(model["coefficients"][0], reference, rtol=1e-7, atol=1e-9)
     # a grouped model's breaks belong to one run
     capsys.readouterr()
-    assert main(["fit", "--data", *map(str, paths), "--temps", ",".join(TEMPS), "--p", "2", "--quiet"]) == 2
+    fit = ["fit", "--data", *map(str, paths), "--temps", ",".join(TEMPS), "--p", "2", "--quiet"]
+    assert main([*fit, "--out", str(tmp_path / "m")]) == 2
     assert "several runs fit a global model" in capsys.readouterr().err
 
     runs = [load_run(p, temps=TEMPS) for p in paths]

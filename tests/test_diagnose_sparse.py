@@ -12,6 +12,7 @@ from groupfit.synthetic import simulate_lumped
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 PERIOD = 100.0
+pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")  # no statistic of an empty or all-NaN slice
 
 
 def ambient_run(seed, n_samples=900, phase_h=0.0):

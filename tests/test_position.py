@@ -483,14 +483,17 @@ def test_fit_position_writes_a_position_model_and_export_writes_its_table(tmp_pa
 
 def test_fit_refuses_a_missing_position_column(tmp_path, capsys):
     long_table(1).to_csv(tmp_path / "axis.csv", index=False)
-    code = main(["fit", "--data", str(tmp_path / "axis.csv"), "--temps", "T1,T2", "--position", "Y_mm"])
+    code = main(
+        ["fit", "--data", str(tmp_path / "axis.csv"), "--temps", "T1,T2", "--position", "Y_mm", "--out", str(tmp_path)]
+    )
     assert code != 0
     assert "position column 'Y_mm' not found" in capsys.readouterr().err
 
 
 def test_position_order_needs_position(tmp_path, capsys):
     long_table(1).to_csv(tmp_path / "axis.csv", index=False)
-    code = main(["fit", "--data", str(tmp_path / "axis.csv"), "--temps", "T1,T2", "--position-order", "2"])
+    args = ["fit", "--data", str(tmp_path / "axis.csv"), "--temps", "T1,T2", "--position-order", "2"]
+    code = main([*args, "--out", str(tmp_path)])
     assert code != 0
     assert "--position-order needs --position" in capsys.readouterr().err
 

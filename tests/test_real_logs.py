@@ -204,10 +204,29 @@ def test_compare_takes_the_heat_column_by_flag_or_leaves_the_ar1_out(tmp_path, c
     err = capsys.readouterr().err
     assert "heat column 'speed_rpm'" in err and "--heat COLUMN" in err and "--heat none" in err
     out = tmp_path / "c.json"
-    assert cli("compare", "--data", path, "--pmax", "1", "--heat", "bed_target", "--quiet", "--json", out) == 0
+    assert (
+        cli(
+            "compare",
+            "--data",
+            path,
+            "--pmax",
+            "1",
+            "--heat",
+            "bed_target",
+            "--quiet",
+            "--json",
+            out,
+            "--out",
+            tmp_path,
+        )
+        == 0
+    )
     result = json.loads(out.read_text())
     assert result["ar1"]["heat"] == "bed_target" and any(r["model"] == "ar1" for r in result["rows"])
-    assert cli("compare", "--data", path, "--pmax", "1", "--heat", "none", "--quiet", "--json", out) == 0
+    assert (
+        cli("compare", "--data", path, "--pmax", "1", "--heat", "none", "--quiet", "--json", out, "--out", tmp_path)
+        == 0
+    )
     result = json.loads(out.read_text())
     assert result["ar1"] is None and not any(r["model"] == "ar1" for r in result["rows"])
     assert "AR(1): left out" in capsys.readouterr().out

@@ -4,6 +4,7 @@ the hold's closed form, the gate, faults, bounds, and the held-out tuning."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from test_switching_models import fault_injected, synthetic_model
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.recalibration_tuning import (
+    CUTS,
     HeldOut,
     candidate_grid,
     choose_recalibration,
@@ -303,3 +305,25 @@ def test_tuning_keeps_the_hold_on_a_random_walk_and_takes_a_drift_when_the_error
     assert sections["drift"].method == "kalman" and "drift" in sections["drift"].terms
     assert max(ratios["drift"]) < 0.7 and np.mean(ratios["drift"]) < 0.5  # a drift is extrapolated between checks
     assert math.isfinite(sections["drift"].chosen["rms_none_um"])
+
+
+def test_tuning_on_error_rows_measured_in_short_probe_cycles_takes_no_statistic_of_nothing():
+    import pandas as pd
+
+    model = ModelFile.from_dict(synthetic_model(p=0)[0])  # inputs T1…T4, 100 s per sample
+    temps, error = ramp_run(1200, drift=0.0, wander=0.3, seed=5)
+    error[np.arange(len(error)) % 60 >= 12] = np.nan  # 12 measured rows in every 60
+    frame = pd.DataFrame(temps, columns=["T1", "T2", "T3", "T4"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # no mean or maximum of an empty or all-NaN slice
+        tuning = choose_recalibration(model, [(frame, error)], intervals_s=(1000.0, 2000.0, 4000.0))
+    # checks 20 and 40 samples apart never meet two measured rows; the RMS without checks is over measured rows
+    held_out = []
+    design = np.column_stack([np.ones(len(temps)), temps])
+    for cut in CUTS:
+        a = int(round(cut * len(temps)))
+        train = np.isfinite(error[:a])
+        coef = np.linalg.lstsq(design[:a][train], error[:a][train], rcond=None)[0]
+        held_out.append(error[a:] - design[a:] @ coef)
+    residual = np.concatenate(held_out)
+    assert tuning.rms_none_um == pytest.approx(math.sqrt(np.mean(residual[np.isfinite(residual)] ** 2)), rel=1e-9)

@@ -72,7 +72,10 @@ def test_an_ambient_named_by_flag_is_no_input_and_the_reference(tmp_path):
     frame.to_csv(path, index=False)
     assert cli("fit", "--data", path, "--p", "0", "--json", tmp_path / "a.json", "--out", tmp_path) == 0
     assert json.loads((tmp_path / "a.json").read_text())["temps"] == ["T1", "T2", "T15"]
-    assert cli("fit", "--data", path, "--p", "0", "--ambient", "T15", "--json", tmp_path / "b.json") == 0
+    assert (
+        cli("fit", "--data", path, "--p", "0", "--ambient", "T15", "--json", tmp_path / "b.json", "--out", tmp_path)
+        == 0
+    )
     model = json.loads((tmp_path / "b.json").read_text())
     assert model["temps"] == ["T1", "T2"] and model["reference"] == "T15"
     assert cli("fit", "--data", path, "--p", "0", "--ambient", "T99", "--out", tmp_path) == 2
