@@ -15,7 +15,7 @@ from groupfit.errors import InputError
 
 from .noise import MeasurementNoise, read_noise
 from .schedule import StepSchedule
-from .tables import ScenarioTable, fail, on_off, step_schedule
+from .tables import ScenarioTable, fail, on_off, read_numbers, read_sensors, step_schedule
 
 BEARINGS = ("fixed-free", "fixed-fixed")
 SOURCES = ("fixed", "nut")
@@ -140,15 +140,9 @@ def _parse_ballscrew(top: ScenarioTable) -> BallScrewScenario:
     d = Screw()
     s = top.sub("screw")
     screw = Screw(
-        length=s.number("length_m", d.length, positive=True),
-        diameter=s.number("diameter_m", d.diameter, positive=True),
-        lead=s.number("lead_m", d.lead, positive=True),
+        **read_numbers(s, d, ("length", "diameter", "lead")),
         bearings=s.string("bearings", d.bearings, BEARINGS),
-        conductivity=s.number("conductivity_W_mK", d.conductivity, positive=True),
-        density=s.number("density_kg_m3", d.density, positive=True),
-        heat_capacity=s.number("heat_capacity_J_kgK", d.heat_capacity, positive=True),
-        expansion=s.number("expansion_1_K", d.expansion, nonnegative=True),
-        convection=s.number("convection_W_m2K", d.convection, nonnegative=True),
+        **read_numbers(s, d, ("conductivity", "density", "heat_capacity", "expansion", "convection")),
     )
     s.finish()
 
@@ -264,16 +258,10 @@ def _parse_source(src: ScenarioTable, screw: Screw) -> Source:
 
 
 def _parse_sensors(raw, screw: Screw) -> dict:
-    if raw is None:
-        return dict(PAPER_SENSORS)
-    if not isinstance(raw, dict) or not raw:
-        raise fail("sensors", "must be a table of NAME = x_m (distance from the source end)")
-    sensors = {}
-    for name, x in raw.items():
-        key = f"sensors.{name}"
-        if name in RESERVED:
-            raise fail(key, "this name is reserved for another column; rename the sensor")
+    def position(key: str, x) -> float:
         if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 <= x <= screw.length:
             raise fail(key, f"expected a position in metres within the screw (0 to {screw.length:g}), got {x!r}")
-        sensors[name] = float(x)
-    return sensors
+        return float(x)
+
+    layout = "x_m (distance from the source end)"
+    return read_sensors(raw, PAPER_SENSORS, layout=layout, reserved=RESERVED.__contains__, position=position)

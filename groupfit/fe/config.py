@@ -21,7 +21,17 @@ from .ballscrew_config import parse_ballscrew
 from .geometry import HousingGeometry, MeshResolution, points_inside
 from .noise import MeasurementNoise, read_noise
 from .schedule import PALMGREN_SPEED_EXPONENT, AmbientProfile, EquilibriumRule, StepSchedule
-from .tables import ScenarioTable, check_alignment, fail, non_negative, on_off, step_schedule
+from .tables import (
+    ScenarioTable,
+    check_alignment,
+    fail,
+    non_negative,
+    on_off,
+    read_number_section,
+    read_numbers,
+    read_sensors,
+    step_schedule,
+)
 from .unsensed import HEAT_INPUTS, UnsensedPart
 
 RESERVED_COLUMNS = {"time_s", "T_amb", "error_um", "speed_rpm", "spindle_on", "q_W_m2"}
@@ -186,11 +196,7 @@ def _parse_headstock(top: ScenarioTable) -> HeadstockScenario:
     g0 = base.geometry
     housing = top.sub("housing")
     geometry = HousingGeometry(
-        width=housing.number("width_m", g0.width, positive=True),
-        height=housing.number("height_m", g0.height, positive=True),
-        length=housing.number("length_m", g0.length, positive=True),
-        axis_height=housing.number("axis_height_m", g0.axis_height, positive=True),
-        bore_diameter=housing.number("bore_diameter_m", g0.bore_diameter, positive=True),
+        **read_numbers(housing, g0, ("width", "height", "length", "axis_height", "bore_diameter")),
         front_seat=housing.vector("front_seat_m", g0.front_seat, 2),
         rear_seat=housing.vector("rear_seat_m", g0.rear_seat, 2),
     )
@@ -210,37 +216,13 @@ def _parse_headstock(top: ScenarioTable) -> HeadstockScenario:
     mesh.finish()
 
     mat = top.sub("material")
-    d = Material()
-    material = Material(
-        density=mat.number("density_kg_m3", d.density, positive=True),
-        heat_capacity=mat.number("heat_capacity_J_kgK", d.heat_capacity, positive=True),
-        conductivity=mat.number("conductivity_W_mK", d.conductivity, positive=True),
-        expansion=mat.number("expansion_1_K", d.expansion, nonnegative=True),
-        poisson=mat.number("poisson", d.poisson, nonnegative=True),
-        young=mat.number("young_Pa", d.young, positive=True),
-    )
+    material = Material(**read_numbers(mat, Material()))
     if not material.poisson < 0.5:
         raise fail("material.poisson", "must be below 0.5")
     mat.finish()
 
-    bnd = top.sub("boundary")
-    b0 = ThermalBoundary()
-    boundary = ThermalBoundary(
-        convection=bnd.number("convection_W_m2K", b0.convection, nonnegative=True),
-        bore_convection=bnd.number("bore_convection_W_m2K", b0.bore_convection, nonnegative=True),
-        mount_conductance=bnd.number("mount_conductance_W_m2K", b0.mount_conductance, positive=True),
-    )
-    bnd.finish()
-
-    brg = top.sub("bearings")
-    h0 = BearingHeat()
-    bearings = BearingHeat(
-        front_W=brg.number("front_heat_W", h0.front_W, nonnegative=True),
-        rear_W=brg.number("rear_heat_W", h0.rear_W, nonnegative=True),
-        reference_speed_rpm=brg.number("reference_speed_rpm", h0.reference_speed_rpm, positive=True),
-        speed_exponent=brg.number("speed_exponent", h0.speed_exponent, nonnegative=True),
-    )
-    brg.finish()
+    boundary = read_number_section(top, "boundary", ThermalBoundary())
+    bearings = read_number_section(top, "bearings", BearingHeat())
 
     period, substeps, spindle, extra = _parse_time(
         top, base.sampling_period_s, base.substeps, [list(s) for s in base.spindle.steps], non_negative, headstock=True
@@ -341,15 +323,10 @@ def _parse_unsensed_part(raw) -> UnsensedPart | None:
 
 
 def _parse_sensors(raw, geometry: HousingGeometry) -> dict:
-    if raw is None:
-        return dict(DEFAULT_SENSORS)
-    if not isinstance(raw, dict) or not raw:
-        raise fail("sensors", "must be a table of NAME = [x_m, y_m, z_m]")
-    sensors = {}
-    for name, point in raw.items():
-        key = f"sensors.{name}"
-        if name in RESERVED_COLUMNS or name.startswith(("node_", "src_")):
-            raise fail(key, "this name is reserved for another column; rename the sensor")
+    def reserved(name: str) -> bool:
+        return name in RESERVED_COLUMNS or name.startswith(("node_", "src_"))
+
+    def position(key: str, point) -> tuple[float, float, float]:
         if (
             not isinstance(point, (list, tuple))
             or len(point) != 3
@@ -361,8 +338,9 @@ def _parse_sensors(raw, geometry: HousingGeometry) -> dict:
             raise fail(
                 key, f"point {xyz} is outside the housing material; move it inside the housing (not in the bore)"
             )
-        sensors[name] = xyz
-    return sensors
+        return xyz
+
+    return read_sensors(raw, DEFAULT_SENSORS, layout="[x_m, y_m, z_m]", reserved=reserved, position=position)
 
 
 def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
@@ -410,15 +388,8 @@ def _parse_sources(raw, step_s: float, sensor_names: set) -> list[HeatSource]:
 def _parse_rod(top: ScenarioTable) -> RodScenario:
     d = RodScenario()
     rod = top.sub("rod")
-    values = dict(
-        length=rod.number("length_m", d.length, positive=True),
-        radius=rod.number("radius_m", d.radius, positive=True),
-        conductivity=rod.number("conductivity_W_mK", d.conductivity, positive=True),
-        density=rod.number("density_kg_m3", d.density, positive=True),
-        heat_capacity=rod.number("heat_capacity_J_kgK", d.heat_capacity, positive=True),
-        expansion=rod.number("expansion_1_K", d.expansion, nonnegative=True),
-        convection=rod.number("convection_W_m2K", d.convection, nonnegative=True),
-    )
+    fields = ("length", "radius", "conductivity", "density", "heat_capacity", "expansion", "convection")
+    values = read_numbers(rod, d, fields)
     rod.finish()
     mesh = top.sub("mesh")
     values["elements"] = mesh.integer("elements", d.elements)
