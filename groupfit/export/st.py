@@ -39,6 +39,7 @@ from groupfit.errors import InputError
 from groupfit.export.literals import reading_comments, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
 from groupfit.export.rule_codes import RULE_CODES
+from groupfit.export.st_bounds import clamp, rate_limited_step
 from groupfit.export.st_probe import probe_pieces
 from groupfit.export.st_terms import input_value, position_pieces, reference_pieces
 from groupfit.export.st_transfer import transfer_pieces
@@ -207,21 +208,7 @@ ${transfer_end}    Fault := 0;
     END_IF;
 ${position_fault}END_IF;
 
-IF target > COMP_MAX THEN
-    target := COMP_MAX;
-END_IF;
-IF target < COMP_MIN THEN
-    target := COMP_MIN;
-END_IF;
-delta := target - comp;
-IF delta > RATE_LIMIT THEN
-    delta := RATE_LIMIT;
-END_IF;
-IF delta < -RATE_LIMIT THEN
-    delta := -RATE_LIMIT;
-END_IF;
-comp := comp + delta;
-CompUm := comp;
+${bounded_output}CompUm := comp;
 ErrorUm := prediction;
 IF NOT periodOk THEN
     Group := $ret_period;
@@ -299,6 +286,8 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         comp_max_text=f"{tables.comp_max_um:g}",
         rate_text=f"{tables.rate_limit_um:g}",
         bad_init=", ".join([str(tables.hold_samples + 1)] * tables.n_temps),
+        bounded_output=clamp("target", "COMP_MIN", "COMP_MAX")
+        + rate_limited_step("comp", "target", "delta", "RATE_LIMIT"),
         **reference_pieces(tables, real),
         **transfer_pieces(tables, real, literal, dot_product, position_pieces(tables, real, literal)),
         **probe_pieces(tables, real, literal),

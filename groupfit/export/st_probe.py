@@ -12,6 +12,7 @@ from __future__ import annotations
 from string import Template
 from textwrap import dedent, indent
 
+from groupfit.export.st_bounds import clamp, rate_limited_step
 from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables
 from groupfit.runtime.recalibration import PROBE_LIMIT_UM
 
@@ -78,13 +79,7 @@ RESET = """    rcApplied := 0.0;
     END_FOR;
 """
 
-CLAMP = """        IF rcX[rcI] > RC_MAX[rcI] THEN
-            rcX[rcI] := RC_MAX[rcI];
-        END_IF;
-        IF rcX[rcI] < -RC_MAX[rcI] THEN
-            rcX[rcI] := -RC_MAX[rcI];
-        END_IF;
-"""
+CLAMP = clamp("rcX[rcI]", "-RC_MAX[rcI]", "RC_MAX[rcI]", " " * 8)
 
 PROPAGATE = """
     (* recalibration: time update (the drift moves the offset and decays; P := F P F' + Q) *)
@@ -111,15 +106,7 @@ CORRECT = """        (* the correction from probe checks, towards offset + gain 
         IF RC_SIG2 > RC_ZERO AND NOT rcSignificant THEN
             rcTarget := RC_ZERO;
         END_IF;
-        rcDelta := rcTarget - rcApplied;
-        IF rcDelta > RC_RATE THEN
-            rcDelta := RC_RATE;
-        END_IF;
-        IF rcDelta < -RC_RATE THEN
-            rcDelta := -RC_RATE;
-        END_IF;
-        rcApplied := rcApplied + rcDelta;
-        prediction := prediction + rcApplied;
+$rate_limited        prediction := prediction + rcApplied;
         target := target - rcApplied;
 """
 
@@ -209,7 +196,9 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         "probe_period_fault": "    rcUsable := FALSE;\n",
         "probe_propagate": Template(PROPAGATE).substitute(clamp=CLAMP),
         "probe_invalidate": "        rcUsable := FALSE;\n",
-        "probe_correct": CORRECT,
+        "probe_correct": Template(CORRECT).substitute(
+            rate_limited=rate_limited_step("rcApplied", "rcTarget", "rcDelta", "RC_RATE", " " * 8)
+        ),
         "probe_check": Template(CHECK).substitute(
             codes,
             clamp=inner_clamp,
