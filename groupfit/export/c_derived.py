@@ -9,6 +9,13 @@ from groupfit.export.literals import c_comment_text as _ascii
 from groupfit.export.literals import double_literal, real_literal
 from groupfit.runtime import RuleTables
 
+TRANSFORM_NOTES = {
+    "lowpass": "low-pass a = exp(-dt/tau), b = 1 - a.",
+    "derivative": "3600 / dt (per hour).",
+    "ontime": "dt / 3600 (hours per sample on).",
+}
+"""The comment above a transform's constants."""
+
 
 def state_fields(tables: RuleTables) -> str:
     if not tables.derived:
@@ -37,16 +44,10 @@ def derived_constants(tables: RuleTables) -> str:
             )
             lines.append(f"static const double gf_power_scale_{k} = {double_literal(d.power_scale)};\n")
             lines.append(f"static const volatile double gf_power_exponent_{k} = {double_literal(d.exponent)};\n")
-        if d.transform == "lowpass":
-            lines.append(f"/* derived[{k}], {_ascii(d.name)}: low-pass a = exp(-dt/tau), b = 1 - a. */\n")
-            lines.append(f"static const gf_real gf_lowpass_a_{k} = {real_literal(d.a)};\n")
-            lines.append(f"static const gf_real gf_lowpass_b_{k} = {real_literal(d.b)};\n")
-        elif d.transform == "derivative":
-            lines.append(f"/* derived[{k}], {_ascii(d.name)}: 3600 / dt (per hour). */\n")
-            lines.append(f"static const gf_real gf_derivative_scale_{k} = {real_literal(d.scale)};\n")
-        elif d.transform == "ontime":
-            lines.append(f"/* derived[{k}], {_ascii(d.name)}: dt / 3600 (hours per sample on). */\n")
-            lines.append(f"static const gf_real gf_ontime_step_{k} = {real_literal(d.scale)};\n")
+        constants = d.transform_constants()
+        if constants:
+            lines.append(f"/* derived[{k}], {_ascii(d.name)}: {TRANSFORM_NOTES[d.transform]} */\n")
+        lines += [f"static const gf_real gf_{name}_{k} = {real_literal(value)};\n" for name, value in constants]
     return ("\n" + "".join(lines)) if lines else ""
 
 

@@ -359,14 +359,8 @@ def derived_constants(tables: RuleTables, real: str, literal) -> str:
         if d.has_power:
             lines.append(f"    POWER_SCALE_{k} : LREAL := {shortest_literal(d.power_scale, single=False)};")
             lines.append(f"    POWER_EXPONENT_{k} : LREAL := {shortest_literal(d.exponent, single=False)};")
-        if d.transform == "lowpass":
-            lines.append(f"    LOWPASS_A_{k} : {real} := {literal(d.a)};")
-            lines.append(f"    LOWPASS_B_{k} : {real} := {literal(d.b)};")
-        elif d.transform == "derivative":
-            lines.append(f"    DERIVATIVE_SCALE_{k} : {real} := {literal(d.scale)};")
-        elif d.transform == "ontime":
-            lines.append(f"    ONTIME_STEP_{k} : {real} := {literal(d.scale)};")
-        elif d.transform == "delay":
+        lines += [f"    {name.upper()}_{k} : {real} := {literal(value)};" for name, value in d.transform_constants()]
+        if d.transform == "delay":
             lines.append(f"    DELAY_{k} : INT := {d.delay_samples};")
     if any(d.transform == "ontime" for d in tables.derived):  # typed, so that no operation mixes real types
         lines.append(f"    ONTIME_ZERO : {real} := {literal(0.0)};")

@@ -94,6 +94,16 @@ class DerivedTable:
         """Whether a low-pass or a delay starts from 0 rather than from the first good value."""
         return self.start == "rest"
 
+    def transform_constants(self) -> tuple[tuple[str, float], ...]:
+        """The transform's constants every target embeds, by name: the low-pass ``a`` and ``b``, the
+        derivative's scale, the on-time step; none for identity and delay."""
+        constants = {
+            "lowpass": (("lowpass_a", self.a), ("lowpass_b", self.b)),
+            "derivative": (("derivative_scale", self.scale),),
+            "ontime": (("ontime_step", self.scale),),
+        }
+        return constants.get(self.transform, ())
+
     def power_text(self) -> str:
         """The power stage in words (ASCII), e.g. ``(|spindle_rpm| / 1000)^1.66667``; the column without one."""
         if not self.has_power:
