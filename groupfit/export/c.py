@@ -296,12 +296,8 @@ def render_c(tables: RuleTables) -> dict[str, str]:
             if d.transform == "delay"
         ),
         state_fields=transfer_header(tables)["transfer_field"] + state_fields(tables),
-        comp_min_f=c_float_literal(tables.comp_min_um),
-        comp_max_f=c_float_literal(tables.comp_max_um),
-        rate_f=c_float_literal(tables.rate_limit_um),
-        comp_min_d=double_literal(tables.comp_min_um),
-        comp_max_d=double_literal(tables.comp_max_um),
-        rate_d=double_literal(tables.rate_limit_um),
+        **{f"{name}_f": c_float_literal(value) for name, value in tables.output_bounds.items()},
+        **{f"{name}_d": double_literal(value) for name, value in tables.output_bounds.items()},
         **reference_header(tables),
         **position_header(tables),
     )

@@ -316,6 +316,11 @@ class RuleTables:
         )
 
     @property
+    def output_bounds(self) -> dict[str, float]:
+        """The compensation's bounds and its rate limit (µm, µm per sample), by the names the exports use."""
+        return {"comp_min": self.comp_min_um, "comp_max": self.comp_max_um, "rate": self.rate_limit_um}
+
+    @property
     def n_temps(self) -> int:
         """Number of readings per sample (the C routine's ``GF_N_TEMPS``)."""
         return len(self.raw_names)
