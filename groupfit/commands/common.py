@@ -184,6 +184,18 @@ def plan_outputs(
     return plan.folder(folder, option, files)
 
 
+def add_counts_limit_option(parser: argparse.ArgumentParser, target: str = "") -> None:
+    """``--counts-limit N``: the largest magnitude of an integer compensation register (``target``: the export
+    target it serves, named at the start of the help)."""
+    parser.add_argument(
+        "--counts-limit",
+        type=int,
+        default=30000,
+        metavar="N",
+        help=f"{target}largest magnitude of the integer compensation register in counts (default 30000)",
+    )
+
+
 def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
     """``--json FILE``: the machine-readable result, ``-`` for stdout."""
     parser.add_argument("--json", metavar="FILE", help=f"write {what} as JSON ('-' for stdout)")

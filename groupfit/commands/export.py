@@ -7,6 +7,7 @@ import argparse
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import (
+    add_counts_limit_option,
     add_model_argument,
     add_out_option,
     add_source_option,
@@ -46,13 +47,7 @@ def add_parser(verbs) -> None:
         metavar="UM",
         help="sheet: µm per count of an integer compensation register (default 0.1)",
     )
-    export.add_argument(
-        "--counts-limit",
-        type=int,
-        default=30000,
-        metavar="N",
-        help="sheet: largest magnitude of that register in counts (default 30000)",
-    )
+    add_counts_limit_option(export, "sheet: ")
     export.add_argument(
         "--tolerance-um",
         type=float,

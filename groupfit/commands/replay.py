@@ -14,6 +14,7 @@ from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import (
     add_clock_options,
+    add_counts_limit_option,
     add_json_option,
     add_model_argument,
     add_model_time_option,
@@ -78,13 +79,7 @@ def add_parser(verbs) -> None:
         metavar="UM",
         help="also report the compensation in integer controller counts of this many µm (e.g. 0.1)",
     )
-    replay.add_argument(
-        "--counts-limit",
-        type=int,
-        default=30000,
-        metavar="N",
-        help="largest magnitude of those counts (default 30000)",
-    )
+    add_counts_limit_option(replay)
     add_source_option(replay)
     add_probe_options(replay)
     add_json_option(replay, "the per-sample result")

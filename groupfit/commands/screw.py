@@ -46,10 +46,9 @@ def add_parser(verbs) -> None:
     identify = sub.add_parser("identify", help="identify h, α′(τ0) and C1, C2 per source from heating runs")
     identify.add_argument("runs", nargs="+", metavar="RUN", help="first: the identification run; then new sources")
     _model_options(identify)
-    identify.add_argument("--json", metavar="FILE", help="write the model as JSON also here ('-' for stdout)")
-    identify.add_argument("--out", metavar="DIR", help=f"folder for screw_model.json (default {DEFAULT_OUT})")
-    add_force_option(identify)
-    add_clock_options(identify)
+    _output_options(
+        identify, "write the model as JSON also here", f"folder for screw_model.json (default {DEFAULT_OUT})"
+    )
     identify.set_defaults(handler=run_identify)
 
     predict = sub.add_parser("predict", help="temperature field and thermal error of a run, with the seed's metrics")
@@ -65,21 +64,25 @@ def add_parser(verbs) -> None:
     predict.add_argument(
         "--at", metavar="X,Y,…", help="also predict the rise and the error at these positions (m from the source)"
     )
-    predict.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-' for stdout)")
-    predict.add_argument("--out", metavar="DIR", help="folder for the figures")
-    add_force_option(predict)
-    add_clock_options(predict)
+    _output_options(predict, "write the prediction as JSON", "folder for the figures")
     predict.set_defaults(handler=run_predict)
 
     compare = sub.add_parser("compare", help="screw model vs MLR on the same sensors, on runs not used to identify")
     compare.add_argument("run", metavar="RUN", help="identification run")
     compare.add_argument("--validate", nargs="+", required=True, metavar="CSV", help="runs of other sources")
     _model_options(compare)
-    compare.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' for stdout)")
-    compare.add_argument("--out", metavar="DIR", help=f"folder for the figures and the model (default {DEFAULT_OUT})")
-    add_force_option(compare)
-    add_clock_options(compare)
+    _output_options(
+        compare, "write the result as JSON", f"folder for the figures and the model (default {DEFAULT_OUT})"
+    )
     compare.set_defaults(handler=run_compare)
+
+
+def _output_options(parser, json_help: str, out_help: str) -> None:
+    """``--json`` (``json_help``, then ``('-' for stdout)``), ``--out``, ``--force`` and the clock options."""
+    parser.add_argument("--json", metavar="FILE", help=f"{json_help} ('-' for stdout)")
+    parser.add_argument("--out", metavar="DIR", help=out_help)
+    add_force_option(parser)
+    add_clock_options(parser)
 
 
 def _model_options(parser) -> None:
