@@ -184,9 +184,14 @@ def plan_outputs(
     return plan.folder(folder, option, files)
 
 
-def add_counts_limit_option(parser: argparse.ArgumentParser, target: str = "") -> None:
-    """``--counts-limit N``: the largest magnitude of an integer compensation register (``target``: the export
-    target it serves, named at the start of the help)."""
+def add_register_options(
+    parser: argparse.ArgumentParser, resolution_help: str, *, resolution_default: float | None = None, target: str = ""
+) -> None:
+    """``--resolution-um UM`` and ``--counts-limit N``: an integer compensation register, µm per count and the
+    largest magnitude it holds (``target``: the export target it serves, named at the start of the help)."""
+    parser.add_argument(
+        "--resolution-um", type=float, default=resolution_default, metavar="UM", help=f"{target}{resolution_help}"
+    )
     parser.add_argument(
         "--counts-limit",
         type=int,

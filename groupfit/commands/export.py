@@ -7,9 +7,9 @@ import argparse
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import (
-    add_counts_limit_option,
     add_model_argument,
     add_out_option,
+    add_register_options,
     add_source_option,
     commit_outputs,
     plan_outputs,
@@ -40,14 +40,8 @@ def add_parser(verbs) -> None:
     add_out_option(export, "folder for the exported files (required)", required=True)
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
     export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
-    export.add_argument(
-        "--resolution-um",
-        type=float,
-        default=0.1,
-        metavar="UM",
-        help="sheet: µm per count of an integer compensation register (default 0.1)",
-    )
-    add_counts_limit_option(export, "sheet: ")
+    resolution = "µm per count of an integer compensation register (default 0.1)"
+    add_register_options(export, resolution, resolution_default=0.1, target="sheet: ")
     export.add_argument(
         "--tolerance-um",
         type=float,

@@ -14,11 +14,11 @@ from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands.common import (
     add_clock_options,
-    add_counts_limit_option,
     add_json_option,
     add_model_argument,
     add_model_time_option,
     add_out_option,
+    add_register_options,
     add_source_option,
     clock_options,
     finish_outputs,
@@ -73,13 +73,7 @@ def add_parser(verbs) -> None:
         default="double",
         help="arithmetic of the rule: double, or single as a PLC REAL computes",
     )
-    replay.add_argument(
-        "--resolution-um",
-        type=float,
-        metavar="UM",
-        help="also report the compensation in integer controller counts of this many µm (e.g. 0.1)",
-    )
-    add_counts_limit_option(replay)
+    add_register_options(replay, "also report the compensation in integer controller counts of this many µm (e.g. 0.1)")
     add_source_option(replay)
     add_probe_options(replay)
     add_json_option(replay, "the per-sample result")
