@@ -32,7 +32,7 @@ import contextlib
 import itertools
 import random
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 from typing import Callable, Iterator
 
 import numpy as np
@@ -161,6 +161,7 @@ class GapFreeEncoding:
         return individual
 
 
+@dataclass
 class GeneticSearch:
     """DEAP genetic algorithm over feasible break vectors.
 
@@ -187,32 +188,18 @@ class GeneticSearch:
         parents' breaks, which keeps breaks that sit well as building blocks.
     """
 
-    def __init__(
-        self,
-        population_size: int = GA_DEFAULTS.population_size,
-        max_generations: int = GA_DEFAULTS.max_generations,
-        stall_generations: int = GA_DEFAULTS.stall_generations,
-        crossover_prob: float = 0.8,
-        mutation_prob: float = 0.4,
-        elite: int = 2,
-        tournament_size: int = 3,
-        *,
-        polish: bool = GA_DEFAULTS.polish,
-        seed: int | None = None,
-        local_window: int = GA_DEFAULTS.local_window,
-        union_crossover: bool = GA_DEFAULTS.union_crossover,
-    ):
-        self.local_window = local_window
-        self.union_crossover = union_crossover
-        self.population_size = population_size
-        self.max_generations = max_generations
-        self.stall_generations = stall_generations
-        self.crossover_prob = crossover_prob
-        self.mutation_prob = mutation_prob
-        self.elite = elite
-        self.tournament_size = tournament_size
-        self.polish = polish
-        self.seed = seed
+    population_size: int = GA_DEFAULTS.population_size
+    max_generations: int = GA_DEFAULTS.max_generations
+    stall_generations: int = GA_DEFAULTS.stall_generations
+    crossover_prob: float = 0.8
+    mutation_prob: float = 0.4
+    elite: int = 2
+    tournament_size: int = 3
+    _: KW_ONLY
+    polish: bool = GA_DEFAULTS.polish
+    seed: int | None = None
+    local_window: int = GA_DEFAULTS.local_window
+    union_crossover: bool = GA_DEFAULTS.union_crossover
 
     @classmethod
     def from_settings(cls, settings: GASettings, seed: int | None = None) -> "GeneticSearch":
