@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from string import Template
 
+from groupfit.export.bounds import clamp, rate_limited_step
 from groupfit.export.c_derived import derived_constants, init_derived, state_fields, step_derived
 from groupfit.export.c_terms import position_header, position_source, reference_header, reference_source
 from groupfit.export.c_transfer import transfer_header, transfer_source
@@ -241,21 +242,7 @@ $${probe_invalidate}    } else {
 $prediction
         target = -prediction;
 $dead_band$${probe_correct}    }
-$transfer_end    if (target > GF_COMP_MAX_UM) {
-        target = GF_COMP_MAX_UM;
-    }
-    if (target < GF_COMP_MIN_UM) {
-        target = GF_COMP_MIN_UM;
-    }
-    delta = target - s->comp_um;
-    if (delta > GF_RATE_LIMIT_UM) {
-        delta = GF_RATE_LIMIT_UM;
-    }
-    if (delta < -GF_RATE_LIMIT_UM) {
-        delta = -GF_RATE_LIMIT_UM;
-    }
-    s->comp_um = s->comp_um + delta;
-    s->error_um = prediction;
+$transfer_end$bounded_output    s->error_um = prediction;
     s->fault = (held ? GF_FAULT_HELD : 0) + (faulted ? GF_FAULT_SENSOR : 0)$position_fault;
     if (error_um) {
         *error_um = (double)prediction;
@@ -307,7 +294,11 @@ def render_c(tables: RuleTables) -> dict[str, str]:
     )
     has_delay = any(d.transform == "delay" for d in tables.derived)
     has_power = any(d.has_power for d in tables.derived)
+    bounded_output = clamp("c", "target", "GF_COMP_MIN_UM", "GF_COMP_MAX_UM", " " * 4) + rate_limited_step(
+        "c", "s->comp_um", "target", "delta", "GF_RATE_LIMIT_UM", " " * 4
+    )
     source = SOURCE.substitute(
+        bounded_output=bounded_output,
         includes="#include <math.h> /* fabs, pow: the power stage of derived inputs */\n" if has_power else "",
         coefficients=coefficient_rows,
         derived_constants=derived_constants(tables),

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from string import Template
 
+from groupfit.export.bounds import clamp, rate_limited_step
 from groupfit.export.literals import double_literal, real_literal
 from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables
 from groupfit.runtime.recalibration import PROBE_LIMIT_UM
@@ -97,13 +98,7 @@ static void gf_rc_clamp(gf_state *s)
 {
     int i;
     for (i = 0; i < 3; i++) {
-        if (s->rc_x[i] > gf_rc_max[i]) {
-            s->rc_x[i] = gf_rc_max[i];
-        }
-        if (s->rc_x[i] < -gf_rc_max[i]) {
-            s->rc_x[i] = -gf_rc_max[i];
-        }
-    }
+$clamp    }
 }
 
 /* Time update of one sample: the drift moves the offset and decays; P = F P F' + Q. */
@@ -138,15 +133,7 @@ static gf_real gf_rc_correct(gf_state *s, gf_real model_um, int usable)
     if (gf_rc_sig2 > 0 && !s->rc_significant) {
         target = 0;
     }
-    delta = target - s->rc_applied_um;
-    if (delta > gf_rc_rate) {
-        delta = gf_rc_rate;
-    }
-    if (delta < -gf_rc_rate) {
-        delta = -gf_rc_rate;
-    }
-    s->rc_applied_um = s->rc_applied_um + delta;
-    return s->rc_applied_um;
+$rate_limited    return s->rc_applied_um;
 }
 """
 
@@ -231,6 +218,8 @@ def probe_source(tables: RuleTables) -> dict[str, str]:
             "sig2": real_literal(t.significance2),
             "rate": real_literal(t.rate_um),
             "confirm": t.confirm_after,
+            "clamp": clamp("c", "s->rc_x[i]", "-gf_rc_max[i]", "gf_rc_max[i]", " " * 8),
+            "rate_limited": rate_limited_step("c", "s->rc_applied_um", "target", "delta", "gf_rc_rate", " " * 4),
         },
     )
     return {

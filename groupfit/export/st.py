@@ -36,10 +36,10 @@ from string import Template
 
 from groupfit.controller_limits import check_st_name, st_integer_type
 from groupfit.errors import InputError
+from groupfit.export.bounds import clamp, rate_limited_step
 from groupfit.export.literals import reading_comments, shortest_literal
 from groupfit.export.literals import st_comment_text as _ascii
 from groupfit.export.rule_codes import RULE_CODES
-from groupfit.export.st_bounds import clamp, rate_limited_step
 from groupfit.export.st_probe import probe_pieces
 from groupfit.export.st_terms import input_value, position_pieces, reference_pieces
 from groupfit.export.st_transfer import transfer_pieces
@@ -282,8 +282,8 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         **{name: literal(value) for name, value in tables.output_bounds.items()},
         **{f"{name}_text": f"{value:g}" for name, value in tables.output_bounds.items()},
         bad_init=", ".join([str(tables.hold_samples + 1)] * tables.n_temps),
-        bounded_output=clamp("target", "COMP_MIN", "COMP_MAX")
-        + rate_limited_step("comp", "target", "delta", "RATE_LIMIT"),
+        bounded_output=clamp("st", "target", "COMP_MIN", "COMP_MAX")
+        + rate_limited_step("st", "comp", "target", "delta", "RATE_LIMIT"),
         **reference_pieces(tables, real),
         **transfer_pieces(tables, real, literal, dot_product, position_pieces(tables, real, literal)),
         **probe_pieces(tables, real, literal),

@@ -12,7 +12,7 @@ from __future__ import annotations
 from string import Template
 from textwrap import dedent, indent
 
-from groupfit.export.st_bounds import clamp, rate_limited_step
+from groupfit.export.bounds import clamp, rate_limited_step
 from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables
 from groupfit.runtime.recalibration import PROBE_LIMIT_UM
 
@@ -79,7 +79,7 @@ RESET = """    rcApplied := 0.0;
     END_FOR;
 """
 
-CLAMP = clamp("rcX[rcI]", "-RC_MAX[rcI]", "RC_MAX[rcI]", " " * 8)
+CLAMP = clamp("st", "rcX[rcI]", "-RC_MAX[rcI]", "RC_MAX[rcI]", " " * 8)
 
 PROPAGATE = """
     (* recalibration: time update (the drift moves the offset and decays; P := F P F' + Q) *)
@@ -197,7 +197,7 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         "probe_propagate": Template(PROPAGATE).substitute(clamp=CLAMP),
         "probe_invalidate": "        rcUsable := FALSE;\n",
         "probe_correct": Template(CORRECT).substitute(
-            rate_limited=rate_limited_step("rcApplied", "rcTarget", "rcDelta", "RC_RATE", " " * 8)
+            rate_limited=rate_limited_step("st", "rcApplied", "rcTarget", "rcDelta", "RC_RATE", " " * 8)
         ),
         "probe_check": Template(CHECK).substitute(
             codes,
