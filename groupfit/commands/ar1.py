@@ -16,15 +16,14 @@ from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands.common import (
     clock_options,
-    commit_outputs,
     finish_outputs,
     plan_outputs,
     print_notes,
     report_stream,
+    write_exports,
 )
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
-from groupfit.export import write
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.plots import plot_fit
 
@@ -101,9 +100,7 @@ def run_export(args: argparse.Namespace) -> int:
     files: dict[str, str] = {}
     for target in targets:
         files.update(render(model, target, real=args.real, name=args.name))
-    written = write(files, plan_outputs(args, folder=args.out, files=files))
-    commit_outputs()
-    print("wrote " + ", ".join(str(p) for p in written))
+    write_exports(args, files)
     return 0
 
 

@@ -25,6 +25,7 @@ from groupfit.data import (
     split_names,
 )
 from groupfit.errors import InputError
+from groupfit.export import write
 from groupfit.io import atomic_write_text, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 from groupfit.model_checks import MAX_RIDGE_ALPHA
@@ -288,6 +289,14 @@ def finish_outputs(args: argparse.Namespace, report: str, data: Any, figures) ->
     commit_outputs()
     lines = [report] + (["wrote    " + wrote_line(written)] if any(written) else [])
     print("\n".join(lines), file=report_stream(args))
+
+
+def write_exports(args: argparse.Namespace, files: dict[str, str]) -> None:
+    """Write the rendered ``files`` into ``--out`` (each checked first, :func:`plan_outputs`), commit them and
+    print the ``wrote`` line."""
+    written = write(files, plan_outputs(args, folder=args.out, files=files))
+    commit_outputs()
+    print("wrote " + ", ".join(str(p) for p in written))
 
 
 def residual_line(result: dict[str, Any]) -> str:

@@ -11,12 +11,12 @@ from groupfit.commands.common import (
     add_out_option,
     add_register_options,
     add_source_option,
-    commit_outputs,
     plan_outputs,
+    write_exports,
 )
 from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
-from groupfit.export import TARGETS, render, write
+from groupfit.export import TARGETS, render
 from groupfit.export.cec import DEFAULT_MAX_POINTS
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
@@ -114,10 +114,7 @@ def run_export(args: argparse.Namespace) -> int:
                 **{key: getattr(args, key) for key in CEC_KEYS},
             )
         )
-    out_dir = plan_outputs(args, folder=args.out, files=files)
-    written = write(files, out_dir)
-    commit_outputs()
-    print("wrote " + ", ".join(str(p) for p in written))
+    write_exports(args, files)
     return 0
 
 

@@ -9,15 +9,14 @@ import numpy as np
 
 from groupfit.commands.common import (
     clock_options,
-    commit_outputs,
     finish_outputs,
     plan_outputs,
     print_notes,
     report_stream,
     residual_line,
+    write_exports,
 )
 from groupfit.errors import InputError
-from groupfit.export import write
 from groupfit.metrics import error_metrics
 from groupfit.screw.deploy import ScrewLaw, choose_source
 from groupfit.screw.export import SCREW_TARGETS, check_screw_target, render_screw
@@ -110,9 +109,7 @@ def run_screw_export(args: argparse.Namespace) -> int:
     files: dict[str, str] = {}
     for target in targets:
         files.update(render_screw(law, target))
-    written = write(files, plan_outputs(args, folder=args.out, files=files))
-    commit_outputs()
-    print("wrote " + ", ".join(str(p) for p in written))
+    write_exports(args, files)
     return 0
 
 
