@@ -35,6 +35,7 @@ from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.mlr import MLR
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.search.base import SearchSettings
+from groupfit.settings import CompareSettings, ModelSettings, RunSettings
 
 MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
 
@@ -43,26 +44,26 @@ MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
 class ComparisonSettings:
     """What ``groupfit compare`` needs beyond the data: the ``[compare]`` table."""
 
-    pmax: int = 4
-    n: int = 3
-    c: float = 3.0
-    objective: str = "sae"
-    fit_intercept: bool = True
-    heat: str | None = "speed_rpm"
+    pmax: int = CompareSettings.pmax
+    n: int = ModelSettings.n
+    c: float = ModelSettings.c
+    objective: str = ModelSettings.objective
+    fit_intercept: bool = ModelSettings.intercept
+    heat: str | None = CompareSettings.heat
     """The AR(1) model's heat-level column; None leaves the AR(1) model out (a run without one)."""
-    ar1_scaling: str = "heat_law"
-    ar1_start: str = "measured"
+    ar1_scaling: str = CompareSettings.ar1_scaling
+    ar1_start: str = CompareSettings.ar1_start
     """Where each AR(1) free run starts: the run's first measured error, or 0 (``"zero"``)."""
-    ar1_fit: str = "one_step"
+    ar1_fit: str = CompareSettings.ar1_fit
     """How the AR(1) model is fitted: on the one-step equations, or on the free-run error (``"free_run"``)."""
-    heat_exponent: float = 5 / 3
-    rise_sensor: str | None = None
-    rise_window_s: float = 6000.0
-    structural_sensor: str | None = None
-    structural_gain_um_per_K: float | None = None
-    conditions: tuple[str, ...] = ("speed_rpm",)
-    p_target: str | float | None = "20%"
-    fit_pmax: int = 3  # the largest p ``groupfit fit`` chooses among ([model] pmax): compare marks its choice
+    heat_exponent: float = CompareSettings.heat_exponent
+    rise_sensor: str | None = CompareSettings.rise_sensor
+    rise_window_s: float = CompareSettings.rise_window_s
+    structural_sensor: str | None = CompareSettings.structural_sensor
+    structural_gain_um_per_K: float | None = CompareSettings.structural_gain_um_per_K
+    conditions: tuple[str, ...] = CompareSettings.conditions
+    p_target: str | float | None = CompareSettings.p_target
+    fit_pmax: int = ModelSettings.pmax  # the largest p ``groupfit fit`` chooses among: compare marks its choice
     same_condition_samples: int = 2
     """A run is on the modelling run's condition when its condition columns go through the same levels in
     the same order, each change within this many samples of the modelling run's (:func:`run_condition`)."""
@@ -72,30 +73,28 @@ class ComparisonSettings:
     """Break-interval options (:func:`groupfit.inference.break_intervals` keywords: method, level, …)."""
 
     @classmethod
-    def from_config(cls, config: dict) -> "ComparisonSettings":
+    def from_settings(cls, settings: RunSettings) -> "ComparisonSettings":
         """The ``[model]``, ``[search]`` and ``[compare]`` tables of a run configuration."""
-        model, table = config["model"], config["compare"]
-        if table.get("ar1_start", "measured") not in ("measured", "zero"):
-            raise InputError(f'[compare] ar1_start = {table["ar1_start"]!r}: choose "measured" or "zero"')
+        model, table = settings.model, settings.compare
         return cls(
-            pmax=table["pmax"],
-            n=model["n"],
-            c=float(model["c"]),
-            objective=model["objective"],
-            fit_intercept=model["intercept"],
-            heat=None if table["heat"] in (None, "none") else table["heat"],
-            ar1_scaling=table["ar1_scaling"],
-            ar1_start=table.get("ar1_start", "measured"),
-            ar1_fit=table.get("ar1_fit", "one_step"),
-            heat_exponent=float(table.get("heat_exponent", 5 / 3)),
-            rise_sensor=table.get("rise_sensor"),
-            rise_window_s=float(table.get("rise_window_s", 6000.0)),
-            structural_sensor=table.get("structural_sensor"),
-            structural_gain_um_per_K=table.get("structural_gain_um_per_K"),
-            conditions=tuple(table["conditions"]),
-            p_target=table.get("p_target"),
-            fit_pmax=model.get("pmax", 3),
-            search=SearchSettings.from_mapping(config["search"]),
+            pmax=table.pmax,
+            n=model.n,
+            c=float(model.c),
+            objective=model.objective,
+            fit_intercept=model.intercept,
+            heat=None if table.heat in (None, "none") else table.heat,
+            ar1_scaling=table.ar1_scaling,
+            ar1_start=table.ar1_start,
+            ar1_fit=table.ar1_fit,
+            heat_exponent=float(table.heat_exponent),
+            rise_sensor=table.rise_sensor,
+            rise_window_s=float(table.rise_window_s),
+            structural_sensor=table.structural_sensor,
+            structural_gain_um_per_K=table.structural_gain_um_per_K,
+            conditions=tuple(table.conditions),
+            p_target=table.p_target,
+            fit_pmax=model.pmax,
+            search=settings.search,
         )
 
 

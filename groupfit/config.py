@@ -53,7 +53,8 @@ A configuration has up to four tables; every key is optional::
     conditions = ["speed_rpm"] # columns whose changes are changes of operating condition
     p_target = "20%"           # target rule: µm or a percentage of R at p = 0
 
-Command-line options override the file. Unknown tables or keys, and values of
+Command-line options override the file. The defaults are those of
+:class:`groupfit.settings.RunSettings`. Unknown tables or keys, and values of
 the wrong type, are errors that name the key.
 """
 
@@ -63,8 +64,7 @@ import math
 from pathlib import Path
 from typing import Any, Callable
 
-from groupfit.grouping import DEFAULT_SOFT_OFFSET, DEFAULT_SPACING
-from groupfit.search.base import DEFAULT_SEED, GA_DEFAULTS
+from groupfit.settings import RunSettings
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 
@@ -164,7 +164,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "pmax": _whole,
         "heat": Table.string,
         "ar1_scaling": Table.string,
-        "ar1_start": Table.string,
+        "ar1_start": lambda table, key: table.string(key, choices=("measured", "zero")),
         "ar1_fit": Table.string,
         "heat_exponent": _positive,
         "rise_sensor": Table.string,
@@ -176,36 +176,6 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     },
 }
 """Every table and key of a run configuration, with the reader that checks its value."""
-
-DEFAULTS: dict[str, dict[str, Any]] = {
-    "data": {"time": "time_s", "error": "error_um", "validate": []},
-    "model": {
-        "p": "auto",
-        "pmax": 3,
-        "p_rule": "next-run",
-        "n": DEFAULT_SOFT_OFFSET,
-        "c": DEFAULT_SPACING,
-        "objective": "sae",
-        "intercept": True,
-    },
-    "search": {
-        "method": "ga",
-        "seed": DEFAULT_SEED,
-        "population_size": GA_DEFAULTS.population_size,
-        "max_generations": GA_DEFAULTS.max_generations,
-        "stall_generations": GA_DEFAULTS.stall_generations,
-        "polish": GA_DEFAULTS.polish,
-        "certify": "auto",
-    },
-    "output": {"dir": "groupfit-out"},
-    "compare": {
-        "pmax": 4,
-        "heat": "speed_rpm",
-        "ar1_scaling": "heat_law",
-        "conditions": ["speed_rpm"],
-        "p_target": "20%",
-    },
-}
 
 PATH_KEYS = {("data", "path"), ("data", "validate")}
 
@@ -232,24 +202,24 @@ def default_config_path() -> Path | None:
     return None
 
 
-def read_config(path: str | Path | None) -> dict[str, dict[str, Any]]:
-    """Read and check a TOML configuration; relative data paths are resolved against its folder."""
-    config = {table: dict(values) for table, values in DEFAULTS.items()}
+def read_config(path: str | Path | None) -> RunSettings:
+    """Read and check a TOML configuration; relative data paths are resolved against its folder.
+
+    ``None``: the defaults (:class:`groupfit.settings.RunSettings`).
+    """
     if path is None:
-        return config
+        return RunSettings()
     path = Path(path)
     raw = read_toml(path, "configuration file")
     base = path.resolve().parent
-    for table, values in check_config(raw, str(path)).items():
-        for key, value in values.items():
-            if (table, key) in PATH_KEYS:
-                value = (
-                    [str((base / v).resolve()) for v in value]
-                    if isinstance(value, list)
-                    else str((base / value).resolve())
-                )
-            config[table][key] = value
-    return config
+    tables = check_config(raw, str(path))
+    for table, key in PATH_KEYS:
+        value = tables.get(table, {}).get(key)
+        if value is not None:
+            tables[table][key] = (
+                [str((base / v).resolve()) for v in value] if isinstance(value, list) else str((base / value).resolve())
+            )
+    return RunSettings.from_tables(tables)
 
 
 def check_config(raw: dict, label: str) -> dict[str, dict[str, Any]]:
@@ -261,9 +231,3 @@ def check_config(raw: dict, label: str) -> dict[str, dict[str, Any]]:
         checked[name] = {key: read(table, key) for key, read in SCHEMA[name].items() if key in table}
         table.finish(f"known keys: {', '.join(SCHEMA[name])}")
     return checked
-
-
-def override(config: dict, table: str, key: str, value: Any) -> None:
-    """Set a value from the command line when it was given."""
-    if value is not None:
-        config[table][key] = value

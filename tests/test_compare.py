@@ -171,4 +171,4 @@ def test_a_bad_ar1_start_names_its_key(tmp_path, capsys):
     text = (ROOT / "configs" / "default.toml").read_text(encoding="utf-8").replace("../datasets/", f"{ROOT}/datasets/")
     config.write_text(text.replace("[compare]", '[compare]\nar1_start = "warm"'), encoding="utf-8")
     assert main(["compare", str(config), "--quiet", "--out", str(tmp_path / "out")]) == 2
-    assert "[compare] ar1_start = 'warm'" in capsys.readouterr().err
+    assert "config key 'compare.ar1_start': must be one of measured, zero, got 'warm'" in capsys.readouterr().err

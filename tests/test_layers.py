@@ -116,7 +116,7 @@ def test_the_packaged_default_configuration_names_packaged_data():
     from groupfit.config import PACKAGED_DEFAULT, read_config
 
     config = read_config(PACKAGED_DEFAULT)  # in a checkout the packaged files link to configs/ and datasets/
-    names = [Path(path).name for path in [config["data"]["path"], *config["data"]["validate"]]]
+    names = [Path(path).name for path in [config.data.path, *config.data.validate]]
     assert names == [
         "paper_cycle.csv",
         "repeat_timing.csv",

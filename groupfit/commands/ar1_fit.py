@@ -9,10 +9,10 @@ from groupfit.ar1.modelfile import STARTS
 from groupfit.commands.common import (
     clock_options,
     commit_outputs,
-    config_with_data_options,
     plan_outputs,
     print_notes,
     report_stream,
+    settings_with_data_options,
     write_json,
     wrote_line,
 )
@@ -73,24 +73,22 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
     if not args.heat:
         raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
-    config_path, config = config_with_data_options(args)
+    config_path, settings = settings_with_data_options(args)
+    data = settings.data
     out_dir = plan_outputs(
         args,
         config_path,
-        config["data"].get("path"),
+        data.path,
         args.closed_form,
-        folder=args.out or config["output"]["dir"],
+        folder=args.out or settings.output_dir,
         files=("model.json", "fit.png"),
     )
-    data = config["data"]
-    if not data.get("path"):
+    if not data.paths:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
-    if isinstance(data["path"], (list, tuple)):
+    if len(data.paths) > 1:
         raise InputError("--model ar1 takes one run (--data CSV)")
-    clock = clock_options(args, config)
-    run = load_run(
-        data["path"], temps=[], time=data["time"], error=data["error"], error_limit=data.get("error_limit"), **clock
-    )
+    clock = clock_options(args, data)
+    run = load_run(data.paths[0], temps=[], time=data.time, error=data.error, error_limit=data.error_limit, **clock)
     print_notes([run], report_stream(args))
     heat = numeric_column(run.frame, args.heat, run.source, allow_nonfinite=False)
     check_heat(heat, source=str(run.source), name=args.heat)

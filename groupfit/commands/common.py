@@ -10,7 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from groupfit.config import default_config_path, override, read_config
+from groupfit.config import default_config_path, read_config
 from groupfit.data import (
     ERROR_LIMIT_UM,
     PERIOD_TOLERANCE,
@@ -34,6 +34,7 @@ from groupfit.outputs import current_plan
 from groupfit.reference import default_reference
 from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
+from groupfit.settings import DataSettings, RunSettings
 
 
 def add_data_options(parser: argparse.ArgumentParser) -> None:
@@ -88,9 +89,9 @@ def resample_seconds(text: str) -> float:
     return value
 
 
-def clock_options(args: argparse.Namespace, config: dict | None = None) -> dict[str, Any]:
+def clock_options(args: argparse.Namespace, data: DataSettings | None = None) -> dict[str, Any]:
     """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run`: the flags, else ``[data]``."""
-    options = configured_clock(config or {})
+    options = configured_clock(data or DataSettings())
     tolerance = parse_period_tolerance(getattr(args, "period_tolerance", None))
     if tolerance is not None:
         options["period_tolerance"] = tolerance
@@ -99,14 +100,10 @@ def clock_options(args: argparse.Namespace, config: dict | None = None) -> dict[
     return options
 
 
-def configured_clock(config: dict) -> dict[str, Any]:
+def configured_clock(data: DataSettings) -> dict[str, Any]:
     """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run` from the configuration's ``[data]``."""
-    data = config.get("data", {})
-    tolerance = parse_period_tolerance(data.get("period_tolerance"))
-    return {
-        "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
-        "resample": data.get("resample_s"),
-    }
+    tolerance = parse_period_tolerance(data.period_tolerance)
+    return {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": data.resample_s}
 
 
 def print_notes(runs, stream=None) -> None:
@@ -211,57 +208,56 @@ def add_quiet_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def config_with_data_options(args: argparse.Namespace) -> tuple[str | Path | None, dict[str, dict[str, Any]]]:
-    """The run configuration's path (CONFIG, else configs/default.toml) and the configuration merged with --data,
-    --time, --temps, --error and the other data options."""
+def settings_with_data_options(args: argparse.Namespace) -> tuple[str | Path | None, RunSettings]:
+    """The run configuration's path (CONFIG, else configs/default.toml) and its settings with --data, --time,
+    --temps, --error and the other data options."""
     config_path = args.config or default_config_path()
-    config = read_config(config_path)
+    settings = read_config(config_path)
     if args.data and getattr(args, "config", None) is None:
         # a run given on the command line does not inherit the default configuration's runs and columns:
         # its inputs are --temps, else its own sensor columns; it is validated only on --validate runs
-        config["data"].pop("temps", None)
-        config["data"]["validate"] = []
-    override(config, "data", "path", args.data[0] if args.data and len(args.data) == 1 else args.data)
-    override(config, "data", "time", args.time)
-    override(config, "data", "temps", split_names(args.temps))
-    override(config, "data", "error", args.error)
-    override(config, "data", "temp_range", parse_temp_range(getattr(args, "range_temp", None)))
-    override(config, "data", "error_limit", parse_error_limit(getattr(args, "range_error", None)))
-    override(config, "data", "period_tolerance", getattr(args, "period_tolerance", None))
-    override(config, "data", "resample_s", getattr(args, "resample", None))
-    override(config, "data", "ambient", getattr(args, "ambient", None))
-    return config_path, config
+        settings = settings.without_default_runs()
+    data = {
+        "path": args.data[0] if args.data and len(args.data) == 1 else args.data,
+        "time": args.time,
+        "temps": split_names(args.temps),
+        "error": args.error,
+        "temp_range": parse_temp_range(getattr(args, "range_temp", None)),
+        "error_limit": parse_error_limit(getattr(args, "range_error", None)),
+        "period_tolerance": getattr(args, "period_tolerance", None),
+        "resample_s": getattr(args, "resample", None),
+        "ambient": getattr(args, "ambient", None),
+    }
+    return config_path, settings.given(data=data)
 
 
-def load_configured_run(config: dict, path: str | None = None, **options) -> Run:
+def load_configured_run(data: DataSettings, path: str | None = None, **options) -> Run:
     """Load the run named by ``path`` (default: the configuration's data path)."""
-    runs = load_configured_runs(config, path, **options)
-    if len(runs) > 1 and not isinstance(path or config["data"].get("path"), (list, tuple)):
-        return load_run(path or config["data"]["path"], **_load_options(config, options))  # names the gap
+    runs = load_configured_runs(data, path, **options)
+    if len(runs) > 1 and not isinstance(path or data.path, (list, tuple)):
+        return load_run(path or data.path, **_load_options(data, options))  # names the gap
     return join_runs(runs)
 
 
-def load_configured_runs(config: dict, path: str | None = None, **options) -> list[Run]:
+def load_configured_runs(data: DataSettings, path: str | None = None, **options) -> list[Run]:
     """The runs named by ``path`` (default: the configuration's data path), a log split at its gaps by
     ``--resample`` giving one run per part."""
-    path = path or config["data"].get("path")
-    if not path:
+    paths = (path,) if path else data.paths
+    if not paths:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
-    options = _load_options(config, options)
-    paths = path if isinstance(path, (list, tuple)) else [path]
+    options = _load_options(data, options)
     return [run for p in paths for run in load_runs(p, **options)]
 
 
-def _load_options(config: dict, options: dict) -> dict:
-    data = config["data"]
+def _load_options(data: DataSettings, options: dict) -> dict:
     options = dict(options)
-    options.setdefault("temp_range", data.get("temp_range", TEMP_RANGE_C))
-    options.setdefault("error_limit", data.get("error_limit", ERROR_LIMIT_UM))
-    for key, value in configured_clock(config).items():
+    options.setdefault("temp_range", TEMP_RANGE_C if data.temp_range is None else data.temp_range)
+    options.setdefault("error_limit", ERROR_LIMIT_UM if data.error_limit is None else data.error_limit)
+    for key, value in configured_clock(data).items():
         options.setdefault(key, value)
-    options.update(temps=data.get("temps"), time=data["time"], error=data["error"])
-    if data.get("ambient") is not None:
-        options.setdefault("ambient", data["ambient"])
+    options.update(temps=list(data.temps) if data.temps is not None else None, time=data.time, error=data.error)
+    if data.ambient is not None:
+        options.setdefault("ambient", data.ambient)
     return options
 
 
@@ -425,12 +421,12 @@ def add_reference_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def configured_reference(args: argparse.Namespace, config: dict, run: Run) -> str | None:
+def configured_reference(args: argparse.Namespace, settings: RunSettings, run: Run) -> str | None:
     """The reference of ``--reference``, else ``[model] reference``, else T_amb when ``run`` has it."""
     value = getattr(args, "reference", None)
     if value is None:
-        value = config["model"].get("reference")
-    ambient = config["data"].get("ambient")
+        value = settings.model.reference
+    ambient = settings.data.ambient
     if value is None and ambient is not None:
         if ambient not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))

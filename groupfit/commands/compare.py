@@ -18,7 +18,6 @@ from groupfit.commands.common import (
     check_exact_budget,
     check_output_dir,
     commit_outputs,
-    config_with_data_options,
     configured_reference,
     load_configured_run,
     load_configured_runs,
@@ -26,11 +25,11 @@ from groupfit.commands.common import (
     print_notes,
     report_stream,
     seed_value,
+    settings_with_data_options,
     write_json,
     wrote_line,
 )
 from groupfit.comparison import ComparisonSettings, compare_models
-from groupfit.config import override
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
@@ -75,40 +74,42 @@ def add_parser(verbs) -> None:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    config_path, config = config_with_data_options(args)
-    override(config, "data", "validate", args.validate)
-    override(config, "compare", "pmax", args.pmax)
-    override(config, "compare", "heat", args.heat)
-    override(config, "search", "seed", args.seed)
-    override(config, "output", "dir", args.out)
-    if config["compare"]["pmax"] < 0:
-        raise InputError(f"--pmax {config['compare']['pmax']}: the largest p compared must be 0 or more")
-    runs = [p for p in [config["data"].get("path"), *config["data"]["validate"]] if isinstance(p, (str, Path))]
+    config_path, run_settings = settings_with_data_options(args)
+    run_settings = run_settings.given(
+        data={"validate": args.validate},
+        compare={"pmax": args.pmax, "heat": args.heat},
+        search={"seed": args.seed},
+        output={"dir": args.out},
+    )
+    data = run_settings.data
+    if run_settings.compare.pmax < 0:
+        raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
+    runs = [p for p in [data.path, *data.validate] if isinstance(p, (str, Path))]
     plan_outputs(
         args,
         config_path,
-        config["data"].get("path"),
-        config["data"]["validate"],
-        folder=config["output"]["dir"],
+        data.path,
+        list(data.validate),
+        folder=run_settings.output_dir,
         files=["R_against_p.png", "error_against_check_interval.png", *(f"compare_{Path(p).stem}.png" for p in runs)],
     )
-    settings = ComparisonSettings.from_config(config)
+    settings = ComparisonSettings.from_settings(run_settings)
     settings.intervals = interval_settings(args)
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
-    if isinstance(config["data"].get("path"), (list, tuple)):
+    if isinstance(data.path, (list, tuple)):
         raise InputError(
-            f"{len(config['data']['path'])} modelling runs given: compare fits grouped models, whose breaks belong "
+            f"{len(data.path)} modelling runs given: compare fits grouped models, whose breaks belong "
             "to one run; give one --data (and the others as --validate), or fit a global model on several runs "
             "with fit --p 0"
         )
-    modelling = load_configured_run(config)
+    modelling = load_configured_run(data)
     if args.heat is not None and any(c not in modelling.frame.columns for c in settings.conditions):
         settings.conditions = (settings.heat,) if settings.heat is not None else ()  # the default speed_rpm is absent
-    validation = [run for path in config["data"]["validate"] for run in load_configured_runs(config, path)]
+    validation = [run for path in data.validate for run in load_configured_runs(data, path)]
     print_notes([modelling, *validation], report_stream(args))
-    reference = configured_reference(args, config, modelling)
+    reference = configured_reference(args, run_settings, modelling)
     modelling = with_reference(modelling, reference)
     validation = [with_reference(run, reference) for run in validation]
     joined, skipped, notes = with_histories(validation, [modelling], assume_continued=args.continues)
@@ -121,7 +122,7 @@ def run_compare(args: argparse.Namespace) -> int:
     check_block(args, modelling.n_samples)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
-    out_dir = check_output_dir(config["output"]["dir"])
+    out_dir = check_output_dir(run_settings.output_dir)
     progress = StageProgress(enabled=not args.quiet)
     try:
         result = compare_models(

@@ -20,8 +20,6 @@ from groupfit.commands.common import (
     check_exact_budget,
     check_output_dir,
     commit_outputs,
-    config_with_data_options,
-    configured_clock,
     configured_reference,
     load_configured_runs,
     plan_outputs,
@@ -29,12 +27,13 @@ from groupfit.commands.common import (
     report_stream,
     ridge_value,
     seed_value,
+    settings_with_data_options,
     write_json,
     wrote_line,
 )
+from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
-from groupfit.config import override
-from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C, Run, join_runs, measured_rows
+from groupfit.data import Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
@@ -43,13 +42,12 @@ from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.heldout.span import SPAN_KEY, input_span
 from groupfit.inference.cli import add_interval_options, check_block, intervals_from_args
-from groupfit.model import DeadBand
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.plots import plot_fit
-from groupfit.position import choose_p0, cross_validate_order, load_position_run, residual_by_order, with_position
 from groupfit.position_plot import plot_position
 from groupfit.reference import START, with_reference
+from groupfit.settings import ModelSettings, RunSettings
 
 NEXT_RUN = "next-run"
 P_RULES = (NEXT_RUN, "bic", "target")
@@ -146,50 +144,55 @@ FIT_FILES = ("model.json", "fit.png", "position.png")
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
-    config_path, config = config_with_data_options(args)
-    override(config, "model", "p", args.p)
-    override(config, "model", "pmax", args.pmax)
-    override(config, "model", "p_rule", args.p_rule)
-    override(config, "model", "p_target", args.p_target)
-    override(config, "model", "n", args.n)
-    override(config, "model", "c", args.c)
-    override(config, "model", "objective", args.objective)
-    if args.no_intercept:
-        config["model"]["intercept"] = False
-    override(config, "model", "criterion", args.criterion)
-    override(config, "search", "method", args.search)
-    override(config, "search", "seed", args.seed)
-    override(config, "search", "certify", {"yes": True, "no": False}.get(args.certify, args.certify))
-    override(config, "output", "dir", args.out)
-    plan_outputs(args, config_path, config["data"].get("path"), folder=config["output"]["dir"], files=FIT_FILES)
+    config_path, settings = settings_with_data_options(args)
+    settings = settings.given(
+        model={
+            "p": args.p,
+            "pmax": args.pmax,
+            "p_rule": args.p_rule,
+            "p_target": args.p_target,
+            "n": args.n,
+            "c": args.c,
+            "objective": args.objective,
+            "intercept": False if args.no_intercept else None,
+            "criterion": args.criterion,
+        },
+        search={
+            "method": args.search,
+            "seed": args.seed,
+            "certify": {"yes": True, "no": False}.get(args.certify, args.certify),
+        },
+        output={"dir": args.out},
+    )
+    plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
 
-    paths = config["data"].get("path")
+    paths = settings.data.path
     position_run = None
     check_position_options(args)
     if args.position:
-        position_run = load_position_data(config, args.position)
+        position_run = load_position_data(settings.data, args.position)
         runs = [position_run.run]
     else:
-        runs = load_configured_runs(config, missing_error=True)
+        runs = load_configured_runs(settings.data, missing_error=True)
     print_notes(runs, report_stream(args))
-    if config["model"]["p"] == "auto" and (len(runs) > 1 or position_run is not None):
-        config["model"]["p"] = 0  # several runs, or check runs at positions: a global model
-    if len(runs) > 1 and config["model"]["p"] != 0:
+    if settings.model.p == "auto" and (len(runs) > 1 or position_run is not None):
+        settings = with_p(settings, 0)  # several runs, or check runs at positions: a global model
+    if len(runs) > 1 and settings.model.p != 0:
         split = "" if isinstance(paths, (list, tuple)) else " (--resample split the log at its gaps)"
         raise InputError(
             f"{len(runs)} runs given{split}: several runs fit a global model, --p 0; a grouped model's "
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)
-    reference = configured_reference(args, config, run)
+    reference = configured_reference(args, settings, run)
     if len(runs) > 1 and reference == START:
         runs = [with_reference(r, START) for r in runs]  # each run's own start
         run = join_runs(runs)
     else:
         run = with_reference(run, reference)
-    if config["model"]["p"] == "auto" and np.isnan(run.error).any():
-        config["model"]["p"] = 0  # an error not on every row: a global model on the measured rows
-    check_measured(run, config["model"]["p"])
+    if settings.model.p == "auto" and np.isnan(run.error).any():
+        settings = with_p(settings, 0)  # an error not on every row: a global model on the measured rows
+    check_measured(run, settings.model.p)
     check_block(args, run.n_samples)
     input_selection = None
     if position_run is not None:
@@ -207,60 +210,68 @@ def run_fit(args: argparse.Namespace) -> int:
     if args.backward is not None:
         if args.select or position_run is not None:
             raise InputError("--backward chooses the inputs itself: not with --select or --position")
-        intercept = config["model"]["intercept"]
-        if config["model"]["p"] == "auto":
-            config["model"]["p"] = 0  # backward elimination is for a global regression
-        run, input_selection = fit_mlr.backward_run(run, args.backward, p=config["model"]["p"], fit_intercept=intercept)
+        intercept = settings.model.intercept
+        if settings.model.p == "auto":
+            settings = with_p(settings, 0)  # backward elimination is for a global regression
+        run, input_selection = fit_mlr.backward_run(run, args.backward, p=settings.model.p, fit_intercept=intercept)
         estimate_runs = [with_inputs(r, run.temp_names) for r in estimate_runs]
-    criterion = config["model"].get("criterion")
+    model_settings = settings.model
+    criterion = model_settings.criterion
     if criterion is not None and criterion not in run.temp_names:
         raise InputError(
             f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
         )
-    n_coef = run.temps.shape[1] + int(config["model"]["intercept"])
-    if config["model"]["p"] == "auto" and config["model"]["p_rule"] != NEXT_RUN:
+    n_coef = run.temps.shape[1] + int(model_settings.intercept)
+    if model_settings.p == "auto" and model_settings.p_rule != NEXT_RUN:
         check_exact_budget(
-            args, run, n_coef, config["model"]["objective"], max(config["model"]["pmax"], 0), "--p auto's exact path"
+            args, run, n_coef, model_settings.objective, max(model_settings.pmax, 0), "--p auto's exact path"
         )
-    elif config["search"]["method"] == "exact" and isinstance(config["model"]["p"], int):
-        check_exact_budget(args, run, n_coef, config["model"]["objective"], config["model"]["p"], "the exact search")
+    elif settings.search.method == "exact" and isinstance(model_settings.p, int):
+        check_exact_budget(args, run, n_coef, model_settings.objective, model_settings.p, "the exact search")
     selection = expectation = None
-    if config["model"]["p"] == "auto" and config["model"]["pmax"] < 0:
-        raise InputError(f"--pmax {config['model']['pmax']}: the largest p tried must be 0 or more")
-    if config["model"]["p"] == "auto" and config["model"]["p_rule"] == NEXT_RUN:
-        p_values = (0,) if args.ridge is not None else tuple(range(config["model"]["pmax"] + 1))
-        expectation = model_expectation(config, estimate_runs, p_values)
-        config["model"]["p"] = expectation.candidates[expectation.chosen]
-    elif config["model"]["p"] == "auto":
-        selection = select_breaks(config, run)
-        config["model"]["p"] = selection["p"]
-    elif not isinstance(config["model"]["p"], int):
-        raise InputError(f"p = {config['model']['p']!r}: give a whole number or 'auto'")
-    estimator = GroupedRegressor.from_config(config)
+    if model_settings.p == "auto" and model_settings.pmax < 0:
+        raise InputError(f"--pmax {model_settings.pmax}: the largest p tried must be 0 or more")
+    if model_settings.p == "auto" and model_settings.p_rule == NEXT_RUN:
+        p_values = (0,) if args.ridge is not None else tuple(range(model_settings.pmax + 1))
+        expectation = model_expectation(model_settings, estimate_runs, p_values)
+        settings = with_p(settings, expectation.candidates[expectation.chosen])
+    elif model_settings.p == "auto":
+        selection = select_breaks(model_settings, run)
+        settings = with_p(settings, selection["p"])
+    elif not isinstance(model_settings.p, int):
+        raise InputError(f"p = {model_settings.p!r}: give a whole number or 'auto'")
+    model_settings = settings.model
+    estimator = GroupedRegressor.from_settings(
+        p=model_settings.p,
+        n=model_settings.n,
+        c=model_settings.c,
+        objective=model_settings.objective,
+        fit_intercept=model_settings.intercept,
+        search=settings.search,
+    )
     frames = [r.frame for r in runs]
     not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
     if args.ridge is not None:
-        settings = config["model"]
         splits = next_run_splits(estimate_runs)
         ridge = ridge_setting(
             args.ridge,
-            settings["p"],
+            model_settings.p,
             run.temps,
             run.error,
             frames,
             not_conditions,
-            settings["intercept"],
+            model_settings.intercept,
             splits=splits,
             splits_name=f"{len(splits)} folds that imitate a next run",
         )
         estimator.set_params(ridge_alpha=ridge.alpha)
-    out_dir = check_output_dir(config["output"]["dir"])
+    out_dir = check_output_dir(settings.output_dir)
     progress = StageProgress(enabled=not args.quiet)
     fit_run = measured_rows(run)
     try:
         estimator.fit(fit_run.temps, fit_run.error, progress=progress)
-        seed = config["search"]["seed"]
+        seed = settings.search.seed
         intervals = intervals_from_args(args, estimator, fit_run.temps, fit_run.error, seed, progress)
     finally:
         progress.close()
@@ -269,12 +280,12 @@ def run_fit(args: argparse.Namespace) -> int:
     if position_run is None and (expectation is None or ridge is not None):
         alpha = ridge.alpha if ridge is not None else 0.0
         try:
-            expectation = model_expectation(config, estimate_runs, (config["model"]["p"],), alpha)
+            expectation = model_expectation(model_settings, estimate_runs, (model_settings.p,), alpha)
         except InputError as exc:
             position_note += f"\nnote    no next-run estimate: {exc}"
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
     if expectation is not None:
-        training.update(expectation_training(expectation, config))
+        training.update(expectation_training(expectation, model_settings.p))
     model = model.replace(training=training)
     if position_run is not None:
         model, position_note = position_model(args, model, position_run)
@@ -286,7 +297,7 @@ def run_fit(args: argparse.Namespace) -> int:
     held_out = None
     if position_run is None:
         alpha = ridge.alpha if ridge is not None else 0.0
-        intercept = config["model"]["intercept"]
+        intercept = model_settings.intercept
         grouped = model.to_dict() if estimator.p > 0 else None
         held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)
         model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
@@ -295,7 +306,7 @@ def run_fit(args: argparse.Namespace) -> int:
         estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out, expectation=expectation
     )
     if estimator.p == 0 and ridge is None and position_run is None:
-        result.statistics = fit_mlr.statistics(fit_run, fit_intercept=config["model"]["intercept"])
+        result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
     run = fit_run
 
     model_path = out_dir / "model.json"
@@ -323,22 +334,26 @@ def run_fit(args: argparse.Namespace) -> int:
     return 0
 
 
-def model_expectation(config: dict, runs: list[Run], p_values, ridge_alpha: float = 0.0) -> NextRunExpectation:
+def with_p(settings: RunSettings, p: int) -> RunSettings:
+    """The settings with the number of breaks decided."""
+    return settings.given(model={"p": p})
+
+
+def model_expectation(model: ModelSettings, runs: list[Run], p_values, ridge_alpha: float = 0.0) -> NextRunExpectation:
     """The expected next-run error of the candidates ``p_values`` (:mod:`groupfit.heldout.expect`)."""
-    model = config["model"]
     try:
         result = expect_next_run(
-            runs, p_values, n=model["n"], c=float(model["c"]), fit_intercept=model["intercept"], ridge_alpha=ridge_alpha
+            runs, p_values, n=model.n, c=float(model.c), fit_intercept=model.intercept, ridge_alpha=ridge_alpha
         )
     except ValueError as exc:
         raise InputError(f"{runs[0].source}: the next-run estimate: {exc}; give --p or record a longer run") from None
     return result
 
 
-def expectation_training(expectation: NextRunExpectation, config: dict) -> dict:
+def expectation_training(expectation: NextRunExpectation, p: int) -> dict:
     """The model file's ``training`` keys of the next-run expectation and of how p was chosen."""
     data = expectation.to_json()
-    chosen = config["model"]["p"] if len(expectation.candidates) == 1 else data["chosen"]["p"]
+    chosen = p if len(expectation.candidates) == 1 else data["chosen"]["p"]
     return {
         **expectation.training(),
         "model_choice": {
@@ -382,71 +397,6 @@ def check_measured(run: Run, p) -> None:
         )
 
 
-def check_position_options(args: argparse.Namespace) -> None:
-    """The position and dead-band options that need another one."""
-    if not args.position:
-        for name in ("position_order", "position_ref"):
-            if getattr(args, name) is not None:
-                raise InputError(f"--{name.replace('_', '-')} needs --position COLUMN")
-    if args.dead_band_ref is not None and args.dead_band is None:
-        raise InputError("--dead-band-ref needs --dead-band C")
-    if args.dead_band is not None and not (0 < args.dead_band <= 50):
-        raise InputError(f"--dead-band {args.dead_band:g}: a threshold in (0, 50] degC")
-
-
-def load_position_data(config: dict, column: str):
-    """The run of ``--position COLUMN`` (long or wide table; :func:`groupfit.position.load_position_run`)."""
-    data = config["data"]
-    path = data.get("path")
-    if not path:
-        raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
-    if isinstance(path, (list, tuple)):
-        raise InputError("--position takes one run (a long or wide table of check runs)")
-    limits = {
-        "temp_range": data.get("temp_range", TEMP_RANGE_C),
-        "error_limit": data.get("error_limit", ERROR_LIMIT_UM),
-    }
-    clock = configured_clock(config)
-    columns = {"temps": data.get("temps"), "time": data["time"], "error": data["error"]}
-    return load_position_run(path, column, **columns, **limits, **clock)
-
-
-def position_model(args: argparse.Namespace, model, position_run) -> tuple:
-    """The model with its position terms (and dead band), and the report's lines on them."""
-    p0 = choose_p0(position_run, args.position_ref)
-    order = args.position_order if args.position_order is not None else 1
-    lines = []
-    if order == "auto":
-        chosen = cross_validate_order(position_run, p0=p0, intercept=model.intercept)
-        order = chosen["order"]
-        scores = ", ".join(f"{k}: {v:.3g}" for k, v in zip(chosen["orders"], chosen["rms_um"]))
-        lines.append(f"position order {order} by cross-validation over held-out positions (RMS um: {scores})")
-    dead_band = None
-    if args.dead_band is not None:
-        reference = args.dead_band_ref or (model.reference if model.reference not in (None, "start") else None)
-        if reference is None:
-            raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
-        if reference not in position_run.run.frame.columns:
-            raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
-        dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
-    fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
-    orders = residual_by_order(model, position_run, p0)
-    fitted = fitted.replace(training={**(fitted.training or {}), "position_orders": orders})
-    training = fitted.training
-    lines.append(
-        f"position {position_run.column}: order {order}, P0 = {p0:g} mm, travel {position_run.travel[0]:g} .. "
-        f"{position_run.travel[1]:g} mm, {len(position_run.positions)} positions x {position_run.run.n_samples} "
-        f"check runs; residual RMS {training['position_rms_um']:.3g} um, max {training['position_max_um']:.3g} um"
-    )
-    lines.append("residual by order (max / mean |e| um): " + order_table_text(orders))
-    return fitted, "\n" + "\n".join(lines)
-
-
-def order_table_text(orders: list[dict]) -> str:
-    """The per-order residual table in one line: ``1: 0.53 / 0.19, 2: …``."""
-    return ", ".join(f"{row['order']}: {row['max_um']:.3g} / {row['mean_um']:.3g}" for row in orders)
-
-
 def select_run_inputs(run: Run, frames: list, method: str, k: int | None, runs: list[Run]) -> tuple[Run, dict]:
     """The run restricted to the inputs ``method`` chooses, scored on folds that imitate a next run.
 
@@ -467,20 +417,19 @@ def select_run_inputs(run: Run, frames: list, method: str, k: int | None, runs: 
     }
 
 
-def select_breaks(config: dict, run: Run) -> dict:
+def select_breaks(model: ModelSettings, run: Run) -> dict:
     """Choose p over 0…pmax from the certified optimum of every p."""
-    model = config["model"]
     path = exact_path(
         run.temps,
         run.error,
-        model["pmax"],
-        n=model["n"],
-        c=float(model["c"]),
-        objective=model["objective"],
-        fit_intercept=model["intercept"],
+        model.pmax,
+        n=model.n,
+        c=float(model.c),
+        objective=model.objective,
+        fit_intercept=model.intercept,
     )
-    n_coef = run.temps.shape[1] + int(model["intercept"])
-    selection = choose_p(path["rss"], path["R"], run.n_samples, n_coef, model["p_rule"], model.get("p_target"))
+    n_coef = run.temps.shape[1] + int(model.intercept)
+    selection = choose_p(path["rss"], path["R"], run.n_samples, n_coef, model.p_rule, model.p_target)
     if selection["p"] is None:
         raise InputError(
             f"no p up to {len(path['R']) - 1} meets the target R = {selection['target_um']:g} µm "

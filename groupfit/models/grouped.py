@@ -199,10 +199,9 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
 
     @classmethod
     def from_config(cls, config: Mapping[str, Mapping[str, Any]], **search_changes) -> "GroupedRegressor":
-        """The estimator of a configuration's ``model`` and ``search`` tables.
+        """The estimator of a sweep's run specification (:mod:`groupfit.sweep.config`): its ``model`` and ``search``.
 
-        A run configuration (:mod:`groupfit.config`) or a sweep's run
-        specification (:mod:`groupfit.sweep.config`); ``search_changes``
+        ``search_changes``
         override :class:`~groupfit.search.base.SearchSettings` fields (e.g. ``certify=False``).
         """
         model = config["model"]

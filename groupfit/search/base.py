@@ -71,10 +71,10 @@ class SearchSettings:
     def from_mapping(cls, table: Mapping[str, Any]) -> "SearchSettings":
         """From a configuration's ``[search]`` table or a sweep specification's ``search``."""
         return cls(
-            method=table.get("method", "ga"),
-            seed=table.get("seed", 0),
+            method=table.get("method", cls.method),
+            seed=table.get("seed", cls.seed),
             ga=GASettings.from_mapping(table),
-            certify=table.get("certify", "auto"),
+            certify=table.get("certify", cls.certify),
         )
 
     def replace(self, **changes) -> "SearchSettings":
