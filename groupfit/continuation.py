@@ -81,7 +81,7 @@ def with_history(run: Run, history: Run | None) -> tuple[Run, int]:
 
 
 def with_histories(
-    runs: Sequence[Run], earlier: Sequence[Run], assume_continued: bool = False
+    runs: Sequence[Run], earlier: Sequence[Run], *, assume_continued: bool = False
 ) -> tuple[list[Run], list[int], list[str]]:
     """Each of ``runs`` with what it continues in front; the rows put in front of each; a note for each.
 

@@ -84,13 +84,13 @@ def held_out_series(model: ModelFile, runs: Sequence, *, cuts: Sequence[float] =
             train = np.isfinite(error[:a])
             if train.sum() < max(MIN_TRAIN_SAMPLES, 2 * design.shape[1]) or a >= len(design) - 1:
                 continue
-            coef = _solve(design[:a][train], error[:a][train], model.ridge_alpha, model.intercept)
+            coef = _solve(design[:a][train], error[:a][train], model.ridge_alpha, intercept=model.intercept)
             prediction = design[a:] @ coef
             series.append(HeldOut(error[a:] - prediction, prediction))
     return series
 
 
-def _solve(design: np.ndarray, target: np.ndarray, alpha: float | None, intercept: bool) -> np.ndarray:
+def _solve(design: np.ndarray, target: np.ndarray, alpha: float | None, *, intercept: bool) -> np.ndarray:
     """Least squares, or ridge on the centred, scaled inputs (the intercept unpenalised) as the model was fitted."""
     if not alpha:
         return np.linalg.lstsq(design, target, rcond=None)[0]

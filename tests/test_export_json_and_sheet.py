@@ -162,7 +162,8 @@ def test_other_integer_forms_and_their_range():
 def test_sinumerik_conversions():
     assert sinumerik_abs_value_mm(-12.5) == -0.0125
     assert sinumerik_temp_comp_type() == 1
-    assert sinumerik_temp_comp_type(True, True) == 3 and sinumerik_temp_comp_type(False, False, True) == 4
+    assert sinumerik_temp_comp_type(position_dependent=True) == 3
+    assert sinumerik_temp_comp_type(position_independent=False, tool_direction=True) == 4
     # K0 = 0.010 mm, tanb = 2e-5, P0 = 100 mm: at P = 600 mm, 10 µm + 2e-5 * 500 mm = 20 µm
     assert sinumerik_total_um(0.010, 2e-5, 600.0, 100.0) == pytest.approx(20.0)
     with pytest.raises(ValueError):

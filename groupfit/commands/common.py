@@ -364,7 +364,7 @@ class StageProgress:
     LOG_SECONDS = 5.0
     QUIET_SECONDS = 2.0
 
-    def __init__(self, enabled: bool, stream=None):
+    def __init__(self, *, enabled: bool, stream=None):
         self.enabled = enabled
         self.stream = stream or sys.stderr
         self.bars: dict[str, tqdm] = {}

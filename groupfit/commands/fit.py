@@ -261,7 +261,7 @@ def run_fit(args: argparse.Namespace) -> int:
             run.error,
             frames,
             not_conditions,
-            model_settings.intercept,
+            fit_intercept=model_settings.intercept,
             splits=splits,
             splits_name=f"{len(splits)} folds that imitate a next run",
         )
@@ -299,7 +299,9 @@ def run_fit(args: argparse.Namespace) -> int:
         alpha = ridge.alpha if ridge is not None else 0.0
         intercept = model_settings.intercept
         grouped = model.to_dict() if estimator.p > 0 else None
-        held_out = held_out_check(run.temps, run.error, frames, not_conditions, intercept, alpha, grouped)
+        held_out = held_out_check(
+            run.temps, run.error, frames, not_conditions, fit_intercept=intercept, ridge_alpha=alpha, grouped=grouped
+        )
         model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
         position_note = recal_note + position_note
     result = FitResult(

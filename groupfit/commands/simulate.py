@@ -20,7 +20,7 @@ def read_scenario(path: str | Path) -> dict:
     return read_toml(path, "scenario configuration")
 
 
-def simulate_scenario(config: dict, progress: bool):
+def simulate_scenario(config: dict, *, progress: bool):
     kind = config.get("kind", "headstock")
     if kind == "lumped":
         return simulate_lumped(config)

@@ -190,7 +190,7 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     inputs = problem.inputs(model)
     residuals = dict(before) if options.baseline is None else problem.residuals(model)
     current = Fit(model, inputs, residuals, problem.scorer(model, inputs))
-    base_check = overfit_check(current.scorer, problem.folds, problem.grouped)
+    base_check = overfit_check(current.scorer, problem.folds, grouped=problem.grouped)
     if base_check.overfitted:
         notes.append(
             Note(

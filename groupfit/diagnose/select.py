@@ -30,7 +30,7 @@ def ridge_base_model(model: ModelLike, runs: Sequence[Run], alpha: float | str) 
     exclude = {runs[0].time_name, model.error, *model.temps}
     y = np.concatenate([run.error for run in runs])
     frames = [run.frame for run in runs]
-    info = ridge_setting(alpha, model.p, np.vstack(inputs), y, frames, exclude, model.intercept)
+    info = ridge_setting(alpha, model.p, np.vstack(inputs), y, frames, exclude, fit_intercept=model.intercept)
     if not info.alpha:  # no penalty: the model as given
         return model, info
     ridged = model.replace(ridge_alpha=info.alpha or None)

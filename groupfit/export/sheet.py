@@ -41,7 +41,7 @@ def sinumerik_abs_value_mm(compensation_um: float) -> float:
 
 
 def sinumerik_temp_comp_type(
-    position_independent: bool = True, position_dependent: bool = False, tool_direction: bool = False
+    *, position_independent: bool = True, position_dependent: bool = False, tool_direction: bool = False
 ) -> int:
     """MD32750 TEMP_COMP_TYPE: bit 0, bit 1 and bit 2 as named."""
     return int(position_independent) | (int(position_dependent) << 1) | (int(tool_direction) << 2)
@@ -159,7 +159,7 @@ def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -
         },
         "sinumerik": {
             "form": "dK = K0 + tanb * (P - P0)",
-            "MD32750_TEMP_COMP_TYPE": sinumerik_temp_comp_type(True, False, False),
+            "MD32750_TEMP_COMP_TYPE": sinumerik_temp_comp_type(),
             "MD32750_bits": {str(bit): text for bit, text in MD32750_BITS.items()},
             "MD32750_note": "bit 0 only: the grouped model is position-independent. Set bit 1 (value 3) "
             "only when a position-dependent slope is also written.",
@@ -272,7 +272,7 @@ def with_position(sheet: dict, tables: RuleTables) -> dict:
     sheet = dict(sheet)
     if tables.has_position:
         sin = dict(sheet["sinumerik"])
-        sin["MD32750_TEMP_COMP_TYPE"] = sinumerik_temp_comp_type(True, True, False)
+        sin["MD32750_TEMP_COMP_TYPE"] = sinumerik_temp_comp_type(position_dependent=True)
         sin["MD32750_note"] = "bits 0 and 1 (value 3): the model is position-dependent"
         sin["SD43900_TEMP_COMP_ABS_VALUE"] = {"value": "-K0Um / 1000", "unit": "mm", "role": "K0"}
         sin["SD43910_TEMP_COMP_SLOPE"] = {"value": "-SlopeUmPerMm / 1000", "unit": "1 (tan beta)", "role": "tanb"}

@@ -61,6 +61,7 @@ def held_out_check(
     y: np.ndarray,
     frames: Sequence[pd.DataFrame],
     exclude: set[str],
+    *,
     fit_intercept: bool = True,
     ridge_alpha: float = 0.0,
     grouped: dict[str, Any] | None = None,
@@ -85,7 +86,7 @@ def held_out_check(
     else:
         design = np.column_stack([np.ones(int(rows.sum())), X[rows]]) if fit_intercept else X[rows]
     scorer = HeldOutScorer(y[rows], design, folds, ridge_alpha=ridge_alpha, fit_intercept=fit_intercept)
-    return overfit_check(scorer, folds, grouped is not None)
+    return overfit_check(scorer, folds, grouped=grouped is not None)
 
 
 def ridge_setting(
@@ -95,8 +96,8 @@ def ridge_setting(
     y: np.ndarray,
     frames: Sequence[pd.DataFrame],
     exclude: set[str],
-    fit_intercept: bool = True,
     *,
+    fit_intercept: bool = True,
     splits: list | None = None,
     splits_name: str = "",
 ) -> RidgeSetting:
@@ -117,7 +118,7 @@ def ridge_setting(
         return RidgeSetting(check_ridge_alpha(option), "given")
     rows = np.isfinite(y)
     if splits is not None:
-        alpha, table = ridge_by_splits(X[rows], y[rows], splits, fit_intercept)
+        alpha, table = ridge_by_splits(X[rows], y[rows], splits, fit_intercept=fit_intercept)
         return RidgeSetting(alpha, "next-run", table, splits_name)
     folds = held_out_folds(frames, exclude, y)
     alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept=fit_intercept)
@@ -126,7 +127,7 @@ def ridge_setting(
 
 
 def ridge_by_splits(
-    X: np.ndarray, y: np.ndarray, splits: list, fit_intercept: bool = True
+    X: np.ndarray, y: np.ndarray, splits: list, *, fit_intercept: bool = True
 ) -> tuple[float, tuple[RidgeScore, ...]]:
     """The largest penalty of the grid within one standard error of the least held-out mean squared error.
 
@@ -143,7 +144,7 @@ def ridge_by_splits(
     return float(grid[chosen]), table[::-1]
 
 
-def overfit_check(scorer: HeldOutScorer, folds: Folds, grouped: bool = False) -> OverfitCheck:
+def overfit_check(scorer: HeldOutScorer, folds: Folds, *, grouped: bool = False) -> OverfitCheck:
     """The model's own regression: in-sample RMS against held-out RMS on the folds, and what to do about it.
 
     A grouped model's groups are stretches of the modelling run: a held-out fold that takes most of a

@@ -48,6 +48,7 @@ class HeldOutScorer:
         target: np.ndarray,
         design: np.ndarray,
         folds: Folds,
+        *,
         ridge_alpha: float = 0.0,
         fit_intercept: bool = True,
     ):
@@ -124,7 +125,11 @@ class HeldOutScorer:
     def with_regressor(self, values: np.ndarray) -> "HeldOutScorer":
         """The scorer of the same design with ``values`` as one more regressor, on the same folds."""
         return HeldOutScorer(
-            self.target, np.column_stack([self.design, values]), self.folds, self.ridge_alpha, self.fit_intercept
+            self.target,
+            np.column_stack([self.design, values]),
+            self.folds,
+            ridge_alpha=self.ridge_alpha,
+            fit_intercept=self.fit_intercept,
         )
 
     @property

@@ -235,7 +235,7 @@ class BallScrewModel:
         if not hasattr(self, "lambda_"):
             raise RuntimeError("BallScrewModel is not fitted; call fit first")
 
-    def get_params(self, deep: bool = True) -> dict:
+    def get_params(self, *, deep: bool = True) -> dict:
         return {
             name: getattr(self, name)
             for name in (
