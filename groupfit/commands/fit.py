@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -45,6 +45,7 @@ from groupfit.inference.cli import add_interval_options, check_block, intervals_
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.plots import plot_fit
+from groupfit.position import PositionRun
 from groupfit.position_plot import plot_position
 from groupfit.reference import START, with_reference
 from groupfit.settings import ModelSettings, RunSettings
@@ -141,11 +142,110 @@ FIT_FILES = ("model.json", "fit.png", "position.png")
 """What fit writes into --out (position.png for a position model)."""
 
 
+@dataclass(frozen=True)
+class FitData:
+    """What ``fit`` fits on, as the stages before the search leave it."""
+
+    settings: RunSettings
+    runs: list[Run]
+    run: Run
+    """The runs joined, with the reference applied and the inputs chosen."""
+    position_run: PositionRun | None
+    estimate_runs: list[Run]
+    """The runs' measured rows the next-run estimate is cut from (none for a position model)."""
+    input_selection: dict | None = None
+
+
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
+    config_path, settings = fit_settings(args)
+    plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
+    data = chosen_inputs(args, prepared_runs(args, settings))
+    settings, selection, expectation = decided_p(args, data)
+    model_settings = settings.model
+    estimator = GroupedRegressor.from_settings(
+        p=model_settings.p,
+        n=model_settings.n,
+        c=model_settings.c,
+        objective=model_settings.objective,
+        fit_intercept=model_settings.intercept,
+        search=settings.search,
+    )
+    run, runs, position_run = data.run, data.runs, data.position_run
+    frames = [r.frame for r in runs]
+    not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
+    ridge = None
+    if args.ridge is not None:
+        splits = next_run_splits(data.estimate_runs)
+        ridge = ridge_setting(
+            args.ridge,
+            model_settings.p,
+            run.temps,
+            run.error,
+            frames,
+            not_conditions,
+            fit_intercept=model_settings.intercept,
+            splits=splits,
+            splits_name=f"{len(splits)} folds that imitate a next run",
+        )
+        estimator.set_params(ridge_alpha=ridge.alpha)
+    alpha = ridge.alpha if ridge is not None else 0.0
+    out_dir = check_output_dir(settings.output_dir)
+    progress = StageProgress(enabled=not args.quiet)
+    fit_run = measured_rows(run)
+    try:
+        estimator.fit(fit_run.temps, fit_run.error, progress=progress)
+        seed = settings.search.seed
+        intervals = intervals_from_args(args, estimator, fit_run.temps, fit_run.error, seed, progress)
+    finally:
+        progress.close()
+    model = estimator.to_model_file(run, model_settings.criterion)  # the valid ranges over every row
+    notes = ""
+    if position_run is None and (expectation is None or ridge is not None):
+        try:
+            expectation = model_expectation(model_settings, data.estimate_runs, (model_settings.p,), alpha)
+        except InputError as exc:
+            notes += f"\nnote    no next-run estimate: {exc}"
+    training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
+    if expectation is not None:
+        training.update(expectation_training(expectation, model_settings.p))
+    model = model.replace(training=training)
+    if position_run is not None:
+        model, notes = position_model(args, model, position_run)
+    if fit_run is not run:
+        notes += (
+            f"\nnote    the error is measured on {fit_run.n_samples} of {run.n_samples} rows: the model is fitted "
+            "on those"
+        )
+    held_out = None
+    if position_run is None:
+        grouped = model.to_dict() if estimator.p > 0 else None
+        held_out = held_out_check(
+            run.temps,
+            run.error,
+            frames,
+            not_conditions,
+            fit_intercept=model_settings.intercept,
+            ridge_alpha=alpha,
+            grouped=grouped,
+        )
+        model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
+        notes = recal_note + notes
+    result = FitResult(
+        estimator, fit_run, model, selection, data.input_selection, intervals, ridge, held_out, expectation=expectation
+    )
+    if estimator.p == 0 and ridge is None and position_run is None:
+        result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
+    written = write_fit_outputs(args, out_dir, result, intervals, position_run)
+    print(result.summary() + notes + "\nwrote   " + written, file=report_stream(args))
+    return 0
+
+
+def fit_settings(args: argparse.Namespace) -> tuple:
+    """The configuration's path and its settings with every option ``fit`` was given."""
     config_path, settings = settings_with_data_options(args)
-    settings = settings.given(
+    return config_path, settings.given(
         model={
             "p": args.p,
             "pmax": args.pmax,
@@ -164,9 +264,10 @@ def run_fit(args: argparse.Namespace) -> int:
         },
         output={"dir": args.out},
     )
-    plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
 
-    paths = settings.data.path
+
+def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
+    """The runs loaded and joined, the reference applied; p = 0 where only a global model can be fitted."""
     position_run = None
     check_position_options(args)
     if args.position:
@@ -178,7 +279,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if settings.model.p == "auto" and (len(runs) > 1 or position_run is not None):
         settings = with_p(settings, 0)  # several runs, or check runs at positions: a global model
     if len(runs) > 1 and settings.model.p != 0:
-        split = "" if isinstance(paths, (list, tuple)) else " (--resample split the log at its gaps)"
+        split = "" if isinstance(settings.data.path, (list, tuple)) else " (--resample split the log at its gaps)"
         raise InputError(
             f"{len(runs)} runs given{split}: several runs fit a global model, --p 0; a grouped model's "
             "breaks belong to one run (fit it per run and operating condition)"
@@ -194,7 +295,6 @@ def run_fit(args: argparse.Namespace) -> int:
         settings = with_p(settings, 0)  # an error not on every row: a global model on the measured rows
     check_measured(run, settings.model.p)
     check_block(args, run.n_samples)
-    input_selection = None
     if position_run is not None:
         position_run = replace(position_run, run=run)
         if args.select:
@@ -202,115 +302,61 @@ def run_fit(args: argparse.Namespace) -> int:
         if args.ridge is not None:
             raise InputError("--ridge is not available with --position: the position terms are fitted by least squares")
     estimate_runs = [measured_rows(with_reference(r, reference)) for r in runs] if position_run is None else []
+    return FitData(settings, runs, run, position_run, estimate_runs)
+
+
+def chosen_inputs(args: argparse.Namespace, data: FitData) -> FitData:
+    """The inputs chosen by ``--select`` or ``--backward`` (all of them otherwise); the criterion checked."""
+    settings, run, estimate_runs, input_selection = data.settings, data.run, data.estimate_runs, None
     if args.select:
-        run, input_selection = select_run_inputs(run, [r.frame for r in runs], args.select, args.sensors, estimate_runs)
+        frames = [r.frame for r in data.runs]
+        run, input_selection = select_run_inputs(run, frames, args.select, args.sensors, estimate_runs)
         estimate_runs = [with_inputs(r, run.temp_names) for r in estimate_runs]
     elif args.sensors is not None:
         raise InputError("--sensors K needs --select forward|lasso|cluster")
     if args.backward is not None:
-        if args.select or position_run is not None:
+        if args.select or data.position_run is not None:
             raise InputError("--backward chooses the inputs itself: not with --select or --position")
-        intercept = settings.model.intercept
         if settings.model.p == "auto":
             settings = with_p(settings, 0)  # backward elimination is for a global regression
+        intercept = settings.model.intercept
         run, input_selection = fit_mlr.backward_run(run, args.backward, p=settings.model.p, fit_intercept=intercept)
         estimate_runs = [with_inputs(r, run.temp_names) for r in estimate_runs]
-    model_settings = settings.model
-    criterion = model_settings.criterion
+    criterion = settings.model.criterion
     if criterion is not None and criterion not in run.temp_names:
         raise InputError(
             f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
         )
-    n_coef = run.temps.shape[1] + int(model_settings.intercept)
-    if model_settings.p == "auto" and model_settings.p_rule != NEXT_RUN:
-        check_exact_budget(
-            args, run, n_coef, model_settings.objective, max(model_settings.pmax, 0), "--p auto's exact path"
-        )
-    elif settings.search.method == "exact" and isinstance(model_settings.p, int):
-        check_exact_budget(args, run, n_coef, model_settings.objective, model_settings.p, "the exact search")
-    selection = expectation = None
-    if model_settings.p == "auto" and model_settings.pmax < 0:
-        raise InputError(f"--pmax {model_settings.pmax}: the largest p tried must be 0 or more")
-    if model_settings.p == "auto" and model_settings.p_rule == NEXT_RUN:
-        p_values = (0,) if args.ridge is not None else tuple(range(model_settings.pmax + 1))
-        expectation = model_expectation(model_settings, estimate_runs, p_values)
-        settings = with_p(settings, expectation.candidates[expectation.chosen])
-    elif model_settings.p == "auto":
-        selection = select_breaks(model_settings, run)
-        settings = with_p(settings, selection["p"])
-    elif not isinstance(model_settings.p, int):
-        raise InputError(f"p = {model_settings.p!r}: give a whole number or 'auto'")
-    model_settings = settings.model
-    estimator = GroupedRegressor.from_settings(
-        p=model_settings.p,
-        n=model_settings.n,
-        c=model_settings.c,
-        objective=model_settings.objective,
-        fit_intercept=model_settings.intercept,
-        search=settings.search,
-    )
-    frames = [r.frame for r in runs]
-    not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
-    ridge = None
-    if args.ridge is not None:
-        splits = next_run_splits(estimate_runs)
-        ridge = ridge_setting(
-            args.ridge,
-            model_settings.p,
-            run.temps,
-            run.error,
-            frames,
-            not_conditions,
-            fit_intercept=model_settings.intercept,
-            splits=splits,
-            splits_name=f"{len(splits)} folds that imitate a next run",
-        )
-        estimator.set_params(ridge_alpha=ridge.alpha)
-    out_dir = check_output_dir(settings.output_dir)
-    progress = StageProgress(enabled=not args.quiet)
-    fit_run = measured_rows(run)
-    try:
-        estimator.fit(fit_run.temps, fit_run.error, progress=progress)
-        seed = settings.search.seed
-        intervals = intervals_from_args(args, estimator, fit_run.temps, fit_run.error, seed, progress)
-    finally:
-        progress.close()
-    model = estimator.to_model_file(run, criterion)  # the valid ranges over every row, measured or not
-    position_note = ""
-    if position_run is None and (expectation is None or ridge is not None):
-        alpha = ridge.alpha if ridge is not None else 0.0
-        try:
-            expectation = model_expectation(model_settings, estimate_runs, (model_settings.p,), alpha)
-        except InputError as exc:
-            position_note += f"\nnote    no next-run estimate: {exc}"
-    training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
-    if expectation is not None:
-        training.update(expectation_training(expectation, model_settings.p))
-    model = model.replace(training=training)
-    if position_run is not None:
-        model, position_note = position_model(args, model, position_run)
-    if fit_run is not run:
-        position_note += (
-            f"\nnote    the error is measured on {fit_run.n_samples} of {run.n_samples} rows: the model is fitted "
-            "on those"
-        )
-    held_out = None
-    if position_run is None:
-        alpha = ridge.alpha if ridge is not None else 0.0
-        intercept = model_settings.intercept
-        grouped = model.to_dict() if estimator.p > 0 else None
-        held_out = held_out_check(
-            run.temps, run.error, frames, not_conditions, fit_intercept=intercept, ridge_alpha=alpha, grouped=grouped
-        )
-        model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
-        position_note = recal_note + position_note
-    result = FitResult(
-        estimator, fit_run, model, selection, input_selection, intervals, ridge, held_out, expectation=expectation
-    )
-    if estimator.p == 0 and ridge is None and position_run is None:
-        result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
-    run = fit_run
+    return replace(data, settings=settings, run=run, estimate_runs=estimate_runs, input_selection=input_selection)
 
+
+def decided_p(args: argparse.Namespace, data: FitData) -> tuple:
+    """The settings with p decided, the exact path's choice (``--p-rule bic|target``) and the next-run expectation."""
+    settings, run = data.settings, data.run
+    model = settings.model
+    n_coef = run.temps.shape[1] + int(model.intercept)
+    if model.p == "auto" and model.p_rule != NEXT_RUN:
+        check_exact_budget(args, run, n_coef, model.objective, max(model.pmax, 0), "--p auto's exact path")
+    elif settings.search.method == "exact" and isinstance(model.p, int):
+        check_exact_budget(args, run, n_coef, model.objective, model.p, "the exact search")
+    selection = expectation = None
+    if model.p == "auto" and model.pmax < 0:
+        raise InputError(f"--pmax {model.pmax}: the largest p tried must be 0 or more")
+    if model.p == "auto" and model.p_rule == NEXT_RUN:
+        p_values = (0,) if args.ridge is not None else tuple(range(model.pmax + 1))
+        expectation = model_expectation(model, data.estimate_runs, p_values)
+        settings = with_p(settings, expectation.candidates[expectation.chosen])
+    elif model.p == "auto":
+        selection = select_breaks(model, run)
+        settings = with_p(settings, selection["p"])
+    elif not isinstance(model.p, int):
+        raise InputError(f"p = {model.p!r}: give a whole number or 'auto'")
+    return settings, selection, expectation
+
+
+def write_fit_outputs(args, out_dir, result: FitResult, intervals, position_run) -> str:
+    """Write model.json, fit.png (position.png) and the JSON; the report's "wrote" line."""
+    run, estimator = result.run, result.estimator
     model_path = out_dir / "model.json"
     figure_path = out_dir / "fit.png"
     result.model.save(model_path)
@@ -331,9 +377,7 @@ def run_fit(args: argparse.Namespace) -> int:
         plot_position(result.model, position_run, position_figure)
     json_path = write_json(args.json, result.to_json())
     commit_outputs()
-    written = wrote_line([model_path, figure_path, position_figure, json_path])
-    print(result.summary() + position_note + "\nwrote   " + written, file=report_stream(args))
-    return 0
+    return wrote_line([model_path, figure_path, position_figure, json_path])
 
 
 def with_p(settings: RunSettings, p: int) -> RunSettings:
