@@ -9,7 +9,7 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.augment import augment_model
-from groupfit.diagnose.candidates import candidate_features, rank_candidates
+from groupfit.diagnose.candidates import Candidate, candidate_features, rank_candidates, within_one_se
 from groupfit.diagnose.report import column_words
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature, lowpass
@@ -223,3 +223,17 @@ def test_measured_data_realities(tmp_path, capsys):
         assert main(["diagnose", str(model_path), "--data", str(path), "--out", str(tmp_path / "d2")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0]
+
+
+def test_candidates_that_score_alike_keep_the_order_they_were_tried_in():
+    def candidate(column, score, fold_sse):
+        return Candidate(Feature(column, "lowpass", tau_s=3600.0), score, 1.0, 0.5, fold_sse=fold_sse)
+
+    tried = [candidate("speed_rpm", 0.5217730986920186, (1.0, 2.0, 3.0))]
+    tried.append(candidate("spindle_on", 0.5217730986920226, (1.0 + 1e-14, 2.0 - 1e-14, 3.0 + 2e-14)))
+    tried.append(candidate("T_amb", 0.5217731, (0.9, 2.0, 3.0)))
+    ranked = sorted(tried, key=lambda c: -c.rank)
+    assert [c.feature.column for c in ranked] == ["T_amb", "speed_rpm", "spindle_on"]
+    assert within_one_se(tried[1], tried[0]) and within_one_se(tried[0], tried[1])
+    worse = candidate("T_oil", 0.4, (1.5, 2.6, 3.4))
+    assert not within_one_se(worse, tried[0])

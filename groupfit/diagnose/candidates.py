@@ -43,6 +43,8 @@ FITTED_EXPONENTS = (1.0, 4.0 / 3.0, 5.0 / 3.0, 2.0)
 """Exponents tried when the heat-law exponent is fitted (``heat_exponent="fit"``)."""
 COLLINEAR_R = 0.95
 """A candidate correlated this closely (|r|) with one of the model's inputs is *collinear* with it."""
+RANK_DIGITS = 9
+"""Decimals of the score candidates are ranked by; scores that agree to these are a tie."""
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,13 @@ class Candidate:
         """The transform in words, with the reference it is taken over."""
         words = self.feature.describe()
         return words if self.over is None else f"{words}, over {self.over}"
+
+    @property
+    def rank(self) -> float:
+        """The score to rank by: rounded to ``RANK_DIGITS`` decimals, so that candidates that score alike (a
+        low-pass of the speed and of spindle-on when the speed is one step) keep the order they were tried in
+        whatever the last digits the linear algebra of the machine gives them."""
+        return round(self.score, RANK_DIGITS)
 
     @property
     def folds_improved(self) -> float:
@@ -183,8 +192,11 @@ def speed_like(frame: pd.DataFrame, operating: Sequence[str]) -> list[str]:
 def within_one_se(candidate: Candidate, best: Candidate, standard_errors: float = 1.0) -> bool:
     """Whether ``candidate``'s held-out error is within ``standard_errors`` standard errors of ``best``'s.
 
-    The standard error of the summed fold-by-fold differences, √K·sd(d).
+    The standard error of the summed fold-by-fold differences, √K·sd(d). Fold errors that agree to
+    ``RANK_DIGITS`` significant digits are a tie, and a tie is within.
     """
+    if np.allclose(candidate.fold_sse, best.fold_sse, rtol=10.0**-RANK_DIGITS, atol=0.0):
+        return True
     difference = np.subtract(candidate.fold_sse, best.fold_sse)
     if len(difference) < 2:
         return bool(difference.sum() <= 0.0)
@@ -234,7 +246,7 @@ def rank_candidates(
                 collinearity=largest_correlation(values, inputs),
             )
         )
-    ranked.sort(key=lambda c: -c.score)
+    ranked.sort(key=lambda c: -c.rank)
     return ranked
 
 

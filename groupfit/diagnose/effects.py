@@ -105,7 +105,7 @@ def ranking(problem: Problem, model, inputs: list[np.ndarray], scorer: HeldOutSc
         taken_over = rank_candidates(
             problem.target[rows], lags_of_reference, lambda f: problem.values(f, over), scorer, model_inputs_now
         )
-        ranked = sorted(ranked + [replace(c, over=over) for c in taken_over], key=lambda c: -c.score)
+        ranked = sorted(ranked + [replace(c, over=over) for c in taken_over], key=lambda c: -c.rank)
     return ranked
 
 

@@ -134,19 +134,19 @@ class JointProblem:
             null = DriftGuard(self.drift, scorer, lambda c: values_of[c.feature], "drift")
             for name in pool:
                 candidate = score_candidate(Feature(name), inputs[name], scorer)
-                if candidate.score >= self.policy.joint_min_gain and (best is None or candidate.score > best[0].score):
+                if candidate.score >= self.policy.joint_min_gain and (best is None or candidate.rank > best[0].rank):
                     best = (candidate, inputs[name])
             scored = [(score_candidate(feature, values, scorer), values) for feature, values in remaining]
             for candidate, values in scored:
-                better = best is None or candidate.score > best[0].score
+                better = best is None or candidate.rank > best[0].rank
                 if better and self.policy.refusal(candidate, "joint", null) is None:
                     best = (candidate, values)
             if not result.effects:
-                result.first_ranking = sorted((c for c, _ in scored), key=lambda c: -c.score)
+                result.first_ranking = sorted((c for c, _ in scored), key=lambda c: -c.rank)
             if best is None and not result.inputs and pool:  # a compensation reads at least one temperature
                 best = max(
                     ((score_candidate(Feature(n), inputs[n], scorer), inputs[n]) for n in pool),
-                    key=lambda c: c[0].score,
+                    key=lambda c: c[0].rank,
                 )
             if best is None:
                 return result

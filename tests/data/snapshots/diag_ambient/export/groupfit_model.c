@@ -12,7 +12,7 @@
 
 /* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
 static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
-    /* group 1 */ { GF_R(-7.05982811817913358e+01, -7.059828186e+01f), GF_R(-1.77272669681809192e+00, -1.772726655e+00f), GF_R(1.67112633323358573e+00, 1.671126366e+00f), GF_R(2.14385538892867933e+00, 2.143855333e+00f), GF_R(1.02289863133990111e+00, 1.022898674e+00f), GF_R(4.65475032836237534e-01, 4.654750228e-01f) }
+    /* group 1 */ { GF_R(-7.05982811817912790e+01, -7.059828186e+01f), GF_R(-1.77272669681810835e+00, -1.772726655e+00f), GF_R(1.67112633323360682e+00, 1.671126366e+00f), GF_R(2.14385538892867533e+00, 2.143855333e+00f), GF_R(1.02289863133989911e+00, 1.022898674e+00f), GF_R(4.65475032836236702e-01, 4.654750228e-01f) }
 };
 
 /* derived[0], T_amb~lp1800s: low-pass a = exp(-dt/tau), b = 1 - a. */
@@ -44,7 +44,7 @@ static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999978e-05, 2.499999937e-0
 static const gf_real gf_rc_p0[3] = { GF_R(1.00000000000000000e+00, 1.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_max[3] = { GF_R(5.60000000000000000e+01, 5.600000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
-static const gf_real gf_rc_r = GF_R(1.97861218265242451e-02, 1.978612132e-02f);
+static const gf_real gf_rc_r = GF_R(1.97861218265242382e-02, 1.978612132e-02f);
 static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
 static const gf_real gf_rc_sig2 = GF_R(4.00000000000000000e+00, 4.000000000e+00f);
 static const gf_real gf_rc_rate = GF_R(1.30000000000000004e+00, 1.299999952e+00f);

@@ -12,7 +12,7 @@
 
 /* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
 static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
-    /* group 1 */ { GF_R(-1.05075251095525530e+01, -1.050752544e+01f), GF_R(-1.51734632729071311e-01, -1.517346352e-01f), GF_R(2.22778170683845568e-02, 2.227781713e-02f), GF_R(3.17507303705038102e-01, 3.175072968e-01f), GF_R(3.39106242496824473e-01, 3.391062319e-01f), GF_R(1.52346085697097795e-02, 1.523460820e-02f) }
+    /* group 1 */ { GF_R(-1.05075251095525921e+01, -1.050752544e+01f), GF_R(-1.51734632729074448e-01, -1.517346352e-01f), GF_R(2.22778170683874017e-02, 2.227781713e-02f), GF_R(3.17507303705039934e-01, 3.175072968e-01f), GF_R(3.39106242496825305e-01, 3.391062319e-01f), GF_R(1.52346085697097639e-02, 1.523460820e-02f) }
 };
 
 /* derived[0], speed_rpm~lp14400sr: low-pass a = exp(-dt/tau), b = 1 - a. */
@@ -44,7 +44,7 @@ static const gf_real gf_rc_q[3] = { GF_R(2.77777777777777791e-06, 2.777777809e-0
 static const gf_real gf_rc_p0[3] = { GF_R(1.00000000000000000e+00, 1.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_max[3] = { GF_R(5.80000000000000000e+01, 5.800000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
-static const gf_real gf_rc_r = GF_R(1.15872763150057668e-02, 1.158727612e-02f);
+static const gf_real gf_rc_r = GF_R(1.15872763150057876e-02, 1.158727612e-02f);
 static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
 static const gf_real gf_rc_sig2 = GF_R(4.00000000000000000e+00, 4.000000000e+00f);
 static const gf_real gf_rc_rate = GF_R(8.00000000000000044e-01, 8.000000119e-01f);

@@ -12,7 +12,7 @@
 
 /* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
 static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
-    /* group 1 */ { GF_R(-3.23188019605364829e+01, -3.231880188e+01f), GF_R(1.19798779329333249e+00, 1.197987795e+00f), GF_R(3.98557030980081384e-01, 3.985570371e-01f) }
+    /* group 1 */ { GF_R(-3.23188019605365113e+01, -3.231880188e+01f), GF_R(1.19798779329333138e+00, 1.197987795e+00f), GF_R(3.98557030980083882e-01, 3.985570371e-01f) }
 };
 
 /* Switch window g (group g -> g+1): samples first..last; forced at last. */
@@ -36,7 +36,7 @@ static const double gf_temp_max[GF_N_TEMPS] = { 4.10000000000000000e+01, 3.90000
 /* Position terms: per group, per power k = 1..GF_POSITION_ORDER of d = P - P0, the coefficient
  * c_k(T): constant, then one per model input (um per mm^k, um per mm^k and unit). */
 static const gf_real gf_position_coef[GF_N_GROUPS][GF_POSITION_ORDER][GF_N_INPUTS + 1] = {
-    /* group 1 */ { { GF_R(-2.82675994342970416e-01, -2.826759815e-01f), GF_R(1.10158572495955460e-02, 1.101585757e-02f), GF_R(2.96879447194443001e-03, 2.968794433e-03f) } }
+    /* group 1 */ { { GF_R(-2.82675994342969916e-01, -2.826759815e-01f), GF_R(1.10158572495955235e-02, 1.101585757e-02f), GF_R(2.96879447194443088e-03, 2.968794433e-03f) } }
 };
 static const gf_real gf_p0 = GF_R(2.50000000000000000e+02, 2.500000000e+02f); /* P0, mm */
 static const gf_real gf_travel_min = GF_R(0.00000000000000000e+00, 0.000000000e+00f); /* modelled travel, mm */
