@@ -324,17 +324,17 @@ def main(argv=None) -> int:
             extra = ""
             if start.endswith("-selected"):
                 model, info = select_base_model(model, runs, start.split("-")[0])
-                extra = f"  [inputs {','.join(info['inputs'])}]"
+                extra = f"  [inputs {','.join(info.inputs)}]"
             elif start.endswith("ridge (auto)"):
                 model, info = ridge_base_model(model, runs, "auto")
-                extra = f"  [alpha {info['alpha']:g}]"
+                extra = f"  [alpha {info.alpha:g}]"
             joint = start.endswith("joint selection")
             result = diagnose(model, runs, held, live_rule=replay_groups, select_jointly=joint)
             if joint:
                 selection = result.selection
                 extra = (
-                    f"  [inputs {','.join(selection['inputs'])}; nested held-out "
-                    f"{selection['nested_held_out_rms_um']:.2f} vs {result.base_check.held_out_rms_um:.2f} µm]"
+                    f"  [inputs {','.join(selection.inputs)}; nested held-out "
+                    f"{selection.nested_held_out_rms_um:.2f} vs {result.base_check.held_out_rms_um:.2f} µm]"
                 )
             print(row(label, result) + extra)
             suffix = {"16 sensors": "", "16 sensors, ridge (auto)": "_ridge", "16 sensors, joint selection": "_joint"}

@@ -11,8 +11,17 @@ from support.bench_modules import load
 
 bench = load("bench_diagnose_independent")
 
+ONE_OF_EACH = {"amb_T_amb_30s", "pump_45min_30s_pure", "speed_rpm_2h_30s_pure", "none_30s", "pump_45min_30s"}
+"""The fast lane's share: an ambient, an on/off source, a speed-driven lag, nothing missing, two at once."""
+DEFAULT_REFERENCE = {"amb_T_amb_30s", "none_30s", "pump_45min_30s"}
 
-@pytest.mark.parametrize("name", [spec.name for spec in machine.scenario_specs()])
+
+def scenario_names(fast: set[str]) -> list:
+    names = [spec.name for spec in machine.scenario_specs()]
+    return [name if name in fast else pytest.param(name, marks=pytest.mark.slow) for name in names]
+
+
+@pytest.mark.parametrize("name", scenario_names(ONE_OF_EACH))
 def test_the_right_effect_first_and_the_next_run_better_by_40_percent(name):
     row = bench.measure(machine.scenarios([name])[0])
     before, after = row["validation_rms_before_um"], row["validation_rms_after_um"]
@@ -22,7 +31,7 @@ def test_the_right_effect_first_and_the_next_run_better_by_40_percent(name):
     assert row["verdict"] == "OK", row
 
 
-@pytest.mark.parametrize("name", [spec.name for spec in machine.scenario_specs()])
+@pytest.mark.parametrize("name", scenario_names(DEFAULT_REFERENCE))
 def test_from_the_fits_default_reference_too(name):
     """Fitted as ``groupfit fit`` does by default (rises over T_amb) on a machine that feels absolute temperatures:
     a reference kept wrongly hides the effect, so the diagnosis on absolute readings must win where it is wrong."""

@@ -87,9 +87,9 @@ def test_joint_selection_on_the_whole_test_forecasts_less_than_the_given_model(f
     run = load_run(frame, temps=SENSORS, error="disp_ch3_um", name="spindle_step_test")
     result = diagnose(sixteen_sensor_model([run]), run, live_rule=replay_groups, select_jointly=True)
     assert result.added[0].feature.column == "spindle_rpm" and result.added[0].feature.exponent == pytest.approx(5 / 3)
-    assert 1 <= len(result.selection["inputs"]) < len(SENSORS)
-    assert result.selection["nested_held_out_rms_um"] < result.base_check.held_out_rms_um
-    assert list(result.model.temps[: len(result.selection["inputs"])]) == result.selection["inputs"]
+    assert 1 <= len(result.selection.inputs) < len(SENSORS)
+    assert result.selection.nested_held_out_rms_um < result.base_check.held_out_rms_um
+    assert tuple(result.model.temps[: len(result.selection.inputs)]) == result.selection.inputs
 
 
 def test_a_validation_file_that_continues_the_log_is_judged_with_its_history(frame):

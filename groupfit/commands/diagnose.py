@@ -239,7 +239,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         validation_continues=args.continues,
     )
     if selection is not None:
-        result = replace(result, selection={**selection, "of": len(model["temps"])})
+        result = replace(result, selection=selection)
     result = replace(result, ridge=ridge)
 
     expectations = {"before": expect_for_model(model, data)}

@@ -39,7 +39,7 @@ from groupfit.diagnose.effects import Tried
 from groupfit.diagnose.notes import JOINT, Note
 from groupfit.diagnose.policy import AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem
-from groupfit.diagnose.result import Step
+from groupfit.diagnose.result import InputSelection, Step
 from groupfit.features import Feature, derived_matrix
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.records import OverfitCheck
@@ -194,8 +194,7 @@ class JointStart:
     """The model refitted on the inputs and first effects chosen together, and what to report of the choice."""
 
     current: Fit
-    selection: dict[str, object]
-    """What ``diagnose --json`` writes under ``selection``."""
+    selection: InputSelection
     effects: tuple[Candidate, ...]
     first_ranking: list[Candidate]
     steps: tuple[Step, ...]
@@ -217,14 +216,9 @@ def joint_start(
     chosen = joint.select()
     refitted = problem.fit(joint_model(problem, model, current.inputs, chosen))
     nested = joint.nested_held_out_rms()
-    selection = {
-        "method": "joint",
-        "inputs": chosen.inputs,
-        "of": len(temps),
-        "order": chosen.order,
-        "folds": problem.folds.describe(),
-        "nested_held_out_rms_um": nested,
-    }
+    selection = InputSelection(
+        "joint", tuple(chosen.inputs), len(temps), problem.folds.describe(), tuple(chosen.order), nested
+    )
     notes = ()
     if nested >= base_check.held_out_rms_um:
         notes = (

@@ -78,7 +78,7 @@ from groupfit.diagnose.policy import DEFAULT_POLICY, AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem, check_arguments, diagnosis_problem
 from groupfit.diagnose.reference import droppable_reference
 from groupfit.diagnose.residual import LiveRule, ModelLike
-from groupfit.diagnose.result import DiagnosisResult, ReferenceCheck, Refused, Step
+from groupfit.diagnose.result import DiagnosisResult, InputSelection, ReferenceCheck, Refused, Step
 from groupfit.heldout.check import overfit_check
 from groupfit.model import ModelFile
 
@@ -114,7 +114,7 @@ class State:
     refused: list[Refused] = field(default_factory=list)
     first_ranking: list[Candidate] | None = None
     reference: ReferenceCheck | None = None
-    selection: dict[str, object] | None = None
+    selection: InputSelection | None = None
 
 
 def diagnose(

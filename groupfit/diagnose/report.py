@@ -88,15 +88,15 @@ def selection_lines(result) -> list[str]:
     selection = result.selection
     if selection is None:
         return []
-    how = "together with the effects" if selection["method"] == "joint" else f"by {selection['method']}"
+    how = "together with the effects" if selection.method == "joint" else f"by {selection.method}"
     lines = [
-        f"inputs re-selected {how} on held-out conditions: {', '.join(selection['inputs']) or 'none'} "
-        f"({len(selection['inputs'])} of {selection['of']}); before/after compare with the model as given"
+        f"inputs re-selected {how} on held-out conditions: {', '.join(selection.inputs) or 'none'} "
+        f"({len(selection.inputs)} of {selection.of}); before/after compare with the model as given"
     ]
-    if "nested_held_out_rms_um" in selection:
+    if selection.nested_held_out_rms_um is not None:
         lines.append(
             f"  chosen again without each held-out condition, the selection predicts it with "
-            f"{selection['nested_held_out_rms_um']:.3g} µm RMS; the model as given, "
+            f"{selection.nested_held_out_rms_um:.3g} µm RMS; the model as given, "
             f"{result.base_check.held_out_rms_um:.3g} µm"
         )
     return lines

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Mapping
 
 import numpy as np
 
@@ -16,8 +16,34 @@ from groupfit.model import ModelFile
 
 Metrics = Mapping[str, float]
 """Error metrics of a residual (``rms_um``, ``max_um``, ``R_um``, …; :func:`groupfit.model.error_metrics`)."""
-JsonRecord = Mapping[str, Any]
-"""A record that goes to ``diagnose --json`` as it is (the over-fit check, the reference check, a selection)."""
+
+
+@dataclass(frozen=True)
+class InputSelection:
+    """How the model's inputs were re-selected before the diagnosis (``diagnose --select``)."""
+
+    method: str
+    """``"joint"`` (the measured inputs and the candidate effects chosen together) or a method of
+    :data:`groupfit.heldout.selection.SELECTION_METHODS` (the inputs alone)."""
+    inputs: tuple[str, ...]
+    """The measured inputs kept."""
+    of: int
+    """How many measured inputs the model had."""
+    folds: str
+    """The held-out folds the choice was scored on, in words."""
+    order: tuple[str, ...] | None = None
+    """Every name chosen (inputs and effects), in the order chosen (a joint selection)."""
+    nested_held_out_rms_um: float | None = None
+    """Held-out RMS (µm) of the whole procedure: each fold predicted by a selection made without it."""
+
+    def to_json(self) -> dict[str, object]:
+        record: dict[str, object] = {"method": self.method, "inputs": list(self.inputs), "of": self.of}
+        if self.order is not None:
+            record["order"] = list(self.order)
+        record["folds"] = self.folds
+        if self.nested_held_out_rms_um is not None:
+            record["nested_held_out_rms_um"] = self.nested_held_out_rms_um
+        return record
 
 
 @dataclass(frozen=True)
@@ -157,7 +183,7 @@ class DiagnosisResult:
     base_check: OverfitCheck | None = None
     run_names: Mapping[str, str] = field(default_factory=dict)
     """Names of the modelling run(s) (``"data"``) and the validation run(s) (``"validate"``)."""
-    selection: JsonRecord | None = None
+    selection: InputSelection | None = None
     """How the inputs were re-selected before the diagnosis (``diagnose --select``), when they were."""
     ridge: RidgeSetting | None = None
     """The ridge penalty the model was refitted with before the diagnosis (``diagnose --ridge``), when it was."""
@@ -185,7 +211,7 @@ class DiagnosisResult:
             "refused": [r.to_dict() for r in self.refused],
             "folds": self.folds,
             "base_model": self.base_check.to_json() if self.base_check is not None else {},
-            "selection": self.selection,
+            "selection": None if self.selection is None else self.selection.to_json(),
             "ridge": self.ridge.to_json() if self.ridge is not None else None,
             "reference": None if self.reference is None else self.reference.to_dict(),
             "before": self.before,

@@ -16,7 +16,7 @@ import numpy as np
 from groupfit.data import Run
 from groupfit.diagnose.augment import refit_model
 from groupfit.diagnose.residual import ModelLike, model_inputs
-from groupfit.diagnose.result import JsonRecord
+from groupfit.diagnose.result import InputSelection
 from groupfit.errors import InputError
 from groupfit.heldout.check import ridge_setting, select_inputs
 from groupfit.heldout.records import RidgeSetting
@@ -37,7 +37,7 @@ def ridge_base_model(model: ModelLike, runs: Sequence[Run], alpha: float | str) 
     return refit_model(ridged, list(runs), inputs, ridged.temps, ridged.derived_inputs or ()), info
 
 
-def select_base_model(model: ModelLike, runs: Sequence[Run], method: str) -> tuple[ModelFile, JsonRecord]:
+def select_base_model(model: ModelLike, runs: Sequence[Run], method: str) -> tuple[ModelFile, InputSelection]:
     """The model refitted on the inputs chosen by ``method``; and what was chosen."""
     model = ModelFile.coerce(model)
     derived = {feature.name for feature in model.derived_inputs or ()}
@@ -50,4 +50,4 @@ def select_base_model(model: ModelLike, runs: Sequence[Run], method: str) -> tup
     names, folds = select_inputs(np.vstack(inputs), y, list(model.temps), frames, exclude, method)
     keep = [model.temps.index(name) for name in names]
     selected = refit_model(model, list(runs), [x[:, keep] for x in inputs], names, [])
-    return selected, {"method": method, "inputs": names, "folds": folds.describe()}
+    return selected, InputSelection(method, tuple(names), len(model.temps), folds.describe())
