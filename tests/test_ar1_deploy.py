@@ -261,7 +261,7 @@ def test_sanitized_c_build_takes_hostile_readings_as_replay_does(model, tmp_path
 
 
 def st_block(model: AR1File, real: str):
-    """The block evaluated over blark's tree (tests/support/structured_text.py); it must parse with tree-sitter too."""
+    """The block evaluated over tree-sitter's tree (tests/support/structured_text.py), which must parse it whole."""
     structured_text = pytest.importorskip("support.structured_text")
     (text,) = render(model, "st", real=real).values()
     assert not structured_text.tree_sitter_errors(text)

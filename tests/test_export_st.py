@@ -1,6 +1,6 @@
 """Structured Text export: parses with blark and tree-sitter, and behaves like the C build.
 
-The block's behaviour is checked by the evaluator over blark's syntax tree of ``tests/support/structured_text.py``.
+The block's behaviour is checked by the evaluator over tree-sitter's tree of ``tests/support/structured_text.py``.
 """
 
 from __future__ import annotations

@@ -1,15 +1,17 @@
 """An evaluator of the exported Structured Text block, and the two parsers' verdicts on a source text.
 
 No IEC 61131-3 compiler installs here, so the block's behaviour is checked by
-a small evaluator over blark's syntax tree: REAL arithmetic in IEEE single
+a small evaluator over tree-sitter's syntax tree: REAL arithmetic in IEEE single
 precision, LREAL in double, integers range-checked, both operands of AND / OR
 always evaluated (ST does not short-circuit), and every array index
 bounds-checked, so an unguarded index fails the test instead of passing by luck.
 An LREAL is never narrowed to REAL implicitly (only ``TO_REAL`` rounds it, as a
 strict IEC 61131-3 compiler requires); ``EXPT`` of LREALs is the C library's
-``pow`` (:func:`math.pow`), with the errors IEC 61131-3 defines for it.
+``pow`` (:func:`math.pow`), with the errors IEC 61131-3 defines for it. A text
+tree-sitter does not parse cannot be evaluated. blark, whose parser takes seconds
+per block, gives only its verdict on a text (:func:`blark_accepts`).
 
-Importing this module skips the importing test when blark is not installed (the ``toolchain`` marker).
+Importing this module skips the importing test when blark or tree-sitter is not installed (the ``toolchain`` marker).
 """
 
 from __future__ import annotations
@@ -21,9 +23,8 @@ import numpy as np
 import pytest
 
 blark_parse = pytest.importorskip("blark.parse")
-import blark.transform as tf  # noqa: E402
-import tree_sitter  # noqa: E402
-import tree_sitter_iec61131_3_st  # noqa: E402
+tree_sitter = pytest.importorskip("tree_sitter")
+tree_sitter_iec61131_3_st = pytest.importorskip("tree_sitter_iec61131_3_st")
 
 from groupfit.export import render  # noqa: E402
 
@@ -31,6 +32,10 @@ from .replay import python_replay  # noqa: E402
 
 INTEGER_RANGES = {"INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1)}
 FLOATS = {"REAL": np.float32, "LREAL": np.float64}
+VAR_SECTIONS = {"var_input", "var_output", "var_in_out", "var_block", "var_temp"}
+"""The declaration sections of a FUNCTION_BLOCK the evaluator declares variables from."""
+SKIPPED = {"comment", "pragma"}
+"""Nodes of tree-sitter's tree the evaluator leaves out wherever they stand."""
 
 
 class STError(Exception):
@@ -82,50 +87,142 @@ def convert(value, base: str):
     raise STError(f"type {base} not supported by the evaluator")
 
 
-def flatten(initialisation) -> list:
-    out = []
-    for element in initialisation.elements:
-        inner = element.element
-        items = flatten(inner) if isinstance(inner, tf.ArrayInitialization) else [inner]
-        count = 1 if element.count is None else int(str(element.count.value))
-        out.extend(items * count)
-    return out
+class Syntax:
+    """A node of tree-sitter's tree, copied once into Python objects (walking tree-sitter's own nodes is slow).
+
+    ``children`` are the named children, ``fields`` the named children by field name, ``operator`` the
+    text of the child in the field ``operator`` (an unnamed token), if any.
+    """
+
+    __slots__ = ("type", "text", "children", "fields", "operator")
+
+    def __init__(self, node):
+        self.type, self.text = node.type, node.text.decode("ascii")
+        self.children, self.fields, self.operator = [], {}, None
+        cursor = node.walk()
+        more = cursor.goto_first_child()
+        while more:
+            child, name = cursor.node, cursor.field_name
+            if child.is_named and child.type not in SKIPPED:
+                copy = Syntax(child)
+                self.children.append(copy)
+                if name is not None:
+                    self.fields.setdefault(name, []).append(copy)
+            elif name == "operator":
+                self.operator = child.text.decode("ascii").upper()
+            more = cursor.goto_next_sibling()
+
+    def field(self, name: str) -> Syntax | None:
+        found = self.fields.get(name)
+        return found[0] if found else None
+
+    def all(self, name: str) -> list[Syntax]:
+        return self.fields.get(name, [])
+
+
+def first_error(node):
+    """The first node of tree-sitter's tree that is an error or a missing token (``node`` has an error)."""
+    for child in node.children:
+        if child.is_error or child.is_missing:
+            return child
+        if child.has_error:
+            return first_error(child)
+    return node
+
+
+def parse_error(root) -> STError:
+    """Where tree-sitter's parse of a text fails: its first error or missing token."""
+    error = first_error(root)
+    row, column = error.start_point
+    if error.is_missing:
+        return STError(f"tree-sitter rejects the block: missing {error.type} at line {row + 1}, column {column + 1}")
+    text = error.text.decode("ascii").partition("\n")[0][:40]
+    return STError(f"tree-sitter rejects the block: cannot parse {text!r} at line {row + 1}, column {column + 1}")
 
 
 @lru_cache(maxsize=None)
-def blark_result(source: str):
-    """blark's parse of a source text (parsing takes seconds: each text is parsed once)."""
-    return blark_parse.parse_source_code(source)
+def function_block(source: str) -> Syntax:
+    """The FUNCTION_BLOCK of a source text, from tree-sitter's parse (each text is copied once)."""
+    root = tree_sitter_tree(source).root_node
+    if root.has_error:
+        raise parse_error(root)
+    blocks = [child for child in root.named_children if child.type == "function_block_declaration"]
+    assert len(blocks) == 1
+    return Syntax(blocks[0])
+
+
+def integer(text: str) -> int:
+    """An integer literal: decimal, or ``base#digits`` (``16#FF``), ``_`` between digits."""
+    text = text.replace("_", "")
+    if "#" not in text:
+        return int(text)
+    base, digits = text.split("#", 1)
+    sign = -1 if base.startswith("-") else 1
+    return sign * int(digits, int(base.lstrip("+-")))
+
+
+def flatten(values: list[Syntax]) -> list[Syntax]:
+    """The elements of an array's initial value, ``n(x)`` repeated ``n`` times."""
+    out = []
+    for value in values:
+        if value.type == "array_repetition":
+            count = value.field("count")
+            items = [child for child in value.children if child is not count]
+            out.extend(flatten(items) * integer(count.text))
+        else:
+            out.append(value)
+    return out
 
 
 class FunctionBlock:
-    """One instance of a FUNCTION_BLOCK, evaluated from blark's tree."""
+    """One instance of a FUNCTION_BLOCK, evaluated from tree-sitter's tree."""
 
     def __init__(self, source: str):
-        result = blark_result(source)
-        if result.exception is not None:
-            raise result.exception
-        blocks = [item for item in result.transform().items if isinstance(item, tf.FunctionBlock)]
-        assert len(blocks) == 1
-        self.block = blocks[0]
+        self.block = function_block(source)
         self.types: dict[str, str] = {}
         self.vars: dict = {}
         self.constants: set[str] = set()
-        for declarations in self.block.declarations:
-            constant = "CONSTANT" in str(getattr(declarations, "attrs", "") or "")
-            for declaration in declarations.items:
-                self.declare(declaration, constant)
+        self.statements = {
+            "assignment_statement": self.assignment,
+            "if_statement": self.if_statement,
+            "for_statement": self.for_statement,
+            "empty_statement": lambda node: None,
+        }
+        self.expressions = {
+            "integer_literal": lambda node: integer(node.text),
+            "real_literal": lambda node: float(node.text.replace("_", "")),
+            "boolean_literal": lambda node: node.text.upper() == "TRUE",
+            "typed_literal": lambda node: self.evaluate(node.field("value")),
+            "identifier": lambda node: self.vars[node.text],
+            "index_expression": lambda node: self.array(node).get(self.subscripts(node)),
+            "parenthesized_expression": lambda node: self.evaluate(node.children[0]),
+            "unary_expression": self.unary,
+            "binary_expression": lambda node: self.binary(
+                node.operator, self.evaluate(node.field("left")), self.evaluate(node.field("right"))
+            ),
+            "call_expression": self.function_call,
+        }
+        for section in self.block.children:
+            if section.type in VAR_SECTIONS:
+                qualifiers = [
+                    q.text.upper() for c in section.children if c.type == "var_qualifier_list" for q in c.children
+                ]
+                for declaration in section.children:
+                    if declaration.type == "variable_declaration":
+                        self.declare(declaration, "CONSTANT" in qualifiers)
 
-    def declare(self, declaration, constant: bool) -> None:
-        names = [str(v.variable.name) for v in declaration.variables]
-        init = declaration.init
-        if isinstance(declaration, tf.ArrayVariableInitDeclaration):
-            bounds = [(int(self.evaluate(r.start)), int(self.evaluate(r.stop))) for r in init.spec.subranges]
-            base = str(init.spec.type.type_name)
+    def declare(self, declaration: Syntax, constant: bool) -> None:
+        names = [name.text for name in declaration.all("names")]
+        spec, initial = declaration.field("type"), declaration.all("initial_value")
+        if spec.type == "array_type":
+            bounds = [
+                (int(self.evaluate(r.field("lower"))), int(self.evaluate(r.field("upper")))) for r in spec.all("range")
+            ]
+            base = spec.field("element_type").text
             for name in names:
                 array = STArray(base, bounds)
                 indices = array.all_indices()
-                values = [self.evaluate(v) for v in flatten(init.value)] if init.value is not None else []
+                values = [self.evaluate(v) for v in flatten(initial)]
                 if values and len(values) != len(indices):
                     raise STError(f"{name}: {len(values)} initial values for {len(indices)} elements")
                 default = False if base == "BOOL" else 0
@@ -134,9 +231,9 @@ class FunctionBlock:
                     array.set(offset, convert(values[k] if values else default, base))
                 self.vars[name], self.types[name] = array, base
         else:
-            base = str(init.spec.type)
+            base = spec.text
             for name in names:
-                value = self.evaluate(init.value) if init.value is not None else (False if base == "BOOL" else 0)
+                value = self.evaluate(initial[0]) if initial else (False if base == "BOOL" else 0)
                 self.vars[name], self.types[name] = convert(value, base), base
         if constant:
             self.constants.update(names)
@@ -150,104 +247,103 @@ class FunctionBlock:
                     target.set((k,), convert(v, target.base))
             else:
                 self.vars[name] = convert(value, self.types[name])
-        self.execute(self.block.body)
+        self.execute(self.block.all("body"))
 
-    def execute(self, node) -> None:
-        if isinstance(node, tf.StatementList):
-            for statement in node.statements:
-                self.execute(statement)
-        elif isinstance(node, tf.AssignmentStatement):
-            value = self.evaluate(node.expression)
-            for variable in node.variables:
-                self.assign(variable, value)
-        elif isinstance(node, tf.IfStatement):
-            if self.condition(node.if_expression):
-                self.execute(node.statements)
+    def execute(self, statements: list[Syntax]) -> None:
+        for statement in statements:
+            run = self.statements.get(statement.type)
+            if run is None:
+                raise STError(f"statement {statement.type} not supported")
+            run(statement)
+
+    def assignment(self, node: Syntax) -> None:
+        self.assign(node.field("left"), self.evaluate(node.field("right")))
+
+    def if_statement(self, node: Syntax) -> None:
+        if self.condition(node.field("condition")):
+            self.execute(node.all("consequence"))
+            return
+        for clause in node.children:
+            if clause.type == "elsif_clause" and self.condition(clause.field("condition")):
+                self.execute(clause.all("body"))
                 return
-            for clause in node.else_ifs or []:
-                if self.condition(clause.if_expression):
-                    self.execute(clause.statements)
-                    return
-            if node.else_clause is not None:
-                self.execute(node.else_clause.statements)
-        elif isinstance(node, tf.ForStatement):
-            if node.step is not None:
-                raise STError("FOR ... BY is not used by the export")
-            name = str(node.control.name)
-            value, stop = self.evaluate(node.from_), self.evaluate(node.to)
-            while value <= stop:
-                self.vars[name] = convert(value, self.types[name])
-                self.execute(node.statements)
-                value = self.vars[name] + 1
-            self.vars[name] = convert(value, self.types[name])
-        else:
-            raise STError(f"statement {type(node).__name__} not supported")
+        for clause in node.children:
+            if clause.type == "else_clause":
+                self.execute(clause.all("body"))
 
-    def condition(self, expression) -> bool:
+    def for_statement(self, node: Syntax) -> None:
+        if node.field("step") is not None:
+            raise STError("FOR ... BY is not used by the export")
+        name = node.field("control").text
+        value, stop = self.evaluate(node.field("start")), self.evaluate(node.field("end"))
+        body = node.all("body")
+        while value <= stop:
+            self.vars[name] = convert(value, self.types[name])
+            self.execute(body)
+            value = self.vars[name] + 1
+        self.vars[name] = convert(value, self.types[name])
+
+    def condition(self, expression: Syntax) -> bool:
         value = self.evaluate(expression)
         if not isinstance(value, (bool, np.bool_)):
             raise STError("condition is not BOOL")
         return bool(value)
 
-    def assign(self, variable, value) -> None:
-        if isinstance(variable, tf.SimpleVariable):
-            name = str(variable.name)
+    def assign(self, variable: Syntax, value) -> None:
+        if variable.type == "identifier":
+            name = variable.text
             if name in self.constants:
                 raise STError(f"assignment to constant {name}")
             self.vars[name] = convert(value, self.types[name])
-        elif isinstance(variable, tf.MultiElementVariable):
-            name = str(variable.name.name)
+        elif variable.type == "index_expression":
+            name = variable.field("object").text
             if name in self.constants:
                 raise STError(f"assignment to constant {name}")
-            array = self.vars[name]
+            array = self.array(variable)
             array.set(self.subscripts(variable), convert(value, array.base))
         else:
-            raise STError(f"assignment target {type(variable).__name__} not supported")
+            raise STError(f"assignment target {variable.type} not supported")
 
     # expressions ----------------------------------------------------------
-    def subscripts(self, variable) -> tuple[int, ...]:
-        (subscript_list,) = variable.elements
-        index = tuple(self.evaluate(s) for s in subscript_list.subscripts)
+    def array(self, variable: Syntax) -> STArray:
+        target = variable.field("object")
+        if target.type != "identifier":
+            raise STError(f"subscripted {target.type} not supported")
+        return self.vars[target.text]
+
+    def subscripts(self, variable: Syntax) -> tuple[int, ...]:
+        index = tuple(self.evaluate(s) for s in variable.all("index"))
         if not all(isinstance(i, int) for i in index):
             raise STError("array subscript is not an integer")
         return index
 
-    def evaluate(self, node):
-        if isinstance(node, tf.Integer):
-            return int(str(node.value))
-        if isinstance(node, tf.Real):
-            return float(str(node.value))
-        if isinstance(node, tf.Boolean):
-            return str(node.value).upper() == "TRUE"
-        if isinstance(node, tf.SimpleVariable):
-            return self.vars[str(node.name)]
-        if isinstance(node, tf.MultiElementVariable):
-            return self.vars[str(node.name.name)].get(self.subscripts(node))
-        if isinstance(node, tf.ParenthesizedExpression):
-            return self.evaluate(node.expr)
-        if isinstance(node, tf.UnaryOperation):
-            operand = self.evaluate(node.expr)
-            op = str(node.op).upper()
-            if op == "-":
-                return -operand
-            if op == "NOT":
-                return not operand
-            raise STError(f"unary {op}")
-        if isinstance(node, tf.BinaryOperation):
-            return self.binary(str(node.op).upper(), self.evaluate(node.left), self.evaluate(node.right))
-        if isinstance(node, tf.FunctionCall):
-            name = str(node.name.name).upper()
-            arguments = [self.evaluate(p.value) for p in node.parameters]
-            if name == "ABS" and len(arguments) == 1:
-                return abs(arguments[0])
-            if name in ("TO_REAL", "TO_LREAL") and len(arguments) == 1:
-                if not isinstance(arguments[0], (float, np.floating)):
-                    raise STError(f"{name} of a {type(arguments[0]).__name__}")
-                return FLOATS[name[3:]](arguments[0])  # IEEE rounding to nearest
-            if name == "EXPT" and len(arguments) == 2:
-                return expt(*arguments)
-            raise STError(f"function {name} not supported")
-        raise STError(f"expression {type(node).__name__} not supported")
+    def evaluate(self, node: Syntax):
+        kind = self.expressions.get(node.type)
+        if kind is None:
+            raise STError(f"expression {node.type} not supported")
+        return kind(node)
+
+    def unary(self, node: Syntax):
+        operand = self.evaluate(node.field("operand"))
+        if node.operator == "-":
+            return -operand
+        if node.operator == "NOT":
+            return not operand
+        raise STError(f"unary {node.operator}")
+
+    def function_call(self, node: Syntax):
+        name = node.field("function").text.upper()
+        parameters = node.field("arguments").children
+        arguments = [self.evaluate(p.field("value") if p.type == "named_argument" else p) for p in parameters]
+        if name == "ABS" and len(arguments) == 1:
+            return abs(arguments[0])
+        if name in ("TO_REAL", "TO_LREAL") and len(arguments) == 1:
+            if not isinstance(arguments[0], (float, np.floating)):
+                raise STError(f"{name} of a {type(arguments[0]).__name__}")
+            return FLOATS[name[3:]](arguments[0])  # IEEE rounding to nearest
+        if name == "EXPT" and len(arguments) == 2:
+            return expt(*arguments)
+        raise STError(f"function {name} not supported")
 
     @staticmethod
     def binary(op: str, left, right):
@@ -317,9 +413,23 @@ def run_block(source: str, streams, period_s: float, real: str) -> list[dict[str
 # parsing ------------------------------------------------------------------
 
 
+@lru_cache(maxsize=1)
+def tree_sitter_parser():
+    return tree_sitter.Parser(tree_sitter.Language(tree_sitter_iec61131_3_st.language()))
+
+
+def tree_sitter_tree(source: str):
+    return tree_sitter_parser().parse(source.encode("ascii"))
+
+
 def tree_sitter_errors(source: str) -> bool:
-    parser = tree_sitter.Parser(tree_sitter.Language(tree_sitter_iec61131_3_st.language()))
-    return parser.parse(source.encode("ascii")).root_node.has_error
+    return tree_sitter_tree(source).root_node.has_error
+
+
+@lru_cache(maxsize=None)
+def blark_result(source: str):
+    """blark's parse of a source text (parsing takes seconds: each text is parsed once)."""
+    return blark_parse.parse_source_code(source)
 
 
 def blark_accepts(source: str) -> bool:
