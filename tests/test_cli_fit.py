@@ -95,9 +95,10 @@ def test_bad_config_key_is_one_line(tmp_path, capsys):
 
 
 @pytest.mark.cli
-def test_module_entry_point_and_usage_errors():
-    ok = subprocess.run([sys.executable, "-m", "groupfit", "fit", "--help"], capture_output=True, text=True)
-    assert ok.returncode == 0 and "--search" in ok.stdout
+def test_module_entry_point_and_usage_errors(capsys):
+    with pytest.raises(SystemExit) as finished:
+        main(["fit", "--help"])
+    assert finished.value.code == 0 and "--search" in capsys.readouterr().out
     bad = subprocess.run([sys.executable, "-m", "groupfit", "fit", "--p", "x"], capture_output=True, text=True)
     assert bad.returncode == 2
     assert len(bad.stderr.strip().splitlines()) == 1 and "invalid p: 'x'" in bad.stderr

@@ -335,7 +335,7 @@ def exposing_power(model: dict, k: int, exponent: float) -> dict:
     return model
 
 
-@pytest.mark.parametrize("exponent", [2.0, 4 / 3])
+@pytest.mark.parametrize("exponent", [2.0, pytest.param(4 / 3, marks=pytest.mark.slow)])
 def test_a_constant_exponent_is_not_folded_into_multiplications(tmp_path, exponent):
     """gcc -O2 turns pow(x, 2.0) into x*x, which differs from the C library's pow in the last bit of ~0.1 %
     of squares; the exponent is a volatile constant, so every build calls pow as the Python rule does."""

@@ -180,11 +180,11 @@ def test_compare_detects_a_continuing_clock_and_takes_continues_for_a_restarted_
     results = {}
     for rest, extra in (("rest.csv", ()), ("rest_restarted.csv", ("--continues",)), ("rest_restarted.csv", ())):
         out = folder / "compare.json"
-        args = ("--data", folder / "first.csv", "--validate", folder / rest, "--pmax", "3", "--heat", "bed_target")
+        args = ("--data", folder / "first.csv", "--validate", folder / rest, "--pmax", "1", "--heat", "bed_target")
         assert cli("compare", *args, *extra, "--quiet", "--json", out, "--out", folder / "c") == 0
         rows = json.loads(out.read_text())["rows"]
         results[(rest, extra)] = next(
-            r for r in rows if r["model"] == "grouped" and r["p"] == 3 and r["run"] != "first"
+            r for r in rows if r["model"] == "grouped" and r["p"] == 1 and r["run"] != "first"
         )
         report = capsys.readouterr().out
         assert ("continue" in report) == (rest == "rest.csv" or bool(extra))

@@ -108,6 +108,7 @@ def test_killed_sweep_resumes_with_nothing_lost_and_nothing_duplicated(tmp_path)
         np.testing.assert_allclose(resumed_rows[run_hash]["coefficients"], row["coefficients"], rtol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.cli
 def test_two_sweeps_on_one_database_share_the_runs(tmp_path):
     """Started together, two sweeps claim runs from the database: every run executes once."""
