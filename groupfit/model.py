@@ -32,18 +32,11 @@ from groupfit.errors import InputError
 from groupfit.features import Feature, derived_matrix
 from groupfit.grouping import bumpless, serving_group_index
 from groupfit.io import atomic_write_text, read_json_file, to_json
-from groupfit.model_checks import (
-    COEFFICIENT_LIMIT,
-    FORMAT,
-    MAX_DELAY_SAMPLES,
-    MAX_POSITION_ORDER,
-    SOURCE_RANGES_KEY,
-    _parse_derived,
-    model_problem,
-    rule_section_problem,
-)
+from groupfit.model_checks import COEFFICIENT_LIMIT, FORMAT, MAX_POSITION_ORDER, model_problem
 from groupfit.model_recalibration import Recalibration
 from groupfit.reference import referenced
+from groupfit.switching_checks import MAX_DELAY_SAMPLES, SOURCE_RANGES_KEY, rule_section_problem
+from groupfit.switching_checks import parse_derived as _parse_derived
 
 RULE_KEYS = (
     "rule",

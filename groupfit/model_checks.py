@@ -2,8 +2,8 @@
 
 :func:`model_problem` is the one validator behind :meth:`groupfit.model.ModelFile.from_dict`
 (so behind every verb that reads a model file, every save and every export);
-:func:`_parse_derived` reads the ``derived_inputs`` entries. Nothing here
-imports the fitting stack.
+the switching section and the derived inputs are checked by
+:mod:`groupfit.switching_checks`. Nothing here imports the fitting stack.
 """
 
 from __future__ import annotations
@@ -11,25 +11,22 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
-from groupfit.controller_limits import MAX_HOLD_SAMPLES as HOLD
 from groupfit.errors import InputError
-from groupfit.features import STARTS, Feature
 from groupfit.grouping import hard_groups, soft_groups
 from groupfit.model_recalibration import recalibration_problem
 from groupfit.model_sections import section_shape_problem
 from groupfit.reference import reference_problem
+from groupfit.switching_checks import (
+    MAX_MARGIN_C,
+    RULE_LIMIT,
+    is_whole,
+    parse_derived,
+    rule_section_problem,
+)
 from groupfit.training_checks import expectation_problem
 from groupfit.training_checks import is_number as _is_number
 
 FORMAT = "groupfit-model/1"
-SOURCE_RANGES_KEY = "source_ranges"
-"""Key of the switching section holding the valid range of every other column of the modelling run."""
-MAX_DELAY_SAMPLES = 32767
-"""Longest delay line of a derived input (its position is a PLC INT)."""
-
-MAX_MARGIN_C = 50.0
-"""Largest criterion noise or margin (°C) a model file may hold: a wider margin would ignore the criterion."""
-
 COEFFICIENT_LIMIT = 1.0e12
 """Largest magnitude of a coefficient a model file may hold.
 
@@ -40,14 +37,6 @@ the controller's arithmetic: a valid reading is at most 1e9 in magnitude
 sum of even thousands of terms stays below 1e25, far from single precision's
 3.4e38 (a PLC REAL). A coefficient such as 1e308 would overflow to infinity in
 double precision already; anything above 1e12 is a corrupted file, not a model.
-"""
-
-
-RULE_LIMIT = 1.0e9
-"""Largest magnitude of a number of the switching rule (thresholds, valid ranges, clamp and rate limit).
-
-The same bound as any reading's valid range (:data:`groupfit.runtime.LEGACY_SOURCE_RANGE`):
-exact enough and far inside single precision, which the exported routines may compute in.
 """
 
 
@@ -103,10 +92,6 @@ def model_problem(model: Any, required: Sequence[str]) -> str | None:
     return None
 
 
-def _is_whole(value) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
 def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     period = model["sampling_period_s"]
     if not _is_number(period) or not 0 < period <= RULE_LIMIT:
@@ -117,16 +102,16 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
         return f"intercept = {model['intercept']!r}: must be true or false"
     if model["error"] is not None and not isinstance(model["error"], str):
         return f"error = {model['error']!r}: must be a column name or null"
-    if not _is_whole(model["p"]) or model["p"] < 0:
+    if not is_whole(model["p"]) or model["p"] < 0:
         return f"p = {model['p']!r}: must be a whole number ≥ 0"
-    if not _is_whole(model["n"]) or model["n"] < 0:
+    if not is_whole(model["n"]) or model["n"] < 0:
         return f"n = {model['n']!r}: must be a whole number ≥ 0"
     if not _is_number(model["c"]) or model["c"] < 0:
         return f"c = {model['c']!r}: must be a finite number ≥ 0"
     if not _is_number(model["objective_value"]) or model["objective_value"] < 0:
         return f"objective_value = {model['objective_value']!r}: must be a finite number ≥ 0"
     n_samples = model.get("n_samples")
-    if n_samples is not None and (not _is_whole(n_samples) or n_samples < 1):
+    if n_samples is not None and (not is_whole(n_samples) or n_samples < 1):
         return f"n_samples = {n_samples!r}: must be a whole number ≥ 1"
     training = model.get("training")
     if training is not None and not isinstance(training, Mapping):
@@ -148,13 +133,13 @@ def _inputs_problem(model: Mapping[str, Any]) -> str | None:
 
 def _groups_problem(model: Mapping[str, Any]) -> str | None:
     p, n, breaks = model["p"], model["n"], model["breaks"]
-    if not isinstance(breaks, list) or not all(_is_whole(b) for b in breaks):
+    if not isinstance(breaks, list) or not all(is_whole(b) for b in breaks):
         return "'breaks' must be a list of whole sample numbers"
     if len(breaks) != p:
         return f"'breaks' holds {len(breaks)} break(s) but p = {p}"
     soft = model["soft_groups"]
     if not isinstance(soft, list) or not all(
-        isinstance(g, list) and len(g) == 2 and all(_is_whole(v) for v in g) for g in soft
+        isinstance(g, list) and len(g) == 2 and all(is_whole(v) for v in g) for g in soft
     ):
         return "'soft_groups' must be a list of [first, last] sample pairs"
     if len(soft) != p + 1:
@@ -162,7 +147,7 @@ def _groups_problem(model: Mapping[str, Any]) -> str | None:
     n_samples = model.get("n_samples")
     if n_samples is None:
         n_samples = soft[-1][1]
-    if not _is_whole(n_samples) or n_samples < 1:
+    if not is_whole(n_samples) or n_samples < 1:
         return f"the last soft group ends at sample {n_samples!r}; it must be ≥ 1"
     if any(b2 <= b1 for b1, b2 in zip(breaks, breaks[1:])):
         return f"breaks {breaks} must be strictly increasing"
@@ -216,146 +201,6 @@ def _coefficients_problem(model: Mapping[str, Any]) -> str | None:
     return None
 
 
-def rule_section_problem(model: Mapping[str, Any]) -> str | None:
-    """What is wrong with a model file's switching section, or None.
-
-    Only keys that are present are checked, so older files without the rule
-    keys stay loadable (the rule then derives them from ``criterion_series``).
-    """
-    section = model.get("switching")
-    if not isinstance(section, Mapping):
-        return "'switching' must be an object"
-    n_temps = len(model.get("temps", []))
-    n_breaks = len(model.get("breaks", []))
-    index = section.get("criterion_index", 0)
-    if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < n_temps:
-        return f"switching.criterion_index must be a column number 0…{n_temps - 1}"
-    series = section.get("criterion_series", [0.0])
-    if not isinstance(series, list) or not series or not all(_is_number(v) for v in series):
-        return "switching.criterion_series must be a list of finite numbers"
-    per_break = {"windows": n_breaks, "thresholds_c": n_breaks, "directions": n_breaks}
-    per_sensor = {"temp_min_c": n_temps, "temp_max_c": n_temps}
-    for key, length in {**per_break, **per_sensor}.items():
-        if key in section and (not isinstance(section[key], list) or len(section[key]) != length):
-            return f"switching.{key} must be a list of {length} entries"
-    for key in ("thresholds_c", "temp_min_c", "temp_max_c"):
-        if key in section and not all(_is_number(v) for v in section[key]):
-            return f"switching.{key} must hold finite numbers"
-    if "directions" in section and not all(_is_whole(v) and v in (-1, 0, 1) for v in section["directions"]):
-        return "switching.directions must hold -1, 0 or 1"
-    if "windows" in section:
-        for w in section["windows"]:
-            if not (isinstance(w, list) and len(w) == 2 and all(_is_whole(v) for v in w) and 1 <= w[0] <= w[1]):
-                return "switching.windows must be [first, last] sample pairs with 1 ≤ first ≤ last"
-    blend = section.get("blend_samples", 0)  # the bumpless transfer's length in samples (a PLC INT holds it)
-    if not (_is_whole(blend) and 0 <= blend <= 10_000):
-        return "switching.blend_samples must be a whole number 0…10000"
-    if "rule" in section and section["rule"] != "groupfit-switch/1":
-        return f"switching.rule = {section['rule']!r}: this version knows 'groupfit-switch/1'"
-    for key in ("noise_c", "margin_c", "comp_min_um", "comp_max_um", "rate_limit_um", "period_tolerance"):
-        if key in section and not _is_number(section[key]):
-            return f"switching.{key} must be a finite number"
-    for key in ("thresholds_c", "temp_min_c", "temp_max_c", "comp_min_um", "comp_max_um", "rate_limit_um"):
-        values = section.get(key)
-        values = values if isinstance(values, list) else [values] if values is not None else []
-        if any(abs(v) > RULE_LIMIT for v in values):
-            return f"switching.{key} exceeds {RULE_LIMIT:g} in magnitude"
-    for key in ("noise_c", "margin_c"):
-        if key in section and not 0 <= section[key] <= MAX_MARGIN_C:
-            return f"switching.{key} = {section[key]!r}: must lie between 0 and {MAX_MARGIN_C:g} °C"
-    if "rate_limit_um" in section and section["rate_limit_um"] <= 0:
-        return "switching.rate_limit_um must be positive"
-    if "comp_min_um" in section and "comp_max_um" in section and section["comp_min_um"] > section["comp_max_um"]:
-        return "switching.comp_min_um must not exceed comp_max_um"
-    if "hold_samples" in section and not (_is_whole(section["hold_samples"]) and 0 <= section["hold_samples"] <= HOLD):
-        return f"switching.hold_samples must be a whole number in 0…{HOLD} (a controller's 32-bit counter)"
-    if "period_tolerance" in section and not 0 < section["period_tolerance"] < 1:
-        return "switching.period_tolerance must lie between 0 and 1 (a fraction of the period)"
-    if "temp_min_c" in section and "temp_max_c" in section:
-        if any(lo > hi for lo, hi in zip(section["temp_min_c"], section["temp_max_c"])):
-            return "switching.temp_min_c must not exceed temp_max_c"
-    if SOURCE_RANGES_KEY in section:
-        ranges = section[SOURCE_RANGES_KEY]
-        if not isinstance(ranges, Mapping):
-            return f"switching.{SOURCE_RANGES_KEY} must be an object: column -> [min, max]"
-        for column, pair in ranges.items():
-            if not (
-                isinstance(pair, list)
-                and len(pair) == 2
-                and all(_is_number(v) and abs(v) <= RULE_LIMIT for v in pair)
-                and pair[0] <= pair[1]
-            ):
-                return f"switching.{SOURCE_RANGES_KEY}['{column}'] must be [min, max] with min <= max"
-    try:
-        features = _parse_derived(model.get("derived_inputs", []))
-    except InputError as exc:
-        return str(exc)
-    temps = model.get("temps", [])
-    if 0 <= index < n_temps and temps[index] in {f.name for f in features}:
-        return (
-            f"switching.criterion_index names the derived input '{temps[index]}'; "
-            "the switching criterion must be a measured input"
-        )
-    defined = {f.name for f in features}
-    for k, feature in enumerate(features):
-        if feature.name not in temps:
-            return f"derived_inputs[{k}] ('{feature.name}') is not one of the model's inputs (temps)"
-        if feature.name in [f.name for f in features[:k]]:
-            return f"derived_inputs[{k}] ('{feature.name}') is defined twice"
-    for name in temps:
-        if isinstance(name, str) and name not in defined and _looks_derived(name):
-            return f"input '{name}' is named as a derived input, but derived_inputs does not define it"
-    return _switching_agrees(model, section)
-
-
-def _looks_derived(name: str) -> bool:
-    """Whether an input name has the form of a derived input's (``T_amb~lp1800s``, ``(speed/1000)^1.667``)."""
-    return "~" in name or (name.startswith("(") and ")^" in name)
-
-
-def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> str | None:
-    """Whether the derived parts of the switching section agree with the breaks (recomputed and compared).
-
-    The windows are what :func:`groupfit.runtime.switch_windows` gives for the
-    breaks and n; each threshold is the criterion series at its window's
-    first sample; the criterion's name is the input it indexes.
-    """
-    temps, breaks, n = model.get("temps"), model.get("breaks"), model.get("n")
-    if not (isinstance(temps, list) and isinstance(breaks, list) and _is_whole(n)):
-        return None
-    index = section.get("criterion_index", 0)
-    criterion = section.get("criterion")
-    if criterion is not None and not isinstance(criterion, str):
-        return "switching.criterion must be an input name"
-    if criterion is not None and criterion != temps[index]:
-        return f"switching.criterion '{criterion}' is not input {index} ('{temps[index]}') named by criterion_index"
-    windows = [[int(b) - n + 1, max(int(b), int(b) - n + 1)] for b in breaks]
-    if "windows" in section and section["windows"] != windows:
-        return f"switching.windows {section['windows']} do not match breaks {breaks} and n = {n} ({windows})"
-    series = section.get("criterion_series")
-    if series is not None:
-        if any(first > len(series) for first, _ in windows):
-            return f"switching.criterion_series holds {len(series)} samples; the breaks {breaks} need more"
-        if "directions" in section and "margin_c" in section:
-            for k, (first, last) in enumerate(windows):
-                change = float(series[min(last, len(series)) - 1] - series[max(first - 2, 0)])
-                expected = 0 if abs(change) <= section["margin_c"] else (1 if change > 0 else -1)
-                if section["directions"][k] != expected:
-                    return (
-                        f"switching.directions[{k}] = {section['directions'][k]!r} does not match the criterion "
-                        f"series over window {k + 1} (expected {expected})"
-                    )
-        if "thresholds_c" in section:
-            for k, (first, _) in enumerate(windows):
-                expected = float(series[first - 1])
-                if not math.isclose(section["thresholds_c"][k], expected, rel_tol=1e-9, abs_tol=1e-9):
-                    return (
-                        f"switching.thresholds_c[{k}] = {section['thresholds_c'][k]!r} is not the criterion at "
-                        f"sample {first} ({expected!r})"
-                    )
-    return None
-
-
 MAX_POSITION_ORDER = 8
 """Highest polynomial order in the position a model file may hold."""
 
@@ -376,7 +221,7 @@ def position_problem(model: Mapping[str, Any]) -> str | None:
     if column == model.get("reference") or column in sources:
         return f"position.column '{column}' is also the reference or the source of a derived input"
     order = section["order"]
-    if not _is_whole(order) or not 1 <= order <= MAX_POSITION_ORDER:
+    if not is_whole(order) or not 1 <= order <= MAX_POSITION_ORDER:
         return f"position.order = {order!r}: must be a whole number 1…{MAX_POSITION_ORDER}"
     travel = section["travel_mm"]
     if not (
@@ -446,50 +291,7 @@ def ridge_problem(model: Mapping[str, Any]) -> str | None:
 def _reference_check(model: Mapping[str, Any]) -> str | None:
     """The ``reference`` key's problem: it must name no measured input (a derived input of it is fine)."""
     try:
-        derived = {feature.name for feature in _parse_derived(model.get("derived_inputs", []))}
+        derived = {feature.name for feature in parse_derived(model.get("derived_inputs", []))}
     except InputError:
         derived = set()
     return reference_problem(model.get("reference"), [name for name in model["temps"] if name not in derived])
-
-
-def _parse_derived(entries: Any) -> list[Feature]:
-    """The ``derived_inputs`` entries as Features; InputError for one that does not describe a transform.
-
-    An entry's ``name`` must match its transform, and a delay be at most
-    :data:`MAX_DELAY_SAMPLES` samples. A power stage (``exponent`` and
-    ``scale``, both finite and > 0) is optional, as is ``start`` (``"steady"``,
-    the default, or ``"rest"``): entries written before these keys existed
-    load unchanged.
-    """
-    if not isinstance(entries, list):
-        raise InputError("'derived_inputs' must be a list")
-    features = []
-    for k, entry in enumerate(entries):
-        where = f"derived_inputs[{k}]"
-        if not isinstance(entry, Mapping) or not isinstance(entry.get("column"), str):
-            raise InputError(f"{where} must be an object with a 'column' name")
-        tau = entry.get("tau_s")
-        if tau is not None and not _is_number(tau):
-            raise InputError(f"{where}: tau_s must be a finite number")
-        delay = entry.get("delay_samples", 0)
-        if not isinstance(delay, int) or isinstance(delay, bool):
-            raise InputError(f"{where}: delay_samples must be a whole number")
-        for key in ("exponent", "scale"):
-            value = entry.get(key)
-            if value is not None and not (_is_number(value) and value > 0):
-                raise InputError(f"{where}: {key} must be a finite number > 0, not {value!r}")
-        if (entry.get("exponent") is None) != (entry.get("scale") is None):
-            raise InputError(f"{where}: a power stage needs both 'exponent' and 'scale' (or neither)")
-        start = entry.get("start", "steady")
-        if start not in STARTS:
-            raise InputError(f"{where}: start {start!r} must be one of {', '.join(STARTS)}")
-        try:
-            feature = Feature.from_dict(entry)
-        except InputError as exc:
-            raise InputError(f"{where}: {exc}") from None
-        if "name" in entry and entry["name"] != feature.name:
-            raise InputError(f"{where}: name '{entry['name']}' does not match its transform ('{feature.name}')")
-        if feature.transform == "delay" and feature.delay_samples > MAX_DELAY_SAMPLES:
-            raise InputError(f"{where}: delay of {feature.delay_samples} samples; at most {MAX_DELAY_SAMPLES}")
-        features.append(feature)
-    return features

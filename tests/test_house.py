@@ -13,7 +13,6 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "groupfit"
 
 C901_EXCEPTIONS = {
-    "groupfit/model_checks.py",
     "groupfit/runtime/interpreter.py",
     "groupfit/search/ga.py",
     "tests/support/json_runtime.py",

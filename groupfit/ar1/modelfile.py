@@ -26,7 +26,8 @@ from typing import Any, Mapping
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text, read_json_file, to_json
 from groupfit.model import _fields_from_dict, _fields_to_dict
-from groupfit.model_checks import COEFFICIENT_LIMIT, FORMAT, RULE_LIMIT
+from groupfit.model_checks import COEFFICIENT_LIMIT, FORMAT
+from groupfit.switching_checks import RULE_LIMIT
 
 KIND = "ar1"
 STARTS = ("zero", "measured")
