@@ -162,6 +162,78 @@ class GapFreeEncoding:
 
 
 @dataclass
+class Variation:
+    """The GA's operators on one encoding: evaluation, crossover, mutation and the Lamarckian local step.
+
+    They draw from :mod:`random`, seeded by the search (:func:`seeded_random`).
+    """
+
+    encoding: GapFreeEncoding
+    constraints: Constraints
+    objective: CachedObjective
+    _: KW_ONLY
+    union_crossover: bool
+
+    @property
+    def p(self) -> int:
+        return self.encoding.p
+
+    def evaluate(self, population: list[Individual]) -> None:
+        to_breaks = self.encoding.to_breaks
+        fresh = [ind for ind in population if not ind.fitness.valid]
+        for ind, value in zip(fresh, self.objective.totals([to_breaks(ind) for ind in fresh])):
+            ind.fitness.values = (value,)
+
+    def mate(self, a: Individual, b: Individual) -> tuple[Individual, Individual]:
+        encoding, p = self.encoding, self.p
+        draw = random.random()
+        if p > 1 and self.union_crossover and draw < 1 / 3:
+            pool = sorted(set(encoding.to_breaks(a)) | set(encoding.to_breaks(b)))
+            a[:] = encoding.from_breaks(sorted(random.sample(pool, p)))
+            b[:] = encoding.from_breaks(sorted(random.sample(pool, p)))
+        elif p > 1 and draw < 2 / 3:
+            tools.cxUniform(a, b, indpb=0.5)
+        else:
+            weight = random.random()
+            a[:], b[:] = (
+                [weight * x + (1 - weight) * y for x, y in zip(a, b)],
+                [(1 - weight) * x + weight * y for x, y in zip(a, b)],
+            )
+        return encoding.repair(a), encoding.repair(b)
+
+    def mutate(self, ind: Individual) -> Individual:
+        low, high = self.encoding.low, self.encoding.high
+        gene = random.randrange(self.p)
+        if random.random() < 0.15:
+            ind[gene] = random.randint(low, high)
+        else:
+            scale = max(1.0, 0.1 * (high - low)) if random.random() < 0.5 else 2.0
+            ind[gene] = ind[gene] + random.gauss(0.0, scale)
+        return self.encoding.repair(ind)
+
+    def local_step(self, children: list[Individual], window: int) -> None:
+        """One pass of windowed single-break shifts on every child (Lamarckian)."""
+        offers = []
+        for child in children:
+            breaks = self.encoding.to_breaks(child)
+            for j in range(self.p):
+                first, last = shift_range(breaks, j, self.constraints)
+                for b in range(max(first, breaks[j] - window), min(last, breaks[j] + window) + 1):
+                    if b != breaks[j]:
+                        offers.append((child, breaks[:j] + [b] + breaks[j + 1 :]))
+        values = self.objective.totals([trial for _, trial in offers])
+        best: dict[int, tuple[float, list[int]]] = {}
+        for (child, trial), value in zip(offers, values):
+            if value < best.get(id(child), (child.fitness.values[0], None))[0]:
+                best[id(child)] = (value, trial)
+        for child in children:
+            if id(child) in best:
+                value, trial = best[id(child)]
+                child[:] = self.encoding.from_breaks(trial)
+                child.fitness.values = (value,)
+
+
+@dataclass
 class GeneticSearch:
     """DEAP genetic algorithm over feasible break vectors.
 
@@ -231,64 +303,9 @@ class GeneticSearch:
             )
 
         encoding = GapFreeEncoding(constraints, p)
-        low, high = encoding.low, encoding.high
-        to_breaks, repair = encoding.to_breaks, encoding.repair
-
-        def evaluate(population: list[Individual]) -> None:
-            fresh = [ind for ind in population if not ind.fitness.valid]
-            for ind, value in zip(fresh, objective.totals([to_breaks(ind) for ind in fresh])):
-                ind.fitness.values = (value,)
-
-        span = high - low
-        sigma = max(1.0, 0.1 * span)
-
-        def mate(a: Individual, b: Individual) -> tuple[Individual, Individual]:
-            draw = random.random()
-            if p > 1 and self.union_crossover and draw < 1 / 3:
-                pool = sorted(set(to_breaks(a)) | set(to_breaks(b)))
-                a[:] = encoding.from_breaks(sorted(random.sample(pool, p)))
-                b[:] = encoding.from_breaks(sorted(random.sample(pool, p)))
-            elif p > 1 and draw < 2 / 3:
-                tools.cxUniform(a, b, indpb=0.5)
-            else:
-                weight = random.random()
-                a[:], b[:] = (
-                    [weight * x + (1 - weight) * y for x, y in zip(a, b)],
-                    [(1 - weight) * x + weight * y for x, y in zip(a, b)],
-                )
-            return repair(a), repair(b)
-
-        def mutate(ind: Individual) -> Individual:
-            gene = random.randrange(p)
-            if random.random() < 0.15:
-                ind[gene] = random.randint(low, high)
-            else:
-                scale = sigma if random.random() < 0.5 else 2.0
-                ind[gene] = ind[gene] + random.gauss(0.0, scale)
-            return repair(ind)
-
-        def local_step(children: list[Individual]) -> None:
-            """One pass of windowed single-break shifts on every child (Lamarckian)."""
-            offers = []
-            for child in children:
-                breaks = to_breaks(child)
-                for j in range(p):
-                    first, last = shift_range(breaks, j, constraints)
-                    for b in range(
-                        max(first, breaks[j] - self.local_window), min(last, breaks[j] + self.local_window) + 1
-                    ):
-                        if b != breaks[j]:
-                            offers.append((child, breaks[:j] + [b] + breaks[j + 1 :]))
-            values = objective.totals([trial for _, trial in offers])
-            best: dict[int, tuple[float, list[int]]] = {}
-            for (child, trial), value in zip(offers, values):
-                if value < best.get(id(child), (child.fitness.values[0], None))[0]:
-                    best[id(child)] = (value, trial)
-            for child in children:
-                if id(child) in best:
-                    value, trial = best[id(child)]
-                    child[:] = encoding.from_breaks(trial)
-                    child.fitness.values = (value,)
+        low, high, repair = encoding.low, encoding.high, encoding.repair
+        variation = Variation(encoding, constraints, objective, union_crossover=self.union_crossover)
+        evaluate, mate, mutate = variation.evaluate, variation.mate, variation.mutate
 
         history: list[float] = []
         evaluations_history: list[int] = []
@@ -316,7 +333,7 @@ class GeneticSearch:
                         mutate(child)
                 evaluate(children)
                 if self.local_window:
-                    local_step(children)
+                    variation.local_step(children, self.local_window)
                 population = elite + children
                 leader = tools.selBest(population, 1)[0]
                 if leader.fitness.values[0] < best_value * (1 - 1e-12) - 1e-300:
@@ -331,7 +348,7 @@ class GeneticSearch:
                     stopped = "stagnation"
                     break
 
-        breaks = to_breaks(best)
+        breaks = encoding.to_breaks(best)
         if self.polish:
             breaks, best_value = polish_breaks(breaks, best_value, objective, constraints)
         return GAResult(
