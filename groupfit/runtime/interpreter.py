@@ -191,6 +191,34 @@ class SwitchingRule:
             raise InputError(f"{len(readings)} readings given; the model takes {t.n_temps} ({', '.join(t.raw_names)})")
         if self.count < COUNT_MAX:
             self.count += 1
+        held, faulted = self._read(readings)
+        self._reference_step()
+        for k in range(len(t.derived)):
+            self._derive(k)
+        switched = self._switch()
+        clamped = False
+        self.recal.propagate()
+        if faulted:
+            prediction = self._zero
+            target = self._zero
+            self.recal.invalidate()
+            self.has_previous = False
+        else:
+            prediction, target, clamped = self._predict(switched, held=held)
+        if self.blend > 0:
+            self.blend -= 1
+        if target > self._comp_max:
+            target = self._comp_max
+        if target < self._comp_min:
+            target = self._comp_min
+        self.compensation = rate_limited(self.compensation, target, self._rate)
+        fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
+        return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
+
+    def _read(self, readings: Sequence[float]) -> tuple[bool, bool]:
+        """Take the valid readings, hold the last good value of an invalid one; whether a reading is held, and
+        whether one has been invalid for longer than the hold (a sensor fault)."""
+        t = self.tables
         held = faulted = False
         for m in range(t.n_temps):
             reading = float(readings[m])
@@ -203,10 +231,11 @@ class SwitchingRule:
                 faulted = True
             elif self.bad[m] > 0:
                 held = True
-        self._reference_step()
-        for k in range(len(t.derived)):
-            self._derive(k)
+        return held, faulted
 
+    def _switch(self) -> int:
+        """Move to the next group when its window is reached and the criterion passes, or at the window's end."""
+        t = self.tables
         switched = SWITCH_NONE
         if self.group < t.n_groups:
             w = self.group - 1
@@ -219,43 +248,30 @@ class SwitchingRule:
         if switched:
             self.blend = t.blend_samples
             self.gap = self._zero
+        return switched
 
-        clamped = False
-        self.recal.propagate()
-        if faulted:
-            prediction = self._zero
-            target = self._zero
-            self.recal.invalidate()
-            self.has_previous = False
-        else:
-            prediction, clamped = self._group_prediction(self.group)
-            if switched and self.has_previous:  # bumpless transfer: the gap from the last output to the new group
-                self.gap = self.previous - prediction
-            if self.blend > 0:  # closed by one share of blend_samples + 1 per sample
-                share = self._real(self.blend) / self._real(t.blend_samples + 1) * self.gap
-                prediction = prediction + share
-                if t.has_position:  # carried by K0, so that K0 + tan(beta)·(P − P0) stays the output
-                    self.k0 = self.k0 + share
-            self.previous = prediction
-            self.has_previous = True
-            target = -prediction
-            if t.has_dead_band:
-                if self._outside_dead_band():
-                    self.band_target = target
-                else:
-                    target = self.band_target
-            correction = self.recal.correct(prediction, usable=not held)
-            prediction = prediction + correction
-            target = target - correction
-        if self.blend > 0:
-            self.blend -= 1
-        if target > self._comp_max:
-            target = self._comp_max
-        if target < self._comp_min:
-            target = self._comp_min
-        self.compensation = rate_limited(self.compensation, target, self._rate)
-        fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
-        return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
+    def _predict(self, switched: int, *, held: bool):
+        """The prediction (bumpless transfer and probe correction included), the compensation's target, and
+        whether the position was clamped."""
+        t = self.tables
+        prediction, clamped = self._group_prediction(self.group)
+        if switched and self.has_previous:  # bumpless transfer: the gap from the last output to the new group
+            self.gap = self.previous - prediction
+        if self.blend > 0:  # closed by one share of blend_samples + 1 per sample
+            share = self._real(self.blend) / self._real(t.blend_samples + 1) * self.gap
+            prediction = prediction + share
+            if t.has_position:  # carried by K0, so that K0 + tan(beta)·(P − P0) stays the output
+                self.k0 = self.k0 + share
+        self.previous = prediction
+        self.has_previous = True
+        target = -prediction
+        if t.has_dead_band:
+            if self._outside_dead_band():
+                self.band_target = target
+            else:
+                target = self.band_target
+        correction = self.recal.correct(prediction, usable=not held)
+        return prediction + correction, target - correction, clamped
 
     def _group_prediction(self, group: int):
         """The prediction of 1-based ``group`` from the current inputs (position terms included), and whether
