@@ -45,6 +45,184 @@ FORMATS = tuple(f"groupfit-runtime/{n}" for n in (1, 2, 3, 4, 5, 7))
 """The formats this runtime implements; it refuses any other instead of computing wrongly."""
 
 
+class TableRuntime:
+    """The rule's state, as after a reset, and one sample's steps on it."""
+
+    def __init__(self, table: dict, probes=None):
+        if table.get("format") not in FORMATS:
+            raise ValueError(f"unknown runtime table format {table.get('format')!r}")
+        self.table = table
+        self.hold, self.crit = table["hold_samples"], table["criterion_index"]
+        self.n_temps, self.n_groups = len(table["temps"]), len(table["coefficients"])
+        self.derived = table.get("derived_inputs", [])
+        self.reference = table.get("reference")
+        self.position, self.dead = table.get("position"), table.get("dead_band")
+        self.measured = [source["reading"] for source in table["inputs"] if "reading" in source]
+        self.blend_samples = table.get("blend_samples", 0)
+        self.count, self.group, self.comp, self.band_target, self.blend = 0, 1, 0.0, 0.0, 0
+        self.previous, self.gap, self.has_previous = 0.0, 0.0, False
+        n_derived = len(self.derived)
+        self.bad, self.last = [self.hold + 1] * self.n_temps, [0.0] * self.n_temps
+        self.first, self.has_first = [0.0] * self.n_temps, [False] * self.n_temps
+        self.started, self.memory, self.value = [False] * n_derived, [0.0] * n_derived, [0.0] * n_derived
+        self.line, self.pos = [[0.0] * d["delay_samples"] for d in self.derived], [0] * n_derived
+        self.checks = ProbeFilter(table["recalibration"]) if probes is not None else None
+
+    def relative(self, m: int) -> float:
+        """A measured reading as the model takes it: as read, or minus the reference."""
+        if self.reference is None:
+            return self.last[m]
+        if self.reference["kind"] == "column":
+            return self.last[m] - self.last[self.reference["reading"]]
+        return self.last[m] - self.first[m]
+
+    def read(self, x: list[float]) -> tuple[bool, bool]:
+        """Count, take the valid readings; whether one is held, and whether one is faulty past the hold."""
+        table, bad, hold = self.table, self.bad, self.hold
+        self.count = min(self.count + 1, table["count_max"])
+        for m in range(self.n_temps):
+            if table["temp_min_c"][m] <= x[m] <= table["temp_max_c"][m]:
+                self.last[m], bad[m] = x[m], 0
+            elif bad[m] <= hold:
+                bad[m] += 1
+        # reference: each measured sensor's first good reading (kind 'start')
+        if self.reference is not None and self.reference["kind"] == "start":
+            for m in self.measured:
+                if not self.has_first[m] and bad[m] == 0:
+                    self.first[m], self.has_first[m] = self.last[m], True
+        return any(0 < b <= hold for b in bad), any(b > hold for b in bad)
+
+    def derive(self) -> None:
+        """The derived inputs, from their source readings as read."""
+        for k, d in enumerate(self.derived):
+            v = self.last[d["reading"]]
+            if d.get("exponent") is not None:  # the power stage, in double precision
+                v = math.pow(abs(v) / d["power_scale"], d["exponent"])
+            if d["transform"] == "identity":
+                self.value[k] = v
+                continue
+            if not self.started[k] and self.bad[d["reading"]] == 0:
+                self.started[k] = True
+                s = 0.0 if d.get("start") == "rest" else v
+                if d["transform"] == "delay":
+                    self.line[k], self.pos[k] = [s] * d["delay_samples"], 0
+                else:
+                    self.memory[k] = s
+            if self.started[k]:
+                self.advance(k, d, v)
+
+    def advance(self, k: int, d: dict, v: float) -> None:
+        memory, value = self.memory, self.value
+        if d["transform"] == "lowpass":
+            memory[k] = d["b"] * v + d["a"] * memory[k]
+            value[k] = memory[k]
+        elif d["transform"] == "derivative":
+            value[k], memory[k] = (v - memory[k]) * d["scale"], v
+        elif d["transform"] == "ontime":
+            memory[k] = memory[k] + 1.0 if v != 0.0 else 0.0
+            value[k] = v * (memory[k] * d["scale"])
+        else:
+            line, pos = self.line[k], self.pos[k]
+            value[k], line[pos] = line[pos], v
+            self.pos[k] = 0 if pos + 1 == d["delay_samples"] else pos + 1
+
+    def switch(self) -> bool:
+        """The next group at its window's end, or within the window when the criterion passes."""
+        table, group = self.table, self.group
+        if group < self.n_groups:
+            window_first, window_last = table["windows"][group - 1]
+            direction, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
+            criterion = self.relative(self.crit)
+            if self.count >= window_last:
+                self.group += 1
+            elif self.count >= window_first and (
+                self.bad[self.crit] > self.hold
+                or direction == 0
+                or (direction > 0 and criterion - threshold >= -table["margin_c"])
+                or (direction < 0 and criterion - threshold <= table["margin_c"])
+            ):
+                self.group += 1
+        return self.group != group
+
+    def predict(self, g: int, inputs: list[float]) -> tuple[float, bool]:
+        """Group ``g``'s prediction from ``inputs``, its position terms included, and whether P was clamped."""
+        row = self.table["coefficients"][g - 1]
+        prediction, clamped = row[0], False
+        for j, x_j in enumerate(inputs):
+            prediction = prediction + row[j + 1] * x_j
+        position = self.position
+        if position:
+            p = self.last[position["reading"]]
+            low, high = position["travel_mm"]
+            if p < low:
+                p, clamped = low, True
+            if p > high:
+                p, clamped = high, True
+            d = p - position["p0_mm"]
+            poly = 0.0
+            for k in range(position["order"], 0, -1):
+                row_k = position["coefficients"][g - 1][k - 1]
+                term = row_k[0]
+                for j, x_j in enumerate(inputs):
+                    term = term + row_k[j + 1] * x_j
+                poly = term if k == position["order"] else poly * d + term
+            prediction = prediction + poly * d
+        return prediction, clamped
+
+    def output(self, switched: bool, *, held: bool) -> tuple[float, float, bool]:
+        """Prediction (bumpless transfer, probe correction), the compensation's target, whether P was clamped."""
+        inputs = [
+            self.relative(source["reading"]) if "reading" in source else self.value[source["derived"]]
+            for source in self.table["inputs"]
+        ]
+        prediction, clamped = self.predict(self.group, inputs)
+        if switched and self.has_previous:
+            self.gap = self.previous - prediction
+        if self.blend > 0:
+            prediction = prediction + float(self.blend) / float(self.blend_samples + 1) * self.gap
+        self.previous, self.has_previous = prediction, True
+        target = -prediction
+        if self.dead:
+            ref = self.last[self.dead["reading"]]
+            if any(abs(self.last[m] - ref) > self.dead["threshold_c"] for m in range(self.dead["n_measured"])):
+                self.band_target = target
+            else:
+                target = self.band_target
+        if self.checks:
+            correction = self.checks.correct(prediction, held)
+            prediction, target = prediction + correction, target - correction
+        return prediction, target, clamped
+
+    def step(self, x: list[float]) -> tuple[int, int, float, float]:
+        """One sample: ``(code, fault, prediction_um, compensation_um)``."""
+        table, bits = self.table, self.table["fault_bits"]
+        held, faulted = self.read(x)
+        self.derive()
+        switched = self.switch()
+        if switched:  # the bumpless transfer starts
+            self.blend, self.gap = self.blend_samples, 0.0
+        clamped = False
+        if self.checks:
+            self.checks.propagate()
+        if faulted:
+            prediction = target = 0.0
+            if self.checks:
+                self.checks.usable = False
+            self.has_previous = False
+        else:
+            prediction, target, clamped = self.output(switched, held=held)
+        if self.blend > 0:
+            self.blend -= 1
+        # clamp, rate limit, output
+        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
+        delta = max(min(target - self.comp, table["rate_limit_um"]), -table["rate_limit_um"])
+        self.comp = self.comp + delta
+        fault = held * bits["held"] + faulted * bits["sensor"]
+        if clamped:
+            fault += bits["position"]
+        return (table["sensor_fault_return"] if faulted else self.group, fault, prediction, self.comp)
+
+
 def run_table(
     table: dict, readings: np.ndarray, probes=None, probe_codes: list | None = None
 ) -> list[tuple[int, int, float, float]]:
@@ -57,6 +235,9 @@ def run_table(
     readings : numpy.ndarray
         One row per sample, one column per entry of ``table["temps"]`` (in that
         order); NaN and infinities are faulty readings.
+    probes : numpy.ndarray, optional
+        Per sample a probe reading (um), NaN where there is no check; the
+        outcome of each check is appended to ``probe_codes``.
 
     Returns
     -------
@@ -70,167 +251,12 @@ def run_table(
     ValueError
         If the table's format is not one of :data:`FORMATS`.
     """
-    if table.get("format") not in FORMATS:
-        raise ValueError(f"unknown runtime table format {table.get('format')!r}")
-    hold, crit = table["hold_samples"], table["criterion_index"]
-    n_temps, n_groups = len(table["temps"]), len(table["coefficients"])
-    bits = table["fault_bits"]
-    derived = table.get("derived_inputs", [])
-    reference = table.get("reference")
-    position, dead = table.get("position"), table.get("dead_band")
-    measured = [source["reading"] for source in table["inputs"] if "reading" in source]
-
-    # state, as after a reset
-    count, group, comp, band_target, blend = 0, 1, 0.0, 0.0, 0
-    previous, gap, has_previous = 0.0, 0.0, False
-    blend_samples = table.get("blend_samples", 0)
-    bad, last = [hold + 1] * n_temps, [0.0] * n_temps
-    first, has_first = [0.0] * n_temps, [False] * n_temps
-    started, memory, value = [False] * len(derived), [0.0] * len(derived), [0.0] * len(derived)
-    line, pos = [[0.0] * d["delay_samples"] for d in derived], [0] * len(derived)
-
-    def relative(m: int) -> float:
-        """A measured reading as the model takes it: as read, or minus the reference."""
-        if reference is None:
-            return last[m]
-        if reference["kind"] == "column":
-            return last[m] - last[reference["reading"]]
-        return last[m] - first[m]
-
-    checks = ProbeFilter(table["recalibration"]) if probes is not None else None
+    runtime = TableRuntime(table, probes)
     out = []
     for i, x in enumerate(np.asarray(readings, dtype=float).tolist()):
-        # count and readings
-        count = min(count + 1, table["count_max"])
-        for m in range(n_temps):
-            if table["temp_min_c"][m] <= x[m] <= table["temp_max_c"][m]:
-                last[m], bad[m] = x[m], 0
-            elif bad[m] <= hold:
-                bad[m] += 1
-        faulted = any(b > hold for b in bad)
-        held = any(0 < b <= hold for b in bad)
-
-        # reference: each measured sensor's first good reading (kind 'start')
-        if reference is not None and reference["kind"] == "start":
-            for m in measured:
-                if not has_first[m] and bad[m] == 0:
-                    first[m], has_first[m] = last[m], True
-
-        # derived inputs, from their source readings as read
-        for k, d in enumerate(derived):
-            v = last[d["reading"]]
-            if d.get("exponent") is not None:  # the power stage, in double precision
-                v = math.pow(abs(v) / d["power_scale"], d["exponent"])
-            if d["transform"] == "identity":
-                value[k] = v
-                continue
-            if not started[k] and bad[d["reading"]] == 0:
-                started[k] = True
-                s = 0.0 if d.get("start") == "rest" else v
-                if d["transform"] == "delay":
-                    line[k], pos[k] = [s] * d["delay_samples"], 0
-                else:
-                    memory[k] = s
-            if started[k]:
-                if d["transform"] == "lowpass":
-                    memory[k] = d["b"] * v + d["a"] * memory[k]
-                    value[k] = memory[k]
-                elif d["transform"] == "derivative":
-                    value[k], memory[k] = (v - memory[k]) * d["scale"], v
-                elif d["transform"] == "ontime":
-                    memory[k] = memory[k] + 1.0 if v != 0.0 else 0.0
-                    value[k] = v * (memory[k] * d["scale"])
-                else:
-                    value[k], line[k][pos[k]] = line[k][pos[k]], v
-                    pos[k] = 0 if pos[k] + 1 == d["delay_samples"] else pos[k] + 1
-
-        # switching
-        before = group
-        if group < n_groups:
-            window_first, window_last = table["windows"][group - 1]
-            direction, threshold = table["directions"][group - 1], table["thresholds_c"][group - 1]
-            if count >= window_last:
-                group += 1
-            elif count >= window_first and (
-                bad[crit] > hold
-                or direction == 0
-                or (direction > 0 and relative(crit) - threshold >= -table["margin_c"])
-                or (direction < 0 and relative(crit) - threshold <= table["margin_c"])
-            ):
-                group += 1
-
-        if group != before:  # the bumpless transfer starts
-            blend, gap = blend_samples, 0.0
-
-        # prediction, position terms, dead band
-        clamped = False
-        if checks:
-            checks.propagate()
-        if faulted:
-            prediction = target = 0.0
-            if checks:
-                checks.usable = False
-        else:
-            inputs = [
-                relative(source["reading"]) if "reading" in source else value[source["derived"]]
-                for source in table["inputs"]
-            ]
-
-            def predict(g: int, inputs=inputs) -> tuple[float, bool]:
-                row = table["coefficients"][g - 1]
-                prediction, clamped = row[0], False
-                for j, x_j in enumerate(inputs):
-                    prediction = prediction + row[j + 1] * x_j
-                if position:
-                    p = last[position["reading"]]
-                    low, high = position["travel_mm"]
-                    if p < low:
-                        p, clamped = low, True
-                    if p > high:
-                        p, clamped = high, True
-                    d = p - position["p0_mm"]
-                    poly = 0.0
-                    for k in range(position["order"], 0, -1):
-                        row_k = position["coefficients"][g - 1][k - 1]
-                        term = row_k[0]
-                        for j, x_j in enumerate(inputs):
-                            term = term + row_k[j + 1] * x_j
-                        poly = term if k == position["order"] else poly * d + term
-                    prediction = prediction + poly * d
-                return prediction, clamped
-
-            prediction, clamped = predict(group)
-            if group != before and has_previous:
-                gap = previous - prediction
-            if blend > 0:
-                prediction = prediction + float(blend) / float(blend_samples + 1) * gap
-            previous, has_previous = prediction, True
-            target = -prediction
-            if dead:
-                ref = last[dead["reading"]]
-                if any(abs(last[m] - ref) > dead["threshold_c"] for m in range(dead["n_measured"])):
-                    band_target = target
-                else:
-                    target = band_target
-            if checks:
-                correction = checks.correct(prediction, held)
-                prediction, target = prediction + correction, target - correction
-
-        if faulted:
-            has_previous = False
-        if blend > 0:
-            blend -= 1
-
-        # clamp, rate limit, output
-        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
-        delta = max(min(target - comp, table["rate_limit_um"]), -table["rate_limit_um"])
-        comp = comp + delta
-        fault = held * bits["held"] + faulted * bits["sensor"]
-        if clamped:
-            fault += bits["position"]
-        out.append((table["sensor_fault_return"] if faulted else group, fault, prediction, comp))
-        if checks and not math.isnan(probes[i]):
-            probe_codes.append(checks.probe(float(probes[i])))
+        out.append(runtime.step(x))
+        if runtime.checks and not math.isnan(probes[i]):
+            probe_codes.append(runtime.checks.probe(float(probes[i])))
     return out
 
 
