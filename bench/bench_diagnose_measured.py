@@ -121,7 +121,7 @@ def forward_split_row(frame, cut):
         for name, rows in (("second", slice(cut, middle)), ("third", slice(middle, None)))
     ]
     in_two = diagnose(model, [modelling], halves, live_rule=replay_groups)
-    each = ", ".join(f"{r['before']['rms_um']:.2f} → {r['after']['rms_um']:.2f}" for r in in_two.validation_runs) + (
+    each = ", ".join(f"{r.before['rms_um']:.2f} → {r.after['rms_um']:.2f}" for r in in_two.validation_runs) + (
         " (worse on one)" if in_two.worse_runs else ""
     )
     return f"{cut / len(frame):<10.0%} {cells[0]:>32} {cells[1]:>32} {each:>42}  {effects}"
@@ -225,7 +225,7 @@ def pick(candidates, prefer, majority=True):
     if prefer == "best":
         return best
     if prefer == "shortest":
-        return shortest_adequate_lag(best, family)
+        return shortest_adequate_lag(best, family, DEFAULT_POLICY)
     return max([best, *(c for c in family if within_one_se(c, best))], key=lambda c: c.feature.tau_s)
 
 
