@@ -20,6 +20,7 @@ from groupfit.fe.ballscrew import (
     simulate_ballscrew,
     steady_rise_at_source,
 )
+from groupfit.screw.runs import load_screw_run
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -157,3 +158,21 @@ def test_displacements_at_further_positions():
     raw["probe"]["displacements_m"] = [0.4]
     with pytest.raises(InputError, match="probe.displacements_m"):
         parse_config(raw)
+
+
+def test_a_source_away_from_the_end_gives_the_probe_as_its_distance_from_the_source():
+    """The sensors are named by their distance from the source; the probe column is in the same coordinate, so that
+    the screw commands read the run as it was simulated. The error is still the displacement at the probe."""
+    raw = config("screw_H")
+    raw["time"]["duration_s"] = 600.0
+    raw.pop("noise")
+    start = 0.05
+    raw["source"]["x_m"] = start
+    raw["sensors"] = {name: x + start for name, x in raw["sensors"].items()}
+    raw["probe"]["x_m"] += start
+    raw["probe"]["displacements_m"] = [raw["probe"]["x_m"]]
+    df = simulate_config(raw, progress=False)
+    assert np.allclose(df["probe_x_m"], 0.16)
+    assert np.allclose(df["error_um"], df[f"u{1000 * (0.16 + start):g}mm_um"])
+    run = load_screw_run(df, name="source_5cm_in")
+    assert np.allclose(run.probe_x, 0.16)

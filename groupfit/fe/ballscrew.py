@@ -213,7 +213,8 @@ def solve_field(sc: BallScrewScenario, *, progress: bool = False):
 
 def simulate_ballscrew(sc: BallScrewScenario, *, progress: bool = True) -> pd.DataFrame:
     """Run the scenario; columns ``time_s``, the sensors (°C), ``error_um``,
-    ``probe_x_m``, ``power_W``, for a nut ``nut_x_m`` and ``screw_rpm``, and
+    ``probe_x_m`` (a fixed source: the probe's distance from it; a nut: the
+    nut's position), ``power_W``, for a nut ``nut_x_m`` and ``screw_rpm``, and
     the exact (noise-free) displacement ``u<mm>mm_um`` at every position of
     ``[probe] displacements_m`` (``u300mm_um`` at the free end of a 0.3 m screw
     is its elongation)."""
@@ -223,8 +224,8 @@ def simulate_ballscrew(sc: BallScrewScenario, *, progress: bool = True) -> pd.Da
     if sc.probe == "nut":
         probe_x = nut_x
         error = np.array([model.displacement_weights(x)[0] @ th for x, th in zip(probe_x, theta)])
-    else:
-        probe_x = np.full(len(times), float(sc.probe))
+    else:  # the probe's distance from the source, the coordinate of the sensors' names and of the screw law
+        probe_x = np.full(len(times), float(sc.probe) - sc.source.x)
         error = theta @ model.displacement_weights(sc.probe)[0]
     temps, error = add_noise(temps, error, sc.noise)
     columns = {"time_s": times}
