@@ -35,8 +35,7 @@ from groupfit.io import atomic_write_text, read_json_file, to_json
 from groupfit.model_checks import COEFFICIENT_LIMIT, FORMAT, MAX_POSITION_ORDER, model_problem
 from groupfit.model_recalibration import Recalibration
 from groupfit.reference import referenced
-from groupfit.switching_checks import MAX_DELAY_SAMPLES, SOURCE_RANGES_KEY, rule_section_problem
-from groupfit.switching_checks import parse_derived as _parse_derived
+from groupfit.switching_checks import MAX_DELAY_SAMPLES, SOURCE_RANGES_KEY, parse_derived, rule_section_problem
 
 RULE_KEYS = (
     "rule",
@@ -216,7 +215,7 @@ class ModelFile:
             raise InputError(prefix + problem)
         nested = {
             "switching": Switching.from_dict,
-            "derived_inputs": lambda v: tuple(_parse_derived(v)),
+            "derived_inputs": lambda v: tuple(parse_derived(v)),
             "position": Position.from_dict,
             "dead_band": DeadBand.from_dict,
             "recalibration": lambda v: _fields_from_dict(Recalibration, v),

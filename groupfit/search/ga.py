@@ -173,6 +173,11 @@ class Variation:
     objective: CachedObjective
     _: KW_ONLY
     union_crossover: bool
+    sigma: float = field(init=False)
+    """Standard deviation (gap-free coordinates) of the wide Gaussian mutation: a tenth of the range, at least 1."""
+
+    def __post_init__(self) -> None:
+        self.sigma = max(1.0, 0.1 * (self.encoding.high - self.encoding.low))
 
     @property
     def p(self) -> int:
@@ -207,7 +212,7 @@ class Variation:
         if random.random() < 0.15:
             ind[gene] = random.randint(low, high)
         else:
-            scale = max(1.0, 0.1 * (high - low)) if random.random() < 0.5 else 2.0
+            scale = self.sigma if random.random() < 0.5 else 2.0
             ind[gene] = ind[gene] + random.gauss(0.0, scale)
         return self.encoding.repair(ind)
 
