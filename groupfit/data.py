@@ -42,48 +42,28 @@ ERROR_LIMIT_UM = 1.0e5
 
 @dataclass(frozen=True)
 class Run:
-    """One validated run.
-
-    Attributes
-    ----------
-    name : str
-        Short name (the file stem, or the name given for a DataFrame).
-    source : str
-        Where the run came from, used in messages.
-    time : ndarray, shape (N,)
-        Sample times in seconds, strictly increasing.
-    temps : ndarray, shape (N, k)
-        Model input temperatures in °C, in the order of ``temp_names``.
-    temp_names : tuple of str
-    error : ndarray, shape (N,) or None
-        Thermal error in µm, when the run has the error column.
-    error_name : str or None
-    period : float
-        Sampling period in seconds (median interval).
-    frame : DataFrame
-        The whole table, including columns that are not model inputs.
-    time_name : str
-        Name of the time column.
-    notes : tuple of str
-        What loading did to the log, for the verbs to print.
-    reference : str or None
-        What ``temps`` are relative to (:mod:`groupfit.reference`): None for
-        absolute readings (as loaded), a column or ``"start"`` once
-        :func:`groupfit.reference.with_reference` has applied it. ``frame``
-        keeps the readings as recorded.
-    """
+    """One validated run."""
 
     name: str
+    """Short name (the file stem, or the name given for a DataFrame)."""
     source: str
+    """Where the run came from, used in messages."""
     time: np.ndarray
+    """Sample times in seconds, strictly increasing, shape (N,)."""
     temps: np.ndarray
+    """Model input temperatures in °C, shape (N, k), in the order of ``temp_names``."""
     temp_names: tuple[str, ...]
     error: np.ndarray | None
+    """Thermal error in µm, shape (N,), when the run has the error column."""
     error_name: str | None
     period: float
+    """Sampling period in seconds (median interval)."""
     frame: pd.DataFrame = field(repr=False)
+    """The whole table, including columns that are not model inputs; readings as recorded."""
     time_name: str = DEFAULT_TIME
     reference: str | None = None
+    """What ``temps`` are relative to (:mod:`groupfit.reference`): None for absolute readings (as loaded), a
+    column or ``"start"`` once :func:`groupfit.reference.with_reference` has applied it."""
     notes: tuple[str, ...] = ()
     """What loading did to the log (a jittering clock accepted, readings resampled), one line each."""
 
@@ -189,18 +169,17 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
     if len(time) < 2:
         raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
     step = np.diff(time)
-    not_increasing = np.flatnonzero(step <= 0)
-    if not_increasing.size:
-        i = int(not_increasing[0]) + 1
+    if np.any(step <= 0):
+        i = int(np.argmax(step <= 0)) + 1
         raise InputError(
             f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
             f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows, remove the duplicate, or average the "
             "readings of each period with --resample SECONDS"
         )
     period = float(np.median(step))
-    irregular = np.flatnonzero(np.abs(step - period) > tolerance * period)
-    if irregular.size:
-        i = int(irregular[0]) + 1
+    irregular = np.abs(step - period) > tolerance * period
+    if np.any(irregular):
+        i = int(np.argmax(irregular)) + 1
         raise InputError(
             f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
             f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
@@ -223,18 +202,20 @@ def parse_period_tolerance(text: str | float | None) -> float | None:
     return percent / 100.0
 
 
-LOAD_DEFAULTS = dict(
-    temps=None,
-    time=DEFAULT_TIME,
-    error=DEFAULT_ERROR,
-    require_error=True,
-    allow_nonfinite=False,
-    missing_error=False,
-    ambient=None,
-    temp_range=TEMP_RANGE_C,
-    error_limit=ERROR_LIMIT_UM,
-)
-"""The column and value options of :func:`load_run` and their defaults."""
+@dataclass(frozen=True)
+class LoadOptions:
+    """The column and value options of :func:`load_run` (its parameters say what each means)."""
+
+    temps: Sequence[str] | None = None
+    time: str = DEFAULT_TIME
+    error: str | None = DEFAULT_ERROR
+    require_error: bool = True
+    allow_nonfinite: bool = False
+    missing_error: bool = False
+    ambient: str | None = None
+    """A column that is never a default input (the ambient temperature, whatever its name)."""
+    temp_range: tuple[float, float] | None = TEMP_RANGE_C
+    error_limit: float | None = ERROR_LIMIT_UM
 
 
 def load_run(
@@ -354,11 +335,10 @@ def _validated(
 ) -> Run:
     """The checks of :func:`load_run` on a table already read (its keywords in ``given``); ``ambient`` (a
     column) is never a default input."""
-    options = {**LOAD_DEFAULTS, **given}
-    temps, time, error = options["temps"], options["time"], options["error"]
-    require_error, allow_nonfinite = options["require_error"], options["allow_nonfinite"]
-    missing_error, ambient = options["missing_error"], options["ambient"]
-    temp_range, error_limit = options["temp_range"], options["error_limit"]
+    options = LoadOptions(**given)
+    temps, time, error, ambient = options.temps, options.time, options.error, options.ambient
+    require_error, allow_nonfinite = options.require_error, options.allow_nonfinite
+    missing_error, temp_range, error_limit = options.missing_error, options.temp_range, options.error_limit
     time_values = time_seconds(frame, time, label)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)

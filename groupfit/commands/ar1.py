@@ -14,14 +14,7 @@ from groupfit.ar1.export import render
 from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
-from groupfit.commands.common import (
-    clock_options,
-    finish_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    write_exports,
-)
+from groupfit.commands import common
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics, prediction_accuracy
@@ -30,12 +23,12 @@ from groupfit.plots import plot_fit
 
 def run_replay(args: argparse.Namespace) -> int:
     """``groupfit replay`` of an AR(1) model file: the routine over a recorded run, every Δτ."""
-    out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
+    out_dir = common.plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     model = AR1File.load(args.model)
     error = args.error or model.error or "error_um"
     time = args.time or (model.training or {}).get("time") or "time_s"
-    run = load_run(args.data, temps=[], time=time, error=error, require_error=False, **clock_options(args))
-    print_notes([run], report_stream(args))
+    run = load_run(args.data, temps=[], time=time, error=error, require_error=False, **common.clock_options(args))
+    common.print_notes([run], common.report_stream(args))
     try:
         step = decimation_step(run.period, model.sampling_period_s, what="the model's step")
     except InputError as exc:
@@ -83,7 +76,7 @@ def run_replay(args: argparse.Namespace) -> int:
         title = f"{run.name}: AR(1) routine, start {model.start}"
         plot_fit(time_s, measured, result.prediction_um, [], [(1, len(heat))], figure, title=title, label="AR(1)")
         figures.append(figure)
-    finish_outputs(args, "\n".join(lines), out, figures)
+    common.finish_outputs(args, "\n".join(lines), out, figures)
     return 0
 
 
@@ -95,12 +88,12 @@ def run_export(args: argparse.Namespace) -> int:
             f"{args.model}: an AR(1) model steps every {model.sampling_period_s:g} s (its C1 and C2 belong to that "
             f"step): call it at that period, or refit with fit --model ar1 --period {args.period:g}"
         )
-    plan_outputs(args, args.model, folder=args.out)
+    common.plan_outputs(args, args.model, folder=args.out)
     targets = ("c", "st", "json", "sheet") if args.target == "all" else (args.target,)
     files: dict[str, str] = {}
     for target in targets:
         files.update(render(model, target, real=args.real, name=args.name))
-    write_exports(args, files)
+    common.write_exports(args, files)
     return 0
 
 

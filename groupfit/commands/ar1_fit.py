@@ -6,16 +6,7 @@ import argparse
 
 from groupfit.ar1.fitting import check_heat, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
 from groupfit.ar1.modelfile import STARTS
-from groupfit.commands.common import (
-    clock_options,
-    commit_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    settings_with_data_options,
-    write_json,
-    wrote_line,
-)
+from groupfit.commands import common
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.plots import plot_fit
@@ -73,9 +64,9 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
     if not args.heat:
         raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
-    config_path, settings = settings_with_data_options(args)
+    config_path, settings = common.settings_with_data_options(args)
     data = settings.data
-    out_dir = plan_outputs(
+    out_dir = common.plan_outputs(
         args,
         config_path,
         data.path,
@@ -87,9 +78,9 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
     if len(data.paths) > 1:
         raise InputError("--model ar1 takes one run (--data CSV)")
-    clock = clock_options(args, data)
+    clock = common.clock_options(args, data)
     run = load_run(data.paths[0], temps=[], time=data.time, error=data.error, error_limit=data.error_limit, **clock)
-    print_notes([run], report_stream(args))
+    common.print_notes([run], common.report_stream(args))
     heat = numeric_column(run.frame, args.heat, run.source, allow_nonfinite=False)
     check_heat(heat, source=str(run.source), name=args.heat)
     step = decimation_step(run.period, args.period)
@@ -120,7 +111,10 @@ def run_fit(args: argparse.Namespace) -> int:
         title=f"{run.name}: AR(1), C1 = {result.model.c1:.5f}, start {args.start}",
         label="AR(1) free run",
     )
-    json_path = write_json(args.json, result.to_json())
-    commit_outputs()
-    print(result.summary() + "\nwrote   " + wrote_line([model_path, figure_path, json_path]), file=report_stream(args))
+    json_path = common.write_json(args.json, result.to_json())
+    common.commit_outputs()
+    print(
+        result.summary() + "\nwrote   " + common.wrote_line([model_path, figure_path, json_path]),
+        file=common.report_stream(args),
+    )
     return 0

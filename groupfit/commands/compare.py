@@ -6,29 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from groupfit.commands.common import (
-    EXACT_BUDGET_SECONDS,
-    StageProgress,
-    add_budget_option,
-    add_json_option,
-    add_out_option,
-    add_quiet_option,
-    add_reference_option,
-    add_run_options,
-    check_exact_budget,
-    check_output_dir,
-    commit_outputs,
-    configured_reference,
-    load_configured_run,
-    load_configured_runs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    seed_value,
-    settings_with_data_options,
-    write_json,
-    wrote_line,
-)
+from groupfit.commands import common
 from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
@@ -42,26 +20,26 @@ from groupfit.runtime import replay_groups
 
 def add_parser(verbs) -> None:
     compare = verbs.add_parser("compare")
-    add_run_options(compare)
+    common.add_run_options(compare)
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
-    compare.add_argument("--seed", type=seed_value, help="seed of the genetic algorithm")
+    compare.add_argument("--seed", type=common.seed_value, help="seed of the genetic algorithm")
     compare.add_argument(
         "--heat",
         metavar="COLUMN|none",
         help="heat-level column of the AR(1) model (default speed_rpm, or [compare] heat); none leaves it out",
     )
-    add_reference_option(compare)
+    common.add_reference_option(compare)
     compare.add_argument(
         "--continues",
         action="store_true",
         help="each --validate run is the rest of the recording before it (the modelling run, then the previous "
         "--validate run) even though its clock starts again; a run whose clock goes on is detected without it",
     )
-    add_json_option(compare)
-    add_out_option(compare, "folder for the figures")
-    add_quiet_option(compare)
-    add_budget_option(compare)
+    common.add_json_option(compare)
+    common.add_out_option(compare, "folder for the figures")
+    common.add_quiet_option(compare)
+    common.add_budget_option(compare)
     add_interval_options(compare)
     compare.add_argument(
         "--probe-every",
@@ -74,7 +52,7 @@ def add_parser(verbs) -> None:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    config_path, run_settings = settings_with_data_options(args)
+    config_path, run_settings = common.settings_with_data_options(args)
     run_settings = run_settings.given(
         data={"validate": args.validate},
         compare={"pmax": args.pmax, "heat": args.heat},
@@ -85,7 +63,7 @@ def run_compare(args: argparse.Namespace) -> int:
     if run_settings.compare.pmax < 0:
         raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
     runs = [p for p in [data.path, *data.validate] if isinstance(p, (str, Path))]
-    plan_outputs(
+    common.plan_outputs(
         args,
         config_path,
         data.path,
@@ -104,12 +82,12 @@ def run_compare(args: argparse.Namespace) -> int:
             "to one run; give one --data (and the others as --validate), or fit a global model on several runs "
             "with fit --p 0"
         )
-    modelling = load_configured_run(data)
+    modelling = common.load_configured_run(data)
     if args.heat is not None and any(c not in modelling.frame.columns for c in settings.conditions):
         settings.conditions = (settings.heat,) if settings.heat is not None else ()  # the default speed_rpm is absent
-    validation = [run for path in data.validate for run in load_configured_runs(data, path)]
-    print_notes([modelling, *validation], report_stream(args))
-    reference = configured_reference(args, run_settings, modelling)
+    validation = [run for path in data.validate for run in common.load_configured_runs(data, path)]
+    common.print_notes([modelling, *validation], common.report_stream(args))
+    reference = common.configured_reference(args, run_settings, modelling)
     modelling = with_reference(modelling, reference)
     validation = [with_reference(run, reference) for run in validation]
     joined, skipped, notes = with_histories(validation, [modelling], assume_continued=args.continues)
@@ -117,13 +95,13 @@ def run_compare(args: argparse.Namespace) -> int:
     for note in notes:
         print(
             f"note    {note.replace('derived inputs and run-time state', 'run-time switching')}",
-            file=report_stream(args),
+            file=common.report_stream(args),
         )
     check_block(args, modelling.n_samples)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
-    check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
-    out_dir = check_output_dir(run_settings.output_dir)
-    progress = StageProgress(enabled=not args.quiet)
+    common.check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
+    out_dir = common.check_output_dir(run_settings.output_dir)
+    progress = common.StageProgress(enabled=not args.quiet)
     try:
         result = compare_models(
             modelling,
@@ -133,7 +111,7 @@ def run_compare(args: argparse.Namespace) -> int:
             progress=projecting(
                 progress,
                 asked=settings.pmax,
-                budget_s=None if args.no_budget else EXACT_BUDGET_SECONDS,
+                budget_s=None if args.no_budget else common.EXACT_BUDGET_SECONDS,
                 estimate=lambda line: print(f"estimate {line}", file=sys.stderr, flush=True),
             ),
             histories=histories,
@@ -176,7 +154,7 @@ def run_compare(args: argparse.Namespace) -> int:
         plot_intervals(table, figure)
         written.append(figure)
         data["probe_intervals"], summary = table, summary + "\n\n" + interval_summary(table)
-    written.append(write_json(args.json, data))
-    commit_outputs()
-    print(summary + "\nwrote   " + wrote_line(written), file=report_stream(args))
+    written.append(common.write_json(args.json, data))
+    common.commit_outputs()
+    print(summary + "\nwrote   " + common.wrote_line(written), file=common.report_stream(args))
     return 0

@@ -11,22 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import (
-    add_clock_options,
-    add_json_option,
-    add_model_argument,
-    add_model_time_option,
-    add_out_option,
-    check_output_dir,
-    clock_options,
-    commit_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    ridge_value,
-    write_json,
-    wrote_line,
-)
+from groupfit.commands import common
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.data import PERIOD_TOLERANCE, Run, load_run
 from groupfit.diagnose import diagnose
@@ -43,7 +28,7 @@ from groupfit.runtime import replay_groups
 
 def add_parser(verbs) -> None:
     parser = verbs.add_parser("diagnose", help="trace a model's residual on measured data to a missing effect")
-    add_model_argument(parser)
+    common.add_model_argument(parser)
     parser.add_argument(
         "--data",
         required=True,
@@ -53,10 +38,10 @@ def add_parser(verbs) -> None:
         "one at a time",
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
-    add_model_time_option(parser)
-    add_json_option(parser)
-    add_clock_options(parser)
-    add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
+    common.add_model_time_option(parser)
+    common.add_json_option(parser)
+    common.add_clock_options(parser)
+    common.add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
         "--min-score",
         type=share_value,
@@ -100,7 +85,7 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument(
         "--ridge",
-        type=ridge_value,
+        type=common.ridge_value,
         metavar="ALPHA|auto",
         help="first refit the global model (p = 0) with a ridge penalty (auto: chosen on held-out conditions), "
         "for many collinear inputs; effects are then scored and added with the same penalty",
@@ -197,7 +182,7 @@ def load_measured(path: str, model: dict[str, Any], time: str, **clock) -> Run:
 
 
 def run_diagnose(args: argparse.Namespace) -> int:
-    plan_outputs(
+    common.plan_outputs(
         args,
         args.model,
         args.data,
@@ -207,11 +192,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
     )
     model = ModelFile.load(args.model).to_dict()
     time = args.time or time_column(model)
-    clock = clock_options(args)
+    clock = common.clock_options(args)
     data = [load_measured(path, model, time, **clock) for path in args.data]
     validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
-    print_notes([*data, *validate], report_stream(args))
-    out_dir = check_output_dir(args.out)
+    common.print_notes([*data, *validate], common.report_stream(args))
+    out_dir = common.check_output_dir(args.out)
     start = model
     selection = None
     joint = args.select == "joint"
@@ -266,10 +251,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
         **result.to_json(model_path),
         "expected_next_run": {k: e and e.to_json() for k, e in expectations.items()},
     }
-    written.append(write_json(args.json, report))
-    commit_outputs()
+    written.append(common.write_json(args.json, report))
+    common.commit_outputs()
     summary = result.summary() + recal_note + expectation_summary(expectations)
-    print(summary + "\nwrote   " + wrote_line(written), file=report_stream(args))
+    print(summary + "\nwrote   " + common.wrote_line(written), file=common.report_stream(args))
     return 0
 
 

@@ -6,14 +6,7 @@ import argparse
 
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
-from groupfit.commands.common import (
-    add_model_argument,
-    add_out_option,
-    add_register_options,
-    add_source_option,
-    plan_outputs,
-    write_exports,
-)
+from groupfit.commands import common
 from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
 from groupfit.export import TARGETS, render
@@ -27,7 +20,7 @@ CEC_KEYS = ("state", "table_index", "input_axis", "output_axis", "step_mm", "max
 
 def add_parser(verbs) -> None:
     export = verbs.add_parser("export")
-    add_model_argument(export)
+    common.add_model_argument(export)
     export.add_argument(
         "--target",
         required=True,
@@ -37,11 +30,11 @@ def add_parser(verbs) -> None:
         "(C, ST and CSV); cec: a SINUMERIK 840D compensation table (NC_CEC.INI) of a position model at one "
         "thermal state (--state); all: every target (with table for a position model)",
     )
-    add_out_option(export, "folder for the exported files (required)", required=True)
+    common.add_out_option(export, "folder for the exported files (required)", required=True)
     export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
     export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
     resolution = "µm per count of an integer compensation register (default 0.1)"
-    add_register_options(export, resolution, resolution_default=0.1, target="sheet: ")
+    common.add_register_options(export, resolution, resolution_default=0.1, target="sheet: ")
     export.add_argument(
         "--tolerance-um",
         type=float,
@@ -50,7 +43,7 @@ def add_parser(verbs) -> None:
         help="table, cec: largest interpolation error of the position table (default 0.5 um)",
     )
     add_cec_options(export)
-    add_source_option(export)
+    common.add_source_option(export)
     export.add_argument(
         "--period",
         type=float,
@@ -90,7 +83,7 @@ def run_export(args: argparse.Namespace) -> int:
         return run_screw_export(args)
     if is_ar1_file(args.model):
         return ar1_commands.run_export(args)
-    plan_outputs(args, args.model, folder=args.out)
+    common.plan_outputs(args, args.model, folder=args.out)
     model = ModelFile.load(args.model)
     if args.period is not None:
         try:
@@ -114,7 +107,7 @@ def run_export(args: argparse.Namespace) -> int:
                 **{key: getattr(args, key) for key in CEC_KEYS},
             )
         )
-    write_exports(args, files)
+    common.write_exports(args, files)
     return 0
 
 

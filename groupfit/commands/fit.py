@@ -8,29 +8,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import fit_mlr
-from groupfit.commands.common import (
-    StageProgress,
-    add_budget_option,
-    add_json_option,
-    add_out_option,
-    add_quiet_option,
-    add_reference_option,
-    add_run_options,
-    check_exact_budget,
-    check_output_dir,
-    commit_outputs,
-    configured_reference,
-    load_configured_runs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    ridge_value,
-    seed_value,
-    settings_with_data_options,
-    write_json,
-    wrote_line,
-)
+from groupfit.commands import common, fit_mlr
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.data import Run, join_runs, measured_rows
@@ -56,7 +34,7 @@ P_RULES = (NEXT_RUN, "bic", "target")
 
 def add_parser(verbs) -> None:
     fit = verbs.add_parser("fit")
-    add_run_options(fit)
+    common.add_run_options(fit)
     fit.add_argument(
         "--p",
         type=whole_or_auto("p"),
@@ -77,14 +55,14 @@ def add_parser(verbs) -> None:
     fit.add_argument("--objective", choices=("sae", "sse"), help="residual sum to minimise")
     fit.add_argument("--no-intercept", action="store_true", help="fit groups without a constant term")
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
-    fit.add_argument("--seed", type=seed_value, help="seed of the genetic algorithm")
+    fit.add_argument("--seed", type=common.seed_value, help="seed of the genetic algorithm")
     fit.add_argument(
         "--certify",
         choices=("auto", "yes", "no"),
         help="GA: also run the exact search and print the gap (auto: when cheap; the default)",
     )
     fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
-    add_reference_option(fit)
+    common.add_reference_option(fit)
     fit.add_argument(
         "--select",
         choices=SELECTION_METHODS,
@@ -93,7 +71,7 @@ def add_parser(verbs) -> None:
     fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
     fit.add_argument(
         "--ridge",
-        type=ridge_value,
+        type=common.ridge_value,
         metavar="ALPHA|auto",
         help="shrink the coefficients of a global model (p = 0) on many collinear inputs by a ridge penalty; "
         "auto: the penalty with the least error on held-out conditions or runs",
@@ -127,10 +105,10 @@ def add_parser(verbs) -> None:
         metavar="COLUMN",
         help="reference sensor of --dead-band (default: the --reference column)",
     )
-    add_json_option(fit)
-    add_out_option(fit, "folder for model.json and fit.png")
-    add_quiet_option(fit)
-    add_budget_option(fit)
+    common.add_json_option(fit)
+    common.add_out_option(fit, "folder for model.json and fit.png")
+    common.add_quiet_option(fit)
+    common.add_budget_option(fit)
     add_interval_options(fit)
     add_recalibrate_option(fit)
     ar1_commands.add_fit_options(fit)
@@ -160,7 +138,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
     config_path, settings = fit_settings(args)
-    plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
+    common.plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
     data = chosen_inputs(args, prepared_runs(args, settings))
     settings, selection, expectation = decided_p(args, data)
     model_settings = settings.model
@@ -191,8 +169,8 @@ def run_fit(args: argparse.Namespace) -> int:
         )
         estimator.set_params(ridge_alpha=ridge.alpha)
     alpha = ridge.alpha if ridge is not None else 0.0
-    out_dir = check_output_dir(settings.output_dir)
-    progress = StageProgress(enabled=not args.quiet)
+    out_dir = common.check_output_dir(settings.output_dir)
+    progress = common.StageProgress(enabled=not args.quiet)
     fit_run = measured_rows(run)
     try:
         estimator.fit(fit_run.temps, fit_run.error, progress=progress)
@@ -238,13 +216,13 @@ def run_fit(args: argparse.Namespace) -> int:
     if estimator.p == 0 and ridge is None and position_run is None:
         result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
     written = write_fit_outputs(args, out_dir, result, intervals, position_run)
-    print(result.summary() + notes + "\nwrote   " + written, file=report_stream(args))
+    print(result.summary() + notes + "\nwrote   " + written, file=common.report_stream(args))
     return 0
 
 
 def fit_settings(args: argparse.Namespace) -> tuple:
     """The configuration's path and its settings with every option ``fit`` was given."""
-    config_path, settings = settings_with_data_options(args)
+    config_path, settings = common.settings_with_data_options(args)
     return config_path, settings.given(
         model={
             "p": args.p,
@@ -274,8 +252,8 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
         position_run = load_position_data(settings.data, args.position)
         runs = [position_run.run]
     else:
-        runs = load_configured_runs(settings.data, missing_error=True)
-    print_notes(runs, report_stream(args))
+        runs = common.load_configured_runs(settings.data, missing_error=True)
+    common.print_notes(runs, common.report_stream(args))
     if settings.model.p == "auto" and (len(runs) > 1 or position_run is not None):
         settings = with_p(settings, 0)  # several runs, or check runs at positions: a global model
     if len(runs) > 1 and settings.model.p != 0:
@@ -285,7 +263,7 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)
-    reference = configured_reference(args, settings, run)
+    reference = common.configured_reference(args, settings, run)
     if len(runs) > 1 and reference == START:
         runs = [with_reference(r, START) for r in runs]  # each run's own start
         run = join_runs(runs)
@@ -336,9 +314,9 @@ def decided_p(args: argparse.Namespace, data: FitData) -> tuple:
     model = settings.model
     n_coef = run.temps.shape[1] + int(model.intercept)
     if model.p == "auto" and model.p_rule != NEXT_RUN:
-        check_exact_budget(args, run, n_coef, model.objective, max(model.pmax, 0), "--p auto's exact path")
+        common.check_exact_budget(args, run, n_coef, model.objective, max(model.pmax, 0), "--p auto's exact path")
     elif settings.search.method == "exact" and isinstance(model.p, int):
-        check_exact_budget(args, run, n_coef, model.objective, model.p, "the exact search")
+        common.check_exact_budget(args, run, n_coef, model.objective, model.p, "the exact search")
     selection = expectation = None
     if model.p == "auto" and model.pmax < 0:
         raise InputError(f"--pmax {model.pmax}: the largest p tried must be 0 or more")
@@ -375,9 +353,9 @@ def write_fit_outputs(args, out_dir, result: FitResult, intervals, position_run)
     if position_run is not None:
         position_figure = out_dir / "position.png"
         plot_position(result.model, position_run, position_figure)
-    json_path = write_json(args.json, result.to_json())
-    commit_outputs()
-    return wrote_line([model_path, figure_path, position_figure, json_path])
+    json_path = common.write_json(args.json, result.to_json())
+    common.commit_outputs()
+    return common.wrote_line([model_path, figure_path, position_figure, json_path])
 
 
 def with_p(settings: RunSettings, p: int) -> RunSettings:

@@ -8,12 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from groupfit.commands.common import (
-    add_json_option,
-    add_out_option,
-    finish_outputs,
-    plan_outputs,
-)
+from groupfit.commands import common
 from groupfit.io import save_figure
 from groupfit.iso230 import STANDARD_REPEATS, Iso230Result, load_runs
 
@@ -33,13 +28,13 @@ def add_parser(verbs) -> None:
         metavar="COLUMN",
         help="positional deviation, actual minus target, um (deviation_um)",
     )
-    add_json_option(iso, "the evaluation")
-    add_out_option(iso, "folder for iso230.png (the mean deviations with their ±2s bands)")
+    common.add_json_option(iso, "the evaluation")
+    common.add_out_option(iso, "folder for iso230.png (the mean deviations with their ±2s bands)")
     iso.set_defaults(handler=run_iso230)
 
 
 def run_iso230(args: argparse.Namespace) -> int:
-    out_dir = plan_outputs(args, args.run, folder=args.out, files=("iso230.png",))
+    out_dir = common.plan_outputs(args, args.run, folder=args.out, files=("iso230.png",))
     result = load_runs(args.run, target=args.target, direction=args.direction, deviation=args.deviation)
     data = {"run": str(args.run), **result.to_json()}
     written = []
@@ -47,7 +42,7 @@ def run_iso230(args: argparse.Namespace) -> int:
         figure = out_dir / "iso230.png"
         plot_iso230(result, figure, title=Path(args.run).name)
         written.append(figure)
-    finish_outputs(args, iso230_report(data), data, written)
+    common.finish_outputs(args, iso230_report(data), data, written)
     return 0
 
 

@@ -12,21 +12,7 @@ import numpy as np
 
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
-from groupfit.commands.common import (
-    add_clock_options,
-    add_json_option,
-    add_model_argument,
-    add_model_time_option,
-    add_out_option,
-    add_register_options,
-    add_source_option,
-    clock_options,
-    finish_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    residual_line,
-)
+from groupfit.commands import common
 from groupfit.commands.replay_probes import (
     add_probe_options,
     probe_report,
@@ -50,14 +36,14 @@ from groupfit.screw.modelfile import is_screw_file
 
 def add_parser(verbs) -> None:
     replay = verbs.add_parser("replay")
-    add_model_argument(replay)
+    common.add_model_argument(replay)
     replay.add_argument(
         "--data",
         required=True,
         metavar="CSV",
         help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
     )
-    add_model_time_option(replay)
+    common.add_model_time_option(replay)
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
     replay.add_argument(
         "--continues",
@@ -66,23 +52,25 @@ def add_parser(verbs) -> None:
         help="the recording(s) --data continues, in order: replayed first, so that the rule and the derived "
         "inputs carry their state into --data as on the controller (only --data's samples are reported)",
     )
-    add_clock_options(replay)
+    common.add_clock_options(replay)
     replay.add_argument(
         "--precision",
         choices=("double", "single"),
         default="double",
         help="arithmetic of the rule: double, or single as a PLC REAL computes",
     )
-    add_register_options(replay, "also report the compensation in integer controller counts of this many µm (e.g. 0.1)")
-    add_source_option(replay)
+    common.add_register_options(
+        replay, "also report the compensation in integer controller counts of this many µm (e.g. 0.1)"
+    )
+    common.add_source_option(replay)
     add_probe_options(replay)
-    add_json_option(replay, "the per-sample result")
-    add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
+    common.add_json_option(replay, "the per-sample result")
+    common.add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
+    out_dir = common.plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     if is_screw_file(args.model):
         return run_screw_replay(args)
     if is_ar1_file(args.model):
@@ -93,7 +81,7 @@ def run_replay(args: argparse.Namespace) -> int:
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
-    options = dict(time=args.time or time_column(model), error=error, **clock_options(args))
+    options = dict(time=args.time or time_column(model), error=error, **common.clock_options(args))
     run = load_readings(args.data, tables, **options)
     history = [load_readings(path, tables, **options) for path in args.continues or []]
     try:
@@ -112,14 +100,14 @@ def run_replay(args: argparse.Namespace) -> int:
         replay = rule.replay(joined[-1].temps).tail(rows)
     else:
         replay = rule.replay(run.temps, probes)
-    print_notes([run, *history], report_stream(args))
+    common.print_notes([run, *history], common.report_stream(args))
     if not history and run.time[0] > 2 * run.period:
         notes.append(
             f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
             "file is the rest of a recording, give the earlier file(s) with --continues FILE"
         )
     for note in notes:
-        print(f"note     {note}", file=report_stream(args))
+        print(f"note     {note}", file=common.report_stream(args))
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     if probes is not None:
         unchecked = residuals(run, rule.replay(run.temps))
@@ -131,7 +119,7 @@ def run_replay(args: argparse.Namespace) -> int:
         figure = out_dir / "replay.png"
         plot_replay(run, rule.tables, replay, model, figure)
         written.append(figure)
-    finish_outputs(args, result.summary(), result.to_json(), written)
+    common.finish_outputs(args, result.summary(), result.to_json(), written)
     return 0
 
 
@@ -301,7 +289,7 @@ def replay_report(result: dict[str, Any]) -> str:
             else ""
         ),
     ]
-    lines.append(residual_line(result))
+    lines.append(common.residual_line(result))
     if "probes" in result:
         lines.append(probe_report(result))
     lines += [f"note     {note}" for note in result.get("notes", [])]

@@ -19,16 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import (
-    add_clock_options,
-    add_force_option,
-    clock_options,
-    commit_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    write_json,
-)
+from groupfit.commands import common
 from groupfit.errors import InputError
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
@@ -81,8 +72,8 @@ def _output_options(parser, json_help: str, out_help: str) -> None:
     """``--json`` (``json_help``, then ``('-' for stdout)``), ``--out``, ``--force`` and the clock options."""
     parser.add_argument("--json", metavar="FILE", help=f"{json_help} ('-' for stdout)")
     parser.add_argument("--out", metavar="DIR", help=out_help)
-    add_force_option(parser)
-    add_clock_options(parser)
+    common.add_force_option(parser)
+    common.add_clock_options(parser)
 
 
 def _model_options(parser) -> None:
@@ -149,8 +140,8 @@ def identify_runs(model, runs):
 
 def _load_runs(args: argparse.Namespace, paths, **options):
     """The screw runs ``paths``, read with the clock options of ``args``; what loading did printed as notes."""
-    runs = [load_screw_run(p, **clock_options(args), **options) for p in paths]
-    print_notes([run.run for run in runs], report_stream(args))
+    runs = [load_screw_run(p, **common.clock_options(args), **options) for p in paths]
+    common.print_notes([run.run for run in runs], common.report_stream(args))
     for run in runs:
         refuse_moving_source(run)
     names = [r.name for r in runs]
@@ -171,16 +162,16 @@ def refuse_moving_source(run) -> None:
 
 # ----------------------------------------------------------------- identify
 def run_identify(args: argparse.Namespace) -> int:
-    out_dir = plan_outputs(args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",))
+    out_dir = common.plan_outputs(args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",))
     model = build_model(args)
     runs = _load_runs(args, args.runs)
     identify_runs(model, runs)
     data = model_to_dict(model, runs={r.name: r.source for r in runs})
     path = out_dir / "screw_model.json"
     save_model(data, path)
-    write_json(args.json, data)
-    commit_outputs()
-    print(identify_report(model, path), file=report_stream(args))
+    common.write_json(args.json, data)
+    common.commit_outputs()
+    print(identify_report(model, path), file=common.report_stream(args))
     return 0
 
 
@@ -225,7 +216,7 @@ def _alpha_rows(model) -> str:
 # ------------------------------------------------------------------ predict
 def run_predict(args: argparse.Namespace) -> int:
     stem = Path(args.data).stem
-    out_dir = plan_outputs(
+    out_dir = common.plan_outputs(
         args,
         args.model,
         args.data,
@@ -272,9 +263,9 @@ def run_predict(args: argparse.Namespace) -> int:
             "rise_K": model.predict(run.time, at, tau0, source).tolist(),
             "error_um": np.column_stack([model.predict_error(run.time, x, tau0, source) for x in at]).tolist(),
         }
-    write_json(args.json, _finite(result))
-    commit_outputs()
-    print(predict_report(score, source, reidentified, model, written), file=report_stream(args))
+    common.write_json(args.json, _finite(result))
+    common.commit_outputs()
+    print(predict_report(score, source, reidentified, model, written), file=common.report_stream(args))
     return 0
 
 
@@ -328,7 +319,7 @@ def _figures(out_dir: Path, run, rises, errors: dict, title: str) -> list[Path]:
 # ------------------------------------------------------------------ compare
 def run_compare(args: argparse.Namespace) -> int:
     names = [Path(p).stem for p in [args.run, *args.validate]]
-    out_dir = plan_outputs(
+    out_dir = common.plan_outputs(
         args,
         args.run,
         args.validate,
@@ -355,9 +346,9 @@ def run_compare(args: argparse.Namespace) -> int:
     model_path = out_dir / "screw_model.json"
     save_model(model_to_dict(model, runs={r.name: r.source for r in runs}), model_path)
     written.append(model_path)
-    write_json(args.json, _finite(compare_json(result, runs)))
-    commit_outputs()
-    print(compare_report(result, runs, written), file=report_stream(args))
+    common.write_json(args.json, _finite(compare_json(result, runs)))
+    common.commit_outputs()
+    print(compare_report(result, runs, written), file=common.report_stream(args))
     return 0
 
 

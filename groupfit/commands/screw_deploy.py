@@ -7,15 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands.common import (
-    clock_options,
-    finish_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    residual_line,
-    write_exports,
-)
+from groupfit.commands import common
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics
 from groupfit.screw.deploy import ScrewLaw, choose_source
@@ -34,10 +26,10 @@ def run_screw_replay(args: argparse.Namespace) -> int:
     """The law sample by sample on a run: the time since its first sample, the probe position, τ0 (line law)."""
     if args.precision != "double":
         raise InputError(f"--precision {args.precision}: the ball-screw law is deployed in double precision only")
-    out_dir = plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
+    out_dir = common.plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     law = screw_law(args)
-    run = load_screw_run(args.data, **clock_options(args))
-    print_notes([run.run], report_stream(args))
+    run = load_screw_run(args.data, **common.clock_options(args))
+    common.print_notes([run.run], common.report_stream(args))
     if run.probe_x is None:
         raise InputError(
             f"{run.source}: column '{PROBE_COLUMN}' not found; the ball-screw law gives the error at the probe "
@@ -54,7 +46,7 @@ def run_screw_replay(args: argparse.Namespace) -> int:
         figure = out_dir / "replay.png"
         plot_error(run.time, run.error, {"run-time law": prediction}, figure, title=f"{run.name}: {law.source}")
         written.append(figure)
-    finish_outputs(args, screw_replay_report(result), result, written)
+    common.finish_outputs(args, screw_replay_report(result), result, written)
     return 0
 
 
@@ -95,13 +87,13 @@ def screw_replay_report(result: dict[str, Any]) -> str:
         f"run      {result['run']}: {result['n_samples']} samples, ball-screw law of source {result['source']} "
         f"(alpha {result['alpha_law']}), {result['fault_samples']} sample(s) with unusable readings"
     ]
-    lines.append(residual_line(result))
+    lines.append(common.residual_line(result))
     return "\n".join(lines)
 
 
 def run_screw_export(args: argparse.Namespace) -> int:
     """``export --target c|json|all`` of one source's law; other targets refused with the reason."""
-    plan_outputs(args, args.model, folder=args.out)
+    common.plan_outputs(args, args.model, folder=args.out)
     targets = SCREW_TARGETS if args.target == "all" else (args.target,)
     for target in targets:
         check_screw_target(target)
@@ -109,7 +101,7 @@ def run_screw_export(args: argparse.Namespace) -> int:
     files: dict[str, str] = {}
     for target in targets:
         files.update(render_screw(law, target))
-    write_exports(args, files)
+    common.write_exports(args, files)
     return 0
 
 

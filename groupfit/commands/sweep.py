@@ -9,19 +9,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from groupfit.commands.common import (
-    EXACT_BUDGET_SECONDS,
-    add_budget_option,
-    add_clock_options,
-    add_json_option,
-    add_out_option,
-    add_quiet_option,
-    commit_outputs,
-    plan_outputs,
-    print_notes,
-    report_stream,
-    write_json,
-)
+from groupfit.commands import common
 from groupfit.errors import InputError
 from groupfit.outputs import current_plan
 from groupfit.sweep.config import read_study
@@ -47,11 +35,11 @@ def add_parser(verbs) -> None:
         help="seconds to wait for the Dask scheduler (default 10)",
     )
     sweep.add_argument("--db", metavar="FILE", help="study database (SQLite; default [study] db or CONFIG-stem.sqlite)")
-    add_out_option(sweep, "write a summary table and figures to DIR", aliases=("--report",))
-    add_json_option(sweep, "counts and the database path")
-    add_quiet_option(sweep)
-    add_budget_option(sweep)
-    add_clock_options(sweep)  # in place of the study's [data] period_tolerance and resample_s
+    common.add_out_option(sweep, "write a summary table and figures to DIR", aliases=("--report",))
+    common.add_json_option(sweep, "counts and the database path")
+    common.add_quiet_option(sweep)
+    common.add_budget_option(sweep)
+    common.add_clock_options(sweep)  # in place of the study's [data] period_tolerance and resample_s
     sweep.set_defaults(handler=run_sweep)
 
 
@@ -63,7 +51,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers}: give 1 or more worker processes")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
-    report_dir = plan_outputs(
+    report_dir = common.plan_outputs(
         args,
         args.config,
         [d.path for d in study.datasets],
@@ -72,13 +60,13 @@ def run_sweep(args: argparse.Namespace) -> int:
     )
     current_plan().file(db, "--db")
     if not args.scheduler:  # a cluster's size is known only once connected
-        budget = None if args.no_budget else EXACT_BUDGET_SECONDS
+        budget = None if args.no_budget else common.EXACT_BUDGET_SECONDS
         check_exact_time(study, feasible, args.config, budget_s=budget, workers=args.workers or os.cpu_count() or 1)
     if args.scheduler:
         executor = DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
     else:
         executor = LocalExecutor(args.workers)
-    out = report_stream(args)
+    out = common.report_stream(args)
     try:
         with StudyStore(db) as store:
             print(
@@ -86,7 +74,7 @@ def run_sweep(args: argparse.Namespace) -> int:
                 file=out,
                 flush=True,
             )
-            print_notes(study.datasets, out)
+            common.print_notes(study.datasets, out)
             if infeasible:
                 print(
                     f"  {len(feasible)} run(s) will fit; {len(infeasible)} cannot fit their breaks and will be "
@@ -126,9 +114,9 @@ def run_sweep(args: argparse.Namespace) -> int:
             file=out,
         )
     if written:
-        commit_outputs()
+        common.commit_outputs()
         print("  report " + ", ".join(str(p) for p in written), file=out)
-    json_path = write_json(
+    json_path = common.write_json(
         args.json,
         {
             "db": str(outcome.db),
@@ -145,7 +133,7 @@ def run_sweep(args: argparse.Namespace) -> int:
             "report": [str(p) for p in written],
         },
     )
-    commit_outputs()
+    common.commit_outputs()
     if json_path is not None:
         print(f"  wrote {json_path}", file=out)
     return 0

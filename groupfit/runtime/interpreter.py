@@ -41,28 +41,18 @@ PROBE_CODE_OFFSET = 2
 
 @dataclass(frozen=True)
 class StepResult:
-    """What the rule decides for one sample.
-
-    Attributes
-    ----------
-    group : int
-        1-based group serving this sample (tracked through faults too).
-    prediction_um : float
-        Predicted thermal error (0 under a sensor fault).
-    compensation_um : float
-        Value for the controller: −prediction, clamped and rate-limited.
-    fault : int
-        Bit mask: :data:`FAULT_HELD` (1), :data:`FAULT_SENSOR` (2).
-    switched : int
-        0, or :data:`SWITCH_CRITERION` / :data:`SWITCH_FORCED` when the group
-        advanced at this sample.
-    """
+    """What the rule decides for one sample."""
 
     group: int
+    """1-based group serving this sample (tracked through faults too)."""
     prediction_um: float
+    """Predicted thermal error (0 under a sensor fault)."""
     compensation_um: float
+    """Value for the controller: −prediction, clamped and rate-limited."""
     fault: int
+    """Bit mask: :data:`FAULT_HELD` (1), :data:`FAULT_SENSOR` (2)."""
     switched: int = SWITCH_NONE
+    """0, or :data:`SWITCH_CRITERION` / :data:`SWITCH_FORCED` when the group advanced at this sample."""
 
     @property
     def code(self) -> int:

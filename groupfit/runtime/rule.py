@@ -45,38 +45,26 @@ PERIOD_TOLERANCE = 0.01
 
 @dataclass(frozen=True)
 class RuleSettings:
-    """How :func:`rule_parameters` derives the rule from the modelling run.
-
-    Attributes
-    ----------
-    noise_c : float
-        Smallest sensor noise (standard deviation, °C) the criterion test
-        must tolerate; the noise estimated from the modelling run's criterion
-        is used when it is larger.
-    margin_sigmas : float
-        The criterion margin in noise standard deviations.
-    hold_s : float
-        How long (s) a sensor's last good value may stand in for invalid
-        readings; K = ``floor(hold_s / period)``, at least 1.
-    range_margin_c : float
-        A reading is valid within the modelling run's range of that sensor
-        widened by this much (°C) on each side, rounded outward to whole °C.
-    clamp_factor, clamp_floor_um : float
-        The compensation is clamped to ``±max(clamp_floor_um,
-        clamp_factor · max|ŷ|)`` over the modelling run, rounded up to 1 µm.
-    rate_factor, rate_floor_um : float
-        Rate limit per sample: ``max(rate_floor_um, rate_factor · max|Δŷ|)``
-        over consecutive samples served by the same group in the modelling
-        run, rounded up to 0.1 µm. Jumps at group switches are spread.
-    """
+    """How :func:`rule_parameters` derives the rule from the modelling run."""
 
     noise_c: float = 0.05
+    """Smallest sensor noise (standard deviation, °C) the criterion test must tolerate; the noise estimated
+    from the modelling run's criterion is used when it is larger."""
     margin_sigmas: float = 3.0
+    """The criterion margin in noise standard deviations."""
     hold_s: float = 300.0
+    """How long (s) a sensor's last good value may stand in for invalid readings; K = ``floor(hold_s /
+    period)``, at least 1."""
     range_margin_c: float = 15.0
+    """A reading is valid within the modelling run's range of that sensor widened by this much (°C) on each
+    side, rounded outward to whole °C."""
     clamp_factor: float = 2.0
+    """The compensation is clamped to ``±max(clamp_floor_um, clamp_factor · max|ŷ|)`` over the modelling
+    run, rounded up to 1 µm."""
     clamp_floor_um: float = 10.0
     rate_factor: float = 2.0
+    """Rate limit per sample: ``max(rate_floor_um, rate_factor · max|Δŷ|)`` over consecutive samples served
+    by the same group in the modelling run, rounded up to 0.1 µm. Jumps at group switches are spread."""
     rate_floor_um: float = 0.5
 
 

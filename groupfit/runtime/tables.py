@@ -112,16 +112,6 @@ class DerivedTable:
 
     def describe(self) -> str:
         """Words for headers and sheets, ASCII only."""
-        if not self.has_power and not self.from_rest:
-            if self.transform == "lowpass":
-                return f"low-pass of {self.column}, tau = {self.tau_s:g} s"
-            if self.transform == "derivative":
-                return f"time derivative of {self.column}, per hour"
-            if self.transform == "delay":
-                return f"{self.column} delayed by {self.delay_samples} sample(s)"
-            return f"{self.column} as read"
-        if self.transform == "ontime":
-            return f"{self.power_text()} times the hours it has been non-zero"
         source = self.power_text()
         rest = ", from rest" if self.from_rest else ""
         if self.transform == "lowpass":
@@ -130,7 +120,9 @@ class DerivedTable:
             return f"time derivative of {source}, per hour"
         if self.transform == "delay":
             return f"{source} delayed by {self.delay_samples} sample(s){rest}"
-        return f"{source} (heat law)"
+        if self.transform == "ontime":
+            return f"{source} times the hours it has been non-zero"
+        return f"{source} (heat law)" if self.has_power or self.from_rest else f"{source} as read"
 
     def power(self, value: float) -> float:
         """The power stage of a source value, in double precision (the C library's ``pow``, as C calls it)."""

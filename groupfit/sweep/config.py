@@ -84,27 +84,18 @@ MAX_STUDY_RUNS = 100_000
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One run of a study.
-
-    Attributes
-    ----------
-    spec : dict
-        Everything the result depends on: ``data`` (sha256, time, error
-        columns), ``sensors`` (``{"names": […]}`` or a selection),
-        ``model`` (p, n, c, objective, intercept) and ``search`` (method and,
-        for the GA, its settings and seed).
-    path : str
-        The data file (not part of the hash: moving a file keeps its runs).
-    dataset : str
-        The data file's name, for tables.
-    run_hash : str
-        SHA-256 of the canonical JSON of ``spec``.
-    """
+    """One run of a study."""
 
     spec: dict
+    """Everything the result depends on: ``data`` (sha256, time, error columns), ``sensors`` (``{"names":
+    […]}`` or a selection), ``model`` (p, n, c, objective, intercept) and ``search`` (method and, for the GA,
+    its settings and seed)."""
     path: str
+    """The data file (not part of the hash: moving a file keeps its runs)."""
     dataset: str
+    """The data file's name, for tables."""
     run_hash: str
+    """SHA-256 of the canonical JSON of ``spec``."""
 
 
 @dataclass
