@@ -1,7 +1,10 @@
 """Reading a run's table: CSV (comma, semicolon or tab separated), Excel or Parquet by suffix, or a DataFrame.
 
-Every problem is one line naming the file: a folder or a device given as a
-file, an empty or unreadable file, a column named twice.
+A text table is read as it was written (:mod:`groupfit.textlayout`: its
+encoding, separator, a preamble, decimal commas, a units row), and a time
+column of date-times, text ones included (:mod:`groupfit.timestamps`), as
+seconds. Every problem is one line naming the file: a folder or a device
+given as a file, an empty or unreadable file, a column named twice.
 """
 
 from __future__ import annotations
@@ -13,6 +16,8 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
+from groupfit.textlayout import DELIMITERS, header_delimiter, layout_of, read_text_table, without_units_row
+from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
     ".csv": "CSV",
@@ -45,8 +50,12 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: data file not found; check the path given to --data")
     note_read(path)
     kind = TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
+    header = None
     try:
-        frame = _read_by_kind(path, kind)
+        if kind == "CSV":
+            frame, header = read_text_table(path.read_bytes())
+        else:
+            frame = _read_by_kind(path, kind)
     except InputError:
         raise
     except pd.errors.EmptyDataError:
@@ -58,7 +67,8 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: not a readable {kind} table ({first})") from None
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
-    header = _raw_header(path, kind) if kind != "Parquet" else _parquet_header(path)
+    if header is None:
+        header = _excel_header(path) if kind == "Excel" else _parquet_header(path)
     if header is None or len(header) != frame.shape[1]:
         header = list(frame.columns)
     _check_unique_columns(header, label)
@@ -66,14 +76,11 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     return frame, (name or path.stem), label
 
 
-def _raw_header(path: Path, kind: str) -> list[str] | None:
-    """The header as written in the file (pandas renames a repeated ``T1`` to ``T1.1`` on reading)."""
+def _excel_header(path: Path) -> list[str] | None:
+    """The header as written in the workbook (pandas renames a repeated ``T1`` to ``T1.1`` on reading)."""
     try:
-        if kind == "Excel":
-            return [str(c) for c in pd.read_excel(path, sheet_name=0, header=None, nrows=1).iloc[0].tolist()]
-        options = {"sep": delimiter(path), "skipinitialspace": True}
-        return [str(c) for c in pd.read_csv(path, header=None, nrows=1, dtype=str, **options).iloc[0]]
-    except (ValueError, OSError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
+        return [str(c) for c in pd.read_excel(path, sheet_name=0, header=None, nrows=1).iloc[0].tolist()]
+    except (ValueError, OSError, IndexError):
         return None
 
 
@@ -87,23 +94,13 @@ def _parquet_header(path: Path) -> list[str] | None:
         return None
 
 
-DELIMITERS = (",", ";", "\t")
-"""Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
-
-
 def delimiter(path: Path) -> str:
     """The field separator of a text table: a comma, a semicolon or a tab, whichever its header uses most."""
     try:
-        with open(path, encoding="utf-8", errors="replace") as stream:
-            first = stream.readline()
+        text = path.read_bytes()[:65536].decode("utf-8", errors="replace")
     except OSError:
         return ","
-    return header_delimiter(first)
-
-
-def header_delimiter(line: str) -> str:
-    """The separator a table's header line uses most of (a comma on a tie)."""
-    return max(DELIMITERS, key=lambda d: (line.count(d), d == ","))
+    return layout_of(text).sep
 
 
 def _check_unique_columns(header, label: str) -> None:
@@ -121,18 +118,16 @@ def _check_unique_columns(header, label: str) -> None:
 
 def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
     if kind == "Excel":
-        return pd.read_excel(path, sheet_name=0)
-    if kind == "Parquet":
-        header = _parquet_header(path)
-        if header is not None:
-            _check_unique_columns(header, str(path))
-        return pd.read_parquet(path)
-    return pd.read_csv(path, sep=delimiter(path), skipinitialspace=True)
+        return without_units_row(pd.read_excel(path, sheet_name=0))
+    header = _parquet_header(path)
+    if header is not None:
+        _check_unique_columns(header, str(path))
+    return pd.read_parquet(path)
 
 
 def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
-    """A date-time column (a Parquet or Excel time stamp) as the seconds since its first row, a duration as its
-    seconds, in place; other columns are left as they are."""
+    """A date-time column (a Parquet or Excel time stamp, or text such as ``2026-03-02 08:00:00``) as the
+    seconds since its first row, a duration as its seconds, in place; other columns are left as they are."""
     if column not in frame.columns:
         return
     raw = frame[column]
@@ -142,6 +137,10 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             raise InputError(f"{label}: row {missing[0] + 1}, column '{column}' is empty; fix or remove that row")
         start = raw.iloc[0] if pd.api.types.is_datetime64_any_dtype(raw) else pd.Timedelta(0)
         frame[column] = (raw - start).dt.total_seconds()
+    elif is_text(raw):
+        seconds = text_seconds(raw, column, label)
+        if seconds is not None:
+            frame[column] = seconds
 
 
 __all__ = ["DELIMITERS", "TABLE_SUFFIXES", "datetimes_to_seconds", "delimiter", "header_delimiter", "read_table"]

@@ -14,7 +14,6 @@ programme answers every p, so GA runs over p and seeds reuse it).
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import os
 import socket
@@ -23,7 +22,6 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from groupfit.data import PERIOD_TOLERANCE, Run, load_run
 from groupfit.errors import InputError
@@ -31,10 +29,10 @@ from groupfit.grouping import Constraints
 from groupfit.heldout.selection import select_sensors
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
-from groupfit.readtable import header_delimiter
 from groupfit.reference import default_reference, referenced
 from groupfit.search.exact import ExactResult, exact_is_cheap, solve_exact
 from groupfit.sweep.config import canonical_json
+from groupfit.textlayout import read_text_table
 
 REFERENCE_PMAX = 8
 """The exact reference is solved for every p up to at least this many breaks at once."""
@@ -203,8 +201,7 @@ def _parsed_run(
             raise InputError(f"{path}: cannot read the data file ({exc.strerror})") from None
     if hashlib.sha256(content).hexdigest() != sha256:
         raise InputError(f"{path}: the data file has changed since the study was read; start the sweep again")
-    first = content.split(b"\n", 1)[0].decode("utf-8", errors="replace")
-    frame = pd.read_csv(io.BytesIO(content), sep=header_delimiter(first), skipinitialspace=True)
+    frame, _ = read_text_table(content)
     frame.columns = [str(c).strip() for c in frame.columns]
     tolerance, resample = clock
     return load_run(

@@ -1,0 +1,145 @@
+"""A time column written as text date-times (``2026-03-02 08:00:00``, ``02.03.2026 08:00:00`` …) in seconds.
+
+A logger's CSV often stamps its rows with the wall-clock time rather than
+seconds. The forms read are ISO 8601 (``T`` or a space, fractions of a
+second, a UTC offset), and a date in one of :data:`DATE_FORMATS` followed by
+a time of day in one of :data:`TIME_FORMATS`, or a time of day alone (a log
+that passes midnight then counts on into the next day).
+
+Where a column reads in more than one form (``03/02/2026`` is 3 February or
+2 March), the form whose times increase most evenly wins: a log's samples
+are spaced alike, and the wrong reading of day and month puts a month
+between two of them. Where the forms agree on every interval they give the
+same seconds.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+
+import numpy as np
+import pandas as pd
+
+from groupfit.errors import InputError
+
+DATE_FORMATS = ("%Y-%m-%d", "%Y/%m/%d", "%d.%m.%Y", "%d.%m.%y", "%d/%m/%Y", "%m/%d/%Y", "%d-%m-%Y")
+TIME_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M", "%I:%M:%S.%f %p", "%I:%M:%S %p", "%I:%M %p")
+FORMATS = tuple(f"{d} {t}" for d in DATE_FORMATS for t in TIME_FORMATS) + TIME_FORMATS
+"""Every form tried after ISO 8601, in order; the time-of-day forms last."""
+EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
+DAY_S = 86400.0
+
+
+def is_text(column: pd.Series) -> bool:
+    return column.dtype == object or pd.api.types.is_string_dtype(column)
+
+
+def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
+    """Seconds since the first row of a text column of date-times; None when its first cell is a number.
+
+    Raises
+    ------
+    InputError
+        A cell empty, or not a date-time in the form of the others, named with its row; or a first
+        cell that is neither a number nor a date-time in a form read here.
+    """
+    text = column.astype("string").str.strip()
+    empty = np.flatnonzero((text.isna() | (text == "")).to_numpy())
+    if empty.size:
+        raise InputError(f"{label}: row {empty[0] + 1}, column '{name}' is empty; fix or remove that row")
+    first, last = str(text.iloc[0]), str(text.iloc[-1])
+    if _is_number(first):
+        return None
+    readings = [seconds for seconds in _readings(text, first, last) if seconds is not None]
+    if not readings:
+        bad = _first_unread(text)
+        if bad is None:
+            raise InputError(
+                f"{label}: row 1, column '{name}': {first!r} is neither a number of seconds nor a date-time "
+                f"in a form groupfit reads ({EXAMPLES}); convert the column to seconds, or name the time "
+                "column with --time"
+            )
+        row, form = bad
+        raise InputError(
+            f"{label}: row {row + 1}, column '{name}': {str(text.iloc[row])!r} is not a date-time in the form "
+            f"of the rows above it ({form}); fix or remove that row"
+        )
+    return min(readings, key=_unevenness)
+
+
+def _readings(text: pd.Series, first: str, last: str):
+    try:
+        stamps = pd.to_datetime(text, format="ISO8601", utc=True)
+    except (ValueError, TypeError):
+        stamps = None
+    if stamps is not None:
+        yield _since_first(stamps)
+        return
+    for form in FORMATS:
+        if not (_parses(first, form) and _parses(last, form)):
+            continue
+        try:
+            stamps = pd.to_datetime(text, format=form)
+        except (ValueError, TypeError):
+            continue
+        seconds = _since_first(stamps)
+        yield _past_midnight(seconds) if form in TIME_FORMATS else seconds
+
+
+def _first_unread(text: pd.Series) -> tuple[int, str] | None:
+    """The first row no form of the first row reads, with that form; None when the first row reads in none."""
+    first = str(text.iloc[0])
+    forms = [form for form in FORMATS if _parses(first, form)]
+    if _is_iso(first):
+        forms.insert(0, "ISO 8601")
+    if not forms:
+        return None
+    form = forms[0]
+    for row, value in enumerate(text.tolist()):
+        if not (_is_iso(value) if form == "ISO 8601" else _parses(value, form)):
+            return row, form
+    return None
+
+
+def _since_first(stamps: pd.Series) -> np.ndarray:
+    return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float)
+
+
+def _past_midnight(seconds: np.ndarray) -> np.ndarray:
+    """A time of day that falls back by most of a day has passed midnight: count on into the next day."""
+    days = np.concatenate([[0.0], np.cumsum(np.diff(seconds) < -DAY_S / 2)])
+    return seconds + DAY_S * days
+
+
+def _unevenness(seconds: np.ndarray) -> tuple[bool, float]:
+    steps = np.diff(seconds)
+    if not steps.size:
+        return (False, 0.0)
+    return (bool(np.any(steps <= 0)), float(np.max(np.abs(steps - np.median(steps)))))
+
+
+def _parses(value: str, form: str) -> bool:
+    try:
+        datetime.strptime(value, form)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_iso(value: str) -> bool:
+    try:
+        datetime.fromisoformat(value)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_number(value: str) -> bool:
+    try:
+        float(value.replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
+__all__ = ["DATE_FORMATS", "EXAMPLES", "FORMATS", "TIME_FORMATS", "is_text", "text_seconds"]

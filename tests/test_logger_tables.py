@@ -1,0 +1,209 @@
+"""Logs as loggers and controllers write them, read without rewriting: decimal commas, a Windows encoding,
+a preamble, a units row, trailing separators and text time stamps. The truth is the same run written as a
+plain comma-separated table in seconds."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_switching_models import SYNTHETIC
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.errors import InputError
+from groupfit.readtable import read_table
+from groupfit.textlayout import layout_of, read_text_table
+from groupfit.timestamps import text_seconds
+
+TEMPS = ["T1", "T2", "T3", "T4"]
+
+
+@pytest.fixture(scope="module")
+def plain():
+    return load_run(SYNTHETIC, temps=TEMPS)
+
+
+@pytest.fixture(scope="module")
+def frame():
+    return pd.read_csv(SYNTHETIC)
+
+
+def same_run(run, plain, *, time=True):
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    if time:
+        np.testing.assert_array_equal(run.time, plain.time)
+    assert run.period == pytest.approx(plain.period)
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_decimal_commas_read_as_the_plain_table(tmp_path, frame, plain, sep):
+    path = tmp_path / "eu.csv"
+    frame.to_csv(path, sep=sep, decimal=",", index=False)
+    assert "," in path.read_text().splitlines()[1]  # the numbers carry decimal commas
+    assert layout_of(path.read_text()).decimal == ","
+    same_run(load_run(path, temps=TEMPS), plain)
+
+
+def test_a_comma_separated_table_never_takes_commas_as_decimal_marks(frame):
+    assert layout_of(frame.to_csv(index=False)).decimal == "."
+
+
+def test_a_windows_encoded_header_with_units_in_the_names(tmp_path, frame, plain):
+    named = frame.rename(columns={"T1": "T1 [°C]", "error_um": "error [µm]"})
+    path = tmp_path / "windows.csv"
+    path.write_bytes(named.to_csv(index=False, sep=";", decimal=",").encode("cp1252"))
+    with pytest.raises(UnicodeDecodeError):
+        path.read_bytes().decode("utf-8")
+    run = load_run(path, temps=["T1 [°C]", "T2", "T3", "T4"], error="error [µm]")
+    assert run.temp_names[0] == "T1 [°C]"
+    same_run(run, plain)
+
+
+def test_a_byte_order_mark_is_not_part_of_the_first_name(tmp_path, frame, plain):
+    path = tmp_path / "bom.csv"
+    path.write_bytes(frame.to_csv(index=False).encode("utf-8-sig"))
+    same_run(load_run(path, temps=TEMPS), plain)
+
+
+def test_a_preamble_and_a_units_row_are_passed_over(tmp_path, frame, plain):
+    body = frame.to_csv(index=False, sep=";", decimal=",", lineterminator="\r\n").split("\r\n", 1)
+    units = ";".join(
+        "s" if c == "time_s" else "µm" if c == "error_um" else "" if c == "spindle_on" else "°C" for c in frame
+    )
+    preamble = "Data logger DL-7, firmware 2.1\r\nStart;02.03.2026 08:00\r\n\r\n"
+    path = tmp_path / "logger.csv"
+    path.write_bytes((preamble + body[0] + "\r\n" + units + "\r\n" + body[1]).encode("cp1252"))
+    layout = layout_of(path.read_bytes().decode("cp1252"))
+    assert (layout.header_line, layout.sep, layout.decimal) == (3, ";", ",")
+    same_run(load_run(path, temps=TEMPS), plain)
+
+
+def test_a_first_row_with_a_number_in_it_is_data_not_units(tmp_path, frame):
+    path = tmp_path / "bad_first_row.csv"
+    text = frame.to_csv(index=False).splitlines()
+    cells = text[1].split(",")
+    text[1] = ",".join(["n/a"] * (len(cells) - 1) + [cells[-1]])
+    path.write_text("\n".join(text) + "\n")
+    with pytest.raises(InputError, match="row 1, column 'time_s'"):
+        load_run(path, temps=TEMPS)
+
+
+def test_a_separator_closing_every_data_row_does_not_shift_the_columns(tmp_path, frame, plain):
+    lines = frame.to_csv(index=False).strip().splitlines()
+    path = tmp_path / "trailing.csv"
+    path.write_text(lines[0] + "\n" + "\n".join(line + "," for line in lines[1:]) + "\n")
+    same_run(load_run(path, temps=TEMPS), plain)
+
+
+def test_a_row_with_more_values_than_names_is_refused(tmp_path):
+    path = tmp_path / "extra.csv"
+    path.write_text("time_s,T1,error_um\n0,20,1,9\n1,20,1\n")
+    with pytest.raises(InputError, match=r"extra.csv: not a readable CSV table \(a row has more values"):
+        read_table(path)
+
+
+def test_the_sweep_reads_file_contents_as_the_verbs_read_the_file(tmp_path, frame):
+    path = tmp_path / "eu.csv"
+    frame.to_csv(path, sep=";", decimal=",", index=False)
+    from_bytes, header = read_text_table(path.read_bytes())
+    from_file, _, _ = read_table(path)
+    pd.testing.assert_frame_equal(from_bytes, from_file)
+    assert header == list(frame.columns)
+
+
+START = pd.Timestamp("2026-03-28 22:00:00")
+
+
+def stamped(frame, form, start=START):
+    """The run with its seconds written as wall-clock text in ``form``."""
+    out = frame.copy()
+    stamps = start + pd.to_timedelta(frame["time_s"] - frame["time_s"].iloc[0], unit="s")
+    out["time_s"] = [t.strftime(form) for t in stamps]
+    return out
+
+
+@pytest.mark.parametrize(
+    "form",
+    [
+        "%Y-%m-%d %H:%M:%S",
+        "%Y-%m-%dT%H:%M:%S",
+        "%d.%m.%Y %H:%M:%S",
+        "%d.%m.%y %H:%M:%S",
+        "%Y/%m/%d %H:%M:%S",
+        "%m/%d/%Y %I:%M:%S %p",
+        "%H:%M:%S",
+    ],
+)
+def test_text_time_stamps_read_as_seconds_from_the_first_row(tmp_path, frame, plain, form):
+    path = tmp_path / "stamped.csv"
+    stamped(frame, form).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS)
+    same_run(run, plain, time=False)
+    # the run (8 h 20 min from 22:00) passes midnight: a time of day alone counts on into the next day
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
+
+
+def test_iso_stamps_with_a_utc_offset_cross_a_clock_change_evenly(tmp_path):
+    # Central Europe changes to summer time at 01:00 UTC on 2026-03-29: the local stamps jump an hour, the
+    # offsets say why, and the samples stay a minute apart
+    utc = pd.date_range("2026-03-29 00:30", periods=90, freq="60s", tz="UTC")
+    local = utc.tz_convert("Europe/Berlin")
+    column = pd.Series([t.isoformat() for t in local])
+    assert column.str.contains(r"\+02:00").any() and column.str.contains(r"\+01:00").any()
+    np.testing.assert_array_equal(text_seconds(column, "time", "run.csv"), 60.0 * np.arange(90))
+
+
+@pytest.mark.parametrize(
+    "dates",
+    [
+        ("01/03/2026", "02/03/2026"),  # day first: 1 → 2 March (month first, 3 January → 3 February)
+        ("03/01/2026", "03/02/2026"),  # month first: 1 → 2 March (day first, 3 January → 3 February)
+    ],
+)
+def test_day_and_month_are_told_apart_by_the_even_sampling(dates):
+    before, after = dates
+    column = pd.Series([f"{before} 23:59:00", f"{after} 00:00:40", f"{after} 00:02:20", f"{after} 00:04:00"])
+    np.testing.assert_array_equal(text_seconds(column, "t", "run.csv"), [0.0, 100.0, 200.0, 300.0])
+
+
+def test_a_time_stamp_that_is_no_date_is_named_with_its_row(tmp_path, frame):
+    path = tmp_path / "stamped.csv"
+    broken = stamped(frame, "%d.%m.%Y %H:%M:%S")
+    broken.loc[4, "time_s"] = "ERR"
+    broken.to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"row 5, column 'time_s': 'ERR' is not a date-time in the form of the"):
+        load_run(path, temps=TEMPS)
+    broken.loc[0, "time_s"] = "Monday"
+    broken.to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"row 1, column 'time_s': 'Monday' is neither a number of seconds nor"):
+        load_run(path, temps=TEMPS)
+
+
+def test_a_fit_on_a_logger_table_equals_the_fit_on_the_plain_one(tmp_path, frame, capsys):
+    path = tmp_path / "logger.csv"
+    body = stamped(frame, "%d.%m.%Y %H:%M:%S").to_csv(index=False, sep=";", decimal=",")
+    path.write_bytes(("Logger\n" + body).encode("cp1252"))
+    models = {}
+    for name, data in (("plain", SYNTHETIC), ("logger", path)):
+        out = tmp_path / name
+        args = ["fit", "--data", str(data), "--temps", ",".join(TEMPS), "--p", "1", "--search", "exact"]
+        assert main([*args, "--out", str(out), "--recalibrate", "none", "--quiet"]) == 0
+        models[name] = (out / "model.json").read_text()
+    capsys.readouterr()
+    plain_model, logger_model = (json.loads(models[k]) for k in ("plain", "logger"))
+    assert plain_model["breaks"] == logger_model["breaks"]
+    np.testing.assert_array_equal(np.asarray(plain_model["coefficients"]), np.asarray(logger_model["coefficients"]))
+
+
+def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain):
+    stamps = stamped(frame, "%d.%m.%Y %H:%M:%S")
+    units = pd.DataFrame([{c: ("" if c == "time_s" else "°C") for c in frame.columns}])
+    path = tmp_path / "logger.xlsx"
+    pd.concat([units, stamps.astype(object)], ignore_index=True).to_excel(path, index=False)
+    run = load_run(path, temps=TEMPS)
+    same_run(run, plain, time=False)
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
