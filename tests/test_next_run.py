@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.data import load_run
+from groupfit.data import load_run, measured_rows
 from groupfit.grouping import Constraints
 from groupfit.heldout import calibration
 from groupfit.heldout.check import ridge_by_splits
@@ -182,6 +182,18 @@ def test_a_run_without_operating_columns_is_noted_as_one_condition():
     run = load_run(frame, name="one", temps=["T1", "T2"])
     notes = trust_notes(forward_chaining(run, [0]))
     assert any("one run of one operating condition" in note and "record a run" in note for note in notes)
+
+
+def test_an_error_measured_on_every_tenth_row_keeps_the_operating_conditions():
+    # a probe cycle every ten samples: the fit and its estimate see a tenth of the rows, the speed steps all
+    frame = tiny_frame(12, segment=100)
+    frame.loc[frame.index % 10 != 9, "error_um"] = np.nan
+    run = load_run(frame, name="probed", temps=["T1", "T2"], missing_error=True)
+    every_row = forward_chaining(tiny_run(12, segment=100), [0])
+    probed = forward_chaining(measured_rows(run), [0])
+    assert probed.segments == every_row.segments == "changes of speed_rpm"
+    assert probed.n_conditions == every_row.n_conditions == len(SPEEDS)
+    assert not any("one operating condition" in note for note in trust_notes(probed))
 
 
 def test_too_few_conditions_are_noted():

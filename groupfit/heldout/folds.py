@@ -31,6 +31,10 @@ MAX_LEVELS = 64
 """An operating column takes at most this many distinct values (a speed spectrum has dozens)…"""
 MAX_CHANGE_FRACTION = 0.05
 """…changes value on at most this share of its samples (a level is held for at least 20 samples on average)…"""
+FEW_LEVELS = 8
+MAX_FEW_LEVEL_CHANGE_FRACTION = 0.25
+"""…or, with at most ``FEW_LEVELS`` values (an on/off signal, a speed programme), on at most this share: such
+a column read on the rows of a probe cycle only (an error measured every few samples) is still a setting…"""
 MIN_STEP_FRACTION = 0.05
 """…and moves in steps: its median change is at least this share of its range. A setting jumps from one
 level to another; a quantised measurement (an ambient read to 0.1 K) creeps by one quantum."""
@@ -126,9 +130,11 @@ def operating_columns(frame: pd.DataFrame, candidates: list[str]) -> list[str]:
             continue
         steps = np.abs(np.diff(values))
         steps = steps[steps > 0]
+        levels = len(np.unique(values))
+        changes = MAX_CHANGE_FRACTION if levels > FEW_LEVELS else MAX_FEW_LEVEL_CHANGE_FRACTION
         if (
-            len(np.unique(values)) <= MAX_LEVELS
-            and len(steps) <= MAX_CHANGE_FRACTION * len(values)
+            levels <= MAX_LEVELS
+            and len(steps) <= changes * len(values)
             and np.median(steps) >= MIN_STEP_FRACTION * np.ptp(values)
         ):
             found.append(column)
