@@ -20,7 +20,7 @@ import pandas as pd
 from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
-from groupfit.resample import jitter_note, resample_frame
+from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
@@ -97,7 +97,8 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
             raise InputError(
                 f"{label}: row {row + 1}, column '{column}' is {what} "
                 f"({int(nonfinite.sum())} non-finite value(s) in that column); "
-                "a model can only be fitted on finite values: repair or drop those rows"
+                "a model can only be fitted on finite values: repair or drop those rows, or let --resample "
+                f"SECONDS interpolate up to {GAP_PERIODS} missed readings in a row"
             )
     return array
 
@@ -304,7 +305,8 @@ def load_runs(
         return [_validated(frame, run_name, label, period_tolerance=period_tolerance, notes=(), **options)]
     time = options.get("time", DEFAULT_TIME)
     time_seconds(frame, time, label)
-    binned = resample_frame(frame, time=time, period_s=float(resample), label=label)
+    error = options.get("error", DEFAULT_ERROR)
+    binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
     if len(binned.pieces) == 1:
         return [

@@ -12,7 +12,11 @@ keeps each burst in one bin, whatever the clock's offset).
 A period without a reading is an *empty* bin. A run of at most
 :data:`GAP_PERIODS` empty bins is filled by linear interpolation between the
 bins around it (a missed cycle); a longer run is a *gap*: the log is split
-there into separate runs, never bridged by made-up samples.
+there into separate runs, never bridged by made-up samples. A column read in
+none of the rows of a period (an empty cell: one sensor missed a reading) is
+interpolated in that period the same way when it misses at most
+:data:`GAP_PERIODS` periods in a row between two readings; a longer silence
+stays empty, and the loader names its first row.
 """
 
 from __future__ import annotations
@@ -30,26 +34,18 @@ GAP_PERIODS = 3
 
 @dataclass(frozen=True)
 class Resampled:
-    """A log binned into periods.
-
-    Attributes
-    ----------
-    pieces : list of DataFrame
-        The binned tables, one per stretch between gaps, the time column
-        holding the bins' centres.
-    combined : int
-        Readings (rows of the log) averaged into the bins.
-    empty : int
-        Empty bins filled by interpolation (a gap's bins are not counted).
-    gaps : list of (float, float)
-        Each gap that split the log: the time of the last reading before it
-        and of the first after it (s).
-    """
+    """A log binned into periods."""
 
     pieces: list[pd.DataFrame]
+    """The binned tables, one per stretch between gaps, the time column holding the bins' centres."""
     combined: int
+    """Readings (rows of the log) averaged into the bins."""
     empty: int
+    """Empty bins filled by interpolation (a gap's bins are not counted)."""
     gaps: list[tuple[float, float]]
+    """Each gap that split the log: the time of the last reading before it and of the first after it (s)."""
+    missed: int = 0
+    """Missed readings of a column (a period with readings, none of that column) filled by interpolation."""
 
     def note(self, label: str, period_s: float, n_bins: int) -> str:
         """The line a verb prints about the resampling."""
@@ -57,6 +53,8 @@ class Resampled:
             f"{label}: resampled to {period_s:g} s: {self.combined} reading(s) averaged into {n_bins} period(s), "
             f"{self.empty} empty period(s) interpolated"
         )
+        if self.missed:
+            text += f", {self.missed} missed reading(s) of a column interpolated"
         if self.gaps:
             where = ", ".join(f"{a:g} s to {b:g} s" for a, b in self.gaps)
             text += (
@@ -74,7 +72,9 @@ def bin_phase(time: np.ndarray, period_s: float) -> float:
     return float(np.mod(time[0] + centre - 0.5 * period_s, period_s))
 
 
-def resample_frame(frame: pd.DataFrame, *, time: str, period_s: float, label: str) -> Resampled:
+def resample_frame(
+    frame: pd.DataFrame, *, time: str, period_s: float, label: str, measured: tuple[str, ...] = ()
+) -> Resampled:
     """Bin ``frame`` into periods of ``period_s`` seconds (see the module).
 
     Parameters
@@ -88,6 +88,9 @@ def resample_frame(frame: pd.DataFrame, *, time: str, period_s: float, label: st
         The period to resample to (s), > 0.
     label : str
         The source, for messages.
+    measured : tuple of str
+        Columns whose missed readings are never filled (the thermal error:
+        a period without one was not measured).
 
     Returns
     -------
@@ -128,17 +131,19 @@ def resample_frame(frame: pd.DataFrame, *, time: str, period_s: float, label: st
             table[column] = np.where(hits > 0, sums / np.maximum(hits, 1), np.nan)
     centres = start + (np.arange(n_bins) + 0.5) * period_s
     occupied = counts > 0
-    pieces, gaps, empty = [], [], 0
+    pieces, gaps, empty, unread = [], [], 0, 0
     first = 0
     for stop in _stretch_ends(occupied):
         piece = pd.DataFrame({time: centres[first:stop], **{c: v[first:stop] for c, v in table.items()}})
-        empty += _interpolate_empty(piece, occupied[first:stop], time)
+        filled, missed = _interpolate_empty(piece, occupied[first:stop], time, measured)
+        empty += filled
+        unread += missed
         pieces.append(piece)
         following = _next_occupied(occupied, stop)
         if following is not None:
             gaps.append((float(stamps[index == stop - 1][-1]), float(stamps[index == following][0])))
             first = following
-    return Resampled(pieces=pieces, combined=int(len(stamps)), empty=empty, gaps=gaps)
+    return Resampled(pieces=pieces, combined=int(len(stamps)), empty=empty, gaps=gaps, missed=unread)
 
 
 def _stretch_ends(occupied: np.ndarray) -> list[int]:
@@ -164,12 +169,15 @@ def _next_occupied(occupied: np.ndarray, stop: int) -> int | None:
     return None if later.size == 0 else stop + int(later[0])
 
 
-def _interpolate_empty(piece: pd.DataFrame, occupied: np.ndarray, time: str) -> int:
-    """Fill the empty bins of one stretch linearly from its occupied ones; the number filled."""
+def _interpolate_empty(
+    piece: pd.DataFrame, occupied: np.ndarray, time: str, measured: tuple[str, ...]
+) -> tuple[int, int]:
+    """Fill the empty bins of one stretch linearly from its occupied ones, and in every column the runs of at
+    most :data:`GAP_PERIODS` bins without a reading of it (a missed reading of one sensor); longer runs stay
+    empty; never in the ``measured`` columns. Returns the empty bins and the missed readings filled."""
     missing = np.flatnonzero(~occupied)
-    if missing.size == 0:
-        return 0
     t = piece[time].to_numpy()
+    missed = 0
     for column in piece.columns:
         if column == time:
             continue
@@ -177,8 +185,21 @@ def _interpolate_empty(piece: pd.DataFrame, occupied: np.ndarray, time: str) -> 
         known = occupied & np.isfinite(values)
         if known.sum() >= 2:
             values[missing] = np.interp(t[missing], t[known], values[known])
+            if column not in measured:
+                unread = _short_runs(occupied & ~np.isfinite(values))
+                values[unread] = np.interp(t[unread], t[known], values[known])
+                missed += int(unread.size)
         piece[column] = values
-    return int(missing.size)
+    return int(missing.size), missed
+
+
+def _short_runs(flags: np.ndarray) -> np.ndarray:
+    """Indices of the flagged entries in runs of at most :data:`GAP_PERIODS` that have an entry unflagged on
+    both sides (a run at either end is not between two readings)."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    inner = [(a, b) for a, b in zip(starts, ends) if b - a <= GAP_PERIODS and a > 0 and b < len(flags)]
+    return np.concatenate([np.arange(a, b) for a, b in inner]) if inner else np.zeros(0, dtype=int)
 
 
 def jitter_note(label: str, time: np.ndarray, period_s: float) -> str | None:

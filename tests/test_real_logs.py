@@ -139,6 +139,42 @@ def test_a_missed_cycle_is_interpolated_and_a_gap_splits_the_log(tmp_path, capsy
     assert cli("fit", "--data", path, "--p", "0", "--resample", "60", "--out", tmp_path) == 0
 
 
+def test_a_sensor_missing_a_few_readings_is_interpolated_and_a_longer_silence_refused(tmp_path, capsys):
+    means = cycle_means().assign(time_s=60.0 * np.arange(N))  # a steady clock: one reading a period
+    holes = means.copy()
+    holes.loc[40:42, "T1"] = np.nan  # three readings missed in a row: filled
+    holes.loc[90, "T2"] = np.nan
+    holes.loc[0, "T2"] = np.nan  # before any reading of T2: nothing to fill it from
+    binned = resample_frame(holes, time="time_s", period_s=60.0, label="holes", measured=("error_um",))
+    (piece,) = binned.pieces
+    assert binned.missed == 4 and binned.empty == 0
+    assert "4 missed reading(s) of a column interpolated" in binned.note("holes", 60.0, len(piece))
+    t = piece["time_s"].to_numpy()
+    for column, rows in (("T1", [40, 41, 42]), ("T2", [90])):
+        known = [rows[0] - 1, rows[-1] + 1]
+        truth = np.interp(t[rows], t[known], piece[column].to_numpy()[known])  # a line between the neighbours
+        np.testing.assert_allclose(piece[column].to_numpy()[rows], truth, rtol=0, atol=1e-12)
+    assert np.isnan(piece["T2"].iloc[0])
+    path = tmp_path / "holes.csv"
+    holes.iloc[1:].to_csv(path, index=False)
+    assert cli("fit", "--data", path, "--temps", "T1,T2", "--p", "0", "--out", tmp_path) == 2
+    assert "or let --resample SECONDS interpolate up to 3 missed readings" in capsys.readouterr().err
+    assert cli("fit", "--data", path, "--temps", "T1,T2", "--p", "0", "--resample", "60", "--out", tmp_path) == 0
+    silent = means.copy()
+    silent.loc[40 : 40 + GAP_PERIODS, "T1"] = np.nan  # one reading more than is filled
+    runs = load_runs(silent, temps=["T1", "T2"], resample=60.0, name="silent", allow_nonfinite=True)
+    assert np.isnan(runs[0].temps[40 : 41 + GAP_PERIODS, 0]).all()
+    with pytest.raises(InputError, match="row 41, column 'T1' is empty"):
+        load_runs(silent, temps=["T1", "T2"], resample=60.0, name="silent")
+
+
+def test_a_missing_error_is_never_made_up(tmp_path):
+    probed = cycle_means().assign(time_s=60.0 * np.arange(N))
+    probed.loc[probed.index % 3 != 0, "error_um"] = np.nan  # a probe cycle every third sample
+    (run,) = load_runs(probed, temps=["T1", "T2"], resample=60.0, name="probed", missing_error=True)
+    np.testing.assert_array_equal(np.isfinite(run.error), probed.index % 3 == 0)
+
+
 # ------------------------------------------------------------------------- a file that continues
 
 
