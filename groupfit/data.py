@@ -21,6 +21,7 @@ from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
+from groupfit.timestamps import unit_seconds
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
@@ -148,9 +149,14 @@ MAX_TIME_S = 1e11
 
 
 def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
-    """The time column in seconds (date-times from the first row), a bad or implausible cell named with its row."""
+    """The time column in seconds (date-times from the first row; numbers in the unit the column's name ends
+    in, :func:`groupfit.timestamps.unit_seconds`), in place; a bad or implausible cell named with its row."""
+    numbers = column in frame.columns and pd.api.types.is_numeric_dtype(frame[column])
     datetimes_to_seconds(frame, column, label)
     values = numeric_column(frame, column, label, allow_nonfinite=False)
+    if numbers and unit_seconds(column) != 1.0:
+        values = values * unit_seconds(column)
+        frame[column] = values
     refuse_beyond(values, MAX_TIME_S, column, label, "s is not a plausible time")
     return values
 

@@ -1,4 +1,5 @@
-"""A time column written as text date-times (``2026-03-02 08:00:00``, ``02.03.2026 08:00:00`` …) in seconds.
+"""A time column in seconds: text date-times (``2026-03-02 08:00:00``, ``02.03.2026 08:00:00`` …), or numbers
+in the unit the column's name gives (``time_ms``, ``Zeit [min]``, ``elapsed_h``; seconds when it names none).
 
 A logger's CSV often stamps its rows with the wall-clock time rather than
 seconds. The forms read are ISO 8601 (``T`` or a space, fractions of a
@@ -15,6 +16,7 @@ same seconds.
 
 from __future__ import annotations
 
+import re
 from datetime import datetime
 
 import numpy as np
@@ -28,6 +30,20 @@ FORMATS = tuple(f"{d} {t}" for d in DATE_FORMATS for t in TIME_FORMATS) + TIME_F
 """Every form tried after ISO 8601, in order; the time-of-day forms last."""
 EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
 DAY_S = 86400.0
+UNIT_SECONDS = {
+    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds"), 1e-3),
+    **dict.fromkeys(("s", "sec", "secs", "second", "seconds"), 1.0),
+    **dict.fromkeys(("min", "mins", "minute", "minutes"), 60.0),
+    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours"), 3600.0),
+}
+"""Units a time column's name may end in (``time_ms``, ``Zeit [min]``, ``hours``), and their seconds."""
+NAMED_UNIT = re.compile(r"(?:^|[_\s\[(/])\s*([a-z]+)\s*[\])]?\s*$", re.IGNORECASE)
+
+
+def unit_seconds(name: str) -> float:
+    """Seconds per unit of a numeric time column, from the unit its name ends in (1 when it names none)."""
+    found = NAMED_UNIT.search(str(name))
+    return UNIT_SECONDS.get(found.group(1).lower(), 1.0) if found else 1.0
 
 
 def is_text(column: pd.Series) -> bool:
@@ -142,4 +158,13 @@ def _is_number(value: str) -> bool:
     return True
 
 
-__all__ = ["DATE_FORMATS", "EXAMPLES", "FORMATS", "TIME_FORMATS", "is_text", "text_seconds"]
+__all__ = [
+    "DATE_FORMATS",
+    "EXAMPLES",
+    "FORMATS",
+    "TIME_FORMATS",
+    "UNIT_SECONDS",
+    "is_text",
+    "text_seconds",
+    "unit_seconds",
+]

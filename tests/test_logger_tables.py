@@ -207,3 +207,32 @@ def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain
     run = load_run(path, temps=TEMPS)
     same_run(run, plain, time=False)
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name, per_second", [("time_ms", 1000.0), ("Zeit [min]", 1 / 60), ("hours", 1 / 3600)])
+def test_a_time_column_named_with_its_unit_is_read_in_seconds(tmp_path, frame, plain, name, per_second):
+    path = tmp_path / "units.csv"
+    frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": name}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time=name)
+    same_run(run, plain, time=False)
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+    assert run.period == pytest.approx(plain.period, rel=1e-12)
+
+
+def test_a_model_fitted_on_minutes_replays_on_minutes_as_the_one_on_seconds(tmp_path, frame, capsys):
+    minutes = tmp_path / "minutes.csv"
+    frame.assign(time_s=frame["time_s"] / 60).rename(columns={"time_s": "t_min"}).to_csv(minutes, index=False)
+    args = ["--temps", ",".join(TEMPS), "--p", "1", "--search", "exact", "--recalibrate", "none", "--quiet"]
+    replays = {}
+    for name, data, time in (("seconds", SYNTHETIC, "time_s"), ("minutes", minutes, "t_min")):
+        out = tmp_path / name
+        assert main(["fit", "--data", str(data), "--time", time, *args, "--out", str(out)]) == 0
+        assert json.loads((out / "model.json").read_text())["sampling_period_s"] == pytest.approx(100.0)
+        replay = ["replay", str(out / "model.json"), "--data", str(data), "--json", str(out / "replay.json")]
+        assert main(replay) == 0
+        replays[name] = json.loads((out / "replay.json").read_text())
+    capsys.readouterr()
+    on_minutes, on_seconds = replays["minutes"]["samples"], replays["seconds"]["samples"]
+    assert [{**r, "time_s": None} for r in on_minutes] == [{**r, "time_s": None} for r in on_seconds]
+    np.testing.assert_allclose([r["time_s"] for r in on_minutes], [r["time_s"] for r in on_seconds], rtol=1e-12)
+    assert replays["minutes"]["rms_um"] == replays["seconds"]["rms_um"]
