@@ -144,6 +144,9 @@ def parse_error_limit(text: str | None) -> float | None:
     return limit
 
 
+RESTART_PERIODS = 10
+"""A clock that goes back by more than this many periods and goes on from there has started again (a logger
+restarted), not a sample out of order or a bad cell."""
 MAX_TIME_S = 1e11
 """Largest plausible time stamp in seconds (some 3000 years): a larger one is a corrupt cell."""
 
@@ -178,6 +181,19 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
     step = np.diff(time)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0)) + 1
+        typical = float(np.median(step[step > 0])) if np.any(step > 0) else 0.0
+        after = time[i + 1 : i + 4]  # a restarted clock goes on from its new start; a bad cell is alone
+        if (
+            typical > 0
+            and time[i - 1] - time[i] > RESTART_PERIODS * typical
+            and after.size
+            and np.all(after < time[i - 1])
+        ):
+            raise InputError(
+                f"{label}: the clock in column '{column}' starts again at row {i + 1} ({time[i]:g} s after "
+                f"{time[i - 1]:g} s: the logger restarted?); split the file before row {i + 1} and give the parts "
+                "as runs of their own (--data part1.csv part2.csv)"
+            )
         raise InputError(
             f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
             f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows, remove the duplicate, or average the "

@@ -236,3 +236,18 @@ def test_a_model_fitted_on_minutes_replays_on_minutes_as_the_one_on_seconds(tmp_
     assert [{**r, "time_s": None} for r in on_minutes] == [{**r, "time_s": None} for r in on_seconds]
     np.testing.assert_allclose([r["time_s"] for r in on_minutes], [r["time_s"] for r in on_seconds], rtol=1e-12)
     assert replays["minutes"]["rms_um"] == replays["seconds"]["rms_um"]
+
+
+def test_a_restarted_clock_is_told_from_rows_out_of_order(frame):
+    restarted = frame.copy()
+    restarted.loc[150:, "time_s"] -= restarted.loc[150, "time_s"]  # the logger powered up again at row 151
+    with pytest.raises(InputError, match=r"starts again at row 151 \(0 s after 15000 s.*split the file before row"):
+        load_run(restarted, temps=TEMPS, name="restarted.csv")
+    swapped = frame.copy()
+    swapped.loc[[150, 151], "time_s"] = swapped.loc[[151, 150], "time_s"].to_numpy()  # two rows out of order
+    with pytest.raises(InputError, match=r"not strictly increasing at row 152 .*sort the rows"):
+        load_run(swapped, temps=TEMPS, name="swapped.csv")
+    bad_cell = frame.copy()
+    bad_cell.loc[150, "time_s"] = 0.0  # one corrupt stamp; the clock goes on as before
+    with pytest.raises(InputError, match=r"not strictly increasing at row 151 .*sort the rows"):
+        load_run(bad_cell, temps=TEMPS, name="bad_cell.csv")
