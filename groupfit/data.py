@@ -118,32 +118,6 @@ def check_range(
         )
 
 
-def parse_temp_range(text: str | None) -> tuple[float, float] | None:
-    """``--range-temp=LOW,HIGH`` (°C; with ``=``, as LOW is usually negative)."""
-    if text is None:
-        return None
-    try:
-        low, high = (float(v) for v in text.split(","))
-    except ValueError:
-        raise InputError(f"--range-temp {text!r}: give LOW,HIGH in °C, e.g. --range-temp=-60,250") from None
-    if not (np.isfinite(low) and np.isfinite(high) and low < high):
-        raise InputError(f"--range-temp {text!r}: LOW and HIGH must be finite with LOW < HIGH")
-    return low, high
-
-
-def parse_error_limit(text: str | None) -> float | None:
-    """``--range-error MAX`` (µm)."""
-    if text is None:
-        return None
-    try:
-        limit = float(text)
-    except ValueError:
-        raise InputError(f"--range-error {text!r}: give the largest plausible |error| in µm, e.g. 1e5") from None
-    if not (np.isfinite(limit) and limit > 0):
-        raise InputError(f"--range-error {text!r}: must be a finite number > 0")
-    return limit
-
-
 RESTART_PERIODS = 10
 """A clock that goes back by more than this many periods and goes on from there has started again (a logger
 restarted), not a sample out of order or a bad cell."""
@@ -210,19 +184,6 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
             "widen the tolerance with --period-tolerance PERCENT, or split the run at the gap"
         )
     return period
-
-
-def parse_period_tolerance(text: str | float | None) -> float | None:
-    """``--period-tolerance PERCENT`` (or ``[data] period_tolerance``) as a fraction of the period."""
-    if text is None:
-        return None
-    try:
-        percent = float(str(text).strip().rstrip("%"))
-    except ValueError:
-        raise InputError(f"--period-tolerance {text!r}: give a percentage of the period, e.g. 2 or 5%") from None
-    if not (np.isfinite(percent) and 0 <= percent < 50):
-        raise InputError(f"--period-tolerance {text!r}: must be a percentage in [0, 50)")
-    return percent / 100.0
 
 
 @dataclass(frozen=True)
@@ -489,13 +450,3 @@ def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | Non
     """Columns named like sensors (``T`` followed by a digit): ``T1``, ``T2_front`` …"""
     excluded = {e for e in exclude if e}
     return [c for c in frame.columns if c not in excluded and len(c) > 1 and c[0] in "Tt" and c[1].isdigit()]
-
-
-def split_names(text: str | None) -> list[str] | None:
-    """Split a comma-separated column list from the command line."""
-    if text is None:
-        return None
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    if not names:
-        raise InputError(f"--temps {text!r}: give at least one column name, comma separated")
-    return names

@@ -19,11 +19,8 @@ from groupfit.data import (
     join_runs,
     load_run,
     load_runs,
-    parse_error_limit,
-    parse_period_tolerance,
-    parse_temp_range,
-    split_names,
 )
+from groupfit.data_options import parse_error_limit, parse_period_tolerance, parse_temp_range, split_names
 from groupfit.errors import InputError
 from groupfit.export import write
 from groupfit.io import atomic_write_text, to_json

@@ -8,7 +8,8 @@ import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from groupfit.data import PERIOD_TOLERANCE, load_run, parse_period_tolerance
+from groupfit.data import PERIOD_TOLERANCE, load_run
+from groupfit.data_options import parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.tomlconfig import Table
