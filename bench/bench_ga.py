@@ -15,9 +15,9 @@ import argparse
 import time
 
 import numpy as np
-from groupfit.data_options import split_names
 
 from groupfit.data import load_run
+from groupfit.data_options import split_names
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
 from groupfit.search.exact import solve_exact
