@@ -131,8 +131,9 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
     numbers = column in frame.columns and pd.api.types.is_numeric_dtype(frame[column])
     datetimes_to_seconds(frame, column, label)
     values = numeric_column(frame, column, label, allow_nonfinite=False)
-    if numbers and unit_seconds(column) != 1.0:
-        values = values * unit_seconds(column)
+    scale = unit_seconds(column) if numbers else 1.0
+    if scale != 1.0:
+        values = values * scale
         frame[column] = values
     refuse_beyond(values, MAX_TIME_S, column, label, "s is not a plausible time")
     return values

@@ -16,7 +16,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.textlayout import DELIMITERS, header_delimiter, layout_of, read_text_table, without_units_row
+from groupfit.textlayout import decode, layout_of, read_text_table, without_units_row
 from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
@@ -97,10 +97,10 @@ def _parquet_header(path: Path) -> list[str] | None:
 def delimiter(path: Path) -> str:
     """The field separator of a text table: a comma, a semicolon or a tab, whichever its header uses most."""
     try:
-        text = path.read_bytes()[:65536].decode("utf-8", errors="replace")
+        content = path.read_bytes()
     except OSError:
         return ","
-    return layout_of(text).sep
+    return layout_of(decode(content)).sep
 
 
 def _check_unique_columns(header, label: str) -> None:
@@ -143,4 +143,4 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             frame[column] = seconds
 
 
-__all__ = ["DELIMITERS", "TABLE_SUFFIXES", "datetimes_to_seconds", "delimiter", "header_delimiter", "read_table"]
+__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "delimiter", "read_table"]

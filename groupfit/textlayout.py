@@ -45,7 +45,6 @@ COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 class TextLayout:
     """Where a text table's header is and how its fields and numbers are written."""
 
-    encoding: str
     sep: str
     header_line: int
     """0-based line of the header: the lines before it are a preamble."""
@@ -57,17 +56,17 @@ def header_delimiter(line: str) -> str:
     return max(DELIMITERS, key=lambda d: (line.count(d), d == ","))
 
 
-def decode(content: bytes) -> tuple[str, str]:
-    """The text of a file and the encoding it was read with (:data:`ENCODINGS`, the first that reads it)."""
+def decode(content: bytes) -> str:
+    """The text of a file, in the first of :data:`ENCODINGS` that reads it."""
     for encoding in ENCODINGS:
         try:
-            return content.decode(encoding), encoding
+            return content.decode(encoding)
         except UnicodeDecodeError:
             continue
     raise AssertionError("latin-1 decodes every byte")
 
 
-def layout_of(text: str, encoding: str = "utf-8-sig") -> TextLayout:
+def layout_of(text: str) -> TextLayout:
     """The layout of a table's text (see the module docstring)."""
     lines = text.split("\n", SNIFF_LINES)[:SNIFF_LINES]
     lines = [line.rstrip("\r") for line in lines]
@@ -75,7 +74,7 @@ def layout_of(text: str, encoding: str = "utf-8-sig") -> TextLayout:
     sep = header_delimiter(lines[header]) if lines else ","
     below = [line for line in lines[header + 1 :] if line.strip()]
     decimal = "," if sep != "," and any(_comma_number(field) for line in below for field in line.split(sep)) else "."
-    return TextLayout(encoding=encoding, sep=sep, header_line=header, decimal=decimal)
+    return TextLayout(sep=sep, header_line=header, decimal=decimal)
 
 
 def _header_line(lines: list[str]) -> int:
@@ -83,7 +82,7 @@ def _header_line(lines: list[str]) -> int:
     for position, k in enumerate(filled):
         sep = header_delimiter(lines[k])
         fields = lines[k].count(sep) + 1
-        if fields < 2 or any(_number(field.strip().strip('"'), ".") for field in lines[k].split(sep)):
+        if fields < 2 or any(is_number(field.strip().strip('"')) for field in lines[k].split(sep)):
             continue  # a header names its columns; a line with a number in it is data or a preamble
         following = filled[position + 1 : position + 1 + AGREEING_LINES]
         if all(lines[j].count(sep) + 1 == fields for j in following):
@@ -97,8 +96,8 @@ def _comma_number(field: str) -> bool:
 
 def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
     """A text table's frame and its header as written (pandas renames a repeated name on reading)."""
-    text, encoding = decode(content)
-    layout = layout_of(text, encoding)
+    text = decode(content)
+    layout = layout_of(text)
     body = _from_line(text, layout.header_line)
     header_text = body.split("\n", 1)[0].rstrip("\r")
     header = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), [])
@@ -126,7 +125,7 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
         return frame
     first = frame.iloc[0]
     cells = [str(v).strip() for v in first if not _empty(v)]
-    if not cells or any(_number(cell, decimal) for cell in cells):
+    if not cells or any(is_number(cell, decimal) for cell in cells):
         return frame  # a number in the first row (or nothing in it): a data row
     rest = frame.iloc[1:].reset_index(drop=True)
     text_columns = [c for c in rest.columns if not pd.api.types.is_numeric_dtype(rest[c])]
@@ -143,7 +142,8 @@ def _empty(value) -> bool:
     return value is None or (isinstance(value, float) and np.isnan(value)) or (str(value).strip() == "")
 
 
-def _number(cell: str, decimal: str) -> bool:
+def is_number(cell: str, decimal: str = ".") -> bool:
+    """Whether a cell's text is a number, its decimal mark ``decimal``."""
     text = cell.replace(",", ".") if decimal == "," else cell
     try:
         float(text)
@@ -170,6 +170,7 @@ __all__ = [
     "TextLayout",
     "decode",
     "header_delimiter",
+    "is_number",
     "layout_of",
     "read_text_table",
     "without_units_row",

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.errors import InputError
+from groupfit.textlayout import is_number
 
 DATE_FORMATS = ("%Y-%m-%d", "%Y/%m/%d", "%d.%m.%Y", "%d.%m.%y", "%d/%m/%Y", "%m/%d/%Y", "%d-%m-%Y")
 TIME_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M", "%I:%M:%S.%f %p", "%I:%M:%S %p", "%I:%M %p")
@@ -64,7 +65,7 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
     if empty.size:
         raise InputError(f"{label}: row {empty[0] + 1}, column '{name}' is empty; fix or remove that row")
     first, last = str(text.iloc[0]), str(text.iloc[-1])
-    if _is_number(first):
+    if is_number(first, ","):
         return None
     readings = [seconds for seconds in _readings(text, first, last) if seconds is not None]
     if not readings:
@@ -145,14 +146,6 @@ def _parses(value: str, form: str) -> bool:
 def _is_iso(value: str) -> bool:
     try:
         datetime.fromisoformat(value)
-    except ValueError:
-        return False
-    return True
-
-
-def _is_number(value: str) -> bool:
-    try:
-        float(value.replace(",", "."))
     except ValueError:
         return False
     return True
