@@ -121,8 +121,9 @@ def add_model_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("model", metavar="MODEL", help="model file written by groupfit fit or groupfit diagnose")
 
 
-def add_model_time_option(parser: argparse.ArgumentParser) -> None:
-    """``--time COLUMN`` of a verb that reads a run against a model: the model's time column by default."""
+def add_model_run_options(parser: argparse.ArgumentParser, help: str, *, several: bool = False) -> None:
+    """``--data RUN`` (required) and ``--time COLUMN`` of a verb that reads a run against a model."""
+    parser.add_argument("--data", required=True, nargs="+" if several else None, metavar="RUN", help=help)
     parser.add_argument(
         "--time",
         metavar="COLUMN",

@@ -29,16 +29,13 @@ from groupfit.runtime import replay_groups
 def add_parser(verbs) -> None:
     parser = verbs.add_parser("diagnose", help="trace a model's residual on measured data to a missing effect")
     common.add_model_argument(parser)
-    parser.add_argument(
-        "--data",
-        required=True,
-        nargs="+",
-        metavar="RUN",
-        help="measured run(s) (CSV, XLSX or Parquet): candidates are chosen on them; several runs are held out "
+    common.add_model_run_options(
+        parser,
+        "measured run(s) (CSV, XLSX or Parquet): candidates are chosen on them; several runs are held out "
         "one at a time",
+        several=True,
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
-    common.add_model_time_option(parser)
     common.add_json_option(parser)
     common.add_clock_options(parser)
     common.add_out_option(parser, "folder for figures and the new model", default="groupfit-out")

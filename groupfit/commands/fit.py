@@ -77,6 +77,13 @@ def add_parser(verbs) -> None:
         "auto: the penalty with the least error on held-out conditions or runs",
     )
     fit.add_argument(
+        "--backward",
+        type=float,
+        metavar="ALPHA",
+        help="with --p 0: drop inputs whose t-test p-value exceeds ALPHA, the least significant first, "
+        "refitting after each (backward elimination, e.g. 0.05)",
+    )
+    fit.add_argument(
         "--position",
         metavar="COLUMN",
         help="axis position column (mm) of a run measured at several positions (long table; a wide one has "
@@ -112,7 +119,6 @@ def add_parser(verbs) -> None:
     add_interval_options(fit)
     add_recalibrate_option(fit)
     ar1_commands.add_fit_options(fit)
-    fit_mlr.add_options(fit)
     fit.set_defaults(handler=run_fit)
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import replace
 
 import numpy as np
@@ -11,16 +10,6 @@ import pandas as pd
 from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.models.mlr import MLR, backward_elimination
-
-
-def add_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--backward",
-        type=float,
-        metavar="ALPHA",
-        help="with --p 0: drop inputs whose t-test p-value exceeds ALPHA, the least significant first, "
-        "refitting after each (backward elimination, e.g. 0.05)",
-    )
 
 
 def backward_run(run: Run, alpha: float, *, p, fit_intercept: bool) -> tuple[Run, dict]:
@@ -41,4 +30,4 @@ def statistics(run: Run, *, fit_intercept: bool) -> dict:
     return MLR(fit_intercept=fit_intercept).fit(named, run.error).statistics_
 
 
-__all__ = ["add_options", "backward_run", "statistics"]
+__all__ = ["backward_run", "statistics"]

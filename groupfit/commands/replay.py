@@ -14,7 +14,6 @@ from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
 from groupfit.commands.replay_probes import (
-    add_probe_options,
     probe_report,
     probe_schedule,
     probe_summary,
@@ -37,13 +36,9 @@ from groupfit.screw.modelfile import is_screw_file
 def add_parser(verbs) -> None:
     replay = verbs.add_parser("replay")
     common.add_model_argument(replay)
-    replay.add_argument(
-        "--data",
-        required=True,
-        metavar="CSV",
-        help="the recorded run (with the model's temperature columns and the source columns of its derived inputs)",
+    common.add_model_run_options(
+        replay, "the recorded run (with the model's temperature columns and the source columns of its derived inputs)"
     )
-    common.add_model_time_option(replay)
     replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
     replay.add_argument(
         "--continues",
@@ -63,7 +58,19 @@ def add_parser(verbs) -> None:
         replay, "also report the compensation in integer controller counts of this many µm (e.g. 0.1)"
     )
     common.add_source_option(replay)
-    add_probe_options(replay)
+    replay.add_argument(
+        "--probe-every",
+        type=float,
+        metavar="SECONDS",
+        help="replay a probe check every SECONDS (the error column, or --probe-column, at those samples), "
+        "folded into the compensation by the model's recalibration section",
+    )
+    replay.add_argument(
+        "--probe-column",
+        metavar="COLUMN",
+        help="the probe's reading in µm (default: the run's error column); "
+        "without --probe-every every row where it holds a number is a check",
+    )
     common.add_json_option(replay, "the per-sample result")
     common.add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)

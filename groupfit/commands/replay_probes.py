@@ -23,22 +23,6 @@ from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_R
 PROBE_NAMES = {PROBE_APPLIED: "applied", PROBE_REJECTED: "rejected", PROBE_IGNORED: "ignored"}
 
 
-def add_probe_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--probe-every",
-        type=float,
-        metavar="SECONDS",
-        help="replay a probe check every SECONDS (the error column, or --probe-column, at those samples), "
-        "folded into the compensation by the model's recalibration section",
-    )
-    parser.add_argument(
-        "--probe-column",
-        metavar="COLUMN",
-        help="the probe's reading in µm (default: the run's error column); "
-        "without --probe-every every row where it holds a number is a check",
-    )
-
-
 def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
     """Per sample the probe reading (µm), NaN where there is no check; None without probe options."""
     if args.probe_every is None and args.probe_column is None:
@@ -97,4 +81,4 @@ def probe_report(result: dict[str, Any]) -> str:
     return line
 
 
-__all__ = ["add_probe_options", "probe_report", "probe_schedule", "probe_summary", "sample_probe"]
+__all__ = ["probe_report", "probe_schedule", "probe_summary", "sample_probe"]
