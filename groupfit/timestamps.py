@@ -41,6 +41,21 @@ UNIT_SECONDS = {
 NAMED_UNIT = re.compile(r"(?:^|[_\s\[(/])\s*([a-z]+)\s*[\])]?\s*$", re.IGNORECASE)
 
 
+TIME_NAME = re.compile(
+    r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|datum|date|uhrzeit|time|zeit|elapsed)"
+    r"(?=$|[^a-z0-9])",
+    re.IGNORECASE,
+)
+"""Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``)."""
+BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")\s*[\])]?)?\s*$", re.IGNORECASE)
+"""``t``, ``t_s``, ``t [min]``: a lone t with a unit or none (not ``T1`` or ``T_amb``, which are sensors)."""
+
+
+def time_like_columns(columns) -> list[str]:
+    """The columns whose names say they hold the time, in table order."""
+    return [str(c) for c in columns if TIME_NAME.match(str(c)) or BARE_T.match(str(c))]
+
+
 def unit_seconds(name: str) -> float:
     """Seconds per unit of a numeric time column, from the unit its name ends in (1 when it names none)."""
     found = NAMED_UNIT.search(str(name))
@@ -159,5 +174,6 @@ __all__ = [
     "UNIT_SECONDS",
     "is_text",
     "text_seconds",
+    "time_like_columns",
     "unit_seconds",
 ]

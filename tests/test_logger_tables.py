@@ -16,7 +16,7 @@ from groupfit.data import load_run
 from groupfit.errors import InputError
 from groupfit.readtable import read_table
 from groupfit.textlayout import layout_of, read_text_table
-from groupfit.timestamps import text_seconds
+from groupfit.timestamps import text_seconds, time_like_columns
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 
@@ -251,3 +251,62 @@ def test_a_restarted_clock_is_told_from_rows_out_of_order(frame):
     bad_cell.loc[150, "time_s"] = 0.0  # one corrupt stamp; the clock goes on as before
     with pytest.raises(InputError, match=r"not strictly increasing at row 151 .*sort the rows"):
         load_run(bad_cell, temps=TEMPS, name="bad_cell.csv")
+
+
+@pytest.mark.parametrize(
+    "names, time_like",
+    [
+        (["Date", "Time", "T1", "T_amb", "T_1", "temp", "Times", "time2", "timer_on"], ["Date", "Time"]),
+        (["Timestamp", "Date/Time", "DateTime", "Date_Time", "time-stamp", "Time (UTC)"], None),
+        (["Zeit [min]", "Datum", "Uhrzeit", "elapsed_h", "t", "t_s", "t [min]", "t_ambient", "t_1"], None),
+    ],
+)
+def test_the_names_a_logger_gives_its_time_column_and_not_its_sensors(names, time_like):
+    expected = time_like if time_like is not None else [n for n in names if n not in ("t_ambient", "t_1")]
+    assert time_like_columns(names) == expected
+
+
+def split_stamps(frame):
+    """The run with a date column and a time-of-day column instead of seconds, from 22:00 over midnight."""
+    stamps = stamped(frame, "%d.%m.%Y %H:%M:%S")["time_s"].str.split(" ", expand=True)
+    return frame.drop(columns="time_s").assign(Date=stamps[0], Time=stamps[1])[["Date", "Time", *TEMPS, "error_um"]]
+
+
+def test_a_log_without_time_s_is_read_on_the_column_named_as_its_time(tmp_path, frame, plain):
+    path = tmp_path / "split.csv"
+    split_stamps(frame).to_csv(path, index=False, sep=";")
+    run = load_run(path, temps=TEMPS)  # the date alone does not increase from row to row: the time of day does
+    assert run.time_name == "Time" and "time from column 'Time'" in run.notes[0]
+    same_run(run, plain, time=False)
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
+    named = frame.rename(columns={"time_s": "t [min]"}).assign(**{"t [min]": frame["time_s"] / 60})
+    same_run(load_run(named, temps=TEMPS, name="minutes.csv"), plain, time=False)
+
+
+def test_only_the_default_time_column_is_looked_for_and_a_bad_stamp_still_named(tmp_path, frame):
+    split = split_stamps(frame)
+    with pytest.raises(InputError, match=r"column 'Clock' not found"):  # a column asked for is never replaced
+        load_run(split, temps=TEMPS, time="Clock", name="split.csv")
+    unnamed = split.drop(columns="Date").rename(columns={"Time": "Clock"})
+    with pytest.raises(InputError, match=r"column 'time_s' not found; the columns are: Clock, T1"):
+        load_run(unnamed, temps=TEMPS, name="unnamed.csv")
+    split.loc[4, "Time"] = "ERR"
+    with pytest.raises(InputError, match=r"row 5, column 'Time': 'ERR' is not a date-time"):
+        load_run(split.drop(columns="Date"), temps=TEMPS, name="broken.csv")
+
+
+def test_a_model_fitted_on_a_split_stamped_log_replays_it_as_the_plain_model_replays_the_plain_run(tmp_path, frame):
+    split = tmp_path / "split.csv"
+    split_stamps(frame).to_csv(split, index=False)
+    args = ["--temps", ",".join(TEMPS), "--p", "1", "--search", "exact", "--recalibrate", "none", "--quiet"]
+    replays = {}
+    for name, data in (("plain", SYNTHETIC), ("split", split)):
+        out = tmp_path / name
+        assert main(["fit", "--data", str(data), *args, "--out", str(out)]) == 0
+        replay = ["replay", str(out / "model.json"), "--data", str(data), "--json", str(out / "replay.json")]
+        assert main(replay) == 0
+        replays[name] = json.loads((out / "replay.json").read_text())
+    assert json.loads((tmp_path / "split" / "model.json").read_text())["training"]["time"] == "Time"
+    on_split, on_plain = replays["split"]["samples"], replays["plain"]["samples"]
+    assert [{**r, "time_s": None} for r in on_split] == [{**r, "time_s": None} for r in on_plain]
+    assert replays["split"]["rms_um"] == replays["plain"]["rms_um"]
