@@ -16,7 +16,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.textlayout import decode, layout_of, read_text_table, without_units_row
+from groupfit.textlayout import decode, layout_of, read_text_table, without_footer_rows, without_units_row
 from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
@@ -118,7 +118,7 @@ def _check_unique_columns(header, label: str) -> None:
 
 def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
     if kind == "Excel":
-        return without_units_row(pd.read_excel(path, sheet_name=0))
+        return without_units_row(without_footer_rows(pd.read_excel(path, sheet_name=0)))
     header = _parquet_header(path)
     if header is not None:
         _check_unique_columns(header, str(path))

@@ -16,7 +16,9 @@ should not have to rewrite one before groupfit reads it:
   rather than shifting the columns;
 * a units row under the header (``s;°C;°C;µm``): a first row that holds text
   and no number, above rows that hold numbers, is dropped and its columns read
-  as numbers.
+  as numbers;
+* a footer: lines after the last one that holds a number (``Logging stopped
+  at 04:00``, ``END``) are not read; in a sheet, rows (:func:`without_footer_rows`).
 """
 
 from __future__ import annotations
@@ -98,7 +100,7 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
     """A text table's frame and its header as written (pandas renames a repeated name on reading)."""
     text = decode(content)
     layout = layout_of(text)
-    body = _from_line(text, layout.header_line)
+    body = _without_footer(_from_line(text, layout.header_line), layout)
     header_text = body.split("\n", 1)[0].rstrip("\r")
     header = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), [])
     with warnings.catch_warnings():
@@ -117,6 +119,31 @@ def _from_line(text: str, line: int) -> str:
     for _ in range(line):
         start = text.index("\n", start) + 1
     return text[start:]
+
+
+def _without_footer(body: str, layout: TextLayout) -> str:
+    """The table's lines up to its last one that holds a number: what follows is a footer, not data."""
+    lines = body.split("\n")
+    for end in range(len(lines), 1, -1):
+        fields = lines[end - 1].rstrip("\r").split(layout.sep)
+        if any(is_number(field.strip().strip('"'), layout.decimal) for field in fields):
+            return body if end == len(lines) else "\n".join(lines[:end]) + "\n"
+    return body
+
+
+def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
+    """A sheet's frame without the rows after its last one that holds a number (a footer), its columns read
+    as numbers where the footer alone was text."""
+    numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().any(axis=1).to_numpy()
+    if not numeric.any() or numeric[-1]:
+        return frame
+    kept = frame.iloc[: int(np.flatnonzero(numeric)[-1]) + 1].copy()
+    for column in kept.columns:
+        if not pd.api.types.is_numeric_dtype(kept[column]):
+            values = _as_numbers(kept[column], ".")
+            if values is not None:
+                kept[column] = values
+    return kept
 
 
 def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFrame:
@@ -173,5 +200,6 @@ __all__ = [
     "is_number",
     "layout_of",
     "read_text_table",
+    "without_footer_rows",
     "without_units_row",
 ]

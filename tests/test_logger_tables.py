@@ -310,3 +310,25 @@ def test_a_model_fitted_on_a_split_stamped_log_replays_it_as_the_plain_model_rep
     on_split, on_plain = replays["split"]["samples"], replays["plain"]["samples"]
     assert [{**r, "time_s": None} for r in on_split] == [{**r, "time_s": None} for r in on_plain]
     assert replays["split"]["rms_um"] == replays["plain"]["rms_um"]
+
+
+@pytest.mark.parametrize("sep, decimal", [(",", "."), (";", ",")])
+def test_a_footer_after_the_last_row_of_data_is_not_read(tmp_path, frame, plain, sep, decimal):
+    path = tmp_path / "footer.csv"
+    footer = f"\n\nLogging stopped at 04:00{sep}{sep}\nEND{sep * (len(frame.columns) + 2)}\n"
+    path.write_text(frame.to_csv(index=False, sep=sep, decimal=decimal) + footer)
+    same_run(load_run(path, temps=TEMPS), plain)
+    sheet = tmp_path / "footer.xlsx"
+    pd.concat([frame.astype(object), pd.DataFrame([{"time_s": "Logging stopped"}])], ignore_index=True).to_excel(
+        sheet, index=False
+    )
+    same_run(load_run(sheet, temps=TEMPS), plain)
+
+
+def test_text_between_rows_of_data_is_still_refused_with_its_row(tmp_path, frame):
+    path = tmp_path / "middle.csv"
+    lines = frame.to_csv(index=False).splitlines()
+    lines.insert(11, "Logging paused")  # the header is line 0: this is data row 11
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"row 11, column 'time_s': 'Logging paused' is not a number"):
+        load_run(path, temps=TEMPS)
