@@ -17,17 +17,16 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, found_error_column, found_time_column
 from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
-from groupfit.timestamps import time_like_columns, unit_seconds
+from groupfit.timestamps import unit_seconds
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
 
-DEFAULT_TIME = "time_s"
-DEFAULT_ERROR = "error_um"
 
 TEMP_RANGE_C = (-50.0, 200.0)
 """Plausible temperature readings (°C) of a machine tool's sensors; anything outside is refused.
@@ -285,41 +284,16 @@ def load_runs(
 ) -> list[Run]:
     """Read and validate a log as :func:`load_run` does; with ``resample``, one run per stretch between gaps.
 
-    A log without the default time column (``time_s``) is read on the one its names say holds the time
-    (:func:`found_time_column`), with a note.
+    A log without the default time or error column (``time_s``, ``error_um``) is read on the one its name
+    marks for the role (:mod:`groupfit.default_columns`), with a note.
     """
     frame, run_name, label = read_table(source, name)
-    time, found = found_time_column(frame, options.get("time", DEFAULT_TIME), label)
-    runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time})
-    return [dataclasses.replace(run, notes=(found, *run.notes)) for run in runs] if found else runs
-
-
-def found_time_column(frame: pd.DataFrame, time: str, label: str) -> tuple[str, str | None]:
-    """The time column to read, and a note when it is not the one asked for.
-
-    Only the default (``time_s``) is looked for elsewhere, and only when the
-    log lacks it: among the columns named like a time (``Timestamp``, ``Date
-    Time``, ``Zeit [min]``, ``t_s``; :func:`groupfit.timestamps.time_like_columns`)
-    the first whose values read as times that increase from most rows to
-    the next (a date alone, beside a time of day, does not). None reading so:
-    the first of them, whose error then names it.
-    """
-    if time != DEFAULT_TIME or time in frame.columns:
-        return time, None
-    names = time_like_columns(frame.columns)
-    if not names:
-        return time, None
-    chosen = next((name for name in names if _reads_as_time(frame, name, label)), names[0])
-    return chosen, f"{label}: time from column '{chosen}' (there is no '{DEFAULT_TIME}'; --time names another)"
-
-
-def _reads_as_time(frame: pd.DataFrame, name: str, label: str) -> bool:
-    try:
-        seconds = time_seconds(frame[[name]].copy(), name, label)
-    except InputError:
-        return False
-    steps = np.diff(seconds)
-    return bool(np.all(steps >= 0) and np.mean(steps > 0) >= 0.5)  # mostly increasing: not a date alone
+    time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label)
+    required = options.get("require_error", True)
+    error, error_note = found_error_column(frame, options.get("error", DEFAULT_ERROR), label, required=required)
+    runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
+    found = tuple(note for note in (time_note, error_note) if note)
+    return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 
 def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> list[Run]:

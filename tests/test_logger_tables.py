@@ -13,6 +13,7 @@ from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.data import load_run
+from groupfit.default_columns import error_like_columns
 from groupfit.errors import InputError
 from groupfit.readtable import read_table
 from groupfit.textlayout import layout_of, read_text_table
@@ -332,3 +333,23 @@ def test_text_between_rows_of_data_is_still_refused_with_its_row(tmp_path, frame
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(InputError, match=r"row 11, column 'time_s': 'Logging paused' is not a number"):
         load_run(path, temps=TEMPS)
+
+
+def test_the_names_a_log_gives_its_thermal_error():
+    names = ["dZ_um", "Abweichung [µm]", "drift", "deltaZ", "dx", "Fehler", "x (um)", "T1", "delta_T", "errand", "dt"]
+    assert error_like_columns(names) == names[:7]
+
+
+def test_a_log_without_error_um_is_read_on_its_one_error_column(tmp_path, frame, plain, capsys):
+    renamed = frame.rename(columns={"time_s": "Zeit [s]", "error_um": "dZ [µm]"})
+    run = load_run(renamed, temps=TEMPS, name="renamed.csv")
+    assert (run.time_name, run.error_name) == ("Zeit [s]", "dZ [µm]")
+    assert "thermal error from column 'dZ [µm]'" in run.notes[1]
+    same_run(run, plain)
+    assert load_run(renamed, temps=TEMPS, error=None, name="renamed.csv").error is None  # no error asked for
+    probes = renamed.assign(**{"dX [µm]": renamed["dZ [µm]"] / 2})
+    with pytest.raises(InputError, match=r"2 could be the thermal error \(dZ \[µm\], dX \[µm\]\); name it with --e"):
+        load_run(probes, temps=TEMPS, name="probes.csv")
+    same_run(load_run(probes, temps=TEMPS, error="dZ [µm]", name="probes.csv"), plain, time=True)
+    # a replay, which runs without an error too, never takes another column for it
+    assert load_run(probes, temps=TEMPS, require_error=False, name="probes.csv").error is None

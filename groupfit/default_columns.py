@@ -1,0 +1,103 @@
+"""The time and thermal-error columns of a log that does not name them, found by their names.
+
+A log written by a logger rarely has groupfit's default names (``time_s``,
+``error_um``). When a verb is not told which columns to read (``--time``,
+``--error``) and the default is absent, the column whose name marks it for
+the role is taken, with a note naming it:
+
+* the time: a name such as ``Timestamp``, ``Date/Time``, ``Time``, ``Zeit
+  [min]``, ``elapsed_h`` or ``t_s`` (:func:`groupfit.timestamps.time_like_columns`);
+  of several, the first whose values increase from most rows to the next (of
+  a ``Date`` and a ``Time`` column, the time of day);
+* the thermal error: the one column named as an error, a deviation, a
+  displacement or a drift, or in µm (``dZ_um``, ``Abweichung [µm]``); with
+  several such columns (five probes) nothing is guessed and the refusal
+  lists them.
+
+A column asked for by name is never replaced.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pandas as pd
+
+from groupfit.errors import InputError
+from groupfit.readtable import datetimes_to_seconds
+from groupfit.timestamps import time_like_columns
+
+DEFAULT_TIME = "time_s"
+DEFAULT_ERROR = "error_um"
+ERROR_NAME = re.compile(
+    r"^\s*(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|abweichung|"
+    r"verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])",
+    re.IGNORECASE,
+)
+IN_MICROMETRES = re.compile(r"(?:^|[\s_\[(/])(?:um|µm|μm|micron|microns)\s*[\])]?\s*$", re.IGNORECASE)
+
+
+def error_like_columns(columns) -> list[str]:
+    """The columns whose names say they hold a thermal error (or any length in µm), in table order."""
+    return [str(c) for c in columns if ERROR_NAME.match(str(c)) or IN_MICROMETRES.search(str(c))]
+
+
+def found_time_column(frame: pd.DataFrame, time: str, label: str) -> tuple[str, str | None]:
+    """The time column to read, and a note when it is not the one asked for (see the module docstring).
+
+    None of the candidates reading as increasing times: the first of them, whose error then names it.
+    """
+    if time != DEFAULT_TIME or time in frame.columns:
+        return time, None
+    names = time_like_columns(frame.columns)
+    if not names:
+        return time, None
+    chosen = next((name for name in names if _reads_as_time(frame, name, label)), names[0])
+    return chosen, f"{label}: time from column '{chosen}' (there is no '{DEFAULT_TIME}'; --time names another)"
+
+
+def found_error_column(
+    frame: pd.DataFrame, error: str | None, label: str, *, required: bool = True
+) -> tuple[str | None, str | None]:
+    """The thermal-error column to read, and a note when it is not the one asked for (module docstring).
+
+    Not ``required`` (a replay, which runs without the error too): the name asked for, never another.
+
+    Raises
+    ------
+    InputError
+        The default is absent and several columns could be the error.
+    """
+    if not required or error != DEFAULT_ERROR or error in frame.columns:
+        return error, None
+    names = error_like_columns(frame.columns)
+    if not names:
+        return error, None
+    if len(names) > 1:
+        raise InputError(
+            f"{label}: there is no column '{DEFAULT_ERROR}' and {len(names)} could be the thermal error "
+            f"({', '.join(names)}); name it with --error COLUMN"
+        )
+    note = f"{label}: thermal error from column '{names[0]}' (there is no '{DEFAULT_ERROR}'; --error names another)"
+    return names[0], note
+
+
+def _reads_as_time(frame: pd.DataFrame, name: str, label: str) -> bool:
+    trial = frame[[name]].copy()
+    try:
+        datetimes_to_seconds(trial, name, label)
+    except InputError:
+        return False
+    seconds = pd.to_numeric(trial[name], errors="coerce").to_numpy(dtype=float)
+    steps = np.diff(seconds)
+    return bool(np.isfinite(seconds).all() and np.all(steps >= 0) and np.mean(steps > 0) >= 0.5)
+
+
+__all__ = [
+    "DEFAULT_ERROR",
+    "DEFAULT_TIME",
+    "error_like_columns",
+    "found_error_column",
+    "found_time_column",
+]
