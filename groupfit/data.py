@@ -17,7 +17,13 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, found_error_column, found_time_column
+from groupfit.default_columns import (
+    DEFAULT_ERROR,
+    DEFAULT_TIME,
+    default_temperature_columns,
+    found_error_column,
+    found_time_column,
+)
 from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
@@ -346,7 +352,7 @@ def _validated(
         temps = default_temperature_columns(frame, exclude=(time, error, ambient))
         if not temps:
             raise InputError(
-                f"{label}: no temperature columns found (named T1, T2 …); name the inputs with --temps A,B,C. "
+                f"{label}: no temperature columns found (named T1, T2 … or in °C); name the inputs with --temps A,B,C. "
                 f"The columns are: {', '.join(map(str, frame.columns))}"
             )
     temps = list(temps)
@@ -457,9 +463,3 @@ def _shared_reference(runs: Sequence[Run]) -> str | None:
     if len(references) > 1:
         raise InputError("the runs' inputs are relative to different references; load them alike")
     return references.pop()
-
-
-def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:
-    """Columns named like sensors (``T`` followed by a digit): ``T1``, ``T2_front`` …"""
-    excluded = {e for e in exclude if e}
-    return [c for c in frame.columns if c not in excluded and len(c) > 1 and c[0] in "Tt" and c[1].isdigit()]

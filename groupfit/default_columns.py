@@ -12,7 +12,10 @@ the role is taken, with a note naming it:
 * the thermal error: the one column named as an error, a deviation, a
   displacement or a drift, or in µm (``dZ_um``, ``Abweichung [µm]``); with
   several such columns (five probes) nothing is guessed and the refusal
-  lists them.
+  lists them;
+* the inputs: the columns named like sensors (``T1``, ``t12_C``), else those
+  named as temperatures (``Spindle [°C]``, ``Temp3``, ``TC2``), the ambient
+  left out (:func:`default_temperature_columns`).
 
 A column asked for by name is never replaced.
 """
@@ -20,10 +23,12 @@ A column asked for by name is never replaced.
 from __future__ import annotations
 
 import re
+from typing import Sequence
 
 import numpy as np
 import pandas as pd
 
+from groupfit.columns import is_ambient_name
 from groupfit.errors import InputError
 from groupfit.readtable import datetimes_to_seconds
 from groupfit.timestamps import time_like_columns
@@ -35,7 +40,19 @@ ERROR_NAME = re.compile(
     r"verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])",
     re.IGNORECASE,
 )
+TEMPERATURE_NAME = re.compile(r"°C|deg[\s_]?C\b|\[C\]|\(C\)|_C$|^\s*temp|temperatur|^\s*TC[\s_]?\d", re.IGNORECASE)
+"""A name that marks a temperature column."""
 IN_MICROMETRES = re.compile(r"(?:^|[\s_\[(/])(?:um|µm|μm|micron|microns)\s*[\])]?\s*$", re.IGNORECASE)
+
+
+def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:
+    """The model inputs of a log that does not name them: the columns named like sensors (``T`` followed by
+    a digit: ``T1``, ``T2_front``, ``t12_C``); a log with none, those named as temperatures (``Spindle
+    [°C]``, ``Temp3``, ``TC2``, ``bed_degC``), an ambient one left out (:func:`groupfit.columns.is_ambient_name`)."""
+    excluded = {e for e in exclude if e}
+    names = [str(c) for c in frame.columns if c not in excluded]
+    sensors = [c for c in names if len(c) > 1 and c[0] in "Tt" and c[1].isdigit()]
+    return sensors or [c for c in names if TEMPERATURE_NAME.search(c) and not is_ambient_name(c)]
 
 
 def error_like_columns(columns) -> list[str]:
@@ -97,6 +114,7 @@ def _reads_as_time(frame: pd.DataFrame, name: str, label: str) -> bool:
 __all__ = [
     "DEFAULT_ERROR",
     "DEFAULT_TIME",
+    "default_temperature_columns",
     "error_like_columns",
     "found_error_column",
     "found_time_column",

@@ -353,3 +353,12 @@ def test_a_log_without_error_um_is_read_on_its_one_error_column(tmp_path, frame,
     same_run(load_run(probes, temps=TEMPS, error="dZ [µm]", name="probes.csv"), plain, time=True)
     # a replay, which runs without an error too, never takes another column for it
     assert load_run(probes, temps=TEMPS, require_error=False, name="probes.csv").error is None
+
+
+def test_inputs_named_as_temperatures_are_taken_when_none_is_named_like_a_sensor(frame, plain):
+    named = {"T1": "Spindle [°C]", "T2": "Temp2", "T3": "TC3", "T4": "bed_degC"}
+    run = load_run(frame.rename(columns=named).assign(**{"Ambient [°C]": 20.0 + frame["T1"] / 10}), name="named.csv")
+    assert run.temp_names == tuple(named.values())  # in table order, the ambient left out
+    same_run(run, plain)
+    both = frame.assign(**{"Spindle [°C]": frame["T1"]})
+    assert load_run(both, name="both.csv").temp_names == tuple(TEMPS)  # sensors named T1 … win
