@@ -349,7 +349,7 @@ def _validated(
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
 
     if temps is None:
-        temps = default_temperature_columns(frame, exclude=(time, error, ambient))
+        temps = default_temperature_columns(frame.columns, exclude=(time, error, ambient))
         if not temps:
             raise InputError(
                 f"{label}: no temperature columns found (named T1, T2 … or in °C); name the inputs with --temps A,B,C. "

@@ -45,12 +45,12 @@ TEMPERATURE_NAME = re.compile(r"°C|deg[\s_]?C\b|\[C\]|\(C\)|_C$|^\s*temp|temper
 IN_MICROMETRES = re.compile(r"(?:^|[\s_\[(/])(?:um|µm|μm|micron|microns)\s*[\])]?\s*$", re.IGNORECASE)
 
 
-def default_temperature_columns(frame: pd.DataFrame, exclude: Sequence[str | None]) -> list[str]:
+def default_temperature_columns(columns: Sequence, exclude: Sequence[str | None] = ()) -> list[str]:
     """The model inputs of a log that does not name them: the columns named like sensors (``T`` followed by
     a digit: ``T1``, ``T2_front``, ``t12_C``); a log with none, those named as temperatures (``Spindle
     [°C]``, ``Temp3``, ``TC2``, ``bed_degC``), an ambient one left out (:func:`groupfit.columns.is_ambient_name`)."""
     excluded = {e for e in exclude if e}
-    names = [str(c) for c in frame.columns if c not in excluded]
+    names = [str(c) for c in columns if c not in excluded]
     sensors = [c for c in names if len(c) > 1 and c[0] in "Tt" and c[1].isdigit()]
     return sensors or [c for c in names if TEMPERATURE_NAME.search(c) and not is_ambient_name(c)]
 

@@ -172,7 +172,7 @@ def load_position_run(
             f"{label}: --resample {resample:g} averages the readings of each period, which would mix a check run's "
             "positions; a position run is one check run per time stamp: leave --resample out"
         )
-    inputs = temps if temps is not None else default_temperature_columns(frame, exclude=(time, error))
+    inputs = temps if temps is not None else default_temperature_columns(frame.columns, exclude=(time, error))
     if position in inputs:
         raise InputError(
             f"{label}: --position '{position}' is also a temperature input; the axis position needs a column of "

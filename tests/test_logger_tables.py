@@ -16,6 +16,7 @@ from groupfit.data import load_run
 from groupfit.default_columns import error_like_columns
 from groupfit.errors import InputError
 from groupfit.readtable import read_table
+from groupfit.sweep.datasets import read_datasets
 from groupfit.textlayout import layout_of, read_text_table
 from groupfit.timestamps import text_seconds, time_like_columns
 
@@ -362,3 +363,13 @@ def test_inputs_named_as_temperatures_are_taken_when_none_is_named_like_a_sensor
     same_run(run, plain)
     both = frame.assign(**{"Spindle [°C]": frame["T1"]})
     assert load_run(both, name="both.csv").temp_names == tuple(TEMPS)  # sensors named T1 … win
+
+
+def test_a_sweep_excludes_the_time_and_error_columns_it_found(tmp_path, frame):
+    renamed = frame.rename(columns={"time_s": "Zeit [s]", "error_um": "dZ [µm]", "T1": "Spindle [°C]"})
+    renamed.to_csv(tmp_path / "renamed.csv", index=False, sep=";", decimal=",")
+    (everything,) = read_datasets({"path": "renamed.csv", "temps": ["*"]}, tmp_path, "study.toml")
+    assert everything.candidates[:4] == ("Spindle [°C]", "T2", "T3", "T4")
+    assert not {"Zeit [s]", "dZ [µm]"} & set(everything.candidates)  # the time and the error are no candidates
+    (default,) = read_datasets({"path": "renamed.csv"}, tmp_path, "study.toml")
+    assert default.candidates == ("T2", "T3", "T4")  # named like sensors: those win

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from groupfit.data import PERIOD_TOLERANCE, load_run
 from groupfit.data_options import parse_period_tolerance
+from groupfit.default_columns import default_temperature_columns
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.tomlconfig import Table
@@ -97,7 +98,7 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
         if not file.is_file():
             raise InputError(f"{label}: [data] data file {entry!r} not found (looked for {file})")
         run = load_run(file, temps=[], time=time_column, error=error_column, **clock)
-        usable = tuple(c for c in run.frame.columns if c not in (time_column, error_column))
+        usable = tuple(c for c in run.frame.columns if c not in (run.time_name, run.error_name))  # as found
         where = f"{label}: {file.name}"
         constant = frozenset(_constant_columns(run.frame, usable))
         candidates = candidate_columns(patterns, usable, constant, where)
@@ -146,10 +147,10 @@ def candidate_columns(patterns, usable, constant, label) -> list[str]:
     """Candidate sensor columns, in file order.
 
     Explicit names must exist; glob patterns (``*``, ``?``, ``[…]``) and the
-    default (columns named ``T<digit>…``) leave out constant columns.
+    default (:func:`groupfit.default_columns.default_temperature_columns`) leave out constant columns.
     """
     if patterns is None:
-        found = [c for c in usable if len(c) > 1 and c[0] in "Tt" and c[1].isdigit() and c not in constant]
+        found = [c for c in default_temperature_columns(usable) if c not in constant]
         if not found:
             raise InputError(f"{label}: no temperature columns found; list them in [data] temps")
         return found
