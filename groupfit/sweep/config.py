@@ -54,6 +54,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME
 from groupfit.errors import InputError
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import GASettings
@@ -154,8 +155,8 @@ def study_from_dict(raw: dict, path: Path) -> Study:
         raise InputError(f'{label}: [study] certify = {certify!r} must be "auto", true or false')
 
     datasets = read_datasets(data_table, base, label)
-    time_column = data_table.get("time", "time_s")
-    error_column = data_table.get("error", "error_um")
+    time_column = data_table.get("time", DEFAULT_TIME)
+    error_column = data_table.get("error", DEFAULT_ERROR)
     grid = {key: _dimension(grid_table, key, label, GRID_DEFAULTS[key]) for key in GRID_DEFAULTS}
     ga = {key: _dimension(ga_table, key, label, GA_GRID_DEFAULTS[key]) for key in GA_GRID_DEFAULTS}
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from groupfit.data import PERIOD_TOLERANCE, load_run
 from groupfit.data_options import parse_period_tolerance
-from groupfit.default_columns import default_temperature_columns
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
 from groupfit.tomlconfig import Table
@@ -88,8 +88,8 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
             raise InputError(f"{label}: [data] paths must be a non-empty list of file names")
     else:
         raise InputError(f'{label}: no data: set [data] path = "run.csv" or paths = ["a.csv", "b.csv"]')
-    time_column = non_empty_string(table.get("time", "time_s"), "[data] time", label)
-    error_column = non_empty_string(table.get("error", "error_um"), "[data] error", label)
+    time_column = non_empty_string(table.get("time", DEFAULT_TIME), "[data] time", label)
+    error_column = non_empty_string(table.get("error", DEFAULT_ERROR), "[data] error", label)
     patterns = table.get("temps")
     clock = clock_settings(table, label)
     datasets = []
