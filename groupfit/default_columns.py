@@ -1,4 +1,4 @@
-"""The time and thermal-error columns of a log that does not name them, found by their names.
+"""The time, thermal-error and input columns of a log that does not name them, found by their names.
 
 A log written by a logger rarely has groupfit's default names (``time_s``,
 ``error_um``). When a verb is not told which columns to read (``--time``,
