@@ -70,7 +70,9 @@ def found_time_column(frame: pd.DataFrame, time: str, label: str) -> tuple[str, 
     names = time_like_columns(frame.columns)
     if not names:
         return time, None
-    chosen = next((name for name in names if _reads_as_time(frame, name, label)), names[0])
+    chosen = names[0]
+    if len(names) > 1:  # one candidate is read once, by the loader
+        chosen = next((name for name in names if _reads_as_time(frame, name, label)), names[0])
     return chosen, f"{label}: time from column '{chosen}' (there is no '{DEFAULT_TIME}'; --time names another)"
 
 
