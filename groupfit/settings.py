@@ -14,6 +14,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME
 from groupfit.grouping import DEFAULT_SOFT_OFFSET, DEFAULT_SPACING
 from groupfit.search.base import GASettings, SearchSettings
 
@@ -23,9 +24,9 @@ class DataSettings:
     """``[data]``: the runs and their columns (:mod:`groupfit.config` documents every key)."""
 
     path: str | tuple[str, ...] | None = None
-    time: str = "time_s"
+    time: str = DEFAULT_TIME
     temps: tuple[str, ...] | None = None
-    error: str = "error_um"
+    error: str = DEFAULT_ERROR
     validate: tuple[str, ...] = ()
     temp_range: tuple[float, float] | None = None
     error_limit: float | None = None
