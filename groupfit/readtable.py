@@ -16,7 +16,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.textlayout import decode, layout_of, read_text_table, without_footer_rows, without_units_row
+from groupfit.textlayout import read_text_table, without_footer_rows, without_units_row
 from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
@@ -94,15 +94,6 @@ def _parquet_header(path: Path) -> list[str] | None:
         return None
 
 
-def delimiter(path: Path) -> str:
-    """The field separator of a text table: a comma, a semicolon or a tab, whichever its header uses most."""
-    try:
-        content = path.read_bytes()
-    except OSError:
-        return ","
-    return layout_of(decode(content)).sep
-
-
 def _check_unique_columns(header, label: str) -> None:
     """Refuse a header that names a column twice, naming both positions (1-based)."""
     seen: dict[str, int] = {}
@@ -143,4 +134,4 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             frame[column] = seconds
 
 
-__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "delimiter", "read_table"]
+__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "read_table"]

@@ -11,7 +11,7 @@ from test_switching_models import SYNTHETIC
 from groupfit.data import load_run
 from groupfit.errors import InputError
 from groupfit.fit_budget import check_projection, projecting
-from groupfit.readtable import delimiter
+from groupfit.textlayout import decode, layout_of
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 
@@ -25,7 +25,7 @@ def comma():
 def test_a_semicolon_or_tab_table_reads_as_the_comma_one(tmp_path, comma, sep, suffix):
     path = tmp_path / f"run{suffix}"
     pd.read_csv(SYNTHETIC).to_csv(path, sep=sep, index=False)
-    assert delimiter(path) == sep
+    assert layout_of(decode(path.read_bytes())).sep == sep
     run = load_run(path, temps=TEMPS)
     np.testing.assert_array_equal(run.temps, comma.temps)
     np.testing.assert_array_equal(run.error, comma.error)
@@ -35,7 +35,7 @@ def test_a_semicolon_or_tab_table_reads_as_the_comma_one(tmp_path, comma, sep, s
 def test_a_decimal_comma_does_not_take_the_comma_as_delimiter(tmp_path):
     # a European export: the header decides (semicolons), though the numbers below carry decimal commas
     (tmp_path / "eu.csv").write_text("time_s;T1;error_um\n0;20,5;1,0\n")
-    assert delimiter(tmp_path / "eu.csv") == ";"
+    assert layout_of(decode((tmp_path / "eu.csv").read_bytes())).sep == ";"
 
 
 @pytest.mark.parametrize("unit", ["datetime", "timedelta"])
