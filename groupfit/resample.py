@@ -174,7 +174,8 @@ def _interpolate_empty(
 ) -> tuple[int, int]:
     """Fill the empty bins of one stretch linearly from its occupied ones, and in every column the runs of at
     most :data:`GAP_PERIODS` bins without a reading of it (a missed reading of one sensor); longer runs stay
-    empty; never in the ``measured`` columns. Returns the empty bins and the missed readings filled."""
+    empty; the ``measured`` columns get the empty bins filled (a missed cycle) but never a missed reading.
+    Returns the empty bins and the missed readings filled."""
     missing = np.flatnonzero(~occupied)
     t = piece[time].to_numpy()
     missed = 0
