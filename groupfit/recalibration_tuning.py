@@ -301,7 +301,7 @@ def choose_recalibration(
     probe_sigma = white_sigma(series)
     candidates = candidate_grid(
         hold_sigma=_hold_sigma(series, everies, period),
-        initial_offset=max(1.0, 2.0 * rms_none),
+        initial_offset=initial_offset_sigma(model, rms_none, offset_max),
         probe_sigma=probe_sigma,
         method=method,
     )
@@ -337,6 +337,19 @@ def choose_recalibration(
         tuple(float(v) for v in rms[:, 0]),
         tuple(float(v) for v in rms[:, best]),
     )
+
+
+def initial_offset_sigma(model: ModelFile, rms_none: float, offset_max: float) -> float:
+    """The offset a run may start with (µm): the prior of the first check, which sizes its gate.
+
+    A check on a new day may find the model off by what a next run can show,
+    not by what the held-out stretches of the modelling run showed: the high
+    end of the model's expected next-run range (``training``), at least twice
+    the held-out RMS without checks and 1 µm, at most the offset's bound.
+    """
+    bounds = (model.training or {}).get("expected_next_run_range_um") or (0.0, 0.0)
+    sigma = max(1.0, 2.0 * rms_none if math.isfinite(rms_none) else 0.0, float(bounds[1]))
+    return min(sigma, offset_max)
 
 
 def _most_responsive_of_the_best(candidates: Candidates, score: np.ndarray, *, kalman: bool) -> int:

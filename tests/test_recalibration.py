@@ -21,7 +21,14 @@ from groupfit.recalibration_tuning import (
     replay_candidates,
     white_sigma,
 )
-from groupfit.runtime import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, RuleTables, SwitchingRule
+from groupfit.runtime import (
+    PROBE_APPLIED,
+    PROBE_CODE_OFFSET,
+    PROBE_IGNORED,
+    PROBE_REJECTED,
+    RuleTables,
+    SwitchingRule,
+)
 from groupfit.runtime.recalibration import Recalibrator, RecalTable
 
 
@@ -327,3 +334,34 @@ def test_tuning_on_error_rows_measured_in_short_probe_cycles_takes_no_statistic_
         held_out.append(error[a:] - design[a:] @ coef)
     residual = np.concatenate(held_out)
     assert tuning.rms_none_um == pytest.approx(math.sqrt(np.mean(residual[np.isfinite(residual)] ** 2)), rel=1e-9)
+
+
+def test_the_first_check_of_a_new_day_is_taken_up_when_the_next_run_range_allows_its_offset():
+    import pandas as pd
+
+    model = ModelFile.from_dict(synthetic_model(p=0)[0])  # inputs T1…T4, 100 s per sample
+    temps, error = ramp_run(1200, drift=0.0, wander=0.02, seed=3)  # a quiet modelling run: checks change little
+    frame = pd.DataFrame(temps, columns=["T1", "T2", "T3", "T4"])
+    trained = model.replace(training={**model.training, "expected_next_run_range_um": [1.0, 30.0]})
+    assert choose_recalibration(trained, [(frame, error)]).section.initial_offset_sigma_um == pytest.approx(30.0)
+    untrained = choose_recalibration(model, [(frame, error)], method="hold").section
+    wide = choose_recalibration(trained, [(frame, error)], method="hold").section
+    assert untrained.initial_offset_sigma_um < 5.0 and wide.initial_offset_sigma_um == pytest.approx(30.0)
+    # the next run: another day, 20 µm off from its start; a check every 40 samples, a gross one at the sixth
+    plain = SwitchingRule(model).replay(temps).prediction_um
+    next_error = plain + 20.0
+    probes = np.full(len(temps), np.nan)
+    rows = np.arange(39, len(temps), 40)
+    probes[rows] = next_error[rows]
+    probes[rows[5]] += 500.0
+    results = {}
+    for label, section in (("untrained", untrained), ("wide", wide)):
+        replay = SwitchingRule(model.replace(recalibration=section)).replay(temps, probes)
+        codes = [int(replay.probe[i]) - PROBE_CODE_OFFSET for i in rows]
+        rms = math.sqrt(np.mean((next_error - replay.prediction_um)[40:] ** 2))
+        results[label] = codes, rms
+    codes, rms = results["wide"]
+    assert codes[0] == PROBE_APPLIED and codes[5] == PROBE_REJECTED and codes.count(PROBE_REJECTED) == 1
+    assert rms < 0.1 * 20.0
+    codes, rms = results["untrained"]  # the in-run scatter alone takes the new day for a gross reading
+    assert codes[:2] == [PROBE_REJECTED, PROBE_REJECTED] and rms > 2 * results["wide"][1]
