@@ -103,11 +103,14 @@ def build_model(folder: Path, modelling: Path, *, temps: list[str] | None, error
     return model
 
 
-def replay_rms(model: ModelFile, readings, error, scored: slice, every: int | None, *, gross_at=None, fault=None):
-    """RMS on the scored rows with a check every ``every`` samples from the scored part's start (None: none)."""
+def replay_rms(
+    model: ModelFile, readings, error, scored: slice, every: int | None, *, gross_at=None, at_start: bool = False
+):
+    """RMS on the scored rows with a check every ``every`` samples (None: none), the first after one interval
+    of the scored part or, ``at_start``, at its first sample (``replay --probe-first 0``)."""
     probes = np.full(len(error), np.nan)
     if every:
-        rows = np.arange(scored.start + every - 1, len(error), every)
+        rows = np.arange(scored.start + (0 if at_start else every - 1), len(error), every)
         probes[rows] = error[rows]
         if gross_at is not None:
             probes[rows[gross_at]] += 500.0
@@ -116,7 +119,9 @@ def replay_rms(model: ModelFile, readings, error, scored: slice, every: int | No
     return float(np.sqrt(np.nanmean(residual**2))), replay.probe_counts()
 
 
-def scenario_result(name: str, model_path: Path, modelling_frames, next_path: Path, scored_from: int) -> dict:
+def scenario_result(
+    name: str, model_path: Path, modelling_frames, next_path: Path, scored_from: int, *, at_start: bool = False
+) -> dict:
     model = ModelFile.load(model_path)
     runs = [(frame, frame[model.error].to_numpy(dtype=float)) for frame in modelling_frames]
     sections = {"none": None}
@@ -131,7 +136,7 @@ def scenario_result(name: str, model_path: Path, modelling_frames, next_path: Pa
         row = []
         for minutes in INTERVALS_MIN:
             every = max(1, int(round(minutes * 60 / run.period))) if method != "none" else None
-            row.append(replay_rms(m, run.temps, run.error, scored, every)[0])
+            row.append(replay_rms(m, run.temps, run.error, scored, every, at_start=at_start)[0])
         table[method] = row
     chosen = model.replace(recalibration=sections["auto"])
     every_30 = max(1, int(round(1800 / run.period)))
@@ -254,12 +259,18 @@ def run(argv=None) -> int:
     parser.add_argument("--json", help="write the results here")
     parser.add_argument("--only", nargs="+", help="scenario names (independent:NAME, fe:RUN, diag:KIND, measured)")
     parser.add_argument("--wide", action="store_true", help="add the wider panel of scenarios")
+    parser.add_argument(
+        "--probe-first-at-start",
+        action="store_true",
+        help="the tables with the first check at the next part's first sample (the gross and fault checks keep theirs)",
+    )
     args = parser.parse_args(argv)
     started = time.perf_counter()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, model, frames, following, scored_from in scenarios_to_run(args.only, Path(tmp), wide=args.wide):
-            results.append(scenario_result(name, model, frames, following, scored_from))
+            at_start = args.probe_first_at_start
+            results.append(scenario_result(name, model, frames, following, scored_from, at_start=at_start))
             print(report(results[-1]) + "\n", flush=True)
     print(summary(results))
     print(f"{len(results)} scenario(s) in {time.perf_counter() - started:.0f} s")

@@ -48,6 +48,25 @@ def test_replay_with_checks_reports_them_and_scores_the_corrected_prediction(tmp
     assert "probes" in report and "applied" in report and "without" in report
 
 
+def test_a_check_at_the_start_of_the_run_corrects_from_the_second_sample(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC)
+    frame["error_um"] += 5.0  # another day: the whole run 5 µm off what the model knows
+    data = tmp_path / "offset.csv"
+    frame.to_csv(data, index=False)
+    later = replay_json(tmp_path, model_path, "--data", data, "--probe-every", 1000)
+    start = replay_json(tmp_path, model_path, "--data", data, "--probe-every", 1000, "--probe-first", 0)
+    shifted = replay_json(tmp_path, model_path, "--data", data, "--probe-every", 1000, "--probe-first", 460)
+    assert [c["i"] for c in start["probes"]["checks"]] == list(range(1, len(frame) + 1, 10))
+    assert [c["i"] for c in shifted["probes"]["checks"]] == list(range(6, len(frame) + 1, 10))  # 460 s: sample 6
+    assert start["probes"]["first_s"] == 0 and later["probes"]["first_s"] is None
+    first, second = start["samples"][0], start["samples"][1]
+    assert first["prediction_um"] == later["samples"][0]["prediction_um"]  # a check acts after its sample
+    assert abs(second["residual_um"]) < abs(later["samples"][1]["residual_um"])  # moving at the rate limit
+    before = [np.mean([abs(s["residual_um"]) for s in r["samples"][1:9]]) for r in (start, later)]
+    assert before[0] < before[1] - 1.0  # taken up before the default first check
+    assert start["rms_um"] < later["rms_um"]  # nine samples fewer off by the whole offset
+
+
 def test_logged_checks_in_their_own_column(tmp_path, model_path):
     frame = pd.read_csv(SYNTHETIC)
     frame["probe_um"] = np.nan
@@ -68,6 +87,9 @@ def test_logged_checks_in_their_own_column(tmp_path, model_path):
         (["--probe-every", "0"], "--probe-every 0: must be a number of seconds > 0"),
         (["--probe-every", "nan"], "must be a number of seconds > 0"),
         (["--probe-column", "nope"], "column 'nope' not found"),
+        (["--probe-every", "1000", "--probe-first", "-1"], "--probe-first -1: must be a number of seconds >= 0"),
+        (["--probe-first", "0"], "--probe-first needs --probe-every"),
+        (["--probe-every", "1000", "--probe-first", "1e9"], "--probe-first 1e+09: after the run's last sample"),
     ],
 )
 def test_bad_probe_options_stop_with_one_line(tmp_path, model_path, capsys, args, message):

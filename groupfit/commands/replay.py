@@ -66,6 +66,13 @@ def add_parser(verbs) -> None:
         "folded into the compensation by the model's recalibration section",
     )
     replay.add_argument(
+        "--probe-first",
+        type=float,
+        metavar="SECONDS",
+        help="with --probe-every: the first check SECONDS after the run's first sample (default: one interval); "
+        "0 checks at the first sample, as a probe cycle at the start of a job does",
+    )
+    replay.add_argument(
         "--probe-column",
         metavar="COLUMN",
         help="the probe's reading in µm (default: the run's error column); "

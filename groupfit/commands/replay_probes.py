@@ -1,7 +1,9 @@
 """``groupfit replay --probe-every SECONDS [--probe-column COLUMN]``: a replay with probe checks.
 
 The checks fall every ``SECONDS`` (rounded to whole samples; the first after
-that many samples), reading the run's error column, or ``--probe-column``
+that many samples, or ``--probe-first`` seconds after the first sample: 0 is a
+check at the first sample, a probe cycle at the start of a job), reading the
+run's error column, or ``--probe-column``
 (a logged check with its own error; alone, every row where that column holds
 a number is a check). A check follows its sample's step, as ``gf_probe``
 follows ``gf_step`` on the controller (``docs/recalibration.md``).
@@ -25,10 +27,15 @@ PROBE_NAMES = {PROBE_APPLIED: "applied", PROBE_REJECTED: "rejected", PROBE_IGNOR
 
 def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
     """Per sample the probe reading (µm), NaN where there is no check; None without probe options."""
+    if args.probe_first is not None and args.probe_every is None:
+        raise InputError("--probe-first needs --probe-every: give the interval of the checks too")
     if args.probe_every is None and args.probe_column is None:
         return None
     if args.probe_every is not None and not (math.isfinite(args.probe_every) and args.probe_every > 0):
         raise InputError(f"--probe-every {args.probe_every:g}: must be a number of seconds > 0")
+    first = args.probe_first
+    if first is not None and not (math.isfinite(first) and first >= 0):
+        raise InputError(f"--probe-first {first:g}: must be a number of seconds >= 0")
     if args.probe_column is not None:
         reading = numeric_column(run.frame, args.probe_column, run.source, allow_nonfinite=True)
     elif run.error is not None:
@@ -40,7 +47,13 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
         rows = np.arange(run.n_samples)
     else:
         every = max(1, int(round(args.probe_every / run.period)))
-        rows = np.arange(every - 1, run.n_samples, every)
+        start = every - 1 if first is None else int(round(first / run.period))
+        if start >= run.n_samples:
+            raise InputError(
+                f"--probe-first {first:g}: after the run's last sample ({(run.n_samples - 1) * run.period:g} s); "
+                "give an earlier first check"
+            )
+        rows = np.arange(start, run.n_samples, every)
     probes[rows] = reading[rows]
     return probes
 
@@ -54,6 +67,7 @@ def probe_summary(args: argparse.Namespace, replay: Replay, probes: np.ndarray, 
         checks.append({"i": int(i) + 1, "reading_um": float(probes[i]), "result": PROBE_NAMES[code]})
     return {
         "every_s": args.probe_every,
+        "first_s": args.probe_first,
         "column": args.probe_column,
         **counts,
         "rms_without_checks_um": rms_without,
