@@ -14,6 +14,7 @@ from test_switching_models import SYNTHETIC, synthetic_model
 from groupfit.cli import main
 from groupfit.model import ModelFile
 from groupfit.probe_intervals import hold_residual, parse_intervals
+from groupfit.runtime import PROBE_APPLIED, PROBE_CODE_OFFSET, SwitchingRule
 
 
 @pytest.fixture()
@@ -65,6 +66,29 @@ def test_a_check_at_the_start_of_the_run_corrects_from_the_second_sample(tmp_pat
     before = [np.mean([abs(s["residual_um"]) for s in r["samples"][1:9]]) for r in (start, later)]
     assert before[0] < before[1] - 1.0  # taken up before the default first check
     assert start["rms_um"] < later["rms_um"]  # nine samples fewer off by the whole offset
+
+
+def test_checks_on_a_file_that_continues_a_recording_are_the_whole_recordings_checks_on_its_rows(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC)
+    frame.loc[137:, "error_um"] += 3.0  # the rest of the recording moved off the model: the checks correct it
+    first, rest = tmp_path / "first.csv", tmp_path / "rest.csv"
+    frame.iloc[:137].to_csv(first, index=False)
+    frame.iloc[137:].to_csv(rest, index=False)
+    continued = replay_json(tmp_path, model_path, "--data", rest, "--continues", first, "--probe-every", 1000)
+    plain = replay_json(tmp_path, model_path, "--data", rest, "--continues", first)
+    model = ModelFile.load(model_path)
+    temps, error = frame[list(model.temps)].to_numpy(float), frame["error_um"].to_numpy(float)
+    probes = np.full(len(frame), np.nan)
+    rows = np.arange(137 + 9, len(frame), 10)  # every 10 samples of 100 s, counted from the rest's first sample
+    probes[rows] = error[rows]
+    whole = SwitchingRule(model).replay(temps, probes)
+    prediction = np.array([s["prediction_um"] for s in continued["samples"]])
+    assert np.array_equal(prediction, whole.prediction_um[137:])
+    assert [c["i"] for c in continued["probes"]["checks"]] == list(rows - 137 + 1)
+    codes = [int(whole.probe[i]) - PROBE_CODE_OFFSET for i in rows]
+    assert continued["probes"]["applied"] == codes.count(PROBE_APPLIED) > 0
+    assert continued["probes"]["rms_without_checks_um"] == pytest.approx(plain["rms_um"], rel=1e-12)
+    assert continued["rms_um"] < plain["rms_um"]
 
 
 def test_logged_checks_in_their_own_column(tmp_path, model_path):

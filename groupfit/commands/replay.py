@@ -45,7 +45,8 @@ def add_parser(verbs) -> None:
         nargs="+",
         metavar="FILE",
         help="the recording(s) --data continues, in order: replayed first, so that the rule and the derived "
-        "inputs carry their state into --data as on the controller (only --data's samples are reported)",
+        "inputs carry their state into --data as on the controller (only --data's samples are reported; probe "
+        "checks fall on them alone)",
     )
     common.add_clock_options(replay)
     replay.add_argument(
@@ -105,15 +106,15 @@ def run_replay(args: argparse.Namespace) -> int:
     probes = probe_schedule(args, run)
     rows, notes = 0, []
     if history:
-        if probes is not None:
-            raise InputError(
-                "--probe-every or --probe-column with --continues: replay the whole recording with its checks instead"
-            )
         joined, skipped, notes = with_histories([*history[1:], run], history[:1], assume_continued=True)
         rows = skipped[-1]
-        replay = rule.replay(joined[-1].temps).tail(rows)
+        temps = joined[-1].temps
+        checks = None if probes is None else np.r_[np.full(rows, np.nan), probes]  # checks on this file only
+        replay = rule.replay(temps, checks).tail(rows)
+        unchecked = rule.replay(temps).tail(rows) if probes is not None else None
     else:
         replay = rule.replay(run.temps, probes)
+        unchecked = rule.replay(run.temps) if probes is not None else None
     common.print_notes([run, *history], common.report_stream(args))
     if not history and run.time[0] > 2 * run.period:
         notes.append(
@@ -124,8 +125,8 @@ def run_replay(args: argparse.Namespace) -> int:
         print(f"note     {note}", file=common.report_stream(args))
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     if probes is not None:
-        unchecked = residuals(run, rule.replay(run.temps))
-        rms_without = float(np.sqrt(np.nanmean(unchecked**2))) if unchecked is not None else None
+        without = residuals(run, unchecked)
+        rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     result = ReplayResult({**data, **range_check(model, run)})
     written = []

@@ -85,7 +85,7 @@ class Replay:
     def tail(self, start: int) -> "Replay":
         """The samples from 0-based ``start`` on (a run replayed with its history in front)."""
         fields = (self.group, self.prediction_um, self.compensation_um, self.fault, self.switched)
-        return Replay(*(array[start:] for array in fields))
+        return Replay(*(array[start:] for array in fields), probe=None if self.probe is None else self.probe[start:])
 
     def switch_samples(self) -> list[dict[str, int | bool]]:
         """Every switch: 1-based sample, groups before and after, whether it was forced."""
