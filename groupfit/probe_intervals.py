@@ -39,12 +39,27 @@ def parse_intervals(text: str) -> list[float]:
     return intervals
 
 
-def hold_residual(residual: np.ndarray, every: int) -> np.ndarray:
-    """The residual after a check every ``every`` samples (the first after ``every``), each held until the next."""
+def check_probe_first(first_s: float | None, intervals) -> None:
+    """``--probe-first SECONDS``: with ``--probe-every``, a number of seconds >= 0 (InputError otherwise)."""
+    if first_s is None:
+        return
+    if not intervals:
+        raise InputError("--probe-first needs --probe-every: give the interval of the checks too")
+    if not (math.isfinite(first_s) and first_s >= 0):
+        raise InputError(f"--probe-first {first_s:g}: must be a number of seconds >= 0")
+
+
+def hold_residual(residual: np.ndarray, every: int, first: int | None = None) -> np.ndarray:
+    """The residual after a check every ``every`` samples, each held until the next.
+
+    The first check follows sample ``first`` (0-based; default ``every − 1``, one interval in), as
+    ``replay --probe-every`` places them (``--probe-first``).
+    """
     residual = np.asarray(residual, dtype=float)
+    first = every - 1 if first is None else first
     k = np.arange(len(residual))
-    last_check = (k // every) * every - 1  # the last check strictly before sample k (−1: none yet)
-    offset = np.where(last_check >= 0, residual[np.maximum(last_check, 0)], 0.0)
+    last_check = first + ((k - 1 - first) // every) * every  # the last check strictly before sample k
+    offset = np.where(k > first, residual[np.clip(last_check, 0, max(0, len(residual) - 1))], 0.0)
     return residual - offset
 
 
@@ -53,15 +68,20 @@ def interval_table(
     predictions: Mapping[str, Mapping[str, np.ndarray]],
     periods: Mapping[str, float],
     intervals_s: Sequence[float],
+    first_s: float | None = None,
 ) -> dict[str, Any]:
-    """Per model and run the RMS without checks and with a check every interval (the ``--json`` object)."""
+    """Per model and run the RMS without checks and with a check every interval (the ``--json`` object).
+
+    ``first_s``: the first check that many seconds after a run's first sample (default: one interval in).
+    """
     rows = []
     for run, error in errors.items():
+        first = None if first_s is None else int(round(first_s / periods[run]))
         for model, prediction in predictions[run].items():
             residual = np.asarray(error, dtype=float) - np.asarray(prediction, dtype=float)
-            rms = [_rms(hold_residual(residual, max(1, int(round(t / periods[run]))))) for t in intervals_s]
+            rms = [_rms(hold_residual(residual, max(1, int(round(t / periods[run]))), first)) for t in intervals_s]
             rows.append({"model": model, "run": run, "rms_none_um": _rms(residual), "rms_um": rms})
-    return {"method": "offset hold", "intervals_s": [float(t) for t in intervals_s], "rows": rows}
+    return {"method": "offset hold", "intervals_s": [float(t) for t in intervals_s], "first_s": first_s, "rows": rows}
 
 
 def _rms(values: np.ndarray) -> float:
@@ -77,7 +97,9 @@ def interval_summary(table: Mapping[str, Any]) -> str:
     """The table ``compare --probe-every`` prints: RMS (µm) against the check interval, per model and run."""
     heads = ["none"] + [_label(t) for t in table["intervals_s"]]
     lines = [
-        f"RMS µm with a probe check every T ({table['method']}), per model and validation run",
+        f"RMS µm with a probe check every T ({table['method']}"
+        + ("" if table.get("first_s") is None else f", the first {table['first_s']:g} s after the run's start")
+        + "), per model and validation run",
         f"{'model':<12} {'run':<20}" + "".join(f"{h:>9}" for h in heads),
     ]
     for row in table["rows"]:
@@ -102,4 +124,11 @@ def plot_intervals(table: Mapping[str, Any], path: Path) -> None:
     save_figure(fig, path, dpi=120)
 
 
-__all__ = ["hold_residual", "interval_summary", "interval_table", "parse_intervals", "plot_intervals"]
+__all__ = [
+    "check_probe_first",
+    "hold_residual",
+    "interval_summary",
+    "interval_table",
+    "parse_intervals",
+    "plot_intervals",
+]

@@ -163,6 +163,38 @@ def test_parse_intervals_and_the_hold_of_compare():
     residual = np.array([1.0, 2.0, 4.0, 7.0, 11.0, 16.0, 22.0])
     # checks after samples 3 and 6 (every 3): held from the next sample on
     assert hold_residual(residual, 3).tolist() == [1.0, 2.0, 4.0, 3.0, 7.0, 12.0, 6.0]
+    assert hold_residual(residual, 3, 2).tolist() == hold_residual(residual, 3).tolist()  # the default, written out
+    # a check after sample 1, then every 3 (after samples 4 and 7): held from the next sample on
+    assert hold_residual(residual, 3, 0).tolist() == [1.0, 1.0, 3.0, 6.0, 4.0, 9.0, 15.0]
+    assert hold_residual(residual, 3, 10).tolist() == residual.tolist()  # after the run's end: no check
+
+
+def test_compare_places_its_first_check_as_replay_does(tmp_path, capsys):
+    json_path = tmp_path / "c.json"
+    args = ["compare", "--pmax", "0", "--probe-every", "30m", "--out", str(tmp_path / "cmp"), "--json", str(json_path)]
+    assert main([*args, "--quiet"]) == 0
+    later = json.loads(json_path.read_text())["probe_intervals"]
+    assert main([*args, "--quiet", "--probe-first", "0"]) == 0
+    start = json.loads(json_path.read_text())["probe_intervals"]
+    assert "the first 0 s after the run's start" in capsys.readouterr().out
+    assert later["first_s"] is None and start["first_s"] == 0
+    assert [r["rms_none_um"] for r in start["rows"]] == [r["rms_none_um"] for r in later["rows"]]
+    assert [r["rms_um"] for r in start["rows"]] != [r["rms_um"] for r in later["rows"]]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--probe-first", "0"], "--probe-first needs --probe-every"),
+        (["--probe-every", "30m", "--probe-first", "-5"], "--probe-first -5: must be a number of seconds >= 0"),
+    ],
+)
+def test_compare_refuses_a_bad_first_check_with_one_line(tmp_path, capsys, args, message):
+    out = tmp_path / "cmp"
+    assert main(["compare", "--pmax", "0", *args, "--out", str(out), "--json", str(tmp_path / "c.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not out.exists() and not (tmp_path / "c.json").exists()
 
 
 def test_compare_prints_and_writes_the_error_against_the_check_interval(tmp_path, capsys):

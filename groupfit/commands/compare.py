@@ -13,7 +13,13 @@ from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
 from groupfit.inference.cli import add_interval_options, check_block, interval_settings
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
-from groupfit.probe_intervals import interval_summary, interval_table, parse_intervals, plot_intervals
+from groupfit.probe_intervals import (
+    check_probe_first,
+    interval_summary,
+    interval_table,
+    parse_intervals,
+    plot_intervals,
+)
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
 
@@ -48,6 +54,13 @@ def add_parser(verbs) -> None:
         help="also the error against a probe check every T (e.g. 5m,15m,30m,60m,120m; s, m, h or seconds) for "
         "every model on the validation runs, through the offset hold: printed, plotted and in --json",
     )
+    compare.add_argument(
+        "--probe-first",
+        type=float,
+        metavar="SECONDS",
+        help="with --probe-every: the first check SECONDS after each run's first sample (default: one interval; "
+        "0: at the first sample), as replay --probe-first",
+    )
     compare.set_defaults(handler=run_compare)
 
 
@@ -62,6 +75,7 @@ def run_compare(args: argparse.Namespace) -> int:
     data = run_settings.data
     if run_settings.compare.pmax < 0:
         raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
+    check_probe_first(args.probe_first, args.probe_every)
     runs = [p for p in [data.path, *data.validate] if isinstance(p, (str, Path))]
     common.plan_outputs(
         args,
@@ -149,6 +163,7 @@ def run_compare(args: argparse.Namespace) -> int:
             result.predictions,
             {run.name: run.period for run in checked},
             args.probe_every,
+            args.probe_first,
         )
         figure = out_dir / "error_against_check_interval.png"
         plot_intervals(table, figure)

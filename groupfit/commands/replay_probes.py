@@ -19,6 +19,7 @@ import numpy as np
 
 from groupfit.data import numeric_column
 from groupfit.errors import InputError
+from groupfit.probe_intervals import check_probe_first
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
 
@@ -27,15 +28,12 @@ PROBE_NAMES = {PROBE_APPLIED: "applied", PROBE_REJECTED: "rejected", PROBE_IGNOR
 
 def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
     """Per sample the probe reading (µm), NaN where there is no check; None without probe options."""
-    if args.probe_first is not None and args.probe_every is None:
-        raise InputError("--probe-first needs --probe-every: give the interval of the checks too")
+    check_probe_first(args.probe_first, args.probe_every)
     if args.probe_every is None and args.probe_column is None:
         return None
     if args.probe_every is not None and not (math.isfinite(args.probe_every) and args.probe_every > 0):
         raise InputError(f"--probe-every {args.probe_every:g}: must be a number of seconds > 0")
     first = args.probe_first
-    if first is not None and not (math.isfinite(first) and first >= 0):
-        raise InputError(f"--probe-first {first:g}: must be a number of seconds >= 0")
     if args.probe_column is not None:
         reading = numeric_column(run.frame, args.probe_column, run.source, allow_nonfinite=True)
     elif run.error is not None:
