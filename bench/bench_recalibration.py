@@ -51,6 +51,7 @@ from independent_machine import scenarios  # noqa: E402
 from groupfit.cli import main  # noqa: E402
 from groupfit.commands.replay import load_readings  # noqa: E402
 from groupfit.model import ModelFile, time_column  # noqa: E402
+from groupfit.probe_intervals import check_rows  # noqa: E402
 from groupfit.recalibration_tuning import choose_recalibration  # noqa: E402
 from groupfit.runtime import RuleTables, SwitchingRule  # noqa: E402
 
@@ -110,7 +111,7 @@ def replay_rms(
     of the scored part or, ``at_start``, at its first sample (``replay --probe-first 0``)."""
     probes = np.full(len(error), np.nan)
     if every:
-        rows = np.arange(scored.start + (0 if at_start else every - 1), len(error), every)
+        rows = scored.start + check_rows(len(error) - scored.start, every, 0 if at_start else None)
         probes[rows] = error[rows]
         if gross_at is not None:
             probes[rows[gross_at]] += 500.0
@@ -268,8 +269,8 @@ def run(argv=None) -> int:
     started = time.perf_counter()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
+        at_start = args.probe_first_at_start
         for name, model, frames, following, scored_from in scenarios_to_run(args.only, Path(tmp), wide=args.wide):
-            at_start = args.probe_first_at_start
             results.append(scenario_result(name, model, frames, following, scored_from, at_start=at_start))
             print(report(results[-1]) + "\n", flush=True)
     print(summary(results))

@@ -49,18 +49,20 @@ def check_probe_first(first_s: float | None, intervals) -> None:
         raise InputError(f"--probe-first {first_s:g}: must be a number of seconds >= 0")
 
 
-def hold_residual(residual: np.ndarray, every: int, first: int | None = None) -> np.ndarray:
-    """The residual after a check every ``every`` samples, each held until the next.
+def check_rows(n_samples: int, every: int, first: int | None = None) -> np.ndarray:
+    """The 0-based samples a check follows: every ``every`` samples from ``first`` (default ``every − 1``,
+    one interval in; ``--probe-first``), as ``replay --probe-every`` and ``compare --probe-every`` place them."""
+    return np.arange(every - 1 if first is None else first, n_samples, every)
 
-    The first check follows sample ``first`` (0-based; default ``every − 1``, one interval in), as
-    ``replay --probe-every`` places them (``--probe-first``).
-    """
+
+def hold_residual(residual: np.ndarray, every: int, first: int | None = None) -> np.ndarray:
+    """The residual after a check at :func:`check_rows`, each held from the next sample until the next check."""
     residual = np.asarray(residual, dtype=float)
-    first = every - 1 if first is None else first
-    k = np.arange(len(residual))
-    last_check = first + ((k - 1 - first) // every) * every  # the last check strictly before sample k
-    offset = np.where(k > first, residual[np.clip(last_check, 0, max(0, len(residual) - 1))], 0.0)
-    return residual - offset
+    rows = check_rows(len(residual), every, first)
+    if not rows.size:
+        return residual.copy()
+    last = np.searchsorted(rows, np.arange(len(residual)), side="left") - 1  # the last check strictly before
+    return residual - np.where(last >= 0, residual[rows[np.maximum(last, 0)]], 0.0)
 
 
 def interval_table(
@@ -126,6 +128,7 @@ def plot_intervals(table: Mapping[str, Any], path: Path) -> None:
 
 __all__ = [
     "check_probe_first",
+    "check_rows",
     "hold_residual",
     "interval_summary",
     "interval_table",

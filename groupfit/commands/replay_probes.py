@@ -19,7 +19,7 @@ import numpy as np
 
 from groupfit.data import numeric_column
 from groupfit.errors import InputError
-from groupfit.probe_intervals import check_probe_first
+from groupfit.probe_intervals import check_probe_first, check_rows
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
 
@@ -45,13 +45,12 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
         rows = np.arange(run.n_samples)
     else:
         every = max(1, int(round(args.probe_every / run.period)))
-        start = every - 1 if first is None else int(round(first / run.period))
-        if start >= run.n_samples:
+        rows = check_rows(run.n_samples, every, None if first is None else int(round(first / run.period)))
+        if not rows.size:
             raise InputError(
                 f"--probe-first {first:g}: after the run's last sample ({(run.n_samples - 1) * run.period:g} s); "
                 "give an earlier first check"
             )
-        rows = np.arange(start, run.n_samples, every)
     probes[rows] = reading[rows]
     return probes
 
