@@ -234,7 +234,7 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
         ph = P[:, 0] + P[:, 2] * m
         hp = P[0, :] + P[2, :] * m
         s = hp[0] + hp[2] * m + r
-        outside = error * error > gate2 * s
+        outside = error * error > gate2 * np.maximum(s, P0[0, 0])
         reject = outside & (rejected < CONFIRM_AFTER)
         fresh = outside & ~reject  # the checks keep disagreeing: the offset takes the change whole
         rejected = np.where(reject, rejected + 1, 0)

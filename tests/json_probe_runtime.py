@@ -17,6 +17,10 @@ class ProbeFilter:
         self.usable = False
         self.rejected = 0
         self.significant = False
+        self.gap2 = 0.0
+
+    def switched(self, gap: float) -> None:
+        self.gap2 = self.gap2 + gap * gap
 
     def clamp(self) -> None:
         for i, bound in enumerate(self.spec["x_max"]):
@@ -56,7 +60,11 @@ class ProbeFilter:
         ph, hp, s = self.projections()
         if not s > 0:
             return codes["ignored"]
-        if nu * nu > spec["gate2"] * s:
+        gate = s + self.gap2
+        if gate < spec["p0"][0]:
+            gate = spec["p0"][0]
+        self.gap2 = 0.0
+        if nu * nu > spec["gate2"] * gate:
             if self.rejected < spec["confirm_after"]:
                 self.rejected += 1
                 return codes["rejected"]

@@ -70,4 +70,40 @@ def probe_cases() -> dict[str, tuple[dict, list[np.ndarray], list[np.ndarray]]]:
         ]
         for name, recal in (("kalman", KALMAN), ("hold", HOLD)):
             cases[f"{label} {name}"] = (with_section(model, recal), streams, probes)
+    quiet = with_section(synthetic, QUIET)
+    cases["synthetic p=3 switch gaps"] = (quiet, [np.asarray(run.temps, dtype=float)], [switch_gap_checks(quiet, run)])
+    wide = with_section(synthetic, {**QUIET, "initial_offset_sigma_um": 5.0, "confirm_after": 2})
+    stepped = probe_schedule(run.error + np.where(np.arange(run.n_samples) < run.n_samples // 2, 0.0, 12.0), 10)
+    cases["synthetic p=3 a real step"] = (wide, [np.asarray(run.temps, dtype=float)], [stepped])
     return cases
+
+
+QUIET = {
+    **KALMAN,
+    "terms": ["offset"],
+    "offset_sigma_um_per_sqrt_h": 0.01,
+    "initial_offset_sigma_um": 0.05,
+    "drift_sigma_um_per_h_per_sqrt_h": 0.0,
+    "initial_drift_sigma_um_per_h": 0.0,
+    "drift_max_um_per_h": 0.0,
+    "gain_sigma_per_sqrt_h": 0.0,
+    "initial_gain_sigma": 0.0,
+    "gain_max": 0.0,
+    "confirm_after": 3,
+}
+"""A filter that trusts its offset: a check off by a switch's gap passes its gate only at the switch; with a
+wide initial offset a real step of 12 µm passes the gate's floor (the new run's offset prior)."""
+
+
+def switch_gap_checks(model: dict, run) -> np.ndarray:
+    """Checks off the rule's own prediction by each switch's gap: at the switch, and five samples before it."""
+    from groupfit.runtime import SwitchingRule
+
+    plain = SwitchingRule(model).replay(run.temps, np.full(run.n_samples, np.nan))
+    blend = model["switching"].get("blend_samples", 0)
+    probes = np.full(run.n_samples, np.nan)
+    for i in np.flatnonzero(plain.switched):
+        gap = (blend + 1) * (plain.prediction_um[i - 1] - plain.prediction_um[i])
+        probes[i] = plain.prediction_um[i] + gap
+        probes[i - 5] = plain.prediction_um[i - 5] + gap
+    return probes

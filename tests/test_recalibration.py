@@ -184,6 +184,58 @@ def test_checks_that_keep_disagreeing_are_applied_after_confirm_after_rejections
     assert codes == [PROBE_REJECTED, PROBE_REJECTED, PROBE_APPLIED, PROBE_APPLIED]
 
 
+def test_a_check_right_after_a_switch_is_gated_with_the_switch_s_gap_and_the_same_miss_elsewhere_is_not():
+    """The innovation a switch causes itself (its gap) passes the gate; the same miss away from a switch is gross."""
+    model, run = synthetic_model()
+    quiet = {**KALMAN, "terms": ["offset"], "offset_sigma_um_per_sqrt_h": 0.01, "initial_offset_sigma_um": 0.05}
+    quiet.update(drift_sigma_um_per_h_per_sqrt_h=0.0, initial_drift_sigma_um_per_h=0.0, drift_max_um_per_h=0.0)
+    quiet.update(gain_sigma_per_sqrt_h=0.0, initial_gain_sigma=0.0, gain_max=0.0)
+    model = ModelFile.from_dict(with_section(model, {**quiet, "confirm_after": 1}))
+    plain = SwitchingRule(model).replay(run.temps, np.full(run.n_samples, np.nan))
+    first = int(np.flatnonzero(plain.switched)[0])
+    blend = model.switching.blend_samples
+    # the replay's output at the switch is the new group's plus blend / (blend + 1) of the gap: solve for the gap
+    gap = (blend + 1) * (plain.prediction_um[first - 1] - plain.prediction_um[first])
+    table = RuleTables.from_model(model).recalibration
+    gate_without_switch = table.gate2 * (table.p0[0] + first * table.q[0] + table.r)
+    assert gap * gap > gate_without_switch  # the old gate would take the switch's own gap for a gross reading
+
+    def code_of_a_check_at(k: int, miss: float) -> int:
+        rule = SwitchingRule(model)
+        for row in run.temps[: k + 1]:
+            rule.step(row)
+        return rule.probe(plain.prediction_um[k] + miss)
+
+    assert code_of_a_check_at(first, gap) == PROBE_APPLIED
+    assert code_of_a_check_at(first - 5, gap) == PROBE_REJECTED
+    assert code_of_a_check_at(first, 3.0 * abs(gap) + 10.0) == PROBE_REJECTED  # beyond the gap still gross
+
+
+def test_the_gate_is_never_narrower_than_a_new_run_s_offset_so_a_real_step_is_taken_and_a_gross_one_is_not():
+    """With a quiet filter locked on, a 12 µm step passes when a new run may be 5 µm off (gate 4·5 µm)."""
+    model, run = synthetic_model()
+    quiet = {**KALMAN, "terms": ["offset"], "offset_sigma_um_per_sqrt_h": 0.01, "confirm_after": 2}
+    quiet.update(drift_sigma_um_per_h_per_sqrt_h=0.0, initial_drift_sigma_um_per_h=0.0, drift_max_um_per_h=0.0)
+    quiet.update(gain_sigma_per_sqrt_h=0.0, initial_gain_sigma=0.0, gain_max=0.0)
+
+    def codes(initial_offset_sigma_um: float, step_um: float) -> list[int]:
+        rule = SwitchingRule(
+            ModelFile.from_dict(with_section(model, {**quiet, **{"initial_offset_sigma_um": initial_offset_sigma_um}}))
+        )
+        plain = SwitchingRule(model).replay(run.temps, np.full(run.n_samples, np.nan)).prediction_um
+        out = []
+        for k, row in enumerate(run.temps[:61]):
+            rule.step(row)
+            if k % 10 == 0 and k:
+                out.append(rule.probe(plain[k] + (step_um if k >= 40 else 0.0)))
+        return out
+
+    assert (4.0 * 5.0) ** 2 > 12.0**2 > 4.0**2 * (0.05**2 + KALMAN["probe_sigma_um"] ** 2)  # floor passes, S alone not
+    assert codes(5.0, 12.0) == [PROBE_APPLIED] * 6
+    assert codes(0.05, 12.0) == [PROBE_APPLIED] * 3 + [PROBE_REJECTED, PROBE_REJECTED, PROBE_APPLIED]
+    assert codes(5.0, 500.0) == [PROBE_APPLIED] * 3 + [PROBE_REJECTED, PROBE_REJECTED, PROBE_APPLIED]
+
+
 def test_a_check_during_a_sensor_fault_or_on_held_readings_is_ignored_and_changes_nothing():
     model, run = synthetic_model()
     section = model["switching"]

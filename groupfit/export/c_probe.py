@@ -21,6 +21,7 @@ FIELDS = """    gf_real rc_x[3];            /* recalibration: offset (um), drift
     int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
+    gf_real rc_gap2;            /* squared gaps of the switches since the last check (um^2): widen its gate */
 """
 
 DECLARATION = """
@@ -92,6 +93,7 @@ static void gf_rc_reset(gf_state *s)
     s->rc_usable = 0;
     s->rc_rejected = 0;
     s->rc_significant = 0;
+    s->rc_gap2 = 0;
 }
 
 static void gf_rc_clamp(gf_state *s)
@@ -141,7 +143,7 @@ FUNCTION = """
 int gf_probe(gf_state *s, double measured_error_um)
 {
     gf_real m = s->rc_model_um;
-    gf_real nu, sv, target, ph[3], hp[3], k[3];
+    gf_real nu, sv, gate, target, ph[3], hp[3], k[3];
     int i, j;
     if (!s->rc_usable || !(measured_error_um >= -GF_PROBE_LIMIT_UM && measured_error_um <= GF_PROBE_LIMIT_UM)) {
         return GF_PROBE_IGNORED;
@@ -151,7 +153,13 @@ int gf_probe(gf_state *s, double measured_error_um)
     if (!(sv > 0)) {
         return GF_PROBE_IGNORED;
     }
-    if (nu * nu > gf_rc_gate2 * sv) {
+    /* a switch since the last check moved the prediction by its gap: the gate widens by it */
+    gate = sv + s->rc_gap2;
+    if (gate < gf_rc_p0[0]) {
+        gate = gf_rc_p0[0]; /* never narrower than a new run's offset */
+    }
+    s->rc_gap2 = 0;
+    if (nu * nu > gf_rc_gate2 * gate) {
         if (s->rc_rejected < GF_RC_CONFIRM_AFTER) {
             s->rc_rejected++;
             return GF_PROBE_REJECTED;
@@ -226,6 +234,7 @@ def probe_source(tables: RuleTables) -> dict[str, str]:
         "probe_constants": constants,
         "init_probe": "    gf_rc_reset(s);\n",
         "probe_propagate": "    gf_rc_propagate(s);\n",
+        "probe_switch": "            s->rc_gap2 = s->rc_gap2 + s->gap * s->gap; /* widens the next check's gate */\n",
         "probe_invalidate": "        s->rc_usable = 0;\n",
         "probe_correct": (
             "        /* the correction from probe checks (0 until the first is applied) */\n"

@@ -36,6 +36,7 @@ def transfer_source(dot_product: str, position: dict[str, str], *, has_position:
         "        if (s->switched && s->has_previous) {\n"
         "            /* bumpless transfer: the gap from the last output to the new group's prediction */\n"
         "            s->gap = s->previous - prediction;\n"
+        "${probe_switch}"
         "        }\n"
         "        if (s->blend > 0) {\n"
         "            /* blend / (GF_BLEND_SAMPLES + 1) of the gap: it closes by one share per sample */\n"

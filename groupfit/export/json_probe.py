@@ -17,7 +17,10 @@ PROBE_STEPS = (
     "x[0] = x[0] + x[1]; x[1] = phi * x[1]; for j in 0..2: A[0][j] = P[0][j] + P[1][j], A[1][j] = phi * P[1][j], "
     "A[2][j] = P[2][j]; then for i in 0..2: P[i][0] = A[i][0] + A[i][1], P[i][1] = A[i][1] * phi, "
     "P[i][2] = A[i][2], P[i][i] = P[i][i] + q[i]; then clamp every x[i] to [-x_max[i], x_max[i]] (upper first). "
-    "x starts at 0, P at diag(p0), applied and model at 0, usable false, rejected 0, significant false",
+    "x starts at 0, P at diag(p0), applied and model at 0, usable false, rejected 0, significant false, gap2 0",
+    "at a sample where the group advanced and the sample before computed a prediction (it was not in a sensor "
+    "fault): g = that prediction (the transfer's share included, the probe correction not) - the new group's "
+    "prediction at this sample (position terms included, before any share); gap2 = gap2 + g * g",
     "under a sensor fault: usable = false (prediction and target 0 as before; applied unchanged)",
     "otherwise, after target = -prediction (and the dead band): model = prediction; usable = not held; "
     "t = x[0] + x[2] * prediction, then t = 0 if significance2 > 0 and not significant; "
@@ -26,7 +29,8 @@ PROBE_STEPS = (
     "a probe check z (the measured thermal error, um) after a sample: ignored if not usable or not "
     "(-probe_limit_um <= z <= probe_limit_um); nu = (z - model) - (x[0] + x[2] * model); for i in 0..2: "
     "Ph[i] = P[i][0] + P[i][2] * model, hP[i] = P[0][i] + P[2][i] * model; S = hP[0] + hP[2] * model + r; "
-    "ignored unless S > 0; if nu * nu > gate2 * S: if rejected < confirm_after: rejected += 1, rejected "
+    "ignored unless S > 0; G = S + gap2, G = p0[0] if G < p0[0], then gap2 = 0; "
+    "if nu * nu > gate2 * G: if rejected < confirm_after: rejected += 1, rejected "
     "(nothing else changes), else (the checks keep disagreeing: a real change) rejected = 0, x[0] = x[0] + nu, "
     "P = diag(p0), clamp x as below, significant = true: applied; otherwise rejected = 0, K[i] = Ph[i] / S, "
     "x[i] = x[i] + K[i] * nu, P[i][j] = P[i][j] - K[i] * hP[j] for all i, j, clamp x (as in the time update), "

@@ -40,6 +40,8 @@ VARS = """    rcX : ARRAY[0..2] OF $real;
     rcZ : $real;
     rcNu : $real;
     rcS : $real;
+    rcGate : $real;
+    rcGap2 : $real := 0.0;
     rcUsable : BOOL := FALSE;
     rcOutside : BOOL;
     rcRejected : INT := 0;
@@ -70,6 +72,7 @@ RESET = """    rcApplied := 0.0;
     rcUsable := FALSE;
     rcRejected := 0;
     rcSignificant := FALSE;
+    rcGap2 := 0.0;
     FOR rcI := 0 TO 2 DO
         rcX[rcI] := 0.0;
         FOR rcJ := 0 TO 2 DO
@@ -119,7 +122,13 @@ IF Probe THEN
         rcNu := (rcZ - rcModel) - (rcX[0] + rcX[2] * rcModel);
 $projections        rcOutside := rcS > RC_ZERO;
         IF rcOutside THEN
-            rcOutside := rcNu * rcNu > RC_GATE2 * rcS;
+            (* a switch since the last check moved the prediction by its gap: the gate widens by it *)
+            rcGate := rcS + rcGap2;
+            IF rcGate < RC_P0[0] THEN
+                rcGate := RC_P0[0]; (* never narrower than a new run's offset *)
+            END_IF;
+            rcGap2 := 0.0;
+            rcOutside := rcNu * rcNu > RC_GATE2 * rcGate;
         END_IF;
         IF rcOutside AND rcRejected >= RC_CONFIRM THEN
             (* the checks keep disagreeing: a real change, which the offset takes whole (as the hold does) *)

@@ -22,6 +22,7 @@ def transfer_pieces(tables: RuleTables, real: str, literal, dot_product: str, po
             "        (* bumpless transfer: the gap from the last output to the new group's prediction *)",
             "        IF Switched <> 0 AND hasPrevious THEN",
             "            transferGap := previousPrediction - prediction;",
+            "            rcGap2 := rcGap2 + transferGap * transferGap; (* widens the next probe check's gate *)",
             "        END_IF;",
             "        IF blendLeft > 0 THEN",
             "            transferShare := blendShare / BLEND_SPAN * transferGap;",

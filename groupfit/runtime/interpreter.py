@@ -247,6 +247,7 @@ class SwitchingRule:
         prediction, clamped = self._group_prediction(self.group)
         if switched and self.has_previous:  # bumpless transfer: the gap from the last output to the new group
             self.gap = self.previous - prediction
+            self.recal.switched(self.gap)
         if self.blend > 0:  # closed by one share of blend_samples + 1 per sample
             share = self._real(self.blend) / self._real(t.blend_samples + 1) * self.gap
             prediction = prediction + share

@@ -25,10 +25,27 @@ number within ±:data:`PROBE_LIMIT_UM`. Otherwise, with ``h = (1, 0, m)``::
     nu = (z − m) − (x0 + x2·m)                       (innovation)
     Ph_i = Pi0 + Pi2·m;  hP_j = P0j + P2j·m;  S = hP0 + hP2·m + r
     if not S > 0: ignored
-    if nu·nu > gate²·S: if rejected-in-a-row < confirm_after: rejected (flagged, nothing changes);
+    if nu·nu > gate²·S_gate (below): if rejected-in-a-row < confirm_after: rejected (flagged, nothing changes);
         else (the checks keep disagreeing: a real change) x0 = x0 + nu, P = diag(p0), clamp x: applied
     K_i = Ph_i / S;  x_i = x_i + K_i·nu;  Pij = Pij − K_i·hP_j;  clamp x;
     significant = t·t > sig2·v  with  t = x0 + x2·m,  v = hP0 + hP2·m  (hP of the new P):  applied
+
+A switch of the coefficient vector changes the prediction by the switch's
+gap ``g`` (the last output before the switch minus the new group's first
+prediction, the gap the bumpless transfer closes): the next check's
+innovation carries it, so its gate is widened by it (:meth:`Recalibrator.switched`)::
+
+    at a switch: gap2 = gap2 + g·g
+    at a check (after the ignore tests): S_gate = S + gap2, at least p0_0; gap2 = 0;
+    the gate compares nu·nu with gate²·S_gate
+
+The gate is never narrower than the prior of a new run's offset (``p0_0 =
+initial_offset_sigma_um²``, sized by the model's expected next-run range): a
+check is gross only when it is farther from the filter's estimate than a new
+run may be off the model. The filter's own innovation variance ``S`` comes
+from noise tuned on the quiet modelling run; a next run at speeds it never
+saw moves by more between checks, and a gate of ``S`` alone took those moves
+for gross readings.
 
 A check taken as a real change leaves the correction significant. With
 ``sig2 = significance_sigmas² > 0`` a correction the checks do not tell apart
@@ -168,6 +185,7 @@ class Recalibrator:
         self.usable = False
         self.rejected_in_row = 0
         self.significant = False
+        self.gap2 = zero
 
     def _reset_covariance(self) -> None:
         """``P = diag(p0)``."""
@@ -190,6 +208,11 @@ class Recalibrator:
             P[i] = [A[i][0] + A[i][1], A[i][1] * phi, A[i][2]]
             P[i][i] = P[i][i] + self._q[i]
         self._clamp()
+
+    def switched(self, gap_um) -> None:
+        """A switch whose new group's prediction is ``gap_um`` below the last output: the next check's gate
+        widens by it, so the change the rule itself made is not taken for a gross reading."""
+        self.gap2 = self.gap2 + gap_um * gap_um
 
     def _clamp(self) -> None:
         for i in range(N_STATES):
@@ -226,7 +249,11 @@ class Recalibrator:
         ph, hp, s = self._projections()
         if not s > self._zero:
             return PROBE_IGNORED
-        if nu * nu > self._gate2 * s:
+        gate_variance = s + self.gap2
+        if gate_variance < self._p0[0]:  # never narrower than a new run's offset
+            gate_variance = self._p0[0]
+        self.gap2 = self._zero
+        if nu * nu > self._gate2 * gate_variance:
             if self.rejected_in_row < self.table.confirm_after:
                 self.rejected_in_row += 1
                 return PROBE_REJECTED

@@ -178,6 +178,8 @@ class TableRuntime:
         prediction, clamped = self.predict(self.group, inputs)
         if switched and self.has_previous:
             self.gap = self.previous - prediction
+            if self.checks:
+                self.checks.switched(self.gap)
         if self.blend > 0:
             prediction = prediction + float(self.blend) / float(self.blend_samples + 1) * self.gap
         self.previous, self.has_previous = prediction, True

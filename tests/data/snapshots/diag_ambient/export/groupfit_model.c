@@ -84,6 +84,7 @@ static void gf_rc_reset(gf_state *s)
     s->rc_usable = 0;
     s->rc_rejected = 0;
     s->rc_significant = 0;
+    s->rc_gap2 = 0;
 }
 
 static void gf_rc_clamp(gf_state *s)
@@ -258,6 +259,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         if (s->switched && s->has_previous) {
             /* bumpless transfer: the gap from the last output to the new group's prediction */
             s->gap = s->previous - prediction;
+            s->rc_gap2 = s->rc_gap2 + s->gap * s->gap; /* widens the next check's gate */
         }
         if (s->blend > 0) {
             /* blend / (GF_BLEND_SAMPLES + 1) of the gap: it closes by one share per sample */
@@ -305,7 +307,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
 int gf_probe(gf_state *s, double measured_error_um)
 {
     gf_real m = s->rc_model_um;
-    gf_real nu, sv, target, ph[3], hp[3], k[3];
+    gf_real nu, sv, gate, target, ph[3], hp[3], k[3];
     int i, j;
     if (!s->rc_usable || !(measured_error_um >= -GF_PROBE_LIMIT_UM && measured_error_um <= GF_PROBE_LIMIT_UM)) {
         return GF_PROBE_IGNORED;
@@ -315,7 +317,13 @@ int gf_probe(gf_state *s, double measured_error_um)
     if (!(sv > 0)) {
         return GF_PROBE_IGNORED;
     }
-    if (nu * nu > gf_rc_gate2 * sv) {
+    /* a switch since the last check moved the prediction by its gap: the gate widens by it */
+    gate = sv + s->rc_gap2;
+    if (gate < gf_rc_p0[0]) {
+        gate = gf_rc_p0[0]; /* never narrower than a new run's offset */
+    }
+    s->rc_gap2 = 0;
+    if (nu * nu > gf_rc_gate2 * gate) {
         if (s->rc_rejected < GF_RC_CONFIRM_AFTER) {
             s->rc_rejected++;
             return GF_PROBE_REJECTED;
