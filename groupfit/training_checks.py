@@ -1,4 +1,4 @@
-"""Checks of a model file's ``training`` section: the expected next-run error a fit recorded."""
+"""Checks of a model file's ``training`` section: the expected next-run error and the recordings a fit recorded."""
 
 from __future__ import annotations
 
@@ -9,6 +9,34 @@ from typing import Any, Mapping
 def is_number(value: Any) -> bool:
     """A finite int or float (not a bool)."""
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+RECORDINGS_KEY = "recordings"
+RECORDING_KEYS = ("path", "sha256", "first_time_s", "last_time_s", "period_s")
+
+
+def recordings_problem(training: Mapping[str, Any]) -> str | None:
+    """What is wrong with ``training.recordings`` (None: absent or well formed)."""
+    entries = training.get(RECORDINGS_KEY)
+    if entries is None:
+        return None
+    if not isinstance(entries, list):
+        return "training.recordings must be a list of the modelling files"
+    for k, entry in enumerate(entries):
+        where = f"training.recordings[{k}]"
+        if not isinstance(entry, Mapping) or any(key not in entry for key in RECORDING_KEYS):
+            return f"{where} must hold {', '.join(RECORDING_KEYS)}"
+        if not isinstance(entry["path"], str) or not entry["path"]:
+            return f"{where}.path must be the file's path"
+        digest = entry["sha256"]
+        if not isinstance(digest, str) or len(digest) != 64 or any(c not in "0123456789abcdef" for c in digest):
+            return f"{where}.sha256 must be 64 hex digits"
+        clock = [entry[key] for key in ("first_time_s", "last_time_s", "period_s")]
+        if not all(is_number(v) for v in clock):
+            return f"{where}: first_time_s, last_time_s and period_s must be finite numbers"
+        if not (clock[0] <= clock[1] and clock[2] > 0):
+            return f"{where}: first_time_s <= last_time_s and period_s > 0 are needed"
+    return None
 
 
 def expectation_problem(training: Mapping[str, Any]) -> str | None:

@@ -222,6 +222,28 @@ def test_a_model_file_with_an_expectation_outside_its_range_is_refused():
     assert "expected_next_run_rms_um" in model_problem(model)
 
 
+@pytest.mark.parametrize(
+    "recordings, named",
+    [
+        ({"path": "a.csv"}, "must hold path, sha256"),
+        ("a.csv", "must be a list"),
+        ({"path": "a.csv", "sha256": "xyz", "first_time_s": 0, "last_time_s": 1, "period_s": 1}, "64 hex digits"),
+        ({"path": "a.csv", "sha256": "0" * 64, "first_time_s": 2, "last_time_s": 1, "period_s": 1}, "first_time_s"),
+        ({"path": "a.csv", "sha256": "0" * 64, "first_time_s": 0, "last_time_s": 1, "period_s": 0}, "period_s > 0"),
+        ({"path": "", "sha256": "0" * 64, "first_time_s": 0, "last_time_s": 1, "period_s": 1}, "path"),
+    ],
+)
+def test_a_model_file_with_a_bad_recording_entry_is_refused_naming_it(recordings, named):
+    run = tiny_run(12)
+    model = GroupedRegressor(p=0).fit(run.temps, run.error).to_model_file(run).to_dict()
+    good = {"path": "a.csv", "sha256": "0" * 64, "first_time_s": 0.0, "last_time_s": 1.0, "period_s": 1.0}
+    model["training"]["recordings"] = [good]
+    assert model_problem(model) is None
+    model["training"]["recordings"] = recordings if isinstance(recordings, str) else [recordings]
+    problem = model_problem(model)
+    assert problem is not None and "training.recordings" in problem and named in problem
+
+
 def test_replay_says_when_a_run_leaves_the_modelling_range(tmp_path, capsys):
     paths = write_runs(tmp_path, (13,))
     out = tmp_path / "fit"

@@ -202,13 +202,55 @@ def replayed(folder, *args) -> dict:
 def test_replay_continues_equals_the_whole_recording_on_the_continued_part(split_recording, rest):
     folder = split_recording
     whole = replayed(folder, "--data", folder / "whole.csv")["samples"][330:]
-    alone = replayed(folder, "--data", folder / rest)
+    alone = replayed(folder, "--data", folder / rest, "--fresh")
     continued = replayed(folder, "--data", folder / rest, "--continues", folder / "first.csv")
     assert continued["history_samples"] == 330 and len(continued["samples"]) == len(whole)
     prediction = np.array([s["prediction_um"] for s in continued["samples"]])
     assert np.max(np.abs(prediction - [s["prediction_um"] for s in whole])) <= 1e-9
     assert [s["group"] for s in continued["samples"]] == [s["group"] for s in whole]
     assert alone["samples"][0]["group"] == 1 and whole[0]["group"] > 1  # restarted, the rule starts again
+
+
+def test_the_rest_whose_clock_continues_the_modelling_file_is_replayed_after_it_unasked(split_recording, capsys):
+    folder = split_recording
+    model = json.loads((folder / "model.json").read_text())
+    (recording,) = model["training"]["recordings"]
+    last = pd.read_csv(folder / "first.csv")["time_s"].iloc[-1]
+    assert recording["path"] == str((folder / "first.csv").resolve()) and recording["last_time_s"] == last
+    unasked = replayed(folder, "--data", folder / "rest.csv")
+    assert "continues the modelling recording" in capsys.readouterr().out
+    declared = replayed(folder, "--data", folder / "rest.csv", "--continues", folder / "first.csv")
+    assert unasked["samples"] == declared["samples"] and unasked["history_samples"] == 330
+    assert unasked["continues"] == [recording["path"]]
+    fresh = replayed(folder, "--data", folder / "rest.csv", "--fresh")
+    assert fresh["continues"] == [] and fresh["samples"][0]["group"] == 1 < unasked["samples"][0]["group"]
+    restarted = replayed(folder, "--data", folder / "rest_restarted.csv")  # its clock does not continue
+    assert restarted["continues"] == [] and restarted["samples"][0]["group"] == 1
+
+
+@pytest.mark.parametrize("change", ["edited", "moved"])
+def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the_note_says_why(
+    split_recording, tmp_path, capsys, change
+):
+    for name in ("model.json", "first.csv", "rest.csv"):
+        (tmp_path / name).write_bytes((split_recording / name).read_bytes())
+    model = json.loads((tmp_path / "model.json").read_text())
+    model["training"]["recordings"][0]["path"] = str(tmp_path / "first.csv")
+    (tmp_path / "model.json").write_text(json.dumps(model))
+    if change == "edited":
+        (tmp_path / "first.csv").write_text((tmp_path / "first.csv").read_text().replace(",", ", ", 1))
+    else:
+        (tmp_path / "first.csv").unlink()
+    result = replayed(tmp_path, "--data", tmp_path / "rest.csv")
+    assert result["continues"] == [] and result["samples"][0]["group"] == 1
+    assert ("has changed" if change == "edited" else "no longer there") in capsys.readouterr().out
+
+
+def test_fresh_and_continues_together_are_refused(split_recording, capsys):
+    folder = split_recording
+    args = ("replay", folder / "model.json", "--data", folder / "rest.csv", "--fresh", "--continues", folder / "x")
+    assert cli(*args) == 2
+    assert "--fresh and --continues" in capsys.readouterr().err
 
 
 def test_compare_detects_a_continuing_clock_and_takes_continues_for_a_restarted_one(split_recording, capsys):

@@ -23,6 +23,7 @@ from groupfit.errors import InputError
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
+from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.runtime import replay_groups
 
 
@@ -229,6 +230,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     if result.changed and expectations["after"] is not None:
         training = {**(result.model.training or {}), **expectations["after"].training()}
         result = replace(result, model=result.model.replace(training=training))
+    recordings = {RECORDINGS_KEY: recording_entries(args.data, data)}  # the files this model was built on
+    result = replace(result, model=result.model.replace(training={**(result.model.training or {}), **recordings}))
     model_path = Path(args.model)
     written = []
     recal_note = ""

@@ -25,6 +25,7 @@ from groupfit.models.select_p import choose_p, exact_path
 from groupfit.plots import plot_fit
 from groupfit.position import PositionRun
 from groupfit.position_plot import plot_position
+from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.reference import START, with_reference
 from groupfit.settings import ModelSettings, RunSettings
 
@@ -192,6 +193,8 @@ def run_fit(args: argparse.Namespace) -> int:
         except InputError as exc:
             notes += f"\nnote    no next-run estimate: {exc}"
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
+    if position_run is None:
+        training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs)
     if expectation is not None:
         training.update(expectation_training(expectation, model_settings.p))
     model = model.replace(training=training)

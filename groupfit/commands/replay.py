@@ -28,6 +28,7 @@ from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
+from groupfit.recordings import continued_recording
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
 from groupfit.screw.modelfile import is_screw_file
@@ -47,6 +48,12 @@ def add_parser(verbs) -> None:
         help="the recording(s) --data continues, in order: replayed first, so that the rule and the derived "
         "inputs carry their state into --data as on the controller (only --data's samples are reported; probe "
         "checks fall on them alone)",
+    )
+    replay.add_argument(
+        "--fresh",
+        action="store_true",
+        help="start the rule and its derived inputs afresh even when --data's clock continues a modelling file "
+        "the model names (training.recordings; by default that file is replayed first, as --continues does)",
     )
     common.add_clock_options(replay)
     replay.add_argument(
@@ -98,7 +105,13 @@ def run_replay(args: argparse.Namespace) -> int:
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), error=error, **common.clock_options(args))
     run = load_readings(args.data, tables, **options)
-    history = [load_readings(path, tables, **options) for path in args.continues or []]
+    if args.continues and args.fresh:
+        raise InputError("--fresh and --continues: give one of them (--fresh starts the rule afresh)")
+    continued, found_note = list(args.continues or []), None
+    if not continued and not args.fresh:
+        found, found_note = continued_recording(model.training, run)
+        continued = [found] if found is not None else []
+    history = [load_readings(path, tables, **options) for path in continued]
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
@@ -116,7 +129,9 @@ def run_replay(args: argparse.Namespace) -> int:
         replay = rule.replay(run.temps, probes)
         unchecked = rule.replay(run.temps) if probes is not None else None
     common.print_notes([run, *history], common.report_stream(args))
-    if not history and run.time[0] > 2 * run.period:
+    if found_note is not None:
+        notes = [found_note] if history else [found_note, *notes]  # the one note of what was continued
+    elif not history and run.time[0] > 2 * run.period:
         notes.append(
             f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
             "file is the rest of a recording, give the earlier file(s) with --continues FILE"
@@ -124,6 +139,7 @@ def run_replay(args: argparse.Namespace) -> int:
     for note in notes:
         print(f"note     {note}", file=common.report_stream(args))
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
+    data["continues"] = [str(path) for path in continued]
     if probes is not None:
         without = residuals(run, unchecked)
         rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None

@@ -1,0 +1,103 @@
+"""The modelling recordings a model file remembers, and the one a replayed run continues.
+
+A long test is often cut in two: the model is fitted on the first part and
+replayed on the rest. On the controller the rule runs on through the cut; the
+rest replayed alone starts it afresh (a heat law from rest, group 1), a fault
+the controller does not have. ``fit`` and ``diagnose`` record in the model
+file's ``training.recordings`` where each modelling file is, its SHA-256 and
+where its clock ends. ``replay`` of a run whose clock picks up one sampling
+period after such a recording ends replays that file first, as ``--continues
+FILE`` does, when it is still there with the same contents (``--fresh``: start
+afresh all the same). A file whose time stamps are dates starts its clock at
+0 (:func:`groupfit.readtable.datetimes_to_seconds`), so it is never taken for
+a continuation this way; ``--continues`` still joins it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from groupfit.continuation import CONTIGUITY_TOLERANCE
+from groupfit.data import Run
+from groupfit.training_checks import RECORDINGS_KEY
+
+
+def file_digest(path: str | Path) -> str:
+    """The SHA-256 of a file's bytes, as hex."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def recording_entries(paths: Sequence[Any], runs: Sequence[Run]) -> list[dict]:
+    """One entry per modelling file read from a path: its absolute path, digest and clock.
+
+    ``runs`` are the runs read from ``paths`` in order (a log split at its gaps
+    gives several; the clock of a file is that of its first and last run).
+    Files that cannot be told apart by path (a data frame, a split whose runs
+    cannot be matched to their files) give no entry.
+    """
+    files = [Path(p) for p in paths if isinstance(p, (str, Path))]
+    if not files or len(files) != len(paths) or not runs:
+        return []
+    if len(files) == 1:
+        parts = [list(runs)]
+    elif len(files) == len(runs):
+        parts = [[run] for run in runs]
+    else:
+        return []
+    entries = []
+    for path, own in zip(files, parts):
+        if not path.is_file():
+            continue
+        entries.append(
+            {
+                "path": str(path.resolve()),
+                "sha256": file_digest(path),
+                "first_time_s": float(own[0].time[0]),
+                "last_time_s": float(own[-1].time[-1]),
+                "period_s": float(own[-1].period),
+            }
+        )
+    return entries
+
+
+def continued_recording(training: Mapping[str, Any] | None, run: Run) -> tuple[Path | None, str | None]:
+    """The modelling file ``run`` continues, and a note on what was found.
+
+    The run continues a recording when its first time stamp follows the
+    recording's last by one sampling period (within
+    :data:`groupfit.continuation.CONTIGUITY_TOLERANCE` of it). The file is
+    used only when it is still at its path with the recorded SHA-256;
+    otherwise the note says why it was not.
+    """
+    for entry in (training or {}).get(RECORDINGS_KEY) or []:
+        period = entry["period_s"]
+        gap = float(run.time[0]) - entry["last_time_s"]
+        if abs(gap - period) > CONTIGUITY_TOLERANCE * period:
+            continue
+        path = Path(entry["path"])
+        if not path.is_file():
+            return None, (
+                f"{run.name}'s clock continues the modelling recording {path} (it ended at "
+                f"{entry['last_time_s']:g} s), which is no longer there: the rule starts afresh; give the file "
+                "with --continues FILE to carry its history"
+            )
+        if file_digest(path) != entry["sha256"]:
+            return None, (
+                f"{run.name}'s clock continues the modelling recording {path}, but that file has changed since "
+                "the fit: the rule starts afresh; give the earlier file with --continues FILE"
+            )
+        return path, (
+            f"{run.name}'s clock continues the modelling recording {path} (it ended at {entry['last_time_s']:g} s): "
+            "replayed after it, as --continues does, so that the rule and its derived inputs carry their history "
+            "as on the controller; --fresh starts them afresh"
+        )
+    return None, None
+
+
+__all__ = ["RECORDINGS_KEY", "continued_recording", "file_digest", "recording_entries"]
