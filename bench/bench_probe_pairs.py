@@ -1,0 +1,168 @@
+"""Probe checks on the next run, pair by pair: how much of the unchecked error a check every T leaves.
+
+Usage::
+
+    python bench/bench_probe_pairs.py [--json FILE] [--every 30m,60m] [--diagnose] [--only NAME ...]
+
+Every pair is a model run and a later run of the same machine the model never
+saw, the calibration panel of the next-run estimate (``bench/next_run_panel.py``:
+the independent simulator's random machines and days, the finite-element
+repeats and other-condition runs, the diagnosis data sets' model → validate
+pairs) and, reported apart, cuts of the shared measured test. Each model is
+built as a user builds it, ``groupfit fit`` with its defaults (``--diagnose``:
+then ``groupfit diagnose`` on the model run), on the whole model run; the next
+run is replayed with ``groupfit replay`` (the model file's run-time rule and
+recalibration section; a next run whose clock continues the model run is
+replayed after it, as ``replay`` does unasked), without checks and with a
+check every T: the first one interval into the run (``replay --probe-every
+T``, the default) and at the run's first sample (``--probe-first 0``).
+
+Printed per pair: RMS without checks and with them, and the ratio; overall,
+the share of pairs where the checks leave at most half the unchecked RMS,
+per schedule and interval. The probe reading is the run's measured error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import independent_machine as machine  # noqa: E402
+from bench_recalibration import quiet_main  # noqa: E402
+from next_run_panel import DATASETS, DIAG_KINDS, FE_PAIRS, MEASURED, MEASURED_CUTS, MEASURED_SENSORS  # noqa: E402
+
+from groupfit.model import ModelFile  # noqa: E402
+from groupfit.probe_intervals import parse_intervals  # noqa: E402
+
+SCHEDULES = {"after T": None, "at start": 0}
+
+
+def pair_frames():
+    """(name, source, model frame, next frame, temps, error column) of every pair."""
+    for truth, seeds in (("absolute", range(14)), ("rises", range(100, 106))):
+        for seed in seeds:
+            scenario = machine.random_spec(seed, truth).make()
+            name = f"{scenario.name}{'_rises' if truth == 'rises' else ''}"
+            yield name, "simulator", scenario.modelling, scenario.validation, list(scenario.temps), "error_um"
+    for a, b in FE_PAIRS:
+        frames = [pd.read_csv(DATASETS / f"{x}.csv") for x in (a, b)]
+        yield f"{a}→{b}", "FE", *frames, ["T1", "T2"], "error_um"
+    for kind in DIAG_KINDS:
+        frames = [pd.read_csv(DATASETS / f"diag_{kind}_{x}.csv") for x in ("model", "validate")]
+        yield f"diag_{kind}", "FE diag", *frames, ["T1", "T2"], "error_um"
+    if MEASURED.exists():
+        whole = pd.read_csv(MEASURED)
+        n = len(whole)
+        for name, ((a0, a1), (b0, b1)) in MEASURED_CUTS.items():
+            model, following = whole.iloc[int(a0 * n) : int(a1 * n)], whole.iloc[int(b0 * n) : int(b1 * n)]
+            yield name, "measured", model, following, MEASURED_SENSORS, "disp_ch3_um"
+
+
+def build(folder: Path, frame: pd.DataFrame, temps, error: str, *, diagnose: bool) -> Path:
+    """``groupfit fit`` with its defaults (and ``diagnose``) on the model run; the model file left."""
+    modelling = folder / "model_run.csv"
+    frame.to_csv(modelling, index=False)
+    log = folder / "groupfit.log"
+    args = ["fit", "--data", str(modelling), "--error", error, "--temps", ",".join(temps), "--out", str(folder / "fit")]
+    quiet_main(args + ["--quiet", "--no-budget"], log)
+    model = folder / "fit" / "model.json"
+    if diagnose:
+        quiet_main(["diagnose", str(model), "--data", str(modelling), "--out", str(folder / "diag")], log)
+        augmented = folder / "diag" / "model_augmented.json"
+        model = augmented if augmented.exists() else model
+    return model
+
+
+def replayed(folder: Path, model_path: Path, following: Path, *args: str) -> dict:
+    """``groupfit replay`` as a user runs it (a file that continues the model run is replayed after it)."""
+    out = folder / "replay.json"
+    quiet_main(["replay", str(model_path), "--data", str(following), *args, "--json", str(out)], folder / "replay.log")
+    return json.loads(out.read_text())
+
+
+def pair_result(name, source, model_path: Path, following: Path, intervals_s) -> dict:
+    folder = model_path.parent
+    model = ModelFile.load(model_path)
+    none = replayed(folder, model_path, following)
+    checked = {}
+    for label, first in SCHEDULES.items():
+        extra = () if first is None else ("--probe-first", f"{first:g}")
+        checked[label] = [
+            replayed(folder, model_path, following, "--probe-every", f"{t:g}", *extra)["rms_um"] for t in intervals_s
+        ]
+    return {
+        "pair": name,
+        "source": source,
+        "p": model.p,
+        "recalibration": model.recalibration.description if model.recalibration else "none",
+        "continued": bool(none["continues"]),
+        "rms_none_um": none["rms_um"],
+        "rms_um": checked,
+    }
+
+
+def report(results: list[dict], intervals_s) -> str:
+    heads = [f"{t / 60:g} min" for t in intervals_s]
+    columns = "".join(f"{s + ' ' + h:>22}" for s in SCHEDULES for h in heads)
+    lines = [f"{'pair':<56}{'source':<11}{'p':>2}{'none µm':>10}{columns}"]
+    for r in results:
+        none = r["rms_none_um"]
+        cells = "".join(f"{f'{v:.3g} ({v / none:.2f})':>22}" for s in SCHEDULES for v in r["rms_um"][s])
+        name = r["pair"] + (" (continued)" if r["continued"] else "")
+        lines.append(f"{name:<56}{r['source']:<11}{r['p']:>2}{r['rms_none_um']:>10.3g}{cells}")
+    for group, members in (
+        ("panel", [r for r in results if r["source"] != "measured"]),
+        ("measured", [r for r in results if r["source"] == "measured"]),
+    ):
+        if not members:
+            continue
+        for s in SCHEDULES:
+            shares = []
+            for k, h in enumerate(heads):
+                halved = sum(r["rms_um"][s][k] <= 0.5 * r["rms_none_um"] for r in members)
+                median = float(np.median([r["rms_um"][s][k] / r["rms_none_um"] for r in members]))
+                shares.append(f"{h}: {halved}/{len(members)} at most half (median ratio {median:.2f})")
+            lines.append(f"{group:<9} first check {s:<9} " + "; ".join(shares))
+    return "\n".join(lines)
+
+
+def run(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", help="write the results here")
+    parser.add_argument("--every", default="30m,60m", help="check intervals (default 30m,60m)")
+    parser.add_argument("--diagnose", action="store_true", help="run groupfit diagnose on the model run too")
+    parser.add_argument("--only", nargs="+", help="pair names")
+    args = parser.parse_args(argv)
+    intervals = parse_intervals(args.every)
+    started = time.perf_counter()
+    results = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (name, source, model, following, temps, error) in enumerate(pair_frames()):
+            if args.only and name not in args.only:
+                continue
+            folder = Path(tmp) / f"pair{k}"
+            folder.mkdir()
+            model_path = build(folder, model, temps, error, diagnose=args.diagnose)
+            next_path = folder / "next_run.csv"
+            following.to_csv(next_path, index=False)
+            results.append(pair_result(name, source, model_path, next_path, intervals))
+            print(f"{name}: none {results[-1]['rms_none_um']:.3g} µm, {results[-1]['rms_um']}", flush=True)
+    print(report(results, intervals))
+    print(f"{len(results)} pair(s) in {time.perf_counter() - started:.0f} s")
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run())
