@@ -228,7 +228,7 @@ def test_the_rest_whose_clock_continues_the_modelling_file_is_replayed_after_it_
     assert restarted["continues"] == [] and restarted["samples"][0]["group"] == 1
 
 
-@pytest.mark.parametrize("change", ["edited", "moved"])
+@pytest.mark.parametrize("change", ["edited", "moved", "other columns"])
 def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the_note_says_why(
     split_recording, tmp_path, capsys, change
 ):
@@ -239,11 +239,15 @@ def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the
     (tmp_path / "model.json").write_text(json.dumps(model))
     if change == "edited":
         (tmp_path / "first.csv").write_text((tmp_path / "first.csv").read_text().replace(",", ", ", 1))
-    else:
+    elif change == "moved":
         (tmp_path / "first.csv").unlink()
+    else:  # the rest logged with one more column: not the same recording, whatever its clock
+        rest = pd.read_csv(tmp_path / "rest.csv").assign(spare=0.0)
+        rest.to_csv(tmp_path / "rest.csv", index=False)
     result = replayed(tmp_path, "--data", tmp_path / "rest.csv")
     assert result["continues"] == [] and result["samples"][0]["group"] == 1
-    assert ("has changed" if change == "edited" else "no longer there") in capsys.readouterr().out
+    expected = {"edited": "has changed", "moved": "no longer there", "other columns": "columns, inputs or"}
+    assert expected[change] in capsys.readouterr().out
 
 
 def test_fresh_and_continues_together_are_refused(split_recording, capsys):

@@ -20,7 +20,7 @@ from groupfit.commands.replay_probes import (
     sample_probe,
 )
 from groupfit.commands.screw_deploy import run_screw_replay
-from groupfit.continuation import with_histories
+from groupfit.continuation import same_recording, with_histories
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
@@ -112,6 +112,12 @@ def run_replay(args: argparse.Namespace) -> int:
         found, found_note = continued_recording(model.training, run)
         continued = [found] if found is not None else []
     history = [load_readings(path, tables, **options) for path in continued]
+    if found_note is not None and history and not same_recording(history[0], run):
+        found_note = (
+            f"{run.name}'s clock continues the modelling recording {continued[0]}, but its columns, inputs or "
+            "sampling period differ: the rule starts afresh"
+        )
+        continued, history = [], []
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
