@@ -13,7 +13,8 @@ Sources (:func:`panel_pairs`): the independent lumped machine
 finite-element repeats and other-condition runs in ``datasets/``, and the
 diagnosis data sets' model → validate pairs. :func:`measured_pairs` cuts the
 shared measured test (``../shared``) into runs; it is reported apart and never
-used to calibrate.
+used to calibrate; a cut that is the rest of the model run's recording is
+replayed with the model run in front, as ``groupfit replay`` does.
 """
 
 from __future__ import annotations
@@ -67,6 +68,9 @@ class Pair:
     source: str
     model: Run
     next: Run
+    continues: bool = False
+    """The next run is the rest of the model run's recording: replayed with the model run in front (as
+    ``groupfit replay`` replays a file whose clock runs on from the modelling file)."""
 
 
 def thin_pair(model: Run, next_run: Run, max_samples: int = MAX_SAMPLES) -> tuple[Run, Run]:
@@ -84,12 +88,14 @@ def frame_run(frame: pd.DataFrame, name: str, temps, error: str = "error_um", ti
     return load_run(frame, name=name, temps=list(temps), time=time, error=error)
 
 
-def make_pair(name: str, source: str, model: Run, next_run: Run, reference: str | None = "default") -> Pair:
+def make_pair(
+    name: str, source: str, model: Run, next_run: Run, reference: str | None = "default", *, continues: bool = False
+) -> Pair:
     if reference == "default":
         reference = default_reference(model.frame)
     model, next_run = with_reference(model, reference), with_reference(next_run, reference)
     model, next_run = thin_pair(model, next_run)
-    return Pair(name, source, model, next_run)
+    return Pair(name, source, model, next_run, continues)
 
 
 def fe_pairs() -> list[Pair]:
@@ -136,7 +142,7 @@ def measured_pairs() -> list[Pair]:
     for name, ((a0, a1), (b0, b1)) in MEASURED_CUTS.items():
         model = sliced(whole, slice(int(a0 * n), int(a1 * n)))
         next_run = sliced(whole, slice(int(b0 * n), int(b1 * n)))
-        out.append(make_pair(name, "measured", model, next_run, reference=None))
+        out.append(make_pair(name, "measured", model, next_run, reference=None, continues=b0 == a1))
     return out
 
 
@@ -151,7 +157,12 @@ def score_pair(pair: Pair) -> dict:
             continue
         estimator = GroupedRegressor(p=p, n=SETTINGS["n"], c=SETTINGS["c"], fixed_breaks=path["breaks"][p] or None)
         estimator.fit(model.temps, model.error)
-        residual = next_run.error - rule_prediction(estimator, model, next_run.temps)
+        if pair.continues:  # the rule runs on from the model run, as on the controller
+            whole = rule_prediction(estimator, model, np.vstack([model.temps, next_run.temps]))
+            prediction = whole[model.n_samples :]
+        else:
+            prediction = rule_prediction(estimator, model, next_run.temps)
+        residual = next_run.error - prediction
         actual[p] = float(np.sqrt(np.mean(residual[np.isfinite(residual)] ** 2)))
     n_coef = model.temps.shape[1] + 1
     bic_p = choose_p(path["rss"], path["R"], model.n_samples, n_coef, "bic")["p"]
