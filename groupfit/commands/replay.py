@@ -105,19 +105,9 @@ def run_replay(args: argparse.Namespace) -> int:
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), error=error, **common.clock_options(args))
     run = load_readings(args.data, tables, **options)
-    if args.continues and args.fresh:
-        raise InputError("--fresh and --continues: give one of them (--fresh starts the rule afresh)")
-    continued, found_note = list(args.continues or []), None
-    if not continued and not args.fresh:
-        found, found_note = continued_recording(model.training, run)
-        continued = [found] if found is not None else []
-    history = [load_readings(path, tables, **options) for path in continued]
-    if found_note is not None and history and not same_recording(history[0], run):
-        found_note = (
-            f"{run.name}'s clock continues the modelling recording {continued[0]}, but its columns, inputs or "
-            "sampling period differ: the rule starts afresh"
-        )
-        continued, history = [], []
+    continued, history, found_note = earlier_recordings(
+        args, model, run, lambda path: load_readings(path, tables, **options)
+    )
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
@@ -229,6 +219,29 @@ def residuals(run, replay: Replay) -> np.ndarray | None:
 def offline_groups(model: ModelFile, n_samples: int) -> np.ndarray:
     """1-based group the offline model serves at each sample index."""
     return model.serving_groups(n_samples) + 1
+
+
+def earlier_recordings(args: argparse.Namespace, model: ModelFile, run: Run, load) -> tuple[list, list, str | None]:
+    """The files replayed before ``run`` (``--continues``, else the modelling file its clock runs on from), their
+    readings (``load(path)``), and the note on a modelling file found by its clock (None: none was)."""
+    if args.continues and args.fresh:
+        raise InputError("--fresh and --continues: give one of them (--fresh starts the rule afresh)")
+    if args.continues or args.fresh:
+        return list(args.continues or []), [load(path) for path in args.continues or []], None
+    found, note = continued_recording(model.training, run)
+    if found is None:
+        return [], [], note
+    history = load(found)
+    if not same_recording(history, run):
+        return (
+            [],
+            [],
+            (
+                f"{run.name}'s clock continues the modelling recording {found}, but its columns, inputs or sampling "
+                "period differ: the rule starts afresh"
+            ),
+        )
+    return [found], [history], note
 
 
 def replay_result(
