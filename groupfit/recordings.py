@@ -16,6 +16,7 @@ a continuation this way; ``--continues`` still joins it.
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -33,8 +34,9 @@ def file_digest(path: str | Path) -> str:
     return digest.hexdigest()
 
 
-def recording_entries(paths: Sequence[Any], runs: Sequence[Run]) -> list[dict]:
-    """One entry per modelling file read from a path: its absolute path, digest and clock.
+def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str | Path | None = None) -> list[dict]:
+    """One entry per modelling file read from a path: its absolute path (and its path from ``model_dir``, the
+    model file's folder, so that a folder moved whole keeps them together), digest and clock.
 
     ``runs`` are the runs read from ``paths`` in order (a log split at its gaps
     gives several; the clock of a file is that of its first and last run).
@@ -54,43 +56,51 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run]) -> list[dict]:
     for path, own in zip(files, parts):
         if not path.is_file():
             continue
-        entries.append(
-            {
-                "path": str(path.resolve()),
-                "sha256": file_digest(path),
-                "first_time_s": float(own[0].time[0]),
-                "last_time_s": float(own[-1].time[-1]),
-                "period_s": float(own[-1].period),
-            }
-        )
+        entry = {
+            "path": str(path.resolve()),
+            "sha256": file_digest(path),
+            "first_time_s": float(own[0].time[0]),
+            "last_time_s": float(own[-1].time[-1]),
+            "period_s": float(own[-1].period),
+        }
+        if model_dir is not None:
+            entry["path_from_model"] = Path(os.path.relpath(path.resolve(), Path(model_dir).resolve())).as_posix()
+        entries.append(entry)
     return entries
 
 
-def continued_recording(training: Mapping[str, Any] | None, run: Run) -> tuple[Path | None, str | None]:
+def continued_recording(
+    training: Mapping[str, Any] | None, run: Run, model_path: str | Path | None = None
+) -> tuple[Path | None, str | None]:
     """The modelling file ``run`` continues, and a note on what was found.
 
     The run continues a recording when its first time stamp follows the
     recording's last by one sampling period (within
     :data:`groupfit.continuation.CONTIGUITY_TOLERANCE` of it). The file is
-    used only when it is still at its path with the recorded SHA-256;
-    otherwise the note says why it was not.
+    looked for where it lies from the model file (``model_path``), then at its
+    absolute path, and used only with the recorded SHA-256; otherwise the note
+    says why it was not.
     """
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
         period = entry["period_s"]
         gap = float(run.time[0]) - entry["last_time_s"]
         if abs(gap - period) > CONTIGUITY_TOLERANCE * period:
             continue
-        path = Path(entry["path"])
-        if not path.is_file():
+        places = [Path(entry["path"])]
+        if model_path is not None and entry.get("path_from_model"):
+            places.insert(0, Path(model_path).resolve().parent / entry["path_from_model"])
+        present = [p for p in places if p.is_file()]
+        path = next((p for p in present if file_digest(p) == entry["sha256"]), None)
+        if not present:
             return None, (
-                f"{run.name}'s clock continues the modelling recording {path} (it ended at "
+                f"{run.name}'s clock continues the modelling recording {entry['path']} (it ended at "
                 f"{entry['last_time_s']:g} s), which is no longer there: the rule starts afresh; give the file "
                 "with --continues FILE to carry its history"
             )
-        if file_digest(path) != entry["sha256"]:
+        if path is None:
             return None, (
-                f"{run.name}'s clock continues the modelling recording {path}, but that file has changed since "
-                "the fit: the rule starts afresh; give the earlier file with --continues FILE"
+                f"{run.name}'s clock continues the modelling recording {present[0]}, but that file has changed "
+                "since the fit: the rule starts afresh; give the earlier file with --continues FILE"
             )
         return path, (
             f"{run.name}'s clock continues the modelling recording {path} (it ended at {entry['last_time_s']:g} s): "

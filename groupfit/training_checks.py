@@ -28,6 +28,9 @@ def recordings_problem(training: Mapping[str, Any]) -> str | None:
             return f"{where} must hold {', '.join(RECORDING_KEYS)}"
         if not isinstance(entry["path"], str) or not entry["path"]:
             return f"{where}.path must be the file's path"
+        relative = entry.get("path_from_model")
+        if relative is not None and (not isinstance(relative, str) or not relative):
+            return f"{where}.path_from_model must be the file's path from the model file's folder"
         digest = entry["sha256"]
         if not isinstance(digest, str) or len(digest) != 64 or any(c not in "0123456789abcdef" for c in digest):
             return f"{where}.sha256 must be 64 hex digits"

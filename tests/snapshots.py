@@ -4,8 +4,9 @@
 returns every output it wrote — the model files, every export target, the
 ``--json`` results and the printed reports — as bytes, keyed by a path
 relative to the snapshot folder. Paths are written as ``<out>`` and
-``<data>``; timings (a search's, an estimate's) as ``<t> s``. Figures (PNG) are left out: their bytes
-depend on the matplotlib version.
+``<data>`` (a path from the model file's folder as ``<from model>``);
+timings (a search's, an estimate's) as ``<t> s``. Figures (PNG) are left
+out: their bytes depend on the matplotlib version.
 
 A change meant to alter an output (a new report line, a new model key)
 regenerates the snapshots with one command, from the repository's root::
@@ -38,6 +39,8 @@ SNAPSHOTS = Path(__file__).resolve().parent / "data" / "snapshots"
 TEMPS = "T1,T2,T3,T4"
 TIMING = re.compile(rb"\b\d+(\.\d+)?(e-?\d+)? s\b")
 SECONDS = re.compile(rb'"seconds": [-+0-9.eE]+')
+FROM_MODEL = re.compile(rb'"path_from_model": "[^"]*"')
+"""A data file's path from the model file's folder: it depends on where the temporary folder lies."""
 
 
 def position_run(path: Path) -> Path:
@@ -140,6 +143,7 @@ an augmented model, a reference dropped before the effects and one kept after th
 def normalised(data: bytes, out: Path) -> bytes:
     data = data.replace(str(out).encode(), b"<out>").replace(str(DATA).encode(), b"<data>")
     data = SECONDS.sub(b'"seconds": "<t>"', data)
+    data = FROM_MODEL.sub(b'"path_from_model": "<from model>"', data)
     return b"\n".join(
         TIMING.sub(b"<t> s", line) if line.startswith((b"search", b"breaks")) else line for line in data.split(b"\n")
     )

@@ -231,6 +231,17 @@ def test_a_model_file_with_an_expectation_outside_its_range_is_refused():
         ({"path": "a.csv", "sha256": "0" * 64, "first_time_s": 2, "last_time_s": 1, "period_s": 1}, "first_time_s"),
         ({"path": "a.csv", "sha256": "0" * 64, "first_time_s": 0, "last_time_s": 1, "period_s": 0}, "period_s > 0"),
         ({"path": "", "sha256": "0" * 64, "first_time_s": 0, "last_time_s": 1, "period_s": 1}, "path"),
+        (
+            {
+                "path": "a.csv",
+                "sha256": "0" * 64,
+                "first_time_s": 0,
+                "last_time_s": 1,
+                "period_s": 1,
+                "path_from_model": 3,
+            },
+            "path_from_model",
+        ),
     ],
 )
 def test_a_model_file_with_a_bad_recording_entry_is_refused_naming_it(recordings, named):

@@ -228,6 +228,20 @@ def test_the_rest_whose_clock_continues_the_modelling_file_is_replayed_after_it_
     assert restarted["continues"] == [] and restarted["samples"][0]["group"] == 1
 
 
+def test_a_folder_moved_whole_keeps_the_model_and_its_modelling_file_together(split_recording, tmp_path):
+    moved = tmp_path / "elsewhere"
+    moved.mkdir()
+    for name in ("model.json", "first.csv", "rest.csv"):
+        (moved / name).write_bytes((split_recording / name).read_bytes())
+    model = json.loads((moved / "model.json").read_text())
+    (recording,) = model["training"]["recordings"]
+    assert recording["path_from_model"] == "first.csv"
+    recording["path"] = str(tmp_path / "gone" / "first.csv")  # the absolute path no longer leads to it
+    (moved / "model.json").write_text(json.dumps(model))
+    result = replayed(moved, "--data", moved / "rest.csv")
+    assert result["continues"] == [str(moved / "first.csv")] and result["history_samples"] == 330
+
+
 @pytest.mark.parametrize("change", ["edited", "moved", "other columns"])
 def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the_note_says_why(
     split_recording, tmp_path, capsys, change

@@ -230,7 +230,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     if result.changed and expectations["after"] is not None:
         training = {**(result.model.training or {}), **expectations["after"].training()}
         result = replace(result, model=result.model.replace(training=training))
-    recordings = {RECORDINGS_KEY: recording_entries(args.data, data)}  # the files this model was built on
+    recordings = {RECORDINGS_KEY: recording_entries(args.data, data, out_dir)}  # the files it was built on
     result = replace(result, model=result.model.replace(training={**(result.model.training or {}), **recordings}))
     model_path = Path(args.model)
     written = []

@@ -194,7 +194,7 @@ def run_fit(args: argparse.Namespace) -> int:
             notes += f"\nnote    no next-run estimate: {exc}"
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
     if position_run is None:
-        training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs)
+        training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
     if expectation is not None:
         training.update(expectation_training(expectation, model_settings.p))
     model = model.replace(training=training)

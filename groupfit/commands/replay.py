@@ -228,7 +228,7 @@ def earlier_recordings(args: argparse.Namespace, model: ModelFile, run: Run, loa
         raise InputError("--fresh and --continues: give one of them (--fresh starts the rule afresh)")
     if args.continues or args.fresh:
         return list(args.continues or []), [load(path) for path in args.continues or []], None
-    found, note = continued_recording(model.training, run)
+    found, note = continued_recording(model.training, run, args.model)
     if found is None:
         return [], [], note
     history = load(found)
