@@ -41,12 +41,14 @@ def same_recording(previous: Run, run: Run) -> bool:
     )
 
 
+def clock_runs_on(last_time_s: float, period_s: float, first_time_s: float) -> bool:
+    """Whether a clock that ended at ``last_time_s`` picks up at ``first_time_s`` one sampling period later."""
+    return bool(abs(first_time_s - last_time_s - period_s) <= CONTIGUITY_TOLERANCE * period_s)
+
+
 def continues(previous: Run, run: Run) -> bool:
     """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period."""
-    if not same_recording(previous, run):
-        return False
-    gap = run.time[0] - previous.time[-1]
-    return bool(abs(gap - previous.period) <= CONTIGUITY_TOLERANCE * previous.period)
+    return same_recording(previous, run) and clock_runs_on(previous.time[-1], previous.period, run.time[0])
 
 
 def restamped(run: Run, previous: Run) -> Run:

@@ -20,7 +20,7 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from groupfit.continuation import CONTIGUITY_TOLERANCE
+from groupfit.continuation import clock_runs_on
 from groupfit.data import Run
 from groupfit.training_checks import RECORDINGS_KEY
 
@@ -75,16 +75,14 @@ def continued_recording(
     """The modelling file ``run`` continues, and a note on what was found.
 
     The run continues a recording when its first time stamp follows the
-    recording's last by one sampling period (within
-    :data:`groupfit.continuation.CONTIGUITY_TOLERANCE` of it). The file is
+    recording's last by one sampling period
+    (:func:`groupfit.continuation.clock_runs_on`). The file is
     looked for where it lies from the model file (``model_path``), then at its
     absolute path, and used only with the recorded SHA-256; otherwise the note
     says why it was not.
     """
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
-        period = entry["period_s"]
-        gap = float(run.time[0]) - entry["last_time_s"]
-        if abs(gap - period) > CONTIGUITY_TOLERANCE * period:
+        if not clock_runs_on(entry["last_time_s"], entry["period_s"], float(run.time[0])):
             continue
         places = [Path(entry["path"])]
         if model_path is not None and entry.get("path_from_model"):
