@@ -4,9 +4,11 @@ Run from the repository root: ``python bench/bench_next_run.py`` (a few minutes)
 Prints, per pair (model run → next run), the raw figure, the expected RMS
 (calibrated), the actual RMS of the chosen model replayed through the run-time
 rule over the next run, their ratio, and whether the chosen p, BIC's p and the
-old default p = 3 are within 1.5× of the best p = 0…3 there. Then derives the
+old default p = 3 are within 1.5× of the best p = 0…3 there; then the same for
+the cuts of the shared measured test (``../shared``). Then derives the
 calibration (:func:`groupfit.heldout.calibration.derive_calibration`) on the
-even-numbered pairs and checks it on the odd-numbered ones, and on the whole panel.
+even-numbered of all pairs (panel and cuts) and checks it on the odd-numbered
+ones, and on all of them (the factor that ships).
 ``--quick`` scores a small subset.
 """
 
@@ -80,19 +82,21 @@ def main() -> None:
     pairs = panel.simulator_pairs(range(3), range(0)) + panel.fe_pairs()[:2] if args.quick else panel.panel_pairs()
     rows = [panel.score_pair(pair) for pair in pairs]
     table(rows, f"calibration panel ({len(rows)} pairs), with the shipped calibration")
-    raw = [r["raw_um"] for r in rows]
-    actual = [r["actual_um"] for r in rows]
-    derived = calibration.derive_calibration(raw[0::2], actual[0::2])
-    print(f"\nderived on the even pairs: {derived}")
-    summary(rows[1::2], derived["factor"], "checked on the odd pairs")
-    summary(rows[0::2], derived["factor"], "on the even pairs themselves")
-    print(f"derived on the whole panel: {calibration.derive_calibration(raw, actual)}")
-    print(ceiling(rows))
-    measured = [panel.score_pair(pair) for pair in panel.measured_pairs()]
+    measured = [] if args.quick else [panel.score_pair(pair) for pair in panel.measured_pairs()]
     if measured:
-        table(measured, "the shared measured test cut into runs (not used to calibrate)")
+        table(measured, "the shared measured test cut into runs")
     else:
-        print("\nthe shared measured test is absent (../shared): skipped")
+        print("\nthe shared measured test is absent (../shared) or --quick: the panel alone calibrates")
+    both = rows + measured
+    raw = [r["raw_um"] for r in both]
+    actual = [r["actual_um"] for r in both]
+    derived = calibration.derive_calibration(raw[0::2], actual[0::2])
+    print(f"\nderived on the even-numbered of all {len(both)} pairs: {derived}")
+    summary(both[1::2], derived["factor"], "checked on the odd-numbered pairs")
+    summary(both[0::2], derived["factor"], "on the even-numbered pairs themselves")
+    print(f"derived on all {len(both)} pairs (what ships): {calibration.derive_calibration(raw, actual)}")
+    summary(both, calibration.FACTOR, f"all {len(both)} pairs with the shipped factor")
+    print(ceiling(both))
     if args.json:
         Path(args.json).write_text(json.dumps({"panel": rows, "measured": measured}, indent=1, default=str))
 

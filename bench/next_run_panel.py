@@ -12,8 +12,8 @@ Sources (:func:`panel_pairs`): the independent lumped machine
 (``independent_machine.py``: random machines, schedules and workshop days), the
 finite-element repeats and other-condition runs in ``datasets/``, and the
 diagnosis data sets' model → validate pairs. :func:`measured_pairs` cuts the
-shared measured test (``../shared``) into runs; it is reported apart and never
-used to calibrate; a cut that is the rest of the model run's recording is
+shared measured test (``../shared``) into runs; they join the calibration (the
+only real runs of the panel); a cut that is the rest of the model run's recording is
 replayed with the model run in front, as ``groupfit replay`` does.
 """
 
@@ -29,9 +29,10 @@ import pandas as pd
 from groupfit.data import Run, load_run
 from groupfit.heldout.expect import expect_next_run
 from groupfit.heldout.nextrun import rule_prediction, sliced
+from groupfit.heldout.reference_choice import choose_reference
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
-from groupfit.reference import default_reference, with_reference
+from groupfit.reference import default_reference, is_column_reference, with_reference
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import independent_machine as machine  # noqa: E402
@@ -71,6 +72,8 @@ class Pair:
     continues: bool = False
     """The next run is the rest of the model run's recording: replayed with the model run in front (as
     ``groupfit replay`` replays a file whose clock runs on from the modelling file)."""
+    reference: str | None = None
+    """The default reference of ``fit`` (the ambient column when the run has one); the runs are kept as read."""
 
 
 def thin_pair(model: Run, next_run: Run, max_samples: int = MAX_SAMPLES) -> tuple[Run, Run]:
@@ -93,9 +96,8 @@ def make_pair(
 ) -> Pair:
     if reference == "default":
         reference = default_reference(model.frame)
-    model, next_run = with_reference(model, reference), with_reference(next_run, reference)
     model, next_run = thin_pair(model, next_run)
-    return Pair(name, source, model, next_run, continues)
+    return Pair(name, source, model, next_run, continues, reference)
 
 
 def fe_pairs() -> list[Pair]:
@@ -147,9 +149,60 @@ def measured_pairs() -> list[Pair]:
 
 
 def score_pair(pair: Pair) -> dict:
-    """The estimate, the actual next-run RMS of every p, and the choices of the estimate, BIC and the default."""
-    model, next_run = pair.model, pair.next
-    expectation = expect_next_run([model], P_VALUES, **SETTINGS)
+    """The estimate, the actual next-run RMS of every p, and the choices of the estimate, BIC and the default.
+
+    The reference is decided as ``fit`` decides it when none is configured
+    (:func:`groupfit.heldout.reference_choice.choose_reference`); BIC and the
+    old default p = 3 keep the default reference, as ``fit`` did before. The
+    best is the least actual RMS over p = 0…3 and both references.
+    """
+    default = pair.reference
+    choice = None
+    chosen_reference = default
+    if is_column_reference(default):
+        choice = choose_reference([pair.model], default, P_VALUES, **SETTINGS)
+        chosen_reference = choice.reference
+    if choice is not None and choice.scored:
+        expectation = choice.expectations[chosen_reference]
+    else:
+        expectation = expect_next_run([with_reference(pair.model, chosen_reference)], P_VALUES, **SETTINGS)
+    actual_default, bic_p, n_model = actual_by_p(pair, default)
+    actual = actual_default if chosen_reference == default else actual_by_p(pair, chosen_reference)[0]
+    chosen = expectation.candidates[expectation.chosen]
+    raw = float(expectation.scores.raw_rms()[expectation.chosen])
+    best = min(*actual.values(), *actual_default.values())
+    default_p = min(DEFAULT_P, max(actual_default))
+    model = with_reference(pair.model, chosen_reference)
+    return {
+        "pair": pair.name,
+        "source": pair.source,
+        "reference": chosen_reference,
+        "default_reference": default,
+        "reference_choice": None if choice is None else choice.to_json(),
+        "chosen_p": chosen,
+        "raw_um": raw,
+        "actual_um": actual[chosen],
+        "actual_by_p": actual,
+        "actual_by_p_default_reference": actual_default,
+        "best_p": min(actual, key=actual.get),
+        "bic_p": bic_p,
+        "within_chosen": actual[chosen] <= 1.5 * best,
+        "within_bic": actual_default[bic_p] <= 1.5 * best,
+        "within_default": actual_default[default_p] <= 1.5 * best,
+        "notes": list(expectation.notes),
+        "error_sd_um": float(np.std(model.error)),
+        "next_error_sd_um": float(np.std(pair.next.error)),
+        "raw_by_p": dict(zip(expectation.candidates, map(float, expectation.scores.raw_rms()))),
+        "n_folds": expectation.scores.n_folds,
+        "n_model": n_model,
+        "n_next": pair.next.n_samples,
+    }
+
+
+def actual_by_p(pair: Pair, reference: str | None) -> tuple[dict, int, int]:
+    """Every p fitted on the model run as ``fit`` fits it (inputs relative to ``reference``) and replayed through
+    the run-time rule over the next run: the actual RMS per p, BIC's p and the model run's samples."""
+    model, next_run = with_reference(pair.model, reference), with_reference(pair.next, reference)
     path = exact_path(model.temps, model.error, max(P_VALUES), objective="sae", **_path_settings())
     actual = {}
     for p in P_VALUES:
@@ -166,31 +219,7 @@ def score_pair(pair: Pair) -> dict:
         actual[p] = float(np.sqrt(np.mean(residual[np.isfinite(residual)] ** 2)))
     n_coef = model.temps.shape[1] + 1
     bic_p = choose_p(path["rss"], path["R"], model.n_samples, n_coef, "bic")["p"]
-    chosen = expectation.candidates[expectation.chosen]
-    raw = float(expectation.scores.raw_rms()[expectation.chosen])
-    best = min(actual.values())
-    default_p = min(DEFAULT_P, max(actual))
-    return {
-        "pair": pair.name,
-        "source": pair.source,
-        "chosen_p": chosen,
-        "raw_um": raw,
-        "actual_um": actual[chosen],
-        "actual_by_p": actual,
-        "best_p": min(actual, key=actual.get),
-        "bic_p": bic_p,
-        "within_chosen": actual[chosen] <= 1.5 * best,
-        "within_bic": actual[bic_p] <= 1.5 * best,
-        "within_default": actual[default_p] <= 1.5 * best,
-        "notes": list(expectation.notes),
-        "in_sample_um": float(np.sqrt(path["rss"][chosen] / model.n_samples)),
-        "error_sd_um": float(np.std(model.error)),
-        "next_error_sd_um": float(np.std(next_run.error)),
-        "raw_by_p": dict(zip(expectation.candidates, map(float, expectation.scores.raw_rms()))),
-        "n_folds": expectation.scores.n_folds,
-        "n_model": model.n_samples,
-        "n_next": next_run.n_samples,
-    }
+    return actual, bic_p, model.n_samples
 
 
 def _path_settings() -> dict:

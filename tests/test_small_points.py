@@ -77,7 +77,12 @@ def test_an_ambient_named_by_flag_is_no_input_and_the_reference(tmp_path):
         == 0
     )
     model = json.loads((tmp_path / "b.json").read_text())
-    assert model["temps"] == ["T1", "T2"] and model["reference"] == "T15"
+    choice = model["training"]["reference_choice"]  # the named ambient is the default, questioned as T_amb is
+    assert model["temps"] == ["T1", "T2"] and choice["default"] == "T15"
+    assert model.get("reference") == choice["chosen"] and choice["chosen"] is None  # the error never follows it
+    args = ("--data", path, "--p", "0", "--ambient", "T15", "--reference", "T15")
+    assert cli("fit", *args, "--json", tmp_path / "c.json", "--out", tmp_path, "--force") == 0
+    assert json.loads((tmp_path / "c.json").read_text())["reference"] == "T15"
     assert cli("fit", "--data", path, "--p", "0", "--ambient", "T99", "--out", tmp_path) == 2
 
 

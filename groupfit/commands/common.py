@@ -419,6 +419,11 @@ def add_reference_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def reference_is_default(args: argparse.Namespace, settings: RunSettings) -> bool:
+    """Whether neither ``--reference`` nor ``[model] reference`` names the reference."""
+    return getattr(args, "reference", None) is None and settings.model.reference is None
+
+
 def configured_reference(args: argparse.Namespace, settings: RunSettings, run: Run) -> str | None:
     """The reference of ``--reference``, else ``[model] reference``, else T_amb when ``run`` has it."""
     value = getattr(args, "reference", None)

@@ -11,6 +11,7 @@ from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
+from groupfit.heldout.reference_choice import default_reference_choice
 from groupfit.inference.cli import add_interval_options, check_block, interval_settings
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import (
@@ -102,6 +103,13 @@ def run_compare(args: argparse.Namespace) -> int:
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path)]
     common.print_notes([modelling, *validation], common.report_stream(args))
     reference = common.configured_reference(args, run_settings, modelling)
+    choice = None
+    if common.reference_is_default(args, run_settings):
+        candidates = tuple(range(settings.fit_pmax + 1))  # as fit decides it
+        choice = default_reference_choice(
+            [modelling], reference, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+        )
+        reference = reference if choice is None else choice.reference
     modelling = with_reference(modelling, reference)
     validation = [with_reference(run, reference) for run in validation]
     joined, skipped, notes = with_histories(validation, [modelling], assume_continued=args.continues)
@@ -156,6 +164,10 @@ def run_compare(args: argparse.Namespace) -> int:
     written.append(figure)
 
     data, summary = result.to_json(), result.summary()
+    if choice is not None:
+        data["reference_choice"] = choice.to_json()
+        if choice.scored:
+            summary = choice.line() + "\n" + summary
     if args.probe_every:
         checked = validation or [modelling]
         table = interval_table(

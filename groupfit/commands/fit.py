@@ -17,6 +17,7 @@ from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
+from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.heldout.span import SPAN_KEY, input_span
 from groupfit.inference.cli import add_interval_options, check_block, intervals_from_args
@@ -139,6 +140,8 @@ class FitData:
     estimate_runs: list[Run]
     """The runs' measured rows the next-run estimate is cut from (none for a position model)."""
     input_selection: dict | None = None
+    reference_choice: ReferenceChoice | None = None
+    """How the default reference was decided (an ambient column that moves), None when it was configured."""
 
 
 def run_fit(args: argparse.Namespace) -> int:
@@ -197,6 +200,10 @@ def run_fit(args: argparse.Namespace) -> int:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
     if expectation is not None:
         training.update(expectation_training(expectation, model_settings.p))
+    if data.reference_choice is not None:
+        training["reference_choice"] = data.reference_choice.to_json()
+        if data.reference_choice.scored:
+            notes += "\n" + data.reference_choice.line()
     model = model.replace(training=training)
     if position_run is not None:
         model, notes = position_model(args, model, position_run)
@@ -273,6 +280,14 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
         )
     run = join_runs(runs)
     reference = common.configured_reference(args, settings, run)
+    choice = None
+    if position_run is None and common.reference_is_default(args, settings):
+        model = settings.model
+        p_values = tuple(range(model.pmax + 1)) if model.p == "auto" else (model.p,)
+        choice = default_reference_choice(
+            runs, reference, p_values, n=model.n, c=float(model.c), fit_intercept=model.intercept
+        )
+        reference = reference if choice is None else choice.reference
     if len(runs) > 1 and reference == START:
         runs = [with_reference(r, START) for r in runs]  # each run's own start
         run = join_runs(runs)
@@ -289,7 +304,7 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
         if args.ridge is not None:
             raise InputError("--ridge is not available with --position: the position terms are fitted by least squares")
     estimate_runs = [measured_rows(with_reference(r, reference)) for r in runs] if position_run is None else []
-    return FitData(settings, runs, run, position_run, estimate_runs)
+    return FitData(settings, runs, run, position_run, estimate_runs, reference_choice=choice)
 
 
 def chosen_inputs(args: argparse.Namespace, data: FitData) -> FitData:

@@ -18,6 +18,8 @@ ask of a model before it goes onto the machine:
 * :mod:`~groupfit.heldout.choice`: the one-standard-error rule;
 * :mod:`~groupfit.heldout.expect`: the expected next-run error of each candidate,
   the one it chooses and the notes on when not to trust it;
+* :mod:`~groupfit.heldout.reference_choice`: the default ambient reference, or none,
+  by the expected next-run error;
 * :mod:`~groupfit.heldout.span`: a run beyond the modelling run's inputs.
 
 Nothing here imports the commands or the diagnosis.
