@@ -8,7 +8,9 @@ old default p = 3 are within 1.5× of the best p = 0…3 there; then the same fo
 the cuts of the shared measured test (``../shared``). Then derives the
 calibration (:func:`groupfit.heldout.calibration.derive_calibration`) on the
 even-numbered of all pairs (panel and cuts) and checks it on the odd-numbered
-ones, and on all of them (the factor that ships).
+ones, and on all of them (the factor that ships). Last, leave-one-run-out on
+two or three of the six FE runs against each other one: the range printed
+with several runs (:data:`groupfit.heldout.calibration.SEVERAL_RUNS_RANGE`).
 ``--quick`` scores a small subset.
 """
 
@@ -74,6 +76,24 @@ def ceiling(rows: list[dict]) -> str:
     )
 
 
+def several_summary(rows: list[dict]) -> None:
+    """Leave-one-run-out on several FE runs: the estimate against the next run, per number of runs."""
+    print("\nseveral runs (fit --data A B [C] --p 0: leave-one-run-out, not scaled) → another FE run")
+    for size in sorted({len(r["model_runs"]) for r in rows}):
+        part = [r for r in rows if len(r["model_runs"]) == size]
+        ratio = np.array([r["actual_um"] / r["expected_um"] for r in part])
+        inside = np.mean([r["range_um"][0] <= r["actual_um"] <= r["range_um"][1] for r in part])
+        within = np.mean((ratio >= 0.5) & (ratio <= 2))
+        print(
+            f"{size} runs, {len(part)} pairs: actual/expected median {np.median(ratio):.2f} "
+            f"({ratio.min():.2f}-{ratio.max():.2f}), in [0.5, 2]: {100 * within:.0f} %, "
+            f"inside the printed range: {100 * inside:.0f} %"
+        )
+    ratio = [r["actual_um"] / r["expected_um"] for r in rows]
+    low, high = np.percentile(ratio, calibration.LEVELS)
+    print(f"10th-90th percentiles of actual / expected over all {len(rows)}: {low:.3g}-{high:.3g} (what ships)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="a small subset")
@@ -97,8 +117,13 @@ def main() -> None:
     print(f"derived on all {len(both)} pairs (what ships): {calibration.derive_calibration(raw, actual)}")
     summary(both, calibration.FACTOR, f"all {len(both)} pairs with the shipped factor")
     print(ceiling(both))
+    several = [] if args.quick else panel.several_run_rows()
+    if several:
+        several_summary(several)
     if args.json:
-        Path(args.json).write_text(json.dumps({"panel": rows, "measured": measured}, indent=1, default=str))
+        Path(args.json).write_text(
+            json.dumps({"panel": rows, "measured": measured, "several_runs": several}, indent=1, default=str)
+        )
 
 
 if __name__ == "__main__":

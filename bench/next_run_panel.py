@@ -19,6 +19,7 @@ replayed with the model run in front, as ``groupfit replay`` does.
 
 from __future__ import annotations
 
+import itertools
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from groupfit.data import Run, load_run
+from groupfit.data import Run, join_runs, load_run
 from groupfit.heldout.expect import expect_next_run
 from groupfit.heldout.nextrun import rule_prediction, sliced
 from groupfit.heldout.reference_choice import choose_reference
@@ -224,6 +225,40 @@ def actual_by_p(pair: Pair, reference: str | None) -> tuple[dict, int, int]:
 
 def _path_settings() -> dict:
     return {"n": SETTINGS["n"], "c": SETTINGS["c"], "fit_intercept": SETTINGS["fit_intercept"]}
+
+
+FE_RUNS = ("paper_cycle", "repeat_timing", "repeat_ambient25", "repeat_warm", "validation_speed", "validation_timing")
+
+
+def several_run_rows(sizes=(2, 3)) -> list[dict]:
+    """Leave-one-run-out on several FE runs → another of the six: the estimate ``fit --data A B [C] --p 0``
+    prints (not scaled), its range, and the actual RMS of the global model fitted on all of them."""
+    runs = {
+        name: with_reference(load_run(DATASETS / f"{name}.csv", temps=["T1", "T2"], name=name), "T_amb")
+        for name in FE_RUNS
+    }
+    rows = []
+    for size in sizes:
+        for names in itertools.combinations(FE_RUNS, size):
+            modelling = [runs[name] for name in names]
+            expected, (low, high) = expect_next_run(modelling, (0,)).expected()
+            joined = join_runs(modelling)
+            estimator = GroupedRegressor(p=0).fit(joined.temps, joined.error)
+            for name in FE_RUNS:
+                if name in names:
+                    continue
+                residual = runs[name].error - rule_prediction(estimator, joined, runs[name].temps)
+                actual = float(np.sqrt(np.mean(residual**2)))
+                rows.append(
+                    {
+                        "model_runs": names,
+                        "next_run": name,
+                        "expected_um": expected,
+                        "range_um": [low, high],
+                        "actual_um": actual,
+                    }
+                )
+    return rows
 
 
 def panel_pairs() -> list[Pair]:

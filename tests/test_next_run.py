@@ -114,8 +114,11 @@ def test_leave_one_run_out_matches_fit_and_replay_run_by_run(tmp_path, capsys):
     # each held-out run is a real next run: not scaled by the one-run calibration
     assert fitted["expected_next_run_rms_um"] == pytest.approx(np.sqrt(sse / count), rel=1e-9)
     assert "leave-one-run-out over 3 runs" in fitted["expected_next_run_method"]
-    low, high = fitted["expected_next_run_range_um"]
-    assert low == pytest.approx(min(per_run)) and high == pytest.approx(max(per_run))
+    low, high = fitted["expected_next_run_range_um"]  # the held-out runs' spread, at least the panel's band
+    expected = fitted["expected_next_run_rms_um"]
+    floor, ceiling = calibration.SEVERAL_RUNS_RANGE
+    assert low == pytest.approx(min(min(per_run), floor * expected))
+    assert high == pytest.approx(max(max(per_run), ceiling * expected))
     saved = ModelFile.load(tmp_path / "all" / "model.json").training
     assert saved["expected_next_run_rms_um"] == fitted["expected_next_run_rms_um"]
 

@@ -44,8 +44,7 @@ class NextRunExpectation:
         index = self.chosen if index is None else index
         raw = float(self.scores.raw_rms()[index])
         if self.scores.kind == LEAVE_ONE_RUN_OUT:  # each held-out run is a real next run: no factor
-            per_run = np.sqrt(self.scores.sse[index] / self.scores.counts)
-            return raw, (float(min(per_run.min(), raw)), float(max(per_run.max(), raw)))
+            return calibration.expected_several(raw, np.sqrt(self.scores.sse[index] / self.scores.counts))
         return calibration.expected(raw)
 
     def for_candidate(self, candidate) -> tuple[float, tuple[float, float]] | None:
@@ -61,7 +60,12 @@ class NextRunExpectation:
 
     def method(self) -> str:
         if self.scores.kind == LEAVE_ONE_RUN_OUT:
-            return f"{self.scores.method()}; range from the best to the worst held-out run"
+            low, high = calibration.SEVERAL_RUNS_RANGE
+            return (
+                f"{self.scores.method()}; range from the best to the worst held-out run, at least "
+                f"×{low:.3g}-{high:.3g} (the several-run panel's {calibration.LEVELS[0]:g}th-"
+                f"{calibration.LEVELS[1]:g}th percentiles)"
+            )
         return (
             f"{self.scores.method()}; calibrated ×{calibration.FACTOR:.3g}, range from the calibration panel's "
             f"{calibration.LEVELS[0]:g}th-{calibration.LEVELS[1]:g}th percentiles"
