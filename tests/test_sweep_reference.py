@@ -1,4 +1,5 @@
-"""A sweep takes the inputs as fit and compare do: rises over T_amb when the run has that column."""
+"""A sweep takes the inputs as fit and compare default to: rises over T_amb when the run has that column
+(kept for every grid point, also where fit would drop it by the next-run estimate)."""
 
 from pathlib import Path
 
