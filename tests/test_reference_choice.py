@@ -74,6 +74,17 @@ def test_the_ambient_s_signal_to_noise_is_its_spread_over_its_white_scatter():
     assert spread == pytest.approx(np.hypot(1.5, sigma), rel=0.03) and ratio > SIGNAL_TO_NOISE
 
 
+def test_two_steady_days_at_two_air_levels_are_an_ambient_that_moves(tmp_path):
+    days = [machine_day(k, air_level=level, air_swing=0.0, truth="absolute") for k, level in ((4, 20.0), (5, 23.0))]
+    for day in days:
+        day["T_amb"] = day["T_amb"].round(0)  # a steady reading with no scatter at all: the ratio is unbounded
+    choice = choose_reference([run_of(day) for day in days], "T_amb", (0,))
+    assert choice.signal_to_noise == np.inf and choice.scored and choice.reference is None
+    record = choice.to_json()
+    assert record["ambient_signal_to_noise"] is None  # JSON has no infinity
+    json.dumps(record, allow_nan=False)
+
+
 def test_an_ambient_that_stays_within_its_noise_leaves_the_default_unquestioned():
     frame = machine_day(1, air_level=20.0, air_swing=0.0, truth="absolute")
     choice = choose_reference([run_of(frame)], "T_amb", (0, 1))

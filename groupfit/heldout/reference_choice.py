@@ -21,6 +21,7 @@ noise leaves the question open, and the default stands.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -108,7 +109,7 @@ class ReferenceChoice:
             "default": self.ambient,
             "rule": RULE,
             "ambient_sd_c": self.spread_c,
-            "ambient_signal_to_noise": self.signal_to_noise,
+            "ambient_signal_to_noise": self.signal_to_noise if math.isfinite(self.signal_to_noise) else None,
             "candidates": candidates,
             "reason": self.reason(),
         }
