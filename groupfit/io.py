@@ -8,13 +8,15 @@ over the target, so a reader never sees a half-written file. Files get the
 mode a plain ``open`` would give them (``0o666`` less the umask), not the
 ``0o600`` of a temporary file. :func:`check_output_file` and
 :func:`check_output_dir` check a target before any work starts, without
-creating anything.
+creating anything. :func:`file_sha256` names a file by its contents (a sweep's
+data sets, the modelling files a model file remembers).
 """
 
 from __future__ import annotations
 
 import contextlib
 import contextvars
+import hashlib
 import json
 import os
 import tempfile
@@ -246,3 +248,12 @@ def read_json_file(path: str | Path, what: str = "model file") -> Any:
         raise InputError(f"{path}: not a JSON {what} ({exc})") from None
     except RecursionError:
         raise InputError(f"{path}: not a {what} (its JSON is nested too deeply to read)") from None
+
+
+def file_sha256(path: str | Path) -> str:
+    """The SHA-256 of a file's bytes, as hex (read in blocks of 1 MiB)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()

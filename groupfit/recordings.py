@@ -15,23 +15,14 @@ a continuation this way; ``--continues`` still joins it.
 
 from __future__ import annotations
 
-import hashlib
 import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from groupfit.continuation import clock_runs_on
 from groupfit.data import Run
+from groupfit.io import file_sha256
 from groupfit.training_checks import RECORDINGS_KEY
-
-
-def file_digest(path: str | Path) -> str:
-    """The SHA-256 of a file's bytes, as hex."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str | Path | None = None) -> list[dict]:
@@ -58,7 +49,7 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
             continue
         entry = {
             "path": str(path.resolve()),
-            "sha256": file_digest(path),
+            "sha256": file_sha256(path),
             "first_time_s": float(own[0].time[0]),
             "last_time_s": float(own[-1].time[-1]),
             "period_s": float(own[-1].period),
@@ -88,7 +79,7 @@ def continued_recording(
         if model_path is not None and entry.get("path_from_model"):
             places.insert(0, Path(model_path).resolve().parent / entry["path_from_model"])
         present = [p for p in places if p.is_file()]
-        path = next((p for p in present if file_digest(p) == entry["sha256"]), None)
+        path = next((p for p in present if file_sha256(p) == entry["sha256"]), None)
         if not present:
             return None, (
                 f"{run.name}'s clock continues the modelling recording {entry['path']} (it ended at "
@@ -108,4 +99,4 @@ def continued_recording(
     return None, None
 
 
-__all__ = ["RECORDINGS_KEY", "continued_recording", "file_digest", "recording_entries"]
+__all__ = ["RECORDINGS_KEY", "continued_recording", "recording_entries"]

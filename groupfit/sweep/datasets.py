@@ -4,7 +4,6 @@ resolved against its columns (:mod:`groupfit.sweep.config` reads the rest of the
 from __future__ import annotations
 
 import fnmatch
-import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -13,6 +12,7 @@ from groupfit.data_options import parse_period_tolerance
 from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
+from groupfit.io import file_sha256
 from groupfit.tomlconfig import Table
 
 
@@ -61,14 +61,6 @@ class Dataset:
         if self.clock["resample"] is not None:
             spec["resample_s"] = self.clock["resample"]
         return spec
-
-
-def file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def non_empty_string(value, what: str, label: str) -> str:
