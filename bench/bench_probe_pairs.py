@@ -37,9 +37,16 @@ import pandas as pd
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-import independent_machine as machine  # noqa: E402
 from bench_recalibration import quiet_main  # noqa: E402
-from next_run_panel import DATASETS, DIAG_KINDS, FE_PAIRS, MEASURED, MEASURED_CUTS, MEASURED_SENSORS  # noqa: E402
+from next_run_panel import (  # noqa: E402
+    DATASETS,
+    DIAG_KINDS,
+    FE_PAIRS,
+    MEASURED,
+    MEASURED_SENSORS,
+    measured_cuts,
+    simulator_scenarios,
+)
 
 from groupfit.model import ModelFile  # noqa: E402
 from groupfit.probe_intervals import parse_intervals  # noqa: E402
@@ -49,11 +56,8 @@ SCHEDULES = {"after T": None, "at start": 0}
 
 def pair_frames():
     """(name, source, model frame, next frame, temps, error column) of every pair."""
-    for truth, seeds in (("absolute", range(14)), ("rises", range(100, 106))):
-        for seed in seeds:
-            scenario = machine.random_spec(seed, truth).make()
-            name = f"{scenario.name}{'_rises' if truth == 'rises' else ''}"
-            yield name, "simulator", scenario.modelling, scenario.validation, list(scenario.temps), "error_um"
+    for name, scenario in simulator_scenarios():
+        yield name, "simulator", scenario.modelling, scenario.validation, list(scenario.temps), "error_um"
     for a, b in FE_PAIRS:
         frames = [pd.read_csv(DATASETS / f"{x}.csv") for x in (a, b)]
         yield f"{a}→{b}", "FE", *frames, ["T1", "T2"], "error_um"
@@ -62,10 +66,8 @@ def pair_frames():
         yield f"diag_{kind}", "FE diag", *frames, ["T1", "T2"], "error_um"
     if MEASURED.exists():
         whole = pd.read_csv(MEASURED)
-        n = len(whole)
-        for name, ((a0, a1), (b0, b1)) in MEASURED_CUTS.items():
-            model, following = whole.iloc[int(a0 * n) : int(a1 * n)], whole.iloc[int(b0 * n) : int(b1 * n)]
-            yield name, "measured", model, following, MEASURED_SENSORS, "disp_ch3_um"
+        for name, model, following, _ in measured_cuts(len(whole)):
+            yield name, "measured", whole.iloc[model], whole.iloc[following], MEASURED_SENSORS, "disp_ch3_um"
 
 
 def build(folder: Path, frame: pd.DataFrame, temps, error: str, *, diagnose: bool) -> Path:

@@ -112,16 +112,21 @@ def fe_pairs() -> list[Pair]:
     return out
 
 
-def simulator_pairs(seeds=range(14), rises_seeds=range(100, 106)) -> list[Pair]:
-    out = []
+def simulator_scenarios(seeds=range(14), rises_seeds=range(100, 106)):
+    """``(pair name, scenario)`` of the independent machine's pairs: its error over 20 °C (``seeds``) and over
+    the air (``rises_seeds``, named ``…_rises``)."""
     for truth, seed_range in (("absolute", seeds), ("rises", rises_seeds)):
         for seed in seed_range:
             scenario = machine.random_spec(seed, truth).make()
-            model = frame_run(scenario.modelling, f"{scenario.name}_model", scenario.temps)
-            next_run = frame_run(scenario.validation, f"{scenario.name}_next", scenario.temps)
-            out.append(
-                make_pair(f"{scenario.name}{'_rises' if truth == 'rises' else ''}", "simulator", model, next_run)
-            )
+            yield f"{scenario.name}{'_rises' if truth == 'rises' else ''}", scenario
+
+
+def simulator_pairs(seeds=range(14), rises_seeds=range(100, 106)) -> list[Pair]:
+    out = []
+    for name, scenario in simulator_scenarios(seeds, rises_seeds):
+        model = frame_run(scenario.modelling, f"{scenario.name}_model", scenario.temps)
+        next_run = frame_run(scenario.validation, f"{scenario.name}_next", scenario.temps)
+        out.append(make_pair(name, "simulator", model, next_run))
     return out
 
 
@@ -135,18 +140,26 @@ MEASURED_CUTS = {
 }
 
 
+def measured_cuts(n_samples: int):
+    """``(name, model rows, next rows, continues)`` of every cut of the measured test's ``n_samples`` rows."""
+    for name, ((a0, a1), (b0, b1)) in MEASURED_CUTS.items():
+        yield (
+            name,
+            slice(int(a0 * n_samples), int(a1 * n_samples)),
+            slice(int(b0 * n_samples), int(b1 * n_samples)),
+            (b0 == a1),
+        )
+
+
 def measured_pairs() -> list[Pair]:
     """Cuts of the shared measured test into model and next runs; empty when ``../shared`` is absent."""
     if not MEASURED.exists():
         return []
     whole = load_run(MEASURED, temps=MEASURED_SENSORS, error="disp_ch3_um")
-    n = whole.n_samples
-    out = []
-    for name, ((a0, a1), (b0, b1)) in MEASURED_CUTS.items():
-        model = sliced(whole, slice(int(a0 * n), int(a1 * n)))
-        next_run = sliced(whole, slice(int(b0 * n), int(b1 * n)))
-        out.append(make_pair(name, "measured", model, next_run, reference=None, continues=b0 == a1))
-    return out
+    return [
+        make_pair(name, "measured", sliced(whole, model), sliced(whole, following), reference=None, continues=joined)
+        for name, model, following, joined in measured_cuts(whole.n_samples)
+    ]
 
 
 def score_pair(pair: Pair) -> dict:
