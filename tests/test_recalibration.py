@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
-from recalibration_cases import HOLD, KALMAN, probe_schedule, with_section
+from recalibration_cases import HOLD, KALMAN, QUIET, probe_schedule, with_section
 from test_switching_models import fault_injected, synthetic_model
 
 from groupfit.errors import InputError
@@ -187,10 +187,7 @@ def test_checks_that_keep_disagreeing_are_applied_after_confirm_after_rejections
 def test_a_check_right_after_a_switch_is_gated_with_the_switch_s_gap_and_the_same_miss_elsewhere_is_not():
     """The innovation a switch causes itself (its gap) passes the gate; the same miss away from a switch is gross."""
     model, run = synthetic_model()
-    quiet = {**KALMAN, "terms": ["offset"], "offset_sigma_um_per_sqrt_h": 0.01, "initial_offset_sigma_um": 0.05}
-    quiet.update(drift_sigma_um_per_h_per_sqrt_h=0.0, initial_drift_sigma_um_per_h=0.0, drift_max_um_per_h=0.0)
-    quiet.update(gain_sigma_per_sqrt_h=0.0, initial_gain_sigma=0.0, gain_max=0.0)
-    model = ModelFile.from_dict(with_section(model, {**quiet, "confirm_after": 1}))
+    model = ModelFile.from_dict(with_section(model, {**QUIET, "confirm_after": 1}))
     plain = SwitchingRule(model).replay(run.temps, np.full(run.n_samples, np.nan))
     first = int(np.flatnonzero(plain.switched)[0])
     blend = model.switching.blend_samples
@@ -214,13 +211,11 @@ def test_a_check_right_after_a_switch_is_gated_with_the_switch_s_gap_and_the_sam
 def test_the_gate_is_never_narrower_than_a_new_run_s_offset_so_a_real_step_is_taken_and_a_gross_one_is_not():
     """With a quiet filter locked on, a 12 µm step passes when a new run may be 5 µm off (gate 4·5 µm)."""
     model, run = synthetic_model()
-    quiet = {**KALMAN, "terms": ["offset"], "offset_sigma_um_per_sqrt_h": 0.01, "confirm_after": 2}
-    quiet.update(drift_sigma_um_per_h_per_sqrt_h=0.0, initial_drift_sigma_um_per_h=0.0, drift_max_um_per_h=0.0)
-    quiet.update(gain_sigma_per_sqrt_h=0.0, initial_gain_sigma=0.0, gain_max=0.0)
+    quiet = {**QUIET, "confirm_after": 2}
 
     def codes(initial_offset_sigma_um: float, step_um: float) -> list[int]:
         rule = SwitchingRule(
-            ModelFile.from_dict(with_section(model, {**quiet, **{"initial_offset_sigma_um": initial_offset_sigma_um}}))
+            ModelFile.from_dict(with_section(model, {**quiet, "initial_offset_sigma_um": initial_offset_sigma_um}))
         )
         plain = SwitchingRule(model).replay(run.temps, np.full(run.n_samples, np.nan)).prediction_um
         out = []

@@ -18,6 +18,8 @@ from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.heldout.reference_choice import SIGNAL_TO_NOISE, ambient_signal_to_noise, choose_reference
 from groupfit.model import ModelFile
+from groupfit.models.grouped import GroupedRegressor
+from groupfit.reference import with_reference
 
 GAINS = (3.0, -1.5, 2.0)
 SPEEDS = (0, 2000, 4000, 1000, 3000, 0, 4000, 2000)
@@ -97,9 +99,6 @@ def test_an_ambient_that_stays_within_its_noise_leaves_the_default_unquestioned(
 
 def next_day_rms(run, next_frame: pd.DataFrame, reference) -> float:
     """A global model on ``run`` with ``reference`` replayed over the next day (truth by construction)."""
-    from groupfit.models.grouped import GroupedRegressor
-    from groupfit.reference import with_reference
-
     fitted = with_reference(run, reference)
     model = ModelFile.coerce(GroupedRegressor(p=0).fit(fitted.temps, fitted.error).to_model_file(fitted))
     prediction = model.predict(model.inputs(next_frame))  # the model's reference applied to the readings
