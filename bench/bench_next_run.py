@@ -78,7 +78,7 @@ def ceiling(rows: list[dict]) -> str:
 
 def several_summary(rows: list[dict]) -> None:
     """Leave-one-run-out on several FE runs: the estimate against the next run, per number of runs."""
-    print("\nseveral runs (fit --data A B [C] --p 0: leave-one-run-out, not scaled) → another FE run")
+    print("\nseveral runs (fit --data A B [C]: leave-one-run-out, not scaled) → another FE run")
     for size in sorted({len(r["model_runs"]) for r in rows}):
         part = [r for r in rows if len(r["model_runs"]) == size]
         ratio = np.array([r["actual_um"] / r["expected_um"] for r in part])

@@ -22,9 +22,11 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import pandas as pd
 
+from groupfit.conditions import condition_changes, run_condition
 from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
+from groupfit.heldout.penalty import penalised_expectation, penalty_lines
 from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
 from groupfit.inference.prediction import band_for
@@ -66,7 +68,7 @@ class ComparisonSettings:
     fit_pmax: int = ModelSettings.pmax  # the largest p ``groupfit fit`` chooses among: compare marks its choice
     same_condition_samples: int = 2
     """A run is on the modelling run's condition when its condition columns go through the same levels in
-    the same order, each change within this many samples of the modelling run's (:func:`run_condition`)."""
+    the same order, each change within this many samples of the modelling run's (:mod:`groupfit.conditions`)."""
     search: SearchSettings = SearchSettings()
     """Seed and GA settings of the grouped models (always the GA, never certified one by one)."""
     intervals: dict[str, Any] = field(default_factory=dict)
@@ -117,12 +119,14 @@ class ComparisonResult:
     bands: dict[str, dict[str, tuple]] = field(default_factory=dict)
     """Per run and model key, the (lower, upper) prediction band of MLR and grouped models."""
     run_conditions: dict[str, str] = field(default_factory=dict)
-    """Per run: ``"modelling"``, ``"same condition"`` or ``"other condition"`` (:func:`run_condition`)."""
+    """Per run: ``"modelling"``, ``"same condition"`` or ``"other condition"`` (:mod:`groupfit.conditions`)."""
     reference: str | None = None
     """What the temperature inputs were taken relative to (:mod:`groupfit.reference`)."""
     expectation: NextRunExpectation | None = None
     """The expected next-run error of p = 0…pmax (:mod:`groupfit.heldout.expect`); ``fit_choice``: fit's p."""
     fit_choice: int | None = None
+    fit_penalty: dict[str, Any] | None = None
+    """The ridge penalty fit gives its choice of p = 0 (:func:`groupfit.heldout.penalty.penalised_expectation`)."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -140,54 +144,16 @@ class ComparisonResult:
             "run_conditions": self.run_conditions,
             "reference": self.reference,
             "expected_next_run": self.expectation
-            and {**self.expectation.to_json(), "fit_would_choose_p": self.fit_choice},
+            and {
+                **self.expectation.to_json(),
+                "fit_would_choose_p": self.fit_choice,
+                "fit_would_choose_ridge": self.fit_penalty,
+            },
         }
 
     def summary(self) -> str:
         """The comparison table and its notes, as ``groupfit compare`` prints them."""
         return comparison_summary(self)
-
-
-def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
-    """Samples (1-based) after which an operating-condition column changes value."""
-    changes: set[int] = set()
-    for column in columns:
-        if column not in run.frame.columns:
-            raise InputError(f"{run.source}: condition column '{column}' not found; set [compare] conditions")
-        values = run.frame[column].to_numpy()
-        changes.update((np.flatnonzero(values[1:] != values[:-1]) + 1).tolist())
-    return sorted(changes)
-
-
-def condition_levels(run: Run, columns: tuple[str, ...]) -> tuple[list[tuple], list[int]]:
-    """The sequence of operating-condition levels of a run and the samples (1-based) after which each ends."""
-    values = [tuple(row) for row in run.frame[list(columns)].to_numpy().tolist()] if columns else []
-    levels, ends = [], []
-    for i, value in enumerate(values):
-        if not levels or value != levels[-1]:
-            if levels:
-                ends.append(i)
-            levels.append(value)
-    return levels, ends
-
-
-def run_condition(run: Run, modelling: Run, columns: tuple[str, ...], tolerance: int) -> str:
-    """``"same condition"`` or ``"other condition"``: is ``run`` the modelling run's duty cycle again?
-
-    Same condition: the condition columns (e.g. the spindle speed) go through the same levels in the same
-    order, and each change comes within ``tolerance`` samples of the modelling run's: the paper's repeat of
-    a working condition, with sampling moments that differ a little. The ambient and the machine's state at
-    the start are not conditions: a repeat at another ambient or after a warm start is the same condition.
-    """
-    if not columns or any(c not in run.frame.columns for c in columns):
-        return "other condition"
-    levels, ends = condition_levels(run, columns)
-    model_levels, model_ends = condition_levels(modelling, columns)
-    if levels != model_levels:
-        return "other condition"
-    if any(abs(a - b) > tolerance for a, b in zip(ends, model_ends)):
-        return "other condition"
-    return "same condition"
 
 
 def distance_to_change(breaks: list[int], changes: list[int]) -> list[int | None]:
@@ -366,6 +332,7 @@ def compare_models(
     expectation = expect_next_run(
         [modelling], candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
     )
+    fit_choice = expectation.choice_among(settings.fit_pmax + 1)
     ar1_summary = None
     if ar1 is not None:
         ar1_summary = {
@@ -401,7 +368,8 @@ def compare_models(
         },
         reference=modelling.reference,
         expectation=expectation,
-        fit_choice=expectation.choice_among(settings.fit_pmax + 1),
+        fit_choice=fit_choice,
+        fit_penalty=penalised_expectation(modelling, fit_intercept=settings.fit_intercept) if fit_choice == 0 else None,
     )
 
 
@@ -444,6 +412,7 @@ def comparison_summary(result: ComparisonResult) -> str:
         f"chooses p = {target['p'] if target['p'] is not None else 'none up to pmax'}"
     )
     lines += result.expectation.candidate_lines(result.runs[0], result.fit_choice) if result.expectation else []
+    lines += penalty_lines(result.fit_penalty)
     stats = result.mlr_statistics
     terms = ", ".join(
         f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"]

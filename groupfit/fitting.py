@@ -36,6 +36,14 @@ class FitResult:
     """A global regression's tests (:func:`groupfit.models.mlr.ols_statistics`), when p = 0 by least squares."""
     expectation: Any = None
     """The expected next-run error (a :class:`groupfit.heldout.expect.NextRunExpectation`), when estimated."""
+    choice: Any = None
+    """The expectation that chose p among several candidates (least squares), when p was chosen by it; the
+    model's own figures are in ``expectation`` (they differ when the chosen global model got a penalty)."""
+
+    @property
+    def p_choice(self):
+        """The expectation p was chosen by: ``choice``, else ``expectation``."""
+        return self.choice if self.choice is not None else self.expectation
 
     def to_json(self) -> dict[str, Any]:
         """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
@@ -54,8 +62,8 @@ class FitResult:
             result["statistics"] = self.statistics
         if self.expectation is not None:
             result.update(self.expectation.training())
-            if len(self.expectation.candidates) > 1:
-                result["p_selection"] = {"rule": "next-run", **self.expectation.to_json()}
+            if len(self.p_choice.candidates) > 1:
+                result["p_selection"] = {"rule": "next-run", **self.p_choice.to_json()}
         return result
 
     def summary(self) -> str:
@@ -76,9 +84,10 @@ class FitResult:
         if self.statistics is not None:
             report += "\n" + statistics_summary(self.statistics)
         if self.expectation is not None:
-            report = choice_summary(self.expectation) + report
+            report = choice_summary(self.p_choice) + report
         if self.held_out is not None:
-            report += "\n" + held_out_summary(self.held_out)
+            penalised = self.ridge is not None and self.ridge.alpha > 0
+            report += "\n" + held_out_summary(self.held_out, penalised=penalised)
         if self.expectation is not None:
             report += "\n" + self.expectation.line()
         return report
@@ -127,13 +136,14 @@ def ridge_summary(ridge: RidgeSetting) -> str:
     if ridge.chosen == "given":
         return f"ridge   penalty alpha = {ridge.alpha:g} (given)"
     table = ", ".join(f"{row.alpha:g}: {row.held_out_rms_um:.3g}" for row in ridge.held_out)
-    how = "the least held-out error"
-    if ridge.chosen == "next-run":
-        how = "the largest within one standard error of the least held-out error"
-    return f"ridge   penalty alpha = {ridge.alpha:g}, {how} ({ridge.folds}; held-out RMS µm by alpha: {table})"
+    default = "; the default for a global model, --ridge 0 for least squares" if ridge.default else ""
+    return (
+        f"ridge   penalty alpha = {ridge.alpha:g}, the least held-out error ({ridge.folds}; held-out RMS µm by "
+        f"alpha: {table}){default}"
+    )
 
 
-def held_out_summary(check: OverfitCheck) -> str:
+def held_out_summary(check: OverfitCheck, *, penalised: bool = False) -> str:
     """The held-out line of a model, with a note when it over-fits."""
     line = (
         f"check   held-out RMS {check.held_out_rms_um:.4g} µm against {check.in_sample_rms_um:.4g} µm in sample "
@@ -141,6 +151,8 @@ def held_out_summary(check: OverfitCheck) -> str:
     )
     if check.overfitted:
         hold_better = "fewer inputs (--select forward) or a ridge penalty (--ridge auto) hold better"
+        if penalised:
+            hold_better = "fewer inputs (--select forward) may hold better"
         if check.grouped:
             hold_better = "try fewer groups (--p 0) or fewer inputs (--select forward)"
         line += (

@@ -11,14 +11,12 @@ from groupfit.cli import main
 from groupfit.data import load_run, measured_rows
 from groupfit.grouping import Constraints
 from groupfit.heldout import calibration
-from groupfit.heldout.check import ridge_by_splits
 from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.expect import expect_next_run, trust_notes
 from groupfit.heldout.nextrun import forward_chaining, leave_one_run_out
 from groupfit.model import ModelFile
 from groupfit.model import model_file_problem as model_problem
 from groupfit.models.grouped import GroupedRegressor
-from groupfit.models.ridge import RIDGE_GRID, held_out_sse
 from groupfit.runtime import SwitchingRule
 
 SEGMENT = 20
@@ -107,7 +105,7 @@ def test_leave_one_run_out_matches_fit_and_replay_run_by_run(tmp_path, capsys):
         per_run.append(float(np.sqrt(np.nanmean(residual**2))))
     capsys.readouterr()
     result = tmp_path / "all.json"
-    options = [*FIT_OPTIONS, "--out", str(tmp_path / "all")]
+    options = [*FIT_OPTIONS, "--ridge", "0", "--out", str(tmp_path / "all")]  # least squares, as --p 0 above
     assert main(["fit", "--data", *paths, *options, "--json", str(result)]) == 0
     fitted = json.loads(result.read_text())
     assert fitted["p"] == 0
@@ -152,18 +150,6 @@ def test_pooled_error_is_the_weighted_mean_and_its_standard_error():
     w = counts / counts.sum()
     assert pooled[0] == pytest.approx(sse.sum() / counts.sum())
     assert se[0] == pytest.approx(np.sqrt(np.sum(w * (mse - pooled[0]) ** 2) / 2))
-
-
-def test_ridge_by_splits_takes_the_largest_penalty_within_one_standard_error():
-    run = tiny_run(6)
-    splits = [(np.arange(a), np.arange(a, a + SEGMENT)) for a in (60, 80, 100)]
-    alpha, table = ridge_by_splits(run.temps, run.error, splits)
-    counts = np.full(3, float(SEGMENT))
-    by_alpha = {a: pooled_error(held_out_sse(run.temps, run.error, splits, a)[None, :], counts) for a in RIDGE_GRID}
-    best = min(by_alpha, key=lambda a: by_alpha[a][0][0])
-    limit = by_alpha[best][0][0] + by_alpha[best][1][0]
-    assert alpha == max(a for a in RIDGE_GRID if by_alpha[a][0][0] <= limit)
-    assert [row.alpha for row in table] == sorted(RIDGE_GRID)
 
 
 def test_calibration_is_the_median_and_percentiles_of_the_ratios():

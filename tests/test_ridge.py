@@ -8,7 +8,10 @@ import pytest
 from sklearn.linear_model import Ridge
 
 from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.heldout.expect import expect_next_run
 from groupfit.heldout.folds import Folds, make_folds
+from groupfit.heldout.penalty import penalised_expectation, penalty_lines
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile, model_file_problem
 from groupfit.models.grouped import GroupedRegressor
@@ -100,17 +103,54 @@ def test_fit_ridge_auto_writes_the_penalty_and_the_model_runs_unchanged(tmp_path
     assert main([*args, "--reference", "none", "--out", str(out), "--json", "-", "--quiet"]) == 0
     result = json.loads(capsys.readouterr().out)
     ridge = result["ridge"]
-    # chosen on folds that imitate a next run, by the one-standard-error rule (tests/test_next_run.py)
-    assert ridge["chosen"] == "next-run" and "imitate a next run" in ridge["folds"]
-    assert ridge["alpha"] in [row["alpha"] for row in ridge["held_out"]] and ridge["alpha"] > 0
+    frame = copies_run(1)
+    splits = make_folds([frame], ["spindle_on"]).index_splits()  # one fold per stretch of spindle_on
+    alpha, table = choose_ridge_alpha(frame[SENSORS].to_numpy(), frame["error_um"].to_numpy(), splits)
+    assert ridge["chosen"] == "held-out" and "leave-one-condition-out" in ridge["folds"]
+    assert ridge["alpha"] == alpha > 0 and not ridge["default"]
+    assert [row["held_out_rms_um"] for row in ridge["held_out"]] == pytest.approx(
+        [row["held_out_rms_um"] for row in table]
+    )
     model = ModelFile.load(out / "model.json")
     assert model.ridge_alpha == ridge["alpha"]
-    frame = copies_run(1)
     peer = GroupedRegressor(p=0, c=0, ridge_alpha=ridge["alpha"]).fit(frame[SENSORS], frame["error_um"])
     np.testing.assert_allclose(model.coefficients[0], [peer.intercept_[0], *peer.coef_[0]], rtol=1e-9)
     replayed = replay_groups(model.to_dict(), frame[SENSORS].to_numpy())
     prediction = model.predict(frame[SENSORS].to_numpy(), replayed)
     np.testing.assert_allclose(prediction, peer.predict(frame[SENSORS]), atol=1e-9)
+
+
+def test_fit_gives_the_global_model_it_chooses_the_penalty_that_holds_on_another_day(tmp_path, capsys):
+    """With p chosen (no --p, no --ridge) and p = 0 chosen, fit applies --ridge auto; --ridge 0 and --p 0 stay
+    least squares. The penalised model predicts other days of the same machine better (truth by construction)."""
+    path = tmp_path / "run.csv"
+    frame = copies_run(4)
+    frame.to_csv(path, index=False)
+    base = ["fit", "--data", str(path), "--temps", ",".join(SENSORS), "--reference", "none"]
+    results = {}
+    for name, extra in (("default", []), ("ridge 0", ["--ridge", "0"]), ("p 0", ["--p", "0"])):
+        out = tmp_path / name.replace(" ", "")
+        assert main([*base, *extra, "--out", str(out), "--json", "-", "--quiet"]) == 0
+        results[name] = (json.loads(capsys.readouterr().out), ModelFile.load(out / "model.json"))
+    result, model = results["default"]
+    assert result["breaks"] == [] and result["ridge"]["default"] is True
+    splits = make_folds([frame], ["spindle_on"]).index_splits()
+    alpha, _ = choose_ridge_alpha(frame[SENSORS].to_numpy(), frame["error_um"].to_numpy(), splits)
+    assert model.ridge_alpha == result["ridge"]["alpha"] == alpha > 0
+    assert "statistics" not in result  # the t-tests of least squares do not describe a penalised fit
+    assert result["expected_next_run_rms_um"] == pytest.approx(model.training["expected_next_run_rms_um"])
+    assert model.training["model_choice"]["p"] == 0
+    for name in ("ridge 0", "p 0"):
+        assert results[name][1].ridge_alpha is None and "statistics" in results[name][0]
+    least_squares = results["p 0"][1]
+    np.testing.assert_allclose(results["ridge 0"][1].coefficients, least_squares.coefficients, rtol=1e-9)
+    rms = {"ridge": [], "ls": []}
+    for seed in range(20, 25):
+        other = copies_run(seed)
+        for key, fitted in (("ridge", model), ("ls", least_squares)):
+            prediction = fitted.predict(other[SENSORS].to_numpy(), np.zeros(len(other), dtype=int))
+            rms[key].append(np.sqrt(np.mean((other["error_um"] - prediction) ** 2)))
+    assert np.mean(rms["ridge"]) < np.mean(rms["ls"])
 
 
 @pytest.mark.parametrize(
@@ -138,8 +178,6 @@ def test_fit_ridge_refuses_what_it_cannot_do_in_one_line(tmp_path, capsys, extra
 def test_model_file_ridge_alpha_is_checked():
     X, y = collinear()
     frame = pd.DataFrame(X, columns=[f"x{k}" for k in range(X.shape[1])])
-    from groupfit.data import load_run
-
     frame.insert(0, "time_s", np.arange(len(y)) * 10.0)
     frame["error_um"] = y
     run = load_run(frame, temps=list(frame.columns[1:-1]))
@@ -177,3 +215,17 @@ def test_diagnose_with_ridge_scores_and_refits_with_the_same_penalty(tmp_path, c
     spread = X.std(axis=0)
     peer = Ridge(alpha=0.01 * len(X), solver="cholesky").fit(X / spread, frame["error_um"])
     np.testing.assert_allclose(augmented.coefficients[0][1:], peer.coef_ / spread, rtol=1e-7)
+
+
+def test_compare_reports_the_penalty_fit_gives_its_global_model():
+    frame = copies_run(4)
+    run = load_run(frame, temps=SENSORS)
+    penalty = penalised_expectation(run)
+    splits = make_folds([frame], ["spindle_on"]).index_splits()
+    alpha, _ = choose_ridge_alpha(frame[SENSORS].to_numpy(), frame["error_um"].to_numpy(), splits)
+    assert penalty["alpha"] == alpha > 0
+    expected = expect_next_run([run], (0,), ridge_alpha=alpha).expected()[0]
+    assert penalty["expected_next_run_rms_um"] == pytest.approx(expected)
+    assert expected != pytest.approx(expect_next_run([run], (0,)).expected()[0])
+    assert f"alpha = {alpha:g}" in penalty_lines(penalty)[0]
+    assert penalty_lines({**penalty, "alpha": 0.0}) == [] and penalty_lines(None) == []

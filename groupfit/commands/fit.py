@@ -76,7 +76,8 @@ def add_parser(verbs) -> None:
         type=common.ridge_value,
         metavar="ALPHA|auto",
         help="shrink the coefficients of a global model (p = 0) on many collinear inputs by a ridge penalty; "
-        "auto: the penalty with the least error on held-out conditions or runs",
+        "auto: the penalty with the least error on held-out conditions or runs (the default when fit chooses "
+        "p and chooses p = 0; 0: least squares)",
     )
     fit.add_argument(
         "--backward",
@@ -149,8 +150,13 @@ def run_fit(args: argparse.Namespace) -> int:
         return ar1_commands.run_fit(args)
     config_path, settings = fit_settings(args)
     common.plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
+    model_wanted = settings.model  # p chosen by the next-run estimate: a global model gets the penalty that holds
+    penalty_by_default = (
+        args.ridge is None and model_wanted.p == "auto" and model_wanted.p_rule == NEXT_RUN and args.backward is None
+    )
     data = chosen_inputs(args, prepared_runs(args, settings))
     settings, selection, expectation = decided_p(args, data)
+    choice = expectation
     model_settings = settings.model
     estimator = GroupedRegressor.from_settings(
         p=model_settings.p,
@@ -164,18 +170,16 @@ def run_fit(args: argparse.Namespace) -> int:
     frames = [r.frame for r in runs]
     not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
-    if args.ridge is not None:
-        splits = next_run_splits(data.estimate_runs)
+    if args.ridge is not None or (penalty_by_default and model_settings.p == 0 and position_run is None):
         ridge = ridge_setting(
-            args.ridge,
+            "auto" if args.ridge is None else args.ridge,
             model_settings.p,
             run.temps,
             run.error,
             frames,
             not_conditions,
             fit_intercept=model_settings.intercept,
-            splits=splits,
-            splits_name=f"{len(splits)} folds that imitate a next run",
+            default=args.ridge is None,
         )
         estimator.set_params(ridge_alpha=ridge.alpha)
     alpha = ridge.alpha if ridge is not None else 0.0
@@ -190,7 +194,7 @@ def run_fit(args: argparse.Namespace) -> int:
         progress.close()
     model = estimator.to_model_file(run, model_settings.criterion)  # the valid ranges over every row
     notes = ""
-    if position_run is None and (expectation is None or ridge is not None):
+    if position_run is None and (expectation is None or alpha > 0):
         try:
             expectation = model_expectation(model_settings, data.estimate_runs, (model_settings.p,), alpha)
         except InputError as exc:
@@ -199,7 +203,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
     if expectation is not None:
-        training.update(expectation_training(expectation, model_settings.p))
+        training.update(expectation.model_training(model_settings.p, choice))
     if data.reference_choice is not None:
         training["reference_choice"] = data.reference_choice.to_json()
         if data.reference_choice.scored:
@@ -227,9 +231,18 @@ def run_fit(args: argparse.Namespace) -> int:
         model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
         notes = recal_note + notes
     result = FitResult(
-        estimator, fit_run, model, selection, data.input_selection, intervals, ridge, held_out, expectation=expectation
+        estimator,
+        fit_run,
+        model,
+        selection,
+        data.input_selection,
+        intervals,
+        ridge,
+        held_out,
+        expectation=expectation,
+        choice=choice if choice is not expectation else None,
     )
-    if estimator.p == 0 and ridge is None and position_run is None:
+    if estimator.p == 0 and alpha == 0 and position_run is None:
         result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
     written = write_fit_outputs(args, out_dir, result, intervals, position_run)
     print(result.summary() + notes + "\nwrote   " + written, file=common.report_stream(args))
@@ -396,21 +409,6 @@ def model_expectation(model: ModelSettings, runs: list[Run], p_values, ridge_alp
     except ValueError as exc:
         raise InputError(f"{runs[0].source}: the next-run estimate: {exc}; give --p or record a longer run") from None
     return result
-
-
-def expectation_training(expectation: NextRunExpectation, p: int) -> dict:
-    """The model file's ``training`` keys of the next-run expectation and of how p was chosen."""
-    data = expectation.to_json()
-    chosen = p if len(expectation.candidates) == 1 else data["chosen"]["p"]
-    return {
-        **expectation.training(),
-        "model_choice": {
-            "p": chosen,
-            "rule": data["chosen"]["rule"] if len(expectation.candidates) > 1 else "given",
-            "candidates": data["candidates"],
-            "notes": data["notes"],
-        },
-    }
 
 
 def with_inputs(run: Run, names) -> Run:

@@ -14,13 +14,12 @@ import pandas as pd
 
 from groupfit.columns import usable_columns
 from groupfit.errors import InputError
-from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.design import group_design, group_index, group_sample_floor
 from groupfit.heldout.folds import Folds, make_folds
 from groupfit.heldout.records import OverfitCheck, RidgeScore, RidgeSetting
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.heldout.selection import select_sensors
-from groupfit.models.ridge import RIDGE_GRID, check_ridge_alpha, choose_ridge_alpha, held_out_sse
+from groupfit.models.ridge import check_ridge_alpha, choose_ridge_alpha
 
 OVERFIT_RATIO = 3.0
 """The base model is called over-fitted when its held-out RMS exceeds its in-sample RMS by this factor."""
@@ -98,16 +97,16 @@ def ridge_setting(
     exclude: set[str],
     *,
     fit_intercept: bool = True,
-    splits: list | None = None,
-    splits_name: str = "",
+    default: bool = False,
 ) -> RidgeSetting:
     """The penalty of ``--ridge ALPHA|auto`` for a global model, and how it was found.
 
-    ``auto``: the penalty with the least error on held-out conditions or runs, the rows with a measured
-    error ``y``.
-    With ``splits`` (``(train, test)`` indices over the measured rows that imitate a next run, named
-    ``splits_name``): the largest penalty within one standard error of the least error on them
-    (:func:`ridge_by_splits`).
+    ``auto``: the penalty with the least error on held-out operating conditions or runs (the rows with a
+    measured error ``y``), ties to the smaller one. Held-out conditions, not the forward chaining that
+    chooses p: a later segment of the same programme keeps the collinear inputs' pattern, so cancelling
+    coefficients still hold there; a condition the fit never saw breaks the pattern, as a next run does
+    (``bench/bench_next_run.py``). ``default``: the penalty was chosen without ``--ridge`` (``fit``'s
+    default for a global model whose p it chose).
     """
     if p != 0:
         raise InputError(
@@ -117,31 +116,10 @@ def ridge_setting(
     if option != "auto":
         return RidgeSetting(check_ridge_alpha(option), "given")
     rows = np.isfinite(y)
-    if splits is not None:
-        alpha, table = ridge_by_splits(X[rows], y[rows], splits, fit_intercept=fit_intercept)
-        return RidgeSetting(alpha, "next-run", table, splits_name)
     folds = held_out_folds(frames, exclude, y)
     alpha, table = choose_ridge_alpha(X[rows], y[rows], folds.index_splits(), fit_intercept=fit_intercept)
     scores = tuple(RidgeScore(row["alpha"], row["held_out_rms_um"]) for row in table)
-    return RidgeSetting(alpha, "held-out", scores, folds.describe())
-
-
-def ridge_by_splits(
-    X: np.ndarray, y: np.ndarray, splits: list, *, fit_intercept: bool = True
-) -> tuple[float, tuple[RidgeScore, ...]]:
-    """The largest penalty of the grid within one standard error of the least held-out mean squared error.
-
-    The penalties are ordered from the simplest model (the largest penalty) to the least shrunk; each fold's
-    mean squared error is weighted by its samples.
-    """
-    grid = sorted(RIDGE_GRID, reverse=True)
-    counts = np.array([len(test) for _, test in splits], dtype=float)
-    pooled, se = pooled_error(
-        np.array([held_out_sse(X, y, splits, alpha, fit_intercept=fit_intercept) for alpha in grid]), counts
-    )
-    chosen = one_standard_error_choice(pooled, se)
-    table = tuple(RidgeScore(float(a), float(np.sqrt(v))) for a, v in zip(grid, pooled))
-    return float(grid[chosen]), table[::-1]
+    return RidgeSetting(alpha, "held-out", scores, folds.describe(), default=default)
 
 
 def overfit_check(scorer: HeldOutScorer, folds: Folds, *, grouped: bool = False) -> OverfitCheck:

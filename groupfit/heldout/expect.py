@@ -80,6 +80,22 @@ class NextRunExpectation:
             "expected_next_run_method": self.method(),
         }
 
+    def model_training(self, p: int, choice: NextRunExpectation | None = None) -> dict[str, Any]:
+        """The model file's ``training`` keys: this expectation's figures, and how p was chosen (by ``choice``, the
+        least-squares candidates' expectation, when it is not this one: a chosen global model got a penalty)."""
+        choice = self if choice is None else choice
+        data = choice.to_json()
+        several = len(choice.candidates) > 1
+        return {
+            **self.training(),
+            "model_choice": {
+                "p": data["chosen"]["p"] if several else p,
+                "rule": data["chosen"]["rule"] if several else "given",
+                "candidates": data["candidates"],
+                "notes": data["notes"],
+            },
+        }
+
     def to_json(self, label: str = "p") -> dict[str, Any]:
         raw = self.scores.raw_rms()
         se = self.scores.standard_error()

@@ -44,24 +44,25 @@ class RidgeScore(NamedTuple):
 class RidgeSetting:
     """The penalty of ``--ridge ALPHA|auto`` and how it was found.
 
-    ``chosen``: ``"given"`` (the user's number), ``"held-out"`` (the least
-    error on held-out conditions or runs) or ``"next-run"`` (the largest
-    penalty within one standard error of the least error on splits that
-    imitate a next run). ``held_out`` and ``folds``: every penalty tried
-    with its held-out RMS, and the folds it was scored on (not for
-    ``"given"``).
+    ``chosen``: ``"given"`` (the user's number) or ``"held-out"`` (the least
+    error on held-out conditions or runs). ``held_out`` and ``folds``: every
+    penalty tried with its held-out RMS, and the folds it was scored on (not
+    for ``"given"``). ``default``: chosen without ``--ridge``, as ``fit`` does
+    for a global model whose p it chose.
     """
 
     alpha: float
     chosen: str
     held_out: tuple[RidgeScore, ...] = ()
     folds: str = ""
+    default: bool = False
 
     def to_json(self) -> dict[str, Any]:
         record: dict[str, Any] = {"alpha": self.alpha, "chosen": self.chosen}
         if self.chosen != "given":
             record["held_out"] = [score._asdict() for score in self.held_out]
             record["folds"] = self.folds
+            record["default"] = self.default
         return record
 
 
