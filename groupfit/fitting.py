@@ -86,7 +86,7 @@ class FitResult:
         if self.expectation is not None:
             report = choice_summary(self.p_choice) + report
         if self.held_out is not None:
-            penalised = self.ridge is not None and self.ridge.alpha > 0
+            penalised = self.ridge is not None and (self.ridge.alpha > 0 or self.ridge.chosen != "given")
             report += "\n" + held_out_summary(self.held_out, penalised=penalised)
         if self.expectation is not None:
             report += "\n" + self.expectation.line()
@@ -151,7 +151,7 @@ def held_out_summary(check: OverfitCheck, *, penalised: bool = False) -> str:
     )
     if check.overfitted:
         hold_better = "fewer inputs (--select forward) or a ridge penalty (--ridge auto) hold better"
-        if penalised:
+        if penalised:  # a penalty was applied, or chosen on held-out data as none
             hold_better = "fewer inputs (--select forward) may hold better"
         if check.grouped:
             hold_better = "try fewer groups (--p 0) or fewer inputs (--select forward)"

@@ -229,3 +229,22 @@ def test_compare_reports_the_penalty_fit_gives_its_global_model():
     assert expected != pytest.approx(expect_next_run([run], (0,)).expected()[0])
     assert f"alpha = {alpha:g}" in penalty_lines(penalty)[0]
     assert penalty_lines({**penalty, "alpha": 0.0}) == [] and penalty_lines(None) == []
+
+
+def test_several_runs_get_the_penalty_with_the_least_error_on_the_held_out_runs(tmp_path, capsys):
+    frames = [copies_run(seed) for seed in (5, 6, 7)]
+    paths = []
+    for k, frame in enumerate(frames):
+        paths.append(str(tmp_path / f"run{k}.csv"))
+        frame.to_csv(paths[-1], index=False)
+    args = ["fit", "--data", *paths, "--temps", ",".join(SENSORS), "--reference", "none", "--recalibrate", "none"]
+    assert main([*args, "--out", str(tmp_path / "m"), "--json", "-", "--quiet"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    X = np.vstack([f[SENSORS].to_numpy() for f in frames])
+    y = np.concatenate([f["error_um"].to_numpy() for f in frames])
+    rows = np.arange(len(y))
+    splits = [(rows[(rows // 80) != k], rows[(rows // 80) == k]) for k in range(3)]  # each run held out once
+    alpha, _ = choose_ridge_alpha(X, y, splits)
+    assert result["ridge"]["alpha"] == alpha > 0 and result["ridge"]["default"] is True
+    assert "leave-one-run-out over 3 runs" in result["ridge"]["folds"]
+    assert "leave-one-run-out over 3 runs" in result["expected_next_run_method"]
