@@ -202,6 +202,8 @@ def run_fit(args: argparse.Namespace) -> int:
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
+    if choice is expectation or (choice is not None and len(choice.candidates) == 1):
+        choice = None  # p was not chosen among several least-squares candidates for a penalised model
     if expectation is not None:
         training.update(expectation.model_training(model_settings.p, choice))
     if data.reference_choice is not None:
@@ -240,7 +242,7 @@ def run_fit(args: argparse.Namespace) -> int:
         ridge,
         held_out,
         expectation=expectation,
-        choice=choice if choice is not expectation else None,
+        choice=choice,
     )
     if estimator.p == 0 and alpha == 0 and position_run is None:
         result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
