@@ -28,7 +28,6 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import Run, join_runs, load_run
-from groupfit.heldout.check import ridge_setting
 from groupfit.heldout.expect import expect_next_run
 from groupfit.heldout.nextrun import rule_prediction, sliced
 from groupfit.heldout.penalty import run_penalty
@@ -275,9 +274,7 @@ def several_run_rows(sizes=(2, 3)) -> list[dict]:
         for names in itertools.combinations(FE_RUNS, size):
             modelling = [runs[name] for name in names]
             joined = join_runs(modelling)
-            exclude = {joined.time_name, joined.error_name, *joined.temp_names}
-            frames = [run.frame for run in modelling]
-            alpha = ridge_setting("auto", 0, joined.temps, joined.error, frames, exclude).alpha
+            alpha = run_penalty(joined, frames=[run.frame for run in modelling]).alpha
             expected, (low, high) = expect_next_run(modelling, (0,), ridge_alpha=alpha).expected()
             estimator = GroupedRegressor(p=0, ridge_alpha=alpha).fit(joined.temps, joined.error)
             for name in FE_RUNS:

@@ -156,7 +156,7 @@ def run_fit(args: argparse.Namespace) -> int:
     )
     data = chosen_inputs(args, prepared_runs(args, settings))
     settings, selection, expectation = decided_p(args, data)
-    choice = expectation
+    p_expectation = expectation  # the least-squares candidates p was chosen among, when it was chosen
     model_settings = settings.model
     estimator = GroupedRegressor.from_settings(
         p=model_settings.p,
@@ -202,8 +202,9 @@ def run_fit(args: argparse.Namespace) -> int:
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
-    if choice is expectation or (choice is not None and len(choice.candidates) == 1):
-        choice = None  # p was not chosen among several least-squares candidates for a penalised model
+    choice = None  # the table p was chosen by, kept apart when the chosen global model got a penalty
+    if alpha > 0 and p_expectation is not None and len(p_expectation.candidates) > 1:
+        choice = p_expectation
     if expectation is not None:
         training.update(expectation.model_training(model_settings.p, choice))
     if data.reference_choice is not None:

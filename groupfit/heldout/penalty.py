@@ -7,7 +7,9 @@ operating conditions (:func:`groupfit.heldout.check.ridge_setting`).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
+
+import pandas as pd
 
 from groupfit.data import Run
 from groupfit.heldout.check import ridge_setting
@@ -15,12 +17,12 @@ from groupfit.heldout.expect import expect_next_run
 from groupfit.heldout.records import RidgeSetting
 
 
-def run_penalty(run: Run, *, fit_intercept: bool = True) -> RidgeSetting:
-    """The penalty of the global model on ``run``: the least error on the run's held-out conditions."""
+def run_penalty(run: Run, *, fit_intercept: bool = True, frames: Sequence[pd.DataFrame] | None = None) -> RidgeSetting:
+    """The penalty of the global model on ``run``: the least error on its held-out conditions, or on its runs
+    held out when ``run`` joins several (``frames``: their tables, in order)."""
     exclude = {run.time_name, run.error_name, *run.temp_names}
-    return ridge_setting(
-        "auto", 0, run.temps, run.error, [run.frame], exclude, fit_intercept=fit_intercept, default=True
-    )
+    frames = [run.frame] if frames is None else list(frames)
+    return ridge_setting("auto", 0, run.temps, run.error, frames, exclude, fit_intercept=fit_intercept, default=True)
 
 
 def penalised_expectation(run: Run, *, fit_intercept: bool = True) -> dict[str, Any]:
