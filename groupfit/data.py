@@ -341,8 +341,8 @@ def _validated(
     column) is never a default input."""
     options = LoadOptions(**given)
     temps, time, error, ambient = options.temps, options.time, options.error, options.ambient
-    require_error, allow_nonfinite = options.require_error, options.allow_nonfinite
-    missing_error, temp_range, error_limit = options.missing_error, options.temp_range, options.error_limit
+    allow_nonfinite = options.allow_nonfinite
+    temp_range, error_limit = options.temp_range, options.error_limit
     time_values = time_seconds(frame, time, label)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
@@ -372,18 +372,7 @@ def _validated(
                 "it cannot inform the model: drop it from --temps (a dead sensor?)"
             )
 
-    error_values = None
-    if error is not None and (require_error or error in frame.columns):
-        error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite or missing_error)
-        if missing_error and not allow_nonfinite:
-            infinite = np.flatnonzero(np.isinf(error_values))
-            if infinite.size:
-                raise InputError(
-                    f"{label}: row {int(infinite[0]) + 1}, column '{error}' is {error_values[infinite[0]]} "
-                    "(an empty cell marks a row without a measurement); repair or drop that row"
-                )
-            if np.isnan(error_values).all():
-                raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
+    error_values = _error_values(frame, error, label, options)
     if not allow_nonfinite:
         if temp_range is not None:
             for j, t in enumerate(temps):
@@ -404,6 +393,31 @@ def _validated(
         time_name=time,
         notes=notes,
     )
+
+
+def _error_values(frame: pd.DataFrame, error: str | None, label: str, options: LoadOptions) -> np.ndarray | None:
+    """The error column as numbers (None when not asked for and absent), refused when it cannot be modelled."""
+    require_error, missing_error = options.require_error, options.missing_error
+    allow_nonfinite = options.allow_nonfinite
+    if error is None or not (require_error or error in frame.columns):
+        return None
+    error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite or missing_error)
+    if missing_error and not allow_nonfinite:
+        infinite = np.flatnonzero(np.isinf(error_values))
+        if infinite.size:
+            raise InputError(
+                f"{label}: row {int(infinite[0]) + 1}, column '{error}' is {error_values[infinite[0]]} "
+                "(an empty cell marks a row without a measurement); repair or drop that row"
+            )
+        if np.isnan(error_values).all():
+            raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
+    measured = error_values[np.isfinite(error_values)]
+    if require_error and measured.size > 1 and np.ptp(measured) == 0.0:
+        raise InputError(
+            f"{label}: error column '{error}' is constant ({measured[0]:g} µm) on every measured row; "
+            "there is nothing to model: name the thermal-error column with --error COLUMN"
+        )
+    return error_values
 
 
 def measured_rows(run: Run) -> Run:

@@ -243,6 +243,7 @@ CASES = [
         "The columns are: time_s, a, b, error_um",
     ),
     Case("data", "constant temperature", data_fit("constant.csv"), "is constant"),
+    Case("data", "constant error", data_fit("constant_error.csv"), "error column 'error_um' is constant"),
     Case("data", "data file not found", data_fit("missing.csv"), "not found"),
     Case("data", "position column missing", data_fit("good.csv", "--position", "P_mm"), "'P_mm' not found"),
     Case("data", "position not a number", position_fit("position_text.csv"), "column 'P_mm'"),
@@ -554,6 +555,7 @@ def _write_inputs(folder: Path) -> None:
     changed("nan.csv", "T3", 5, float("nan"))
     changed("backwards.csv", "time_s", 30, 100.0)
     good.assign(T4=21.0).to_csv(folder / "constant.csv", index=False)
+    good.assign(error_um=0.0).to_csv(folder / "constant_error.csv", index=False)
     good.assign(time_s=good["time_s"] * 0.6).to_csv(folder / "fast.csv", index=False)
     pd.DataFrame({"time_s": good["time_s"], "a": good["T1"], "b": good["T2"], "error_um": good["error_um"]}).to_csv(
         folder / "no_sensors.csv", index=False

@@ -57,6 +57,7 @@ CASES = [
     ("time not increasing", lambda f: mutate(f, "time_s", 20, 1900.0), r"not strictly increasing at row 21"),
     ("irregular sampling", lambda f: mutate(f, "time_s", 30, 3050.0), r"sampling is not uniform: rows 30 to 31"),
     ("constant temperature", lambda f: f.assign(T2=21.5), r"column 'T2' is constant \(21.5 °C\)"),
+    ("constant error", lambda f: f.assign(error_um=0.0), r"error column 'error_um' is constant \(0 µm\)"),
 ]
 
 
