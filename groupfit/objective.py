@@ -38,6 +38,8 @@ from groupfit.grouping import served_ranges, soft_groups
 from groupfit.models.ridge import penalty_diagonal, ridge_solve
 
 OBJECTIVES = ("sae", "sse")
+SAE_BLOCK_ELEMENTS = 2**25
+"""Residuals the sae cost holds at once (rows × candidate groups sharing a first row): 256 MiB of float64."""
 RANK_RTOL = 1e-12
 """Relative pivot tolerance on the standardised Gram matrix (≈ 1e-6 on singular values)."""
 LSTSQ_RCOND = 1e-6
@@ -254,13 +256,16 @@ class SegmentCost:
         starts = np.flatnonzero(np.r_[True, np.diff(lo[order]) != 0])
         ends = np.r_[starts[1:], len(order)]
         for s, e in zip(starts, ends):
-            members = order[s:e]
-            first = int(lo[members[0]])
-            stop = int(last[members].max())
-            rows = slice(first - 1, stop)
-            residual = np.abs(self.target[rows, None] - self.design[rows] @ coef[members].T)
-            cumulative = np.cumsum(residual, axis=0)
-            cost[members] = cumulative[last[members] - first, np.arange(len(members))]
+            shared = order[s:e]
+            shared = shared[np.argsort(last[shared], kind="stable")]
+            first = int(lo[shared[0]])
+            width = max(1, SAE_BLOCK_ELEMENTS // max(1, int(last[shared[-1]]) - first + 1))
+            for k in range(0, len(shared), width):
+                members = shared[k : k + width]
+                rows = slice(first - 1, int(last[members[-1]]))
+                residual = np.abs(self.target[rows, None] - self.design[rows] @ coef[members].T)
+                cumulative = np.cumsum(residual, axis=0)
+                cost[members] = cumulative[last[members] - first, np.arange(len(members))]
         return cost
 
     def total(self, breaks: Sequence[int]) -> float:

@@ -91,3 +91,19 @@ def test_large_offsets_keep_their_digits():
     cost = SegmentCost(X, y, n=3, objective="sse")
     breaks = [100, 250]
     assert cost.total(breaks) == pytest.approx(brute_force_rg(X, y, breaks, 3, "sse", True), rel=1e-6)
+
+
+def test_sae_costs_in_blocks_equal_the_direct_sums(monkeypatch):
+    """Many candidate groups sharing a first row are scored a few at a time (bounded memory), exactly."""
+    rng = np.random.default_rng(11)
+    N = 400
+    X = np.cumsum(rng.normal(size=(N, 2)), axis=0)
+    y = X @ [1.5, -0.7] + rng.normal(size=N)
+    cost = SegmentCost(X, y, n=0, objective="sae", fit_intercept=True)
+    a = np.zeros(150, dtype=np.int64)
+    b = np.arange(N - 149, N + 1)
+    monkeypatch.setattr("groupfit.objective.SAE_BLOCK_ELEMENTS", 3 * N)  # three candidates at a time
+    blocked = cost.pair_costs(a, b)
+    A = np.column_stack([np.ones(N), X])
+    direct = [np.sum(np.abs(y[:last] - A[:last] @ np.linalg.lstsq(A[:last], y[:last], rcond=None)[0])) for last in b]
+    np.testing.assert_allclose(blocked, direct, rtol=1e-9)
