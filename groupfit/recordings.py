@@ -99,4 +99,13 @@ def continued_recording(
     return None, None
 
 
-__all__ = ["RECORDINGS_KEY", "continued_recording", "recording_entries"]
+def is_modelling_file(training: Mapping[str, Any] | None, path: Any) -> bool:
+    """Whether the file at ``path`` is one the model was fitted on (its SHA-256 among ``training.recordings``)."""
+    entries = (training or {}).get(RECORDINGS_KEY) or []
+    if not entries or not isinstance(path, (str, Path)) or not Path(path).is_file():
+        return False
+    digest = file_sha256(path)
+    return any(entry.get("sha256") == digest for entry in entries)
+
+
+__all__ = ["RECORDINGS_KEY", "continued_recording", "is_modelling_file", "recording_entries"]

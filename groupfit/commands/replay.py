@@ -28,7 +28,7 @@ from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
-from groupfit.recordings import continued_recording
+from groupfit.recordings import continued_recording, is_modelling_file
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
 from groupfit.screw.modelfile import is_screw_file
@@ -140,6 +140,7 @@ def run_replay(args: argparse.Namespace) -> int:
         without = residuals(run, unchecked)
         rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
+    data.update(expectation_check(model, data, modelling=is_modelling_file(model.training, args.data)))
     result = ReplayResult({**data, **range_check(model, run)})
     written = []
     if out_dir is not None:
@@ -204,6 +205,45 @@ def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
     beyond = beyond_span(span, model.temps, inputs)
     note = span_note(beyond, run.n_samples)
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
+
+
+def expectation_check(model: ModelFile, data: dict[str, Any], *, modelling: bool = False) -> dict[str, Any]:
+    """This run's RMS without checks against what the model file expected of a next run (``training``).
+
+    Empty when the run has no measured error or the model file holds no expectation. ``modelling``: the
+    replayed file is one the model was fitted on, not a next run (``place`` says so).
+    """
+    training = model.training or {}
+    expected = training.get("expected_next_run_rms_um")
+    rms = data["probes"]["rms_without_checks_um"] if "probes" in data else data.get("rms_um")
+    if rms is None or not isinstance(expected, (int, float)) or not expected > 0:
+        return {}
+    low, high = training.get("expected_next_run_range_um") or (expected, expected)
+    place = "below" if rms < low else "above" if rms > high else "inside"
+    if modelling:
+        place = "modelling run"
+    return {
+        "expected_next_run": {
+            "rms_um": float(expected),
+            "range_um": [float(low), float(high)],
+            "actual_rms_um": float(rms),
+            "actual_over_expected": float(rms / expected),
+            "place": place,
+        }
+    }
+
+
+def expectation_line(check: dict[str, Any]) -> str:
+    """The report line of :func:`expectation_check`."""
+    low, high = check["range_um"]
+    where = "inside the range" if check["place"] == "inside" else f"{check['place']} the range"
+    if check["place"] == "modelling run":
+        where = "but this file is one the model was fitted on, not a next run"
+    return (
+        f"expected about {check['rms_um']:.3g} µm RMS on a next run (range {low:.3g}-{high:.3g} µm, from the model "
+        f"file); this run without checks: {check['actual_rms_um']:.3g} µm, {check['actual_over_expected']:.2g}× "
+        f"that, {where}"
+    )
 
 
 def residuals(run, replay: Replay) -> np.ndarray | None:
@@ -342,6 +382,8 @@ def replay_report(result: dict[str, Any]) -> str:
     lines.append(common.residual_line(result))
     if "probes" in result:
         lines.append(probe_report(result))
+    if "expected_next_run" in result:
+        lines.append(expectation_line(result["expected_next_run"]))
     lines += [f"note     {note}" for note in result.get("notes", [])]
     return "\n".join(lines)
 
