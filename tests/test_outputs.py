@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import stat
 
 import numpy as np
@@ -125,6 +126,10 @@ def test_exact_search_over_the_budget_is_refused_before_it_starts(tmp_path, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--objective sse" in err[0] and "--search ga" in err[0] and "--no-budget" in err[0]
     assert not (tmp_path / "o").exists()
+    step, seconds = re.search(r"keep one row in (\d+) of the run \(--resample (\d+):", err[0]).groups()
+    assert float(seconds) == int(step) * 10.0  # the sampling period times the step
+    cost = estimate_exact_cost(n // int(step), 9, "sae", 3)
+    assert cost.seconds <= 15 * 60 and cost.bytes <= 4e9  # the advice brings the search within the budget
     # p = 0 is one least-squares fit, not a search: no budget to refuse it on
     argv[argv.index("3")] = "0"
     assert main(argv) == 0

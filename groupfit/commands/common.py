@@ -337,7 +337,7 @@ def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objectiv
     step = 2
     while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
         step *= 2
-    hints.append(f"or keep one row in {step} of the run")
+    hints.append(f"or keep one row in {step} of the run (--resample {step * run.period:g}: the mean of {step} rows)")
     raise InputError(
         f"{run.source}: {what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "
         f"{cost.describe()}, over the budget of {format_seconds(EXACT_BUDGET_SECONDS)} and "
