@@ -271,4 +271,11 @@ def expectation_summary(expectations: dict) -> str:
     if method is not None:
         lines.append(f"        ({method.method()})")
         lines += [f"note    {note}" for note in method.notes]
+    before, after = expectations["before"], expectations["after"]
+    if before is not None and after is not None and after is not before and after.expected()[0] > before.expected()[0]:
+        lines.append(
+            f"note    the next-run estimate rises with the change ({before.expected()[0]:.3g} → "
+            f"{after.expected()[0]:.3g} µm) although the diagnosis's own held-out check adopted it: the two "
+            "disagree; replay a next run (groupfit replay) before the model goes onto the machine"
+        )
     return "\n" + "\n".join(lines)
