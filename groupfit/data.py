@@ -34,13 +34,14 @@ PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
 
 
-TEMP_RANGE_C = (-50.0, 200.0)
-"""Plausible temperature readings (°C) of a machine tool's sensors; anything outside is refused.
+TEMP_RANGE_C = (-50.0, 500.0)
+"""Plausible temperature readings (°C) of the sensors of a machine; anything outside is refused.
 
 Wider than any machine shop (coolant, bearings and motors stay well inside
-it) and narrower than the overflow values a broken logger writes (1e300, a
-missing sensor read as −273 or 850 °C). ``--range-temp=LOW,HIGH`` (or ``[data]
-temp_range``) widens it.
+it) and than the hot end of a 3-D printer (200-300 °C, logged as ``T0`` by
+its firmware), and narrower than the overflow values a broken logger writes
+(1e300, 9999, 3276.7, a missing sensor read as −273 or 850 °C).
+``--range-temp=LOW,HIGH`` (or ``[data] temp_range``) sets another.
 """
 ERROR_LIMIT_UM = 1.0e5
 """Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""

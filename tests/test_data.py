@@ -108,3 +108,15 @@ def test_unreadable_or_empty_files(tmp_path):
     header_only.write_text("time_s,T1,error_um\n")
     with pytest.raises(InputError, match="no rows"):
         load_run(header_only)
+
+
+def test_a_printer_hot_end_is_a_reading_and_logger_overflows_are_not(tmp_path):
+    """A 3-D printer's hot end (``T0`` at 215 °C) loads; the values broken loggers write are refused."""
+    frame = good_frame()
+    frame.insert(1, "T0", 215.0 + 0.3 * np.sin(frame["time_s"] / 900.0))
+    run = load_run(write_run(tmp_path, frame))
+    assert run.temp_names[0] == "T0" and run.temps[:, 0].min() > 200.0
+    for fault in (850.0, 9999.0, 3276.7, -273.15):
+        path = write_run(tmp_path, mutate(frame, "T0", 7, fault))
+        with pytest.raises(InputError, match=r"row 8, column 'T0'.*outside the plausible range"):
+            load_run(path)
