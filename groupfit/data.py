@@ -17,34 +17,27 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.column_values import ERROR_LIMIT_UM as ERROR_LIMIT_UM
+from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
+from groupfit.column_values import LoadOptions as LoadOptions
+from groupfit.column_values import check_range as check_range
+from groupfit.column_values import error_values as read_error_values
+from groupfit.column_values import numeric_column as numeric_column
+from groupfit.column_values import temperature_inputs
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
-    default_temperature_columns,
     found_error_column,
     found_time_column,
 )
 from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
-from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
+from groupfit.resample import jitter_note, resample_frame
 from groupfit.timestamps import unit_seconds
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
-
-
-TEMP_RANGE_C = (-50.0, 500.0)
-"""Plausible temperature readings (°C) of the sensors of a machine; anything outside is refused.
-
-Wider than any machine shop (coolant, bearings and motors stay well inside
-it) and than the hot end of a 3-D printer (200-300 °C, logged as ``T0`` by
-its firmware), and narrower than the overflow values a broken logger writes
-(1e300, 9999, 3276.7, a missing sensor read as −273 or 850 °C).
-``--range-temp=LOW,HIGH`` (or ``[data] temp_range``) sets another.
-"""
-ERROR_LIMIT_UM = 1.0e5
-"""Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
 
 
 @dataclass(frozen=True)
@@ -77,51 +70,6 @@ class Run:
     @property
     def n_samples(self) -> int:
         return len(self.time)
-
-
-def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
-    """Return one column as float64, naming the first bad cell if there is one.
-
-    Rows are reported 1-based, counting data rows (the header is not a row).
-    """
-    if column not in frame.columns:
-        available = ", ".join(map(str, frame.columns))
-        raise InputError(f"{label}: column '{column}' not found; the columns are: {available}")
-    raw = frame[column]
-    values = pd.to_numeric(raw, errors="coerce")
-    bad_text = values.isna() & raw.notna() & (raw.astype(str).str.strip().str.lower() != "nan")
-    if bad_text.any():
-        row = int(np.flatnonzero(bad_text.to_numpy())[0])
-        raise InputError(
-            f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; fix or remove that row"
-        )
-    array = values.to_numpy(dtype=float)
-    if not allow_nonfinite:
-        nonfinite = ~np.isfinite(array)
-        if nonfinite.any():
-            row = int(np.flatnonzero(nonfinite)[0])
-            what = "empty" if np.isnan(array[row]) else f"{array[row]}"
-            raise InputError(
-                f"{label}: row {row + 1}, column '{column}' is {what} "
-                f"({int(nonfinite.sum())} non-finite value(s) in that column); "
-                "a model can only be fitted on finite values: repair or drop those rows, or let --resample "
-                f"SECONDS interpolate up to {GAP_PERIODS} missed readings in a row"
-            )
-    return array
-
-
-def check_range(
-    values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
-) -> None:
-    """Refuse the first reading outside ``bounds`` (a physically impossible value), naming row and column."""
-    low, high = bounds
-    outside = np.flatnonzero((values < low) | (values > high))
-    if outside.size:
-        row = int(outside[0])
-        raise InputError(
-            f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "
-            f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, or widen the range with {option}"
-        )
 
 
 RESTART_PERIODS = 10
@@ -191,22 +139,6 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
             "widen the tolerance with --period-tolerance PERCENT, or split the run at the gap"
         )
     return period
-
-
-@dataclass(frozen=True)
-class LoadOptions:
-    """The column and value options of :func:`load_run` (its parameters say what each means)."""
-
-    temps: Sequence[str] | None = None
-    time: str = DEFAULT_TIME
-    error: str | None = DEFAULT_ERROR
-    require_error: bool = True
-    allow_nonfinite: bool = False
-    missing_error: bool = False
-    ambient: str | None = None
-    """A column that is never a default input (the ambient temperature, whatever its name)."""
-    temp_range: tuple[float, float] | None = TEMP_RANGE_C
-    error_limit: float | None = ERROR_LIMIT_UM
 
 
 def load_run(
@@ -341,7 +273,7 @@ def _validated(
     """The checks of :func:`load_run` on a table already read (its keywords in ``given``); ``ambient`` (a
     column) is never a default input."""
     options = LoadOptions(**given)
-    temps, time, error, ambient = options.temps, options.time, options.error, options.ambient
+    time, error = options.time, options.error
     allow_nonfinite = options.allow_nonfinite
     temp_range, error_limit = options.temp_range, options.error_limit
     time_values = time_seconds(frame, time, label)
@@ -349,31 +281,10 @@ def _validated(
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
 
-    if temps is None:
-        temps = default_temperature_columns(frame.columns, exclude=(time, error, ambient))
-        if not temps:
-            raise InputError(
-                f"{label}: no temperature columns found (named T1, T2 … or in °C); name the inputs with --temps A,B,C. "
-                f"The columns are: {', '.join(map(str, frame.columns))}"
-            )
-    temps = list(temps)
-    duplicates = sorted({t for t in temps if temps.count(t) > 1})
-    if duplicates:
-        raise InputError(f"{label}: temperature column(s) listed twice: {', '.join(duplicates)}")
-    if error is not None and error in temps:
-        raise InputError(f"{label}: column '{error}' is both the error and a temperature input")
+    temps, temp_array, dropped = temperature_inputs(frame, label, options)
+    notes = notes + ((dropped,) if dropped else ())
 
-    columns = [numeric_column(frame, t, label, allow_nonfinite=allow_nonfinite) for t in temps]
-    temp_array = np.column_stack(columns) if columns else np.empty((len(frame), 0))
-    for j, t in enumerate(temps):
-        finite = temp_array[np.isfinite(temp_array[:, j]), j]
-        if finite.size and np.ptp(finite) == 0.0:
-            raise InputError(
-                f"{label}: temperature column '{t}' is constant ({finite[0]:g} °C) over the whole run; "
-                "it cannot inform the model: drop it from --temps (a dead sensor?)"
-            )
-
-    error_values = _error_values(frame, error, label, options)
+    error_values = read_error_values(frame, error, label, options)
     if not allow_nonfinite:
         if temp_range is not None:
             for j, t in enumerate(temps):
@@ -394,31 +305,6 @@ def _validated(
         time_name=time,
         notes=notes,
     )
-
-
-def _error_values(frame: pd.DataFrame, error: str | None, label: str, options: LoadOptions) -> np.ndarray | None:
-    """The error column as numbers (None when not asked for and absent), refused when it cannot be modelled."""
-    require_error, missing_error = options.require_error, options.missing_error
-    allow_nonfinite = options.allow_nonfinite
-    if error is None or not (require_error or error in frame.columns):
-        return None
-    error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite or missing_error)
-    if missing_error and not allow_nonfinite:
-        infinite = np.flatnonzero(np.isinf(error_values))
-        if infinite.size:
-            raise InputError(
-                f"{label}: row {int(infinite[0]) + 1}, column '{error}' is {error_values[infinite[0]]} "
-                "(an empty cell marks a row without a measurement); repair or drop that row"
-            )
-        if np.isnan(error_values).all():
-            raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
-    measured = error_values[np.isfinite(error_values)]
-    if require_error and measured.size > 1 and np.ptp(measured) == 0.0:
-        raise InputError(
-            f"{label}: error column '{error}' is constant ({measured[0]:g} µm) on every measured row; "
-            "there is nothing to model: name the thermal-error column with --error COLUMN"
-        )
-    return error_values
 
 
 def measured_rows(run: Run) -> Run:

@@ -36,12 +36,12 @@ from groupfit.data import (
     PERIOD_TOLERANCE,
     TEMP_RANGE_C,
     Run,
-    default_temperature_columns,
     load_run,
     numeric_column,
     read_table,
     refuse_beyond,
 )
+from groupfit.default_columns import default_temperature_columns
 from groupfit.errors import InputError
 from groupfit.export.table import position_coefficients
 from groupfit.model import MAX_POSITION_ORDER, DeadBand, ModelFile, Position

@@ -120,3 +120,16 @@ def test_a_printer_hot_end_is_a_reading_and_logger_overflows_are_not(tmp_path):
         path = write_run(tmp_path, mutate(frame, "T0", 7, fault))
         with pytest.raises(InputError, match=r"row 8, column 'T0'.*outside the plausible range"):
             load_run(path)
+
+
+def test_a_constant_column_among_the_default_inputs_is_left_out_with_a_note(tmp_path):
+    frame = good_frame().assign(T0_target=215.0)
+    run = load_run(write_run(tmp_path, frame))
+    assert run.temp_names == ("T1", "T2", "T3")
+    np.testing.assert_array_equal(run.temps, frame[["T1", "T2", "T3"]].to_numpy())
+    assert any("left out of the inputs: 'T0_target' (215 °C)" in note for note in run.notes)
+    with pytest.raises(InputError, match=r"column 'T0_target' is constant \(215 °C\)"):  # named: refused
+        load_run(write_run(tmp_path, frame), temps=["T1", "T0_target"])
+    dead = frame.assign(T1=20.0, T2=20.0, T3=20.0).drop(columns="T0_target")
+    with pytest.raises(InputError, match=r"column 'T1' is constant"):  # nothing left to model with
+        load_run(write_run(tmp_path, dead))

@@ -1,0 +1,172 @@
+"""A run's value columns read as numbers and checked: the temperature inputs, the error, their plausible ranges.
+
+:func:`groupfit.data.load_run` reads a log through these; every refusal names
+the file, the row and the column.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
+from groupfit.errors import InputError
+from groupfit.resample import GAP_PERIODS
+
+TEMP_RANGE_C = (-50.0, 500.0)
+"""Plausible temperature readings (°C) of the sensors of a machine; anything outside is refused.
+
+Wider than any machine shop (coolant, bearings and motors stay well inside
+it) and than the hot end of a 3-D printer (200-300 °C, logged as ``T0`` by
+its firmware), and narrower than the overflow values a broken logger writes
+(1e300, 9999, 3276.7, a missing sensor read as −273 or 850 °C).
+``--range-temp=LOW,HIGH`` (or ``[data] temp_range``) sets another.
+"""
+ERROR_LIMIT_UM = 1.0e5
+"""Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
+
+
+@dataclass(frozen=True)
+class LoadOptions:
+    """The column and value options of :func:`load_run` (its parameters say what each means)."""
+
+    temps: Sequence[str] | None = None
+    time: str = DEFAULT_TIME
+    error: str | None = DEFAULT_ERROR
+    require_error: bool = True
+    allow_nonfinite: bool = False
+    missing_error: bool = False
+    ambient: str | None = None
+    """A column that is never a default input (the ambient temperature, whatever its name)."""
+    temp_range: tuple[float, float] | None = TEMP_RANGE_C
+    error_limit: float | None = ERROR_LIMIT_UM
+
+
+def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
+    """Return one column as float64, naming the first bad cell if there is one.
+
+    Rows are reported 1-based, counting data rows (the header is not a row).
+    """
+    if column not in frame.columns:
+        available = ", ".join(map(str, frame.columns))
+        raise InputError(f"{label}: column '{column}' not found; the columns are: {available}")
+    raw = frame[column]
+    values = pd.to_numeric(raw, errors="coerce")
+    bad_text = values.isna() & raw.notna() & (raw.astype(str).str.strip().str.lower() != "nan")
+    if bad_text.any():
+        row = int(np.flatnonzero(bad_text.to_numpy())[0])
+        raise InputError(
+            f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; fix or remove that row"
+        )
+    array = values.to_numpy(dtype=float)
+    if not allow_nonfinite:
+        nonfinite = ~np.isfinite(array)
+        if nonfinite.any():
+            row = int(np.flatnonzero(nonfinite)[0])
+            what = "empty" if np.isnan(array[row]) else f"{array[row]}"
+            raise InputError(
+                f"{label}: row {row + 1}, column '{column}' is {what} "
+                f"({int(nonfinite.sum())} non-finite value(s) in that column); "
+                "a model can only be fitted on finite values: repair or drop those rows, or let --resample "
+                f"SECONDS interpolate up to {GAP_PERIODS} missed readings in a row"
+            )
+    return array
+
+
+def check_range(
+    values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
+) -> None:
+    """Refuse the first reading outside ``bounds`` (a physically impossible value), naming row and column."""
+    low, high = bounds
+    outside = np.flatnonzero((values < low) | (values > high))
+    if outside.size:
+        row = int(outside[0])
+        raise InputError(
+            f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "
+            f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, or widen the range with {option}"
+        )
+
+
+def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[list, np.ndarray, str | None]:
+    """The input columns and their readings; constant columns among the default inputs are left out, with a note.
+
+    A constant column named with ``--temps`` is refused (a dead sensor); one found by its name (a setpoint
+    logged as ``T0_target``, a sensor that never moved) is not an input the user asked for.
+    """
+    temps, time, error, ambient = options.temps, options.time, options.error, options.ambient
+    defaulted = temps is None
+    if defaulted:
+        temps = default_temperature_columns(frame.columns, exclude=(time, error, ambient))
+        if not temps:
+            raise InputError(
+                f"{label}: no temperature columns found (named T1, T2 … or in °C); name the inputs with --temps A,B,C. "
+                f"The columns are: {', '.join(map(str, frame.columns))}"
+            )
+    temps = list(temps)
+    duplicates = sorted({t for t in temps if temps.count(t) > 1})
+    if duplicates:
+        raise InputError(f"{label}: temperature column(s) listed twice: {', '.join(duplicates)}")
+    if error is not None and error in temps:
+        raise InputError(f"{label}: column '{error}' is both the error and a temperature input")
+
+    columns = [numeric_column(frame, t, label, allow_nonfinite=options.allow_nonfinite) for t in temps]
+    constant = {}
+    for t, column in zip(temps, columns):
+        finite = column[np.isfinite(column)]
+        if finite.size and np.ptp(finite) == 0.0:
+            constant[t] = finite[0]
+    if constant and (not defaulted or len(constant) == len(temps)):
+        t, value = next(iter(constant.items()))
+        raise InputError(
+            f"{label}: temperature column '{t}' is constant ({value:g} °C) over the whole run; "
+            "it cannot inform the model: drop it from --temps (a dead sensor?)"
+        )
+    kept = [j for j, t in enumerate(temps) if t not in constant]
+    array = np.column_stack([columns[j] for j in kept]) if kept else np.empty((len(frame), 0))
+    note = None
+    if constant:
+        listed = ", ".join(f"'{t}' ({v:g} °C)" for t, v in constant.items())
+        note = (
+            f"{label}: constant over the whole run, left out of the inputs: {listed} (a setpoint or a sensor that "
+            "never moved); --temps names the inputs"
+        )
+    return [temps[j] for j in kept], array, note
+
+
+def error_values(frame: pd.DataFrame, error: str | None, label: str, options: LoadOptions) -> np.ndarray | None:
+    """The error column as numbers (None when not asked for and absent), refused when it cannot be modelled."""
+    require_error, missing_error = options.require_error, options.missing_error
+    allow_nonfinite = options.allow_nonfinite
+    if error is None or not (require_error or error in frame.columns):
+        return None
+    error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite or missing_error)
+    if missing_error and not allow_nonfinite:
+        infinite = np.flatnonzero(np.isinf(error_values))
+        if infinite.size:
+            raise InputError(
+                f"{label}: row {int(infinite[0]) + 1}, column '{error}' is {error_values[infinite[0]]} "
+                "(an empty cell marks a row without a measurement); repair or drop that row"
+            )
+        if np.isnan(error_values).all():
+            raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
+    measured = error_values[np.isfinite(error_values)]
+    if require_error and measured.size > 1 and np.ptp(measured) == 0.0:
+        raise InputError(
+            f"{label}: error column '{error}' is constant ({measured[0]:g} µm) on every measured row; "
+            "there is nothing to model: name the thermal-error column with --error COLUMN"
+        )
+    return error_values
+
+
+__all__ = [
+    "ERROR_LIMIT_UM",
+    "TEMP_RANGE_C",
+    "LoadOptions",
+    "check_range",
+    "error_values",
+    "numeric_column",
+    "temperature_inputs",
+]
