@@ -10,11 +10,12 @@ the role is taken, with a note naming it:
   of several, the first whose values increase from most rows to the next (of
   a ``Date`` and a ``Time`` column, the time of day);
 * the thermal error: the one column named as an error, a deviation, a
-  displacement or a drift, or in µm (``dZ_um``, ``Abweichung [µm]``); with
+  displacement or a drift (of an axis: ``Z drift``), or in µm (``dZ_um``,
+  ``Abweichung [µm]``); with
   several such columns (five probes) nothing is guessed and the refusal
   lists them;
 * the inputs: the columns named like sensors (``T1``, ``t12_C``), else those
-  named as temperatures (``Spindle [°C]``, ``Temp3``, ``TC2``), the ambient
+  named as temperatures (``Spindle [°C]``, ``Temp3``, ``Motor temp``, ``TC2``), the ambient
   left out (:func:`default_temperature_columns`).
 
 A column asked for by name is never replaced.
@@ -36,11 +37,14 @@ from groupfit.timestamps import time_like_columns
 DEFAULT_TIME = "time_s"
 DEFAULT_ERROR = "error_um"
 ERROR_NAME = re.compile(
-    r"^\s*(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|abweichung|"
+    r"^\s*(?:[xyz][\s_-]?)?(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|"
+    r"abweichung|"
     r"verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])",
     re.IGNORECASE,
 )
-TEMPERATURE_NAME = re.compile(r"°C|deg[\s_]?C\b|\[C\]|\(C\)|_C$|^\s*temp|temperatur|^\s*TC[\s_]?\d", re.IGNORECASE)
+TEMPERATURE_NAME = re.compile(
+    r"°C|deg[\s_]?C\b|\[C\]|\(C\)|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d", re.IGNORECASE
+)
 """A name that marks a temperature column."""
 IN_MICROMETRES = re.compile(r"(?:^|[\s_\[(/])(?:um|µm|μm|micron|microns)\s*[\])]?\s*$", re.IGNORECASE)
 

@@ -13,7 +13,7 @@ from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.data import load_run
-from groupfit.default_columns import error_like_columns
+from groupfit.default_columns import default_temperature_columns, error_like_columns
 from groupfit.errors import InputError
 from groupfit.readtable import read_table
 from groupfit.sweep.datasets import read_datasets
@@ -373,3 +373,13 @@ def test_a_sweep_excludes_the_time_and_error_columns_it_found(tmp_path, frame):
     assert not {"Zeit [s]", "dZ [µm]"} & set(everything.candidates)  # the time and the error are no candidates
     (default,) = read_datasets({"path": "renamed.csv"}, tmp_path, "study.toml")
     assert default.candidates == ("T2", "T3", "T4")  # named like sensors: those win
+
+
+def test_an_axis_drift_and_a_temperature_word_anywhere_are_recognised():
+    assert error_like_columns(["Z drift", "z_error", "X-Deviation", "x_errand", "T1", "Zone", "delta_T"]) == [
+        "Z drift",
+        "z_error",
+        "X-Deviation",
+    ]
+    names = ["Time", "Spindle_Temp", "Motor temp", "Tempo", "attempt", "Ambient temp", "Z drift"]
+    assert default_temperature_columns(names) == ["Spindle_Temp", "Motor temp"]
