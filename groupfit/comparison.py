@@ -430,7 +430,7 @@ def comparison_summary(result: ComparisonResult) -> str:
 def ar1_line(ar1: dict[str, Any] | None) -> str:
     """The summary line of the AR(1) model."""
     if ar1 is None:
-        return "AR(1): left out (--heat none: no heat-level column)"
+        return "AR(1): left out (no heat-level column; --heat COLUMN names one)"
     c2 = ", ".join(f"C2({level}) = {value:.4g} µm" for level, value in ar1["C2"].items())
     lb = ar1["ljung_box"]
     start = (

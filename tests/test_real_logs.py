@@ -296,9 +296,13 @@ def test_compare_detects_a_continuing_clock_and_takes_continues_for_a_restarted_
 def test_compare_takes_the_heat_column_by_flag_or_leaves_the_ar1_out(tmp_path, capsys):
     path = tmp_path / "printer.csv"
     cycle_means().to_csv(path, index=False)
-    assert cli("compare", "--data", path, "--pmax", "1", "--quiet", "--out", tmp_path) == 2
+    assert cli("compare", "--data", path, "--pmax", "1", "--heat", "speed_rpm", "--quiet", "--out", tmp_path) == 2
     err = capsys.readouterr().err
     assert "heat column 'speed_rpm'" in err and "--heat COLUMN" in err and "--heat none" in err
+    default = tmp_path / "default.json"  # the default heat level absent: the AR(1) is left out, with a note
+    assert cli("compare", "--data", path, "--pmax", "1", "--quiet", "--json", default, "--out", tmp_path) == 0
+    assert json.loads(default.read_text())["ar1"] is None
+    assert "AR(1): left out: the run has no 'speed_rpm' column" in capsys.readouterr().out
     out = tmp_path / "c.json"
     assert (
         cli(

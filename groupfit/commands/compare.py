@@ -23,6 +23,7 @@ from groupfit.probe_intervals import (
 )
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
+from groupfit.settings import CompareSettings
 
 
 def add_parser(verbs) -> None:
@@ -98,10 +99,18 @@ def run_compare(args: argparse.Namespace) -> int:
             "with fit --p 0"
         )
     modelling = common.load_configured_run(data)
-    if args.heat is not None and any(c not in modelling.frame.columns for c in settings.conditions):
+    heat_note = None
+    if args.heat is None and settings.heat == CompareSettings.heat and settings.heat not in modelling.frame.columns:
+        heat_note = (
+            f"AR(1): left out: the run has no '{settings.heat}' column, its default heat level; --heat COLUMN names one"
+        )
+        settings.heat = None
+    if (args.heat is not None or heat_note) and any(c not in modelling.frame.columns for c in settings.conditions):
         settings.conditions = (settings.heat,) if settings.heat is not None else ()  # the default speed_rpm is absent
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path)]
     common.print_notes([modelling, *validation], common.report_stream(args))
+    if heat_note:
+        print(f"note    {heat_note}", file=common.report_stream(args))
     reference = common.configured_reference(args, run_settings, modelling)
     choice = None
     if common.reference_is_default(args, run_settings):
