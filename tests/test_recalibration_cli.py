@@ -210,3 +210,17 @@ def test_compare_prints_and_writes_the_error_against_the_check_interval(tmp_path
     assert {row["model"] for row in table["rows"]} == {"mlr", "ar1", "grouped1"}
     assert "RMS µm with a probe check every T" in report
     assert (out / "error_against_check_interval.png").stat().st_size > 10_000
+
+
+def test_a_log_measured_on_some_rows_is_checked_where_it_was_measured(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC)
+    sparse = frame.assign(error_um=np.where(np.arange(len(frame)) % 4 == 1, frame["error_um"], np.nan))
+    path = tmp_path / "sparse.csv"
+    sparse.to_csv(path, index=False)
+    checked = replay_json(tmp_path, model_path, "--data", path, "--probe-every", 1000)  # due after rows 10, 20 …
+    due = np.arange(9, len(frame), 10)
+    measured = np.flatnonzero(np.isfinite(sparse["error_um"].to_numpy()))
+    expected = [int(measured[measured >= r][0]) for r in due if (measured >= r).any()]
+    expected = [m for m, r in zip(expected, due) if m < r + 10]  # a reading before the next check is due
+    assert [c["i"] - 1 for c in checked["probes"]["checks"]] == expected
+    assert [c["reading_um"] for c in checked["probes"]["checks"]] == [float(sparse["error_um"][m]) for m in expected]

@@ -51,8 +51,22 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
                 f"--probe-first {first:g}: after the run's last sample ({(run.n_samples - 1) * run.period:g} s); "
                 "give an earlier first check"
             )
+        rows = on_measured_rows(rows, np.isfinite(reading))
     probes[rows] = reading[rows]
     return probes
+
+
+def on_measured_rows(rows: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """Each check moved to the first row at or after it that has a reading, if one comes before the next check.
+
+    A log whose error is measured on some rows only (a probe cycle every few
+    minutes) is checked when it was measured; a row due without a reading up
+    to the next check has no check.
+    """
+    n = len(measured)
+    following = np.minimum.accumulate(np.where(measured, np.arange(n), n)[::-1])[::-1]
+    moved = following[rows]
+    return moved[moved < np.r_[rows[1:], n]]
 
 
 def probe_summary(args: argparse.Namespace, replay: Replay, probes: np.ndarray, rms_without: float | None) -> dict:
