@@ -106,6 +106,12 @@ def test_other_sampling_period_is_refused_with_one_line(tmp_path, model_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "fast.csv" in err[0] and "sampling period 60 s differs from the model's 100 s" in err[0]
     assert not (tmp_path / "r.json").exists() and not (tmp_path / "fig").exists()
+    assert "--resample 100" in err[0]  # the advice, followed, replays the run
+    assert replay(model_path, "--data", data, "--resample", "100", "--json", tmp_path / "r.json") == 0
+    assert json.loads((tmp_path / "r.json").read_text())["sampling_period_s"] == 100.0
+    frame.assign(time_s=frame["time_s"] / 0.6 * 1.5).to_csv(data, index=False)  # slower than the model: refit
+    assert replay(model_path, "--data", data) == 2
+    assert "fit a model at this period" in capsys.readouterr().err
 
 
 def test_missing_temperature_column_is_refused(tmp_path, model_path, capsys):

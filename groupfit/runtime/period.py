@@ -63,8 +63,8 @@ def at_period(model: ModelFile | Mapping[str, Any], period_s: float) -> ModelFil
     if model.breaks:
         raise InputError(
             f"{head}: the model switches groups by sample count (p = {len(model.breaks)}, breaks at samples "
-            f"{', '.join(str(b) for b in model.breaks)}), which is exact only at its own period; resample the run "
-            "to the model's period or fit a model at this period"
+            f"{', '.join(str(b) for b in model.breaks)}), which is exact only at its own period; "
+            + _what_to_do(old, float(period_s))
         )
     ratio = old / float(period_s)
     features, names = [], {}
@@ -76,8 +76,7 @@ def at_period(model: ModelFile | Mapping[str, Any], period_s: float) -> ModelFil
                 raise InputError(
                     f"{head}: derived input {feature.name} delays its source by {feature.delay_samples} sample(s) "
                     f"({feature.delay_samples * old:g} s), which is no whole number of {period_s:g} s samples "
-                    f"from 1 to {MAX_DELAY_SAMPLES}; "
-                    "resample the run to the model's period or fit a model at this period"
+                    f"from 1 to {MAX_DELAY_SAMPLES}; " + _what_to_do(old, float(period_s))
                 )
             rescaled = dataclasses.replace(feature, delay_samples=int(round(samples)))
             names[feature.name] = rescaled.name
@@ -93,6 +92,13 @@ def at_period(model: ModelFile | Mapping[str, Any], period_s: float) -> ModelFil
         switching=switching,
         derived_inputs=tuple(features) if model.derived_inputs is not None else None,
     )
+
+
+def _what_to_do(model_period_s: float, period_s: float) -> str:
+    """The advice of a refusal: average the run to the model's period when it is sampled faster, else refit."""
+    if period_s < model_period_s:
+        return f"average the run to the model's period with --resample {model_period_s:g}, or fit a model at its own"
+    return "fit a model at this period (a run sampled more slowly than the model cannot be resampled to it)"
 
 
 __all__ = ["at_period", "period_differs"]
