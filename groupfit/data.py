@@ -155,6 +155,7 @@ def load_run(
     error_limit: float | None = ERROR_LIMIT_UM,
     period_tolerance: float = PERIOD_TOLERANCE,
     resample: float | None = None,
+    time_is_default: bool = False,
 ) -> Run:
     """Read and validate a run.
 
@@ -196,6 +197,10 @@ def load_run(
         Bin the rows into periods of this many seconds first
         (:mod:`groupfit.resample`); a gap that splits the log is refused here
         (:func:`load_runs` returns the pieces).
+    time_is_default : bool
+        ``time`` is a default, not asked for (the column a model was fitted
+        with): a log without it is read on the column its name marks as the
+        time, with a note, as a log without ``time_s`` is.
 
     Raises
     ------
@@ -204,7 +209,14 @@ def load_run(
     """
     options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
     options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
-    runs = load_runs(source, name=name, period_tolerance=period_tolerance, resample=resample, **options)
+    runs = load_runs(
+        source,
+        name=name,
+        period_tolerance=period_tolerance,
+        resample=resample,
+        time_is_default=time_is_default,
+        **options,
+    )
     if len(runs) > 1:
         raise InputError(
             f"{runs[0].source.split(' (part')[0]}: --resample {resample:g} splits the log into {len(runs)} runs at "
@@ -219,6 +231,7 @@ def load_runs(
     name: str | None = None,
     period_tolerance: float = PERIOD_TOLERANCE,
     resample: float | None = None,
+    time_is_default: bool = False,
     **options,
 ) -> list[Run]:
     """Read and validate a log as :func:`load_run` does; with ``resample``, one run per stretch between gaps.
@@ -227,7 +240,7 @@ def load_runs(
     marks for the role (:mod:`groupfit.default_columns`), with a note.
     """
     frame, run_name, label = read_table(source, name)
-    time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label)
+    time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     required = options.get("require_error", True)
     error, error_note = found_error_column(frame, options.get("error", DEFAULT_ERROR), label, required=required)
     runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})

@@ -64,12 +64,14 @@ def error_like_columns(columns) -> list[str]:
     return [str(c) for c in columns if ERROR_NAME.match(str(c)) or IN_MICROMETRES.search(str(c))]
 
 
-def found_time_column(frame: pd.DataFrame, time: str, label: str) -> tuple[str, str | None]:
+def found_time_column(frame: pd.DataFrame, time: str, label: str, *, default: bool = False) -> tuple[str, str | None]:
     """The time column to read, and a note when it is not the one asked for (see the module docstring).
 
-    None of the candidates reading as increasing times: the first of them, whose error then names it.
+    ``default``: ``time`` was not asked for (the column a model was fitted with), so a log without it is
+    read on the column its name marks, as one without ``time_s`` is. None of the candidates reading as
+    increasing times: the first of them, whose error then names it.
     """
-    if time != DEFAULT_TIME or time in frame.columns:
+    if time in frame.columns or (time != DEFAULT_TIME and not default):
         return time, None
     names = time_like_columns(frame.columns)
     if not names:
@@ -77,7 +79,7 @@ def found_time_column(frame: pd.DataFrame, time: str, label: str) -> tuple[str, 
     chosen = names[0]
     if len(names) > 1:  # one candidate is read once, by the loader
         chosen = next((name for name in names if _reads_as_time(frame, name, label)), names[0])
-    return chosen, f"{label}: time from column '{chosen}' (there is no '{DEFAULT_TIME}'; --time names another)"
+    return chosen, f"{label}: time from column '{chosen}' (there is no '{time}'; --time names another)"
 
 
 def found_error_column(

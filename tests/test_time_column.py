@@ -52,3 +52,23 @@ def test_a_model_file_without_its_time_column_reads_time_s(tmp_path, capsys):
     assert main(["diagnose", str(model), "--data", str(model_run), "--out", str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "column 'time_s' not found" in err[0] and TIME in err[0]
+
+
+def test_a_next_run_without_the_models_time_column_is_read_on_the_one_its_name_marks(tmp_path, capsys):
+    german = tmp_path / "model_run.csv"
+    pd.read_csv(DATA / "diag_speed_model.csv").rename(columns={"time_s": "Zeit [s]"}).to_csv(german, index=False)
+    fit = ["fit", "--data", str(german), "--temps", "T1,T2", "--p", "0", "--quiet", "--out", str(tmp_path / "m")]
+    assert main(fit) == 0
+    model = tmp_path / "m" / "model.json"
+    assert json.loads(model.read_text())["training"]["time"] == "Zeit [s]"
+    other = DATA / "diag_speed_validate.csv"  # its clock is time_s
+    same = tmp_path / "validate_zeit.csv"
+    pd.read_csv(other).rename(columns={"time_s": "Zeit [s]"}).to_csv(same, index=False)
+    capsys.readouterr()
+    assert main(["replay", str(model), "--data", str(other), "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    assert "time from column 'time_s' (there is no 'Zeit [s]'" in captured.err
+    assert main(["replay", str(model), "--data", str(same), "--json", "-"]) == 0
+    assert json.loads(captured.out)["rms_um"] == json.loads(capsys.readouterr().out)["rms_um"]
+    assert main(["replay", str(model), "--data", str(other), "--time", "Zeit [s]"]) == 2  # asked for: refused
+    assert "column 'Zeit [s]' not found" in capsys.readouterr().err

@@ -190,7 +190,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     )
     model = ModelFile.load(args.model).to_dict()
     time = args.time or time_column(model)
-    clock = common.clock_options(args)
+    clock = {**common.clock_options(args), "time_is_default": args.time is None}
     data = [load_measured(path, model, time, **clock) for path in args.data]
     validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
     common.print_notes([*data, *validate], common.report_stream(args))

@@ -104,6 +104,7 @@ def run_replay(args: argparse.Namespace) -> int:
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), error=error, **common.clock_options(args))
+    options["time_is_default"] = args.time is None
     run = load_readings(args.data, tables, **options)
     continued, history, found_note = earlier_recordings(
         args, model, run, lambda path: load_readings(path, tables, **options)
