@@ -344,7 +344,10 @@ def join_runs(runs: Sequence[Run]) -> Run:
     first = runs[0]
     for run in runs[1:]:
         if run.temp_names != first.temp_names:
-            raise InputError(f"{run.source}: inputs {', '.join(run.temp_names)} differ from {first.source}'s")
+            raise InputError(
+                f"{run.source}: inputs {', '.join(run.temp_names)} differ from {first.source}'s "
+                f"({', '.join(first.temp_names)}); name the inputs every run has with --temps A,B,C"
+            )
         if abs(run.period - first.period) > 0.01 * first.period:
             raise InputError(
                 f"{run.source}: sampled every {run.period:g} s but {first.source} every {first.period:g} s; "

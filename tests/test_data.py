@@ -133,3 +133,15 @@ def test_a_constant_column_among_the_default_inputs_is_left_out_with_a_note(tmp_
     dead = frame.assign(T1=20.0, T2=20.0, T3=20.0).drop(columns="T0_target")
     with pytest.raises(InputError, match=r"column 'T1' is constant"):  # nothing left to model with
         load_run(write_run(tmp_path, dead))
+
+
+def test_runs_with_other_default_inputs_are_refused_with_the_option_that_aligns_them(tmp_path, capsys):
+    frame = good_frame()
+    first = write_run(tmp_path, frame, "a.csv")
+    second = write_run(tmp_path, frame.assign(T3=20.0), "b.csv")  # T3 never moved that day: left out there
+    out = tmp_path / "out"
+    assert main(["fit", "--data", str(first), str(second), "--p", "0", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "b.csv: inputs T1, T2 differ from" in err[0] and "a.csv's (T1, T2, T3)" in err[0]
+    assert "--temps" in err[0]
+    assert main(["fit", "--data", str(first), str(second), "--temps", "T1,T2", "--p", "0", "--out", str(out)]) == 0
