@@ -94,7 +94,9 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
     """The input columns and their readings; constant columns among the default inputs are left out, with a note.
 
     A constant column named with ``--temps`` is refused (a dead sensor); one found by its name (a setpoint
-    logged as ``T0_target``, a sensor that never moved) is not an input the user asked for.
+    logged as ``T0_target``, a sensor that never moved) is not an input the user asked for. A run read
+    without its error (a replay) keeps every column: the run-time rule meets a stuck sensor as the
+    controller does.
     """
     temps, time, error, ambient = options.temps, options.time, options.error, options.ambient
     defaulted = temps is None
@@ -116,7 +118,7 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
     constant = {}
     for t, column in zip(temps, columns):
         finite = column[np.isfinite(column)]
-        if finite.size and np.ptp(finite) == 0.0:
+        if options.require_error and finite.size and np.ptp(finite) == 0.0:  # a replay runs what it reads
             constant[t] = finite[0]
     if constant and (not defaulted or len(constant) == len(temps)):
         t, value = next(iter(constant.items()))

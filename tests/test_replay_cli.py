@@ -21,6 +21,8 @@ from test_switching_models import (
 )
 
 from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.runtime import FAULT_HELD, FAULT_SENSOR, SwitchingRule, replay_groups
 
@@ -87,6 +89,19 @@ def test_nonfinite_readings_are_sensor_faults_not_errors(tmp_path, model_path):
     assert result["scored_samples"] == len(frame) - 4
     assert result["faults"] == {"held_samples": 5, "sensor_fault_samples": 3}
     assert result["nonfinite_readings"] == 8
+
+
+def test_a_sensor_stuck_for_the_whole_run_is_replayed_as_the_controller_reads_it(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC).assign(T2=21.5)  # stuck at one value: the rule gets what it would read
+    data = tmp_path / "stuck.csv"
+    frame.to_csv(data, index=False)
+    assert replay(model_path, "--data", data, "--json", tmp_path / "r.json") == 0
+    result = json.loads((tmp_path / "r.json").read_text())
+    rule = SwitchingRule(ModelFile.load(model_path), period_s=float(frame["time_s"].diff().iloc[1]))
+    expected = rule.replay(frame[list(ModelFile.load(model_path).temps)].to_numpy(dtype=float)).prediction_um
+    np.testing.assert_array_equal([s["prediction_um"] for s in result["samples"]], expected)
+    with pytest.raises(InputError, match="'T2' is constant"):  # fitting on it is refused, as before
+        load_run(data, temps=["T1", "T2"])
 
 
 def test_run_without_error_column_has_no_residual(tmp_path, model_path, capsys):
