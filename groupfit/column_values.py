@@ -124,7 +124,7 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
         t, value = next(iter(constant.items()))
         raise InputError(
             f"{label}: temperature column '{t}' is constant ({value:g} °C) over the whole run; "
-            "it cannot inform the model: drop it from --temps (a dead sensor?)"
+            "a fit cannot use it (a dead sensor?): leave it out of the model's inputs (--temps)"
         )
     kept = [j for j, t in enumerate(temps) if t not in constant]
     array = np.column_stack([columns[j] for j in kept]) if kept else np.empty((len(frame), 0))
