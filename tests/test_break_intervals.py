@@ -19,7 +19,7 @@ from groupfit.inference.bootstrap import block_resample, bootstrap_break_interva
 from groupfit.inference.break_intervals import argmax_cdf, argmax_quantile, bai_intervals
 from groupfit.models import GroupedRegressor
 from groupfit.objective import SegmentCost
-from groupfit.search.exact import solve_exact
+from groupfit.search.exact import exact_is_cheap, solve_exact
 
 ROOT = Path(__file__).resolve().parents[1]
 RECORDED = ROOT / "tests" / "data" / "strucchange"
@@ -205,3 +205,28 @@ def test_compare_prints_intervals_next_to_the_breaks_and_writes_bands(tmp_path, 
         assert f"{first['break']} [{first['lower']}, {first['upper']}]" in report
     assert "break intervals: Bai (1997)" in report
     assert (out / "compare_paper_cycle.png").stat().st_size > 10_000
+
+
+def test_auto_leaves_the_bootstrap_out_before_a_refit_when_the_fits_own_search_says_it_is_too_slow(monkeypatch):
+    X, y = shifted_series(n_samples=800, change=400)
+    assert not exact_is_cheap(len(y), "sae")  # the refits search by the GA, as the fit did
+    model = GroupedRegressor(p=1, n=3, objective="sae", search="ga").fit(X, y)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("no refit should start")
+
+    monkeypatch.setattr("groupfit.inference.bootstrap_break_intervals", refuse)
+    model.search_["seconds"] = 0.1  # 200 refits of it: 20 s, over a budget of 5 s
+    report = break_intervals(model, X, y, n_boot=200, budget_s=5.0)
+    assert report.intervals == [] and report.detail.startswith("not computed")
+    assert report.seconds == pytest.approx(20.0)
+    with pytest.raises(AssertionError, match="no refit"):  # asked for by name: run whatever it costs
+        break_intervals(model, X, y, method="bootstrap", n_boot=200, budget_s=5.0)
+    model.search_["seconds"] = 0.001  # 0.2 s: within the budget, so the bootstrap starts
+    with pytest.raises(AssertionError, match="no refit"):
+        break_intervals(model, X, y, n_boot=200, budget_s=5.0)
+    small_X, small_y = shifted_series()  # cheap exact refits: the bootstrap's own projection decides
+    small = GroupedRegressor(p=1, n=3, objective="sae", search="ga").fit(small_X, small_y)
+    small.search_["seconds"] = 0.1
+    with pytest.raises(AssertionError, match="no refit"):
+        break_intervals(small, small_X, small_y, n_boot=200, budget_s=5.0)

@@ -23,6 +23,7 @@ from groupfit.inference.bootstrap import BootstrapTooSlow, bootstrap_break_inter
 from groupfit.inference.break_intervals import BreakInterval, bai_intervals
 from groupfit.objective import design_matrix
 from groupfit.search.base import DEFAULT_SEED
+from groupfit.search.exact import exact_is_cheap
 
 METHODS = ("auto", "bai", "bootstrap", "none")
 
@@ -147,6 +148,10 @@ def break_intervals(
         variant = "heteroskedastic regressors and errors" if het else "common Q and sigma"
         return BreakIntervalReport([_clip(i, n_samples) for i in raw], "bai", f"Bai (1997), {variant}", level)
 
+    search_s = float((getattr(estimator, "search_", None) or {}).get("seconds") or 0.0)
+    by_ga = not exact_is_cheap(n_samples, estimator.objective)  # the refits search as the fit did
+    if method == "auto" and budget_s is not None and by_ga and search_s * n_boot > budget_s:
+        return _bootstrap_not_run(n_boot, level, search_s * n_boot)
     started = time.perf_counter()
     try:
         result = bootstrap_break_intervals(
@@ -165,18 +170,23 @@ def break_intervals(
             budget_s=budget_s if method == "auto" else None,
         )
     except BootstrapTooSlow as slow:
-        return BreakIntervalReport(
-            detail=f"not computed: ask for the bootstrap ({n_boot} refits) with --intervals bootstrap; "
-            "Bai's intervals need the sse objective and n = 0",
-            level=level,
-            seconds=slow.projected_s,
-        )
+        return _bootstrap_not_run(n_boot, level, slow.projected_s)
     seconds = time.perf_counter() - started
     detail = (
         f"residual block bootstrap, {n_boot} refits ({result.search} search), blocks of {result.block} samples, "
         f"seed {seed}"
     )
     return BreakIntervalReport(result.intervals, "bootstrap", detail, level, seconds)
+
+
+def _bootstrap_not_run(n_boot: int, level: float, projected_s: float) -> BreakIntervalReport:
+    """The report of an automatic bootstrap that would exceed its budget (``projected_s`` seconds)."""
+    return BreakIntervalReport(
+        detail=f"not computed: ask for the bootstrap ({n_boot} refits) with --intervals bootstrap; "
+        "Bai's intervals need the sse objective and n = 0",
+        level=level,
+        seconds=projected_s,
+    )
 
 
 def weak_breaks(intervals: list[BreakInterval], n_samples: int, share: float = 0.5) -> dict[int, str]:
