@@ -38,8 +38,7 @@ DEFAULT_TIME = "time_s"
 DEFAULT_ERROR = "error_um"
 ERROR_NAME = re.compile(
     r"^\s*(?:[xyz][\s_-]?)?(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|"
-    r"abweichung|"
-    r"verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])",
+    r"abweichung|verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])",
     re.IGNORECASE,
 )
 TEMPERATURE_NAME = re.compile(

@@ -103,8 +103,8 @@ def run_replay(args: argparse.Namespace) -> int:
         counts = IntegerForm(args.resolution_um, args.counts_limit)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
-    options = dict(time=args.time or time_column(model), error=error, **common.clock_options(args))
-    options["time_is_default"] = args.time is None
+    options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
+    options.update(common.clock_options(args))
     run = load_readings(args.data, tables, **options)
     continued, history, found_note = earlier_recordings(
         args, model, run, lambda path: load_readings(path, tables, **options)
@@ -141,7 +141,7 @@ def run_replay(args: argparse.Namespace) -> int:
         without = residuals(run, unchecked)
         rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
-    data.update(expectation_check(model, data, modelling=is_modelling_file(model.training, args.data)))
+    data.update(expectation_check(model, data, args.data))
     result = ReplayResult({**data, **range_check(model, run)})
     written = []
     if out_dir is not None:
@@ -208,11 +208,11 @@ def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 
 
-def expectation_check(model: ModelFile, data: dict[str, Any], *, modelling: bool = False) -> dict[str, Any]:
+def expectation_check(model: ModelFile, data: dict[str, Any], path) -> dict[str, Any]:
     """This run's RMS without checks against what the model file expected of a next run (``training``).
 
-    Empty when the run has no measured error or the model file holds no expectation. ``modelling``: the
-    replayed file is one the model was fitted on, not a next run (``place`` says so).
+    Empty when the run has no measured error or the model file holds no expectation. A file ``path`` the
+    model was fitted on is no next run (``place`` says so).
     """
     training = model.training or {}
     expected = training.get("expected_next_run_rms_um")
@@ -221,7 +221,7 @@ def expectation_check(model: ModelFile, data: dict[str, Any], *, modelling: bool
         return {}
     low, high = training.get("expected_next_run_range_um") or (expected, expected)
     place = "below" if rms < low else "above" if rms > high else "inside"
-    if modelling:
+    if is_modelling_file(training, path):  # read only when there is a figure to place
         place = "modelling run"
     return {
         "expected_next_run": {
