@@ -12,6 +12,12 @@ predicted without any refitting or tuning:
   (:mod:`groupfit.runtime`) chooses the group from the live criterion
   temperature when it is available, else the groups are applied by sample
   index, and the table says which.
+
+A modelling run whose error is measured on some rows only (a probe cycle
+every few minutes) gets the global models only: MLR fitted on its measured
+rows (grouped models' breaks are row indices of a complete error, the AR(1)
+recursion needs the error on consecutive rows). Every run is scored on its
+measured rows.
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.conditions import condition_changes, run_condition
-from groupfit.data import Run
+from groupfit.data import Run, measured_rows
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.penalty import penalised_expectation, penalty_lines
@@ -127,6 +133,8 @@ class ComparisonResult:
     fit_choice: int | None = None
     fit_penalty: dict[str, Any] | None = None
     """The ridge penalty fit gives its choice of p = 0 (:func:`groupfit.heldout.penalty.penalised_expectation`)."""
+    notes: list[str] = field(default_factory=list)
+    """What was left out and why (a modelling run whose error is not measured on every row)."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -143,6 +151,7 @@ class ComparisonResult:
             "break_intervals": {str(p): report.to_json() for p, report in self.break_intervals.items()},
             "run_conditions": self.run_conditions,
             "reference": self.reference,
+            "notes": self.notes,
             "expected_next_run": self.expectation
             and {
                 **self.expectation.to_json(),
@@ -236,15 +245,17 @@ def compare_models(
     if len(set(names)) != len(names):
         raise InputError(f"two runs share the name '{[n for n in names if names.count(n) > 1][0]}'; rename a file")
 
-    X, y = modelling.temps, modelling.error
+    measured = measured_rows(modelling)
+    notes = sparse_error_notes(modelling, measured)
+    X, y = measured.temps, measured.error
     named = pd.DataFrame(X, columns=list(modelling.temp_names))
     mlr = MLR(objective=settings.objective, fit_intercept=settings.fit_intercept).fit(named, y)
-    ar1 = fit_ar1(modelling, settings) if settings.heat is not None else None
+    ar1 = fit_ar1(modelling, settings) if settings.heat is not None and not notes else None
 
     path = exact_path(
         X,
         y,
-        settings.pmax,
+        0 if notes else settings.pmax,
         n=settings.n,
         c=settings.c,
         objective=settings.objective,
@@ -289,7 +300,7 @@ def compare_models(
                 _column(modelling, sensor), modelling.period, settings.rise_window_s
             )
         if ar1 is not None:
-            initial = run.error[0] if settings.ar1_start == "measured" else 0.0
+            initial = first_measured(run.error) if settings.ar1_start == "measured" else 0.0
             preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=initial, rise_ratio=rise_ratio)
         bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
         for p, model in grouped.items():
@@ -304,8 +315,9 @@ def compare_models(
                 groups = groups[len(history) :]
             bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
         predictions[run.name] = preds
+        scored = np.isfinite(run.error)
         for key, prediction in preds.items():
-            metrics = error_metrics(run.error - prediction)
+            metrics = error_metrics((run.error - prediction)[scored])
             if key.startswith("grouped"):
                 p = int(key[len("grouped") :])
                 breaks = grouped[p].breaks_
@@ -321,18 +333,19 @@ def compare_models(
         rule: choose_p(
             path["rss"],
             path["R"],
-            modelling.n_samples,
+            measured.n_samples,
             X.shape[1] + int(settings.fit_intercept),
             rule,
             settings.p_target if rule == "target" else None,
         )
         for rule in ("bic", "target")
     }
-    candidates = range(max(pmax, settings.fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
+    fit_pmax = 0 if notes else settings.fit_pmax
+    candidates = range(max(pmax, fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
     expectation = expect_next_run(
-        [modelling], candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+        [measured], candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
     )
-    fit_choice = expectation.choice_among(settings.fit_pmax + 1)
+    fit_choice = expectation.choice_among(fit_pmax + 1)
     ar1_summary = None
     if ar1 is not None:
         ar1_summary = {
@@ -369,8 +382,27 @@ def compare_models(
         reference=modelling.reference,
         expectation=expectation,
         fit_choice=fit_choice,
-        fit_penalty=penalised_expectation(modelling, fit_intercept=settings.fit_intercept) if fit_choice == 0 else None,
+        fit_penalty=penalised_expectation(measured, fit_intercept=settings.fit_intercept) if fit_choice == 0 else None,
+        notes=notes,
     )
+
+
+def sparse_error_notes(modelling: Run, measured: Run) -> list[str]:
+    """What a modelling run whose error is measured on some rows only leaves out of the comparison."""
+    if measured is modelling:
+        return []
+    return [
+        f"the error of {modelling.name} is measured on {measured.n_samples} of {modelling.n_samples} rows: "
+        "compared are the global models fitted on those rows; grouped models (p >= 1) need the error on every "
+        "row (their breaks are row indices), the AR(1) model on consecutive rows; every run is scored on its "
+        "measured rows"
+    ]
+
+
+def first_measured(error: np.ndarray) -> float:
+    """The first measured value of an error series (where an AR(1) free run starts); 0 when none is."""
+    finite = np.flatnonzero(np.isfinite(error))
+    return float(error[finite[0]]) if finite.size else 0.0
 
 
 def _column(run: Run, name: str) -> np.ndarray:
@@ -387,7 +419,7 @@ def comparison_summary(result: ComparisonResult) -> str:
     )
     keys = ["mlr"] + (["ar1"] if result.ar1 is not None else []) + grouped_keys
     index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
-    lines = comparison_table(result, keys, index)
+    lines = [f"note    {note}" for note in result.notes] + comparison_table(result, keys, index)
     lines += [
         "",
         f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
@@ -419,7 +451,7 @@ def comparison_summary(result: ComparisonResult) -> str:
     )
     f_text = f"F = {stats['f_value']:.4g} (p = {stats['f_p_value']:.2g}), " if stats["f_value"] is not None else ""
     lines.append(f"MLR: {terms}; {f_text}R² = {stats['r_squared']:.5f}, σ = {stats['sigma_um']:.3g} µm")
-    lines.append(ar1_line(result.ar1))
+    lines.append(ar1_line(result.ar1, left_out="the error is not measured on every row" if result.notes else None))
     lines.append(
         f"grouped models on validation runs: groups chosen by {result.validation_rule}; "
         "they are fitted to the modelling run's condition and are not retuned."
@@ -427,10 +459,10 @@ def comparison_summary(result: ComparisonResult) -> str:
     return "\n".join(lines)
 
 
-def ar1_line(ar1: dict[str, Any] | None) -> str:
-    """The summary line of the AR(1) model."""
+def ar1_line(ar1: dict[str, Any] | None, left_out: str | None = None) -> str:
+    """The summary line of the AR(1) model (``left_out``: why it was, if not for want of a heat column)."""
     if ar1 is None:
-        return "AR(1): left out (no heat-level column; --heat COLUMN names one)"
+        return f"AR(1): left out ({left_out or 'no heat-level column; --heat COLUMN names one'})"
     c2 = ", ".join(f"C2({level}) = {value:.4g} µm" for level, value in ar1["C2"].items())
     lb = ar1["ljung_box"]
     start = (

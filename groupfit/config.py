@@ -8,7 +8,7 @@ A configuration has up to four tables; every key is optional::
     temps = ["T1", "T2", "T3", "T4"]
     error = "error_um"
     validate = ["../datasets/other_run.csv"]
-    temp_range = [-50, 200]    # plausible temperatures (°C); a reading outside is refused
+    temp_range = [-50, 500]    # plausible temperatures (°C); a reading outside is refused
     error_limit = 1e5          # largest plausible |error| (µm)
     period_tolerance = 2       # % of the period an interval may deviate by (a jittering clock)
     resample_s = 60            # average the readings of every 60 s (a gap splits the log)

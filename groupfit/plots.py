@@ -112,7 +112,9 @@ def plot_run_comparison(
     fig, (top, bottom) = subplots(
         2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.6]}, constrained_layout=True
     )
-    top.plot(hours, measured, color="black", lw=2.0, label="measured")
+    measured = np.asarray(measured, dtype=float)
+    points = {"ls": "none", "marker": "."} if not np.isfinite(measured).all() else {}  # a sparse error: its readings
+    top.plot(hours, measured, color="black", lw=2.0, label="measured", **points)
     grouped_colors = iter(["tab:blue", "tab:purple", "tab:red", "tab:brown", "tab:pink", "tab:olive"])
     shown = [key for key in predictions if key in MODEL_STYLE] + [
         f"grouped{p}" for p in grouped_shown if f"grouped{p}" in predictions
@@ -127,7 +129,7 @@ def plot_run_comparison(
             lower, upper = (np.asarray(end) - predictions[key] for end in bands[key])
             top.fill_between(hours, predictions[key] + lower, predictions[key] + upper, color=color, alpha=0.12, lw=0)
             bottom.fill_between(hours, lower, upper, color=color, alpha=0.12, lw=0)
-        bottom.plot(hours, np.asarray(measured) - predictions[key], color=color, ls=style, lw=1.0)
+        bottom.plot(hours, measured - predictions[key], color=color, lw=1.0, **({"ls": style} | points))
     bottom.axhline(0.0, color="black", lw=0.6)
     if bands:
         bottom.set_title("shaded: 95 % prediction bands, centred on each model's prediction", fontsize=8)

@@ -55,10 +55,24 @@ def check_rows(n_samples: int, every: int, first: int | None = None) -> np.ndarr
     return np.arange(every - 1 if first is None else first, n_samples, every)
 
 
+def on_measured_rows(rows: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """Each check moved to the first row at or after it that has a reading, if one comes before the next check.
+
+    A log whose error is measured on some rows only (a probe cycle every few
+    minutes) is checked when it was measured; a row due without a reading up
+    to the next check has no check.
+    """
+    n = len(measured)
+    following = np.minimum.accumulate(np.where(measured, np.arange(n), n)[::-1])[::-1]
+    moved = following[rows]
+    return moved[moved < np.r_[rows[1:], n]]
+
+
 def hold_residual(residual: np.ndarray, every: int, first: int | None = None) -> np.ndarray:
-    """The residual after a check at :func:`check_rows`, each held from the next sample until the next check."""
+    """The residual after a check at :func:`check_rows` (on the next measured row: :func:`on_measured_rows`),
+    each held from the next sample until the next check."""
     residual = np.asarray(residual, dtype=float)
-    rows = check_rows(len(residual), every, first)
+    rows = on_measured_rows(check_rows(len(residual), every, first), np.isfinite(residual))
     if not rows.size:
         return residual.copy()
     last = np.searchsorted(rows, np.arange(len(residual)), side="left") - 1  # the last check strictly before

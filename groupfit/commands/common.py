@@ -48,8 +48,8 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--range-temp",
         metavar="LOW,HIGH",
-        help="plausible temperature readings in °C (default -50,200; write --range-temp=-60,250 for a negative LOW); "
-        "a reading outside is refused",
+        help=f"plausible temperature readings in °C (default {TEMP_RANGE_C[0]:g},{TEMP_RANGE_C[1]:g}; "
+        "write --range-temp=-60,250 for a negative LOW); a reading outside is refused",
     )
     parser.add_argument(
         "--range-error",

@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from groupfit.commands import common
 from groupfit.comparison import ComparisonSettings, compare_models
 from groupfit.continuation import with_histories
@@ -98,7 +100,7 @@ def run_compare(args: argparse.Namespace) -> int:
             "to one run; give one --data (and the others as --validate), or fit a global model on several runs "
             "with fit --p 0"
         )
-    modelling = common.load_configured_run(data)
+    modelling = common.load_configured_run(data, missing_error=True)
     heat_note = None
     if args.heat is None and settings.heat == CompareSettings.heat and settings.heat not in modelling.frame.columns:
         heat_note = (
@@ -107,7 +109,7 @@ def run_compare(args: argparse.Namespace) -> int:
         settings.heat = None
     if (args.heat is not None or heat_note) and any(c not in modelling.frame.columns for c in settings.conditions):
         settings.conditions = (settings.heat,) if settings.heat is not None else ()  # the default speed_rpm is absent
-    validation = [run for path in data.validate for run in common.load_configured_runs(data, path)]
+    validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
     common.print_notes([modelling, *validation], common.report_stream(args))
     if heat_note:
         print(f"note    {heat_note}", file=common.report_stream(args))
@@ -130,7 +132,8 @@ def run_compare(args: argparse.Namespace) -> int:
         )
     check_block(args, modelling.n_samples)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
-    common.check_exact_budget(args, modelling, n_coef, settings.objective, settings.pmax, "the exact path p = 0…pmax")
+    pmax = settings.pmax if np.isfinite(modelling.error).all() else 0  # a sparse error: global models only
+    common.check_exact_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
     out_dir = common.check_output_dir(run_settings.output_dir)
     progress = common.StageProgress(enabled=not args.quiet)
     try:

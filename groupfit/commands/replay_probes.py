@@ -19,7 +19,7 @@ import numpy as np
 
 from groupfit.data import numeric_column
 from groupfit.errors import InputError
-from groupfit.probe_intervals import check_probe_first, check_rows
+from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
 
@@ -54,19 +54,6 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
         rows = on_measured_rows(rows, np.isfinite(reading))
     probes[rows] = reading[rows]
     return probes
-
-
-def on_measured_rows(rows: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """Each check moved to the first row at or after it that has a reading, if one comes before the next check.
-
-    A log whose error is measured on some rows only (a probe cycle every few
-    minutes) is checked when it was measured; a row due without a reading up
-    to the next check has no check.
-    """
-    n = len(measured)
-    following = np.minimum.accumulate(np.where(measured, np.arange(n), n)[::-1])[::-1]
-    moved = following[rows]
-    return moved[moved < np.r_[rows[1:], n]]
 
 
 def probe_summary(args: argparse.Namespace, replay: Replay, probes: np.ndarray, rms_without: float | None) -> dict:
