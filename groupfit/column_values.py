@@ -6,6 +6,7 @@ the file, the row and the column.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -27,6 +28,25 @@ its firmware), and narrower than the overflow values a broken logger writes
 """
 ERROR_LIMIT_UM = 1.0e5
 """Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
+
+MICROMETRES_PER_UNIT = {"mm": 1000.0, "um": 1.0, "µm": 1.0, "μm": 1.0, "micron": 1.0, "microns": 1.0, "nm": 1e-3}
+"""Length units an error column's name may end in (``error_mm``, ``dZ [mm]``, ``drift (nm)``), in µm."""
+LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/])(mm|um|µm|μm|microns?|nm)\s*[\])]?\s*$", re.IGNORECASE)
+
+
+def length_unit(name: str | None) -> tuple[str, float]:
+    """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none)."""
+    match = LENGTH_UNIT.search(str(name)) if name is not None else None
+    scale = MICROMETRES_PER_UNIT[match.group(1).lower()] if match else 1.0
+    return (match.group(1).lower() if scale != 1.0 else "µm"), scale
+
+
+def unit_note(name: str | None, label: str) -> str | None:
+    """The note of an error column read in another unit than µm (None for one in µm)."""
+    unit, scale = length_unit(name)
+    if scale == 1.0:
+        return None
+    return f"{label}: column '{name}' is in {unit} by its name: read ×{scale:g} as µm (rename it to read it as µm)"
 
 
 @dataclass(frozen=True)
@@ -154,6 +174,7 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
             )
         if np.isnan(error_values).all():
             raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
+    error_values = error_values * length_unit(error)[1]
     measured = error_values[np.isfinite(error_values)]
     if require_error and measured.size > 1 and np.ptp(measured) == 0.0:
         raise InputError(

@@ -22,8 +22,9 @@ from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
 from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
+from groupfit.column_values import length_unit as length_unit
 from groupfit.column_values import numeric_column as numeric_column
-from groupfit.column_values import temperature_inputs
+from groupfit.column_values import temperature_inputs, unit_note
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
@@ -298,6 +299,8 @@ def _validated(
     notes = notes + ((dropped,) if dropped else ())
 
     error_values = read_error_values(frame, error, label, options)
+    in_other_unit = unit_note(error, label) if error_values is not None else None
+    notes = notes + ((in_other_unit,) if in_other_unit else ())
     if not allow_nonfinite:
         if temp_range is not None:
             for j, t in enumerate(temps):

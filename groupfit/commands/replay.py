@@ -83,7 +83,8 @@ def add_parser(verbs) -> None:
     replay.add_argument(
         "--probe-column",
         metavar="COLUMN",
-        help="the probe's reading in µm (default: the run's error column); "
+        help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm); default: the run's error "
+        "column; "
         "without --probe-every every row where it holds a number is a check",
     )
     common.add_json_option(replay, "the per-sample result")

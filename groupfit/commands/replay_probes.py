@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.data import numeric_column
+from groupfit.data import length_unit, numeric_column
 from groupfit.errors import InputError
 from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
@@ -36,6 +36,7 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
     first = args.probe_first
     if args.probe_column is not None:
         reading = numeric_column(run.frame, args.probe_column, run.source, allow_nonfinite=True)
+        reading = reading * length_unit(args.probe_column)[1]  # ``probe_mm``: read in µm
     elif run.error is not None:
         reading = np.asarray(run.error, dtype=float)
     else:
