@@ -157,6 +157,7 @@ def load_run(
     period_tolerance: float = PERIOD_TOLERANCE,
     resample: float | None = None,
     time_is_default: bool = False,
+    error_is_default: bool = False,
 ) -> Run:
     """Read and validate a run.
 
@@ -202,6 +203,9 @@ def load_run(
         ``time`` is a default, not asked for (the column a model was fitted
         with): a log without it is read on the column its name marks as the
         time, with a note, as a log without ``time_s`` is.
+    error_is_default : bool
+        The same for ``error`` (a replay of a model on a log that names its
+        error otherwise): the one column named as an error is read, with a note.
 
     Raises
     ------
@@ -216,6 +220,7 @@ def load_run(
         period_tolerance=period_tolerance,
         resample=resample,
         time_is_default=time_is_default,
+        error_is_default=error_is_default,
         **options,
     )
     if len(runs) > 1:
@@ -233,6 +238,7 @@ def load_runs(
     period_tolerance: float = PERIOD_TOLERANCE,
     resample: float | None = None,
     time_is_default: bool = False,
+    error_is_default: bool = False,
     **options,
 ) -> list[Run]:
     """Read and validate a log as :func:`load_run` does; with ``resample``, one run per stretch between gaps.
@@ -243,7 +249,9 @@ def load_runs(
     frame, run_name, label = read_table(source, name)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     required = options.get("require_error", True)
-    error, error_note = found_error_column(frame, options.get("error", DEFAULT_ERROR), label, required=required)
+    error, error_note = found_error_column(
+        frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default
+    )
     runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
     found = tuple(note for note in (time_note, error_note) if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs

@@ -82,28 +82,37 @@ def found_time_column(frame: pd.DataFrame, time: str, label: str, *, default: bo
 
 
 def found_error_column(
-    frame: pd.DataFrame, error: str | None, label: str, *, required: bool = True
+    frame: pd.DataFrame, error: str | None, label: str, *, required: bool = True, default: bool = False
 ) -> tuple[str | None, str | None]:
     """The thermal-error column to read, and a note when it is not the one asked for (module docstring).
 
-    Not ``required`` (a replay, which runs without the error too): the name asked for, never another.
+    ``default``: ``error`` was not asked for (the column a model was fitted
+    with), so a log without it is read on the one column named as an error.
+    Not ``required`` (a replay, which runs without the error too): never a
+    guess between several.
 
     Raises
     ------
     InputError
         The default is absent and several columns could be the error.
     """
-    if not required or error != DEFAULT_ERROR or error in frame.columns:
+    if error is None or error in frame.columns or not (default or (required and error == DEFAULT_ERROR)):
         return error, None
     names = error_like_columns(frame.columns)
     if not names:
         return error, None
+    if len(names) > 1 and not required:
+        listed = ", ".join(names)
+        return (
+            error,
+            f"{label}: there is no column '{error}' and {len(names)} could be the error ({listed}); --error names one",
+        )
     if len(names) > 1:
         raise InputError(
             f"{label}: there is no column '{DEFAULT_ERROR}' and {len(names)} could be the thermal error "
             f"({', '.join(names)}); name it with --error COLUMN"
         )
-    note = f"{label}: thermal error from column '{names[0]}' (there is no '{DEFAULT_ERROR}'; --error names another)"
+    note = f"{label}: thermal error from column '{names[0]}' (there is no '{error}'; --error names another)"
     return names[0], note
 
 

@@ -105,6 +105,7 @@ def run_replay(args: argparse.Namespace) -> int:
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
+    options.update(error_is_default=args.error is None)
     options.update(common.clock_options(args))
     run = load_readings(args.data, tables, **options)
     continued, history, found_note = earlier_recordings(
