@@ -16,10 +16,12 @@ line through (log N, log seconds) over the points with N ≥ 1000 (M ≥ 9 for
 part 2; every point for exact sae), the small sizes being dominated by fixed
 overheads. Part 3 (not with --quick): the GA at N = 100 000 and 64 sensors.
 Part 4: the local search that closes every GA run of ``fit`` (one break, sae,
-M = 5) at N and 10 N: its seconds and the peak memory it allocates (traced),
-and their ratios; the sae cost holds its residuals in blocks of bounded size
-(at N = 8 640 → 86 400: 698 → 1052 MiB, 5.4 → 142 s on a busy 2-core
-machine; before the blocks, a day at 1 s asked for 51 GiB).
+M = 5) at N and 10 N, coarse to fine as ``fit`` runs it and trying every
+position (the baseline, measured in the same run): seconds, the peak memory
+allocated (traced), their ratios, and whether both find the same break. The
+sae cost holds its residuals in blocks of bounded size (before them, a day at
+1 s asked for 51 GiB); every position costs a residual pass, so trying them all
+is quadratic in N (8 640 → 86 400: 5.4 → 142 s on a busy 2-core machine).
 """
 
 from __future__ import annotations
@@ -32,8 +34,10 @@ import numpy as np
 
 from groupfit.grouping import Constraints
 from groupfit.objective import SAE_BLOCK_ELEMENTS, SegmentCost
+from groupfit.search import polish
 from groupfit.search.exact import solve_exact
-from groupfit.search.ga import CachedObjective, GeneticSearch, polish_breaks
+from groupfit.search.ga import CachedObjective, GeneticSearch
+from groupfit.search.polish import polish_breaks
 
 P = 4
 N_SOFT = 3
@@ -193,26 +197,42 @@ def corner(n_samples: int, n_sensors: int) -> None:
 
 
 def polish_memory(n_small: int) -> None:
-    """Seconds and traced peak memory of the GA's closing local search at ``n_small`` and 10× as many samples."""
+    """Seconds and traced peak memory of the GA's closing local search at ``n_small`` and 10× as many samples,
+    coarse to fine (as ``fit`` runs it) and trying every position (the baseline), and whether both agree."""
     print(f"\nPart 4: the GA's closing local search (sae, p = 1, M = 5) at N = {n_small} and {10 * n_small}")
-    figures = []
+    figures = {}
     for n_samples in (n_small, 10 * n_small):
         X, y = regime_data(n_samples, 4)
         cost = SegmentCost(X, y, n=N_SOFT, objective="sae")
         constraints = Constraints.for_model(n_samples, N_SOFT, C, cost.n_coef)
-        objective = CachedObjective(cost)
         start = [n_samples // 3]
-        tracemalloc.start()
-        (_, _), seconds = timed(polish_breaks, start, objective.totals([start])[0], objective, constraints)
-        peak = tracemalloc.get_traced_memory()[1]
-        tracemalloc.stop()
-        figures.append((seconds, peak))
-        print(f"N = {n_samples:>7}: {seconds:8.2f} s, peak {peak / 2**20:8.1f} MiB", flush=True)
-    (t1, m1), (t2, m2) = figures
-    print(
-        f"ratio 10 N / N: time {t2 / t1:.1f} (the search is quadratic in N), memory {m2 / m1:.1f} (residual blocks "
-        f"capped at {SAE_BLOCK_ELEMENTS:.3g} values; uncapped, the peak grows as N², 100× for 10 N)"
-    )
+        found = []
+        for mode, limit in (("coarse to fine", polish.COARSE_POSITIONS), ("every position", 10**12)):
+            objective = CachedObjective(cost)
+            default, polish.COARSE_POSITIONS = polish.COARSE_POSITIONS, limit
+            tracemalloc.start()
+            try:
+                (breaks, value), seconds = timed(
+                    polish_breaks, start, objective.totals([start])[0], objective, constraints
+                )
+            finally:
+                polish.COARSE_POSITIONS = default
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+            figures[n_samples, mode] = (seconds, peak)
+            found.append((breaks, value))
+            print(
+                f"N = {n_samples:>7}, {mode}: {seconds:8.2f} s, peak {peak / 2**20:8.1f} MiB, breaks {breaks}",
+                flush=True,
+            )
+        print(f"N = {n_samples:>7}: the same breaks and Rg both ways: {found[0] == found[1]}")
+    for mode in ("coarse to fine", "every position"):
+        (t1, m1), (t2, m2) = figures[n_small, mode], figures[10 * n_small, mode]
+        print(f"{mode}: ratio 10 N / N: time {t2 / t1:.1f}, memory {m2 / m1:.1f}")
+    for n_samples in (n_small, 10 * n_small):
+        ratio = figures[n_samples, "every position"][0] / figures[n_samples, "coarse to fine"][0]
+        print(f"N = {n_samples}: every position takes {ratio:.1f}× the time of coarse to fine")
+    print(f"(residual blocks capped at {SAE_BLOCK_ELEMENTS:.3g} values; uncapped, the peak grows as N², 100× for 10 N)")
 
 
 if __name__ == "__main__":

@@ -23,13 +23,12 @@ break positions are "soft" and the population revisits the same segments.
 With ``polish=True`` (the default) the best individual is finished by a local
 search that moves one break at a time to its best position between its
 neighbours, until no move improves Rg, as MATLAB's ``ga`` does with a hybrid
-function.
+function (:mod:`groupfit.search.polish`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import itertools
 import random
 import time as _time
 from dataclasses import KW_ONLY, dataclass, field
@@ -41,6 +40,7 @@ from deap import base, tools
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
 from groupfit.search.base import GA_DEFAULTS, GASettings, SearchResult
+from groupfit.search.polish import polish_breaks, shift_range
 
 
 @dataclass(kw_only=True)
@@ -368,117 +368,3 @@ class GeneticSearch:
             evaluations_history=evaluations_history,
             seed=self.seed,
         )
-
-
-def polish_breaks(
-    breaks: list[int],
-    value: float,
-    objective: CachedObjective,
-    constraints: Constraints,
-    max_relocated: int = 2,
-    beam: int = 4,
-) -> tuple[list[int], float]:
-    """Local search from ``breaks`` until no move improves Rg.
-
-    *Shift* moves one break to its best position between its neighbours.
-    *Relocate* removes up to ``max_relocated`` breaks and inserts as many
-    again, one at a time, keeping the ``beam`` best partial vectors at each
-    insertion; each resulting vector is shift-polished before it is compared,
-    so a relocation that only pays once its neighbours have moved is found.
-    """
-    breaks, value = _shift_polish(list(breaks), value, objective, constraints)
-    improved = True
-    while improved:
-        improved = False
-        for size in range(1, min(max_relocated, len(breaks)) + 1):
-            for removed in itertools.combinations(range(len(breaks)), size):
-                rest = [b for i, b in enumerate(breaks) if i not in removed]
-                for trial in _beam_insert(rest, size, beam, objective, constraints):
-                    trial, trial_value = _shift_polish(trial, objective.totals([trial])[0], objective, constraints)
-                    if trial_value < value * (1 - 1e-12) - 1e-300:
-                        breaks, value, improved = trial, trial_value, True
-                        break
-                if improved:
-                    break
-            if improved:
-                break
-    return breaks, value
-
-
-def _beam_insert(
-    rest: list[int], count: int, beam: int, objective: CachedObjective, constraints: Constraints
-) -> list[list[int]]:
-    """Insert ``count`` breaks into ``rest`` one at a time, keeping the ``beam`` best at each step."""
-    frontier = [rest]
-    for _ in range(count):
-        expanded = {tuple(c) for partial in frontier for c in _insertions(partial, constraints)}
-        if not expanded:
-            return []
-        candidates = [list(c) for c in sorted(expanded)]
-        values = np.asarray(objective.totals(candidates))
-        frontier = [candidates[k] for k in np.argsort(values, kind="stable")[:beam]]
-    return frontier
-
-
-def _shift_polish(
-    breaks: list[int], value: float, objective: CachedObjective, constraints: Constraints, pair_window: int = 8
-) -> tuple[list[int], float]:
-    """Shift single breaks, then neighbouring pairs within ``±pair_window``, until neither improves."""
-    improved = True
-    while improved:
-        improved = False
-        for move in (_shift_candidates, _pair_candidates):
-            for j in range(len(breaks) - (move is _pair_candidates)):
-                candidates = (
-                    move(breaks, j, constraints)
-                    if move is _shift_candidates
-                    else move(breaks, j, constraints, pair_window)
-                )
-                if not candidates:
-                    continue
-                values = objective.totals(candidates)
-                k = int(np.argmin(values))
-                if values[k] < value * (1 - 1e-12) - 1e-300:
-                    breaks, value, improved = candidates[k], values[k], True
-            if improved:
-                break
-    return breaks, value
-
-
-def shift_range(breaks: list[int], j: int, constraints: Constraints) -> tuple[int, int]:
-    """Positions break j may take with the other breaks where they are."""
-    left = breaks[j - 1] if j > 0 else 0
-    right = breaks[j + 1] if j + 1 < len(breaks) else constraints.n_samples
-    return (
-        max(left + constraints.min_size, constraints.lowest_break),
-        min(right - constraints.min_size, constraints.highest_break),
-    )
-
-
-def _pair_candidates(breaks: list[int], j: int, constraints: Constraints, window: int) -> list[list[int]]:
-    """Break vectors with breaks j and j+1 moved together, each by at most ``window`` samples."""
-    min_size = constraints.min_size
-    low, _ = shift_range(breaks, j, constraints)
-    _, high = shift_range(breaks, j + 1, constraints)
-    candidates = []
-    for first in range(max(low, breaks[j] - window), breaks[j] + window + 1):
-        for second in range(max(first + min_size, breaks[j + 1] - window), min(high, breaks[j + 1] + window) + 1):
-            if (first, second) != (breaks[j], breaks[j + 1]):
-                candidates.append(breaks[:j] + [first, second] + breaks[j + 2 :])
-    return candidates
-
-
-def _shift_candidates(breaks: list[int], j: int, constraints: Constraints) -> list[list[int]]:
-    first, last = shift_range(breaks, j, constraints)
-    return [breaks[:j] + [b] + breaks[j + 1 :] for b in range(first, last + 1) if b != breaks[j]]
-
-
-def _insertions(breaks: list[int], constraints: Constraints) -> list[list[int]]:
-    """Every feasible vector with one more break than ``breaks``."""
-    edges = [0, *breaks, constraints.n_samples]
-    candidates = []
-    for k in range(len(edges) - 1):
-        first = max(edges[k] + constraints.min_size, constraints.lowest_break)
-        last = min(edges[k + 1] - constraints.min_size, constraints.highest_break)
-        candidates.extend(breaks[:k] + [b] + breaks[k:] for b in range(first, last + 1))
-    return candidates
