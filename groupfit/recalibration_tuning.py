@@ -18,8 +18,8 @@ held-out residual no filter can follow: its sample-to-sample scatter
 checks looks good on a quiet stretch and cannot follow a new day's offset).
 And a new day may wander more than the stretch did: among the candidates
 whose score is within :data:`INDIFFERENCE` of the best (the held-out data do
-not tell them apart), the most responsive Kalman filter is kept (the largest
-offset noise, then the fewest terms); the hold, which assumes checks without
+not tell them apart), the simplest Kalman filter is kept (the fewest terms),
+and of those the most responsive (the largest offset noise); the hold, which assumes checks without
 noise, only when no Kalman filter comes within that band. Every Kalman candidate applies
 a correction only when it stands out of its own noise by
 :data:`SIGNIFICANCE_SIGMAS` (:mod:`groupfit.runtime.recalibration`), so a
@@ -277,9 +277,9 @@ def choose_recalibration(
     runs : sequence of (frame, error)
         The modelling runs (the frame with the model's columns, the measured error per row).
     method : {"auto", "hold", "kalman", "none"}
-        ``auto``: the best on held-out data, the most responsive of those the
-        data do not tell apart (the hold only when no Kalman filter is among
-        them); ``kalman``: the same among the
+        ``auto``: the best on held-out data, the simplest and then the most
+        responsive of those the data do not tell apart (the hold only when no
+        Kalman filter is among them); ``kalman``: the same among the
         Kalman filters even if the hold does better; ``none``: no section.
     """
     if method not in METHODS:
@@ -353,20 +353,25 @@ def initial_offset_sigma(model: ModelFile, rms_none: float, offset_max: float) -
 
 
 def _most_responsive_of_the_best(candidates: Candidates, score: np.ndarray, *, kalman: bool) -> int:
-    """The candidate kept: among those within :data:`INDIFFERENCE` of the best score, the most responsive.
+    """The candidate kept: among those within :data:`INDIFFERENCE` of the best score, the simplest Kalman
+    filter (the fewest terms), and of those the most responsive.
 
-    A Kalman filter is the more responsive, the larger its offset noise
-    against its check noise; on a tie the first (the fewest terms). The hold
-    assumes checks without noise, which the measured check noise contradicts:
-    it is kept only when no Kalman filter comes within the band.
-    ``kalman``: the hold is left out.
+    A drift or gain term the held-out data do not ask for only carries the
+    checks' noise forward (a gain multiplies it by the prediction). A Kalman
+    filter is the more responsive, the larger its offset noise against its
+    check noise; on a tie the first. The hold assumes checks without noise,
+    which the measured check noise contradicts: it is kept only when no
+    Kalman filter comes within the band. ``kalman``: the hold is left out.
     """
     score = np.where(np.arange(len(candidates)) == 0, np.inf, score) if kalman else score
     near = np.flatnonzero(score <= np.min(score) + INDIFFERENCE)
-    responsiveness = np.where(
-        candidates.probe_sigma > 0, candidates.offset_sigma / np.maximum(candidates.probe_sigma, 1e-300), -np.inf
-    )
-    return int(near[np.argmax(responsiveness[near])])
+    filters = near[candidates.probe_sigma[near] > 0]
+    if not filters.size:
+        return int(near[0])
+    terms = np.array([len(t) for t in candidates.terms])[filters]
+    simplest = filters[terms == terms.min()]
+    responsiveness = candidates.offset_sigma[simplest] / candidates.probe_sigma[simplest]
+    return int(simplest[np.argmax(responsiveness)])
 
 
 def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: float) -> float:

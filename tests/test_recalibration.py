@@ -16,6 +16,7 @@ from groupfit.model import ModelFile
 from groupfit.recalibration_tuning import (
     CUTS,
     HeldOut,
+    _most_responsive_of_the_best,
     candidate_grid,
     choose_recalibration,
     replay_candidates,
@@ -412,3 +413,24 @@ def test_the_first_check_of_a_new_day_is_taken_up_when_the_next_run_range_allows
     assert rms < 0.1 * 20.0
     codes, rms = results["untrained"]  # the in-run scatter alone takes the new day for a gross reading
     assert codes[:2] == [PROBE_REJECTED, PROBE_REJECTED] and rms > 2 * results["wide"][1]
+
+
+def test_the_data_not_telling_filters_apart_the_simplest_kalman_filter_is_kept_then_the_most_responsive():
+    candidates = candidate_grid(hold_sigma=2.0, initial_offset=2.0, probe_sigma=0.3)
+    terms = [tuple(t) for t in candidates.terms]
+
+    def index(wanted_terms, offset):
+        return next(
+            k for k in range(1, len(candidates)) if terms[k] == wanted_terms and candidates.offset_sigma[k] == offset
+        )
+
+    plain, gained = index(("offset",), 0.3), index(("offset", "gain"), 10.0)
+    drifting = index(("offset", "drift"), 3.0)
+    score = np.full(len(candidates), 1.0)
+    score[[0, plain, gained, drifting]] = [0.0, 0.01, 0.005, 0.015]  # the hold best; all four within the band
+    assert _most_responsive_of_the_best(candidates, score, kalman=False) == plain
+    score[plain] = 1.0  # only filters with two terms left beside the hold: the most responsive of them
+    assert _most_responsive_of_the_best(candidates, score, kalman=False) == gained
+    score[[gained, drifting]] = 1.0  # the hold alone in the band
+    assert _most_responsive_of_the_best(candidates, score, kalman=False) == 0
+    assert _most_responsive_of_the_best(candidates, score, kalman=True) != 0
