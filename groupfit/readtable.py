@@ -34,7 +34,9 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     """Read a run's table (CSV, Excel or Parquet, by suffix) or take a DataFrame; return ``(frame, name, label)``.
 
     ``label`` names the source in error messages. An Excel workbook is read
-    from its first sheet, with the first row as the header.
+    from its first sheet that holds a table of numbers (a cover sheet before
+    it is passed over, and the label names the sheet), with the first row as
+    the header.
     """
     if isinstance(source, pd.DataFrame):
         label = name or "DataFrame"
@@ -50,12 +52,15 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: data file not found; check the path given to --data")
     note_read(path)
     kind = TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
-    header = None
+    header, sheet = None, 0
     try:
         if kind == "CSV":
             frame, header = read_text_table(path.read_bytes())
+        elif kind == "Excel":
+            sheet, frame, first = _data_sheet(path)
+            label = label if first else f"{label} (sheet '{sheet}')"
         else:
-            frame = _read_by_kind(path, kind)
+            frame = _read_parquet(path)
     except InputError:
         raise
     except pd.errors.EmptyDataError:
@@ -68,7 +73,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
     if header is None:
-        header = _excel_header(path) if kind == "Excel" else _parquet_header(path)
+        header = _excel_header(path, sheet) if kind == "Excel" else _parquet_header(path)
     if header is None or len(header) != frame.shape[1]:
         header = list(frame.columns)
     _check_unique_columns(header, label)
@@ -76,12 +81,29 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     return frame, (name or path.stem), label
 
 
-def _excel_header(path: Path) -> list[str] | None:
+def _excel_header(path: Path, sheet: str | int = 0) -> list[str] | None:
     """The header as written in the workbook (pandas renames a repeated ``T1`` to ``T1.1`` on reading)."""
     try:
-        return [str(c) for c in pd.read_excel(path, sheet_name=0, header=None, nrows=1).iloc[0].tolist()]
+        return [str(c) for c in pd.read_excel(path, sheet_name=sheet, header=None, nrows=1).iloc[0].tolist()]
     except (ValueError, OSError, IndexError):
         return None
+
+
+def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool]:
+    """The workbook's first sheet that holds a table of numbers (two numeric columns or more), its frame, and
+    whether it is the workbook's first sheet.
+
+    A logger's export often opens with a cover sheet (the machine, the operator); the first sheet is
+    taken when none holds numbers.
+    """
+    sheets = pd.read_excel(path, sheet_name=None)
+    for k, (name, frame) in enumerate(sheets.items()):
+        frame = without_units_row(without_footer_rows(frame))
+        numeric = sum(pd.to_numeric(frame[c], errors="coerce").notna().mean() > 0.5 for c in frame.columns)
+        if len(frame) >= 2 and numeric >= 2:
+            return name, frame, k == 0
+    name = next(iter(sheets))
+    return name, without_units_row(without_footer_rows(sheets[name])), True
 
 
 def _parquet_header(path: Path) -> list[str] | None:
@@ -107,9 +129,7 @@ def _check_unique_columns(header, label: str) -> None:
         seen[name] = position
 
 
-def _read_by_kind(path: Path, kind: str) -> pd.DataFrame:
-    if kind == "Excel":
-        return without_units_row(without_footer_rows(pd.read_excel(path, sheet_name=0)))
+def _read_parquet(path: Path) -> pd.DataFrame:
     header = _parquet_header(path)
     if header is not None:
         _check_unique_columns(header, str(path))

@@ -211,6 +211,26 @@ def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
 
 
+def test_a_workbook_whose_first_sheet_is_a_cover_is_read_from_its_data_sheet(tmp_path, frame, plain):
+    path = tmp_path / "export.xlsx"
+    with pd.ExcelWriter(path) as workbook:
+        pd.DataFrame({"Logger": ["XYZ 2000", "machine 7", "operator A"]}).to_excel(
+            workbook, sheet_name="Info", index=False
+        )
+        frame.to_excel(workbook, sheet_name="Data", index=False)
+        frame.head(3).to_excel(workbook, sheet_name="Later", index=False)  # a second table is not read
+    run = load_run(path, temps=TEMPS)
+    same_run(run, plain)
+    assert run.source == f"{path} (sheet 'Data')"
+    with pytest.raises(InputError, match=r"export.xlsx \(sheet 'Data'\): column 'T9' not found"):
+        load_run(path, temps=["T9"])
+    covers = tmp_path / "covers.xlsx"
+    with pd.ExcelWriter(covers) as workbook:
+        pd.DataFrame({"Logger": ["XYZ 2000"]}).to_excel(workbook, sheet_name="Info", index=False)
+    with pytest.raises(InputError, match=r"covers.xlsx: column 'time_s' not found"):  # no table: the first sheet
+        load_run(covers, temps=TEMPS)
+
+
 @pytest.mark.parametrize("name, per_second", [("time_ms", 1000.0), ("Zeit [min]", 1 / 60), ("hours", 1 / 3600)])
 def test_a_time_column_named_with_its_unit_is_read_in_seconds(tmp_path, frame, plain, name, per_second):
     path = tmp_path / "units.csv"
