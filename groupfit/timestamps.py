@@ -36,6 +36,7 @@ UNIT_SECONDS = {
     **dict.fromkeys(("s", "sec", "secs", "second", "seconds"), 1.0),
     **dict.fromkeys(("min", "mins", "minute", "minutes"), 60.0),
     **dict.fromkeys(("h", "hr", "hrs", "hour", "hours"), 3600.0),
+    **dict.fromkeys(("d", "day", "days"), 86400.0),
 }
 """Units a time column's name may end in (``time_ms``, ``Zeit [min]``, ``hours``), and their seconds."""
 NAMED_UNIT = re.compile(r"(?:^|[_\s\[(/])\s*([a-z]+)\s*[\])]?\s*$", re.IGNORECASE)
@@ -54,6 +55,31 @@ BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")
 def time_like_columns(columns) -> list[str]:
     """The columns whose names say they hold the time, in table order."""
     return [str(c) for c in columns if TIME_NAME.match(str(c)) or BARE_T.match(str(c))]
+
+
+SERIAL_DAYS = (20000.0, 80000.0)
+"""Spreadsheet serial dates (days since 1899-12-30) of 1954 … 2119: a date column exported as numbers."""
+DATE_WORD = re.compile(r"date|datum", re.IGNORECASE)
+
+
+def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
+    """A date column of spreadsheet serial dates converted to seconds in place, and its note (None: not one).
+
+    A column named as a date (``Date``, ``Datum/Zeit``) without a unit whose numbers all lie among the
+    serial dates of 1954 … 2119, less than a day apart, is a spreadsheet's date-time written as a number.
+    """
+    if column not in frame.columns or not DATE_WORD.search(str(column)) or unit_seconds(column) != 1.0:
+        return None
+    if not pd.api.types.is_numeric_dtype(frame[column]):
+        return None
+    days = frame[column].to_numpy(dtype=float)
+    steps = np.diff(days)
+    if len(days) < 2 or not np.all(np.isfinite(days)) or days.min() < SERIAL_DAYS[0] or days.max() > SERIAL_DAYS[1]:
+        return None
+    if not 0.0 < float(np.median(steps)) < 1.0:
+        return None
+    frame[column] = days * DAY_S
+    return f"{label}: column '{column}' holds spreadsheet serial dates (days since 1899-12-30): read in seconds"
 
 
 def unit_seconds(name: str) -> float:

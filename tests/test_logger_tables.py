@@ -211,6 +211,30 @@ def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("name", ["Date", "Datum/Zeit", "DateTime"])
+def test_a_date_column_of_spreadsheet_serial_days_is_read_in_seconds(tmp_path, frame, plain, name):
+    path = tmp_path / "serial.csv"
+    days = 46083.25 + (frame["time_s"] - frame["time_s"].iloc[0]) / 86400.0  # 2026-03-02 06:00 on
+    frame.drop(columns="time_s").assign(**{name: days}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time=name)
+    same_run(run, plain, time=False)
+    np.testing.assert_allclose(run.time - run.time[0], plain.time - plain.time[0], rtol=0, atol=1e-5)
+    assert run.period == pytest.approx(plain.period, rel=1e-9)
+    assert any("holds spreadsheet serial dates (days since 1899-12-30)" in note for note in run.notes)
+    assert not any("jitter" in note for note in run.notes)  # a float's rounding of days is no clock jitter
+
+
+def test_numbers_in_the_serial_range_are_seconds_unless_the_column_is_named_as_a_date(tmp_path, frame, plain):
+    path = tmp_path / "elapsed.csv"
+    seconds = 30000.0 + (frame["time_s"] - frame["time_s"].iloc[0]) / 1000.0  # elapsed s, sampled every 0.1 s
+    frame.drop(columns="time_s").assign(Elapsed=seconds).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time="Elapsed")
+    assert run.period == pytest.approx(0.1, rel=1e-9)
+    in_days = tmp_path / "days.csv"
+    frame.assign(time_s=frame["time_s"] / 86400.0).rename(columns={"time_s": "time [d]"}).to_csv(in_days, index=False)
+    assert load_run(in_days, temps=TEMPS, time="time [d]").period == pytest.approx(plain.period, rel=1e-9)
+
+
 def test_a_workbook_whose_first_sheet_is_a_cover_is_read_from_its_data_sheet(tmp_path, frame, plain):
     path = tmp_path / "export.xlsx"
     with pd.ExcelWriter(path) as workbook:
