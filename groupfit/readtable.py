@@ -3,12 +3,17 @@
 A text table is read as it was written (:mod:`groupfit.textlayout`: its
 encoding, separator, a preamble, decimal commas, a units row), and a time
 column of date-times, text ones included (:mod:`groupfit.timestamps`), as
-seconds. Every problem is one line naming the file: a folder or a device
+seconds; a compressed table (``.gz``, ``.bz2``, ``.xz``, a ``.zip`` of one file) is read
+as the table it holds. Every problem is one line naming the file: a folder or a device
 given as a file, an empty or unreadable file, a column named twice.
 """
 
 from __future__ import annotations
 
+import bz2
+import gzip
+import lzma
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +33,8 @@ TABLE_SUFFIXES = {
     ".parquet": "Parquet",
 }
 """File types a run is read from, by suffix (anything else is read as CSV)."""
+COMPRESSED = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress, ".zip": None}
+"""A text table compressed by a logger or for mail (``log.csv.gz``, a zip of one table), by suffix."""
 
 
 def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
@@ -51,11 +58,13 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     if not path.is_file():
         raise InputError(f"{label}: data file not found; check the path given to --data")
     note_read(path)
-    kind = TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
+    compressed = path.suffix.lower() in COMPRESSED
+    stem = Path(path.stem).stem if compressed else path.stem
+    kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
     header, sheet = None, 0
     try:
         if kind == "CSV":
-            frame, header = read_text_table(path.read_bytes())
+            frame, header = read_text_table(_decompressed(path) if compressed else path.read_bytes())
         elif kind == "Excel":
             sheet, frame, first = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
@@ -67,7 +76,15 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: the file is empty; a header line and one row per sample are needed") from None
     except ImportError as exc:
         raise InputError(f"{label}: reading {kind} files needs the package '{exc.name}'; pip install it") from None
-    except (pd.errors.ParserError, UnicodeDecodeError, ValueError, OSError) as exc:
+    except (
+        pd.errors.ParserError,
+        UnicodeDecodeError,
+        ValueError,
+        OSError,
+        EOFError,
+        zipfile.BadZipFile,
+        lzma.LZMAError,
+    ) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{label}: not a readable {kind} table ({first})") from None
     if frame.shape[0] == 0:
@@ -78,7 +95,20 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         header = list(frame.columns)
     _check_unique_columns(header, label)
     frame.columns = [str(c).strip() for c in frame.columns]
-    return frame, (name or path.stem), label
+    return frame, (name or stem), label
+
+
+def _decompressed(path: Path) -> bytes:
+    """The bytes of a compressed text table (a zip archive must hold exactly one file)."""
+    suffix = path.suffix.lower()
+    if suffix != ".zip":
+        return COMPRESSED[suffix](path.read_bytes())
+    with zipfile.ZipFile(path) as archive:
+        members = [m for m in archive.infolist() if not m.is_dir()]
+        if len(members) != 1:
+            listed = ", ".join(m.filename for m in members) or "nothing"
+            raise InputError(f"{path}: a zip archive of one table is read; this one holds {listed}: unpack it")
+        return archive.read(members[0])
 
 
 def _excel_header(path: Path, sheet: str | int = 0) -> list[str] | None:

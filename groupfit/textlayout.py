@@ -3,8 +3,10 @@
 Loggers and controllers write their tables in several ways, and a user
 should not have to rewrite one before groupfit reads it:
 
-* the encoding: UTF-8 (with or without a byte-order mark), else Windows-1252
-  (a ``°C`` written by a Windows program), else Latin-1;
+* the encoding: UTF-16 or UTF-32 when a byte-order mark says so (a
+  spreadsheet's "Unicode text" export), else UTF-8 (with or without a
+  byte-order mark), else Windows-1252 (a ``°C`` written by a Windows
+  program), else Latin-1;
 * the separator: a comma, a semicolon or a tab, whichever the header line
   uses most (a comma on a tie);
 * a preamble: lines before the header (a logger's name, the start date) are
@@ -23,6 +25,7 @@ should not have to rewrite one before groupfit reads it:
 
 from __future__ import annotations
 
+import codecs
 import csv
 import io
 import re
@@ -36,6 +39,13 @@ DELIMITERS = (",", ";", "\t")
 """Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
 ENCODINGS = ("utf-8-sig", "cp1252", "latin-1")
 """Tried in this order; Latin-1 reads any byte."""
+BYTE_ORDER_MARKS = (
+    (codecs.BOM_UTF32_LE, "utf-32-le"),
+    (codecs.BOM_UTF32_BE, "utf-32-be"),
+    (codecs.BOM_UTF16_LE, "utf-16-le"),
+    (codecs.BOM_UTF16_BE, "utf-16-be"),
+)
+"""UTF-32 before UTF-16: the UTF-32 little-endian mark begins with UTF-16's."""
 SNIFF_LINES = 60
 """Lines looked at for the header and, below it, for the decimal mark."""
 AGREEING_LINES = 3
@@ -59,7 +69,14 @@ def header_delimiter(line: str) -> str:
 
 
 def decode(content: bytes) -> str:
-    """The text of a file, in the first of :data:`ENCODINGS` that reads it."""
+    """The text of a file: in the Unicode form its byte-order mark names, else the first of :data:`ENCODINGS`
+    that reads it."""
+    for mark, encoding in BYTE_ORDER_MARKS:
+        if content.startswith(mark):
+            try:
+                return content[len(mark) :].decode(encoding)
+            except UnicodeDecodeError:
+                break
     for encoding in ENCODINGS:
         try:
             return content.decode(encoding)

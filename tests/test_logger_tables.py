@@ -4,7 +4,12 @@ plain comma-separated table in seconds."""
 
 from __future__ import annotations
 
+import bz2
+import codecs
+import gzip
 import json
+import lzma
+import zipfile
 
 import numpy as np
 import pandas as pd
@@ -209,6 +214,43 @@ def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain
     run = load_run(path, temps=TEMPS)
     same_run(run, plain, time=False)
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be", "utf-32"])
+def test_a_unicode_text_export_is_read_by_its_byte_order_mark(tmp_path, frame, plain, encoding):
+    path = tmp_path / "unicode.txt"
+    frame.rename(columns={"T1": "T1 [°C]"}).to_csv(path, sep="\t", index=False, encoding=encoding)
+    if encoding == "utf-16-be":
+        path.write_bytes(codecs.BOM_UTF16_BE + path.read_bytes())
+    run = load_run(path, temps=["T1 [°C]", *TEMPS[1:]])
+    same_run(run, plain)
+
+
+@pytest.mark.parametrize("suffix", [".gz", ".bz2", ".xz", ".zip"])
+def test_a_compressed_table_is_read_as_the_table_it_holds(tmp_path, frame, plain, suffix):
+    text = frame.to_csv(index=False).encode()
+    path = tmp_path / f"log.csv{suffix}" if suffix != ".zip" else tmp_path / "log.zip"
+    if suffix == ".zip":
+        with zipfile.ZipFile(path, "w") as archive:
+            archive.writestr("log.csv", text)
+    else:
+        path.write_bytes({".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}[suffix](text))
+    run = load_run(path, temps=TEMPS)
+    same_run(run, plain)
+    assert run.name == "log"
+
+
+def test_an_archive_of_several_files_or_a_broken_one_is_refused_in_one_line(tmp_path, frame):
+    several = tmp_path / "logs.zip"
+    with zipfile.ZipFile(several, "w") as archive:
+        archive.writestr("a.csv", frame.to_csv(index=False))
+        archive.writestr("b.csv", frame.to_csv(index=False))
+    with pytest.raises(InputError, match=r"logs.zip: a zip archive of one table is read; this one holds a.csv, b.csv"):
+        load_run(several, temps=TEMPS)
+    broken = tmp_path / "log.csv.gz"
+    broken.write_bytes(b"not compressed")
+    with pytest.raises(InputError, match=r"log.csv.gz: not a readable CSV table"):
+        load_run(broken, temps=TEMPS)
 
 
 @pytest.mark.parametrize("name", ["Date", "Datum/Zeit", "DateTime"])
