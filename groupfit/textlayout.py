@@ -8,7 +8,9 @@ should not have to rewrite one before groupfit reads it:
   byte-order mark), else Windows-1252 (a ``°C`` written by a Windows
   program), else Latin-1;
 * the separator: a comma, a semicolon or a tab, whichever the header line
-  uses most (a comma on a tie);
+  uses most (a comma on a tie); runs of spaces when the header has none of
+  them (a lab logger's ``.dat``; a name with a space in it cannot be told
+  from two there);
 * a preamble: lines before the header (a logger's name, the start date) are
   skipped. The header is the first line of two or more fields, none of them a
   number, whose next lines have as many fields;
@@ -36,6 +38,9 @@ import numpy as np
 import pandas as pd
 
 DELIMITERS = (",", ";", "\t")
+WHITESPACE = " "
+"""The separator of a table whose header has none of :data:`DELIMITERS`: runs of spaces (a lab logger's
+``.dat``, a fixed-width export)."""
 """Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
 ENCODINGS = ("utf-8-sig", "cp1252", "latin-1")
 """Tried in this order; Latin-1 reads any byte."""
@@ -64,8 +69,16 @@ class TextLayout:
 
 
 def header_delimiter(line: str) -> str:
-    """The separator a table's header line uses most of (a comma on a tie)."""
+    """The separator a table's header line uses most of (a comma on a tie); runs of spaces when it has none
+    of :data:`DELIMITERS` but two words or more."""
+    if not any(d in line for d in DELIMITERS) and len(line.split()) > 1:
+        return WHITESPACE
     return max(DELIMITERS, key=lambda d: (line.count(d), d == ","))
+
+
+def fields_of(line: str, sep: str) -> list[str]:
+    """A line's fields: split at ``sep``, or at runs of spaces (:data:`WHITESPACE`)."""
+    return line.split() if sep == WHITESPACE else line.split(sep)
 
 
 def decode(content: bytes) -> str:
@@ -92,7 +105,7 @@ def layout_of(text: str) -> TextLayout:
     header = _header_line(lines)
     sep = header_delimiter(lines[header]) if lines else ","
     below = [line for line in lines[header + 1 :] if line.strip()]
-    decimal = "," if sep != "," and any(_comma_number(field) for line in below for field in line.split(sep)) else "."
+    decimal = "," if sep != "," and any(_comma_number(f) for line in below for f in fields_of(line, sep)) else "."
     return TextLayout(sep=sep, header_line=header, decimal=decimal)
 
 
@@ -100,11 +113,11 @@ def _header_line(lines: list[str]) -> int:
     filled = [k for k, line in enumerate(lines) if line.strip()]
     for position, k in enumerate(filled):
         sep = header_delimiter(lines[k])
-        fields = lines[k].count(sep) + 1
-        if fields < 2 or any(is_number(field.strip().strip('"')) for field in lines[k].split(sep)):
+        fields = len(fields_of(lines[k], sep))
+        if fields < 2 or any(is_number(field.strip().strip('"')) for field in fields_of(lines[k], sep)):
             continue  # a header names its columns; a line with a number in it is data or a preamble
         following = filled[position + 1 : position + 1 + AGREEING_LINES]
-        if all(lines[j].count(sep) + 1 == fields for j in following):
+        if all(len(fields_of(lines[j], sep)) == fields for j in following):
             return k
     return filled[0] if filled else 0
 
@@ -119,12 +132,16 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
     layout = layout_of(text)
     body = _without_footer(_from_line(text, layout.header_line), layout)
     header_text = body.split("\n", 1)[0].rstrip("\r")
-    header = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), [])
+    if layout.sep == WHITESPACE:
+        header = header_text.split()
+    else:
+        header = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), [])
+    sep = r"\s+" if layout.sep == WHITESPACE else layout.sep
     with warnings.catch_warnings():
         warnings.simplefilter("error", pd.errors.ParserWarning)
         try:
             frame = pd.read_csv(
-                io.StringIO(body), sep=layout.sep, decimal=layout.decimal, skipinitialspace=True, index_col=False
+                io.StringIO(body), sep=sep, decimal=layout.decimal, skipinitialspace=True, index_col=False
             )
         except pd.errors.ParserWarning:
             raise ValueError("a row has more values than the header has names; name every column") from None
@@ -142,7 +159,7 @@ def _without_footer(body: str, layout: TextLayout) -> str:
     """The table's lines up to its last one that holds a number: what follows is a footer, not data."""
     lines = body.split("\n")
     for end in range(len(lines), 1, -1):
-        fields = lines[end - 1].rstrip("\r").split(layout.sep)
+        fields = fields_of(lines[end - 1].rstrip("\r"), layout.sep)
         if any(is_number(field.strip().strip('"'), layout.decimal) for field in fields):
             return body if end == len(lines) else "\n".join(lines[:end]) + "\n"
     return body

@@ -216,6 +216,15 @@ def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("decimal", [".", ","])
+def test_a_table_separated_by_runs_of_spaces_is_read(tmp_path, frame, plain, decimal):
+    path = tmp_path / "lab.dat"
+    aligned = frame.to_string(index=False, float_format=lambda v: repr(float(v)))  # right-aligned columns
+    text = "Lab logger 3 export\n\n" + (aligned.replace(".", ",") if decimal == "," else aligned) + "\n"
+    path.write_text(text)
+    same_run(load_run(path, temps=TEMPS), plain)
+
+
 @pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be", "utf-32"])
 def test_a_unicode_text_export_is_read_by_its_byte_order_mark(tmp_path, frame, plain, encoding):
     path = tmp_path / "unicode.txt"
