@@ -332,8 +332,17 @@ def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objectiv
     hints = []
     if objective == "sae":
         sse = estimate_exact_cost(run.n_samples, n_coef, "sse", pmax)
-        hints.append(f"--objective sse ({sse.describe()})")
-    hints.append("--search ga --p P (the genetic algorithm)")
+        setting = "--objective sse" if hasattr(args, "objective") else 'objective = "sse" in a configuration\'s [model]'
+        hints.append(f"{setting} ({sse.describe()})")
+    if hasattr(args, "search"):
+        hints.append("--search ga --p P (the genetic algorithm)")
+    else:
+        fits = [p for p in range(1, pmax) if _within_budget(estimate_exact_cost(run.n_samples, n_coef, objective, p))]
+        hints += (
+            [f"--pmax {fits[-1]} ({estimate_exact_cost(run.n_samples, n_coef, objective, fits[-1]).describe()})"]
+            if fits
+            else []
+        )
     step = 2
     while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
         step *= 2
