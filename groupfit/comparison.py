@@ -28,6 +28,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import pandas as pd
 
+from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
 from groupfit.data import Run, measured_rows
 from groupfit.errors import InputError
@@ -39,9 +40,8 @@ from groupfit.inference.prediction import band_for
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.model import ModelFile
 from groupfit.models.ar1 import AR1Model, early_rise
-from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.mlr import MLR
-from groupfit.models.select_p import choose_p, exact_path
+from groupfit.models.select_p import choose_p
 from groupfit.search.base import SearchSettings
 from groupfit.settings import CompareSettings, ModelSettings, RunSettings
 
@@ -77,6 +77,8 @@ class ComparisonSettings:
     the same order, each change within this many samples of the modelling run's (:mod:`groupfit.conditions`)."""
     search: SearchSettings = SearchSettings()
     """Seed and GA settings of the grouped models (always the GA, never certified one by one)."""
+    certify_path: bool = True
+    """The path of R against p by the exact search; False: the GA's models alone (a run over the budget)."""
     intervals: dict[str, Any] = field(default_factory=dict)
     """Break-interval options (:func:`groupfit.inference.break_intervals` keywords: method, level, …)."""
 
@@ -142,7 +144,10 @@ class ComparisonResult:
             "runs": self.runs,
             "rows": self.rows,
             "p_selection": self.selection,
-            "exact_path": {k: self.path[k] for k in ("breaks", "objective", "R", "rss")},
+            "exact_path": {
+                **{k: self.path[k] for k in ("breaks", "objective", "R", "rss")},
+                "certified": self.path.get("certified", True),
+            },
             "break_stability": self.break_stability,
             "condition_changes": self.condition_changes,
             "mlr_statistics": self.mlr_statistics,
@@ -252,7 +257,7 @@ def compare_models(
     mlr = MLR(objective=settings.objective, fit_intercept=settings.fit_intercept).fit(named, y)
     ar1 = fit_ar1(modelling, settings) if settings.heat is not None and not notes else None
 
-    path = exact_path(
+    path, grouped = grouped_path(
         X,
         y,
         0 if notes else settings.pmax,
@@ -260,25 +265,11 @@ def compare_models(
         c=settings.c,
         objective=settings.objective,
         fit_intercept=settings.fit_intercept,
+        search=settings.search,
+        certified=settings.certify_path,
+        progress=progress,
     )
     pmax = len(path["breaks"]) - 1
-    grouped: dict[int, GroupedRegressor] = {}
-    search = settings.search.replace(method="ga", certify=False)
-    for p in range(1, pmax + 1):
-        grouped[p] = GroupedRegressor.from_settings(
-            p=p,
-            n=settings.n,
-            c=settings.c,
-            objective=settings.objective,
-            fit_intercept=settings.fit_intercept,
-            search=search,
-        ).fit(X, y)
-        exact_value = path["objective"][p]
-        grouped[p].search_["exact_objective"] = exact_value
-        grouped[p].search_["exact_breaks"] = path["breaks"][p]
-        grouped[p].search_["gap_percent"] = 100.0 * (grouped[p].search_["search_objective"] - exact_value) / exact_value
-        if progress is not None:
-            progress("grouped", p / pmax)
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
     intervals = {
         p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)

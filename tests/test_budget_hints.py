@@ -1,6 +1,8 @@
-"""An exact search over the budget is refused with advice the refusing verb takes."""
+"""An exact search over the budget: `fit` refuses it with advice it takes; `compare` compares the GA's
+models on a path marked not certified."""
 
 import argparse
+import json
 import re
 
 import numpy as np
@@ -28,13 +30,26 @@ def options_of(verb: str) -> set[str]:
     return {flag for action in verbs.choices[verb]._actions for flag in action.option_strings}  # noqa: SLF001
 
 
-@pytest.mark.parametrize(
-    "verb, args",
-    [("fit", ["--search", "exact", "--p", "3"]), ("compare", ["--heat", "none"])],
-)
-def test_the_refusal_names_only_options_of_its_verb(tmp_path, capsys, long_run, verb, args):
-    assert main([verb, "--data", str(long_run), *args, "--out", str(tmp_path / "out")]) == 2
+def test_fits_refusal_names_only_options_fit_takes(tmp_path, capsys, long_run):
+    args = ["fit", "--data", str(long_run), "--search", "exact", "--p", "3", "--out", str(tmp_path / "out")]
+    assert main(args) == 2
     line = capsys.readouterr().err.strip().splitlines()[-1]
     assert "over the budget" in line and not (tmp_path / "out").exists()
     advised = set(re.findall(r"(--[a-z][a-z-]*)", line))
-    assert advised and advised <= options_of(verb), advised - options_of(verb)
+    assert advised and advised <= options_of("fit"), advised - options_of("fit")
+
+
+def test_compare_over_the_budget_compares_the_gas_models_on_a_path_it_marks_uncertified(tmp_path, capsys, long_run):
+    out = tmp_path / "c.json"
+    args = ["compare", "--data", str(long_run), "--heat", "none", "--pmax", "2", "--out", str(tmp_path / "cmp")]
+    assert main([*args, "--json", str(out), "--quiet"]) == 0
+    note = next(line for line in capsys.readouterr().out.splitlines() if "over the budget" in line)
+    assert "not certified" in note and set(re.findall(r"(--[a-z][a-z-]*)", note)) <= options_of("compare")
+    result = json.loads(out.read_text())
+    path = result["exact_path"]
+    assert path["certified"] is False
+    grouped = {r["p"]: r for r in result["rows"] if r["model"] == "grouped"}
+    assert path["breaks"][1:] == [grouped[1]["breaks"], grouped[2]["breaks"]]  # the GA's own models
+    assert path["R"][1:] == pytest.approx([grouped[1]["R_um"], grouped[2]["R_um"]], rel=1e-9)
+    mlr = next(r for r in result["rows"] if r["model"] == "mlr")
+    assert path["R"][0] == pytest.approx(mlr["R_um"], rel=1e-6)  # p = 0: the least-squares fit, exact

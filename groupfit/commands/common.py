@@ -324,11 +324,18 @@ def add_budget_option(parser: argparse.ArgumentParser) -> None:
 
 def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objective: str, pmax: int, what: str) -> None:
     """Refuse, before it starts, an exact search estimated to exceed the budget; one line saying what to do."""
+    over = over_budget(args, run, n_coef, objective, pmax, what)
+    if over is not None:
+        raise InputError(over)
+
+
+def over_budget(args: argparse.Namespace, run: Run, n_coef: int, objective: str, pmax: int, what: str) -> str | None:
+    """What an exact search estimated to exceed the budget would take and what to do instead (None: within it)."""
     if getattr(args, "no_budget", False) or pmax == 0:  # p = 0: one least-squares fit, no search
-        return
+        return None
     cost = estimate_exact_cost(run.n_samples, n_coef, objective, pmax)
     if cost.seconds <= EXACT_BUDGET_SECONDS and cost.bytes <= EXACT_BUDGET_BYTES:
-        return
+        return None
     hints = []
     if objective == "sae":
         sse = estimate_exact_cost(run.n_samples, n_coef, "sse", pmax)
@@ -347,7 +354,7 @@ def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objectiv
     while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
         step *= 2
     hints.append(f"or keep one row in {step} of the run (--resample {step * run.period:g}: the mean of {step} rows)")
-    raise InputError(
+    return (
         f"{run.source}: {what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "
         f"{cost.describe()}, over the budget of {format_seconds(EXACT_BUDGET_SECONDS)} and "
         f"{EXACT_BUDGET_BYTES / 1e9:g} GB: use {', '.join(hints)}; --no-budget runs it anyway"

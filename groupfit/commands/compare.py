@@ -133,7 +133,14 @@ def run_compare(args: argparse.Namespace) -> int:
     check_block(args, modelling.n_samples)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     pmax = settings.pmax if np.isfinite(modelling.error).all() else 0  # a sparse error: global models only
-    common.check_exact_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
+    over = common.over_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
+    if over is not None:  # the GA's models are compared, the path not certified
+        settings.certify_path = False
+        note = over.split(": ", 1)[1].split(": use ", 1)[0]
+        print(
+            f"note    {note}: the path of R against p is the GA's models, not certified (--no-budget certifies it)",
+            file=common.report_stream(args),
+        )
     out_dir = common.check_output_dir(run_settings.output_dir)
     progress = common.StageProgress(enabled=not args.quiet)
     try:
@@ -167,7 +174,7 @@ def run_compare(args: argparse.Namespace) -> int:
         )
         written.append(figure)
     figure = out_dir / "R_against_p.png"
-    plot_r_against_p(result.path["R"], result.rows, result.runs, figure)
+    plot_r_against_p(result.path["R"], result.rows, result.runs, figure, certified=result.path.get("certified", True))
     written.append(figure)
     figure = out_dir / f"hysteresis_{modelling.name}.png"
     plot_hysteresis(
