@@ -106,8 +106,41 @@ def check_range(
         row = int(outside[0])
         raise InputError(
             f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "
-            f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, or widen the range with {option}"
+            f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, widen the range with {option}, "
+            "or take such readings as missed with --resample SECONDS (up to 3 in a row of a sensor are interpolated)"
         )
+
+
+def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[pd.DataFrame, str | None]:
+    """The log with its physically impossible readings emptied (a broken sensor's -999, a logger's overflow),
+    for ``--resample`` to take as missed readings; and a note counting them (None: there were none).
+
+    The inputs (``--temps``, else the columns named like sensors) outside ``temp_range`` and errors beyond
+    ``error_limit``; other columns (a speed, a setpoint) are left as they are.
+    """
+    if options.allow_nonfinite:
+        return frame, None
+    temps = options.temps
+    if temps is None:
+        temps = default_temperature_columns(frame.columns, exclude=(options.time, options.error, options.ambient))
+    bounds = {t: options.temp_range for t in temps if options.temp_range is not None}
+    if options.error is not None and options.error_limit is not None:
+        limit = options.error_limit / length_unit(options.error)[1]
+        bounds[options.error] = (-limit, limit)
+    counts = {}
+    frame = frame.copy()
+    for column, (low, high) in bounds.items():
+        if column not in frame.columns:
+            continue
+        values = pd.to_numeric(frame[column], errors="coerce")
+        outside = (values < low) | (values > high)
+        if outside.any():
+            frame.loc[outside.to_numpy(), column] = np.nan
+            counts[column] = int(outside.sum())
+    if not counts:
+        return frame, None
+    listed = ", ".join(f"{count} in '{column}'" for column, count in counts.items())
+    return frame, f"{label}: readings outside the plausible range taken as missed ({listed})"
 
 
 def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[list, np.ndarray, str | None]:
@@ -185,6 +218,7 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
 
 
 __all__ = [
+    "implausible_as_missed",
     "ERROR_LIMIT_UM",
     "TEMP_RANGE_C",
     "LoadOptions",

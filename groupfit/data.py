@@ -22,9 +22,9 @@ from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
 from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
+from groupfit.column_values import implausible_as_missed, temperature_inputs, unit_note
 from groupfit.column_values import length_unit as length_unit
 from groupfit.column_values import numeric_column as numeric_column
-from groupfit.column_values import temperature_inputs, unit_note
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
@@ -264,11 +264,13 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     time = options.get("time", DEFAULT_TIME)
     time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
+    frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
     binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
+    notes = (missed, note) if missed else (note,)
     if len(binned.pieces) == 1:
         return [
-            _validated(binned.pieces[0], run_name, label, period_tolerance=period_tolerance, notes=(note,), **options)
+            _validated(binned.pieces[0], run_name, label, period_tolerance=period_tolerance, notes=notes, **options)
         ]
     total = len(binned.pieces)
     return [
@@ -277,7 +279,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
             f"{run_name}#{k}",
             f"{label} (part {k} of {total})",
             period_tolerance=period_tolerance,
-            notes=(note,) if k == 1 else (),
+            notes=notes if k == 1 else (),
             **options,
         )
         for k, piece in enumerate(binned.pieces, start=1)

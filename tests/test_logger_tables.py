@@ -216,6 +216,23 @@ def test_a_workbook_with_a_units_row_and_text_time_stamps(tmp_path, frame, plain
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
 
 
+def test_resampling_takes_a_broken_sensors_readings_as_missed_and_interpolates_them(tmp_path, frame):
+    path = tmp_path / "broken.csv"
+    broken = frame.copy()
+    broken.loc[40:41, "T3"] = -999.0  # a thermocouple off its input for two readings
+    broken.loc[70, "T1"] = 9999.0  # an overflow
+    broken.to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"row 71, column 'T1': 9999 °C .* or take such readings as missed with"):
+        load_run(path, temps=TEMPS)
+    run = load_run(path, temps=TEMPS, resample=100.0)
+    expected = frame[TEMPS].to_numpy(dtype=float).copy()
+    expected[40:42, 2] = np.interp([40, 41], [39, 42], expected[[39, 42], 2])  # straight across, as for empty cells
+    expected[70, 0] = 0.5 * (expected[69, 0] + expected[71, 0])
+    np.testing.assert_allclose(run.temps, expected, rtol=0, atol=1e-9)
+    assert any("outside the plausible range taken as missed (1 in 'T1', 2 in 'T3')" in note for note in run.notes)
+    np.testing.assert_array_equal(run.frame["spindle_on"], frame["spindle_on"])  # not an input: left as it is
+
+
 @pytest.mark.parametrize("decimal", [".", ","])
 def test_a_table_separated_by_runs_of_spaces_is_read(tmp_path, frame, plain, decimal):
     path = tmp_path / "lab.dat"
