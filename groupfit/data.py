@@ -35,7 +35,7 @@ from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import jitter_note, resample_frame
-from groupfit.timestamps import serial_days_to_seconds, unit_seconds
+from groupfit.timestamps import epoch_to_seconds, serial_days_to_seconds, unit_seconds
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
@@ -248,7 +248,7 @@ def load_runs(
     """
     frame, run_name, label = read_table(source, name)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
-    serial_note = serial_days_to_seconds(frame, time, label)
+    serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     required = options.get("require_error", True)
     error, error_note = found_error_column(
         frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default

@@ -68,7 +68,7 @@ def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str 
     A column named as a date (``Date``, ``Datum/Zeit``) without a unit whose numbers all lie among the
     serial dates of 1954 … 2119, less than a day apart, is a spreadsheet's date-time written as a number.
     """
-    if column not in frame.columns or not DATE_WORD.search(str(column)) or unit_seconds(column) != 1.0:
+    if column not in frame.columns or not DATE_WORD.search(str(column)) or names_a_unit(column):
         return None
     if not pd.api.types.is_numeric_dtype(frame[column]):
         return None
@@ -80,6 +80,35 @@ def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str 
         return None
     frame[column] = days * DAY_S
     return f"{label}: column '{column}' holds spreadsheet serial dates (days since 1899-12-30): read in seconds"
+
+
+EPOCH_UNITS = (
+    (1e12, 1e13, 1e-3, "milliseconds"),
+    (1e15, 1e16, 1e-6, "microseconds"),
+    (1e18, 1e19, 1e-9, "nanoseconds"),
+)
+"""Unix times of 2001 … 2286 in ms, µs and ns: far beyond any time in seconds, so read in their unit."""
+
+
+def epoch_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
+    """A numeric time column of Unix times in ms, µs or ns (its name giving no unit) converted to seconds in
+    place, and its note (None: not one)."""
+    if column not in frame.columns or names_a_unit(column) or not pd.api.types.is_numeric_dtype(frame[column]):
+        return None
+    values = frame[column].to_numpy(dtype=float)
+    if not values.size or not np.all(np.isfinite(values)):
+        return None
+    for low, high, scale, unit in EPOCH_UNITS:
+        if values.min() >= low and values.max() < high:
+            frame[column] = values * scale
+            return f"{label}: column '{column}' holds Unix times in {unit}: read in seconds"
+    return None
+
+
+def names_a_unit(name: str) -> bool:
+    """Whether a column's name ends in a unit of time (``time_s``, ``Zeit [min]``)."""
+    found = NAMED_UNIT.search(str(name))
+    return bool(found) and found.group(1).lower() in UNIT_SECONDS
 
 
 def unit_seconds(name: str) -> float:

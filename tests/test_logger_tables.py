@@ -292,6 +292,21 @@ def test_a_date_column_of_spreadsheet_serial_days_is_read_in_seconds(tmp_path, f
     assert not any("jitter" in note for note in run.notes)  # a float's rounding of days is no clock jitter
 
 
+@pytest.mark.parametrize("per_second", [1e3, 1e6, 1e9])
+def test_unix_times_in_ms_us_or_ns_are_read_in_seconds_unless_the_name_says_seconds(tmp_path, frame, plain, per_second):
+    path = tmp_path / "epoch.csv"
+    stamps = (1.77e9 + frame["time_s"]) * per_second
+    frame.drop(columns="time_s").assign(timestamp=stamps).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time="timestamp")
+    same_run(run, plain, time=False)
+    np.testing.assert_allclose(run.time - run.time[0], plain.time - plain.time[0], rtol=0, atol=1e-3)
+    assert any("holds Unix times in" in note for note in run.notes)
+    named = tmp_path / "named.csv"
+    frame.assign(time_s=stamps).to_csv(named, index=False)
+    with pytest.raises(InputError, match="is not a plausible time"):
+        load_run(named, temps=TEMPS)
+
+
 def test_numbers_in_the_serial_range_are_seconds_unless_the_column_is_named_as_a_date(tmp_path, frame, plain):
     path = tmp_path / "elapsed.csv"
     seconds = 30000.0 + (frame["time_s"] - frame["time_s"].iloc[0]) / 1000.0  # elapsed s, sampled every 0.1 s
