@@ -26,6 +26,8 @@ its firmware), and narrower than the overflow values a broken logger writes
 (1e300, 9999, 3276.7, a missing sensor read as −273 or 850 °C).
 ``--range-temp=LOW,HIGH`` (or ``[data] temp_range``) sets another.
 """
+NO_READING = re.compile(r"[-*?]+|n\.?a\.?|none|null|ovl|over(?:flow)?|err(?:or)?|fault", re.IGNORECASE)
+"""Cells a logger writes for a reading it did not take (``---``, ``n.a.``, ``OVL``, ``Err``): read as empty."""
 ERROR_LIMIT_UM = 1.0e5
 """Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
 
@@ -66,7 +68,8 @@ class LoadOptions:
 
 
 def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
-    """Return one column as float64, naming the first bad cell if there is one.
+    """Return one column as float64, naming the first bad cell if there is one; a cell marking a reading not
+    taken (:data:`NO_READING`) is empty.
 
     Rows are reported 1-based, counting data rows (the header is not a row).
     """
@@ -75,7 +78,9 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
         raise InputError(f"{label}: column '{column}' not found; the columns are: {available}")
     raw = frame[column]
     values = pd.to_numeric(raw, errors="coerce")
-    bad_text = values.isna() & raw.notna() & (raw.astype(str).str.strip().str.lower() != "nan")
+    text = raw.astype(str).str.strip()
+    marked = raw.notna() & text.str.fullmatch(NO_READING)
+    bad_text = values.isna() & raw.notna() & (text.str.lower() != "nan") & ~marked
     if bad_text.any():
         row = int(np.flatnonzero(bad_text.to_numpy())[0])
         raise InputError(
@@ -86,7 +91,13 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
         nonfinite = ~np.isfinite(array)
         if nonfinite.any():
             row = int(np.flatnonzero(nonfinite)[0])
-            what = "empty" if np.isnan(array[row]) else f"{array[row]}"
+            what = (
+                f"{raw.iloc[row]!r} (no reading)"
+                if marked.iloc[row]
+                else "empty"
+                if np.isnan(array[row])
+                else array[row]
+            )
             raise InputError(
                 f"{label}: row {row + 1}, column '{column}' is {what} "
                 f"({int(nonfinite.sum())} non-finite value(s) in that column); "

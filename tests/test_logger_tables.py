@@ -9,6 +9,7 @@ import codecs
 import gzip
 import json
 import lzma
+import re
 import zipfile
 
 import numpy as np
@@ -231,6 +232,24 @@ def test_resampling_takes_a_broken_sensors_readings_as_missed_and_interpolates_t
     np.testing.assert_allclose(run.temps, expected, rtol=0, atol=1e-9)
     assert any("outside the plausible range taken as missed (1 in 'T1', 2 in 'T3')" in note for note in run.notes)
     np.testing.assert_array_equal(run.frame["spindle_on"], frame["spindle_on"])  # not an input: left as it is
+
+
+@pytest.mark.parametrize("mark", ["---", "-", "n.a.", "OVL", "Err", "*"])
+def test_a_cell_marking_a_reading_not_taken_is_an_empty_cell(tmp_path, frame, plain, mark):
+    path = tmp_path / "marked.csv"
+    marked = frame.astype(object)
+    marked.loc[marked.index % 4 != 0, "error_um"] = mark  # the error measured on one row in four
+    marked.to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, missing_error=True)
+    expected = plain.error.copy()
+    expected[np.arange(len(expected)) % 4 != 0] = np.nan
+    np.testing.assert_array_equal(run.error, expected)
+    marked.loc[:, "error_um"] = frame["error_um"]
+    marked.loc[30, "T2"] = mark
+    marked.to_csv(path, index=False)
+    with pytest.raises(InputError, match=rf"row 31, column 'T2' is {re.escape(repr(mark))} \(no reading\)"):
+        load_run(path, temps=TEMPS)
+    np.testing.assert_allclose(load_run(path, temps=TEMPS, resample=100.0).temps[30, 1], plain.temps[29:32:2, 1].mean())
 
 
 @pytest.mark.parametrize("decimal", [".", ","])
