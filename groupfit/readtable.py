@@ -41,9 +41,8 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     """Read a run's table (CSV, Excel or Parquet, by suffix) or take a DataFrame; return ``(frame, name, label)``.
 
     ``label`` names the source in error messages. An Excel workbook is read
-    from its first sheet that holds a table of numbers (a cover sheet before
-    it is passed over, and the label names the sheet), with the first row as
-    the header.
+    from its sheet with the largest table of numbers (a cover sheet is passed
+    over, and the label names the sheet), with the first row as the header.
     """
     if isinstance(source, pd.DataFrame):
         label = name or "DataFrame"
@@ -120,20 +119,23 @@ def _excel_header(path: Path, sheet: str | int = 0) -> list[str] | None:
 
 
 def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool]:
-    """The workbook's first sheet that holds a table of numbers (two numeric columns or more), its frame, and
-    whether it is the workbook's first sheet.
+    """The workbook's sheet that holds the largest table of numbers, its frame, and whether it is the first.
 
-    A logger's export often opens with a cover sheet (the machine, the operator); the first sheet is
-    taken when none holds numbers.
+    A logger's export often opens with a cover sheet (the machine, the operator) or a small table of
+    calibration constants beside the log; the sheet with the most numeric cells is the log (the first on a
+    tie, and the first when none holds numbers).
     """
-    sheets = pd.read_excel(path, sheet_name=None)
-    for k, (name, frame) in enumerate(sheets.items()):
-        frame = without_units_row(without_footer_rows(frame))
-        numeric = sum(pd.to_numeric(frame[c], errors="coerce").notna().mean() > 0.5 for c in frame.columns)
-        if len(frame) >= 2 and numeric >= 2:
-            return name, frame, k == 0
-    name = next(iter(sheets))
-    return name, without_units_row(without_footer_rows(sheets[name])), True
+    sheets = {
+        name: without_units_row(without_footer_rows(frame))
+        for name, frame in pd.read_excel(path, sheet_name=None).items()
+    }
+    sizes = [
+        int(frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().to_numpy().sum())
+        for frame in sheets.values()
+    ]
+    k = int(np.argmax(sizes)) if max(sizes, default=0) > 0 else 0
+    name = list(sheets)[k]
+    return name, sheets[name], k == 0
 
 
 def _parquet_header(path: Path) -> list[str] | None:

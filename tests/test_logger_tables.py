@@ -337,14 +337,18 @@ def test_numbers_in_the_serial_range_are_seconds_unless_the_column_is_named_as_a
     assert load_run(in_days, temps=TEMPS, time="time [d]").period == pytest.approx(plain.period, rel=1e-9)
 
 
-def test_a_workbook_whose_first_sheet_is_a_cover_is_read_from_its_data_sheet(tmp_path, frame, plain):
+def test_a_workbook_is_read_from_its_largest_table_of_numbers_past_a_cover_and_a_constants_sheet(
+    tmp_path, frame, plain
+):
     path = tmp_path / "export.xlsx"
     with pd.ExcelWriter(path) as workbook:
         pd.DataFrame({"Logger": ["XYZ 2000", "machine 7", "operator A"]}).to_excel(
             workbook, sheet_name="Info", index=False
         )
+        calibration = pd.DataFrame({"sensor": [1, 2, 3, 4], "offset_K": [0.1, -0.05, 0.02, 0.0]})
+        calibration.to_excel(workbook, sheet_name="Calibration", index=False)  # numbers, but not the log
         frame.to_excel(workbook, sheet_name="Data", index=False)
-        frame.head(3).to_excel(workbook, sheet_name="Later", index=False)  # a second table is not read
+        frame.head(3).to_excel(workbook, sheet_name="Later", index=False)  # a smaller table is not read
     run = load_run(path, temps=TEMPS)
     same_run(run, plain)
     assert run.source == f"{path} (sheet 'Data')"
