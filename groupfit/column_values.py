@@ -13,7 +13,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns, length_unit
 from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS
 
@@ -30,17 +30,6 @@ NO_READING = re.compile(r"[-*?]+|n\.?a\.?|none|null|ovl|over(?:flow)?|err(?:or)?
 """Cells a logger writes for a reading it did not take (``---``, ``n.a.``, ``OVL``, ``Err``): read as empty."""
 ERROR_LIMIT_UM = 1.0e5
 """Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
-
-MICROMETRES_PER_UNIT = {"mm": 1000.0, "um": 1.0, "µm": 1.0, "μm": 1.0, "micron": 1.0, "microns": 1.0, "nm": 1e-3}
-"""Length units an error column's name may end in (``error_mm``, ``dZ [mm]``, ``drift (nm)``), in µm."""
-LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/])(mm|um|µm|μm|microns?|nm)\s*[\])]?\s*$", re.IGNORECASE)
-
-
-def length_unit(name: str | None) -> tuple[str, float]:
-    """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none)."""
-    match = LENGTH_UNIT.search(str(name)) if name is not None else None
-    scale = MICROMETRES_PER_UNIT[match.group(1).lower()] if match else 1.0
-    return (match.group(1).lower() if scale != 1.0 else "µm"), scale
 
 
 def unit_note(name: str | None, label: str) -> str | None:
@@ -229,12 +218,14 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
 
 
 __all__ = [
-    "implausible_as_missed",
     "ERROR_LIMIT_UM",
+    "NO_READING",
     "TEMP_RANGE_C",
     "LoadOptions",
     "check_range",
     "error_values",
+    "implausible_as_missed",
     "numeric_column",
     "temperature_inputs",
+    "unit_note",
 ]

@@ -23,7 +23,6 @@ from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import implausible_as_missed, temperature_inputs, unit_note
-from groupfit.column_values import length_unit as length_unit
 from groupfit.column_values import numeric_column as numeric_column
 from groupfit.default_columns import (
     DEFAULT_ERROR,
@@ -31,6 +30,7 @@ from groupfit.default_columns import (
     found_error_column,
     found_time_column,
 )
+from groupfit.default_columns import length_unit as length_unit
 from groupfit.errors import InputError
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table

@@ -45,7 +45,21 @@ TEMPERATURE_NAME = re.compile(
     r"°C|deg[\s_]?C\b|\[C\]|\(C\)|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d", re.IGNORECASE
 )
 """A name that marks a temperature column."""
-IN_MICROMETRES = re.compile(r"(?:^|[\s_\[(/])(?:um|µm|μm|micron|microns)\s*[\])]?\s*$", re.IGNORECASE)
+MICROMETRES_PER_UNIT = {"mm": 1000.0, "um": 1.0, "µm": 1.0, "μm": 1.0, "micron": 1.0, "microns": 1.0, "nm": 1e-3}
+"""Length units a column's name may end in (``error_mm``, ``dZ [µm]``, ``drift (nm)``), in µm."""
+LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/])(mm|um|µm|μm|microns?|nm)\s*[\])]?\s*$", re.IGNORECASE)
+
+
+def length_unit(name: str | None) -> tuple[str, float]:
+    """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none)."""
+    unit = _named_length_unit(name)
+    scale = MICROMETRES_PER_UNIT[unit] if unit else 1.0
+    return (unit if scale != 1.0 else "µm"), scale
+
+
+def _named_length_unit(name: str | None) -> str | None:
+    match = LENGTH_UNIT.search(str(name)) if name is not None else None
+    return match.group(1).lower() if match else None
 
 
 def default_temperature_columns(columns: Sequence, exclude: Sequence[str | None] = ()) -> list[str]:
@@ -60,7 +74,9 @@ def default_temperature_columns(columns: Sequence, exclude: Sequence[str | None]
 
 def error_like_columns(columns) -> list[str]:
     """The columns whose names say they hold a thermal error (or any length in µm), in table order."""
-    return [str(c) for c in columns if ERROR_NAME.match(str(c)) or IN_MICROMETRES.search(str(c))]
+    return [
+        str(c) for c in columns if ERROR_NAME.match(str(c)) or MICROMETRES_PER_UNIT.get(_named_length_unit(c)) == 1.0
+    ]
 
 
 def found_time_column(frame: pd.DataFrame, time: str, label: str, *, default: bool = False) -> tuple[str, str | None]:
@@ -134,4 +150,5 @@ __all__ = [
     "error_like_columns",
     "found_error_column",
     "found_time_column",
+    "length_unit",
 ]

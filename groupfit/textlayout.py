@@ -38,10 +38,10 @@ import numpy as np
 import pandas as pd
 
 DELIMITERS = (",", ";", "\t")
+"""Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
 WHITESPACE = " "
 """The separator of a table whose header has none of :data:`DELIMITERS`: runs of spaces (a lab logger's
 ``.dat``, a fixed-width export)."""
-"""Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
 ENCODINGS = ("utf-8-sig", "cp1252", "latin-1")
 """Tried in this order; Latin-1 reads any byte."""
 BYTE_ORDER_MARKS = (
@@ -113,8 +113,9 @@ def _header_line(lines: list[str]) -> int:
     filled = [k for k, line in enumerate(lines) if line.strip()]
     for position, k in enumerate(filled):
         sep = header_delimiter(lines[k])
-        fields = len(fields_of(lines[k], sep))
-        if fields < 2 or any(is_number(field.strip().strip('"')) for field in fields_of(lines[k], sep)):
+        names = fields_of(lines[k], sep)
+        fields = len(names)
+        if fields < 2 or any(is_number(field.strip().strip('"')) for field in names):
             continue  # a header names its columns; a line with a number in it is data or a preamble
         following = filled[position + 1 : position + 1 + AGREEING_LINES]
         if all(len(fields_of(lines[j], sep)) == fields for j in following):
@@ -133,10 +134,9 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
     body = _without_footer(_from_line(text, layout.header_line), layout)
     header_text = body.split("\n", 1)[0].rstrip("\r")
     if layout.sep == WHITESPACE:
-        header = header_text.split()
+        header, sep = header_text.split(), r"\s+"
     else:
-        header = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), [])
-    sep = r"\s+" if layout.sep == WHITESPACE else layout.sep
+        header, sep = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), []), layout.sep
     with warnings.catch_warnings():
         warnings.simplefilter("error", pd.errors.ParserWarning)
         try:

@@ -68,15 +68,10 @@ def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str 
     A column named as a date (``Date``, ``Datum/Zeit``) without a unit whose numbers all lie among the
     serial dates of 1954 … 2119, less than a day apart, is a spreadsheet's date-time written as a number.
     """
-    if column not in frame.columns or not DATE_WORD.search(str(column)) or names_a_unit(column):
+    days = _numbers_without_unit(frame, column) if DATE_WORD.search(str(column)) else None
+    if days is None or len(days) < 2 or days.min() < SERIAL_DAYS[0] or days.max() > SERIAL_DAYS[1]:
         return None
-    if not pd.api.types.is_numeric_dtype(frame[column]):
-        return None
-    days = frame[column].to_numpy(dtype=float)
-    steps = np.diff(days)
-    if len(days) < 2 or not np.all(np.isfinite(days)) or days.min() < SERIAL_DAYS[0] or days.max() > SERIAL_DAYS[1]:
-        return None
-    if not 0.0 < float(np.median(steps)) < 1.0:
+    if not 0.0 < float(np.median(np.diff(days))) < 1.0:
         return None
     frame[column] = days * DAY_S
     return f"{label}: column '{column}' holds spreadsheet serial dates (days since 1899-12-30): read in seconds"
@@ -93,16 +88,22 @@ EPOCH_UNITS = (
 def epoch_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
     """A numeric time column of Unix times in ms, µs or ns (its name giving no unit) converted to seconds in
     place, and its note (None: not one)."""
-    if column not in frame.columns or names_a_unit(column) or not pd.api.types.is_numeric_dtype(frame[column]):
-        return None
-    values = frame[column].to_numpy(dtype=float)
-    if not values.size or not np.all(np.isfinite(values)):
+    values = _numbers_without_unit(frame, column)
+    if values is None or not values.size:
         return None
     for low, high, scale, unit in EPOCH_UNITS:
         if values.min() >= low and values.max() < high:
             frame[column] = values * scale
             return f"{label}: column '{column}' holds Unix times in {unit}: read in seconds"
     return None
+
+
+def _numbers_without_unit(frame: pd.DataFrame, column: str) -> np.ndarray | None:
+    """A numeric time column's finite values when its name gives no unit of time (None otherwise)."""
+    if column not in frame.columns or names_a_unit(column) or not pd.api.types.is_numeric_dtype(frame[column]):
+        return None
+    values = frame[column].to_numpy(dtype=float)
+    return values if np.all(np.isfinite(values)) else None
 
 
 def names_a_unit(name: str) -> bool:

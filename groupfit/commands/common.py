@@ -326,15 +326,19 @@ def check_exact_budget(args: argparse.Namespace, run: Run, n_coef: int, objectiv
     """Refuse, before it starts, an exact search estimated to exceed the budget; one line saying what to do."""
     over = over_budget(args, run, n_coef, objective, pmax, what)
     if over is not None:
-        raise InputError(over)
+        cost, hints = over
+        raise InputError(f"{run.source}: {cost}: use {', '.join(hints)}; --no-budget runs it anyway")
 
 
-def over_budget(args: argparse.Namespace, run: Run, n_coef: int, objective: str, pmax: int, what: str) -> str | None:
-    """What an exact search estimated to exceed the budget would take and what to do instead (None: within it)."""
+def over_budget(
+    args: argparse.Namespace, run: Run, n_coef: int, objective: str, pmax: int, what: str
+) -> tuple[str, list[str]] | None:
+    """An exact search estimated to exceed the budget: what it would take, and what to do instead (the options
+    the verb of ``args`` takes); None within the budget."""
     if getattr(args, "no_budget", False) or pmax == 0:  # p = 0: one least-squares fit, no search
         return None
     cost = estimate_exact_cost(run.n_samples, n_coef, objective, pmax)
-    if cost.seconds <= EXACT_BUDGET_SECONDS and cost.bytes <= EXACT_BUDGET_BYTES:
+    if _within_budget(cost):
         return None
     hints = []
     if objective == "sae":
@@ -344,20 +348,20 @@ def over_budget(args: argparse.Namespace, run: Run, n_coef: int, objective: str,
     if hasattr(args, "search"):
         hints.append("--search ga --p P (the genetic algorithm)")
     else:
-        fits = [p for p in range(1, pmax) if _within_budget(estimate_exact_cost(run.n_samples, n_coef, objective, p))]
-        hints += (
-            [f"--pmax {fits[-1]} ({estimate_exact_cost(run.n_samples, n_coef, objective, fits[-1]).describe()})"]
-            if fits
-            else []
-        )
+        for p in range(pmax - 1, 0, -1):  # the largest p whose exact path fits
+            smaller = estimate_exact_cost(run.n_samples, n_coef, objective, p)
+            if _within_budget(smaller):
+                hints.append(f"--pmax {p} ({smaller.describe()})")
+                break
     step = 2
     while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
         step *= 2
     hints.append(f"or keep one row in {step} of the run (--resample {step * run.period:g}: the mean of {step} rows)")
     return (
-        f"{run.source}: {what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "
+        f"{what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "
         f"{cost.describe()}, over the budget of {format_seconds(EXACT_BUDGET_SECONDS)} and "
-        f"{EXACT_BUDGET_BYTES / 1e9:g} GB: use {', '.join(hints)}; --no-budget runs it anyway"
+        f"{EXACT_BUDGET_BYTES / 1e9:g} GB",
+        hints,
     )
 
 

@@ -136,9 +136,8 @@ def run_compare(args: argparse.Namespace) -> int:
     over = common.over_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
     if over is not None:  # the GA's models are compared, the path not certified
         settings.certify_path = False
-        note = over.split(": ", 1)[1].split(": use ", 1)[0]
         print(
-            f"note    {note}: the path of R against p is the GA's models, not certified (--no-budget certifies it)",
+            f"note    {over[0]}: the path of R against p is the GA's models, not certified (--no-budget certifies it)",
             file=common.report_stream(args),
         )
     out_dir = common.check_output_dir(run_settings.output_dir)

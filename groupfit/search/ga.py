@@ -40,7 +40,7 @@ from deap import base, tools
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
 from groupfit.search.base import GA_DEFAULTS, GASettings, SearchResult
-from groupfit.search.polish import polish_breaks, shift_range
+from groupfit.search.polish import improves, polish_breaks, shift_range
 
 
 @dataclass(kw_only=True)
@@ -341,7 +341,7 @@ class GeneticSearch:
                     variation.local_step(children, self.local_window)
                 population = elite + children
                 leader = tools.selBest(population, 1)[0]
-                if leader.fitness.values[0] < best_value * (1 - 1e-12) - 1e-300:
+                if improves(leader.fitness.values[0], best_value):
                     best, best_value, stalled = leader, leader.fitness.values[0], 0
                 else:
                     stalled += 1

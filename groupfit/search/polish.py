@@ -24,6 +24,11 @@ COARSE_POSITIONS = 1024
 """A move with more positions to try than this is searched every ``ceil(range / COARSE_POSITIONS)``-th first."""
 
 
+def improves(new: float, old: float) -> bool:
+    """Whether Rg ``new`` is lower than ``old`` by more than rounding (a relative 1e-12)."""
+    return new < old * (1 - 1e-12) - 1e-300
+
+
 class BreakObjective(Protocol):
     def totals(self, break_vectors) -> list[float]: ...
 
@@ -53,7 +58,7 @@ def polish_breaks(
                 rest = [b for i, b in enumerate(breaks) if i not in removed]
                 for trial in _beam_insert(rest, size, beam, objective, constraints):
                     trial, trial_value = _shift_polish(trial, objective.totals([trial])[0], objective, constraints)
-                    if trial_value < value * (1 - 1e-12) - 1e-300:
+                    if improves(trial_value, value):
                         breaks, value, improved = trial, trial_value, True
                         break
                 if improved:
@@ -87,7 +92,7 @@ def _shift_polish(
         improved = False
         for j in range(len(breaks)):
             candidate, candidate_value = _best_shift(breaks, j, objective, constraints)
-            if candidate is not None and candidate_value < value * (1 - 1e-12) - 1e-300:
+            if candidate is not None and improves(candidate_value, value):
                 breaks, value, improved = candidate, candidate_value, True
         if improved:
             continue
@@ -97,7 +102,7 @@ def _shift_polish(
                 continue
             values = objective.totals(candidates)
             k = int(np.argmin(values))
-            if values[k] < value * (1 - 1e-12) - 1e-300:
+            if improves(values[k], value):
                 breaks, value, improved = candidates[k], values[k], True
     return breaks, value
 
@@ -168,4 +173,4 @@ def _insertions(breaks: list[int], constraints: Constraints) -> list[list[int]]:
     return candidates
 
 
-__all__ = ["COARSE_POSITIONS", "polish_breaks", "shift_range"]
+__all__ = ["COARSE_POSITIONS", "improves", "polish_breaks", "shift_range"]
