@@ -142,6 +142,18 @@ def test_one_standard_error_rule_on_constructed_scores():
         one_standard_error_choice([1.0, 2.0], [0.1])
 
 
+def test_a_more_complex_model_must_beat_the_simpler_by_the_tolerance():
+    # mean squared errors: p = 1's RMS is 1.6x below p = 0's, p = 2's 2.5x
+    mean, se = [4.0, 1.5625, 0.64], [0.0, 0.0, 0.0]
+    assert one_standard_error_choice(mean, se) == 2
+    assert one_standard_error_choice(mean, se, rms_tolerance=2.0) == 1  # p = 1 is within a factor 2 of the best
+    assert one_standard_error_choice(mean, se, rms_tolerance=2.6) == 0
+    assert one_standard_error_choice([4.0, 0.9], [0.0, 0.0], rms_tolerance=2.0) == 1  # 2.1x better: taken
+    assert one_standard_error_choice([5.0, 3.0, 2.8], [0.1, 0.1, 0.25], rms_tolerance=1.0) == 1  # the 1-SE rule
+    with pytest.raises(ValueError):
+        one_standard_error_choice([1.0], [0.0], rms_tolerance=0.5)
+
+
 def test_pooled_error_is_the_weighted_mean_and_its_standard_error():
     sse = np.array([[4.0, 9.0, 1.0]])
     counts = np.array([2.0, 3.0, 1.0])

@@ -152,7 +152,14 @@ def test_data_on_the_command_line_does_not_inherit_the_default_runs(tmp_path, ca
 
 
 def test_p_auto_at_the_edge_of_its_range_says_so(tmp_path, capsys):
-    argv = ["fit", "--data", str(SYNTHETIC), "--temps", "T1,T2", "--p", "auto", "--pmax", "1", "--quiet"]
+    # the error's law changes a third into the run: one break is expected to serve far better than none
+    rng = np.random.default_rng(0)
+    t = np.arange(400) * 60.0
+    t1, t2 = 20 + 10 * (1 - np.exp(-t / 6000)), 20 + 2 * np.sin(t / 3000)
+    law = np.where(np.arange(400) < 120, 3 * (t1 - 20), 30 - 4 * (t1 - 20) + 5 * (t2 - 20))
+    data = tmp_path / "regime.csv"
+    pd.DataFrame({"time_s": t, "T1": t1, "T2": t2, "error_um": law + rng.normal(0, 0.2, 400)}).to_csv(data)
+    argv = ["fit", "--data", str(data), "--temps", "T1,T2", "--p", "auto", "--pmax", "1", "--quiet"]
     assert main([*argv, "--out", str(tmp_path / "o")]) == 0
     out = capsys.readouterr().out
     assert "p = 1 is the largest p tried" in out and "--pmax" in out

@@ -48,8 +48,8 @@ def add_parser(verbs) -> None:
         "--p-rule",
         dest="p_rule",
         choices=P_RULES,
-        help="how p is chosen: next-run (default: the least expected next-run error, one-standard-error rule "
-        "toward fewer breaks), bic (in sample), target (fewest breaks with R <= --p-target)",
+        help="how p is chosen: next-run (default: the fewest breaks whose expected next-run error is within one "
+        "standard error, or a factor of 2, of the least), bic (in sample), target (fewest breaks with R <= --p-target)",
     )
     fit.add_argument("--p-target", metavar="R", help="target R for --p-rule target: µm, or a percentage like 20%%")
     fit.add_argument("--n", type=int, help="soft offset: samples shared by neighbouring groups")

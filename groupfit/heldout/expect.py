@@ -13,7 +13,7 @@ import numpy as np
 
 from groupfit.data import Run
 from groupfit.heldout import calibration
-from groupfit.heldout.choice import one_standard_error_choice
+from groupfit.heldout.choice import RMS_TOLERANCE, one_standard_error_choice
 from groupfit.heldout.nextrun import (
     LEAVE_ONE_RUN_OUT,
     MIN_SEGMENTS,
@@ -23,7 +23,10 @@ from groupfit.heldout.nextrun import (
 )
 from groupfit.model import ModelFile
 
-CHOICE_RULE = "the simplest model within one standard error of the least expected next-run error"
+CHOICE_RULE = (
+    "the simplest model within one standard error, or a factor of "
+    f"{RMS_TOLERANCE:g}, of the least expected next-run error"
+)
 
 
 @dataclass(frozen=True)
@@ -56,7 +59,7 @@ class NextRunExpectation:
     def choice_among(self, count: int):
         """The candidate the one-standard-error rule chooses among the first ``count`` candidates."""
         mean, error = self.scores.pooled()
-        return self.candidates[one_standard_error_choice(mean[:count], error[:count])]
+        return self.candidates[one_standard_error_choice(mean[:count], error[:count], rms_tolerance=RMS_TOLERANCE)]
 
     def method(self) -> str:
         if self.scores.kind == LEAVE_ONE_RUN_OUT:
@@ -158,7 +161,7 @@ def expect_next_run(
         scores = forward_chaining(
             runs[0], list(p_values), n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
         )
-    chosen = one_standard_error_choice(*scores.pooled())
+    chosen = one_standard_error_choice(*scores.pooled(), rms_tolerance=RMS_TOLERANCE)
     return NextRunExpectation(scores, chosen, trust_notes(scores))
 
 
