@@ -1,6 +1,7 @@
 """diagnose checks the model's reference sensor: rises over T_amb against absolute readings, on held-out conditions."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -11,7 +12,9 @@ from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.diagnose import diagnose
+from groupfit.diagnose.policy import REFERENCE_STEADY
 from groupfit.diagnose.problem import stacked_residual
+from groupfit.diagnose.reference import absolute_model
 from groupfit.features import derived_matrix, lowpass
 from groupfit.heldout.folds import make_folds
 from groupfit.model import model_file_problem
@@ -19,6 +22,7 @@ from groupfit.models.grouped import GroupedRegressor
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
 
+DATASETS = Path(__file__).resolve().parents[1] / "datasets"
 PERIOD = 60.0
 TEMPS = ["T1", "T2"]
 GAINS = (2.0, -1.5)
@@ -55,6 +59,10 @@ def fitted(frame, reference="T_amb"):
     run = load_run(frame, temps=TEMPS, name="modelling")
     referenced = with_reference(run, reference)
     return GroupedRegressor(p=0).fit(referenced.temps, referenced.error).to_model_file(referenced).to_dict(), run
+
+
+def rms(values) -> float:
+    return float(np.sqrt(np.mean(np.asarray(values)[np.isfinite(values)] ** 2)))
 
 
 def held_out_rms(design, y, groups):
@@ -106,6 +114,24 @@ def test_a_run_whose_air_stays_still_cannot_tell_and_keeps_the_reference():
     check = result.reference
     assert not check.dropped and check.score == pytest.approx(0.0, abs=1e-6)
     assert result.model.reference == "T_amb"
+
+
+def test_an_air_reading_steady_within_its_noise_keeps_the_reference_for_a_day_at_another_level():
+    # the FE modelling run's air stays at 20 °C within its reading noise; absolute readings shed that noise and
+    # win on its held-out folds, yet the repeat of the same programme at 25 °C shows what they would cost
+    modelling = load_run(DATASETS / "paper_cycle.csv", temps=TEMPS)
+    warmer_day = load_run(DATASETS / "repeat_ambient25.csv", temps=TEMPS)
+    model, run = fitted(modelling.frame)
+    result = diagnose(model, run, live_rule=replay_groups)
+    check = result.reference
+    assert check.rule_id == REFERENCE_STEADY and not check.dropped
+    assert check.held_out_rms_um["absolute"] < check.held_out_rms_um["given"]  # the folds alone would drop it
+    assert result.model.reference == "T_amb" and result.added
+    on_model_day = stacked_residual(result.model, [run], replay_groups)
+    on_warmer_day = stacked_residual(result.model, [warmer_day], replay_groups)
+    on_absolute, _ = absolute_model(result.model, [run])  # what dropping it would do there
+    assert rms(on_warmer_day) < 2 * rms(on_model_day)
+    assert rms(stacked_residual(on_absolute, [warmer_day], replay_groups)) > 10 * rms(on_warmer_day)
 
 
 def test_models_without_a_reference_sensor_are_not_checked():

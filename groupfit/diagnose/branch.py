@@ -13,9 +13,9 @@ from dataclasses import replace
 from typing import Callable
 
 from groupfit.diagnose.candidates import Candidate
-from groupfit.diagnose.policy import REFERENCE_NEEDED, AcceptancePolicy, Refusal
+from groupfit.diagnose.policy import REFERENCE_NEEDED, REFERENCE_STEADY, AcceptancePolicy, Refusal
 from groupfit.diagnose.problem import Fit, Model, Problem
-from groupfit.diagnose.reference import absolute_candidate, absolute_model, global_view
+from groupfit.diagnose.reference import absolute_candidate, absolute_model, global_view, steady_reference
 from groupfit.diagnose.result import BranchOutcome, DiagnosisResult, ReferenceCheck
 
 
@@ -31,6 +31,9 @@ def reference_stage(
     judged_scorer = problem.scorer(global_view(absolute) if grouped else absolute, absolute_inputs)
     candidate = absolute_candidate(reference, given_scorer, judged_scorer)
     refusal = policy.refusal(candidate, "reference")
+    steady = steady_reference(reference, problem.data) if refusal is None else None
+    if steady is not None:
+        refusal = Refusal(REFERENCE_STEADY, steady)
     check = ReferenceCheck(
         reference=reference,
         dropped=refusal is None,
@@ -41,6 +44,7 @@ def reference_stage(
         score=candidate.score,
         as_one_group=grouped,
         reason=None if refusal is None else refusal.reason,
+        rule_id=None if refusal is None else refusal.rule_id,
     )
     if refusal is not None:
         return current, check
@@ -76,6 +80,8 @@ def absolute_branch(
     the diagnosis on rises already tried as a lag over the reference.
     """
     reference, scorer = check.reference, current.scorer
+    if steady_reference(reference, problem.data) is not None:  # no fold can justify absolute readings
+        return None, check
     start, _ = absolute_model(model, problem.data)
     branch = diagnose_from(start)
     branch_scorer = problem.scorer(branch.model, problem.inputs(branch.model))

@@ -56,6 +56,9 @@ REFERENCE_SHARE = "reference-share"
 """Absolute readings remove too little of the held-out error for a change of reference."""
 REFERENCE_NEEDED = "reference-needed"
 """The diagnosis on absolute readings took the reference column itself as an effect: no evidence against it."""
+REFERENCE_STEADY = "reference-steady"
+"""The reference sensor stays within its noise on the modelling run: its folds cannot tell rises over it from
+absolute readings, and absolute readings carry the day's air level into every other day."""
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,7 @@ from groupfit.diagnose.augment import refit_model
 from groupfit.diagnose.candidates import Candidate, candidate_of_fold_sse
 from groupfit.diagnose.residual import model_inputs
 from groupfit.features import Feature
+from groupfit.heldout.reference_choice import SIGNAL_TO_NOISE, ambient_signal_to_noise
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
 from groupfit.reference import is_column_reference
@@ -52,6 +53,24 @@ def droppable_reference(model: ModelFile, runs: Sequence[Run]) -> str | None:
     if not is_column_reference(reference):
         return None
     return reference if all(reference in run.frame.columns for run in runs) else None
+
+
+def steady_reference(reference: str, runs: Sequence[Run]) -> str | None:
+    """Why ``runs`` cannot tell rises over ``reference`` from absolute readings: its reading stays within its
+    noise (the test of :func:`groupfit.heldout.reference_choice.ambient_signal_to_noise`); None when it moves.
+
+    Rises and absolute readings then differ by a constant and the reference's noise: a held-out gain of
+    absolute readings is that noise taken out, and the model on them keeps this day's air level in its
+    intercept, off by the whole change on a day at another level.
+    """
+    spread, ratio = ambient_signal_to_noise([run.frame[reference].to_numpy(dtype=float) for run in runs])
+    if ratio > SIGNAL_TO_NOISE:
+        return None
+    return (
+        f"`{reference}` stays within its noise (sd {spread:.2g} °C, {ratio:.2g} × its sample-to-sample scatter): "
+        "the run cannot tell rises over it from absolute readings, and a model on absolute readings would be off "
+        "by the whole change on a day at another air level"
+    )
 
 
 def absolute_model(model: ModelFile, runs: Sequence[Run]) -> tuple[ModelFile, list[np.ndarray]]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from groupfit.columns import is_ambient_name
 from groupfit.diagnose.notes import COLD_START, OVERFIT
+from groupfit.diagnose.policy import REFERENCE_STEADY
 
 
 def column_words(column: str, ambient: tuple[str, ...] = ()) -> str:
@@ -117,6 +118,12 @@ def ridge_lines(result) -> list[str]:
 
 def reference_lines(result) -> list[str]:
     reference = result.reference
+    if reference is not None and reference.rule_id == REFERENCE_STEADY:
+        rms = reference.held_out_rms_um
+        return [
+            f"reference kept: absolute readings predict the held-out conditions with RMS "
+            f"{change_words(rms['given'], rms['absolute'])}, but {reference.reason}"
+        ]
     if reference is None or not reference.dropped:
         return []
     branch = reference.branch

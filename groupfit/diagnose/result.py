@@ -135,6 +135,8 @@ class ReferenceCheck:
     """Why the reference was kept; None when it was dropped."""
     branch: BranchOutcome | None = None
     """The diagnosis from absolute readings, when the reference survived the diagnosis on rises."""
+    rule_id: str | None = None
+    """The rule that kept the reference (:mod:`groupfit.diagnose.policy`); None when it was dropped."""
 
     def to_dict(self) -> dict[str, object]:
         out = {
@@ -147,6 +149,7 @@ class ReferenceCheck:
             "score": self.score,
             "as_one_group": self.as_one_group,
             "reason": self.reason,
+            "rule_id": self.rule_id,
         }
         return out if self.branch is None else {**out, "branch": self.branch.to_dict()}
 
