@@ -260,7 +260,7 @@ def compare_models(
     path, grouped = grouped_path(
         X,
         y,
-        0 if notes else settings.pmax,
+        path_pmax(modelling, settings.pmax),
         n=settings.n,
         c=settings.c,
         objective=settings.objective,
@@ -376,6 +376,11 @@ def compare_models(
         fit_penalty=penalised_expectation(measured, fit_intercept=settings.fit_intercept) if fit_choice == 0 else None,
         notes=notes,
     )
+
+
+def path_pmax(modelling: Run, pmax: int) -> int:
+    """The largest p compared: ``pmax``, or 0 for an error measured on some rows only (:func:`sparse_error_notes`)."""
+    return pmax if np.isfinite(modelling.error).all() else 0
 
 
 def sparse_error_notes(modelling: Run, measured: Run) -> list[str]:

@@ -6,10 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from groupfit.commands import common
-from groupfit.comparison import ComparisonSettings, compare_models
+from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
@@ -132,7 +130,7 @@ def run_compare(args: argparse.Namespace) -> int:
         )
     check_block(args, modelling.n_samples)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
-    pmax = settings.pmax if np.isfinite(modelling.error).all() else 0  # a sparse error: global models only
+    pmax = path_pmax(modelling, settings.pmax)
     over = common.over_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
     if over is not None:  # the GA's models are compared, the path not certified
         settings.certify_path = False
