@@ -331,7 +331,7 @@ def compare_models(
         )
         for rule in ("bic", "target")
     }
-    fit_pmax = 0 if notes else settings.fit_pmax
+    fit_pmax = path_pmax(modelling, settings.fit_pmax)
     candidates = range(max(pmax, fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
     expectation = expect_next_run(
         [measured], candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
@@ -379,7 +379,8 @@ def compare_models(
 
 
 def path_pmax(modelling: Run, pmax: int) -> int:
-    """The largest p compared: ``pmax``, or 0 for an error measured on some rows only (:func:`sparse_error_notes`)."""
+    """The largest p compared or chosen: ``pmax``, or 0 for an error measured on some rows only
+    (:func:`sparse_error_notes`)."""
     return pmax if np.isfinite(modelling.error).all() else 0
 
 

@@ -37,6 +37,12 @@ def one_standard_error_choice(
     return int(np.flatnonzero(mean <= limit)[0])
 
 
+def next_run_choice(mean: Sequence[float], standard_error: Sequence[float]) -> int:
+    """Index of the candidate ``fit`` keeps: the simplest within one standard error or :data:`RMS_TOLERANCE` of
+    the best (:func:`one_standard_error_choice`)."""
+    return one_standard_error_choice(mean, standard_error, rms_tolerance=RMS_TOLERANCE)
+
+
 def pooled_error(sse: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each candidate's pooled mean squared error over the folds and its standard error.
 
@@ -54,4 +60,4 @@ def pooled_error(sse: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.nd
     return pooled, np.sqrt(spread / (len(counts) - 1))
 
 
-__all__ = ["RMS_TOLERANCE", "one_standard_error_choice", "pooled_error"]
+__all__ = ["RMS_TOLERANCE", "next_run_choice", "one_standard_error_choice", "pooled_error"]

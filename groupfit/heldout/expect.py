@@ -13,7 +13,7 @@ import numpy as np
 
 from groupfit.data import Run
 from groupfit.heldout import calibration
-from groupfit.heldout.choice import RMS_TOLERANCE, one_standard_error_choice
+from groupfit.heldout.choice import RMS_TOLERANCE, next_run_choice
 from groupfit.heldout.nextrun import (
     LEAVE_ONE_RUN_OUT,
     MIN_SEGMENTS,
@@ -57,9 +57,9 @@ class NextRunExpectation:
         return self.expected(self.candidates.index(candidate))
 
     def choice_among(self, count: int):
-        """The candidate the one-standard-error rule chooses among the first ``count`` candidates."""
+        """The candidate the rule of :data:`CHOICE_RULE` chooses among the first ``count`` candidates."""
         mean, error = self.scores.pooled()
-        return self.candidates[one_standard_error_choice(mean[:count], error[:count], rms_tolerance=RMS_TOLERANCE)]
+        return self.candidates[next_run_choice(mean[:count], error[:count])]
 
     def method(self) -> str:
         if self.scores.kind == LEAVE_ONE_RUN_OUT:
@@ -161,7 +161,7 @@ def expect_next_run(
         scores = forward_chaining(
             runs[0], list(p_values), n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
         )
-    chosen = one_standard_error_choice(*scores.pooled(), rms_tolerance=RMS_TOLERANCE)
+    chosen = next_run_choice(*scores.pooled())
     return NextRunExpectation(scores, chosen, trust_notes(scores))
 
 
