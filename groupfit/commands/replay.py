@@ -140,11 +140,14 @@ def run_replay(args: argparse.Namespace) -> int:
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     data["continues"] = [str(path) for path in continued]
     if probes is not None:
-        without = residuals(run, unchecked)
+        without = residuals(run, unchecked, rule.tables)
         rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     data.update(expectation_check(model, data, args.data))
-    result = ReplayResult({**data, **range_check(model, run)})
+    span = range_check(model, run)
+    clamp = clamp_check(rule.tables, replay)
+    notes = span.get("notes", []) + clamp.pop("notes")
+    result = ReplayResult({**data, **span, **clamp, **({"notes": notes} if notes else {})})
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"
@@ -210,6 +213,24 @@ def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 
 
+def clamp_check(tables: RuleTables, replay: Replay) -> dict[str, Any]:
+    """How many samples the compensation's clamp held short of the prediction, and a note when any did.
+
+    The residual counts what the clamp left (:func:`residuals`): a next run
+    beyond the modelling run's error can reach the clamp, which the rule sets
+    from the modelling run's predictions.
+    """
+    target = -replay.prediction_um
+    served = (replay.fault & FAULT_SENSOR) == 0
+    clamped = int(np.sum(served & ((target > tables.comp_max_um) | (target < tables.comp_min_um))))
+    note = (
+        f"the compensation was held at its clamp [{tables.comp_min_um:g}, {tables.comp_max_um:g}] µm on {clamped} "
+        "sample(s), where the prediction went beyond it; the residual counts the error the clamp left. If the "
+        "machine allows a larger correction, widen switching.comp_min_um / comp_max_um in the model file"
+    )
+    return {"clamped_samples": clamped, "notes": [note] if clamped else []}
+
+
 def expectation_check(model: ModelFile, data: dict[str, Any], path) -> dict[str, Any]:
     """This run's RMS without checks against what the model file expected of a next run (``training``).
 
@@ -249,11 +270,17 @@ def expectation_line(check: dict[str, Any]) -> str:
     )
 
 
-def residuals(run, replay: Replay) -> np.ndarray | None:
-    """Measured minus predicted error; NaN where the error is missing or the rule was in sensor fault."""
+def residuals(run, replay: Replay, tables: RuleTables) -> np.ndarray | None:
+    """The error the compensation leaves: measured error + the target ``−ŷ`` within the rule's clamp; NaN where
+    the error is missing or the rule was in sensor fault.
+
+    The clamp bounds what the machine can correct, so a prediction beyond it
+    counts only up to it. The rate limit does not count: it shapes how the
+    output reaches its target (from 0 at power-on), not what the model predicts.
+    """
     if run.error is None:
         return None
-    residual = run.error - replay.prediction_um
+    residual = run.error + np.clip(-replay.prediction_um, tables.comp_min_um, tables.comp_max_um)
     residual[(replay.fault & FAULT_SENSOR) != 0] = np.nan
     residual[~np.isfinite(residual)] = np.nan
     return residual
@@ -297,7 +324,7 @@ def replay_result(
     samples replayed before the run (``--continues``); the rule's sample count
     at the run's sample ``i`` is ``history_samples + i``.
     """
-    residual = residuals(run, replay)
+    residual = residuals(run, replay, tables)
     switch_names = {0: None, 1: "criterion", 2: "forced"}
     samples = []
     for k in range(run.n_samples):
