@@ -109,6 +109,7 @@ def pair_result(name, source, model_path: Path, following: Path, intervals_s) ->
         "recalibration": model.recalibration.description if model.recalibration else "none",
         "continued": bool(none["continues"]),
         "rms_none_um": none["rms_um"],
+        "clamped": none.get("clamped_samples"),
         "rms_um": checked,
     }
 

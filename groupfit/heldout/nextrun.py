@@ -38,6 +38,7 @@ from groupfit.heldout.folds import make_folds
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.runtime import replay_groups
+from groupfit.runtime.rule import compensation_clamp
 from groupfit.search.exact import solve_exact
 
 MAX_SAMPLES = 600
@@ -157,12 +158,15 @@ def feasible_pmax(n_samples: int, *, n: int, c: float, n_coef: int, pmax: int) -
 
 
 def rule_prediction(estimator: GroupedRegressor, fitted_on: Run, temps: np.ndarray) -> np.ndarray:
-    """The prediction a controller makes over ``temps`` from sample 1 on: the group chosen by the model's rule,
-    with its bumpless transfer after a switch."""
+    """What a controller compensates over ``temps`` from sample 1 on: the group chosen by the model's rule, with
+    its bumpless transfer after a switch, within the clamp the rule sets from ``fitted_on`` (as ``replay``
+    scores it)."""
     if estimator.p == 0 and not estimator.breaks_:
-        return estimator.intercept_[0] + temps @ estimator.coef_[0]
+        clamp = compensation_clamp(estimator.intercept_[0] + fitted_on.temps @ estimator.coef_[0])
+        return np.clip(estimator.intercept_[0] + temps @ estimator.coef_[0], -clamp, clamp)
     model = estimator.to_model_file(fitted_on)
-    return model.predict(temps, replay_groups(model, temps), transfer=True)  # with the bumpless transfer
+    prediction = model.predict(temps, replay_groups(model, temps), transfer=True)  # with the bumpless transfer
+    return -np.clip(-prediction, model.switching.comp_min_um, model.switching.comp_max_um)
 
 
 def forward_chaining(

@@ -182,7 +182,7 @@ def rule_parameters(
         high = np.ceil(ranged.max(axis=0) + settings.range_margin_c)
         group = serving_group_index(model.breaks, len(modelling_readings), int(model.n))
         prediction = model.predict(modelling_readings, group)
-        clamp = max(settings.clamp_floor_um, math.ceil(settings.clamp_factor * float(np.max(np.abs(prediction)))))
+        clamp = compensation_clamp(prediction, settings)
         same_group = group[1:] == group[:-1]
         steps = np.abs(np.diff(prediction))[same_group]
         largest_step = float(steps.max()) if steps.size else 0.0
@@ -210,6 +210,11 @@ def rule_parameters(
         "period_tolerance": PERIOD_TOLERANCE,
         "blend_samples": int(model.n),
     }
+
+
+def compensation_clamp(prediction, settings: RuleSettings = RuleSettings()) -> float:
+    """The clamp (µm) of the compensation, from the modelling run's predictions (:attr:`RuleSettings.clamp_factor`)."""
+    return max(settings.clamp_floor_um, math.ceil(settings.clamp_factor * float(np.max(np.abs(prediction)))))
 
 
 def source_valid_range(values) -> tuple[float, float] | None:
