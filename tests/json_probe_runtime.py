@@ -36,10 +36,10 @@ class ProbeFilter:
             P[i][i] = P[i][i] + self.spec["q"][i]
         self.clamp()
 
-    def correct(self, prediction: float, held: bool) -> float:
-        self.model, self.usable = prediction, not held
+    def correct(self, model: float, held: bool) -> float:
+        self.model, self.usable = model, not held
         rate = self.spec["rate_um"]
-        target = self.x[0] + self.x[2] * prediction
+        target = self.x[0] + self.x[2] * model
         if self.spec["significance2"] > 0 and not self.significant:
             target = 0.0
         delta = max(min(target - self.applied, rate), -rate)

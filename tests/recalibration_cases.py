@@ -75,7 +75,23 @@ def probe_cases() -> dict[str, tuple[dict, list[np.ndarray], list[np.ndarray]]]:
     wide = with_section(synthetic, {**QUIET, "initial_offset_sigma_um": 5.0, "confirm_after": 2})
     stepped = probe_schedule(run.error + np.where(np.arange(run.n_samples) < run.n_samples // 2, 0.0, 12.0), 10)
     cases["synthetic p=3 a real step"] = (wide, [np.asarray(run.temps, dtype=float)], [stepped])
+    cases["synthetic p=3 beyond the clamp"] = (clamped_to_half(with_section(synthetic, KALMAN), run), *wide_runs(run))
     return cases
+
+
+def clamped_to_half(model: dict, run) -> dict:
+    """The model with its compensation clamped to half its largest prediction over ``run``."""
+    from groupfit.runtime import SwitchingRule
+
+    plain = SwitchingRule(model).replay(run.temps)
+    limit = float(np.ceil(0.5 * np.max(np.abs(plain.prediction_um))))
+    return {**model, "switching": {**model["switching"], "comp_min_um": -limit, "comp_max_um": limit}}
+
+
+def wide_runs(run) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The run, with checks every 5 samples, and with its error 3 µm higher checked every sample."""
+    temps = np.asarray(run.temps, dtype=float)
+    return [temps, temps], [probe_schedule(run.error, 5, seed=3), probe_schedule(run.error + 3.0, 1, seed=4)]
 
 
 QUIET = {

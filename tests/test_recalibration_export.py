@@ -33,6 +33,16 @@ def test_the_cases_exercise_every_outcome_of_a_check():
     assert all(count > 0 for count in seen.values()), seen
 
 
+def test_the_clamp_case_carries_the_output_beyond_the_models_clamp_and_no_further():
+    model, streams, probes = CASES["synthetic p=3 beyond the clamp"]
+    limit = model["switching"]["comp_max_um"]
+    bound = limit + model["recalibration"]["offset_max_um"]
+    for temps, checks in zip(streams, probes):
+        output = np.abs(python_replay(model, temps, checks)[0].compensation_um)
+        assert limit < output.max() <= bound
+        assert np.abs(SwitchingRule(model).replay(temps).compensation_um).max() <= limit  # without checks
+
+
 def test_the_kalman_cases_leave_corrections_both_applied_and_held_back_as_not_significant():
     states = set()
     for label, (model, streams, probes) in CASES.items():
@@ -97,14 +107,15 @@ def test_the_sheet_names_the_setting_datum_of_a_probe_cycle(tmp_path):
 @pytest.mark.slow
 @pytest.mark.toolchain
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
-def test_the_structured_text_block_takes_checks_as_the_python_rule_does(real):
+@pytest.mark.parametrize("label, samples", [("lowpass p=0 kalman", 160), ("synthetic p=3 beyond the clamp", None)])
+def test_the_structured_text_block_takes_checks_as_the_python_rule_does(real, label, samples):
     blocks = pytest.importorskip("support.structured_text")
-    model, streams, probes = CASES["lowpass p=0 kalman"]
+    model, streams, probes = CASES[label]
     block = blocks.FunctionBlock(render(model, "st", real=real)["FB_GroupfitComp.st"])
     cast = blocks.FLOATS[real]
     for temps, checks in list(zip(streams, probes))[:2]:
-        temps, checks = temps[:160], checks[:160]
-        predictions, codes = [], []
+        temps, checks = temps[:samples], checks[:samples]
+        predictions, outputs, codes = [], [], []
         for k, (row, check) in enumerate(zip(temps, checks)):
             with np.errstate(over="ignore", invalid="ignore"):
                 block.call(
@@ -115,8 +126,10 @@ def test_the_structured_text_block_takes_checks_as_the_python_rule_does(real):
                     ProbeErrorUm=0.0 if np.isnan(check) else float(check),
                 )
             predictions.append(float(block.vars["ErrorUm"]))
+            outputs.append(float(block.vars["CompUm"]))
             if not np.isnan(check):
                 codes.append(int(block.vars["ProbeResult"]))
         replay, expected = python_replay(model, temps, checks, "single" if real == "REAL" else "double")
         assert np.array_equal(codes, expected)
         assert np.array(predictions).tobytes() == replay.prediction_um.tobytes()
+        assert np.array(outputs).tobytes() == replay.compensation_um.tobytes()

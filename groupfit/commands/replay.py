@@ -140,7 +140,7 @@ def run_replay(args: argparse.Namespace) -> int:
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     data["continues"] = [str(path) for path in continued]
     if probes is not None:
-        without = residuals(run, unchecked, rule.tables)
+        without = residuals(run, unchecked)
         rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     data.update(expectation_check(model, data, args.data))
@@ -214,18 +214,18 @@ def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
 
 
 def clamp_check(tables: RuleTables, replay: Replay) -> dict[str, Any]:
-    """How many samples the compensation's clamp held short of the prediction, and a note when any did.
+    """On how many samples a clamp held the compensation short of the model's prediction, and a note when any did.
 
     The residual counts what the clamp left (:func:`residuals`): a next run
     beyond the modelling run's error can reach the clamp, which the rule sets
-    from the modelling run's predictions.
+    from the modelling run's predictions. Probe checks may carry the output
+    beyond it, by up to the recalibration's offset bound.
     """
-    target = -replay.prediction_um
-    served = (replay.fault & FAULT_SENSOR) == 0
-    clamped = int(np.sum(served & ((target > tables.comp_max_um) | (target < tables.comp_min_um))))
+    clamped = int(np.sum(replay.clamped))
     note = (
-        f"the compensation was held at its clamp [{tables.comp_min_um:g}, {tables.comp_max_um:g}] µm on {clamped} "
-        "sample(s), where the prediction went beyond it; the residual counts the error the clamp left. If the "
+        f"the model's prediction went beyond the compensation's clamp [{tables.comp_min_um:g}, "
+        f"{tables.comp_max_um:g}] µm on {clamped} sample(s); the residual counts the error the clamp left (probe "
+        f"checks may carry the output on to [{tables.output_min_um:g}, {tables.output_max_um:g}] µm). If the "
         "machine allows a larger correction, widen switching.comp_min_um / comp_max_um in the model file"
     )
     return {"clamped_samples": clamped, "notes": [note] if clamped else []}
@@ -270,17 +270,17 @@ def expectation_line(check: dict[str, Any]) -> str:
     )
 
 
-def residuals(run, replay: Replay, tables: RuleTables) -> np.ndarray | None:
-    """The error the compensation leaves: measured error + the target ``−ŷ`` within the rule's clamp; NaN where
-    the error is missing or the rule was in sensor fault.
+def residuals(run, replay: Replay) -> np.ndarray | None:
+    """The error the compensation leaves: measured error + the compensation's target (``−ŷ`` and the probe
+    correction, within the rule's clamps); NaN where the error is missing or the rule was in sensor fault.
 
-    The clamp bounds what the machine can correct, so a prediction beyond it
-    counts only up to it. The rate limit does not count: it shapes how the
-    output reaches its target (from 0 at power-on), not what the model predicts.
+    The clamps bound what the machine can correct, so a prediction beyond
+    them counts only up to them. The rate limit does not count: it shapes how
+    the output reaches its target (from 0 at power-on), not what the model predicts.
     """
     if run.error is None:
         return None
-    residual = run.error + np.clip(-replay.prediction_um, tables.comp_min_um, tables.comp_max_um)
+    residual = run.error + replay.target_um
     residual[(replay.fault & FAULT_SENSOR) != 0] = np.nan
     residual[~np.isfinite(residual)] = np.nan
     return residual
@@ -324,7 +324,7 @@ def replay_result(
     samples replayed before the run (``--continues``); the rule's sample count
     at the run's sample ``i`` is ``history_samples + i``.
     """
-    residual = residuals(run, replay, tables)
+    residual = residuals(run, replay)
     switch_names = {0: None, 1: "criterion", 2: "forced"}
     samples = []
     for k in range(run.n_samples):

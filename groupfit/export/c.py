@@ -67,7 +67,8 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
  * than GF_HOLD_SAMPLES samples in a row, or was never valid since gf_init().
  * It writes the predicted thermal error (um) to *error_um (0 under a sensor
  * fault). The value to hand to the controller is s->comp_um (um):
- * -prediction clamped to [GF_COMP_MIN_UM, GF_COMP_MAX_UM] and moved by at
+ * -prediction clamped to [GF_COMP_MIN_UM, GF_COMP_MAX_UM] (a probe check's
+ * correction may carry it on to [GF_OUT_MIN_UM, GF_OUT_MAX_UM]) and moved by at
  * most GF_RATE_LIMIT_UM per sample; under a sensor fault it ramps to 0 at
  * that rate.
  * s->fault is a bit mask: GF_FAULT_HELD (a last good value stood in for an
@@ -101,11 +102,15 @@ $transfer_macro$delay_macros$reference_macros$position_macros
 typedef float gf_real;
 #define GF_COMP_MIN_UM $comp_min_f
 #define GF_COMP_MAX_UM $comp_max_f
+#define GF_OUT_MIN_UM $out_min_f
+#define GF_OUT_MAX_UM $out_max_f
 #define GF_RATE_LIMIT_UM $rate_f
 #else
 typedef double gf_real;
 #define GF_COMP_MIN_UM $comp_min_d
 #define GF_COMP_MAX_UM $comp_max_d
+#define GF_OUT_MIN_UM $out_min_d
+#define GF_OUT_MAX_UM $out_max_d
 #define GF_RATE_LIMIT_UM $rate_d
 #endif
 
@@ -241,7 +246,7 @@ $${probe_propagate}    if (faulted) {
 $${probe_invalidate}    } else {
 $prediction
         target = -prediction;
-$dead_band$${probe_correct}    }
+$dead_band$model_clamp$${probe_correct}    }
 $transfer_end$bounded_output    s->error_um = prediction;
     s->fault = (held ? GF_FAULT_HELD : 0) + (faulted ? GF_FAULT_SENSOR : 0)$position_fault;
     if (error_um) {
@@ -294,11 +299,12 @@ def render_c(tables: RuleTables) -> dict[str, str]:
     )
     has_delay = any(d.transform == "delay" for d in tables.derived)
     has_power = any(d.has_power for d in tables.derived)
-    bounded_output = clamp("c", "target", "GF_COMP_MIN_UM", "GF_COMP_MAX_UM", " " * 4) + rate_limited_step(
+    bounded_output = clamp("c", "target", "GF_OUT_MIN_UM", "GF_OUT_MAX_UM", " " * 4) + rate_limited_step(
         "c", "s->comp_um", "target", "delta", "GF_RATE_LIMIT_UM", " " * 4
     )
     source = SOURCE.substitute(
         bounded_output=bounded_output,
+        model_clamp=clamp("c", "target", "GF_COMP_MIN_UM", "GF_COMP_MAX_UM", " " * 8),
         includes="#include <math.h> /* fabs, pow: the power stage of derived inputs */\n" if has_power else "",
         coefficients=coefficient_rows,
         derived_constants=derived_constants(tables),

@@ -17,7 +17,7 @@ from groupfit.runtime.recalibration import PROBE_LIMIT_UM
 FIELDS = """    gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
     gf_real rc_P[3][3];         /* their covariance */
     gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
-    gf_real rc_model_um;        /* the model's own prediction at the last sample (um) */
+    gf_real rc_model_um;        /* what the model commanded at the last sample (um, within its clamp) */
     int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
@@ -239,7 +239,7 @@ def probe_source(tables: RuleTables) -> dict[str, str]:
         "probe_correct": (
             "        /* the correction from probe checks (0 until the first is applied) */\n"
             "        {\n"
-            "            gf_real correction = gf_rc_correct(s, prediction, !held);\n"
+            "            gf_real correction = gf_rc_correct(s, -target, !held); /* what the model commands */\n"
             "            prediction = prediction + correction;\n"
             "            target = target - correction;\n"
             "        }\n"

@@ -22,10 +22,13 @@ PROBE_STEPS = (
     "fault): g = that prediction (the transfer's share included, the probe correction not) - the new group's "
     "prediction at this sample (position terms included, before any share); gap2 = gap2 + g * g",
     "under a sensor fault: usable = false (prediction and target 0 as before; applied unchanged)",
-    "otherwise, after target = -prediction (and the dead band): model = prediction; usable = not held; "
-    "t = x[0] + x[2] * prediction, then t = 0 if significance2 > 0 and not significant; "
+    "otherwise, after target = -prediction (and the dead band): target = min(max(target, comp_min_um), "
+    "comp_max_um) (the model's clamp, upper bound first); model = -target; usable = not held; "
+    "t = x[0] + x[2] * model, then t = 0 if significance2 > 0 and not significant; "
     "delta = t - applied limited to [-rate_um, rate_um]; applied = applied + delta; "
-    "prediction = prediction + applied; target = target - applied; then the clamp and rate limit as before",
+    "prediction = prediction + applied; target = target - applied; then target = min(max(target, "
+    "output_min_um), output_max_um) (the checks may carry the output beyond the model's clamp by x_max[0]) and "
+    "the rate limit as before",
     "a probe check z (the measured thermal error, um) after a sample: ignored if not usable or not "
     "(-probe_limit_um <= z <= probe_limit_um); nu = (z - model) - (x[0] + x[2] * model); for i in 0..2: "
     "Ph[i] = P[i][0] + P[i][2] * model, hP[i] = P[0][i] + P[2][i] * model; S = hP[0] + hP[2] * model + r; "
@@ -59,6 +62,8 @@ def with_recalibration(table: dict, tables: RuleTables) -> dict:
         "confirm_after": t.confirm_after,
         "x_max": list(t.x_max),
         "rate_um": t.rate_um,
+        "output_min_um": tables.output_min_um,
+        "output_max_um": tables.output_max_um,
         "probe_limit_um": PROBE_LIMIT_UM,
         "codes": {"applied": PROBE_APPLIED, "rejected": PROBE_REJECTED, "ignored": PROBE_IGNORED},
         "steps": list(PROBE_STEPS),

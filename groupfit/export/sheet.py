@@ -132,7 +132,8 @@ def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -
     """The sheet as a JSON-ready object."""
     period = tables.sampling_period_s
     clamp_counts = [integer.counts(tables.comp_min_um), integer.counts(tables.comp_max_um)]
-    saturates = max(abs(tables.comp_min_um), abs(tables.comp_max_um)) > integer.range_um
+    output_counts = [integer.counts(tables.output_min_um), integer.counts(tables.output_max_um)]
+    saturates = max(abs(tables.output_min_um), abs(tables.output_max_um)) > integer.range_um
     return {
         "format": "groupfit-controller-sheet/1",
         "readings": reading_list(tables),
@@ -145,13 +146,16 @@ def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -
         "output": {
             "name": "compensation",
             "unit": "um",
-            "definition": "C = -(predicted thermal error), clamped to [comp_min_um, comp_max_um], "
-            "then changed by at most rate_limit_um per sample",
+            "definition": "C = -(predicted thermal error), clamped to [comp_min_um, comp_max_um] (a probe "
+            "check's correction may carry it on to [output_min_um, output_max_um]), then changed by at most "
+            "rate_limit_um per sample",
             "sign": "the thermal error is the displacement the model was fitted on (positive along the "
             "axis as measured); C moves the axis the opposite way. If your error was measured with the "
             "opposite sign, write -C. Check the sign on the machine with a small test value first.",
             "comp_min_um": tables.comp_min_um,
             "comp_max_um": tables.comp_max_um,
+            "output_min_um": tables.output_min_um,
+            "output_max_um": tables.output_max_um,
             "rate_limit_um_per_sample": tables.rate_limit_um,
             "rate_limit_um_per_s": tables.rate_limit_um / period,
             "sampling_period_s": period,
@@ -178,6 +182,7 @@ def controller_sheet(tables: RuleTables, integer: IntegerForm = IntegerForm()) -
             "range_um": integer.range_um,
             "counts": "round(C / resolution_um), halves away from zero, saturated at +-limit_counts",
             "clamp_counts": clamp_counts,
+            "output_counts": output_counts,
             "rate_limit_counts_per_sample": integer.counts(tables.rate_limit_um),
             "clamp_exceeds_register": saturates,
         },
@@ -214,7 +219,8 @@ def sheet_text(sheet: dict) -> str:
         f"  Invalid reading: {sheet['on_invalid_reading']}.",
         "",
         "Output of the run-time rule",
-        f"  C = -(predicted thermal error) in um, clamped to [{out['comp_min_um']:g}, {out['comp_max_um']:g}] um,",
+        f"  C = -(predicted thermal error) in um, clamped to [{out['comp_min_um']:g}, {out['comp_max_um']:g}] um",
+        f"  (probe checks may carry it on to [{out['output_min_um']:g}, {out['output_max_um']:g}] um),",
         f"  changed by at most {out['rate_limit_um_per_sample']:g} um per sample "
         f"({out['rate_limit_um_per_s']:.4g} um/s at {out['sampling_period_s']:g} s per sample).",
         f"  Sign: {out['sign']}",
@@ -234,7 +240,10 @@ def sheet_text(sheet: dict) -> str:
         f"  rate limit: {integer['rate_limit_counts_per_sample']} counts per sample",
     ]
     if integer["clamp_exceeds_register"]:
-        lines.append("  WARNING: the clamp range exceeds the register; values beyond it saturate.")
+        lines.append(
+            "  WARNING: the output's range (the clamp, widened by probe checks) exceeds the register; values "
+            "beyond it saturate."
+        )
     return "\n".join(lines + probe_lines(sheet)) + "\n"
 
 

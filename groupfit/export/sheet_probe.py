@@ -21,7 +21,8 @@ def with_probe(sheet: dict, tables: RuleTables) -> dict:
             "result": "1 applied, 0 rejected by the innovation gate (a gross reading: flagged, never applied), "
             "-1 ignored (sensor fault, held readings, or not a reading)",
             "setting_datum": "SD43900 TEMP_COMP_ABS_VALUE (the position-independent offset K0): the correction "
-            "enters the prediction, so C and with it SD43900 move, within the clamp and the rate limit "
+            "enters the prediction, so C and with it SD43900 move, within the rate limit and the clamp widened by "
+            "the correction's bound "
             f"({t.rate_um:g} um per sample for the correction itself, bounded to +-{t.x_max[0]:g} um); "
             "SD43910 and SD43920 are not touched by a probe cycle",
         },

@@ -68,7 +68,8 @@ $input_lines  Inputs:
              since Reset); $ret_period while SamplePeriodS differs from $period_text s.
     ErrorUm  predicted thermal error, um (0 under a fault).
     CompUm   value for the controller, um: -ErrorUm clamped to
-             [$comp_min_text, $comp_max_text] um and moved by at most $rate_text um per
+             [$comp_min_text, $comp_max_text] um (probe checks may carry it on to
+             [$out_min_text, $out_max_text] um) and moved by at most $rate_text um per
              call; under a fault it ramps to 0 at that rate. SINUMERIK
              SD43900 TEMP_COMP_ABS_VALUE takes CompUm / 1000 (mm).
     Fault    sum of: $fault_held held reading (last good value used, output
@@ -129,6 +130,9 @@ $coefficients
     TEMP_MAX : ARRAY[1..$n_temps] OF $real := [$temp_max];
     COMP_MIN : $real := $comp_min;
     COMP_MAX : $real := $comp_max;
+    (* Probe checks may carry the output beyond COMP_MIN..COMP_MAX, up to OUT_MIN..OUT_MAX. *)
+    OUT_MIN : $real := $out_min;
+    OUT_MAX : $real := $out_max;
     RATE_LIMIT : $real := $rate;
 ${transfer_constants}${position_constants}${probe_constants}END_VAR
 
@@ -198,7 +202,7 @@ ${probe_propagate}
 ${probe_invalidate}    ELSE
 ${prediction}
         target := -prediction;
-${dead_band}${probe_correct}    END_IF;
+${dead_band}${model_clamp}${probe_correct}    END_IF;
 ${transfer_end}    Fault := 0;
     IF held THEN
         Fault := Fault + $fault_held;
@@ -282,7 +286,8 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         **{name: literal(value) for name, value in tables.output_bounds.items()},
         **{f"{name}_text": f"{value:g}" for name, value in tables.output_bounds.items()},
         bad_init=", ".join([str(tables.hold_samples + 1)] * tables.n_temps),
-        bounded_output=clamp("st", "target", "COMP_MIN", "COMP_MAX")
+        model_clamp=clamp("st", "target", "COMP_MIN", "COMP_MAX", " " * 8),
+        bounded_output=clamp("st", "target", "OUT_MIN", "OUT_MAX")
         + rate_limited_step("st", "comp", "target", "delta", "RATE_LIMIT"),
         **reference_pieces(tables, real),
         **transfer_pieces(tables, real, literal, dot_product, position_pieces(tables, real, literal)),

@@ -103,9 +103,9 @@ $clamp    END_FOR;
 
 CORRECT = """        (* the correction from probe checks, towards offset + gain * prediction (0 while it does not
            stand out of its noise), rate-limited *)
-        rcModel := prediction;
+        rcModel := -target; (* what the model commands, within its clamp *)
         rcUsable := NOT held;
-        rcTarget := rcX[0] + rcX[2] * prediction;
+        rcTarget := rcX[0] + rcX[2] * rcModel;
         IF RC_SIG2 > RC_ZERO AND NOT rcSignificant THEN
             rcTarget := RC_ZERO;
         END_IF;

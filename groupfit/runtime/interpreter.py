@@ -53,6 +53,10 @@ class StepResult:
     """Bit mask: :data:`FAULT_HELD` (1), :data:`FAULT_SENSOR` (2)."""
     switched: int = SWITCH_NONE
     """0, or :data:`SWITCH_CRITERION` / :data:`SWITCH_FORCED` when the group advanced at this sample."""
+    target_um: float = 0.0
+    """What the compensation moves towards: after the clamps, before the rate limit."""
+    clamped: bool = False
+    """Whether a clamp held the target short of −prediction (the model's clamp or the output's)."""
 
     @property
     def code(self) -> int:
@@ -71,6 +75,10 @@ class Replay:
     switched: np.ndarray
     probe: np.ndarray | None = None
     """Per sample: 0 without a check, else :data:`PROBE_CODE_OFFSET` plus what the probe returned."""
+    target_um: np.ndarray | None = None
+    """Per sample: :attr:`StepResult.target_um`."""
+    clamped: np.ndarray | None = None
+    """Per sample: :attr:`StepResult.clamped`."""
 
     def probe_counts(self) -> dict[str, int]:
         """Checks applied, rejected by the gate and ignored (no valid prediction)."""
@@ -85,7 +93,11 @@ class Replay:
     def tail(self, start: int) -> "Replay":
         """The samples from 0-based ``start`` on (a run replayed with its history in front)."""
         fields = (self.group, self.prediction_um, self.compensation_um, self.fault, self.switched)
-        return Replay(*(array[start:] for array in fields), probe=None if self.probe is None else self.probe[start:])
+        extra = {
+            name: None if getattr(self, name) is None else getattr(self, name)[start:]
+            for name in ("probe", "target_um", "clamped")
+        }
+        return Replay(*(array[start:] for array in fields), **extra)
 
     def switch_samples(self) -> list[dict[str, int | bool]]:
         """Every switch: 1-based sample, groups before and after, whether it was forced."""
@@ -136,6 +148,8 @@ class SwitchingRule:
         self._margin = real(t.margin_c)
         self._comp_min = real(t.comp_min_um)
         self._comp_max = real(t.comp_max_um)
+        self._out_min = real(t.output_min_um)
+        self._out_max = real(t.output_max_um)
         self._rate = real(t.rate_limit_um)
         self._zero = real(0.0)
         self._lp_a = [real(d.a) for d in t.derived]
@@ -172,6 +186,7 @@ class SwitchingRule:
         self.k0 = self._zero
         self.slope = self._zero
         self.recal.reset()
+        self._model_clamped = False
         self._reset_reference()
 
     def step(self, readings: Sequence[float]) -> StepResult:
@@ -187,6 +202,7 @@ class SwitchingRule:
             self._derive(k)
         switched = self._switch()
         clamped = False
+        self._model_clamped = False
         self.recal.propagate()
         if faulted:
             prediction = self._zero
@@ -197,13 +213,14 @@ class SwitchingRule:
             prediction, target, clamped = self._predict(switched, held=held)
         if self.blend > 0:
             self.blend -= 1
-        if target > self._comp_max:
-            target = self._comp_max
-        if target < self._comp_min:
-            target = self._comp_min
+        wanted = target
+        target = _within(target, self._out_min, self._out_max)
         self.compensation = rate_limited(self.compensation, target, self._rate)
         fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
-        return StepResult(self.group, float(prediction), float(self.compensation), fault, switched)
+        limited = bool(target != wanted or self._model_clamped)
+        return StepResult(
+            self.group, float(prediction), float(self.compensation), fault, switched, float(target), limited
+        )
 
     def _read(self, readings: Sequence[float]) -> tuple[bool, bool]:
         """Take the valid readings, hold the last good value of an invalid one; whether a reading is held, and
@@ -261,8 +278,10 @@ class SwitchingRule:
                 self.band_target = target
             else:
                 target = self.band_target
-        correction = self.recal.correct(prediction, usable=not held)
-        return prediction + correction, target - correction, clamped
+        served = _within(target, self._comp_min, self._comp_max)  # the model alone commands no more
+        self._model_clamped = served != target
+        correction = self.recal.correct(-served, usable=not held)  # checks correct what the model commands
+        return prediction + correction, served - correction, clamped
 
     def _group_prediction(self, group: int):
         """The prediction of 1-based ``group`` from the current inputs (position terms included), and whether
@@ -433,6 +452,8 @@ class SwitchingRule:
         self.reset()
         n_samples = len(readings)
         group = np.empty(n_samples, dtype=int)
+        target = np.empty(n_samples)
+        clamped = np.zeros(n_samples, dtype=bool)
         fault = np.empty(n_samples, dtype=int)
         switched = np.empty(n_samples, dtype=int)
         prediction = np.empty(n_samples)
@@ -443,9 +464,19 @@ class SwitchingRule:
             result = self.step(row)
             group[i], fault[i], switched[i] = result.group, result.fault, result.switched
             prediction[i], compensation[i] = result.prediction_um, result.compensation_um
+            target[i], clamped[i] = result.target_um, result.clamped
             if checks is not None and not math.isnan(checks[i]):
                 probe_code[i] = PROBE_CODE_OFFSET + self.probe(checks[i])
-        return Replay(group, prediction, compensation, fault, switched, probe_code)
+        return Replay(group, prediction, compensation, fault, switched, probe_code, target, clamped)
+
+
+def _within(value, low, high):
+    """``value`` held within ``[low, high]``, the upper bound first, as every export computes it."""
+    if value > high:
+        value = high
+    if value < low:
+        value = low
+    return value
 
 
 def check_period(tables: RuleTables, period_s: float) -> None:

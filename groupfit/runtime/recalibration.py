@@ -10,11 +10,14 @@ prediction (:meth:`Recalibrator.propagate`)::
     P  = A·Fᵀ: Pi0 = Ai0 + Ai1,  Pi1 = Ai1·phi,  Pi2 = Ai2;  Pii = Pii + q_i
     clamp x_i to ±x_max_i
 
-After the model's prediction ``m`` (:meth:`Recalibrator.correct`), the target
+After the model's prediction ``ŷ`` (:meth:`Recalibrator.correct`), with
+``m`` what the model commands (``ŷ`` within the rule's clamp), the target
 correction ``x0 + x2·m`` (0 while the last applied check left it not
 significant, see below); the applied correction ``c`` moves towards it by at
-most ``rate`` per sample, and the rule predicts ``m + c`` (the compensation is
-``−(m + c)``, clamped and rate-limited as before). Under a sensor fault the
+most ``rate`` per sample, and the rule predicts ``ŷ + c``. The compensation
+is ``−(m + c)`` within the clamp widened by the offset's bound ``x_max0``
+(checks may correct what the clamp leaves; the model alone may not pass it),
+then rate-limited. Under a sensor fault the
 output is the safe one and ``c`` is left as it is.
 
 A probe check ``z`` (the measured thermal error, µm, after the sample's step;

@@ -308,9 +308,31 @@ class RuleTables:
         )
 
     @property
+    def correction_bound_um(self) -> float:
+        """How far probe checks may carry the compensation beyond the model's clamp (µm): the offset's bound."""
+        return float(self.recalibration.x_max[0]) if self.recalibration is not None else 0.0
+
+    @property
+    def output_min_um(self) -> float:
+        """The output's lower bound: the model's clamp widened by :attr:`correction_bound_um`."""
+        return self.comp_min_um - self.correction_bound_um
+
+    @property
+    def output_max_um(self) -> float:
+        """The output's upper bound: the model's clamp widened by :attr:`correction_bound_um`."""
+        return self.comp_max_um + self.correction_bound_um
+
+    @property
     def output_bounds(self) -> dict[str, float]:
-        """The compensation's bounds and its rate limit (µm, µm per sample), by the names the exports use."""
-        return {"comp_min": self.comp_min_um, "comp_max": self.comp_max_um, "rate": self.rate_limit_um}
+        """The model's clamp, the output's bounds and the rate limit (µm, µm per sample), by the names the
+        exports use."""
+        return {
+            "comp_min": self.comp_min_um,
+            "comp_max": self.comp_max_um,
+            "out_min": self.output_min_um,
+            "out_max": self.output_max_um,
+            "rate": self.rate_limit_um,
+        }
 
     @property
     def n_temps(self) -> int:

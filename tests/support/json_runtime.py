@@ -190,8 +190,9 @@ class TableRuntime:
                 self.band_target = target
             else:
                 target = self.band_target
-        if self.checks:
-            correction = self.checks.correct(prediction, held)
+        if self.checks:  # the model's clamp, then the correction of what the model commands
+            target = max(min(target, self.table["comp_max_um"]), self.table["comp_min_um"])
+            correction = self.checks.correct(-target, held)
             prediction, target = prediction + correction, target - correction
         return prediction, target, clamped
 
@@ -216,7 +217,12 @@ class TableRuntime:
         if self.blend > 0:
             self.blend -= 1
         # clamp, rate limit, output
-        target = max(min(target, table["comp_max_um"]), table["comp_min_um"])
+        low, high = (
+            (table["recalibration"]["output_min_um"], table["recalibration"]["output_max_um"])
+            if self.checks
+            else (table["comp_min_um"], table["comp_max_um"])
+        )
+        target = max(min(target, high), low)
         delta = max(min(target - self.comp, table["rate_limit_um"]), -table["rate_limit_um"])
         self.comp = self.comp + delta
         fault = held * bits["held"] + faulted * bits["sensor"]

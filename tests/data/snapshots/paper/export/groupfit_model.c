@@ -249,9 +249,15 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->previous = prediction;
         s->has_previous = 1;
         target = -prediction;
+        if (target > GF_COMP_MAX_UM) {
+            target = GF_COMP_MAX_UM;
+        }
+        if (target < GF_COMP_MIN_UM) {
+            target = GF_COMP_MIN_UM;
+        }
         /* the correction from probe checks (0 until the first is applied) */
         {
-            gf_real correction = gf_rc_correct(s, prediction, !held);
+            gf_real correction = gf_rc_correct(s, -target, !held); /* what the model commands */
             prediction = prediction + correction;
             target = target - correction;
         }
@@ -262,11 +268,11 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
     if (s->blend > 0) {
         s->blend--;
     }
-    if (target > GF_COMP_MAX_UM) {
-        target = GF_COMP_MAX_UM;
+    if (target > GF_OUT_MAX_UM) {
+        target = GF_OUT_MAX_UM;
     }
-    if (target < GF_COMP_MIN_UM) {
-        target = GF_COMP_MIN_UM;
+    if (target < GF_OUT_MIN_UM) {
+        target = GF_OUT_MIN_UM;
     }
     delta = target - s->comp_um;
     if (delta > GF_RATE_LIMIT_UM) {

@@ -24,7 +24,8 @@
  * than GF_HOLD_SAMPLES samples in a row, or was never valid since gf_init().
  * It writes the predicted thermal error (um) to *error_um (0 under a sensor
  * fault). The value to hand to the controller is s->comp_um (um):
- * -prediction clamped to [GF_COMP_MIN_UM, GF_COMP_MAX_UM] and moved by at
+ * -prediction clamped to [GF_COMP_MIN_UM, GF_COMP_MAX_UM] (a probe check's
+ * correction may carry it on to [GF_OUT_MIN_UM, GF_OUT_MAX_UM]) and moved by at
  * most GF_RATE_LIMIT_UM per sample; under a sensor fault it ramps to 0 at
  * that rate.
  * s->fault is a bit mask: GF_FAULT_HELD (a last good value stood in for an
@@ -60,11 +61,15 @@
 typedef float gf_real;
 #define GF_COMP_MIN_UM -4.800000000e+01f
 #define GF_COMP_MAX_UM 4.800000000e+01f
+#define GF_OUT_MIN_UM -9.600000000e+01f
+#define GF_OUT_MAX_UM 9.600000000e+01f
 #define GF_RATE_LIMIT_UM 1.200000048e+00f
 #else
 typedef double gf_real;
 #define GF_COMP_MIN_UM -4.80000000000000000e+01
 #define GF_COMP_MAX_UM 4.80000000000000000e+01
+#define GF_OUT_MIN_UM -9.60000000000000000e+01
+#define GF_OUT_MAX_UM 9.60000000000000000e+01
 #define GF_RATE_LIMIT_UM 1.19999999999999996e+00
 #endif
 
@@ -82,7 +87,7 @@ typedef struct {
     gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
     gf_real rc_P[3][3];         /* their covariance */
     gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
-    gf_real rc_model_um;        /* the model's own prediction at the last sample (um) */
+    gf_real rc_model_um;        /* what the model commanded at the last sample (um, within its clamp) */
     int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
