@@ -9,8 +9,9 @@ from __future__ import annotations
 
 
 class ProbeFilter:
-    def __init__(self, spec: dict):
+    def __init__(self, spec: dict, clamp: tuple[float, float]):
         self.spec = spec
+        self.clamp_low, self.clamp_high = clamp
         self.x = [0.0, 0.0, 0.0]
         self.P = [[spec["p0"][i] if i == j else 0.0 for j in range(3)] for i in range(3)]
         self.applied = self.model = 0.0
@@ -53,6 +54,17 @@ class ProbeFilter:
         return ph, hp, hp[0] + hp[2] * m + self.spec["r"]
 
     def probe(self, z: float) -> int:
+        result = self.check(z)
+        if result == self.spec["codes"]["applied"]:
+            w = abs(z)
+            w = w + w
+            if w > self.clamp_high:
+                self.clamp_high = min(w, self.spec["output_max_um"])
+            if -w < self.clamp_low:
+                self.clamp_low = max(-w, self.spec["output_min_um"])
+        return result
+
+    def check(self, z: float) -> int:
         spec, codes, m, P = self.spec, self.spec["codes"], self.model, self.P
         if not self.usable or not (-spec["probe_limit_um"] <= z <= spec["probe_limit_um"]):
             return codes["ignored"]

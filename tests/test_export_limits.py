@@ -64,7 +64,8 @@ def c_integers(header: str, source: str):
     macros = {k: int(v) for k, v in re.findall(r"#define (GF_\w+) (-?\d+)L?\b", header)}
     fields = {name: kind for kind, name in re.findall(r"^\s+(int|long) (\w+)(?:\[[^\]]*\])?;", header, flags=re.M)}
     for field, macro, offset in re.findall(r"s->(\w+)(?:\[\w+\])? = (GF_\w+)(?: \+ (\d+))?;", source):
-        yield field, fields[field], macros[macro] + int(offset or 0)
+        if field in fields:  # an integer counter (a real field, such as the clamp, is no integer)
+            yield field, fields[field], macros[macro] + int(offset or 0)
 
 
 def test_a_5_ms_model_declares_dint_counters_and_every_constant_fits(fast_model):

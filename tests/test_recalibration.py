@@ -434,3 +434,23 @@ def test_the_data_not_telling_filters_apart_the_simplest_kalman_filter_is_kept_t
     score[[gained, drifting]] = 1.0  # the hold alone in the band
     assert _most_responsive_of_the_best(candidates, score, kalman=False) == 0
     assert _most_responsive_of_the_best(candidates, score, kalman=True) != 0
+
+
+def test_an_applied_check_widens_the_models_clamp_to_twice_the_measured_error_within_the_output():
+    section = {**KALMAN, "gate_sigmas": 1e5, "significance_sigmas": 0.0}
+    table = RuleTables.from_model(ModelFile.from_dict(model_with(section))).recalibration
+    recal = Recalibrator(table, clamp=(-10.0, 10.0), output=(-30.0, 30.0))
+    expected = [(4.0, (-10.0, 10.0)), (7.0, (-14.0, 14.0)), (-9.0, (-18.0, 18.0)), (6.0, (-18.0, 18.0))]
+    expected += [(-40.0, (-30.0, 30.0))]
+    for z, bounds in expected:
+        recal.propagate()
+        recal.correct(0.0)
+        assert recal.probe(z) == PROBE_APPLIED
+        assert (recal.clamp_low, recal.clamp_high) == bounds
+    recal.propagate()
+    recal.correct(0.0)
+    recal.invalidate()
+    assert recal.probe(100.0) == PROBE_IGNORED  # a check not taken widens nothing
+    assert (recal.clamp_low, recal.clamp_high) == (-30.0, 30.0)
+    recal.reset()
+    assert (recal.clamp_low, recal.clamp_high) == (-10.0, 10.0)

@@ -41,6 +41,9 @@ def test_the_clamp_case_carries_the_output_beyond_the_models_clamp_and_no_furthe
         output = np.abs(python_replay(model, temps, checks)[0].compensation_um)
         assert limit < output.max() <= bound
         assert np.abs(SwitchingRule(model).replay(temps).compensation_um).max() <= limit  # without checks
+        rule = SwitchingRule(model)
+        rule.replay(temps, checks)
+        assert limit < rule.recal.clamp_high <= bound  # the checks widened the model's own clamp too
 
 
 def test_the_kalman_cases_leave_corrections_both_applied_and_held_back_as_not_significant():

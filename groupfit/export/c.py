@@ -304,7 +304,7 @@ def render_c(tables: RuleTables) -> dict[str, str]:
     )
     source = SOURCE.substitute(
         bounded_output=bounded_output,
-        model_clamp=clamp("c", "target", "GF_COMP_MIN_UM", "GF_COMP_MAX_UM", " " * 8),
+        model_clamp=clamp("c", "target", "s->rc_lim_min", "s->rc_lim_max", " " * 8),
         includes="#include <math.h> /* fabs, pow: the power stage of derived inputs */\n" if has_power else "",
         coefficients=coefficient_rows,
         derived_constants=derived_constants(tables),

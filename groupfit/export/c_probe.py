@@ -22,6 +22,8 @@ FIELDS = """    gf_real rc_x[3];            /* recalibration: offset (um), drift
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
     gf_real rc_gap2;            /* squared gaps of the switches since the last check (um^2): widen its gate */
+    gf_real rc_lim_min;         /* the model's clamp (um): GF_COMP_MIN_UM/GF_COMP_MAX_UM, widened by checks */
+    gf_real rc_lim_max;
 """
 
 DECLARATION = """
@@ -94,6 +96,8 @@ static void gf_rc_reset(gf_state *s)
     s->rc_rejected = 0;
     s->rc_significant = 0;
     s->rc_gap2 = 0;
+    s->rc_lim_min = GF_COMP_MIN_UM;
+    s->rc_lim_max = GF_COMP_MAX_UM;
 }
 
 static void gf_rc_clamp(gf_state *s)
@@ -140,7 +144,7 @@ $rate_limited    return s->rc_applied_um;
 """
 
 FUNCTION = """
-int gf_probe(gf_state *s, double measured_error_um)
+static int gf_rc_check(gf_state *s, double measured_error_um)
 {
     gf_real m = s->rc_model_um;
     gf_real nu, sv, gate, target, ph[3], hp[3], k[3];
@@ -188,6 +192,26 @@ int gf_probe(gf_state *s, double measured_error_um)
     (void)gf_rc_projections(s, ph, hp);
     s->rc_significant = target * target > gf_rc_sig2 * (hp[0] + hp[2] * m);
     return GF_PROBE_APPLIED;
+}
+
+int gf_probe(gf_state *s, double measured_error_um)
+{
+    int result = gf_rc_check(s, measured_error_um);
+    if (result == GF_PROBE_APPLIED) {
+        /* a measured error widens the model's clamp to twice its size, within the output's bounds */
+        gf_real w = (gf_real)measured_error_um;
+        if (w < 0) {
+            w = -w;
+        }
+        w = w + w;
+        if (w > s->rc_lim_max) {
+            s->rc_lim_max = w < GF_OUT_MAX_UM ? w : GF_OUT_MAX_UM;
+        }
+        if (-w < s->rc_lim_min) {
+            s->rc_lim_min = -w > GF_OUT_MIN_UM ? -w : GF_OUT_MIN_UM;
+        }
+    }
+    return result;
 }
 """
 

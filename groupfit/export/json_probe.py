@@ -22,8 +22,9 @@ PROBE_STEPS = (
     "fault): g = that prediction (the transfer's share included, the probe correction not) - the new group's "
     "prediction at this sample (position terms included, before any share); gap2 = gap2 + g * g",
     "under a sensor fault: usable = false (prediction and target 0 as before; applied unchanged)",
-    "otherwise, after target = -prediction (and the dead band): target = min(max(target, comp_min_um), "
-    "comp_max_um) (the model's clamp, upper bound first); model = -target; usable = not held; "
+    "otherwise, after target = -prediction (and the dead band): target = min(max(target, clamp_low), "
+    "clamp_high) (the model's clamp, upper bound first; clamp_low and clamp_high start at comp_min_um and "
+    "comp_max_um); model = -target; usable = not held; "
     "t = x[0] + x[2] * model, then t = 0 if significance2 > 0 and not significant; "
     "delta = t - applied limited to [-rate_um, rate_um]; applied = applied + delta; "
     "prediction = prediction + applied; target = target - applied; then target = min(max(target, "
@@ -39,6 +40,8 @@ PROBE_STEPS = (
     "x[i] = x[i] + K[i] * nu, P[i][j] = P[i][j] - K[i] * hP[j] for all i, j, clamp x (as in the time update), "
     "then with the new P: t = x[0] + x[2] * model, hP[i] = P[0][i] + P[2][i] * model, "
     "significant = t * t > significance2 * (hP[0] + hP[2] * model): applied",
+    "after an applied check z: w = 2 * |z| (w = |z|, then w = w + w); if w > clamp_high: clamp_high = "
+    "min(w, output_max_um); if -w < clamp_low: clamp_low = max(-w, output_min_um)",
 )
 
 

@@ -286,7 +286,7 @@ def render_st(tables: RuleTables, real: str = "LREAL", name: str = "FB_GroupfitC
         **{name: literal(value) for name, value in tables.output_bounds.items()},
         **{f"{name}_text": f"{value:g}" for name, value in tables.output_bounds.items()},
         bad_init=", ".join([str(tables.hold_samples + 1)] * tables.n_temps),
-        model_clamp=clamp("st", "target", "COMP_MIN", "COMP_MAX", " " * 8),
+        model_clamp=clamp("st", "target", "rcLimMin", "rcLimMax", " " * 8),
         bounded_output=clamp("st", "target", "OUT_MIN", "OUT_MAX")
         + rate_limited_step("st", "comp", "target", "delta", "RATE_LIMIT"),
         **reference_pieces(tables, real),

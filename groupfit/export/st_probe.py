@@ -47,6 +47,9 @@ VARS = """    rcX : ARRAY[0..2] OF $real;
     rcRejected : INT := 0;
     rcSignificant : BOOL := FALSE;
     rcTarget : $real;
+    rcLimMin : $real := $lim_min; (* the model's clamp, widened by checks *)
+    rcLimMax : $real := $lim_max;
+    rcW : $real;
     rcI : INT;
     rcJ : INT;
 """
@@ -68,6 +71,8 @@ CONSTANTS = """    (* Recalibration ($description): per-sample process variance,
 """
 
 RESET = """    rcApplied := 0.0;
+    rcLimMin := COMP_MIN;
+    rcLimMax := COMP_MAX;
     rcModel := 0.0;
     rcUsable := FALSE;
     rcRejected := 0;
@@ -164,6 +169,29 @@ $inner_projections                rcSignificant := rcTarget * rcTarget > RC_SIG2
             END_IF;
         END_IF;
     END_IF;
+    IF ProbeResult = $applied THEN
+        (* a measured error widens the model's clamp to twice its size, within the output's bounds *)
+        IF rcZ < RC_ZERO THEN
+            rcW := -rcZ;
+        ELSE
+            rcW := rcZ;
+        END_IF;
+        rcW := rcW + rcW;
+        IF rcW > rcLimMax THEN
+            IF rcW < OUT_MAX THEN
+                rcLimMax := rcW;
+            ELSE
+                rcLimMax := OUT_MAX;
+            END_IF;
+        END_IF;
+        IF -rcW < rcLimMin THEN
+            IF -rcW > OUT_MIN THEN
+                rcLimMin := -rcW;
+            ELSE
+                rcLimMin := OUT_MIN;
+            END_IF;
+        END_IF;
+    END_IF;
 END_IF;
 """
 
@@ -199,7 +227,9 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         "probe_doc": Template(DOC).substitute(codes),
         "probe_inputs": "    Probe : BOOL;\n    ProbeErrorUm : LREAL;\n",
         "probe_outputs": "    ProbeResult : INT;\n",
-        "probe_vars": Template(VARS).substitute(real=real),
+        "probe_vars": Template(VARS).substitute(
+            real=real, lim_min=literal(tables.comp_min_um), lim_max=literal(tables.comp_max_um)
+        ),
         "probe_constants": constants,
         "reset_probe": RESET,
         "probe_period_fault": "    rcUsable := FALSE;\n",

@@ -146,8 +146,6 @@ class SwitchingRule:
         self._coef = [[real(v) for v in row] for row in t.coefficients]
         self._threshold = [real(v) for v in t.thresholds_c]
         self._margin = real(t.margin_c)
-        self._comp_min = real(t.comp_min_um)
-        self._comp_max = real(t.comp_max_um)
         self._out_min = real(t.output_min_um)
         self._out_max = real(t.output_max_um)
         self._rate = real(t.rate_limit_um)
@@ -162,7 +160,12 @@ class SwitchingRule:
             self._travel_min = real(t.travel_min_mm)
             self._travel_max = real(t.travel_max_mm)
         self._band = real(t.dead_band_c)
-        self.recal = Recalibrator(t.recalibration, real)
+        self.recal = Recalibrator(
+            t.recalibration,
+            real,
+            clamp=(t.comp_min_um, t.comp_max_um),
+            output=(t.output_min_um, t.output_max_um),
+        )
         self.reset()
 
     def reset(self) -> None:
@@ -278,7 +281,7 @@ class SwitchingRule:
                 self.band_target = target
             else:
                 target = self.band_target
-        served = _within(target, self._comp_min, self._comp_max)  # the model alone commands no more
+        served = _within(target, self.recal.clamp_low, self.recal.clamp_high)  # the model alone commands no more
         self._model_clamped = served != target
         correction = self.recal.correct(-served, usable=not held)  # checks correct what the model commands
         return prediction + correction, served - correction, clamped

@@ -17,7 +17,8 @@ significant, see below); the applied correction ``c`` moves towards it by at
 most ``rate`` per sample, and the rule predicts ``ŷ + c``. The compensation
 is ``−(m + c)`` within the clamp widened by the offset's bound ``x_max0``
 (checks may correct what the clamp leaves; the model alone may not pass it),
-then rate-limited. Under a sensor fault the
+then rate-limited. An applied check ``z`` widens the model's clamp to
+``2·|z|`` (:meth:`Recalibrator.probe`), within the output's bounds. Under a sensor fault the
 output is the safe one and ``c`` is left as it is.
 
 A probe check ``z`` (the measured thermal error, µm, after the sample's step;
@@ -161,11 +162,24 @@ def model_section(model: ModelFile, *, comp_limit_um: float, rate_limit_um: floa
 
 
 class Recalibrator:
-    """The filter's state and its three operations, in double or single precision (``real``: float or float32)."""
+    """The filter's state and its three operations, in double or single precision (``real``: float or float32).
 
-    def __init__(self, table: RecalTable, real: Any = float):
+    ``clamp``: the model's clamp ``(low, high)`` of the compensation target (µm), which an applied check
+    widens (:meth:`probe`) within ``output``, the bounds of the output.
+    """
+
+    def __init__(
+        self,
+        table: RecalTable,
+        real: Any = float,
+        *,
+        clamp: tuple[float, float] = (-math.inf, math.inf),
+        output: tuple[float, float] = (-math.inf, math.inf),
+    ):
         self.table = table
         self._real = real
+        self._clamp0 = (real(clamp[0]), real(clamp[1]))
+        self._output = (real(output[0]), real(output[1]))
         self._q = [real(v) for v in table.q]
         self._p0 = [real(v) for v in table.p0]
         self._phi = real(table.phi)
@@ -189,6 +203,7 @@ class Recalibrator:
         self.rejected_in_row = 0
         self.significant = False
         self.gap2 = zero
+        self.clamp_low, self.clamp_high = self._clamp0
 
     def _reset_covariance(self) -> None:
         """``P = diag(p0)``."""
@@ -244,7 +259,26 @@ class Recalibrator:
         return (self._real(measured_um) - m) - (self.x[0] + self.x[2] * m)
 
     def probe(self, measured_um: float) -> int:
-        """Fold one check into the state: :data:`PROBE_APPLIED`, :data:`PROBE_REJECTED` or :data:`PROBE_IGNORED`."""
+        """Fold one check into the state: :data:`PROBE_APPLIED`, :data:`PROBE_REJECTED` or :data:`PROBE_IGNORED`.
+
+        An applied check widens the model's clamp to twice the error it measured (the rule's clamp is twice
+        the modelling run's largest prediction), within the output's bounds.
+        """
+        result = self._check(measured_um)
+        if result == PROBE_APPLIED:
+            self._widen(self._real(measured_um))
+        return result
+
+    def _widen(self, z) -> None:
+        w = -z if z < self._zero else z
+        w = w + w
+        if w > self.clamp_high:
+            self.clamp_high = w if w < self._output[1] else self._output[1]
+        if -w < self.clamp_low:
+            self.clamp_low = -w if -w > self._output[0] else self._output[0]
+
+    def _check(self, measured_um: float) -> int:
+        """The filter's part of :meth:`probe`."""
         z = float(measured_um)
         if not self.usable or not (z >= -PROBE_LIMIT_UM and z <= PROBE_LIMIT_UM):
             return PROBE_IGNORED

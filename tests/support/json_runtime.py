@@ -66,7 +66,11 @@ class TableRuntime:
         self.first, self.has_first = [0.0] * self.n_temps, [False] * self.n_temps
         self.started, self.memory, self.value = [False] * n_derived, [0.0] * n_derived, [0.0] * n_derived
         self.line, self.pos = [[0.0] * d["delay_samples"] for d in self.derived], [0] * n_derived
-        self.checks = ProbeFilter(table["recalibration"]) if probes is not None else None
+        self.checks = (
+            ProbeFilter(table["recalibration"], (table["comp_min_um"], table["comp_max_um"]))
+            if probes is not None
+            else None
+        )
 
     def relative(self, m: int) -> float:
         """A measured reading as the model takes it: as read, or minus the reference."""
@@ -191,7 +195,7 @@ class TableRuntime:
             else:
                 target = self.band_target
         if self.checks:  # the model's clamp, then the correction of what the model commands
-            target = max(min(target, self.table["comp_max_um"]), self.table["comp_min_um"])
+            target = max(min(target, self.checks.clamp_high), self.checks.clamp_low)
             correction = self.checks.correct(-target, held)
             prediction, target = prediction + correction, target - correction
         return prediction, target, clamped

@@ -85,6 +85,8 @@ static void gf_rc_reset(gf_state *s)
     s->rc_rejected = 0;
     s->rc_significant = 0;
     s->rc_gap2 = 0;
+    s->rc_lim_min = GF_COMP_MIN_UM;
+    s->rc_lim_max = GF_COMP_MAX_UM;
 }
 
 static void gf_rc_clamp(gf_state *s)
@@ -269,11 +271,11 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->previous = prediction;
         s->has_previous = 1;
         target = -prediction;
-        if (target > GF_COMP_MAX_UM) {
-            target = GF_COMP_MAX_UM;
+        if (target > s->rc_lim_max) {
+            target = s->rc_lim_max;
         }
-        if (target < GF_COMP_MIN_UM) {
-            target = GF_COMP_MIN_UM;
+        if (target < s->rc_lim_min) {
+            target = s->rc_lim_min;
         }
         /* the correction from probe checks (0 until the first is applied) */
         {
@@ -310,7 +312,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
     return faulted ? GF_RET_SENSOR_FAULT : s->group;
 }
 
-int gf_probe(gf_state *s, double measured_error_um)
+static int gf_rc_check(gf_state *s, double measured_error_um)
 {
     gf_real m = s->rc_model_um;
     gf_real nu, sv, gate, target, ph[3], hp[3], k[3];
@@ -358,4 +360,24 @@ int gf_probe(gf_state *s, double measured_error_um)
     (void)gf_rc_projections(s, ph, hp);
     s->rc_significant = target * target > gf_rc_sig2 * (hp[0] + hp[2] * m);
     return GF_PROBE_APPLIED;
+}
+
+int gf_probe(gf_state *s, double measured_error_um)
+{
+    int result = gf_rc_check(s, measured_error_um);
+    if (result == GF_PROBE_APPLIED) {
+        /* a measured error widens the model's clamp to twice its size, within the output's bounds */
+        gf_real w = (gf_real)measured_error_um;
+        if (w < 0) {
+            w = -w;
+        }
+        w = w + w;
+        if (w > s->rc_lim_max) {
+            s->rc_lim_max = w < GF_OUT_MAX_UM ? w : GF_OUT_MAX_UM;
+        }
+        if (-w < s->rc_lim_min) {
+            s->rc_lim_min = -w > GF_OUT_MIN_UM ? -w : GF_OUT_MIN_UM;
+        }
+    }
+    return result;
 }

@@ -94,6 +94,8 @@ typedef struct {
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
     gf_real rc_gap2;            /* squared gaps of the switches since the last check (um^2): widen its gate */
+    gf_real rc_lim_min;         /* the model's clamp (um): GF_COMP_MIN_UM/GF_COMP_MAX_UM, widened by checks */
+    gf_real rc_lim_max;
     gf_real error_um;           /* last prediction, um */
     gf_real comp_um;            /* value for the controller, um */
 } gf_state;
