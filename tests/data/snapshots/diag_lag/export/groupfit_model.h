@@ -125,9 +125,11 @@ int gf_check_period(double period_s);
  * (the innovation gate: a gross reading, flagged and never applied) or
  * GF_PROBE_IGNORED (that sample was in a sensor fault or on held readings, or e is
  * not a number within +-GF_PROBE_LIMIT_UM). From the next gf_step() on, the
- * prediction includes the correction, and s->comp_um with it. On a SINUMERIK the
- * correction moves the position-independent offset (SD43900) the compensation
- * already writes; no other datum changes.
+ * prediction includes the correction, and s->comp_um with it: within the
+ * model's clamp [GF_COMP_MIN_UM, GF_COMP_MAX_UM], which an applied check widens
+ * to 2|e|, plus the correction, within [GF_OUT_MIN_UM, GF_OUT_MAX_UM]. On a
+ * SINUMERIK the correction moves the position-independent offset (SD43900) the
+ * compensation already writes; no other datum changes.
  */
 #define GF_PROBE_APPLIED 1
 #define GF_PROBE_REJECTED 0
