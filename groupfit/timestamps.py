@@ -108,14 +108,20 @@ def _numbers_without_unit(frame: pd.DataFrame, column: str) -> np.ndarray | None
 
 def names_a_unit(name: str) -> bool:
     """Whether a column's name ends in a unit of time (``time_s``, ``Zeit [min]``)."""
-    found = NAMED_UNIT.search(str(name))
-    return bool(found) and found.group(1).lower() in UNIT_SECONDS
+    return _named_time_unit(name) is not None
 
 
 def unit_seconds(name: str) -> float:
     """Seconds per unit of a numeric time column, from the unit its name ends in (1 when it names none)."""
+    unit = _named_time_unit(name)
+    return UNIT_SECONDS[unit] if unit else 1.0
+
+
+def _named_time_unit(name: str) -> str | None:
+    """The unit of time a column's name ends in (a key of :data:`UNIT_SECONDS`), None when it names none."""
     found = NAMED_UNIT.search(str(name))
-    return UNIT_SECONDS.get(found.group(1).lower(), 1.0) if found else 1.0
+    unit = found.group(1).lower() if found else None
+    return unit if unit in UNIT_SECONDS else None
 
 
 def is_text(column: pd.Series) -> bool:

@@ -145,9 +145,9 @@ def run_replay(args: argparse.Namespace) -> int:
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     data.update(expectation_check(model, data, args.data))
     span = range_check(model, run)
-    clamp = clamp_check(rule.tables, replay)
-    notes = span.get("notes", []) + clamp.pop("notes")
-    result = ReplayResult({**data, **span, **clamp, **({"notes": notes} if notes else {})})
+    clamped, clamp_note = clamp_check(rule.tables, replay)
+    notes = span.get("notes", []) + ([clamp_note] if clamp_note else [])
+    result = ReplayResult({**data, **span, "clamped_samples": clamped, **({"notes": notes} if notes else {})})
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"
@@ -213,8 +213,9 @@ def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 
 
-def clamp_check(tables: RuleTables, replay: Replay) -> dict[str, Any]:
-    """On how many samples a clamp held the compensation short of the model's prediction, and a note when any did.
+def clamp_check(tables: RuleTables, replay: Replay) -> tuple[int, str | None]:
+    """On how many samples a clamp held the compensation short of the model's prediction, and a note when any did
+    (None when none did).
 
     The residual counts what the clamp left (:func:`residuals`): a next run
     beyond the modelling run's error can reach the clamp, which the rule sets
@@ -222,13 +223,14 @@ def clamp_check(tables: RuleTables, replay: Replay) -> dict[str, Any]:
     beyond it, by up to the recalibration's offset bound.
     """
     clamped = int(np.sum(replay.clamped))
-    note = (
+    if not clamped:
+        return 0, None
+    return clamped, (
         f"the model's prediction went beyond the compensation's clamp [{tables.comp_min_um:g}, "
         f"{tables.comp_max_um:g}] µm on {clamped} sample(s); the residual counts the error the clamp left (probe "
         f"checks may carry the output on to [{tables.output_min_um:g}, {tables.output_max_um:g}] µm). If the "
         "machine allows a larger correction, widen switching.comp_min_um / comp_max_um in the model file"
     )
-    return {"clamped_samples": clamped, "notes": [note] if clamped else []}
 
 
 def expectation_check(model: ModelFile, data: dict[str, Any], path) -> dict[str, Any]:

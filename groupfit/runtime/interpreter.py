@@ -21,7 +21,7 @@ import numpy as np
 from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
-from groupfit.runtime.rate import rate_limited
+from groupfit.runtime.rate import rate_limited, within
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED, Recalibrator
 from groupfit.runtime.rule import (
     COUNT_MAX,
@@ -217,7 +217,7 @@ class SwitchingRule:
         if self.blend > 0:
             self.blend -= 1
         wanted = target
-        target = _within(target, self._out_min, self._out_max)
+        target = within(target, self._out_min, self._out_max)
         self.compensation = rate_limited(self.compensation, target, self._rate)
         fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
         limited = bool(target != wanted or self._model_clamped)
@@ -281,7 +281,7 @@ class SwitchingRule:
                 self.band_target = target
             else:
                 target = self.band_target
-        served = _within(target, self.recal.clamp_low, self.recal.clamp_high)  # the model alone commands no more
+        served = within(target, self.recal.clamp_low, self.recal.clamp_high)  # the model alone commands no more
         self._model_clamped = served != target
         correction = self.recal.correct(-served, usable=not held)  # checks correct what the model commands
         return prediction + correction, served - correction, clamped
@@ -471,15 +471,6 @@ class SwitchingRule:
             if checks is not None and not math.isnan(checks[i]):
                 probe_code[i] = PROBE_CODE_OFFSET + self.probe(checks[i])
         return Replay(group, prediction, compensation, fault, switched, probe_code, target, clamped)
-
-
-def _within(value, low, high):
-    """``value`` held within ``[low, high]``, the upper bound first, as every export computes it."""
-    if value > high:
-        value = high
-    if value < low:
-        value = low
-    return value
 
 
 def check_period(tables: RuleTables, period_s: float) -> None:

@@ -1,6 +1,16 @@
-"""The rate limit of the run-time routine: how far an output may move in one sample."""
+"""The bounds of the run-time routine: a value held within its limits, and how far an output may move in one
+sample."""
 
 from __future__ import annotations
+
+
+def within(value, low, high):
+    """``value`` held within ``[low, high]``, the upper bound first, as every export computes it."""
+    if value > high:
+        value = high
+    if value < low:
+        value = low
+    return value
 
 
 def rate_limited(current, target, rate):
@@ -9,9 +19,4 @@ def rate_limited(current, target, rate):
     The steps are those of the generated C and Structured Text, so that a
     single-precision replay rounds as the controller does.
     """
-    delta = target - current
-    if delta > rate:
-        delta = rate
-    if delta < -rate:
-        delta = -rate
-    return current + delta
+    return current + within(target - current, -rate, rate)

@@ -70,7 +70,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from groupfit.model import ModelFile, Recalibration
-from groupfit.runtime.rate import rate_limited
+from groupfit.runtime.rate import rate_limited, within
 
 PROBE_APPLIED = 1
 PROBE_REJECTED = 0
@@ -234,10 +234,7 @@ class Recalibrator:
 
     def _clamp(self) -> None:
         for i in range(N_STATES):
-            if self.x[i] > self._max[i]:
-                self.x[i] = self._max[i]
-            if self.x[i] < -self._max[i]:
-                self.x[i] = -self._max[i]
+            self.x[i] = within(self.x[i], -self._max[i], self._max[i])
 
     def correct(self, model_um, *, usable: bool = True):
         """The applied correction of this sample, after the model's prediction ``model_um`` (rate-limited)."""
