@@ -8,7 +8,9 @@ old default p = 3 are within 1.5× of the best p = 0…3 there; then the same fo
 the cuts of the shared measured test (``../shared``). Then derives the
 calibration (:func:`groupfit.heldout.calibration.derive_calibration`) on the
 even-numbered of all pairs (panel and cuts) and checks it on the odd-numbered
-ones, and on all of them (the factor that ships). Last, leave-one-run-out on
+ones, and on all of them (the factor that ships). Then every pair again as a
+log without its operating columns would give it (the estimate cuts the model
+run into blocks of time), with the factor that ships. Last, leave-one-run-out on
 two or three of the six FE runs against each other one: the range printed
 with several runs (:data:`groupfit.heldout.calibration.SEVERAL_RUNS_RANGE`).
 ``--quick`` scores a small subset.
@@ -102,7 +104,9 @@ def main() -> None:
     pairs = panel.simulator_pairs(range(3), range(0)) + panel.fe_pairs()[:2] if args.quick else panel.panel_pairs()
     rows = [panel.score_pair(pair) for pair in pairs]
     table(rows, f"calibration panel ({len(rows)} pairs), with the shipped calibration")
-    measured = [] if args.quick else [panel.score_pair(pair) for pair in panel.measured_pairs()]
+    measured_pairs = [] if args.quick else panel.measured_pairs()
+    measured = [panel.score_pair(pair) for pair in measured_pairs]
+    all_pairs = pairs + measured_pairs
     if measured:
         table(measured, "the shared measured test cut into runs")
     else:
@@ -117,12 +121,19 @@ def main() -> None:
     print(f"derived on all {len(both)} pairs (what ships): {calibration.derive_calibration(raw, actual)}")
     summary(both, calibration.FACTOR, f"all {len(both)} pairs with the shipped factor")
     print(ceiling(both))
+    blind = [] if args.quick else [panel.score_pair(panel.without_operating_columns(p)) for p in all_pairs]
+    if blind:
+        table(blind, "the same pairs logged without their operating columns (the estimate on blocks of time)")
     several = [] if args.quick else panel.several_run_rows()
     if several:
         several_summary(several)
     if args.json:
         Path(args.json).write_text(
-            json.dumps({"panel": rows, "measured": measured, "several_runs": several}, indent=1, default=str)
+            json.dumps(
+                {"panel": rows, "measured": measured, "without_operating_columns": blind, "several_runs": several},
+                indent=1,
+                default=str,
+            )
         )
 
 

@@ -19,6 +19,7 @@ replayed with the model run in front, as ``groupfit replay`` does.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import sys
 from dataclasses import dataclass
@@ -27,8 +28,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from groupfit.columns import usable_columns
 from groupfit.data import Run, join_runs, load_run
 from groupfit.heldout.expect import expect_next_run
+from groupfit.heldout.folds import operating_columns
 from groupfit.heldout.nextrun import rule_prediction, sliced
 from groupfit.heldout.penalty import run_penalty
 from groupfit.heldout.reference_choice import choose_reference
@@ -161,6 +164,16 @@ def measured_pairs() -> list[Pair]:
         make_pair(name, "measured", sliced(whole, model), sliced(whole, following), reference=None, continues=joined)
         for name, model, following, joined in measured_cuts(whole.n_samples)
     ]
+
+
+def without_operating_columns(pair: Pair) -> Pair:
+    """The pair as a log without its operating columns (no speed, no on/off of a source) would give it: the
+    estimate then cuts the model run into blocks of time (:mod:`groupfit.heldout.folds`)."""
+    run = pair.model
+    columns, _ = usable_columns(run.frame, {run.time_name, run.error_name, *run.temp_names})
+    settings = operating_columns(run.frame, columns)
+    model = dataclasses.replace(run, frame=run.frame.drop(columns=settings))
+    return dataclasses.replace(pair, model=model)
 
 
 def score_pair(pair: Pair) -> dict:

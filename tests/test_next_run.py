@@ -13,7 +13,8 @@ from groupfit.grouping import Constraints
 from groupfit.heldout import calibration
 from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.expect import expect_next_run, trust_notes
-from groupfit.heldout.nextrun import forward_chaining, leave_one_run_out
+from groupfit.heldout.folds import make_folds
+from groupfit.heldout.nextrun import MIN_TRAIN_FRACTION, forward_chaining, leave_one_run_out
 from groupfit.model import ModelFile
 from groupfit.model import model_file_problem as model_problem
 from groupfit.models.grouped import GroupedRegressor
@@ -181,8 +182,15 @@ def test_calibration_is_the_median_and_percentiles_of_the_ratios():
 def test_a_run_without_operating_columns_is_noted_as_one_condition():
     frame = tiny_frame(7).drop(columns="speed_rpm")
     run = load_run(frame, name="one", temps=["T1", "T2"])
-    notes = trust_notes(forward_chaining(run, [0]))
+    scores = forward_chaining(run, [0])
+    notes = trust_notes(scores)
     assert any("one run of one operating condition" in note and "record a run" in note for note in notes)
+    # the folds are blocks of time, and the method says so rather than calling them operating segments
+    blocks = len(np.unique(make_folds([frame], []).labels))
+    scored = sum(start >= MIN_TRAIN_FRACTION * len(frame) for start in np.linspace(0, len(frame), blocks + 1)[:-1])
+    assert scores.n_folds == scored
+    assert scores.method().startswith(f"forward chaining over {scored} blocks of time (the run cut into {blocks} ")
+    assert "operating segments" not in scores.method()
 
 
 def test_an_error_measured_on_every_tenth_row_keeps_the_operating_conditions():

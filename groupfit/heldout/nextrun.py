@@ -47,6 +47,7 @@ MIN_TRAIN_FRACTION = 0.4
 """Forward chaining scores the segments that start after this share of the run."""
 MIN_SEGMENTS = 3
 """Fewer scored segments than this make the estimate a rough one (a note says so)."""
+NO_OPERATING_COLUMN = "no operating column"
 FORWARD = "forward"
 LEAVE_ONE_RUN_OUT = "leave-one-run-out"
 
@@ -93,8 +94,9 @@ class NextRunScores:
         if self.kind == LEAVE_ONE_RUN_OUT:
             return f"leave-one-run-out over {self.n_folds} runs, each replayed through the run-time rule"
         thinned = f", one sample in {self.stride}" if self.stride > 1 else ""
+        folds = "blocks of time" if NO_OPERATING_COLUMN in self.segments else "operating segments"
         return (
-            f"forward chaining over {self.n_folds} operating segments ({self.segments}{thinned}): fitted on the "
+            f"forward chaining over {self.n_folds} {folds} ({self.segments}{thinned}): fitted on the "
             "run before each segment, replayed through the run-time rule, scored on the segment"
         )
 
@@ -134,7 +136,7 @@ def segment_starts(run: Run) -> tuple[list[int], str, int]:
         values = run.frame[list(folds.columns)].to_numpy(dtype=float)
         conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
         return starts, f"changes of {', '.join(folds.columns)}", conditions
-    return starts, f"{len(starts)} equal blocks of time, no operating column", 1
+    return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1
 
 
 def forward_folds(run: Run, starts: Sequence[int], min_train: float = MIN_TRAIN_FRACTION) -> list[tuple[int, int]]:
