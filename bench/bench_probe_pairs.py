@@ -19,7 +19,11 @@ T``, the default) and at the run's first sample (``--probe-first 0``).
 
 Printed per pair: RMS without checks and with them, and the ratio; overall,
 the share of pairs where the checks leave at most half the unchecked RMS,
-per schedule and interval. The probe reading is the run's measured error.
+per schedule and interval; how many pairs the checks leave worse than
+without them (by more than 5 %); and the share halved among the pairs whose
+model is off on the next run (its unchecked RMS more than twice the model
+run's in-sample RMS), not at its noise floor. The probe reading is the run's
+measured error.
 """
 
 from __future__ import annotations
@@ -52,6 +56,10 @@ from groupfit.model import ModelFile  # noqa: E402
 from groupfit.probe_intervals import parse_intervals  # noqa: E402
 
 SCHEDULES = {"after T": None, "at start": 0}
+WORSE_TOLERANCE = 1.05
+"""The issue's "never worse than no checks", counted with 5 % to spare (a check's own noise)."""
+OFF_FACTOR = 2.0
+"""A next run whose unchecked RMS exceeds this many times the model run's in-sample RMS finds the model off."""
 
 
 def pair_frames():
@@ -109,6 +117,7 @@ def pair_result(name, source, model_path: Path, following: Path, intervals_s) ->
         "recalibration": model.recalibration.description if model.recalibration else "none",
         "continued": bool(none["continues"]),
         "rms_none_um": none["rms_um"],
+        "rms_in_sample_um": float(model.training["rms_um"]),
         "clamped": none.get("clamped_samples"),
         "rms_um": checked,
     }
@@ -136,7 +145,37 @@ def report(results: list[dict], intervals_s) -> str:
                 median = float(np.median([r["rms_um"][s][k] / r["rms_none_um"] for r in members]))
                 shares.append(f"{h}: {halved}/{len(members)} at most half (median ratio {median:.2f})")
             lines.append(f"{group:<9} first check {s:<9} " + "; ".join(shares))
+    lines += [worse_than_none(results, heads), off_the_floor(results, heads)]
     return "\n".join(lines)
+
+
+def worse_than_none(results: list[dict], heads) -> str:
+    """How many pairs the checks leave worse than no checks by more than 5 %, per schedule and interval."""
+    cells = []
+    for s in SCHEDULES:
+        for k, h in enumerate(heads):
+            worse = [r for r in results if r["rms_um"][s][k] > WORSE_TOLERANCE * r["rms_none_um"]]
+            worst = max((r["rms_um"][s][k] / r["rms_none_um"] for r in worse), default=1.0)
+            cells.append(f"{s} {h}: {len(worse)}/{len(results)} (worst ×{worst:.2f})")
+    return f"worse than no checks by more than {100 * (WORSE_TOLERANCE - 1):.0f} %: " + "; ".join(cells)
+
+
+def off_the_floor(results: list[dict], heads) -> str:
+    """The share halved among the pairs whose model is off on the next run, not at its noise floor.
+
+    Off: the next run's unchecked RMS exceeds :data:`OFF_FACTOR` times the model run's in-sample RMS. A
+    model at its floor leaves checks nothing to correct (their own noise is of the same size).
+    """
+    off = [r for r in results if r["rms_none_um"] > OFF_FACTOR * r["rms_in_sample_um"]]
+    cells = []
+    for s in SCHEDULES:
+        for k, h in enumerate(heads):
+            halved = sum(r["rms_um"][s][k] <= 0.5 * r["rms_none_um"] for r in off)
+            cells.append(f"{s} {h}: {halved}/{len(off)}")
+    return (
+        f"at most half, where the next run's unchecked RMS exceeds {OFF_FACTOR:g}× the model run's in-sample RMS "
+        f"({len(off)} of {len(results)} pairs): " + "; ".join(cells)
+    )
 
 
 def run(argv=None) -> int:
