@@ -15,6 +15,7 @@ from groupfit.data import Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
+from groupfit.heldout.choice import RMS_TOLERANCE
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
@@ -49,7 +50,8 @@ def add_parser(verbs) -> None:
         dest="p_rule",
         choices=P_RULES,
         help="how p is chosen: next-run (default: the fewest breaks whose expected next-run error is within one "
-        "standard error, or a factor of 2, of the least), bic (in sample), target (fewest breaks with R <= --p-target)",
+        f"standard error, or a factor of {RMS_TOLERANCE:g}, of the least), bic (in sample), target (fewest breaks "
+        "with R <= --p-target)",
     )
     fit.add_argument("--p-target", metavar="R", help="target R for --p-rule target: µm, or a percentage like 20%%")
     fit.add_argument("--n", type=int, help="soft offset: samples shared by neighbouring groups")
