@@ -189,7 +189,6 @@ class SwitchingRule:
         self.k0 = self._zero
         self.slope = self._zero
         self.recal.reset()
-        self._model_clamped = False
         self._reset_reference()
 
     def step(self, readings: Sequence[float]) -> StepResult:
@@ -204,8 +203,7 @@ class SwitchingRule:
         for k in range(len(t.derived)):
             self._derive(k)
         switched = self._switch()
-        clamped = False
-        self._model_clamped = False
+        clamped = model_clamped = False
         self.recal.propagate()
         if faulted:
             prediction = self._zero
@@ -213,14 +211,14 @@ class SwitchingRule:
             self.recal.invalidate()
             self.has_previous = False
         else:
-            prediction, target, clamped = self._predict(switched, held=held)
+            prediction, target, clamped, model_clamped = self._predict(switched, held=held)
         if self.blend > 0:
             self.blend -= 1
         wanted = target
         target = within(target, self._out_min, self._out_max)
         self.compensation = rate_limited(self.compensation, target, self._rate)
         fault = (FAULT_HELD if held else 0) + (FAULT_SENSOR if faulted else 0) + (FAULT_POSITION if clamped else 0)
-        limited = bool(target != wanted or self._model_clamped)
+        limited = bool(target != wanted or model_clamped)
         return StepResult(
             self.group, float(prediction), float(self.compensation), fault, switched, float(target), limited
         )
@@ -261,8 +259,8 @@ class SwitchingRule:
         return switched
 
     def _predict(self, switched: int, *, held: bool):
-        """The prediction (bumpless transfer and probe correction included), the compensation's target, and
-        whether the position was clamped."""
+        """The prediction (bumpless transfer and probe correction included), the compensation's target, whether
+        the position was clamped, and whether the model's clamp bound its command."""
         t = self.tables
         prediction, clamped = self._group_prediction(self.group)
         if switched and self.has_previous:  # bumpless transfer: the gap from the last output to the new group
@@ -282,9 +280,8 @@ class SwitchingRule:
             else:
                 target = self.band_target
         served = within(target, self.recal.clamp_low, self.recal.clamp_high)  # the model alone commands no more
-        self._model_clamped = served != target
         correction = self.recal.correct(-served, usable=not held)  # checks correct what the model commands
-        return prediction + correction, served - correction, clamped
+        return prediction + correction, served - correction, clamped, served != target
 
     def _group_prediction(self, group: int):
         """The prediction of 1-based ``group`` from the current inputs (position terms included), and whether
