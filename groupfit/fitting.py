@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from groupfit.data import Run
+from groupfit.fast_response import without_stage
 from groupfit.grouping import served_ranges
 from groupfit.heldout.expect import CHOICE_RULE
 from groupfit.heldout.records import OverfitCheck, RidgeSetting
@@ -182,7 +183,9 @@ def selection_summary(selection: dict) -> str:
 
 
 def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile, intervals=None) -> str:
-    """The table ``groupfit fit`` prints (without the files it wrote)."""
+    """The table ``groupfit fit`` prints (without the files it wrote): the model's coefficients, without the
+    fast-response stage for probe checks (:mod:`groupfit.fast_response`), which is reported on its own line."""
+    model = without_stage(model)
     unit = "µm" if estimator.objective == "sae" else "µm²"
     search = estimator.search_
     lines = [

@@ -23,7 +23,7 @@ from groupfit.switching_checks import (
     parse_derived,
     rule_section_problem,
 )
-from groupfit.training_checks import expectation_problem, recordings_problem
+from groupfit.training_checks import expectation_problem, recordings_problem, stage_problem
 from groupfit.training_checks import is_number as _is_number
 
 FORMAT = "groupfit-model/1"
@@ -116,7 +116,11 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     training = model.get("training")
     if training is not None and not isinstance(training, Mapping):
         return "'training' must be an object"
-    return expectation_problem(training or {}) or recordings_problem(training or {})
+    return (
+        expectation_problem(training or {})
+        or recordings_problem(training or {})
+        or stage_problem(training or {}, model.get("temps") or [])
+    )
 
 
 def _inputs_problem(model: Mapping[str, Any]) -> str | None:

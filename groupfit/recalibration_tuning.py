@@ -43,6 +43,7 @@ from typing import Sequence
 
 import numpy as np
 
+from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
 
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
@@ -84,10 +85,27 @@ def held_out_series(model: ModelFile, runs: Sequence, *, cuts: Sequence[float] =
             train = np.isfinite(error[:a])
             if train.sum() < max(MIN_TRAIN_SAMPLES, 2 * design.shape[1]) or a >= len(design) - 1:
                 continue
-            coef = _solve(design[:a][train], error[:a][train], model.ridge_alpha, intercept=model.intercept)
-            prediction = design[a:] @ coef
+            prediction = _refit_prediction(model, inputs, design, error, a, train)
             series.append(HeldOut(error[a:] - prediction, prediction))
     return series
+
+
+def _refit_prediction(
+    model: ModelFile, inputs: np.ndarray, design: np.ndarray, error: np.ndarray, a: int, train: np.ndarray
+) -> np.ndarray:
+    """The prediction of the rows from ``a`` on by the model refitted on the rows before ``a`` (``train``: those
+    measured); a model with a fast-response stage in its two steps (:mod:`groupfit.fast_response`)."""
+    split = stage_split(model)
+    if split is None:
+        coef = _solve(design[:a][train], error[:a][train], model.ridge_alpha, intercept=model.intercept)
+        return design[a:] @ coef
+    base, sensors, lowpasses = split
+    columns = ([0] if model.intercept else []) + [j + int(model.intercept) for j in base]
+    coef = _solve(design[:a][train][:, columns], error[:a][train], model.ridge_alpha, intercept=model.intercept)
+    high = inputs[:, sensors] - inputs[:, lowpasses]
+    residual = error[:a] - design[:a][:, columns] @ coef
+    gains = fit_gains(high[:a], np.where(train, residual, np.nan))
+    return design[a:][:, columns] @ coef + high[a:] @ gains
 
 
 def _solve(design: np.ndarray, target: np.ndarray, alpha: float | None, *, intercept: bool) -> np.ndarray:

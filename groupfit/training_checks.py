@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
+
+from groupfit.features import Feature
 
 
 def is_number(value: Any) -> bool:
@@ -13,6 +15,41 @@ def is_number(value: Any) -> bool:
 
 RECORDINGS_KEY = "recordings"
 RECORDING_KEYS = ("path", "sha256", "first_time_s", "last_time_s", "period_s")
+
+
+FAST_KEY = "fast_response"
+"""The ``training`` key of the fast-response stage (:mod:`groupfit.fast_response`): ``{"tau_s", "columns",
+"coefficients", "slopes"}`` (the gains, and the sensors' slopes without the stage)."""
+
+
+def stage_features(columns: Sequence[str], tau_s: float) -> list[Feature]:
+    """The low-passes of the fast-response stage: one per sensor, time constant ``tau_s``."""
+    return [Feature(column, "lowpass", tau_s=float(tau_s)) for column in columns]
+
+
+def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | None:
+    """What is wrong with ``training.fast_response`` (None: absent or well formed)."""
+    stage = training.get(FAST_KEY)
+    if stage is None:
+        return None
+    where = f"training.{FAST_KEY}"
+    if not isinstance(stage, Mapping):
+        return f"{where} must be an object with tau_s, columns, coefficients and slopes"
+    tau, columns = stage.get("tau_s"), stage.get("columns")
+    if not isinstance(tau, (int, float)) or isinstance(tau, bool) or not (math.isfinite(tau) and tau > 0):
+        return f"{where}.tau_s = {tau!r}: must be a number of seconds > 0"
+    if not isinstance(columns, list) or not all(isinstance(c, str) for c in columns) or not columns:
+        return f"{where}.columns must be a list of the model's input names"
+    for key in ("coefficients", "slopes"):
+        values = stage.get(key)
+        if not isinstance(values, list) or len(values) != len(columns):
+            return f"{where}.{key} must hold one number per column ({len(columns)})"
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
+            return f"{where}.{key} must be finite numbers"
+    missing = [name for name in (*columns, *(f.name for f in stage_features(columns, tau))) if name not in temps]
+    if missing:
+        return f"{where}: input {missing[0]!r} is not among the model's inputs (temps)"
+    return None
 
 
 def recordings_problem(training: Mapping[str, Any]) -> str | None:

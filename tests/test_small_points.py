@@ -13,7 +13,9 @@ from test_real_logs import cycle_means
 from groupfit.cli import main
 from groupfit.columns import usable_columns
 from groupfit.comparison import comparison_table
+from groupfit.fast_response import without_stage
 from groupfit.heldout.folds import operating_columns
+from groupfit.model import ModelFile
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.search.base import SearchSettings
 
@@ -78,7 +80,7 @@ def test_an_ambient_named_by_flag_is_no_input_and_the_reference(tmp_path):
     )
     model = json.loads((tmp_path / "b.json").read_text())
     choice = model["training"]["reference_choice"]  # the named ambient is the default, questioned as T_amb is
-    assert model["temps"] == ["T1", "T2"] and choice["default"] == "T15"
+    assert without_stage(ModelFile.from_dict(model)).temps == ("T1", "T2") and choice["default"] == "T15"
     assert model.get("reference") == choice["chosen"] and choice["chosen"] is None  # the error never follows it
     args = ("--data", path, "--p", "0", "--ambient", "T15", "--reference", "T15")
     assert cli("fit", *args, "--json", tmp_path / "c.json", "--out", tmp_path, "--force") == 0

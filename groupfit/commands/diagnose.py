@@ -20,6 +20,7 @@ from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM,
 from groupfit.diagnose.plot import plot_diagnosis
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.errors import InputError
+from groupfit.fast_response import without_stage
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
@@ -188,7 +189,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         folder=args.out,
         files=("model_augmented.json", "diagnose.png"),
     )
-    model = ModelFile.load(args.model).to_dict()
+    model = without_stage(ModelFile.load(args.model)).to_dict()  # effects are sought on the model itself
     time = args.time or time_column(model)
     clock = {**common.clock_options(args), "time_is_default": args.time is None}
     data = [load_measured(path, model, time, **clock) for path in args.data]

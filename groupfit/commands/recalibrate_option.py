@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
+from groupfit.fast_response import describe, stage_of
+from groupfit.fast_response_choice import choose_stage
 from groupfit.model import ModelFile
-from groupfit.recalibration_tuning import METHODS, choose_recalibration
+from groupfit.recalibration_tuning import METHODS
 
 
 def add_recalibrate_option(parser: argparse.ArgumentParser) -> None:
@@ -21,14 +23,24 @@ def add_recalibrate_option(parser: argparse.ArgumentParser) -> None:
 
 
 def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFile, str]:
-    """The model with its recalibration section chosen on ``runs`` ((frame, error) pairs), and a report line."""
-    tuning = choose_recalibration(model, runs, method=method)
+    """The model with its recalibration section chosen on ``runs`` ((frame, error) pairs), with or without the
+    fast-response stage (:mod:`groupfit.fast_response_choice`), and the report lines."""
+    model, tuning, without = choose_stage(model, runs, method)
     if tuning.section is None:
         return model.replace(recalibration=None), ""
     section = tuning.section
-    line = f"\nrecal   {section.description}"
+    minutes = "/".join(f"{t / 60:g}" for t in tuning.intervals_s)
+    line = ""
+    if without is not None:
+        line = (
+            f"\nfast    {describe(stage_of(model))}: held-out RMS with a check every {minutes} min "
+            + "/".join(f"{v:.3g}" for v in without.rms_chosen_um)
+            + " → "
+            + "/".join(f"{v:.3g}" for v in tuning.rms_chosen_um)
+            + f" µm, without checks {without.rms_none_um:.3g} → {tuning.rms_none_um:.3g}"
+        )
+    line += f"\nrecal   {section.description}"
     if tuning.rms_hold_um:
-        minutes = "/".join(f"{t / 60:g}" for t in tuning.intervals_s)
         line += (
             f", chosen on held-out checks; RMS with a check every {minutes} min: "
             + "/".join(f"{v:.3g}" for v in tuning.rms_chosen_um)

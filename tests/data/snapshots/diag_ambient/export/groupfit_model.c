@@ -12,12 +12,24 @@
 
 /* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
 static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
-    /* group 1 */ { GF_R(-7.05982811817912790e+01, -7.059828186e+01f), GF_R(-1.77272669681810835e+00, -1.772726655e+00f), GF_R(1.67112633323360682e+00, 1.671126366e+00f), GF_R(2.14385538892867533e+00, 2.143855333e+00f), GF_R(1.02289863133989911e+00, 1.022898674e+00f), GF_R(4.65475032836236702e-01, 4.654750228e-01f) }
+    /* group 1 */ { GF_R(-7.05982811817912790e+01, -7.059828186e+01f), GF_R(5.66589504708445046e-01, 5.665895343e-01f), GF_R(8.95106568773686995e-02, 8.951065689e-02f), GF_R(1.76850547592829255e+00, 1.768505454e+00f), GF_R(2.18509949144275128e-01, 2.185099423e-01f), GF_R(4.65475032836236702e-01, 4.654750228e-01f), GF_R(-2.33931620152655340e+00, -2.339316130e+00f), GF_R(1.58161567635623812e+00, 1.581615686e+00f), GF_R(3.75349913000382784e-01, 3.753499091e-01f), GF_R(8.04388682195623983e-01, 8.043887019e-01f) }
 };
 
 /* derived[0], T_amb~lp1800s: low-pass a = exp(-dt/tau), b = 1 - a. */
 static const gf_real gf_lowpass_a_0 = GF_R(9.45959468906765411e-01, 9.459594488e-01f);
 static const gf_real gf_lowpass_b_0 = GF_R(5.40405310932345895e-02, 5.404053256e-02f);
+/* derived[1], T1~lp600s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_1 = GF_R(8.46481724890614129e-01, 8.464817405e-01f);
+static const gf_real gf_lowpass_b_1 = GF_R(1.53518275109385871e-01, 1.535182744e-01f);
+/* derived[2], T2~lp600s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_2 = GF_R(8.46481724890614129e-01, 8.464817405e-01f);
+static const gf_real gf_lowpass_b_2 = GF_R(1.53518275109385871e-01, 1.535182744e-01f);
+/* derived[3], T3~lp600s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_3 = GF_R(8.46481724890614129e-01, 8.464817405e-01f);
+static const gf_real gf_lowpass_b_3 = GF_R(1.53518275109385871e-01, 1.535182744e-01f);
+/* derived[4], T4~lp600s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_4 = GF_R(8.46481724890614129e-01, 8.464817405e-01f);
+static const gf_real gf_lowpass_b_4 = GF_R(1.53518275109385871e-01, 1.535182744e-01f);
 
 /* Switch window g (group g -> g+1): samples first..last; forced at last. */
 static const long gf_window_first[GF_N_WINDOWS] = { 2000000000L };
@@ -44,7 +56,7 @@ static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999978e-05, 2.499999937e-0
 static const gf_real gf_rc_p0[3] = { GF_R(4.79970712434535862e+00, 4.799706936e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_max[3] = { GF_R(5.60000000000000000e+01, 5.600000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
-static const gf_real gf_rc_r = GF_R(1.97861218265242382e-02, 1.978612132e-02f);
+static const gf_real gf_rc_r = GF_R(1.38660164696802219e-02, 1.386601664e-02f);
 static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
 static const gf_real gf_rc_sig2 = GF_R(4.00000000000000000e+00, 4.000000000e+00f);
 static const gf_real gf_rc_rate = GF_R(1.30000000000000004e+00, 1.299999952e+00f);
@@ -163,6 +175,18 @@ void gf_init(gf_state *s)
     s->started[0] = 0;
     s->derived[0] = 0;
     s->memory[0] = 0;
+    s->started[1] = 0;
+    s->derived[1] = 0;
+    s->memory[1] = 0;
+    s->started[2] = 0;
+    s->derived[2] = 0;
+    s->memory[2] = 0;
+    s->started[3] = 0;
+    s->derived[3] = 0;
+    s->memory[3] = 0;
+    s->started[4] = 0;
+    s->derived[4] = 0;
+    s->memory[4] = 0;
     gf_rc_reset(s);
     s->error_um = 0;
     s->comp_um = 0;
@@ -214,6 +238,46 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->derived[0] = s->memory[0];
     }
 
+    /* derived[1] = T1~lp600s: low-pass of T1, tau = 600 s (temps[0]) */
+    if (!s->started[1] && s->bad[0] == 0) {
+        s->started[1] = 1;
+        s->memory[1] = s->last[0];
+    }
+    if (s->started[1]) {
+        s->memory[1] = gf_lowpass_b_1 * s->last[0] + gf_lowpass_a_1 * s->memory[1];
+        s->derived[1] = s->memory[1];
+    }
+
+    /* derived[2] = T2~lp600s: low-pass of T2, tau = 600 s (temps[1]) */
+    if (!s->started[2] && s->bad[1] == 0) {
+        s->started[2] = 1;
+        s->memory[2] = s->last[1];
+    }
+    if (s->started[2]) {
+        s->memory[2] = gf_lowpass_b_2 * s->last[1] + gf_lowpass_a_2 * s->memory[2];
+        s->derived[2] = s->memory[2];
+    }
+
+    /* derived[3] = T3~lp600s: low-pass of T3, tau = 600 s (temps[2]) */
+    if (!s->started[3] && s->bad[2] == 0) {
+        s->started[3] = 1;
+        s->memory[3] = s->last[2];
+    }
+    if (s->started[3]) {
+        s->memory[3] = gf_lowpass_b_3 * s->last[2] + gf_lowpass_a_3 * s->memory[3];
+        s->derived[3] = s->memory[3];
+    }
+
+    /* derived[4] = T4~lp600s: low-pass of T4, tau = 600 s (temps[3]) */
+    if (!s->started[4] && s->bad[3] == 0) {
+        s->started[4] = 1;
+        s->memory[4] = s->last[3];
+    }
+    if (s->started[4]) {
+        s->memory[4] = gf_lowpass_b_4 * s->last[3] + gf_lowpass_a_4 * s->memory[4];
+        s->derived[4] = s->memory[4];
+    }
+
     s->switched = 0;
     if (s->group < GF_N_GROUPS) {
         int w = s->group - 1;
@@ -254,6 +318,10 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         x[2] = GF_VALUE(2);
         x[3] = GF_VALUE(3);
         x[4] = s->derived[0];
+        x[5] = s->derived[1];
+        x[6] = s->derived[2];
+        x[7] = s->derived[3];
+        x[8] = s->derived[4];
         prediction = row[0];
         for (m = 0; m < GF_N_INPUTS; m++) {
             prediction = prediction + row[m + 1] * x[m];

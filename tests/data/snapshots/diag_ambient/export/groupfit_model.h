@@ -9,10 +9,10 @@
  *
  * Readings temps[GF_N_TEMPS], in this order, with the range in which a reading
  * is valid:
- *   temps[0] = T1  [4, 46] degC  (criterion)
- *   temps[1] = T2  [4, 46] degC
- *   temps[2] = T3  [4, 44] degC
- *   temps[3] = T4  [4, 46] degC
+ *   temps[0] = T1  [4, 46] degC  (criterion; also the source of T1~lp600s)
+ *   temps[1] = T2  [4, 46] degC  (also the source of T2~lp600s)
+ *   temps[2] = T3  [4, 44] degC  (also the source of T3~lp600s)
+ *   temps[3] = T4  [4, 46] degC  (also the source of T4~lp600s)
  *   temps[4] = T_amb  [7, 36]  (source of T_amb~lp1800s)
  *   (temperatures in degC; a source in the unit of its column in the modelling data)
  *
@@ -22,10 +22,22 @@
  *   x[2] = temps[2]  (T3)
  *   x[3] = temps[3]  (T4)
  *   x[4] = derived[0]  (T_amb~lp1800s)
+ *   x[5] = derived[1]  (T1~lp600s)
+ *   x[6] = derived[2]  (T2~lp600s)
+ *   x[7] = derived[3]  (T3~lp600s)
+ *   x[8] = derived[4]  (T4~lp600s)
  * Derived inputs, computed every sample from the last good value v of their
  * source reading (a held value stands in for an invalid reading), starting at
  * the source's first good reading after gf_init():
  *   derived[0] = T_amb~lp1800s: low-pass of T_amb, tau = 1800 s (temps[4]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[1] = T1~lp600s: low-pass of T1, tau = 600 s (temps[0]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[2] = T2~lp600s: low-pass of T2, tau = 600 s (temps[1]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[3] = T3~lp600s: low-pass of T3, tau = 600 s (temps[2]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[4] = T4~lp600s: low-pass of T4, tau = 600 s (temps[3]):
  *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
  *
  * Switching criterion: temps[GF_CRITERION] (T1).
@@ -49,8 +61,8 @@
 #define GROUPFIT_MODEL_H
 
 #define GF_N_TEMPS 5 /* readings per sample */
-#define GF_N_INPUTS 5 /* model inputs: one coefficient each */
-#define GF_N_DERIVED 1 /* derived inputs computed from the readings */
+#define GF_N_INPUTS 9 /* model inputs: one coefficient each */
+#define GF_N_DERIVED 5 /* derived inputs computed from the readings */
 #define GF_N_GROUPS 1
 #define GF_N_WINDOWS 1 /* 0 switch window(s); at least 1 entry */
 #define GF_CRITERION 0

@@ -12,12 +12,24 @@
 
 /* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
 static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
-    /* group 1 */ { GF_R(-1.05075251095525921e+01, -1.050752544e+01f), GF_R(-1.51734632729074448e-01, -1.517346352e-01f), GF_R(2.22778170683874017e-02, 2.227781713e-02f), GF_R(3.17507303705039934e-01, 3.175072968e-01f), GF_R(3.39106242496825305e-01, 3.391062319e-01f), GF_R(1.52346085697097639e-02, 1.523460820e-02f) }
+    /* group 1 */ { GF_R(-1.05075251095525921e+01, -1.050752544e+01f), GF_R(1.27226789746958835e-01, 1.272267848e-01f), GF_R(-4.70859870447690315e-02, -4.708598554e-02f), GF_R(9.88795075701197068e-02, 9.887950867e-02f), GF_R(2.03605129649252953e-01, 2.036051303e-01f), GF_R(1.52346085697097639e-02, 1.523460820e-02f), GF_R(-2.78961422476033283e-01, -2.789614201e-01f), GF_R(6.93638041131564298e-02, 6.936380267e-02f), GF_R(2.18627796134920227e-01, 2.186277956e-01f), GF_R(1.35501112847572353e-01, 1.355011165e-01f) }
 };
 
 /* derived[0], speed_rpm~lp14400sr: low-pass a = exp(-dt/tau), b = 1 - a. */
 static const gf_real gf_lowpass_a_0 = GF_R(9.93079612490315955e-01, 9.930796027e-01f);
 static const gf_real gf_lowpass_b_0 = GF_R(6.92038750968404504e-03, 6.920387503e-03f);
+/* derived[1], T1~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_1 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_1 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[2], T2~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_2 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_2 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[3], T3~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_3 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_3 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[4], T4~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_4 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_4 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
 
 /* Switch window g (group g -> g+1): samples first..last; forced at last. */
 static const long gf_window_first[GF_N_WINDOWS] = { 2000000000L };
@@ -40,11 +52,11 @@ static const double gf_temp_max[GF_N_TEMPS] = { 4.40000000000000000e+01, 4.40000
 /* Recalibration (offset (kalman)): per sample process variance q, initial variance p0 (offset um^2,
  * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, significance^2 (0: every correction
  * is applied), state bounds, rate of the correction. */
-static const gf_real gf_rc_q[3] = { GF_R(2.77777777777777791e-06, 2.777777809e-06f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999978e-05, 2.499999937e-05f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_p0[3] = { GF_R(2.28478308321844636e+00, 2.284783125e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_max[3] = { GF_R(5.80000000000000000e+01, 5.800000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
-static const gf_real gf_rc_r = GF_R(1.15872763150057876e-02, 1.158727612e-02f);
+static const gf_real gf_rc_r = GF_R(1.10186105014059496e-02, 1.101861056e-02f);
 static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
 static const gf_real gf_rc_sig2 = GF_R(4.00000000000000000e+00, 4.000000000e+00f);
 static const gf_real gf_rc_rate = GF_R(8.00000000000000044e-01, 8.000000119e-01f);
@@ -163,6 +175,18 @@ void gf_init(gf_state *s)
     s->started[0] = 0;
     s->derived[0] = 0;
     s->memory[0] = 0;
+    s->started[1] = 0;
+    s->derived[1] = 0;
+    s->memory[1] = 0;
+    s->started[2] = 0;
+    s->derived[2] = 0;
+    s->memory[2] = 0;
+    s->started[3] = 0;
+    s->derived[3] = 0;
+    s->memory[3] = 0;
+    s->started[4] = 0;
+    s->derived[4] = 0;
+    s->memory[4] = 0;
     gf_rc_reset(s);
     s->error_um = 0;
     s->comp_um = 0;
@@ -214,6 +238,46 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->derived[0] = s->memory[0];
     }
 
+    /* derived[1] = T1~lp300s: low-pass of T1, tau = 300 s (temps[0]) */
+    if (!s->started[1] && s->bad[0] == 0) {
+        s->started[1] = 1;
+        s->memory[1] = s->last[0];
+    }
+    if (s->started[1]) {
+        s->memory[1] = gf_lowpass_b_1 * s->last[0] + gf_lowpass_a_1 * s->memory[1];
+        s->derived[1] = s->memory[1];
+    }
+
+    /* derived[2] = T2~lp300s: low-pass of T2, tau = 300 s (temps[1]) */
+    if (!s->started[2] && s->bad[1] == 0) {
+        s->started[2] = 1;
+        s->memory[2] = s->last[1];
+    }
+    if (s->started[2]) {
+        s->memory[2] = gf_lowpass_b_2 * s->last[1] + gf_lowpass_a_2 * s->memory[2];
+        s->derived[2] = s->memory[2];
+    }
+
+    /* derived[3] = T3~lp300s: low-pass of T3, tau = 300 s (temps[2]) */
+    if (!s->started[3] && s->bad[2] == 0) {
+        s->started[3] = 1;
+        s->memory[3] = s->last[2];
+    }
+    if (s->started[3]) {
+        s->memory[3] = gf_lowpass_b_3 * s->last[2] + gf_lowpass_a_3 * s->memory[3];
+        s->derived[3] = s->memory[3];
+    }
+
+    /* derived[4] = T4~lp300s: low-pass of T4, tau = 300 s (temps[3]) */
+    if (!s->started[4] && s->bad[3] == 0) {
+        s->started[4] = 1;
+        s->memory[4] = s->last[3];
+    }
+    if (s->started[4]) {
+        s->memory[4] = gf_lowpass_b_4 * s->last[3] + gf_lowpass_a_4 * s->memory[4];
+        s->derived[4] = s->memory[4];
+    }
+
     s->switched = 0;
     if (s->group < GF_N_GROUPS) {
         int w = s->group - 1;
@@ -254,6 +318,10 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         x[2] = GF_VALUE(2);
         x[3] = GF_VALUE(3);
         x[4] = s->derived[0];
+        x[5] = s->derived[1];
+        x[6] = s->derived[2];
+        x[7] = s->derived[3];
+        x[8] = s->derived[4];
         prediction = row[0];
         for (m = 0; m < GF_N_INPUTS; m++) {
             prediction = prediction + row[m + 1] * x[m];

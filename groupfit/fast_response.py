@@ -1,0 +1,170 @@
+"""The model's response to fast swings of its sensors, fitted apart: a stage for a compensation with probe checks.
+
+A model fitted over a long run weighs each sensor by what moves the error
+over hours. Faster swings of the same sensors (a chiller cycling, a coolant
+pump, a door) move the error with other weights; what the model leaves of
+them changes within minutes, and between two probe checks no filter can
+follow it. This stage fits that response apart. Its inputs are the model's
+measured inputs less their own low-pass, ``h_k = T_k − LP_τ(T_k)``, fitted by
+least squares on the residual the model leaves on its modelling runs, the
+model's own coefficients kept. A swing's high-pass returns to zero, so the
+stage leaves the model's level, which the next-run estimate judges, alone.
+
+The stage is written as one low-pass derived input per sensor: the sensor's
+coefficient raised by ``g_k``, the low-pass's coefficient ``−g_k``; every
+target computes it as any derived input. The model file records it under
+``training.fast_response`` (τ, the sensors, ``g`` and the sensors' own
+slopes), so that the model without it is recovered exactly (:func:`without_stage`) before the model is changed
+(``diagnose``) and the stage chosen again.
+
+Whether a model keeps the stage, and with which τ, is decided on held-out
+stretches with simulated checks (:mod:`groupfit.fast_response_choice`).
+Global models (p = 0) on absolute readings only: a grouped model's groups,
+a reference, a position or a dead band are left as they are.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from groupfit.features import derived_matrix
+from groupfit.model import ModelFile
+from groupfit.training_checks import FAST_KEY, stage_features
+
+
+def stage_columns(model: ModelFile) -> list[str]:
+    """The measured inputs a stage may be fitted on (empty: the model cannot take one)."""
+    if model.p != 0 or model.reference is not None or model.position is not None or model.dead_band is not None:
+        return []
+    return list(model.measured_inputs)
+
+
+def stage_of(model: ModelFile) -> Mapping[str, Any] | None:
+    """The model's recorded stage, or None."""
+    return (model.training or {}).get(FAST_KEY)
+
+
+def without_stage(model: ModelFile) -> ModelFile:
+    """The model as it was before its stage was added (itself when it has none)."""
+    stage = stage_of(model)
+    if stage is None:
+        return model
+    names = {feature.name for feature in stage_features(stage["columns"], stage["tau_s"])}
+    slopes = dict(zip(stage["columns"], stage["slopes"]))
+    offset = 1 if model.intercept else 0
+    keep = [j for j, name in enumerate(model.temps) if name not in names]
+    rows = []
+    for row in model.coefficients:
+        rows.append((*row[:offset], *(slopes.get(model.temps[j], row[offset + j]) for j in keep)))
+    derived = tuple(f for f in model.derived_inputs or () if f.name not in names)
+    training = {k: v for k, v in (model.training or {}).items() if k != FAST_KEY}
+    return model.replace(
+        switching=_ranges_kept(model, keep),
+        temps=tuple(model.temps[j] for j in keep),
+        coefficients=tuple(rows),
+        derived_inputs=derived or None,
+        training=training,
+    )
+
+
+def _ranges_added(model: ModelFile, columns: Sequence[str]):
+    """The switching section with a valid range for each of the stage's low-passes: its sensor's."""
+    switching = model.switching
+    index = [model.temps.index(column) for column in columns]
+    low = (*switching.temp_min_c, *(switching.temp_min_c[j] for j in index))
+    high = (*switching.temp_max_c, *(switching.temp_max_c[j] for j in index))
+    return dataclasses.replace(switching, temp_min_c=low, temp_max_c=high)
+
+
+def _ranges_kept(model: ModelFile, keep: Sequence[int]):
+    """The switching section with the valid ranges of the inputs ``keep`` only."""
+    switching = model.switching
+    low = tuple(switching.temp_min_c[j] for j in keep)
+    high = tuple(switching.temp_max_c[j] for j in keep)
+    return dataclasses.replace(switching, temp_min_c=low, temp_max_c=high)
+
+
+def high_passes(model: ModelFile, frame, columns: Sequence[str], tau_s: float) -> np.ndarray:
+    """``T_k − LP_τ(T_k)`` of ``columns`` on one run, the low-pass as every target computes it."""
+    lowpassed = derived_matrix(stage_features(columns, tau_s), frame, model.sampling_period_s)
+    return frame[list(columns)].to_numpy(dtype=float) - lowpassed
+
+
+def stage_split(model: ModelFile) -> tuple[list[int], list[int], list[int]] | None:
+    """Positions among the model's inputs of: the inputs without the stage, the stage's sensors, their low-passes
+    (None: no stage)."""
+    stage = stage_of(model)
+    if stage is None:
+        return None
+    lowpasses = [f.name for f in stage_features(stage["columns"], stage["tau_s"])]
+    base = [j for j, name in enumerate(model.temps) if name not in lowpasses]
+    return base, [model.temps.index(c) for c in stage["columns"]], [model.temps.index(n) for n in lowpasses]
+
+
+def fit_gains(high_pass: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """Least squares of the residual on the high-passes, over the rows with a measured residual."""
+    rows = np.isfinite(residual) & np.all(np.isfinite(high_pass), axis=1)
+    return np.linalg.lstsq(high_pass[rows], residual[rows], rcond=None)[0]
+
+
+def with_stage(model: ModelFile, runs: Sequence, tau_s: float) -> ModelFile | None:
+    """``model`` (without a stage) with the stage of time constant ``tau_s`` fitted on ``runs`` ((frame, error)
+    pairs); None when the model cannot take one or the runs are too short for it."""
+    columns = stage_columns(model)
+    if not columns:
+        return None
+    high, residual = [], []
+    for frame, error in runs:
+        inputs = model.inputs(frame)
+        design = np.column_stack([np.ones(len(inputs)), inputs]) if model.intercept else inputs
+        residual.append(np.asarray(error, dtype=float) - design @ np.asarray(model.coefficients[0], dtype=float))
+        high.append(high_passes(model, frame, columns, tau_s))
+    high, residual = np.vstack(high), np.concatenate(residual)
+    if np.count_nonzero(np.isfinite(residual)) < 4 * (len(columns) + 1):
+        return None
+    gains = fit_gains(high, residual)
+    if not np.all(np.isfinite(gains)):
+        return None
+    features = stage_features(columns, tau_s)
+    offset = 1 if model.intercept else 0
+    row = list(model.coefficients[0])
+    slopes = [float(row[offset + model.temps.index(column)]) for column in columns]
+    for column, gain in zip(columns, gains):
+        row[offset + model.temps.index(column)] += float(gain)
+    row += [-float(gain) for gain in gains]
+    stage = {
+        "tau_s": float(tau_s),
+        "columns": list(columns),
+        "coefficients": [float(g) for g in gains],
+        "slopes": slopes,
+    }
+    return model.replace(
+        switching=_ranges_added(model, columns),
+        temps=(*model.temps, *(f.name for f in features)),
+        coefficients=(tuple(row),),
+        derived_inputs=(*(model.derived_inputs or ()), *features),
+        training={**(model.training or {}), FAST_KEY: stage},
+    )
+
+
+def describe(stage: Mapping[str, Any]) -> str:
+    return (
+        f"fast response: each of {len(stage['columns'])} input(s) less its {stage['tau_s'] / 60:g}-min low-pass, "
+        "fitted on the model's residual (the model's coefficients kept)"
+    )
+
+
+__all__ = [
+    "FAST_KEY",
+    "describe",
+    "fit_gains",
+    "high_passes",
+    "stage_columns",
+    "stage_of",
+    "stage_split",
+    "with_stage",
+    "without_stage",
+]
