@@ -19,8 +19,10 @@ slopes), so that the model without it is recovered exactly (:func:`without_stage
 
 Whether a model keeps the stage, and with which τ, is decided on held-out
 stretches with simulated checks (:mod:`groupfit.fast_response_choice`).
-Global models (p = 0) on absolute readings only: a grouped model's groups,
-a reference, a position or a dead band are left as they are.
+Global models (p = 0), on absolute readings or over a reference column
+(``u_k = T_k − R``: the stage adds the reference's low-pass too); a grouped
+model, a reference taken at the start, a position or a dead band are left as
+they are.
 """
 
 from __future__ import annotations
@@ -32,12 +34,13 @@ import numpy as np
 
 from groupfit.features import derived_matrix
 from groupfit.model import ModelFile
+from groupfit.reference import START
 from groupfit.training_checks import FAST_KEY, stage_features
 
 
 def stage_columns(model: ModelFile) -> list[str]:
     """The measured inputs a stage may be fitted on (empty: the model cannot take one)."""
-    if model.p != 0 or model.reference is not None or model.position is not None or model.dead_band is not None:
+    if model.p != 0 or model.reference == START or model.position is not None or model.dead_band is not None:
         return []
     return list(model.measured_inputs)
 
@@ -52,7 +55,7 @@ def without_stage(model: ModelFile) -> ModelFile:
     stage = stage_of(model)
     if stage is None:
         return model
-    names = {feature.name for feature in stage_features(stage["columns"], stage["tau_s"])}
+    names = {feature.name for feature in _features(stage)}
     slopes = dict(zip(stage["columns"], stage["slopes"]))
     offset = 1 if model.intercept else 0
     keep = [j for j, name in enumerate(model.temps) if name not in names]
@@ -70,13 +73,22 @@ def without_stage(model: ModelFile) -> ModelFile:
     )
 
 
+def _features(stage: Mapping[str, Any]):
+    return stage_features(stage["columns"], stage["tau_s"], stage.get("reference"))
+
+
 def _ranges_added(model: ModelFile, columns: Sequence[str]):
-    """The switching section with a valid range for each of the stage's low-passes: its sensor's."""
+    """The switching section with a range for each of the stage's low-passes: its sensor's (the reference's
+    low-pass: the widest of them). Only the measured inputs' ranges are read at run time."""
     switching = model.switching
     index = [model.temps.index(column) for column in columns]
-    low = (*switching.temp_min_c, *(switching.temp_min_c[j] for j in index))
-    high = (*switching.temp_max_c, *(switching.temp_max_c[j] for j in index))
-    return dataclasses.replace(switching, temp_min_c=low, temp_max_c=high)
+    low = [switching.temp_min_c[j] for j in index]
+    high = [switching.temp_max_c[j] for j in index]
+    if model.reference is not None:
+        low, high = [*low, min(low)], [*high, max(high)]
+    return dataclasses.replace(
+        switching, temp_min_c=(*switching.temp_min_c, *low), temp_max_c=(*switching.temp_max_c, *high)
+    )
 
 
 def _ranges_kept(model: ModelFile, keep: Sequence[int]):
@@ -88,20 +100,32 @@ def _ranges_kept(model: ModelFile, keep: Sequence[int]):
 
 
 def high_passes(model: ModelFile, frame, columns: Sequence[str], tau_s: float) -> np.ndarray:
-    """``T_k − LP_τ(T_k)`` of ``columns`` on one run, the low-pass as every target computes it."""
-    lowpassed = derived_matrix(stage_features(columns, tau_s), frame, model.sampling_period_s)
-    return frame[list(columns)].to_numpy(dtype=float) - lowpassed
+    """``u_k − LP_τ(u_k)`` of the inputs ``columns`` on one run, ``u_k`` as the model reads it (``T_k``, or
+    ``T_k − R`` over a reference column ``R``: then ``(T_k − R) − LP(T_k) + LP(R)``, the low-pass being
+    linear), the low-passes as every target computes them."""
+    features = stage_features(columns, tau_s, model.reference)
+    lowpassed = derived_matrix(features, frame, model.sampling_period_s)
+    inputs = model.inputs(frame)[:, [model.temps.index(column) for column in columns]]
+    high = inputs - lowpassed[:, : len(columns)]
+    return high + lowpassed[:, len(columns) :] if model.reference is not None else high
 
 
-def stage_split(model: ModelFile) -> tuple[list[int], list[int], list[int]] | None:
-    """Positions among the model's inputs of: the inputs without the stage, the stage's sensors, their low-passes
-    (None: no stage)."""
+def stage_split(model: ModelFile) -> tuple[list[int], np.ndarray] | None:
+    """The positions among the model's inputs of those without the stage, and the matrix that maps the model's
+    inputs to the stage's high-passes (None: no stage)."""
     stage = stage_of(model)
     if stage is None:
         return None
-    lowpasses = [f.name for f in stage_features(stage["columns"], stage["tau_s"])]
-    base = [j for j, name in enumerate(model.temps) if name not in lowpasses]
-    return base, [model.temps.index(c) for c in stage["columns"]], [model.temps.index(n) for n in lowpasses]
+    names = [f.name for f in _features(stage)]
+    base = [j for j, name in enumerate(model.temps) if name not in names]
+    k = len(stage["columns"])
+    mapping = np.zeros((len(model.temps), k))
+    for i, column in enumerate(stage["columns"]):
+        mapping[model.temps.index(column), i] = 1.0
+        mapping[model.temps.index(names[i]), i] = -1.0
+        if len(names) > k:  # the reference's low-pass
+            mapping[model.temps.index(names[k]), i] = 1.0
+    return base, mapping
 
 
 def fit_gains(high_pass: np.ndarray, residual: np.ndarray) -> np.ndarray:
@@ -128,18 +152,21 @@ def with_stage(model: ModelFile, runs: Sequence, tau_s: float) -> ModelFile | No
     gains = fit_gains(high, residual)
     if not np.all(np.isfinite(gains)):
         return None
-    features = stage_features(columns, tau_s)
+    features = stage_features(columns, tau_s, model.reference)
     offset = 1 if model.intercept else 0
     row = list(model.coefficients[0])
     slopes = [float(row[offset + model.temps.index(column)]) for column in columns]
     for column, gain in zip(columns, gains):
         row[offset + model.temps.index(column)] += float(gain)
     row += [-float(gain) for gain in gains]
+    if model.reference is not None:
+        row.append(float(np.sum(gains)))
     stage = {
         "tau_s": float(tau_s),
         "columns": list(columns),
         "coefficients": [float(g) for g in gains],
         "slopes": slopes,
+        **({"reference": model.reference} if model.reference is not None else {}),
     }
     return model.replace(
         switching=_ranges_added(model, columns),

@@ -99,10 +99,11 @@ def _refit_prediction(
     if split is None:
         coef = _solve(design[:a][train], error[:a][train], model.ridge_alpha, intercept=model.intercept)
         return design[a:] @ coef
-    base, sensors, lowpasses = split
+    base, mapping = split
     columns = ([0] if model.intercept else []) + [j + int(model.intercept) for j in base]
     coef = _solve(design[:a][train][:, columns], error[:a][train], model.ridge_alpha, intercept=model.intercept)
-    high = inputs[:, sensors] - inputs[:, lowpasses]
+    used = np.flatnonzero(np.any(mapping != 0, axis=1))  # only the stage's inputs enter its high-passes
+    high = inputs[:, used] @ mapping[used]
     residual = error[:a] - design[:a][:, columns] @ coef
     gains = fit_gains(high[:a], np.where(train, residual, np.nan))
     return design[a:][:, columns] @ coef + high[a:] @ gains

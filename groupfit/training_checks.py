@@ -22,9 +22,12 @@ FAST_KEY = "fast_response"
 "coefficients", "slopes"}`` (the gains, and the sensors' slopes without the stage)."""
 
 
-def stage_features(columns: Sequence[str], tau_s: float) -> list[Feature]:
-    """The low-passes of the fast-response stage: one per sensor, time constant ``tau_s``."""
-    return [Feature(column, "lowpass", tau_s=float(tau_s)) for column in columns]
+def stage_features(columns: Sequence[str], tau_s: float, reference: str | None = None) -> list[Feature]:
+    """The low-passes of the fast-response stage: one per sensor, time constant ``tau_s``, then the reference
+    column's when the model reads its sensors over one."""
+    return [
+        Feature(column, "lowpass", tau_s=float(tau_s)) for column in (*columns, *([reference] if reference else []))
+    ]
 
 
 def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | None:
@@ -46,7 +49,11 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | No
             return f"{where}.{key} must hold one number per column ({len(columns)})"
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
             return f"{where}.{key} must be finite numbers"
-    missing = [name for name in (*columns, *(f.name for f in stage_features(columns, tau))) if name not in temps]
+    reference = stage.get("reference")
+    if reference is not None and not isinstance(reference, str):
+        return f"{where}.reference = {reference!r}: must be the reference column's name"
+    names = [f.name for f in stage_features(columns, tau, reference)]
+    missing = [name for name in (*columns, *names) if name not in temps]
     if missing:
         return f"{where}: input {missing[0]!r} is not among the model's inputs (temps)"
     return None

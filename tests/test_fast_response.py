@@ -148,6 +148,8 @@ def test_diagnose_seeks_effects_on_the_model_without_its_stage(fitted, tmp_path,
         ({"tau_s": 600, "columns": ["T1"], "coefficients": [1.0, 2.0], "slopes": [1.0]}, "one number per column"),
         ({"tau_s": 600, "columns": ["T1"], "coefficients": ["x"], "slopes": [1.0]}, "finite numbers"),
         ({"tau_s": 600, "columns": ["T1"], "coefficients": [1.0]}, "slopes must hold"),
+        ({"tau_s": 600, "columns": ["T1"], "coefficients": [1.0], "slopes": [1.0], "reference": 5}, "reference"),
+        ({"tau_s": 600, "columns": ["T1"], "coefficients": [1.0], "slopes": [1.0], "reference": "T_amb"}, "'T_amb~"),
         ("600", "must be an object"),
     ],
 )
@@ -157,3 +159,34 @@ def test_a_malformed_stage_is_refused_naming_it(fitted, stage, problem):
     staged["training"][FAST_KEY] = stage
     found = model_problem(staged)
     assert found is not None and FAST_KEY in found and problem in found
+
+
+def test_over_a_reference_column_the_stage_takes_the_rises_high_passes(tmp_path):
+    # the air swings too; the model reads the sensors over it (T_k − T_amb), and so does the stage
+    frame = swinging_run(4, fast_gain=4.0)
+    t = frame["time_s"].to_numpy()
+    air = 20 + 0.3 * np.sin(2 * np.pi * t / 2700.0)
+    frame[SENSORS] = frame[SENSORS].to_numpy() + air[:, None]
+    frame.insert(4, "T_amb", air)
+    frame.to_csv(tmp_path / "run.csv", index=False)
+    args = ["fit", "--data", str(tmp_path / "run.csv"), "--temps", ",".join(SENSORS), "--p", "0", "--ridge", "0"]
+    assert main([*args, "--reference", "T_amb", "--recalibrate", "none", "--quiet", "--out", str(tmp_path / "m")]) == 0
+    model = ModelFile.load(tmp_path / "m" / "model.json")
+    assert model.reference == "T_amb"
+    staged = with_stage(model, [(frame, frame["error_um"].to_numpy())], 600.0)
+    rises = frame[SENSORS].to_numpy() - air[:, None]
+    high = rises - np.column_stack(
+        [exponential_lag(frame[c].to_numpy(), 600.0) - exponential_lag(air, 600.0) for c in SENSORS]
+    )
+    base = model.coefficients[0][0] + rises @ np.asarray(model.coefficients[0][1:])
+    gains = np.linalg.lstsq(high, frame["error_um"].to_numpy() - base, rcond=None)[0]
+    np.testing.assert_allclose(stage_of(staged)["coefficients"], gains, rtol=1e-6, atol=1e-9)
+    assert stage_of(staged)["reference"] == "T_amb" and "T_amb~lp600s" in staged.temps
+    assert model_problem(staged.to_dict()) is None
+    prediction = np.column_stack([np.ones(len(frame)), staged.inputs(frame)]) @ np.asarray(staged.coefficients[0])
+    np.testing.assert_allclose(prediction, base + high @ gains, rtol=0, atol=1e-9)
+    assert without_stage(staged) == model
+    # the held-out refit in two steps sees the same high-passes: the stage helps on held-out stretches
+    kept, tuning, without = choose_stage(model, [(frame, frame["error_um"].to_numpy())], "auto")
+    assert stage_of(kept) is not None and stage_of(kept)["reference"] == "T_amb"
+    assert np.all(np.asarray(tuning.rms_chosen_um) < np.asarray(without.rms_chosen_um))
