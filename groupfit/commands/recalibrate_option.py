@@ -18,7 +18,8 @@ def add_recalibrate_option(parser: argparse.ArgumentParser) -> None:
         default="auto",
         help="how probe checks correct the compensation at run time (the model file's recalibration section): "
         "auto (default: the offset hold or a Kalman filter, whichever serves better on held-out stretches of the "
-        "modelling runs with simulated checks every 15 min … 2 h), hold, kalman, or none",
+        "modelling runs with simulated checks every 15 min … 2 h), hold, kalman, or none; with a filter, a "
+        "fast-response stage of the inputs' swings is kept where those checks show it helps (docs/recalibration.md)",
     )
 
 
