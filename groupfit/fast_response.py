@@ -99,14 +99,17 @@ def _ranges_kept(model: ModelFile, keep: Sequence[int]):
     return dataclasses.replace(switching, temp_min_c=low, temp_max_c=high)
 
 
-def high_passes(model: ModelFile, frame, columns: Sequence[str], tau_s: float) -> np.ndarray:
+def high_passes(
+    model: ModelFile, frame, columns: Sequence[str], tau_s: float, inputs: np.ndarray | None = None
+) -> np.ndarray:
     """``u_k − LP_τ(u_k)`` of the inputs ``columns`` on one run, ``u_k`` as the model reads it (``T_k``, or
     ``T_k − R`` over a reference column ``R``: then ``(T_k − R) − LP(T_k) + LP(R)``, the low-pass being
-    linear), the low-passes as every target computes them."""
+    linear), the low-passes as every target computes them. ``inputs``: the model's inputs on the run, when
+    already computed."""
     features = stage_features(columns, tau_s, model.reference)
     lowpassed = derived_matrix(features, frame, model.sampling_period_s)
-    inputs = model.inputs(frame)[:, [model.temps.index(column) for column in columns]]
-    high = inputs - lowpassed[:, : len(columns)]
+    inputs = model.inputs(frame) if inputs is None else inputs
+    high = inputs[:, [model.temps.index(column) for column in columns]] - lowpassed[:, : len(columns)]
     return high + lowpassed[:, len(columns) :] if model.reference is not None else high
 
 
@@ -143,9 +146,8 @@ def with_stage(model: ModelFile, runs: Sequence, tau_s: float) -> ModelFile | No
     high, residual = [], []
     for frame, error in runs:
         inputs = model.inputs(frame)
-        design = np.column_stack([np.ones(len(inputs)), inputs]) if model.intercept else inputs
-        residual.append(np.asarray(error, dtype=float) - design @ np.asarray(model.coefficients[0], dtype=float))
-        high.append(high_passes(model, frame, columns, tau_s))
+        residual.append(np.asarray(error, dtype=float) - model.predict(inputs))
+        high.append(high_passes(model, frame, columns, tau_s, inputs))
     high, residual = np.vstack(high), np.concatenate(residual)
     if np.count_nonzero(np.isfinite(residual)) < 4 * (len(columns) + 1):
         return None

@@ -1,4 +1,5 @@
-"""Checks of a model file's ``training`` section: the expected next-run error and the recordings a fit recorded."""
+"""Checks of a model file's ``training`` section: the expected next-run error, the recordings a fit recorded and
+the fast-response stage."""
 
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | No
     if not isinstance(stage, Mapping):
         return f"{where} must be an object with tau_s, columns, coefficients and slopes"
     tau, columns = stage.get("tau_s"), stage.get("columns")
-    if not isinstance(tau, (int, float)) or isinstance(tau, bool) or not (math.isfinite(tau) and tau > 0):
+    if not is_number(tau) or tau <= 0:
         return f"{where}.tau_s = {tau!r}: must be a number of seconds > 0"
     if not isinstance(columns, list) or not all(isinstance(c, str) for c in columns) or not columns:
         return f"{where}.columns must be a list of the model's input names"
@@ -47,7 +48,7 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | No
         values = stage.get(key)
         if not isinstance(values, list) or len(values) != len(columns):
             return f"{where}.{key} must hold one number per column ({len(columns)})"
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
+        if not all(is_number(v) for v in values):
             return f"{where}.{key} must be finite numbers"
     reference = stage.get("reference")
     if reference is not None and not isinstance(reference, str):
