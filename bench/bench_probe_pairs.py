@@ -141,12 +141,16 @@ def report(results: list[dict], intervals_s) -> str:
         for s in SCHEDULES:
             shares = []
             for k, h in enumerate(heads):
-                halved = sum(r["rms_um"][s][k] <= 0.5 * r["rms_none_um"] for r in members)
                 median = float(np.median([r["rms_um"][s][k] / r["rms_none_um"] for r in members]))
-                shares.append(f"{h}: {halved}/{len(members)} at most half (median ratio {median:.2f})")
+                shares.append(f"{h}: {halved(members, s, k)}/{len(members)} at most half (median ratio {median:.2f})")
             lines.append(f"{group:<9} first check {s:<9} " + "; ".join(shares))
     lines += [worse_than_none(results, heads), off_the_floor(results, heads)]
     return "\n".join(lines)
+
+
+def halved(results: list[dict], schedule: str, k: int) -> int:
+    """How many pairs the checks of ``schedule`` at the ``k``-th interval leave at most half the unchecked RMS."""
+    return sum(r["rms_um"][schedule][k] <= 0.5 * r["rms_none_um"] for r in results)
 
 
 def worse_than_none(results: list[dict], heads) -> str:
@@ -170,8 +174,7 @@ def off_the_floor(results: list[dict], heads) -> str:
     cells = []
     for s in SCHEDULES:
         for k, h in enumerate(heads):
-            halved = sum(r["rms_um"][s][k] <= 0.5 * r["rms_none_um"] for r in off)
-            cells.append(f"{s} {h}: {halved}/{len(off)}")
+            cells.append(f"{s} {h}: {halved(off, s, k)}/{len(off)}")
     return (
         f"at most half, where the next run's unchecked RMS exceeds {OFF_FACTOR:g}× the model run's in-sample RMS "
         f"({len(off)} of {len(results)} pairs): " + "; ".join(cells)
