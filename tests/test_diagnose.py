@@ -223,6 +223,14 @@ def test_measured_data_realities(tmp_path, capsys):
         assert main(["diagnose", str(model_path), "--data", str(path), "--out", str(tmp_path / "d2")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0]
+        if path == dead_path:
+            assert "--resample SECONDS interpolate" in err[0]  # the way out the fit's own refusal names
+    # a missed reading or three, interpolated as --resample offers
+    short = frame.copy()
+    short.loc[10:12, "T2"] = np.nan
+    short.to_csv(tmp_path / "short.csv", index=False)
+    args = ["diagnose", str(model_path), "--data", str(tmp_path / "short.csv"), "--out", str(tmp_path / "d3")]
+    assert main([*args, "--resample", "100"]) == 0
 
 
 def test_candidates_that_score_alike_keep_the_order_they_were_tried_in():

@@ -31,6 +31,7 @@ from groupfit.heldout.design import group_index, group_sample_floor, stacked_des
 from groupfit.heldout.folds import Folds, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
+from groupfit.resample import GAP_PERIODS
 
 Model = ModelFile
 """The model the diagnosis holds (its JSON object only where it is read or written)."""
@@ -215,7 +216,8 @@ def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
             row = int(np.flatnonzero(bad)[0]) + 1
             raise InputError(
                 f"{run.source}: model input '{name}' is not finite at row {row} ({int(bad.sum())} rows): "
-                "repair or drop those rows before diagnosing"
+                "repair or drop those rows before diagnosing, or let --resample SECONDS interpolate up to "
+                f"{GAP_PERIODS} missed readings in a row"
             )
         if np.ptp(column) == 0.0:
             notes.append(f"model input '{name}' is constant on {run.name} (a dead sensor?)")
