@@ -19,10 +19,11 @@ slopes), so that the model without it is recovered exactly (:func:`without_stage
 
 Whether a model keeps the stage, and with which τ, is decided on held-out
 stretches with simulated checks (:mod:`groupfit.fast_response_choice`).
-Global models (p = 0), on absolute readings or over a reference column
-(``u_k = T_k − R``: the stage adds the reference's low-pass too); a grouped
-model, a reference taken at the start, a position or a dead band are left as
-they are.
+On absolute readings or over a reference column (``u_k = T_k − R``: the
+stage adds the reference's low-pass too); a grouped model fitted on one run
+takes one set of gains shared by its groups, fitted on the residual of each
+sample's offline group, each group's own slopes recorded. A reference taken
+at the start, a position or a dead band are left as they are.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from groupfit.training_checks import FAST_KEY, stage_features
 
 def stage_columns(model: ModelFile) -> list[str]:
     """The measured inputs a stage may be fitted on (empty: the model cannot take one)."""
-    if model.p != 0 or model.reference == START or model.position is not None or model.dead_band is not None:
+    if model.reference == START or model.position is not None or model.dead_band is not None:
         return []
     return list(model.measured_inputs)
 
@@ -56,11 +57,11 @@ def without_stage(model: ModelFile) -> ModelFile:
     if stage is None:
         return model
     names = {feature.name for feature in _features(stage)}
-    slopes = dict(zip(stage["columns"], stage["slopes"]))
     offset = 1 if model.intercept else 0
     keep = [j for j, name in enumerate(model.temps) if name not in names]
     rows = []
-    for row in model.coefficients:
+    for row, row_slopes in zip(model.coefficients, group_slopes(stage, len(model.coefficients))):
+        slopes = dict(zip(stage["columns"], row_slopes))
         rows.append((*row[:offset], *(slopes.get(model.temps[j], row[offset + j]) for j in keep)))
     derived = tuple(f for f in model.derived_inputs or () if f.name not in names)
     training = {k: v for k, v in (model.training or {}).items() if k != FAST_KEY}
@@ -71,6 +72,14 @@ def without_stage(model: ModelFile) -> ModelFile:
         derived_inputs=derived or None,
         training=training,
     )
+
+
+def group_slopes(stage: Mapping[str, Any], n_groups: int) -> list[list[float]]:
+    """The sensors' slopes without the stage, one list per coefficient row: ``slopes`` holds one list per group
+    in a grouped model, the single list of a global model's one row otherwise."""
+    slopes = stage["slopes"]
+    grouped = len(slopes) > 0 and isinstance(slopes[0], (list, tuple))
+    return [list(row) for row in slopes] if grouped else [list(slopes)] * n_groups
 
 
 def _features(stage: Mapping[str, Any]):
@@ -141,7 +150,7 @@ def with_stage(model: ModelFile, runs: Sequence, tau_s: float) -> ModelFile | No
     """``model`` (without a stage) with the stage of time constant ``tau_s`` fitted on ``runs`` ((frame, error)
     pairs); None when the model cannot take one or the runs are too short for it."""
     columns = stage_columns(model)
-    if not columns:
+    if not columns or (model.p > 0 and len(runs) != 1):  # a grouped model's groups are those of its one run
         return None
     high, residual = [], []
     for frame, error in runs:
@@ -156,24 +165,28 @@ def with_stage(model: ModelFile, runs: Sequence, tau_s: float) -> ModelFile | No
         return None
     features = stage_features(columns, tau_s, model.reference)
     offset = 1 if model.intercept else 0
-    row = list(model.coefficients[0])
-    slopes = [float(row[offset + model.temps.index(column)]) for column in columns]
-    for column, gain in zip(columns, gains):
-        row[offset + model.temps.index(column)] += float(gain)
-    row += [-float(gain) for gain in gains]
-    if model.reference is not None:
-        row.append(float(np.sum(gains)))
+    index = [offset + model.temps.index(column) for column in columns]
+    rows, slopes = [], []
+    for coefficients in model.coefficients:
+        row = list(coefficients)
+        slopes.append([float(row[j]) for j in index])
+        for j, gain in zip(index, gains):
+            row[j] += float(gain)
+        row += [-float(gain) for gain in gains]
+        if model.reference is not None:
+            row.append(float(np.sum(gains)))
+        rows.append(tuple(row))
     stage = {
         "tau_s": float(tau_s),
         "columns": list(columns),
         "coefficients": [float(g) for g in gains],
-        "slopes": slopes,
+        "slopes": slopes[0] if len(slopes) == 1 else slopes,
         **({"reference": model.reference} if model.reference is not None else {}),
     }
     return model.replace(
         switching=_ranges_added(model, columns),
         temps=(*model.temps, *(f.name for f in features)),
-        coefficients=(tuple(row),),
+        coefficients=tuple(rows),
         derived_inputs=(*(model.derived_inputs or ()), *features),
         training={**(model.training or {}), FAST_KEY: stage},
     )
@@ -190,6 +203,7 @@ __all__ = [
     "FAST_KEY",
     "describe",
     "fit_gains",
+    "group_slopes",
     "high_passes",
     "stage_columns",
     "stage_of",

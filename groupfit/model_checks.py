@@ -81,8 +81,20 @@ def model_problem(model: Any, required: Sequence[str]) -> str | None:
     missing = [key for key in required if key not in model]
     if missing:
         return f"model file lacks key '{missing[0]}'"
-    checks = (_scalar_problem, _inputs_problem, _groups_problem, _coefficients_problem, rule_section_problem)
-    for check in (*checks, _reference_check, position_problem, dead_band_problem, ridge_problem, recalibration_problem):
+    checks = (
+        _scalar_problem,
+        _inputs_problem,
+        _groups_problem,
+        _coefficients_problem,
+        _training_problem,
+        rule_section_problem,
+        _reference_check,
+        position_problem,
+        dead_band_problem,
+        ridge_problem,
+        recalibration_problem,
+    )
+    for check in checks:
         problem = check(model)
         if problem:
             return problem
@@ -113,13 +125,17 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
     n_samples = model.get("n_samples")
     if n_samples is not None and (not is_whole(n_samples) or n_samples < 1):
         return f"n_samples = {n_samples!r}: must be a whole number ≥ 1"
+    return None
+
+
+def _training_problem(model: Mapping[str, Any]) -> str | None:
     training = model.get("training")
     if training is not None and not isinstance(training, Mapping):
         return "'training' must be an object"
     return (
         expectation_problem(training or {})
         or recordings_problem(training or {})
-        or stage_problem(training or {}, model.get("temps") or [])
+        or stage_problem(training or {}, model["temps"], len(model["coefficients"]))
     )
 
 

@@ -20,7 +20,8 @@ RECORDING_KEYS = ("path", "sha256", "first_time_s", "last_time_s", "period_s")
 
 FAST_KEY = "fast_response"
 """The ``training`` key of the fast-response stage (:mod:`groupfit.fast_response`): ``{"tau_s", "columns",
-"coefficients", "slopes"}`` (the gains, and the sensors' slopes without the stage)."""
+"coefficients", "slopes"}`` (the gains, and the sensors' slopes without the stage: one list, or one list per
+group of a grouped model)."""
 
 
 def stage_features(columns: Sequence[str], tau_s: float, reference: str | None = None) -> list[Feature]:
@@ -31,8 +32,9 @@ def stage_features(columns: Sequence[str], tau_s: float, reference: str | None =
     ]
 
 
-def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | None:
-    """What is wrong with ``training.fast_response`` (None: absent or well formed)."""
+def stage_problem(training: Mapping[str, Any], temps: Sequence[str], n_groups: int = 1) -> str | None:
+    """What is wrong with ``training.fast_response`` (None: absent or well formed); ``n_groups``: the model's
+    coefficient rows."""
     stage = training.get(FAST_KEY)
     if stage is None:
         return None
@@ -44,9 +46,15 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str]) -> str | No
         return f"{where}.tau_s = {tau!r}: must be a number of seconds > 0"
     if not isinstance(columns, list) or not all(isinstance(c, str) for c in columns) or not columns:
         return f"{where}.columns must be a list of the model's input names"
-    for key in ("coefficients", "slopes"):
-        values = stage.get(key)
-        if not isinstance(values, list) or len(values) != len(columns):
+    slopes = stage.get("slopes")
+    grouped = isinstance(slopes, (list, tuple)) and bool(slopes) and all(isinstance(r, (list, tuple)) for r in slopes)
+    if grouped and len(slopes) != n_groups:
+        return f"{where}.slopes must hold one list per group ({n_groups}), or one number per column"
+    for key, values in [
+        ("coefficients", stage.get("coefficients")),
+        *(("slopes", row) for row in (slopes if grouped else [slopes])),
+    ]:
+        if not isinstance(values, (list, tuple)) or len(values) != len(columns):
             return f"{where}.{key} must hold one number per column ({len(columns)})"
         if not all(is_number(v) for v in values):
             return f"{where}.{key} must be finite numbers"

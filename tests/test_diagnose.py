@@ -12,6 +12,7 @@ from groupfit.diagnose.augment import augment_model
 from groupfit.diagnose.candidates import Candidate, candidate_features, rank_candidates, within_one_se
 from groupfit.diagnose.report import column_words
 from groupfit.diagnose.residual import model_inputs
+from groupfit.fast_response import without_stage
 from groupfit.features import Feature, lowpass
 from groupfit.heldout.design import group_design
 from groupfit.heldout.folds import Folds, make_folds
@@ -89,7 +90,7 @@ def test_a_grouped_model_gets_the_effect_with_one_coefficient_as_it_was_scored(t
     group refitted by least squares on what the effect leaves; the shared coefficient is the scorer's."""
     frame = with_ambient_effect(lumped())
     path, model_path = fit_model(tmp_path, frame, "amb", p=2)
-    model = ModelFile.load(model_path).to_dict()
+    model = without_stage(ModelFile.load(model_path)).to_dict()  # as diagnose takes it
     run = load_run(path, temps=TEMPS)
     feature = Feature("T_amb", "lowpass", tau_s=3600.0)
     augmented = augment_model(model, run, model_inputs(model, run), feature).to_dict()

@@ -133,7 +133,7 @@ def test_diagnose_seeks_effects_on_the_model_without_its_stage(fitted, tmp_path,
         args = ["diagnose", str(tmp_path / f"{name}.json"), "--data", str(tmp_path / "run.csv")]
         assert main([*args, "--json", str(tmp_path / f"{name}_d.json"), "--out", str(tmp_path / name)]) == 0
         reports.append(json.loads((tmp_path / f"{name}_d.json").read_text()))
-    capsys.readouterr()
+    assert capsys.readouterr().out.count("fast-response stage is set aside") == 1  # said of the staged model only
     strip = {"model", "model_path", "written"}
     assert {k: v for k, v in reports[0].items() if k not in strip} == {
         k: v for k, v in reports[1].items() if k not in strip

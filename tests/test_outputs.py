@@ -18,6 +18,7 @@ from groupfit.cli import main
 from groupfit.commands.common import StageProgress
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_files, atomic_write_text, check_output_dir, check_output_file
+from groupfit.model import ModelFile
 from groupfit.models.grouped import _ga_reporter
 from groupfit.search.exact import estimate_exact_cost
 
@@ -144,7 +145,8 @@ def test_data_on_the_command_line_does_not_inherit_the_default_runs(tmp_path, ca
     argv = ["fit", "--data", str(data), "--p", "1", "--search", "exact", "--quiet", "--out", str(tmp_path / "o")]
     assert main(argv) == 0
     model = json.loads((tmp_path / "o" / "model.json").read_text())
-    assert model["temps"] == ["T1", "T2", "T3", "T4"]  # the file's sensors, not the default config's T1, T2
+    # the file's sensors (and any stage's low-passes of them), not the default config's T1, T2
+    assert list(ModelFile.from_dict(model).measured_inputs) == ["T1", "T2", "T3", "T4"]
     capsys.readouterr()
     argv = ["compare", "--data", str(data), "--pmax", "1", "--quiet", "--out", str(tmp_path / "c")]
     assert main([*argv, "--json", str(tmp_path / "c.json")]) == 0

@@ -20,7 +20,7 @@ from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM,
 from groupfit.diagnose.plot import plot_diagnosis
 from groupfit.diagnose.select import ridge_base_model, select_base_model
 from groupfit.errors import InputError
-from groupfit.fast_response import without_stage
+from groupfit.fast_response import stage_of, without_stage
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
@@ -189,7 +189,14 @@ def run_diagnose(args: argparse.Namespace) -> int:
         folder=args.out,
         files=("model_augmented.json", "diagnose.png"),
     )
-    model = without_stage(ModelFile.load(args.model)).to_dict()  # effects are sought on the model itself
+    given = ModelFile.load(args.model)
+    model = without_stage(given).to_dict()  # effects are sought on the model itself
+    stage_note = (
+        "\nnote    the model's fast-response stage is set aside: before and after are the models without it "
+        "(replay of the model file serves it); a model written gets its stage chosen again"
+        if stage_of(given) is not None
+        else ""
+    )
     time = args.time or time_column(model)
     clock = {**common.clock_options(args), "time_is_default": args.time is None}
     data = [load_measured(path, model, time, **clock) for path in args.data]
@@ -254,7 +261,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     }
     written.append(common.write_json(args.json, report))
     common.commit_outputs()
-    summary = result.summary() + recal_note + expectation_summary(expectations)
+    summary = result.summary() + recal_note + stage_note + expectation_summary(expectations)
     print(summary + "\nwrote   " + common.wrote_line(written), file=common.report_stream(args))
     return 0
 

@@ -12,10 +12,26 @@
 
 /* Coefficients per group: constant, then one per model input in header order (um, um per unit). */
 static const gf_real gf_coef[GF_N_GROUPS][GF_N_INPUTS + 1] = {
-    /* group 1 */ { GF_R(3.78010133816886196e-03, 3.780101426e-03f), GF_R(8.92393760296887772e-01, 8.923937678e-01f), GF_R(-6.66588843334150916e-01, -6.665888429e-01f), GF_R(1.81562975680013694e+00, 1.815629721e+00f), GF_R(4.96883889024081038e-01, 4.968838990e-01f) },
-    /* group 2 */ { GF_R(-4.22565549083465442e-01, -4.225655496e-01f), GF_R(-5.92512859748232090e-01, -5.925128460e-01f), GF_R(1.26540004876167056e+00, 1.265400052e+00f), GF_R(1.87274473736675673e+00, 1.872744679e+00f), GF_R(4.30615525200900018e-01, 4.306155145e-01f) },
-    /* group 3 */ { GF_R(-4.66440550367618911e+00, -4.664405346e+00f), GF_R(1.15876427482804845e+00, 1.158764243e+00f), GF_R(8.11956054292913065e-01, 8.119560480e-01f), GF_R(2.90654503721604507e-01, 2.906545103e-01f), GF_R(7.43733551287560468e-01, 7.437335253e-01f) }
+    /* group 1 */ { GF_R(3.78010133816886196e-03, 3.780101426e-03f), GF_R(1.22874828280224047e+00, 1.228748322e+00f), GF_R(-7.96091560659324848e-01, -7.960915565e-01f), GF_R(9.79460824522361384e-01, 9.794608355e-01f), GF_R(3.30272914334135304e-01, 3.302729130e-01f), GF_R(-3.36354522505352693e-01, -3.363545239e-01f), GF_R(1.29502717325173933e-01, 1.295027137e-01f), GF_R(8.36168932277775556e-01, 8.361689448e-01f), GF_R(1.66610974689945707e-01, 1.666109711e-01f), GF_R(-7.95928101787542475e-01, -7.959281206e-01f) },
+    /* group 2 */ { GF_R(-4.22565549083465442e-01, -4.225655496e-01f), GF_R(-2.56158337242879397e-01, -2.561583519e-01f), GF_R(1.13589733143649663e+00, 1.135897279e+00f), GF_R(1.03657580508898128e+00, 1.036575794e+00f), GF_R(2.64004550510954283e-01, 2.640045583e-01f), GF_R(-3.36354522505352693e-01, -3.363545239e-01f), GF_R(1.29502717325173933e-01, 1.295027137e-01f), GF_R(8.36168932277775556e-01, 8.361689448e-01f), GF_R(1.66610974689945707e-01, 1.666109711e-01f), GF_R(-7.95928101787542475e-01, -7.959281206e-01f) },
+    /* group 3 */ { GF_R(-4.66440550367618911e+00, -4.664405346e+00f), GF_R(1.49511879733340125e+00, 1.495118856e+00f), GF_R(6.82453336967739133e-01, 6.824533343e-01f), GF_R(-5.45514428556171049e-01, -5.455144048e-01f), GF_R(5.77122576597614789e-01, 5.771225691e-01f), GF_R(-3.36354522505352693e-01, -3.363545239e-01f), GF_R(1.29502717325173933e-01, 1.295027137e-01f), GF_R(8.36168932277775556e-01, 8.361689448e-01f), GF_R(1.66610974689945707e-01, 1.666109711e-01f), GF_R(-7.95928101787542475e-01, -7.959281206e-01f) }
 };
+
+/* derived[0], T1~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_0 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_0 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[1], T2~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_1 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_1 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[2], T3~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_2 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_2 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[3], T4~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_3 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_3 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
+/* derived[4], T_amb~lp300s: low-pass a = exp(-dt/tau), b = 1 - a. */
+static const gf_real gf_lowpass_a_4 = GF_R(7.16531310573789271e-01, 7.165313363e-01f);
+static const gf_real gf_lowpass_b_4 = GF_R(2.83468689426210729e-01, 2.834686935e-01f);
 
 /* Switch window g (group g -> g+1): samples first..last; forced at last. */
 static const long gf_window_first[GF_N_WINDOWS] = { 40L, 138L };
@@ -43,7 +59,7 @@ static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999978e-05, 2.499999937e-0
 static const gf_real gf_rc_p0[3] = { GF_R(2.48156168493871787e+00, 2.481561661e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_max[3] = { GF_R(4.80000000000000000e+01, 4.800000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
-static const gf_real gf_rc_r = GF_R(2.70012538092759789e-02, 2.700125426e-02f);
+static const gf_real gf_rc_r = GF_R(1.93117499105179800e-02, 1.931175031e-02f);
 static const gf_real gf_rc_gate2 = GF_R(2.50000000000000000e+01, 2.500000000e+01f);
 static const gf_real gf_rc_sig2 = GF_R(4.00000000000000000e+00, 4.000000000e+00f);
 static const gf_real gf_rc_rate = GF_R(1.19999999999999996e+00, 1.200000048e+00f);
@@ -159,6 +175,21 @@ void gf_init(gf_state *s)
         s->bad[m] = GF_HOLD_SAMPLES + 1;
         s->last[m] = 0;
     }
+    s->started[0] = 0;
+    s->derived[0] = 0;
+    s->memory[0] = 0;
+    s->started[1] = 0;
+    s->derived[1] = 0;
+    s->memory[1] = 0;
+    s->started[2] = 0;
+    s->derived[2] = 0;
+    s->memory[2] = 0;
+    s->started[3] = 0;
+    s->derived[3] = 0;
+    s->memory[3] = 0;
+    s->started[4] = 0;
+    s->derived[4] = 0;
+    s->memory[4] = 0;
     gf_rc_reset(s);
     s->error_um = 0;
     s->comp_um = 0;
@@ -200,6 +231,56 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         }
     }
 
+    /* derived[0] = T1~lp300s: low-pass of T1, tau = 300 s (temps[0]) */
+    if (!s->started[0] && s->bad[0] == 0) {
+        s->started[0] = 1;
+        s->memory[0] = s->last[0];
+    }
+    if (s->started[0]) {
+        s->memory[0] = gf_lowpass_b_0 * s->last[0] + gf_lowpass_a_0 * s->memory[0];
+        s->derived[0] = s->memory[0];
+    }
+
+    /* derived[1] = T2~lp300s: low-pass of T2, tau = 300 s (temps[1]) */
+    if (!s->started[1] && s->bad[1] == 0) {
+        s->started[1] = 1;
+        s->memory[1] = s->last[1];
+    }
+    if (s->started[1]) {
+        s->memory[1] = gf_lowpass_b_1 * s->last[1] + gf_lowpass_a_1 * s->memory[1];
+        s->derived[1] = s->memory[1];
+    }
+
+    /* derived[2] = T3~lp300s: low-pass of T3, tau = 300 s (temps[2]) */
+    if (!s->started[2] && s->bad[2] == 0) {
+        s->started[2] = 1;
+        s->memory[2] = s->last[2];
+    }
+    if (s->started[2]) {
+        s->memory[2] = gf_lowpass_b_2 * s->last[2] + gf_lowpass_a_2 * s->memory[2];
+        s->derived[2] = s->memory[2];
+    }
+
+    /* derived[3] = T4~lp300s: low-pass of T4, tau = 300 s (temps[3]) */
+    if (!s->started[3] && s->bad[3] == 0) {
+        s->started[3] = 1;
+        s->memory[3] = s->last[3];
+    }
+    if (s->started[3]) {
+        s->memory[3] = gf_lowpass_b_3 * s->last[3] + gf_lowpass_a_3 * s->memory[3];
+        s->derived[3] = s->memory[3];
+    }
+
+    /* derived[4] = T_amb~lp300s: low-pass of T_amb, tau = 300 s (temps[4]) */
+    if (!s->started[4] && s->bad[4] == 0) {
+        s->started[4] = 1;
+        s->memory[4] = s->last[4];
+    }
+    if (s->started[4]) {
+        s->memory[4] = gf_lowpass_b_4 * s->last[4] + gf_lowpass_a_4 * s->memory[4];
+        s->derived[4] = s->memory[4];
+    }
+
     s->switched = 0;
     if (s->group < GF_N_GROUPS) {
         int w = s->group - 1;
@@ -234,9 +315,19 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->rc_usable = 0;
     } else {
         const gf_real *row = gf_coef[s->group - 1];
+        gf_real x[GF_N_INPUTS];
+        x[0] = GF_VALUE(0);
+        x[1] = GF_VALUE(1);
+        x[2] = GF_VALUE(2);
+        x[3] = GF_VALUE(3);
+        x[4] = s->derived[0];
+        x[5] = s->derived[1];
+        x[6] = s->derived[2];
+        x[7] = s->derived[3];
+        x[8] = s->derived[4];
         prediction = row[0];
         for (m = 0; m < GF_N_INPUTS; m++) {
-            prediction = prediction + row[m + 1] * GF_VALUE(m);
+            prediction = prediction + row[m + 1] * x[m];
         }
         if (s->switched && s->has_previous) {
             /* bumpless transfer: the gap from the last output to the new group's prediction */

@@ -9,12 +9,36 @@
  *
  * Readings temps[GF_N_TEMPS], in this order, with the range in which a reading
  * is valid:
- *   temps[0] = T1  [5, 45] degC  (criterion)
- *   temps[1] = T2  [5, 45] degC
- *   temps[2] = T3  [4, 43] degC
- *   temps[3] = T4  [4, 45] degC
- *   temps[4] = T_amb  [9, 31]  (reference: subtracted from every measured input)
+ *   temps[0] = T1  [5, 45] degC  (criterion; also the source of T1~lp300s)
+ *   temps[1] = T2  [5, 45] degC  (also the source of T2~lp300s)
+ *   temps[2] = T3  [4, 43] degC  (also the source of T3~lp300s)
+ *   temps[3] = T4  [4, 45] degC  (also the source of T4~lp300s)
+ *   temps[4] = T_amb  [9, 31]  (source of T_amb~lp300s; reference: subtracted from every measured input)
  *   (temperatures in degC; a source in the unit of its column in the modelling data)
+ *
+ * Model inputs x[GF_N_INPUTS], one coefficient each, in this order:
+ *   x[0] = temps[0]  (T1)
+ *   x[1] = temps[1]  (T2)
+ *   x[2] = temps[2]  (T3)
+ *   x[3] = temps[3]  (T4)
+ *   x[4] = derived[0]  (T1~lp300s)
+ *   x[5] = derived[1]  (T2~lp300s)
+ *   x[6] = derived[2]  (T3~lp300s)
+ *   x[7] = derived[3]  (T4~lp300s)
+ *   x[8] = derived[4]  (T_amb~lp300s)
+ * Derived inputs, computed every sample from the last good value v of their
+ * source reading (a held value stands in for an invalid reading), starting at
+ * the source's first good reading after gf_init():
+ *   derived[0] = T1~lp300s: low-pass of T1, tau = 300 s (temps[0]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[1] = T2~lp300s: low-pass of T2, tau = 300 s (temps[1]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[2] = T3~lp300s: low-pass of T3, tau = 300 s (temps[2]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[3] = T4~lp300s: low-pass of T4, tau = 300 s (temps[3]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
+ *   derived[4] = T_amb~lp300s: low-pass of T_amb, tau = 300 s (temps[4]):
+ *       y = b*v + a*y with y = v before its first sample; a = exp(-dt/tau), b = 1 - a
  *
  * Switching criterion: temps[GF_CRITERION] (T1).
  *
@@ -37,8 +61,8 @@
 #define GROUPFIT_MODEL_H
 
 #define GF_N_TEMPS 5 /* readings per sample */
-#define GF_N_INPUTS 4 /* model inputs: one coefficient each */
-#define GF_N_DERIVED 0 /* derived inputs computed from the readings */
+#define GF_N_INPUTS 9 /* model inputs: one coefficient each */
+#define GF_N_DERIVED 5 /* derived inputs computed from the readings */
 #define GF_N_GROUPS 3
 #define GF_N_WINDOWS 2 /* 2 switch window(s); at least 1 entry */
 #define GF_CRITERION 0
@@ -84,6 +108,9 @@ typedef struct {
     int has_previous;           /* 1 when the last sample computed a prediction (no sensor fault) */
     gf_real previous;           /* that prediction, um */
     gf_real gap;                /* last output before the switch minus the new group's first, um */
+    int started[GF_N_DERIVED];  /* 1 once the source has had a good reading since gf_init */
+    gf_real derived[GF_N_DERIVED]; /* value of every derived input at the last sample */
+    gf_real memory[GF_N_DERIVED];  /* low-pass: its output; derivative: the last value; on-time: samples on */
     gf_real rc_x[3];            /* recalibration: offset (um), drift (um per sample), gain */
     gf_real rc_P[3][3];         /* their covariance */
     gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
