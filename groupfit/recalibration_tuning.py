@@ -45,6 +45,7 @@ import numpy as np
 
 from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
+from groupfit.models.ridge import input_spreads, penalty_diagonal, ridge_solve
 
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
 CUTS = (0.5, 0.7)
@@ -110,18 +111,12 @@ def _refit_prediction(
 
 
 def _solve(design: np.ndarray, target: np.ndarray, alpha: float | None, *, intercept: bool) -> np.ndarray:
-    """Least squares, or ridge on the centred, scaled inputs (the intercept unpenalised) as the model was fitted."""
+    """Least squares, or the ridge penalty as the model was fitted (:mod:`groupfit.models.ridge`: ``alpha · m``
+    times each input's squared spread over the rows fitted, the intercept unpenalised)."""
     if not alpha:
         return np.linalg.lstsq(design, target, rcond=None)[0]
-    start = 1 if intercept else 0
-    x = design[:, start:]
-    mean = x.mean(axis=0) if intercept else np.zeros(x.shape[1])
-    scale = x.std(axis=0)
-    scale[scale == 0] = 1.0
-    z = (x - mean) / scale
-    offset = target.mean() if intercept else 0.0
-    slopes = np.linalg.solve(z.T @ z + alpha * np.eye(z.shape[1]), z.T @ (target - offset)) / scale
-    return np.concatenate([[offset - mean @ slopes], slopes]) if intercept else slopes
+    spreads = input_spreads(design[:, 1:] if intercept else design, fit_intercept=intercept)
+    return ridge_solve(design, target, penalty_diagonal(spreads, alpha, len(design), fit_intercept=intercept))
 
 
 @dataclass(frozen=True)
