@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from test_fast_response import PERIOD_S, SENSORS, exponential_lag
 
 from groupfit.cli import main
 from groupfit.fast_response import stage_of, with_stage, without_stage
@@ -13,20 +14,6 @@ from groupfit.fast_response_choice import choose_stage
 from groupfit.model import ModelFile
 from groupfit.model import model_file_problem as model_problem
 from groupfit.training_checks import FAST_KEY
-
-PERIOD_S = 60.0
-SENSORS = ["T1", "T2", "T3"]
-
-
-def exponential_lag(x: np.ndarray, tau_s: float) -> np.ndarray:
-    """y[k] = a·y[k−1] + (1 − a)·x[k], y[−1] = x[0]: written out here, not taken from the package."""
-    a = np.exp(-PERIOD_S / tau_s)
-    y = np.empty_like(x)
-    memory = x[0]
-    for k, value in enumerate(x):
-        memory = a * memory + (1 - a) * value
-        y[k] = memory
-    return y
 
 
 def two_regime_run(seed: int, *, n: int = 1600) -> pd.DataFrame:
