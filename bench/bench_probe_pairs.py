@@ -3,6 +3,7 @@
 Usage::
 
     python bench/bench_probe_pairs.py [--json FILE] [--every 30m,60m] [--diagnose] [--only NAME ...]
+                                      [--fit-args='--p 1']
 
 Every pair is a model run and a later run of the same machine the model never
 saw, the calibration panel of the next-run estimate (``bench/next_run_panel.py``:
@@ -78,13 +79,14 @@ def pair_frames():
             yield name, "measured", whole.iloc[model], whole.iloc[following], MEASURED_SENSORS, "disp_ch3_um"
 
 
-def build(folder: Path, frame: pd.DataFrame, temps, error: str, *, diagnose: bool) -> Path:
-    """``groupfit fit`` with its defaults (and ``diagnose``) on the model run; the model file left."""
+def build(folder: Path, frame: pd.DataFrame, temps, error: str, *, diagnose: bool, fit_args=()) -> Path:
+    """``groupfit fit`` with its defaults (and ``diagnose``) on the model run; the model file left. ``fit_args``:
+    options added to ``fit`` (``--fit-args``)."""
     modelling = folder / "model_run.csv"
     frame.to_csv(modelling, index=False)
     log = folder / "groupfit.log"
     args = ["fit", "--data", str(modelling), "--error", error, "--temps", ",".join(temps), "--out", str(folder / "fit")]
-    quiet_main(args + ["--quiet", "--no-budget"], log)
+    quiet_main(args + ["--quiet", "--no-budget", *fit_args], log)
     model = folder / "fit" / "model.json"
     if diagnose:
         quiet_main(["diagnose", str(model), "--data", str(modelling), "--out", str(folder / "diag")], log)
@@ -187,6 +189,9 @@ def run(argv=None) -> int:
     parser.add_argument("--every", default="30m,60m", help="check intervals (default 30m,60m)")
     parser.add_argument("--diagnose", action="store_true", help="run groupfit diagnose on the model run too")
     parser.add_argument("--only", nargs="+", help="pair names")
+    parser.add_argument(
+        "--fit-args", default="", help="options added to every groupfit fit, in one string (e.g. --fit-args='--p 1')"
+    )
     args = parser.parse_args(argv)
     intervals = parse_intervals(args.every)
     started = time.perf_counter()
@@ -197,7 +202,7 @@ def run(argv=None) -> int:
                 continue
             folder = Path(tmp) / f"pair{k}"
             folder.mkdir()
-            model_path = build(folder, model, temps, error, diagnose=args.diagnose)
+            model_path = build(folder, model, temps, error, diagnose=args.diagnose, fit_args=args.fit_args.split())
             next_path = folder / "next_run.csv"
             following.to_csv(next_path, index=False)
             results.append(pair_result(name, source, model_path, next_path, intervals))
