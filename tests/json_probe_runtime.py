@@ -14,7 +14,7 @@ class ProbeFilter:
         self.clamp_low, self.clamp_high = clamp
         self.x = [0.0, 0.0, 0.0]
         self.P = [[spec["p0"][i] if i == j else 0.0 for j in range(3)] for i in range(3)]
-        self.applied = self.model = 0.0
+        self.applied = self.model = self.command = 0.0
         self.usable = False
         self.rejected = 0
         self.significant = False
@@ -37,8 +37,8 @@ class ProbeFilter:
             P[i][i] = P[i][i] + self.spec["q"][i]
         self.clamp()
 
-    def correct(self, model: float, held: bool) -> float:
-        self.model, self.usable = model, not held
+    def correct(self, model: float, held: bool, command: float) -> float:
+        self.model, self.usable, self.command = model, not held, command
         rate = self.spec["rate_um"]
         target = self.x[0] + self.x[2] * model
         if self.spec["significance2"] > 0 and not self.significant:
@@ -62,6 +62,12 @@ class ProbeFilter:
                 self.clamp_high = min(w, self.spec["output_max_um"])
             if -w < self.clamp_low:
                 self.clamp_low = max(-w, self.spec["output_min_um"])
+            w = -max(min(-self.command, self.clamp_high), self.clamp_low)
+            if w != self.model:
+                self.x[0] = self.x[0] + (1.0 + self.x[2]) * (self.model - w)
+                self.clamp()
+                self.model = w
+                self.significant = True
         return result
 
     def check(self, z: float) -> int:

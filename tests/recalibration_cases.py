@@ -76,7 +76,24 @@ def probe_cases() -> dict[str, tuple[dict, list[np.ndarray], list[np.ndarray]]]:
     stepped = probe_schedule(run.error + np.where(np.arange(run.n_samples) < run.n_samples // 2, 0.0, 12.0), 10)
     cases["synthetic p=3 a real step"] = (wide, [np.asarray(run.temps, dtype=float)], [stepped])
     cases["synthetic p=3 beyond the clamp"] = (clamped_to_half(with_section(synthetic, KALMAN), run), *wide_runs(run))
+    cases["synthetic p=3 held at the clamp"] = (
+        clamped_to_half(with_section(synthetic, KALMAN), run),
+        [np.asarray(run.temps, dtype=float)],
+        [late_checks_of_less(clamped_to_half(synthetic, run), run)],
+    )
     return cases
+
+
+def late_checks_of_less(model: dict, run) -> np.ndarray:
+    """Checks every 40 samples from the first sample the model commands beyond its clamp on, each reading 0.8 of
+    the error: the check that widens the clamp finds the model over-predicting (the offset must keep its level)."""
+    from groupfit.runtime import SwitchingRule
+
+    prediction = SwitchingRule(model).replay(run.temps).prediction_um
+    first = int(np.flatnonzero(np.abs(prediction) >= model["switching"]["comp_max_um"])[0]) + 5
+    probes = np.full(run.n_samples, np.nan)
+    probes[first::40] = 0.8 * np.asarray(run.error, dtype=float)[first::40]
+    return probes
 
 
 def clamped_to_half(model: dict, run) -> dict:

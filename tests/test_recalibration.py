@@ -454,3 +454,24 @@ def test_an_applied_check_widens_the_models_clamp_to_twice_the_measured_error_wi
     assert (recal.clamp_low, recal.clamp_high) == (-30.0, 30.0)
     recal.reset()
     assert (recal.clamp_low, recal.clamp_high) == (-10.0, 10.0)
+
+
+def test_the_check_that_widens_the_clamp_keeps_the_error_where_it_measured_it():
+    # the model predicts -14 µm, held at its clamp of 10; the check measures -9: it over-predicts
+    table = RuleTables.from_model(ModelFile.from_dict(model_with(HOLD))).recalibration
+    recal = Recalibrator(table, clamp=(-10.0, 10.0), output=(-30.0, 30.0))
+    recal.propagate()
+    recal.correct(-10.0, command_um=-14.0)
+    assert recal.probe(-9.0) == PROBE_APPLIED
+    assert (recal.clamp_low, recal.clamp_high) == (-18.0, 18.0)  # 2·|z|: the model's -14 is no longer held
+    # the hold takes the check's residual against the model's command under the widened clamp: -9 - (-14)
+    assert recal.model_um == -14.0 and recal.x[0] == pytest.approx(5.0, abs=1e-12)
+    for _ in range(20):  # the applied correction moves at its rate
+        recal.propagate()
+        served = -14.0 + recal.correct(-14.0, command_um=-14.0)
+    assert served == pytest.approx(-9.0, abs=1e-12)
+    # without a clamp to widen nothing moves: the residual against the command it checked
+    recal = Recalibrator(table, clamp=(-10.0, 10.0), output=(-30.0, 30.0))
+    recal.propagate()
+    recal.correct(-6.0, command_um=-6.0)
+    assert recal.probe(-9.0) == PROBE_APPLIED and recal.x[0] == pytest.approx(-3.0, abs=1e-12)

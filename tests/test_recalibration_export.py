@@ -110,7 +110,10 @@ def test_the_sheet_names_the_setting_datum_of_a_probe_cycle(tmp_path):
 @pytest.mark.slow
 @pytest.mark.toolchain
 @pytest.mark.parametrize("real", ["REAL", "LREAL"])
-@pytest.mark.parametrize("label, samples", [("lowpass p=0 kalman", 160), ("synthetic p=3 beyond the clamp", None)])
+@pytest.mark.parametrize(
+    "label, samples",
+    [("lowpass p=0 kalman", 160), ("synthetic p=3 beyond the clamp", None), ("synthetic p=3 held at the clamp", None)],
+)
 def test_the_structured_text_block_takes_checks_as_the_python_rule_does(real, label, samples):
     blocks = pytest.importorskip("support.structured_text")
     model, streams, probes = CASES[label]

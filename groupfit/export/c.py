@@ -246,7 +246,7 @@ $${probe_propagate}    if (faulted) {
 $${probe_invalidate}    } else {
 $prediction
         target = -prediction;
-$dead_band$model_clamp$${probe_correct}    }
+$dead_band$${probe_command}$model_clamp$${probe_correct}    }
 $transfer_end$bounded_output    s->error_um = prediction;
     s->fault = (held ? GF_FAULT_HELD : 0) + (faulted ? GF_FAULT_SENSOR : 0)$position_fault;
     if (error_um) {

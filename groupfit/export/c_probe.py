@@ -18,6 +18,7 @@ FIELDS = """    gf_real rc_x[3];            /* recalibration: offset (um), drift
     gf_real rc_P[3][3];         /* their covariance */
     gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
     gf_real rc_model_um;        /* what the model commanded at the last sample (um, within its clamp) */
+    gf_real rc_command_um;      /* the same before the clamp (um) */
     int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
@@ -94,6 +95,7 @@ static void gf_rc_reset(gf_state *s)
     gf_rc_reset_covariance(s);
     s->rc_applied_um = 0;
     s->rc_model_um = 0;
+    s->rc_command_um = 0;
     s->rc_usable = 0;
     s->rc_rejected = 0;
     s->rc_significant = 0;
@@ -212,6 +214,15 @@ int gf_probe(gf_state *s, double measured_error_um)
         if (-w < s->rc_lim_min) {
             s->rc_lim_min = -w > GF_OUT_MIN_UM ? -w : GF_OUT_MIN_UM;
         }
+        /* the model's command at the check under the widened clamp: the offset takes what it changed */
+        w = -s->rc_command_um;
+$command_clamp        w = -w;
+        if (w != s->rc_model_um) {
+            s->rc_x[0] = s->rc_x[0] + (1 + s->rc_x[2]) * (s->rc_model_um - w);
+            gf_rc_clamp(s);
+            s->rc_model_um = w;
+            s->rc_significant = 1;
+        }
     }
     return result;
 }
@@ -270,7 +281,13 @@ def probe_source(tables: RuleTables) -> dict[str, str]:
             "            target = target - correction;\n"
             "        }\n"
         ),
-        "probe_function": FUNCTION,
+        "probe_command": "        s->rc_command_um = -target; /* what the model commands before its clamp */\n",
+        "probe_function": _fill(
+            FUNCTION,
+            {
+                "command_clamp": clamp("c", "w", "s->rc_lim_min", "s->rc_lim_max", " " * 8),
+            },
+        ),
     }
 
 

@@ -17,14 +17,15 @@ PROBE_STEPS = (
     "x[0] = x[0] + x[1]; x[1] = phi * x[1]; for j in 0..2: A[0][j] = P[0][j] + P[1][j], A[1][j] = phi * P[1][j], "
     "A[2][j] = P[2][j]; then for i in 0..2: P[i][0] = A[i][0] + A[i][1], P[i][1] = A[i][1] * phi, "
     "P[i][2] = A[i][2], P[i][i] = P[i][i] + q[i]; then clamp every x[i] to [-x_max[i], x_max[i]] (upper first). "
-    "x starts at 0, P at diag(p0), applied and model at 0, usable false, rejected 0, significant false, gap2 0",
+    "x starts at 0, P at diag(p0), applied, model and command at 0, usable false, rejected 0, significant false, "
+    "gap2 0",
     "at a sample where the group advanced and the sample before computed a prediction (it was not in a sensor "
     "fault): g = that prediction (the transfer's share included, the probe correction not) - the new group's "
     "prediction at this sample (position terms included, before any share); gap2 = gap2 + g * g",
     "under a sensor fault: usable = false (prediction and target 0 as before; applied unchanged)",
-    "otherwise, after target = -prediction (and the dead band): target = min(max(target, clamp_low), "
-    "clamp_high) (the model's clamp, upper bound first; clamp_low and clamp_high start at comp_min_um and "
-    "comp_max_um); model = -target; usable = not held; "
+    "otherwise, after target = -prediction (and the dead band): command = -target; target = min(max(target, "
+    "clamp_low), clamp_high) (the model's clamp, upper bound first; clamp_low and clamp_high start at "
+    "comp_min_um and comp_max_um); model = -target; usable = not held; "
     "t = x[0] + x[2] * model, then t = 0 if significance2 > 0 and not significant; "
     "delta = t - applied limited to [-rate_um, rate_um]; applied = applied + delta; "
     "prediction = prediction + applied; target = target - applied; then target = min(max(target, "
@@ -41,7 +42,10 @@ PROBE_STEPS = (
     "then with the new P: t = x[0] + x[2] * model, hP[i] = P[0][i] + P[2][i] * model, "
     "significant = t * t > significance2 * (hP[0] + hP[2] * model): applied",
     "after an applied check z: w = 2 * |z| (w = |z|, then w = w + w); if w > clamp_high: clamp_high = "
-    "min(w, output_max_um); if -w < clamp_low: clamp_low = max(-w, output_min_um)",
+    "min(w, output_max_um); if -w < clamp_low: clamp_low = max(-w, output_min_um); then the model's command "
+    "under the widened clamp: w = -command, w = min(max(w, clamp_low), clamp_high) (upper bound first), "
+    "w = -w; if w != model: x[0] = x[0] + (1 + x[2]) * (model - w), clamp x (as in the time update), "
+    "model = w, significant = true",
 )
 
 

@@ -202,7 +202,7 @@ ${probe_propagate}
 ${probe_invalidate}    ELSE
 ${prediction}
         target := -prediction;
-${dead_band}${model_clamp}${probe_correct}    END_IF;
+${dead_band}${probe_command}${model_clamp}${probe_correct}    END_IF;
 ${transfer_end}    Fault := 0;
     IF held THEN
         Fault := Fault + $fault_held;

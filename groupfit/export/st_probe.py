@@ -36,6 +36,7 @@ VARS = """    rcX : ARRAY[0..2] OF $real;
     rcK : ARRAY[0..2] OF $real;
     rcApplied : $real := 0.0;
     rcModel : $real := 0.0;
+    rcCommand : $real := 0.0;
     rcDelta : $real;
     rcZ : $real;
     rcNu : $real;
@@ -66,6 +67,7 @@ CONSTANTS = """    (* Recalibration ($description): per-sample process variance,
     RC_SIG2 : $real := $sig2;
     RC_RATE : $real := $rate;
     RC_ZERO : $real := 0.0;
+    RC_ONE : $real := 1.0;
     RC_CONFIRM : INT := $confirm;
     PROBE_LIMIT : LREAL := $limit;
 """
@@ -74,6 +76,7 @@ RESET = """    rcApplied := 0.0;
     rcLimMin := COMP_MIN;
     rcLimMax := COMP_MAX;
     rcModel := 0.0;
+    rcCommand := 0.0;
     rcUsable := FALSE;
     rcRejected := 0;
     rcSignificant := FALSE;
@@ -191,6 +194,16 @@ $inner_projections                rcSignificant := rcTarget * rcTarget > RC_SIG2
                 rcLimMin := OUT_MIN;
             END_IF;
         END_IF;
+        (* the model's command at the check under the widened clamp: the offset takes what it changed *)
+        rcW := -rcCommand;
+$command_clamp        rcW := -rcW;
+        IF rcW <> rcModel THEN
+            rcX[0] := rcX[0] + (RC_ONE + rcX[2]) * (rcModel - rcW);
+            FOR rcI := 0 TO 2 DO
+$outer_clamp            END_FOR;
+            rcModel := rcW;
+            rcSignificant := TRUE;
+        END_IF;
     END_IF;
 END_IF;
 """
@@ -238,9 +251,12 @@ def probe_pieces(tables: RuleTables, real: str, literal) -> dict[str, str]:
         "probe_correct": Template(CORRECT).substitute(
             rate_limited=rate_limited_step("st", "rcApplied", "rcTarget", "rcDelta", "RC_RATE", " " * 8)
         ),
+        "probe_command": "        rcCommand := -target; (* what the model commands before its clamp *)\n",
         "probe_check": Template(CHECK).substitute(
             codes,
             clamp=inner_clamp,
+            command_clamp=clamp("st", "rcW", "rcLimMin", "rcLimMax", " " * 8),
+            outer_clamp=indent(dedent(CLAMP), " " * 12),
             to_real=f"TO_{real}",
             projections=PROJECTIONS,
             inner_projections=indent(dedent(PROJECTIONS), " " * 16),

@@ -280,7 +280,8 @@ class SwitchingRule:
             else:
                 target = self.band_target
         served = within(target, self.recal.clamp_low, self.recal.clamp_high)  # the model alone commands no more
-        correction = self.recal.correct(-served, usable=not held)  # checks correct what the model commands
+        # checks correct what the model commands
+        correction = self.recal.correct(-served, usable=not held, command_um=-target)
         return prediction + correction, served - correction, clamped, served != target
 
     def _group_prediction(self, group: int):

@@ -18,8 +18,17 @@ most ``rate`` per sample, and the rule predicts ``ŷ + c``. The compensation
 is ``−(m + c)`` within the clamp widened by the offset's bound ``x_max0``
 (checks may correct what the clamp leaves; the model alone may not pass it),
 then rate-limited. An applied check ``z`` widens the model's clamp to
-``2·|z|`` (:meth:`Recalibrator.probe`), within the output's bounds. Under a sensor fault the
-output is the safe one and ``c`` is left as it is.
+``2·|z|`` (:meth:`Recalibrator.probe`), within the output's bounds; the
+model's command at the check under the widened clamp, ``m'`` (its command
+before the clamp, ``u``, clamped anew), replaces ``m``, and the offset takes
+the difference, so that the estimate of the error stays where the check put
+it (a model held at its clamp and over-predicting is not released by the
+check that measured less)::
+
+    t = −u clamped to the widened clamp;  m' = −t
+    if m' ≠ m:  x0 = x0 + (1 + x2)·(m − m');  clamp x;  m = m';  significant = true
+
+Under a sensor fault the output is the safe one and ``c`` is left as it is.
 
 A probe check ``z`` (the measured thermal error, µm, after the sample's step;
 :meth:`Recalibrator.probe`) is ignored (:data:`PROBE_IGNORED`) before the first
@@ -199,6 +208,7 @@ class Recalibrator:
         self._reset_covariance()
         self.applied = zero
         self.model_um = zero
+        self.command_um = zero
         self.usable = False
         self.rejected_in_row = 0
         self.significant = False
@@ -236,9 +246,11 @@ class Recalibrator:
         for i in range(N_STATES):
             self.x[i] = within(self.x[i], -self._max[i], self._max[i])
 
-    def correct(self, model_um, *, usable: bool = True):
-        """The applied correction of this sample, after the model's prediction ``model_um`` (rate-limited)."""
+    def correct(self, model_um, *, usable: bool = True, command_um=None):
+        """The applied correction of this sample, after the model's prediction ``model_um`` (within its clamp;
+        ``command_um``: the same before the clamp, default ``model_um``), rate-limited."""
         self.model_um = model_um
+        self.command_um = model_um if command_um is None else command_um
         self.usable = usable
         target = self.x[0] + self.x[2] * model_um
         if self._significance2 > self._zero and not self.significant:
@@ -264,7 +276,17 @@ class Recalibrator:
         result = self._check(measured_um)
         if result == PROBE_APPLIED:
             self._widen(self._real(measured_um))
+            self._rebase()
         return result
+
+    def _rebase(self) -> None:
+        """The model's command at the check under the widened clamp; the offset takes what it changed."""
+        model = -within(-self.command_um, self.clamp_low, self.clamp_high)
+        if model != self.model_um:
+            self.x[0] = self.x[0] + (self._real(1.0) + self.x[2]) * (self.model_um - model)
+            self._clamp()
+            self.model_um = model
+            self.significant = True
 
     def _widen(self, z) -> None:
         w = -z if z < self._zero else z

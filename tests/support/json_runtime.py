@@ -195,8 +195,9 @@ class TableRuntime:
             else:
                 target = self.band_target
         if self.checks:  # the model's clamp, then the correction of what the model commands
+            command = -target
             target = max(min(target, self.checks.clamp_high), self.checks.clamp_low)
-            correction = self.checks.correct(-target, held)
+            correction = self.checks.correct(-target, held, command)
             prediction, target = prediction + correction, target - correction
         return prediction, target, clamped
 

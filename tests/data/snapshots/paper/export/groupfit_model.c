@@ -96,6 +96,7 @@ static void gf_rc_reset(gf_state *s)
     gf_rc_reset_covariance(s);
     s->rc_applied_um = 0;
     s->rc_model_um = 0;
+    s->rc_command_um = 0;
     s->rc_usable = 0;
     s->rc_rejected = 0;
     s->rc_significant = 0;
@@ -342,6 +343,7 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->previous = prediction;
         s->has_previous = 1;
         target = -prediction;
+        s->rc_command_um = -target; /* what the model commands before its clamp */
         if (target > s->rc_lim_max) {
             target = s->rc_lim_max;
         }
@@ -448,6 +450,21 @@ int gf_probe(gf_state *s, double measured_error_um)
         }
         if (-w < s->rc_lim_min) {
             s->rc_lim_min = -w > GF_OUT_MIN_UM ? -w : GF_OUT_MIN_UM;
+        }
+        /* the model's command at the check under the widened clamp: the offset takes what it changed */
+        w = -s->rc_command_um;
+        if (w > s->rc_lim_max) {
+            w = s->rc_lim_max;
+        }
+        if (w < s->rc_lim_min) {
+            w = s->rc_lim_min;
+        }
+        w = -w;
+        if (w != s->rc_model_um) {
+            s->rc_x[0] = s->rc_x[0] + (1 + s->rc_x[2]) * (s->rc_model_um - w);
+            gf_rc_clamp(s);
+            s->rc_model_um = w;
+            s->rc_significant = 1;
         }
     }
     return result;

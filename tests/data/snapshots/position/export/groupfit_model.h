@@ -90,6 +90,7 @@ typedef struct {
     gf_real rc_P[3][3];         /* their covariance */
     gf_real rc_applied_um;      /* correction in the prediction (um), rate-limited */
     gf_real rc_model_um;        /* what the model commanded at the last sample (um, within its clamp) */
+    gf_real rc_command_um;      /* the same before the clamp (um) */
     int rc_usable;              /* 1 when a check may be compared with the last sample's prediction */
     int rc_rejected;            /* checks rejected by the gate in a row */
     int rc_significant;         /* 1 when the last applied check left a correction that stands out of its noise */
