@@ -140,7 +140,9 @@ int gf_check_period(double period_s);
  * not a number within +-GF_PROBE_LIMIT_UM). From the next gf_step() on, the
  * prediction includes the correction, and s->comp_um with it: within the
  * model's clamp [GF_COMP_MIN_UM, GF_COMP_MAX_UM], which an applied check widens
- * to 2|e|, plus the correction, within [GF_OUT_MIN_UM, GF_OUT_MAX_UM]. On a
+ * to 2|e| (the correction then takes what the widening changes in the model's
+ * command, so the estimate stays at e), plus the correction, within
+ * [GF_OUT_MIN_UM, GF_OUT_MAX_UM]. On a
  * SINUMERIK the correction moves the position-independent offset (SD43900) the
  * compensation already writes; no other datum changes.
  */
