@@ -35,23 +35,24 @@ def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFi
     if without is not None:
         line = (
             f"\nfast    {describe(stage_of(model))}: held-out RMS with a check every {minutes} min "
-            + "/".join(f"{v:.3g}" for v in without.rms_chosen_um)
-            + " → "
-            + "/".join(f"{v:.3g}" for v in tuning.rms_chosen_um)
-            + f" µm, without checks {without.rms_none_um:.3g} → {tuning.rms_none_um:.3g}"
+            f"{_per_interval(without.rms_chosen_um)} → {_per_interval(tuning.rms_chosen_um)} µm, "
+            f"without checks {without.rms_none_um:.3g} → {tuning.rms_none_um:.3g}"
         )
     line += f"\nrecal   {section.description}"
     if tuning.rms_hold_um:
         line += (
             f", chosen on held-out checks; RMS with a check every {minutes} min: "
-            + "/".join(f"{v:.3g}" for v in tuning.rms_chosen_um)
-            + " µm (offset hold "
-            + "/".join(f"{v:.3g}" for v in tuning.rms_hold_um)
-            + f", no checks {tuning.rms_none_um:.3g})"
+            f"{_per_interval(tuning.rms_chosen_um)} µm (offset hold {_per_interval(tuning.rms_hold_um)}, "
+            f"no checks {tuning.rms_none_um:.3g})"
         )
     else:
         line += f" ({section.chosen.get('reason', 'default')})"
     return model.replace(recalibration=section), line
+
+
+def _per_interval(values: Sequence[float]) -> str:
+    """One figure per check interval, ``a/b/c`` to three significant digits."""
+    return "/".join(f"{v:.3g}" for v in values)
 
 
 __all__ = ["add_recalibrate_option", "recalibrated"]
