@@ -66,6 +66,7 @@ def test_forward_chaining_matches_a_loop_written_out_by_hand():
     starts = [k * SEGMENT for k in range(len(SPEEDS))]
     scored = [(a, a + SEGMENT) for a in starts if a >= 0.4 * run.n_samples]
     assert scores.n_folds == len(scored) == 3 and scores.segments == "changes of speed_rpm"
+    assert not scores.blocks_of_time and "operating segments" in scores.method()
     expected = np.zeros((2, len(scored)))
     for k, (start, end) in enumerate(scored):
         X, y = run.temps[:start], run.error[:start]
@@ -188,7 +189,7 @@ def test_a_run_without_operating_columns_is_noted_as_one_condition():
     # the folds are blocks of time, and the method says so rather than calling them operating segments
     blocks = len(np.unique(make_folds([frame], []).labels))
     scored = sum(start >= MIN_TRAIN_FRACTION * len(frame) for start in np.linspace(0, len(frame), blocks + 1)[:-1])
-    assert scores.n_folds == scored
+    assert scores.n_folds == scored and scores.blocks_of_time
     assert scores.method().startswith(f"forward chaining over {scored} blocks of time (the run cut into {blocks} ")
     assert "operating segments" not in scores.method()
 

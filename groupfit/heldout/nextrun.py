@@ -72,6 +72,8 @@ class NextRunScores:
     """Samples of the (thinned) run the folds were cut from."""
     n_conditions: int = 0
     """Stretches of one operating condition in the run (1 with no operating column; 0: not counted)."""
+    blocks_of_time: bool = False
+    """The scored folds are equal blocks of time, not operating segments."""
 
     @property
     def n_folds(self) -> int:
@@ -94,7 +96,7 @@ class NextRunScores:
         if self.kind == LEAVE_ONE_RUN_OUT:
             return f"leave-one-run-out over {self.n_folds} runs, each replayed through the run-time rule"
         thinned = f", one sample in {self.stride}" if self.stride > 1 else ""
-        folds = "blocks of time" if NO_OPERATING_COLUMN in self.segments else "operating segments"
+        folds = "blocks of time" if self.blocks_of_time else "operating segments"
         return (
             f"forward chaining over {self.n_folds} {folds} ({self.segments}{thinned}): fitted on the "
             "run before each segment, replayed through the run-time rule, scored on the segment"
@@ -122,9 +124,10 @@ def sliced(run: Run, rows: np.ndarray, *, period: float | None = None) -> Run:
     )
 
 
-def segment_starts(run: Run) -> tuple[list[int], str, int]:
-    """First sample of every operating segment of ``run`` (0-based), how they were found, and how many
-    stretches of one operating condition the run holds (a long one is cut into several segments)."""
+def segment_starts(run: Run) -> tuple[list[int], str, int, bool]:
+    """First sample of every operating segment of ``run`` (0-based), how they were found, how many
+    stretches of one operating condition the run holds (a long one is cut into several segments), and
+    whether the segments are equal blocks of time (the run has no operating column)."""
     exclude = {run.time_name, run.error_name, *run.temp_names}
     if run.reference not in (None, "start"):
         exclude.add(run.reference)
@@ -135,8 +138,8 @@ def segment_starts(run: Run) -> tuple[list[int], str, int]:
     if folds.kind == "condition":
         values = run.frame[list(folds.columns)].to_numpy(dtype=float)
         conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
-        return starts, f"changes of {', '.join(folds.columns)}", conditions
-    return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1
+        return starts, f"changes of {', '.join(folds.columns)}", conditions, False
+    return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, True
 
 
 def forward_folds(run: Run, starts: Sequence[int], min_train: float = MIN_TRAIN_FRACTION) -> list[tuple[int, int]]:
@@ -190,10 +193,11 @@ def forward_chaining(
     prefix is left out of ``candidates``.
     """
     thin, stride = thinned(run, max_samples)
-    starts, how, conditions = segment_starts(thin)
+    starts, how, conditions, blocks = segment_starts(thin)
     folds = forward_folds(thin, starts, min_train)
-    if not folds:  # a run of one segment: score its last blocks
+    if not folds:  # no segment starts late enough: score the run's last blocks of time
         folds = forward_folds(thin, _blocks(thin.n_samples), min_train)
+        how, blocks = f"{how}; none starts after {100 * min_train:g} % of the run, its last blocks scored", True
     n_coef = thin.temps.shape[1] + int(fit_intercept)
     shortest = min(a for a, _ in folds)
     top = feasible_pmax(shortest, n=n, c=c, n_coef=n_coef, pmax=max(p_values))
@@ -216,7 +220,7 @@ def forward_chaining(
             estimator.fit(prefix.temps, prefix.error)
             prediction = rule_prediction(estimator, prefix, X[:end])
             sse[i, k] = float(np.sum((y[scored] - prediction[scored]) ** 2))
-    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, thin.n_samples, conditions)
+    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, thin.n_samples, conditions, blocks)
 
 
 def prefix_breaks(prefix: Run, pmax: int, *, n: int, c: float, fit_intercept: bool) -> dict[int, list[int]]:
@@ -251,7 +255,7 @@ def next_run_splits(runs: Sequence[Run]) -> list[tuple[np.ndarray, np.ndarray]]:
         return [
             (np.r_[rows[: edges[k]], rows[edges[k + 1] :]], rows[edges[k] : edges[k + 1]]) for k in range(len(runs))
         ]
-    starts, _, _ = segment_starts(runs[0])
+    starts, *_ = segment_starts(runs[0])
     folds = forward_folds(runs[0], starts) or forward_folds(runs[0], _blocks(runs[0].n_samples))
     return [(np.arange(a), np.arange(a, b)) for a, b in folds]
 
