@@ -36,7 +36,7 @@ import numpy as np
 from groupfit.features import derived_matrix
 from groupfit.model import ModelFile
 from groupfit.reference import START
-from groupfit.training_checks import FAST_KEY, stage_features
+from groupfit.training_checks import FAST_KEY, slopes_per_group, stage_features
 
 
 def stage_columns(model: ModelFile) -> list[str]:
@@ -78,8 +78,7 @@ def group_slopes(stage: Mapping[str, Any], n_groups: int) -> list[list[float]]:
     """The sensors' slopes without the stage, one list per coefficient row: ``slopes`` holds one list per group
     in a grouped model, the single list of a global model's one row otherwise."""
     slopes = stage["slopes"]
-    grouped = len(slopes) > 0 and isinstance(slopes[0], (list, tuple))
-    return [list(row) for row in slopes] if grouped else [list(slopes)] * n_groups
+    return [list(row) for row in slopes] if slopes_per_group(slopes) else [list(slopes)] * n_groups
 
 
 def _features(stage: Mapping[str, Any]):

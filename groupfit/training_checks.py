@@ -32,6 +32,11 @@ def stage_features(columns: Sequence[str], tau_s: float, reference: str | None =
     ]
 
 
+def slopes_per_group(slopes: Any) -> bool:
+    """Whether a stage's ``slopes`` hold one list per group (a grouped model) rather than one number per column."""
+    return isinstance(slopes, (list, tuple)) and bool(slopes) and all(isinstance(r, (list, tuple)) for r in slopes)
+
+
 def stage_problem(training: Mapping[str, Any], temps: Sequence[str], n_groups: int = 1) -> str | None:
     """What is wrong with ``training.fast_response`` (None: absent or well formed); ``n_groups``: the model's
     coefficient rows."""
@@ -47,7 +52,7 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str], n_groups: i
     if not isinstance(columns, list) or not all(isinstance(c, str) for c in columns) or not columns:
         return f"{where}.columns must be a list of the model's input names"
     slopes = stage.get("slopes")
-    grouped = isinstance(slopes, (list, tuple)) and bool(slopes) and all(isinstance(r, (list, tuple)) for r in slopes)
+    grouped = slopes_per_group(slopes)
     if grouped and len(slopes) != n_groups:
         return f"{where}.slopes must hold one list per group ({n_groups}), or one number per column"
     for key, values in [
