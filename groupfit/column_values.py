@@ -54,6 +54,8 @@ class LoadOptions:
     """A column that is never a default input (the ambient temperature, whatever its name)."""
     temp_range: tuple[float, float] | None = TEMP_RANGE_C
     error_limit: float | None = ERROR_LIMIT_UM
+    drop_glitches: bool = False
+    """Take the error's glitches (:mod:`groupfit.glitches`) as not measured, with a note."""
 
 
 def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:

@@ -13,6 +13,7 @@ A configuration has up to four tables; every key is optional::
     period_tolerance = 2       # % of the period an interval may deviate by (a jittering clock)
     resample_s = 60            # average the readings of every 60 s (a gap splits the log)
     ambient = "T15"            # the ambient sensor, whatever its name
+    keep_glitches = false      # true: keep error readings that leave their neighbours and come back
 
     [model]
     p = "auto"                 # or a whole number; "auto": choose p by p_rule over 0…pmax
@@ -137,6 +138,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "period_tolerance": _number,
         "resample_s": lambda table, key: table.number(key, positive=True),
         "ambient": Table.string,
+        "keep_glitches": Table.boolean,
     },
     "model": {
         "p": _whole_or_auto,

@@ -32,6 +32,7 @@ from groupfit.default_columns import (
 )
 from groupfit.default_columns import length_unit as length_unit
 from groupfit.errors import InputError
+from groupfit.glitches import error_glitches, glitch_note
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import jitter_note, resample_frame
@@ -158,6 +159,7 @@ def load_run(
     resample: float | None = None,
     time_is_default: bool = False,
     error_is_default: bool = False,
+    drop_glitches: bool = False,
 ) -> Run:
     """Read and validate a run.
 
@@ -206,6 +208,11 @@ def load_run(
     error_is_default : bool
         The same for ``error`` (a replay of a model on a log that names its
         error otherwise): the one column named as an error is read, with a note.
+    drop_glitches : bool
+        Take the error's glitches (:mod:`groupfit.glitches`: readings that
+        leave their neighbours and come back) as not measured, with a note
+        naming their rows; for a run that may hold unmeasured rows
+        (``missing_error`` or ``allow_nonfinite``).
 
     Raises
     ------
@@ -214,6 +221,7 @@ def load_run(
     """
     options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
     options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
+    options.update(drop_glitches=drop_glitches)
     runs = load_runs(
         source,
         name=name,
@@ -265,9 +273,10 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
     frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
+    frame, glitched = _glitches_as_missed(frame, label, LoadOptions(**options))
     binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
-    notes = (missed, note) if missed else (note,)
+    notes = tuple(n for n in (missed, glitched) if n) + (note,)
     if len(binned.pieces) == 1:
         return [
             _validated(binned.pieces[0], run_name, label, period_tolerance=period_tolerance, notes=notes, **options)
@@ -284,6 +293,20 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
         )
         for k, piece in enumerate(binned.pieces, start=1)
     ]
+
+
+def _glitches_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[pd.DataFrame, str | None]:
+    """The log with its error's glitches emptied before ``--resample`` averages them in, and a note."""
+    error = options.error
+    if not options.drop_glitches or error is None or error not in frame.columns:
+        return frame, None
+    values = pd.to_numeric(frame[error], errors="coerce").to_numpy(dtype=float) * length_unit(error)[1]
+    glitches = error_glitches(values)
+    if not glitches.size:
+        return frame, None
+    frame = frame.copy()
+    frame.loc[frame.index[glitches], error] = np.nan
+    return frame, glitch_note(error, label, values, glitches)
 
 
 def _validated(
@@ -318,6 +341,12 @@ def _validated(
                 check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp=LOW,HIGH")
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
+    if options.drop_glitches and error_values is not None:
+        glitches = error_glitches(error_values)
+        if glitches.size:
+            notes = notes + (glitch_note(error, label, error_values, glitches),)
+            error_values = error_values.copy()
+            error_values[glitches] = np.nan
 
     return Run(
         name=run_name,

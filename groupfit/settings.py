@@ -33,6 +33,7 @@ class DataSettings:
     period_tolerance: float | None = None
     resample_s: float | None = None
     ambient: str | None = None
+    keep_glitches: bool = False
 
     @property
     def paths(self) -> tuple[str, ...]:

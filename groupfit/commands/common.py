@@ -57,6 +57,18 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
         help="largest plausible |thermal error| in µm (default 1e5); a larger value is refused",
     )
     add_clock_options(parser)
+    add_glitch_option(parser)
+
+
+def add_glitch_option(parser: argparse.ArgumentParser) -> None:
+    """``--keep-glitches``: fit on the error's glitches too (:mod:`groupfit.glitches`)."""
+    parser.add_argument(
+        "--keep-glitches",
+        action="store_true",
+        default=None,
+        help="keep error readings that leave their neighbours and come back (by default such a measuring glitch "
+        "is left out as not measured, with a note naming its rows)",
+    )
 
 
 def add_clock_options(parser: argparse.ArgumentParser) -> None:
@@ -225,6 +237,7 @@ def settings_with_data_options(args: argparse.Namespace) -> tuple[str | Path | N
         "period_tolerance": getattr(args, "period_tolerance", None),
         "resample_s": getattr(args, "resample", None),
         "ambient": getattr(args, "ambient", None),
+        "keep_glitches": getattr(args, "keep_glitches", None),
     }
     return config_path, settings.given(data=data)
 
@@ -256,6 +269,8 @@ def _load_options(data: DataSettings, options: dict) -> dict:
     options.update(temps=list(data.temps) if data.temps is not None else None, time=data.time, error=data.error)
     if data.ambient is not None:
         options.setdefault("ambient", data.ambient)
+    if options.get("missing_error"):  # a run that may hold unmeasured rows: its glitches become such rows
+        options.setdefault("drop_glitches", not data.keep_glitches)
     return options
 
 

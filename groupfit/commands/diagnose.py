@@ -40,6 +40,7 @@ def add_parser(verbs) -> None:
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     common.add_json_option(parser)
     common.add_clock_options(parser)
+    common.add_glitch_option(parser)
     common.add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
         "--min-score",
@@ -199,7 +200,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     )
     time = args.time or time_column(model)
     clock = {**common.clock_options(args), "time_is_default": args.time is None}
-    data = [load_measured(path, model, time, **clock) for path in args.data]
+    data = [load_measured(path, model, time, drop_glitches=not args.keep_glitches, **clock) for path in args.data]
     validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
     common.print_notes([*data, *validate], common.report_stream(args))
     out_dir = common.check_output_dir(args.out)

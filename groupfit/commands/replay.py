@@ -24,6 +24,7 @@ from groupfit.continuation import same_recording, with_histories
 from groupfit.data import Run, load_run, numeric_column
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
+from groupfit.glitches import scored_glitches
 from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
@@ -146,8 +147,11 @@ def run_replay(args: argparse.Namespace) -> int:
     data.update(expectation_check(model, data, args.data))
     span = range_check(model, run)
     clamped, clamp_note = clamp_check(rule.tables, replay)
-    notes = span.get("notes", []) + ([clamp_note] if clamp_note else [])
-    result = ReplayResult({**data, **span, "clamped_samples": clamped, **({"notes": notes} if notes else {})})
+    glitches, glitch_notes = scored_glitches(run.error, residuals(run, replay))
+    notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes
+    result = ReplayResult(
+        {**data, **span, **glitches, "clamped_samples": clamped, **({"notes": notes} if notes else {})}
+    )
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"

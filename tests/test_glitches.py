@@ -1,0 +1,180 @@
+"""Glitches in the measured error: found where they were put and nowhere else, and left out as not measured."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.glitches import WINDOW, error_glitches
+from groupfit.model import ModelFile
+
+ROOT = Path(__file__).resolve().parents[1]
+DATASETS = ROOT / "datasets"
+sys.path.insert(0, str(ROOT / "bench"))
+import independent_machine as machine  # noqa: E402
+
+TEMPS = "T1,T2,T3,T4"
+COMMON = ["--temps", TEMPS, "--reference", "none", "--quiet", "--p", "0", "--ridge", "0", "--recalibrate", "none"]
+
+
+def shipped_errors():
+    for path in sorted(DATASETS.glob("*.csv")):
+        frame = pd.read_csv(path)
+        if "error_um" in frame:
+            yield path.name, frame["error_um"].to_numpy(dtype=float)
+
+
+@pytest.mark.parametrize("name, error", list(shipped_errors()), ids=lambda v: v if isinstance(v, str) else "")
+def test_no_reading_of_a_shipped_run_is_a_glitch(name, error):
+    assert error_glitches(error).size == 0
+    # nor when the error is measured on every fifth row only (a probe cycle)
+    sparse = np.where(np.arange(len(error)) % 5 == 2, error, np.nan)
+    assert error_glitches(sparse).size == 0
+
+
+def test_no_reading_of_the_independent_machines_runs_is_a_glitch():
+    for seed in range(12):
+        scenario = machine.random_spec(seed, "absolute").make()
+        for run in (scenario.modelling, scenario.validation):
+            assert error_glitches(run["error_um"].to_numpy(dtype=float)).size == 0, scenario.name
+
+
+@pytest.mark.parametrize("length", [1, 2, WINDOW // 2])
+def test_glitches_are_found_where_they_were_put_whatever_their_sign(length):
+    error = pd.read_csv(DATASETS / "paper_cycle.csv")["error_um"].to_numpy(dtype=float)
+    rng = np.random.default_rng(length)
+    largest = int(np.argmax(np.abs(error[20:-20]))) + 20  # a logger that wrote 0 where the error is largest
+    others = [s for s in np.arange(20, len(error) - 20, 40) if abs(s - largest) > 2 * WINDOW]
+    starts = np.sort([largest, *rng.choice(others, 3, replace=False)])
+    rows = np.concatenate([np.arange(s, s + length) for s in starts])
+    glitched = error.copy()
+    for start, jump in zip(starts[starts != largest], (300.0, -250.0, 40.0)):
+        glitched[start : start + length] += jump
+    glitched[largest : largest + length] = 0.0
+    np.testing.assert_array_equal(error_glitches(glitched), rows)
+
+
+def test_a_step_of_the_error_and_the_readings_at_the_ends_are_not_glitches():
+    error = pd.read_csv(DATASETS / "paper_cycle.csv")["error_um"].to_numpy(dtype=float)
+    stepped = error + np.where(np.arange(len(error)) >= 200, 0.5 * np.ptp(error), 0.0)
+    assert error_glitches(stepped).size == 0
+    ends = error.copy()
+    ends[0] += 300.0
+    ends[-1] -= 300.0
+    assert error_glitches(ends).size == 0
+
+
+def test_a_quiet_run_of_repeated_readings_has_no_glitch():
+    # a resolution of 1 µm: most departures from the running median are 0, the spread with them
+    error = np.round(np.linspace(0.0, 20.0, 400) + 0.3 * np.sin(np.arange(400) / 3.0))
+    assert error_glitches(error).size == 0
+
+
+@pytest.fixture(scope="module")
+def glitched(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("glitches")
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    rows = [100, 101, 300]
+    dirty = frame.copy()
+    dirty.loc[rows, "error_um"] = [312.0, 311.0, -250.0]
+    dirty.to_csv(tmp / "dirty.csv", index=False)
+    emptied = frame.copy()
+    emptied.loc[rows, "error_um"] = np.nan
+    emptied.to_csv(tmp / "emptied.csv", index=False)
+    return tmp, rows, dirty
+
+
+def fitted(tmp: Path, data: str, out: str, *extra: str) -> tuple[ModelFile, str]:
+    """The model ``fit`` writes and its report."""
+    report = tmp / f"{out}.txt"
+    stdout, sys.stdout = sys.stdout, open(report, "w")
+    try:
+        code = main(["fit", "--data", str(tmp / data), "--out", str(tmp / out), *COMMON, *extra])
+    finally:
+        sys.stdout.close()
+        sys.stdout = stdout
+    assert code == 0
+    return ModelFile.load(tmp / out / "model.json"), report.read_text()
+
+
+def coefficients(model: ModelFile) -> np.ndarray:
+    return model.coefficient_matrix()[0]
+
+
+def test_fit_leaves_the_glitches_out_as_it_leaves_out_rows_not_measured(glitched):
+    tmp, rows, dirty = glitched
+    model, report = fitted(tmp, "dirty.csv", "dirty", "--json", str(tmp / "dirty.json"))
+    reference, _ = fitted(tmp, "emptied.csv", "emptied")
+    assert json.loads((tmp / "dirty.json").read_text())["data_notes"] == [
+        line.removeprefix("note").strip() for line in report.splitlines() if "leave their neighbours" in line
+    ]
+    np.testing.assert_allclose(coefficients(model), coefficients(reference), rtol=1e-12, atol=1e-12)
+    note = next(line for line in report.splitlines() if "leave their neighbours" in line)
+    assert "3 reading(s) of 'error_um'" in note and "--keep-glitches" in note
+    assert all(f"row {r + 1}: " in note for r in rows)  # 1-based data rows
+
+
+def test_keep_glitches_fits_on_them_as_least_squares_does(glitched, tmp_path):
+    tmp, _, dirty = glitched
+    model, report = fitted(tmp, "dirty.csv", "kept", "--keep-glitches")
+    assert "leave their neighbours" not in report
+    design = np.column_stack([np.ones(len(dirty)), dirty[TEMPS.split(",")].to_numpy(dtype=float)])
+    least_squares = np.linalg.lstsq(design, dirty["error_um"].to_numpy(dtype=float), rcond=None)[0]
+    np.testing.assert_allclose(coefficients(model), least_squares, rtol=1e-8, atol=1e-8)
+    # the configuration's [data] keep_glitches does the same
+    config = tmp_path / "run.toml"
+    config.write_text(f'[data]\npath = "{tmp / "dirty.csv"}"\nkeep_glitches = true\n')
+    stdout, sys.stdout = sys.stdout, open(tmp_path / "report.txt", "w")
+    try:
+        assert main(["fit", str(config), "--out", str(tmp_path / "cfg"), *COMMON]) == 0
+    finally:
+        sys.stdout.close()
+        sys.stdout = stdout
+    configured = ModelFile.load(tmp_path / "cfg" / "model.json")
+    np.testing.assert_allclose(coefficients(configured), least_squares, rtol=1e-8, atol=1e-8)
+
+
+def test_resampling_averages_without_the_glitches(glitched):
+    tmp, _, _ = glitched
+    model, report = fitted(tmp, "dirty.csv", "resampled", "--resample", "200")
+    reference, _ = fitted(tmp, "emptied.csv", "resampled_emptied", "--resample", "200")
+    assert "leave their neighbours" in report
+    np.testing.assert_allclose(coefficients(model), coefficients(reference), rtol=1e-12, atol=1e-12)
+
+
+def test_diagnose_reads_the_run_without_its_glitches(glitched, capsys):
+    tmp, _, _ = glitched
+    model = tmp / "emptied" / "model.json"
+    if not model.exists():
+        fitted(tmp, "emptied.csv", "emptied")
+    capsys.readouterr()
+    args = ["diagnose", str(model), "--out"]
+    assert main([*args, str(tmp / "diag_dirty"), "--data", str(tmp / "dirty.csv"), "--json", "-"]) == 0
+    dirty_out, dirty_report = capsys.readouterr()
+    assert main([*args, str(tmp / "diag_emptied"), "--data", str(tmp / "emptied.csv"), "--json", "-"]) == 0
+    emptied = json.loads(capsys.readouterr().out)
+    dirty = json.loads(dirty_out[dirty_out.index("{") :])
+    assert dirty["before"] == emptied["before"] and dirty["after"] == emptied["after"]
+    assert "leave their neighbours" in dirty_report  # the report goes to stderr with --json -
+
+
+def test_replay_scores_the_glitches_as_logged_and_gives_the_rms_without_them(glitched, capsys):
+    tmp, rows, _ = glitched
+    model = tmp / "emptied" / "model.json"
+    if not model.exists():
+        fitted(tmp, "emptied.csv", "emptied")
+    capsys.readouterr()
+    assert main(["replay", str(model), "--data", str(tmp / "dirty.csv"), "--json", "-"]) == 0
+    out, report = capsys.readouterr()
+    data = json.loads(out)
+    residual = np.array([np.nan if s["residual_um"] is None else s["residual_um"] for s in data["samples"]])
+    assert data["rms_um"] == pytest.approx(np.sqrt(np.nanmean(residual**2)), rel=1e-9)  # the glitches counted
+    assert data["glitch_rows"] == [r + 1 for r in rows]
+    kept = np.delete(residual, rows)
+    assert data["rms_without_glitches_um"] == pytest.approx(np.sqrt(np.nanmean(kept**2)), rel=1e-9)
+    assert data["rms_without_glitches_um"] < data["rms_um"] / 5
+    assert any("come back (rows 101, 102, 301)" in note for note in data["notes"])
