@@ -14,7 +14,7 @@ from groupfit.heldout import calibration
 from groupfit.heldout.choice import one_standard_error_choice, pooled_error
 from groupfit.heldout.expect import expect_next_run, trust_notes
 from groupfit.heldout.folds import make_folds
-from groupfit.heldout.nextrun import MIN_TRAIN_FRACTION, forward_chaining, leave_one_run_out
+from groupfit.heldout.nextrun import MIN_TRAIN_FRACTION, forward_chaining, leave_one_run_out, phase_offsets
 from groupfit.model import ModelFile
 from groupfit.model import model_file_problem as model_problem
 from groupfit.models.grouped import GroupedRegressor
@@ -299,3 +299,19 @@ def test_diagnose_reports_before_and_after_with_the_estimate_fit_makes(tmp_path,
     augmented = ModelFile.load(tmp_path / "d" / "model_augmented.json").training
     assert augmented["expected_next_run_rms_um"] == expected["after"]["expected_next_run_rms_um"]
     assert "expect  before: about" in captured.err and "expect  after: about" in captured.err
+
+
+def test_a_thinned_run_pools_the_squared_errors_of_thinnings_from_several_first_rows():
+    run = tiny_run(5, segment=60)  # 360 rows: thinned to every third row for at most 120
+    scores = forward_chaining(run, [0, 1], n=0, c=1.0, max_samples=120)
+    assert scores.stride == 3 and phase_offsets(3) == [0, 1, 2]
+    by_hand = []
+    for offset in (0, 1, 2):
+        frame = tiny_frame(5, segment=60).iloc[offset::3].reset_index(drop=True)
+        frame["time_s"] = 180.0 * np.arange(len(frame))
+        thin = load_run(frame, name=f"every third from {offset}", temps=["T1", "T2"])
+        by_hand.append(forward_chaining(thin, [0, 1], n=0, c=1.0, max_samples=120))
+    assert all(h.stride == 1 and h.n_folds == scores.n_folds for h in by_hand)
+    np.testing.assert_allclose(scores.sse, sum(h.sse for h in by_hand), rtol=1e-9)
+    np.testing.assert_array_equal(scores.counts, sum(h.counts for h in by_hand))
+    assert phase_offsets(1) == [0] and phase_offsets(2) == [0, 1] and phase_offsets(12) == [0, 4, 8]

@@ -43,6 +43,9 @@ from groupfit.search.exact import solve_exact
 
 MAX_SAMPLES = 600
 """A run longer than this is thinned (every k-th row) for the estimate."""
+PHASES = 3
+"""A thinned run is scored from this many first rows spread over one stride, the squared errors pooled: which
+rows a thinning keeps moves a grouped candidate's estimate by up to a third."""
 MIN_TRAIN_FRACTION = 0.4
 """Forward chaining scores the segments that start after this share of the run."""
 MIN_SEGMENTS = 3
@@ -95,7 +98,8 @@ class NextRunScores:
         """One line on how the estimate was made."""
         if self.kind == LEAVE_ONE_RUN_OUT:
             return f"leave-one-run-out over {self.n_folds} runs, each replayed through the run-time rule"
-        thinned = f", one sample in {self.stride}" if self.stride > 1 else ""
+        phases = len(phase_offsets(self.stride))
+        thinned = f", one sample in {self.stride}, {phases} thinnings pooled" if self.stride > 1 else ""
         folds = "blocks of time" if self.blocks_of_time else "operating segments"
         return (
             f"forward chaining over {self.n_folds} {folds} ({self.segments}{thinned}): fitted on the "
@@ -192,7 +196,37 @@ def forward_chaining(
     ridge penalty ``ridge_alpha``). A p whose groups do not fit in the shortest
     prefix is left out of ``candidates``.
     """
-    thin, stride = thinned(run, max_samples)
+    stride = thinned(run, max_samples)[1]
+    phases = [
+        _phase_scores(thinned_from(run, stride, offset), p_values, n, c, fit_intercept, ridge_alpha, min_train)
+        for offset in phase_offsets(stride)
+    ]
+    candidates = tuple(p for p in phases[0][0] if all(p in phase[0] for phase in phases))
+    if len({phase[1].shape[1] for phase in phases}) == 1:  # the same folds in every phase: pooled fold by fold
+        sse = sum(phase[1][[phase[0].index(p) for p in candidates]] for phase in phases)
+        counts = sum(phase[2] for phase in phases)
+    else:
+        sse = np.hstack([phase[1][[phase[0].index(p) for p in candidates]] for phase in phases])
+        counts = np.concatenate([phase[2] for phase in phases])
+    _, _, _, how, conditions, blocks, n_thin = phases[0]
+    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, n_thin, conditions, blocks)
+
+
+def phase_offsets(stride: int, phases: int = PHASES) -> list[int]:
+    """The first rows of the thinned runs the estimate pools: up to ``phases`` spread over one stride."""
+    count = min(phases, stride)
+    return sorted({k * stride // count for k in range(count)})
+
+
+def thinned_from(run: Run, stride: int, offset: int) -> Run:
+    """Every ``stride``-th row of ``run`` from row ``offset`` (the run itself for a stride of 1)."""
+    if stride == 1:
+        return run
+    return sliced(run, np.arange(offset, run.n_samples, stride), period=run.period * stride)
+
+
+def _phase_scores(thin: Run, p_values, n, c, fit_intercept, ridge_alpha, min_train):
+    """Forward chaining on one thinned run: candidates, sse, counts, how, conditions, blocks, samples."""
     starts, how, conditions, blocks = segment_starts(thin)
     folds = forward_folds(thin, starts, min_train)
     if not folds:  # no segment starts late enough: score the run's last blocks of time
@@ -220,7 +254,7 @@ def forward_chaining(
             estimator.fit(prefix.temps, prefix.error)
             prediction = rule_prediction(estimator, prefix, X[:end])
             sse[i, k] = float(np.sum((y[scored] - prediction[scored]) ** 2))
-    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, thin.n_samples, conditions, blocks)
+    return candidates, sse, counts, how, conditions, blocks, thin.n_samples
 
 
 def prefix_breaks(prefix: Run, pmax: int, *, n: int, c: float, fit_intercept: bool) -> dict[int, list[int]]:

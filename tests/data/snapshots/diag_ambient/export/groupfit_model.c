@@ -53,7 +53,7 @@ static const double gf_temp_max[GF_N_TEMPS] = { 4.60000000000000000e+01, 4.60000
  * drift (um/sample)^2, gain), drift decay phi, check variance r, gate^2, significance^2 (0: every correction
  * is applied), state bounds, rate of the correction. */
 static const gf_real gf_rc_q[3] = { GF_R(2.49999999999999978e-05, 2.499999937e-05f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
-static const gf_real gf_rc_p0[3] = { GF_R(4.79970712434535862e+00, 4.799706936e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
+static const gf_real gf_rc_p0[3] = { GF_R(3.88977280160801442e+00, 3.889772892e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_max[3] = { GF_R(5.60000000000000000e+01, 5.600000000e+01f), GF_R(0.00000000000000000e+00, 0.000000000e+00f), GF_R(0.00000000000000000e+00, 0.000000000e+00f) };
 static const gf_real gf_rc_phi = GF_R(9.72604477116348343e-01, 9.726044536e-01f);
 static const gf_real gf_rc_r = GF_R(1.38660164696802236e-02, 1.386601664e-02f);
