@@ -153,12 +153,23 @@ def test_diagnose_reads_the_run_without_its_glitches(glitched, capsys):
         fitted(tmp, "emptied.csv", "emptied")
     capsys.readouterr()
     args = ["diagnose", str(model), "--out"]
-    assert main([*args, str(tmp / "diag_dirty"), "--data", str(tmp / "dirty.csv"), "--json", "-"]) == 0
+    dirty_run, emptied_run = ("--data", str(tmp / "dirty.csv")), ("--data", str(tmp / "emptied.csv"))
+    validate = ("--validate", str(DATASETS / "repeat_timing.csv"))
+    assert main([*args, str(tmp / "diag_dirty"), *dirty_run, *validate, "--json", "-"]) == 0
     dirty_out, dirty_report = capsys.readouterr()
-    assert main([*args, str(tmp / "diag_emptied"), "--data", str(tmp / "emptied.csv"), "--json", "-"]) == 0
+    assert main([*args, str(tmp / "diag_emptied"), *emptied_run, *validate, "--json", "-"]) == 0
     emptied = json.loads(capsys.readouterr().out)
     dirty = json.loads(dirty_out[dirty_out.index("{") :])
     assert dirty["before"] == emptied["before"] and dirty["after"] == emptied["after"]
+    assert dirty["validation_runs"] == emptied["validation_runs"]
+    # a validation run's glitches are left out of its figures as well
+    figures = []
+    for validation in ("dirty", "emptied"):
+        capsys.readouterr()
+        out = str(tmp / f"diag_{validation}_validation")
+        assert main([*args, out, *emptied_run, "--validate", str(tmp / f"{validation}.csv"), "--json", "-"]) == 0
+        figures.append([{**run, "name": None} for run in json.loads(capsys.readouterr().out)["validation_runs"]])
+    assert figures[0] == figures[1]
     assert "leave their neighbours" in dirty_report  # the report goes to stderr with --json -
 
 

@@ -200,7 +200,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     )
     time = args.time or time_column(model)
     clock = {**common.clock_options(args), "time_is_default": args.time is None}
-    data = [load_measured(path, model, time, drop_glitches=not args.keep_glitches, **clock) for path in args.data]
+    clock["drop_glitches"] = not args.keep_glitches
+    data = [load_measured(path, model, time, **clock) for path in args.data]
     validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
     common.print_notes([*data, *validate], common.report_stream(args))
     out_dir = common.check_output_dir(args.out)
