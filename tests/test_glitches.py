@@ -189,3 +189,17 @@ def test_replay_scores_the_glitches_as_logged_and_gives_the_rms_without_them(gli
     assert data["rms_without_glitches_um"] == pytest.approx(np.sqrt(np.nanmean(kept**2)), rel=1e-9)
     assert data["rms_without_glitches_um"] < data["rms_um"] / 5
     assert any("come back (rows 101, 102, 301)" in note for note in data["notes"])
+
+
+def test_compare_scores_a_validation_run_without_its_glitches(glitched, capsys):
+    tmp, _, _ = glitched
+    rows = []
+    for validation, flags in (("dirty", []), ("emptied", []), ("dirty", ["--keep-glitches"])):
+        out = tmp / f"compare_{validation}{len(flags)}"
+        args = ["compare", "--data", str(DATASETS / "repeat_timing.csv"), "--validate", str(tmp / f"{validation}.csv")]
+        args += ["--pmax", "1", "--temps", TEMPS, "--quiet", "--out", str(out), "--json", "-", *flags]
+        assert main(args) == 0
+        result = json.loads(capsys.readouterr().out)
+        rows.append([{**row, "run": None} for row in result["rows"] if row["run"] == validation])
+    assert rows[0] and rows[0] == rows[1]
+    assert all(kept["rms_um"] > 10 * left["rms_um"] for kept, left in zip(rows[2], rows[0]))
