@@ -146,13 +146,20 @@ def test_resampling_averages_without_the_glitches(glitched):
     np.testing.assert_allclose(coefficients(model), coefficients(reference), rtol=1e-12, atol=1e-12)
 
 
-def test_diagnose_reads_the_run_without_its_glitches(glitched, capsys):
-    tmp, _, _ = glitched
+@pytest.fixture(scope="module")
+def clean_model(glitched) -> Path:
+    """The model ``fit`` writes for the run with its glitches emptied."""
+    tmp = glitched[0]
     model = tmp / "emptied" / "model.json"
     if not model.exists():
         fitted(tmp, "emptied.csv", "emptied")
+    return model
+
+
+def test_diagnose_reads_the_run_without_its_glitches(glitched, clean_model, capsys):
+    tmp = glitched[0]
     capsys.readouterr()
-    args = ["diagnose", str(model), "--out"]
+    args = ["diagnose", str(clean_model), "--out"]
     dirty_run, emptied_run = ("--data", str(tmp / "dirty.csv")), ("--data", str(tmp / "emptied.csv"))
     validate = ("--validate", str(DATASETS / "repeat_timing.csv"))
     assert main([*args, str(tmp / "diag_dirty"), *dirty_run, *validate, "--json", "-"]) == 0
@@ -173,13 +180,10 @@ def test_diagnose_reads_the_run_without_its_glitches(glitched, capsys):
     assert "leave their neighbours" in dirty_report  # the report goes to stderr with --json -
 
 
-def test_replay_scores_the_glitches_as_logged_and_gives_the_rms_without_them(glitched, capsys):
+def test_replay_scores_the_glitches_as_logged_and_gives_the_rms_without_them(glitched, clean_model, capsys):
     tmp, rows, _ = glitched
-    model = tmp / "emptied" / "model.json"
-    if not model.exists():
-        fitted(tmp, "emptied.csv", "emptied")
     capsys.readouterr()
-    assert main(["replay", str(model), "--data", str(tmp / "dirty.csv"), "--json", "-"]) == 0
+    assert main(["replay", str(clean_model), "--data", str(tmp / "dirty.csv"), "--json", "-"]) == 0
     out, report = capsys.readouterr()
     data = json.loads(out)
     residual = np.array([np.nan if s["residual_um"] is None else s["residual_um"] for s in data["samples"]])
