@@ -16,7 +16,10 @@ running median): so up to ``WINDOW // 2`` glitches in a row are found, a
 step of the error is not one (the median follows it within half a window)
 and neither is the noise of a quiet run. The first and last ``WINDOW // 2`` readings are never glitches:
 their neighbours are on one side only. Only finite readings count; a log
-whose error is measured on some rows only is tested on those.
+whose error is measured on fewer than :data:`MIN_MEASURED_SHARE` of its rows
+(a probe cycle every few minutes) is not tested: its readings lie too far
+apart to tell a glitch from a change (one in 20 rows of a speed-step run
+already showed one).
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ RANGE_SHARE = 0.5
 """Share of the error's range (1st to 99th percentile) a glitch departs by at least: a real error that is
 sampled sparsely can show a narrow dip of a quarter of its range; no real error swings by half of it and back
 within a few samples."""
+MIN_MEASURED_SHARE = 0.5
+"""Share of a run's rows the error must be measured on for glitches to be looked for."""
 SHOWN = 5
 """Glitches named in the note; the rest are counted."""
 
@@ -41,7 +46,7 @@ def error_glitches(error: np.ndarray) -> np.ndarray:
     error = np.asarray(error, dtype=float)
     rows = np.flatnonzero(np.isfinite(error))
     half = WINDOW // 2
-    if len(rows) < 2 * WINDOW:
+    if len(rows) < max(2 * WINDOW, MIN_MEASURED_SHARE * len(error)):
         return np.array([], dtype=int)
     values = error[rows]
     median = pd.Series(values).rolling(WINDOW, center=True, min_periods=1).median().to_numpy()
@@ -89,4 +94,4 @@ def scored_glitches(error: np.ndarray | None, residual: np.ndarray | None) -> tu
     return {"glitch_rows": [int(i) + 1 for i in glitches], "rms_without_glitches_um": rms}, [note]
 
 
-__all__ = ["RANGE_SHARE", "SIGMAS", "WINDOW", "error_glitches", "glitch_note", "scored_glitches"]
+__all__ = ["MIN_MEASURED_SHARE", "RANGE_SHARE", "SIGMAS", "WINDOW", "error_glitches", "glitch_note", "scored_glitches"]

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.glitches import WINDOW, error_glitches
+from groupfit.glitches import MIN_MEASURED_SHARE, WINDOW, error_glitches
 from groupfit.model import ModelFile
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,9 +31,19 @@ def shipped_errors():
 @pytest.mark.parametrize("name, error", list(shipped_errors()), ids=lambda v: v if isinstance(v, str) else "")
 def test_no_reading_of_a_shipped_run_is_a_glitch(name, error):
     assert error_glitches(error).size == 0
-    # nor when the error is measured on every fifth row only (a probe cycle)
-    sparse = np.where(np.arange(len(error)) % 5 == 2, error, np.nan)
-    assert error_glitches(sparse).size == 0
+    # nor when the error is missing on every third row
+    assert error_glitches(np.where(np.arange(len(error)) % 3 == 1, np.nan, error)).size == 0
+
+
+def test_an_error_measured_on_few_rows_is_not_tested():
+    # a probe cycle every second row: readings too far apart to tell a glitch from a change
+    error = pd.read_csv(DATASETS / "paper_cycle.csv")["error_um"].to_numpy(dtype=float, copy=True)
+    error[100] += 300.0
+    assert error_glitches(error).tolist() == [100]
+    half = np.where(np.arange(len(error)) % 2 == 0, error, np.nan)
+    assert np.isfinite(half).sum() >= MIN_MEASURED_SHARE * len(error) and error_glitches(half).tolist() == [100]
+    half[[0, 2]] = np.nan  # two readings fewer: just under half the rows measured
+    assert np.isfinite(half).sum() < MIN_MEASURED_SHARE * len(error) and error_glitches(half).size == 0
 
 
 def test_no_reading_of_the_independent_machines_runs_is_a_glitch():
