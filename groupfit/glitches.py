@@ -14,8 +14,9 @@ A reading is a glitch when it stands out from the running median of its
 :data:`RANGE_SHARE` of the error's range (the 1st to 99th percentile of the
 running median): so up to ``WINDOW // 2`` glitches in a row are found, a
 step of the error is not one (the median follows it within half a window)
-and neither is the noise of a quiet run. The first and last ``WINDOW // 2`` readings are never glitches:
-their neighbours are on one side only. Only finite readings count; a log
+and neither is the noise of a quiet run. The first and last ``WINDOW // 2``
+readings are never glitches: their neighbours are on one side only. Only
+finite readings count; a log
 whose error is measured on fewer than :data:`MIN_MEASURED_SHARE` of its rows
 (a probe cycle every few minutes) is not tested: its readings lie too far
 apart to tell a glitch from a change (one in 20 rows of a speed-step run
@@ -32,9 +33,9 @@ WINDOW = 7
 SIGMAS = 10.0
 """Robust standard deviations (1.4826 × MAD) of the departures from the running median a glitch exceeds."""
 RANGE_SHARE = 0.5
-"""Share of the error's range (1st to 99th percentile) a glitch departs by at least: a real error that is
-sampled sparsely can show a narrow dip of a quarter of its range; no real error swings by half of it and back
-within a few samples."""
+"""Share of the error's range (the running median's 1st to 99th percentile) a glitch departs by at least: a real
+error sampled sparsely can show a narrow dip of a quarter of its range; no real error swings by half of it and
+back within a few samples."""
 MIN_MEASURED_SHARE = 0.5
 """Share of a run's rows the error must be measured on for glitches to be looked for."""
 SHOWN = 5
