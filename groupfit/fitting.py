@@ -47,7 +47,7 @@ class FitResult:
         return self.choice if self.choice is not None else self.expectation
 
     def to_json(self) -> dict[str, Any]:
-        """The model file object plus ``search`` (and ``p_selection``, ``data_notes``): ``fit --json``."""
+        """The model file object plus ``search`` (and ``p_selection``): ``fit --json``."""
         result = {**self.model.to_dict(), "search": self.estimator.search_}
         if self.intervals is not None:
             result["break_intervals"] = self.intervals.to_json()
@@ -65,8 +65,6 @@ class FitResult:
             result.update(self.expectation.training())
             if len(self.p_choice.candidates) > 1:
                 result["p_selection"] = {"rule": "next-run", **self.p_choice.to_json()}
-        if self.run.notes:  # what loading did to the log (glitches left out, a resampling, a jittering clock)
-            result["data_notes"] = list(dict.fromkeys(self.run.notes))
         return result
 
     def summary(self) -> str:

@@ -23,7 +23,7 @@ from groupfit.switching_checks import (
     parse_derived,
     rule_section_problem,
 )
-from groupfit.training_checks import expectation_problem, recordings_problem, stage_problem
+from groupfit.training_checks import data_notes_problem, expectation_problem, recordings_problem, stage_problem
 from groupfit.training_checks import is_number as _is_number
 
 FORMAT = "groupfit-model/1"
@@ -135,6 +135,7 @@ def _training_problem(model: Mapping[str, Any]) -> str | None:
     return (
         expectation_problem(training or {})
         or recordings_problem(training or {})
+        or data_notes_problem(training or {})
         or stage_problem(training or {}, model["temps"], len(model["coefficients"]))
     )
 

@@ -15,6 +15,8 @@ def is_number(value: Any) -> bool:
 
 
 RECORDINGS_KEY = "recordings"
+DATA_NOTES_KEY = "data_notes"
+"""The model file's ``training`` key: what loading did to the modelling logs (glitches left out, a resampling)."""
 RECORDING_KEYS = ("path", "sha256", "first_time_s", "last_time_s", "period_s")
 
 
@@ -98,6 +100,14 @@ def recordings_problem(training: Mapping[str, Any]) -> str | None:
         if not (clock[0] <= clock[1] and clock[2] > 0):
             return f"{where}: first_time_s <= last_time_s and period_s > 0 are needed"
     return None
+
+
+def data_notes_problem(training: Mapping[str, Any]) -> str | None:
+    """What is wrong with ``training.data_notes`` (None: absent or a list of lines)."""
+    notes = training.get(DATA_NOTES_KEY)
+    if notes is None or (isinstance(notes, list) and all(isinstance(n, str) and n for n in notes)):
+        return None
+    return "training.data_notes must be a list of lines (what loading did to the modelling logs)"
 
 
 def expectation_problem(training: Mapping[str, Any]) -> str | None:

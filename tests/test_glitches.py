@@ -11,6 +11,7 @@ import pytest
 from groupfit.cli import main
 from groupfit.glitches import MIN_MEASURED_SHARE, WINDOW, error_glitches
 from groupfit.model import ModelFile
+from groupfit.model import model_file_problem as model_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"
@@ -119,9 +120,9 @@ def test_fit_leaves_the_glitches_out_as_it_leaves_out_rows_not_measured(glitched
     tmp, rows, dirty = glitched
     model, report = fitted(tmp, "dirty.csv", "dirty", "--json", str(tmp / "dirty.json"))
     reference, _ = fitted(tmp, "emptied.csv", "emptied")
-    assert json.loads((tmp / "dirty.json").read_text())["data_notes"] == [
-        line.removeprefix("note").strip() for line in report.splitlines() if "leave their neighbours" in line
-    ]
+    noted = [line.removeprefix("note").strip() for line in report.splitlines() if "leave their neighbours" in line]
+    assert json.loads((tmp / "dirty.json").read_text())["training"]["data_notes"] == noted
+    assert list(model.training["data_notes"]) == noted and "data_notes" not in reference.training
     np.testing.assert_allclose(coefficients(model), coefficients(reference), rtol=1e-12, atol=1e-12)
     note = next(line for line in report.splitlines() if "leave their neighbours" in line)
     assert "3 reading(s) of 'error_um'" in note and "--keep-glitches" in note
@@ -217,3 +218,28 @@ def test_compare_scores_a_validation_run_without_its_glitches(glitched, capsys):
         rows.append([{**row, "run": None} for row in result["rows"] if row["run"] == validation])
     assert rows[0] and rows[0] == rows[1]
     assert all(kept["rms_um"] > 10 * left["rms_um"] for kept, left in zip(rows[2], rows[0]))
+
+
+@pytest.mark.parametrize("notes", ["a line", [""], [3], ["a line", None]])
+def test_a_model_file_whose_data_notes_are_not_lines_is_refused(clean_model, notes):
+    model = json.loads(clean_model.read_text())
+    model.setdefault("training", {})["data_notes"] = ["glitches left out"]
+    assert model_problem(model) is None
+    model["training"]["data_notes"] = notes
+    assert "training.data_notes must be a list of lines" in model_problem(model)
+
+
+def test_diagnose_keeps_its_own_runs_loading_notes(glitched, clean_model):
+    tmp = glitched[0]
+    for data, flags, expected in (("dirty.csv", [], True), ("dirty.csv", ["--keep-glitches"], False)):
+        out = tmp / f"diag_notes{len(flags)}"
+        args = ["diagnose", str(clean_model), "--data", str(tmp / data), "--out", str(out), "--recalibrate", "none"]
+        stdout, sys.stdout = sys.stdout, open(tmp / "diag_notes.txt", "w")
+        try:
+            assert main([*args, *flags]) == 0
+        finally:
+            sys.stdout.close()
+            sys.stdout = stdout
+        written = next(out.glob("model_*.json"))
+        notes = ModelFile.load(written).training.get("data_notes", [])
+        assert any("leave their neighbours" in note for note in notes) == expected

@@ -26,6 +26,7 @@ from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.model import ModelFile, time_column
 from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.runtime import replay_groups
+from groupfit.training_checks import DATA_NOTES_KEY
 
 
 def add_parser(verbs) -> None:
@@ -241,7 +242,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
         training = {**(result.model.training or {}), **expectations["after"].training()}
         result = replace(result, model=result.model.replace(training=training))
     recordings = {RECORDINGS_KEY: recording_entries(args.data, data, out_dir)}  # the files it was built on
-    result = replace(result, model=result.model.replace(training={**(result.model.training or {}), **recordings}))
+    loading = list(dict.fromkeys(note for run in data for note in run.notes))  # this run's, not the fit's
+    training = {k: v for k, v in (result.model.training or {}).items() if k != DATA_NOTES_KEY}
+    training = {**training, **recordings, **({DATA_NOTES_KEY: loading} if loading else {})}
+    result = replace(result, model=result.model.replace(training=training))
     model_path = Path(args.model)
     written = []
     recal_note = ""

@@ -30,6 +30,7 @@ from groupfit.position_plot import plot_position
 from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.reference import START, with_reference
 from groupfit.settings import ModelSettings, RunSettings
+from groupfit.training_checks import DATA_NOTES_KEY
 
 NEXT_RUN = "next-run"
 P_RULES = (NEXT_RUN, "bic", "target")
@@ -204,6 +205,8 @@ def run_fit(args: argparse.Namespace) -> int:
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
+    if run.notes:
+        training[DATA_NOTES_KEY] = list(dict.fromkeys(run.notes))
     choice = None  # the table p was chosen by, kept apart when the chosen global model got a penalty
     if alpha > 0 and p_expectation is not None and len(p_expectation.candidates) > 1:
         choice = p_expectation
