@@ -32,7 +32,7 @@ from groupfit.default_columns import (
 )
 from groupfit.default_columns import length_unit as length_unit
 from groupfit.errors import InputError
-from groupfit.glitches import error_glitches, glitch_note
+from groupfit.glitches import without_glitches
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import jitter_note, resample_frame
@@ -301,12 +301,12 @@ def _glitches_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions) -
     if not options.drop_glitches or error is None or error not in frame.columns:
         return frame, None
     values = pd.to_numeric(frame[error], errors="coerce").to_numpy(dtype=float) * length_unit(error)[1]
-    glitches = error_glitches(values)
-    if not glitches.size:
+    _, glitches, note = without_glitches(values, error, label)
+    if note is None:
         return frame, None
     frame = frame.copy()
     frame.loc[frame.index[glitches], error] = np.nan
-    return frame, glitch_note(error, label, values, glitches)
+    return frame, note
 
 
 def _validated(
@@ -342,11 +342,8 @@ def _validated(
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
     if options.drop_glitches and error_values is not None:
-        glitches = error_glitches(error_values)
-        if glitches.size:
-            notes = notes + (glitch_note(error, label, error_values, glitches),)
-            error_values = error_values.copy()
-            error_values[glitches] = np.nan
+        error_values, _, glitched = without_glitches(error_values, error, label)
+        notes = notes + ((glitched,) if glitched else ())
 
     return Run(
         name=run_name,
@@ -361,6 +358,11 @@ def _validated(
         time_name=time,
         notes=notes,
     )
+
+
+def loading_notes(runs: Sequence[Run]) -> list[str]:
+    """What loading did to the runs (a jittering clock, a resampling, glitches left out), each note once."""
+    return list(dict.fromkeys(note for run in runs for note in run.notes))
 
 
 def measured_rows(run: Run) -> Run:

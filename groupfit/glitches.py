@@ -16,11 +16,10 @@ running median): so up to ``WINDOW // 2`` glitches in a row are found, a
 step of the error is not one (the median follows it within half a window)
 and neither is the noise of a quiet run. The first and last ``WINDOW // 2``
 readings are never glitches: their neighbours are on one side only. Only
-finite readings count; a log
-whose error is measured on fewer than :data:`MIN_MEASURED_SHARE` of its rows
-(a probe cycle every few minutes) is not tested: its readings lie too far
-apart to tell a glitch from a change (one in 20 rows of a speed-step run
-already showed one).
+finite readings count; a log whose error is measured on fewer than
+:data:`MIN_MEASURED_SHARE` of its rows (a probe cycle every few minutes) is
+not tested: its readings lie too far apart to tell a glitch from a change
+(one in 20 rows of a speed-step run already showed one).
 """
 
 from __future__ import annotations
@@ -72,6 +71,18 @@ def glitch_note(column: str, label: str, error: np.ndarray, glitches: np.ndarray
     )
 
 
+def without_glitches(error: np.ndarray, column: str, label: str) -> tuple[np.ndarray, np.ndarray, str | None]:
+    """``error`` with its glitches as NaN (not measured), their indices, and the note naming them (None: none)."""
+    error = np.asarray(error, dtype=float)
+    glitches = error_glitches(error)
+    if not glitches.size:
+        return error, glitches, None
+    note = glitch_note(column, label, error, glitches)
+    error = error.copy()
+    error[glitches] = np.nan
+    return error, glitches, note
+
+
 def scored_glitches(error: np.ndarray | None, residual: np.ndarray | None) -> tuple[dict, list[str]]:
     """A replay's glitches: ``{"glitch_rows": [...], "rms_without_glitches_um": x}`` and a note, or nothing.
 
@@ -95,4 +106,13 @@ def scored_glitches(error: np.ndarray | None, residual: np.ndarray | None) -> tu
     return {"glitch_rows": [int(i) + 1 for i in glitches], "rms_without_glitches_um": rms}, [note]
 
 
-__all__ = ["MIN_MEASURED_SHARE", "RANGE_SHARE", "SIGMAS", "WINDOW", "error_glitches", "glitch_note", "scored_glitches"]
+__all__ = [
+    "MIN_MEASURED_SHARE",
+    "RANGE_SHARE",
+    "SIGMAS",
+    "WINDOW",
+    "error_glitches",
+    "glitch_note",
+    "scored_glitches",
+    "without_glitches",
+]

@@ -19,6 +19,7 @@ from groupfit.data import (
     join_runs,
     load_run,
     load_runs,
+    loading_notes,
 )
 from groupfit.data_options import parse_error_limit, parse_period_tolerance, parse_temp_range, split_names
 from groupfit.errors import InputError
@@ -116,8 +117,8 @@ def configured_clock(data: DataSettings) -> dict[str, Any]:
 
 
 def print_notes(runs, stream=None) -> None:
-    """Print what loading did to each run (a jittering clock, a resampling), one ``note`` line each."""
-    for note in dict.fromkeys(note for run in runs for note in run.notes):
+    """Print what loading did to each run, one ``note`` line each (:func:`groupfit.data.loading_notes`)."""
+    for note in loading_notes(runs):
         print(f"note     {note}", file=stream or sys.stdout)
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from groupfit.commands import common
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
-from groupfit.data import PERIOD_TOLERANCE, Run, load_run
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
@@ -201,9 +201,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
     )
     time = args.time or time_column(model)
     clock = {**common.clock_options(args), "time_is_default": args.time is None}
-    clock["drop_glitches"] = not args.keep_glitches
-    data = [load_measured(path, model, time, **clock) for path in args.data]
-    validate = [load_measured(path, model, time, **clock) for path in args.validate or []]
+    glitches = {"drop_glitches": not args.keep_glitches}
+    data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
+    validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     common.print_notes([*data, *validate], common.report_stream(args))
     out_dir = common.check_output_dir(args.out)
     start = model
@@ -242,7 +242,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         training = {**(result.model.training or {}), **expectations["after"].training()}
         result = replace(result, model=result.model.replace(training=training))
     recordings = {RECORDINGS_KEY: recording_entries(args.data, data, out_dir)}  # the files it was built on
-    loading = list(dict.fromkeys(note for run in data for note in run.notes))  # this run's, not the fit's
+    loading = loading_notes(data)  # this run's, not the fit's
     training = {k: v for k, v in (result.model.training or {}).items() if k != DATA_NOTES_KEY}
     training = {**training, **recordings, **({DATA_NOTES_KEY: loading} if loading else {})}
     result = replace(result, model=result.model.replace(training=training))

@@ -11,7 +11,7 @@ from groupfit.commands import ar1_fit as ar1_commands
 from groupfit.commands import common, fit_mlr
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
-from groupfit.data import Run, join_runs, measured_rows
+from groupfit.data import Run, join_runs, loading_notes, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
@@ -206,7 +206,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
     if run.notes:
-        training[DATA_NOTES_KEY] = list(dict.fromkeys(run.notes))
+        training[DATA_NOTES_KEY] = loading_notes([run])
     choice = None  # the table p was chosen by, kept apart when the chosen global model got a penalty
     if alpha > 0 and p_expectation is not None and len(p_expectation.candidates) > 1:
         choice = p_expectation

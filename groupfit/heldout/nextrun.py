@@ -45,7 +45,7 @@ MAX_SAMPLES = 600
 """A run longer than this is thinned (every k-th row) for the estimate."""
 PHASES = 3
 """A thinned run is scored from this many first rows spread over one stride, the squared errors pooled: which
-rows a thinning keeps moves a grouped candidate's estimate by up to a third."""
+rows one thinning kept moved a grouped candidate's estimate by a factor of up to 2-4 (docs/nextrun.md)."""
 MIN_TRAIN_FRACTION = 0.4
 """Forward chaining scores the segments that start after this share of the run."""
 MIN_SEGMENTS = 3
@@ -107,13 +107,9 @@ class NextRunScores:
         )
 
 
-def thinned(run: Run, max_samples: int = MAX_SAMPLES) -> tuple[Run, int]:
-    """The run with every k-th row, k the least whole number that leaves at most ``max_samples`` rows."""
-    stride = max(1, int(np.ceil(run.n_samples / max_samples)))
-    if stride == 1:
-        return run, 1
-    rows = np.arange(0, run.n_samples, stride)
-    return sliced(run, rows, period=run.period * stride), stride
+def thinning_stride(n_samples: int, max_samples: int = MAX_SAMPLES) -> int:
+    """k, the least whole number for which every k-th row leaves at most ``max_samples`` of ``n_samples`` rows."""
+    return max(1, int(np.ceil(n_samples / max_samples)))
 
 
 def sliced(run: Run, rows: np.ndarray, *, period: float | None = None) -> Run:
@@ -196,7 +192,7 @@ def forward_chaining(
     ridge penalty ``ridge_alpha``). A p whose groups do not fit in the shortest
     prefix is left out of ``candidates``.
     """
-    stride = thinned(run, max_samples)[1]
+    stride = thinning_stride(run.n_samples, max_samples)
     phases = [
         _phase_scores(thinned_from(run, stride, offset), p_values, n, c, fit_intercept, ridge_alpha, min_train)
         for offset in phase_offsets(stride)
@@ -328,5 +324,6 @@ __all__ = [
     "next_run_splits",
     "rule_prediction",
     "segment_starts",
-    "thinned",
+    "thinned_from",
+    "thinning_stride",
 ]
