@@ -146,7 +146,8 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
 
 
 def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[list, np.ndarray, str | None]:
-    """The input columns and their readings; constant columns among the default inputs are left out, with a note.
+    """The input columns and their readings; constant or empty columns among the default inputs are left out,
+    with a note.
 
     A constant column named with ``--temps`` is refused (a dead sensor); one found by its name (a setpoint
     logged as ``T0_target``, a sensor that never moved) is not an input the user asked for. A run read
@@ -169,6 +170,8 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
     if error is not None and error in temps:
         raise InputError(f"{label}: column '{error}' is both the error and a temperature input")
 
+    empty = [t for t in temps if defaulted and _without_readings(frame, t)] if options.require_error else []
+    temps = [t for t in temps if t not in empty] if len(empty) < len(temps) else temps
     columns = [numeric_column(frame, t, label, allow_nonfinite=options.allow_nonfinite) for t in temps]
     constant = {}
     for t, column in zip(temps, columns):
@@ -183,14 +186,26 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
         )
     kept = [j for j, t in enumerate(temps) if t not in constant]
     array = np.column_stack([columns[j] for j in kept]) if kept else np.empty((len(frame), 0))
-    note = None
+    notes = []
     if constant:
         listed = ", ".join(f"'{t}' ({v:g} °C)" for t, v in constant.items())
-        note = (
+        notes.append(
             f"{label}: constant over the whole run, left out of the inputs: {listed} (a setpoint or a sensor that "
             "never moved); --temps names the inputs"
         )
-    return [temps[j] for j in kept], array, note
+    if empty:
+        listed = ", ".join(f"'{t}'" for t in empty)
+        notes.append(
+            f"{label}: no reading in the whole run, left out of the inputs: {listed} (a channel not connected); "
+            "--temps names the inputs"
+        )
+    return [temps[j] for j in kept], array, "; ".join(notes) or None
+
+
+def _without_readings(frame: pd.DataFrame, column: str) -> bool:
+    """Whether a column holds no finite number at all (a logger's channel with nothing connected)."""
+    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+    return not np.isfinite(values).any()
 
 
 def error_values(frame: pd.DataFrame, error: str | None, label: str, options: LoadOptions) -> np.ndarray | None:

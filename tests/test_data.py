@@ -135,6 +135,21 @@ def test_a_constant_column_among_the_default_inputs_is_left_out_with_a_note(tmp_
         load_run(write_run(tmp_path, dead))
 
 
+def test_an_empty_column_among_the_default_inputs_is_left_out_with_a_note(tmp_path):
+    frame = good_frame().assign(T9=np.nan)
+    run = load_run(write_run(tmp_path, frame))
+    assert run.temp_names == ("T1", "T2", "T3")
+    np.testing.assert_array_equal(run.temps, frame[["T1", "T2", "T3"]].to_numpy())
+    assert any("no reading in the whole run, left out of the inputs: 'T9'" in note for note in run.notes)
+    with pytest.raises(InputError, match=r"row 1, column 'T9' is empty"):  # named: refused
+        load_run(write_run(tmp_path, frame), temps=["T1", "T9"])
+    half = frame.assign(T9=np.where(np.arange(len(frame)) < 5, np.nan, 21.0))
+    with pytest.raises(InputError, match=r"row 1, column 'T9' is empty \(5 non-finite"):  # readings missed: refused
+        load_run(write_run(tmp_path, half))
+    replayed = load_run(write_run(tmp_path, frame), require_error=False, allow_nonfinite=True)
+    assert replayed.temp_names == ("T1", "T2", "T3", "T9")  # a replay keeps what it reads
+
+
 def test_runs_with_other_default_inputs_are_refused_with_the_option_that_aligns_them(tmp_path, capsys):
     frame = good_frame()
     first = write_run(tmp_path, frame, "a.csv")
