@@ -19,6 +19,10 @@ The rules:
   or the data set of ``simulate --out``) is replaced only with ``--force``
   (the files a verb writes into its ``--out`` folder are its own, replaced
   on every run);
+* an existing model file (JSON whose ``format`` is a groupfit model's:
+  ``groupfit-model/1``, ``groupfit-ballscrew/1``) named as an output file
+  (``--json``) is replaced only with ``--force``: it may be the only copy of
+  a model on a machine;
 * an empty path (``--out ""``) is refused instead of meaning the current folder;
 * two outputs may not name one file (``--json DIR/model.json`` beside ``--out DIR``).
 """
@@ -26,6 +30,7 @@ The rules:
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 from pathlib import Path
 from typing import Iterable, Iterator
@@ -36,6 +41,10 @@ from groupfit.io import STAGE, check_output_dir, check_output_file
 DATA_SUFFIXES = frozenset({".csv", ".tsv", ".xlsx", ".xls", ".parquet", ".pq", ".toml"})
 """Files an output named on the command line replaces only with ``--force``: the kinds a run or a
 configuration is read from (the files a verb writes into its ``--out`` folder are its own and replaced)."""
+MODEL_FORMATS = ("groupfit-model/", "groupfit-ballscrew/")
+"""The ``format`` of the model files an output file named on the command line replaces only with ``--force``."""
+MODEL_SNIFF_BYTES = 64 * 1024 * 1024
+"""A JSON file larger than this is not read to tell whether it is a model file (none is that large)."""
 
 
 def _resolved(path: str | Path) -> Path:
@@ -47,6 +56,17 @@ def _same_file(a: Path, b: Path) -> bool:
         return a.exists() and b.exists() and os.path.samefile(a, b)
     except OSError:
         return False
+
+
+def _is_model_file(path: Path) -> bool:
+    """Whether ``path`` holds a groupfit model (a JSON object whose ``format`` is one of :data:`MODEL_FORMATS`)."""
+    try:
+        if path.suffix.lower() != ".json" or path.stat().st_size > MODEL_SNIFF_BYTES:
+            return False
+        content = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return False
+    return isinstance(content, dict) and str(content.get("format", "")).startswith(MODEL_FORMATS)
 
 
 class OutputPlan:
@@ -92,6 +112,10 @@ class OutputPlan:
             raise InputError(
                 f"{target}: {option} would replace an existing data file; choose another {option}, or pass --force "
                 "to replace it"
+            )
+        if target.is_file() and not self.force and _is_model_file(target):
+            raise InputError(
+                f"{target}: {option} would replace a model file; choose another {option}, or pass --force to replace it"
             )
         return check_output_file(target, option)
 

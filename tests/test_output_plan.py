@@ -144,6 +144,20 @@ def test_an_existing_data_file_is_replaced_only_with_force(inputs, tmp_path, cap
     assert status == 2 and "--force" in err[0] and unchanged
 
 
+def test_an_existing_model_file_is_replaced_only_with_force(inputs, tmp_path, capsys):
+    model = (inputs / "model.json").read_text()
+    (tmp_path / "kept.json").write_text(model)
+    argv = ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{tmp}/kept.json")
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and "would replace a model file" in err[0] and "--force" in err[0]
+    assert unchanged
+    status, _, _ = _run((*argv, "--force"), inputs, tmp_path, capsys)
+    assert status == 0 and "rms_um" in json.loads((tmp_path / "kept.json").read_text())
+    # a JSON file that is not a model (last run's report) is replaced as before
+    status, _, _ = _run(argv, inputs, tmp_path, capsys)
+    assert status == 0
+
+
 @pytest.mark.parametrize(
     "argv, words",
     [

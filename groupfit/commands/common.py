@@ -173,7 +173,7 @@ def add_force_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--force",
         action="store_true",
-        help="replace an existing data file named as an output (never one the command reads)",
+        help="replace an existing data or model file named as an output (never one the command reads)",
     )
 
 
