@@ -273,6 +273,8 @@ class Tuning:
     rms_none_um: float
     rms_hold_um: tuple[float, ...]
     rms_chosen_um: tuple[float, ...]
+    rms_none_by_interval_um: tuple[float, ...] = ()
+    """Without checks, on the samples each interval's figures are taken from (those after its first check)."""
 
 
 def choose_recalibration(
@@ -330,6 +332,7 @@ def choose_recalibration(
     best = _most_responsive_of_the_best(
         candidates, np.mean(np.log(rms / rms[:, :1]), axis=0), kalman=method == "kalman"
     )
+    unchecked = [_rms_unchecked(series, every) for every in everies]
     chosen = {
         "by": "held-out checks",
         "method_asked": method,
@@ -342,6 +345,7 @@ def choose_recalibration(
         "indifference": INDIFFERENCE,
         "rms_hold_um": [float(v) for v in rms[:, 0]],
         "rms_chosen_um": [float(v) for v in rms[:, best]],
+        "rms_none_by_interval_um": unchecked,
         "candidates": len(candidates),
     }
     return Tuning(
@@ -350,7 +354,15 @@ def choose_recalibration(
         rms_none,
         tuple(float(v) for v in rms[:, 0]),
         tuple(float(v) for v in rms[:, best]),
+        tuple(unchecked),
     )
+
+
+def _rms_unchecked(series: Sequence[HeldOut], every: int) -> float:
+    """The held-out RMS without checks over the samples a replay with checks every ``every`` scores."""
+    tail = np.concatenate([s.residual[every:] for s in series])
+    tail = tail[np.isfinite(tail)]
+    return float(np.sqrt(np.mean(tail**2))) if tail.size else math.nan
 
 
 def initial_offset_sigma(model: ModelFile, rms_none: float, offset_max: float) -> float:
