@@ -21,7 +21,8 @@ T``, the default) and at the run's first sample (``--probe-first 0``).
 Printed per pair: RMS without checks and with them, and the ratio; overall,
 the share of pairs where the checks leave at most half the unchecked RMS,
 per schedule and interval; how many pairs the checks leave worse than
-without them (by more than 5 %); and the share halved among the pairs whose
+without them (by more than 5 %), and whether the model run's held-out
+stretches (``recalibration.chosen``) said so beforehand; and the share halved among the pairs whose
 model is off on the next run (its unchecked RMS more than twice the model
 run's in-sample RMS), not at its noise floor. The probe reading is the run's
 measured error.
@@ -122,6 +123,7 @@ def pair_result(name, source, model_path: Path, following: Path, intervals_s) ->
         "rms_in_sample_um": float(model.training["rms_um"]),
         "clamped": none.get("clamped_samples"),
         "rms_um": checked,
+        "held_out_worse": [held_out_worse(model, t) for t in intervals_s],
     }
 
 
@@ -146,7 +148,7 @@ def report(results: list[dict], intervals_s) -> str:
                 median = float(np.median([r["rms_um"][s][k] / r["rms_none_um"] for r in members]))
                 shares.append(f"{h}: {halved(members, s, k)}/{len(members)} at most half (median ratio {median:.2f})")
             lines.append(f"{group:<9} first check {s:<9} " + "; ".join(shares))
-    lines += [worse_than_none(results, heads), off_the_floor(results, heads)]
+    lines += [worse_than_none(results, heads), off_the_floor(results, heads), held_out_foretold(results, heads)]
     return "\n".join(lines)
 
 
@@ -164,6 +166,27 @@ def worse_than_none(results: list[dict], heads) -> str:
             worst = max((r["rms_um"][s][k] / r["rms_none_um"] for r in worse), default=1.0)
             cells.append(f"{s} {h}: {len(worse)}/{len(results)} (worst ×{worst:.2f})")
     return f"worse than no checks by more than {100 * (WORSE_TOLERANCE - 1):.0f} %: " + "; ".join(cells)
+
+
+def held_out_worse(model: ModelFile, interval_s: float) -> bool | None:
+    """Whether the chosen filter did worse than no checks (by more than 5 %) at ``interval_s`` on the model
+    run's held-out stretches (``recalibration.chosen``); None when the tuning did not try that interval."""
+    chosen = model.recalibration.chosen if model.recalibration else None
+    if not chosen or interval_s not in chosen.get("intervals_s", ()) or "rms_none_by_interval_um" not in chosen:
+        return None
+    k = list(chosen["intervals_s"]).index(interval_s)
+    return chosen["rms_chosen_um"][k] > WORSE_TOLERANCE * chosen["rms_none_by_interval_um"][k]
+
+
+def held_out_foretold(results: list[dict], heads) -> str:
+    """Whether the model run's held-out stretches foretold the next runs the checks made worse than none."""
+    cells = []
+    for k, h in enumerate(heads):
+        worse = [r["rms_um"]["after T"][k] > WORSE_TOLERANCE * r["rms_none_um"] for r in results]
+        said = [bool(r["held_out_worse"][k]) for r in results]
+        both = sum(w and v for w, v in zip(worse, said))
+        cells.append(f"{h}: said {sum(said)}, of them worse {both}; worse {sum(worse)}, of them said {both}")
+    return "held-out stretches that said checks do worse than none, against the next run: " + "; ".join(cells)
 
 
 def off_the_floor(results: list[dict], heads) -> str:

@@ -19,6 +19,7 @@ from groupfit.recalibration_tuning import (
     _most_responsive_of_the_best,
     candidate_grid,
     choose_recalibration,
+    held_out_series,
     replay_candidates,
     white_sigma,
 )
@@ -360,6 +361,30 @@ def test_tuning_keeps_the_hold_on_a_random_walk_and_takes_a_drift_when_the_error
     assert sections["drift"].method == "kalman" and "drift" in sections["drift"].terms
     assert max(ratios["drift"]) < 0.7 and np.mean(ratios["drift"]) < 0.5  # a drift is extrapolated between checks
     assert math.isfinite(sections["drift"].chosen["rms_none_um"])
+
+
+def test_the_no_check_figure_of_each_interval_is_taken_on_the_samples_the_checked_figures_score():
+    import pandas as pd
+
+    model = ModelFile.from_dict(synthetic_model(p=0)[0])  # inputs T1…T4, 100 s per sample
+    temps, error = ramp_run(1200, drift=0.02, wander=0.1, seed=3)
+    frame = pd.DataFrame(temps, columns=["T1", "T2", "T3", "T4"])
+    error[::37] = np.nan  # rows not measured are not scored either way
+    intervals = (900.0, 1800.0, 3600.0, 7200.0)
+    tuning = choose_recalibration(model, [(frame, error)], intervals_s=intervals)
+    series = held_out_series(model, [(frame, error)])
+    candidates = candidate_grid(hold_sigma=1.0, initial_offset=1.0, probe_sigma=0.1)
+    for interval, unchecked in zip(intervals, tuning.rms_none_by_interval_um):
+        every = int(round(interval / model.sampling_period_s))
+        squares, count = 0.0, 0
+        for held in series:
+            _, scored = replay_candidates(held, candidates, every=every, period_s=model.sampling_period_s)
+            after_first_check = [r for k, r in enumerate(held.residual) if k >= every and np.isfinite(r)]
+            assert len(after_first_check) == scored
+            squares, count = squares + sum(r * r for r in after_first_check), count + scored
+        assert unchecked == pytest.approx(math.sqrt(squares / count), rel=1e-12)
+    assert tuning.section.chosen["rms_none_by_interval_um"] == list(tuning.rms_none_by_interval_um)
+    assert len(set(tuning.rms_none_by_interval_um)) == len(intervals)  # each on its own samples
 
 
 def test_tuning_on_error_rows_measured_in_short_probe_cycles_takes_no_statistic_of_nothing():

@@ -8,7 +8,6 @@ from typing import Sequence
 from groupfit.fast_response import describe, stage_of
 from groupfit.fast_response_choice import choose_stage
 from groupfit.model import ModelFile
-from groupfit.recalibration_advice import interval_advice
 from groupfit.recalibration_tuning import METHODS
 
 
@@ -46,8 +45,6 @@ def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFi
             f"{_per_interval(tuning.rms_chosen_um)} µm (offset hold {_per_interval(tuning.rms_hold_um)}, "
             f"no checks {tuning.rms_none_um:.3g})"
         )
-        advice = interval_advice(section.chosen)
-        line += f"\nnote    {advice}" if advice else ""
     else:
         line += f" ({section.chosen.get('reason', 'default')})"
     return model.replace(recalibration=section), line

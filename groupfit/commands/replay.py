@@ -29,7 +29,6 @@ from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
-from groupfit.recalibration_advice import interval_advice
 from groupfit.recordings import continued_recording, is_modelling_file
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
@@ -150,8 +149,6 @@ def run_replay(args: argparse.Namespace) -> int:
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residuals(run, replay))
     notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes
-    if args.probe_every and model.recalibration is not None:
-        notes += [advice for advice in [interval_advice(model.recalibration.chosen, args.probe_every)] if advice]
     result = ReplayResult(
         {**data, **span, **glitches, "clamped_samples": clamped, **({"notes": notes} if notes else {})}
     )
