@@ -112,3 +112,34 @@ def test_selected_sensors_are_fitted(tmp_path, cycle):
     direct = GroupedRegressor(p=1, search="exact").fit(run.temps, run.error)
     assert result["breaks"] == direct.breaks_
     assert result["objective"] == pytest.approx(direct.objective_value_, rel=1e-12)
+
+
+def test_glitches_in_the_error_are_left_out_as_fit_leaves_them_unless_kept(tmp_path, cycle):
+    import pandas as pd
+
+    X, y = cycle
+    frame = pd.read_csv(DATA)
+    frame.loc[[120, 121], "error_um"] += 300.0  # two readings a measurement got wrong, back at the third
+    glitched = tmp_path / "glitched.csv"
+    frame.to_csv(glitched, index=False)
+    kept = np.ones(len(y), dtype=bool)
+    kept[[120, 121]] = False
+    design = np.column_stack([np.ones(len(y)), X])
+    for keep, rows in ((False, kept), (True, np.ones(len(y), dtype=bool))):
+        folder = tmp_path / f"keep_{keep}"
+        folder.mkdir()
+        config = folder / "study.toml"
+        config.write_text(
+            f'[data]\npath = "{glitched.as_posix()}"\ntemps = ["T1", "T2", "T3", "T4"]\n'
+            f'keep_glitches = {str(keep).lower()}\n[grid]\np = [0]\nobjective = "sse"\nsearch = "exact"\n',
+            encoding="utf-8",
+        )
+        study = read_study(config)
+        assert study.runs[0].spec["data"].get("glitches_left_out", False) is not keep
+        assert any("glitch" in note for note in study.datasets[0].notes) is not keep
+        result = execute_run(study.runs[0].spec, study.runs[0].path)
+        assert result["status"] == "done", result["error"]
+        expected = np.linalg.lstsq(design[rows], frame["error_um"].to_numpy()[rows], rcond=None)[0]
+        np.testing.assert_allclose(np.ravel(result["coefficients"]), expected, rtol=1e-8, atol=1e-10)
+    clean = study_of(tmp_path, "p = [0]")
+    assert "glitches_left_out" not in clean.runs[0].spec["data"]  # a clean run keeps its hash

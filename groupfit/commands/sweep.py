@@ -40,11 +40,14 @@ def add_parser(verbs) -> None:
     common.add_quiet_option(sweep)
     common.add_budget_option(sweep)
     common.add_clock_options(sweep)  # in place of the study's [data] period_tolerance and resample_s
+    common.add_glitch_option(sweep)  # in place of [data] keep_glitches
     sweep.set_defaults(handler=run_sweep)
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    study = read_study(args.config, {"period_tolerance": args.period_tolerance, "resample_s": args.resample})
+    given = {"period_tolerance": args.period_tolerance, "resample_s": args.resample}
+    given["keep_glitches"] = args.keep_glitches
+    study = read_study(args.config, given)
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")
     feasible, infeasible = check_feasible(study, args.config)

@@ -7,6 +7,8 @@ import fnmatch
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from groupfit.data import PERIOD_TOLERANCE, load_run
 from groupfit.data_options import parse_period_tolerance
 from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
@@ -36,7 +38,9 @@ class Dataset:
     constant : frozenset of str
         Columns with a single value (never picked by a pattern).
     clock : dict
-        ``period_tolerance`` and ``resample`` as :func:`groupfit.data.load_run` takes them.
+        ``period_tolerance``, ``resample`` and ``drop_glitches`` as :func:`groupfit.data.load_run` takes them.
+    glitches_left_out : bool
+        The error has measuring glitches (:mod:`groupfit.glitches`) and they are left out as not measured.
     notes : tuple of str
         What loading did to the log (a jittering clock accepted, readings resampled).
     """
@@ -48,8 +52,9 @@ class Dataset:
     n_samples: int
     columns: tuple[str, ...] = field(repr=False, default=())
     constant: frozenset[str] = field(repr=False, default=frozenset())
-    clock: dict = field(repr=False, default_factory=lambda: {"period_tolerance": PERIOD_TOLERANCE, "resample": None})
+    clock: dict = field(repr=False, default_factory=lambda: dict(DEFAULT_CLOCK))
     notes: tuple[str, ...] = field(repr=False, default=())
+    glitches_left_out: bool = False
 
     @property
     def clock_spec(self) -> dict:
@@ -60,7 +65,12 @@ class Dataset:
             spec["period_tolerance"] = self.clock["period_tolerance"]
         if self.clock["resample"] is not None:
             spec["resample_s"] = self.clock["resample"]
+        if self.glitches_left_out:  # the fit changes only where there are glitches: so does the hash
+            spec["glitches_left_out"] = True
         return spec
+
+
+DEFAULT_CLOCK = {"period_tolerance": PERIOD_TOLERANCE, "resample": None, "drop_glitches": True}
 
 
 def non_empty_string(value, what: str, label: str) -> str:
@@ -89,12 +99,13 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
         file = (base / entry).resolve()
         if not file.is_file():
             raise InputError(f"{label}: [data] data file {entry!r} not found (looked for {file})")
-        run = load_run(file, temps=[], time=time_column, error=error_column, **clock)
+        run = load_run(file, temps=[], time=time_column, error=error_column, **{**clock, "drop_glitches": False})
         usable = tuple(c for c in run.frame.columns if c not in (run.time_name, run.error_name))  # as found
         where = f"{label}: {file.name}"
         constant = frozenset(_constant_columns(run.frame, usable))
         candidates = candidate_columns(patterns, usable, constant, where)
-        load_run(file, temps=candidates, time=time_column, error=error_column, **clock)
+        checked = load_run(file, temps=candidates, time=time_column, error=error_column, **clock)
+        left_out = not np.array_equal(checked.error, run.error, equal_nan=True)
         datasets.append(
             Dataset(
                 name=file.stem,
@@ -105,7 +116,8 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
                 columns=usable,
                 constant=constant,
                 clock=clock,
-                notes=run.notes,
+                notes=checked.notes,
+                glitches_left_out=left_out,
             )
         )
     names = [d.name for d in datasets]
@@ -116,13 +128,19 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
 
 
 def clock_settings(table: dict, label: str) -> dict:
-    """``[data] period_tolerance`` (percent) and ``resample_s`` (seconds) as :func:`groupfit.data.load_run`
-    takes them (``groupfit sweep --period-tolerance`` and ``--resample`` replace them)."""
+    """``[data] period_tolerance`` (percent), ``resample_s`` (seconds) and ``keep_glitches`` as
+    :func:`groupfit.data.load_run` takes them (``groupfit sweep --period-tolerance``, ``--resample`` and
+    ``--keep-glitches`` replace them)."""
     tolerance = parse_period_tolerance(table.get("period_tolerance"))
     resample = (
         None if table.get("resample_s") is None else Table(table, "data", label).number("resample_s", positive=True)
     )
-    return {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": resample}
+    keep = Table(table, "data", label).boolean("keep_glitches", False)
+    return {
+        "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
+        "resample": resample,
+        "drop_glitches": not keep,
+    }
 
 
 def _constant_columns(frame, columns) -> set[str]:

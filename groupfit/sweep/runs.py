@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groupfit.data import PERIOD_TOLERANCE, Run, load_run
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run, measured_rows
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
 from groupfit.heldout.selection import select_sensors
@@ -188,7 +188,8 @@ def _selected(sha256: str, selection_json: str, run: Run) -> tuple[str, ...]:
 
 def _load(spec: dict, path: str, content: bytes | None) -> Run:
     data = spec["data"]
-    clock = (data.get("period_tolerance", PERIOD_TOLERANCE), data.get("resample_s"))
+    glitches = bool(data.get("glitches_left_out"))
+    clock = (data.get("period_tolerance", PERIOD_TOLERANCE), data.get("resample_s"), glitches)
     return _parsed_run(data["sha256"], data["time"], data["error"], clock, path, content)
 
 
@@ -205,8 +206,8 @@ def _parsed_run(
         raise InputError(f"{path}: the data file has changed since the study was read; start the sweep again")
     frame, _ = read_text_table(content)
     frame.columns = [str(c).strip() for c in frame.columns]
-    tolerance, resample = clock
-    return load_run(
+    tolerance, resample, drop_glitches = clock
+    run = load_run(
         frame,
         temps=[],
         time=time_column,
@@ -214,4 +215,6 @@ def _parsed_run(
         name=Path(path).stem,
         period_tolerance=tolerance,
         resample=resample,
+        drop_glitches=drop_glitches,
     )
+    return measured_rows(run)  # glitches left out are rows not measured, as fit leaves them out
