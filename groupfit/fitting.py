@@ -118,13 +118,21 @@ def statistics_summary(stats: dict) -> str:
 
 
 def choice_summary(expectation) -> str:
-    """How p was chosen by the expected next-run error, when it was chosen among several (else nothing)."""
-    if len(expectation.candidates) < 2:
-        return ""
-    table = ", ".join(f"p={p}: {expectation.expected(i)[0]:.3g} µm" for i, p in enumerate(expectation.candidates))
-    chosen = expectation.candidates[expectation.chosen]
-    line = f"p       {chosen}: {CHOICE_RULE} (expected next-run RMS {table})\n"
-    if chosen > 0 and chosen == max(expectation.candidates):
+    """How p was chosen by the expected next-run error, when it was chosen among several, or why there was
+    only one (else nothing)."""
+    candidates, too_long = expectation.candidates, expectation.too_long
+    untried = (
+        f"p = {', '.join(str(p) for p in too_long)} not tried, the run before its first scored segment being too "
+        "short for that many groups; a longer run lets them be tried"
+        if too_long
+        else ""
+    )
+    if len(candidates) < 2:
+        return f"p       {candidates[0]}: {untried}\n" if untried else ""
+    table = ", ".join(f"p={p}: {expectation.expected(i)[0]:.3g} µm" for i, p in enumerate(candidates))
+    chosen = candidates[expectation.chosen]
+    line = f"p       {chosen}: {CHOICE_RULE} (expected next-run RMS {table}{'; ' + untried if untried else ''})\n"
+    if chosen > 0 and chosen == max(candidates) and not too_long:
         line += (
             f"note    p = {chosen} is the largest p tried (the edge of the range): a larger p may hold better; "
             "raise --pmax to look further\n"

@@ -21,8 +21,10 @@ The rules:
   on every run);
 * an existing model file (JSON whose ``format`` is a groupfit model's:
   ``groupfit-model/1``, ``groupfit-ballscrew/1``) named as an output file
-  (``--json``) is replaced only with ``--force``: it may be the only copy of
-  a model on a machine;
+  (``--json``) of a report (``replay``, ``compare`` …) is replaced only with
+  ``--force``: it may be the only copy of a model on a machine (a verb whose
+  ``--json`` is a model itself, ``fit`` or ``screw identify``, replaces it as
+  it replaces its own output on every run);
 * an empty path (``--out ""``) is refused instead of meaning the current folder;
 * two outputs may not name one file (``--json DIR/model.json`` beside ``--out DIR``).
 """
@@ -97,11 +99,12 @@ class OutputPlan:
                 self.inputs.setdefault(_resolved(path), str(path))
         return self
 
-    def file(self, path: str | Path | None, option: str, *, data: bool = False) -> Path | None:
+    def file(self, path: str | Path | None, option: str, *, data: bool = False, model: bool = False) -> Path | None:
         """Check that ``path`` (an output file) may be written; None and ``-`` (stdout) pass.
 
         ``data`` marks a data set the command writes (``simulate --out``): an existing file there is
-        replaced only with ``--force``, whatever its suffix.
+        replaced only with ``--force``, whatever its suffix. ``model``: the file written is itself a model file
+        (``fit --json``), so it replaces one as a run of the same command replaces its own output.
         """
         if path is None or str(path) == "-":
             return None
@@ -113,7 +116,7 @@ class OutputPlan:
                 f"{target}: {option} would replace an existing data file; choose another {option}, or pass --force "
                 "to replace it"
             )
-        if target.is_file() and not self.force and _is_model_file(target):
+        if target.is_file() and not (self.force or model) and _is_model_file(target):
             raise InputError(
                 f"{target}: {option} would replace a model file; choose another {option}, or pass --force to replace it"
             )

@@ -1,5 +1,6 @@
 """The expected next-run error: forward chaining and leave-one-run-out against loops written out by hand."""
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -315,3 +316,45 @@ def test_a_thinned_run_pools_the_squared_errors_of_thinnings_from_several_first_
     np.testing.assert_allclose(scores.sse, sum(h.sse for h in by_hand), rtol=1e-9)
     np.testing.assert_array_equal(scores.counts, sum(h.counts for h in by_hand))
     assert phase_offsets(1) == [0] and phase_offsets(2) == [0, 1] and phase_offsets(12) == [0, 4, 8]
+
+
+@pytest.mark.parametrize("segment", [5, 8, 20])
+def test_the_p_a_short_run_cannot_try_are_named_and_the_choice_says_so(tmp_path, capsys, segment):
+    frame = tiny_frame(5, segment=segment)
+    run = load_run(frame, name="short", temps=["T1", "T2"])
+    # one p at a time, as an independent truth: the estimate refuses a p whose groups do not fit
+    fits = []
+    for p in (0, 1, 2, 3):
+        try:
+            expect_next_run([run], (p,))
+            fits.append(p)
+        except ValueError:
+            pass
+    expectation = expect_next_run([run], (0, 1, 2, 3))
+    assert expectation.candidates == tuple(fits)
+    too_long = tuple(p for p in (0, 1, 2, 3) if p not in fits)
+    assert expectation.too_long == too_long
+    path = tmp_path / "run.csv"
+    frame.to_csv(path, index=False)
+    out = tmp_path / "m"
+    options = [o for o in FIT_OPTIONS if o != "--quiet"]
+    assert main(["fit", "--data", str(path), *options, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    choice = json.loads((out / "model.json").read_text())["training"]["model_choice"]
+    listed = ", ".join(str(p) for p in too_long)
+    assert choice.get("not_tried", []) == list(too_long)
+    assert (f"p = {listed} not tried" in printed) == bool(too_long)
+    if len(fits) == 1:  # only p = 0 fits the first prefix: said, not shown as a choice among one
+        assert f"p       0: p = {listed} not tried" in printed and choice["rule"] == "the only p the run allows"
+    assert "raise --pmax" not in printed or not too_long  # a larger --pmax cannot help a run too short
+
+
+def test_the_edge_note_names_the_p_a_short_run_did_not_try():
+    from groupfit.fitting import choice_summary
+
+    expectation = expect_next_run([tiny_run(5, segment=8)], (0, 1, 2, 3))
+    edge = dataclasses.replace(expectation, chosen=expectation.candidates.index(1))
+    line = choice_summary(edge)
+    assert line.startswith("p       1: ") and "; p = 2, 3 not tried" in line and "--pmax" not in line
+    unlimited = dataclasses.replace(edge, too_long=())
+    assert "raise --pmax" in choice_summary(unlimited)

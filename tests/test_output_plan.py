@@ -156,6 +156,11 @@ def test_an_existing_model_file_is_replaced_only_with_force(inputs, tmp_path, ca
     # a JSON file that is not a model (last run's report) is replaced as before
     status, _, _ = _run(argv, inputs, tmp_path, capsys)
     assert status == 0
+    # fit's --json is a model file itself: running fit again replaces it, a report over it is refused
+    for _ in range(2):
+        assert _run(_fit("--json", "{tmp}/fit.json"), inputs, tmp_path, capsys)[0] == 0
+    status, err, unchanged = _run((*argv[:-1], "{tmp}/fit.json"), inputs, tmp_path, capsys)
+    assert status == 2 and "would replace a model file" in err[0] and unchanged
 
 
 @pytest.mark.parametrize(

@@ -73,6 +73,7 @@ def run_fit(args: argparse.Namespace) -> int:
         args.closed_form,
         folder=args.out or settings.output_dir,
         files=("model.json", "fit.png"),
+        json_model=True,
     )
     if not data.paths:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")

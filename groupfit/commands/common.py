@@ -178,18 +178,18 @@ def add_force_option(parser: argparse.ArgumentParser) -> None:
 
 
 def plan_outputs(
-    args: argparse.Namespace, *inputs, folder: str | Path | None = None, files=(), option: str = "--out"
+    args: argparse.Namespace, *inputs, folder: str | Path | None = None, files=(), option="--out", json_model=False
 ) -> Path | None:
     """Declare what a verb reads and writes, and check every output before any work (one line when refused).
 
     ``inputs`` are the files the verb reads (paths or lists of paths; None
     skipped); the outputs are ``--json`` and the files ``files`` in ``folder``
-    (``option`` names it). An output that is an input, an existing data file
-    without ``--force``, or an empty path is refused
+    (``option`` names it; ``json_model``: the ``--json`` written is a model file). An output that is an
+    input, an existing data file without ``--force``, or an empty path is refused
     (:class:`groupfit.outputs.OutputPlan`). Returns the folder (None when none).
     """
     plan = current_plan(force=getattr(args, "force", False)).read(*inputs)
-    plan.file(getattr(args, "json", None), "--json")
+    plan.file(getattr(args, "json", None), "--json", model=json_model)
     return plan.folder(folder, option, files)
 
 

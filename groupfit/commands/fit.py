@@ -152,7 +152,9 @@ def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
     config_path, settings = fit_settings(args)
-    common.plan_outputs(args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES)
+    common.plan_outputs(
+        args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES, json_model=True
+    )
     model_wanted = settings.model  # p chosen by the next-run estimate: a global model gets the penalty that holds
     penalty_by_default = (
         args.ridge is None and model_wanted.p == "auto" and model_wanted.p_rule == NEXT_RUN and args.backward is None
@@ -208,7 +210,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if run.notes:
         training[DATA_NOTES_KEY] = loading_notes([run])
     choice = None  # the table p was chosen by, kept apart when the chosen global model got a penalty
-    if alpha > 0 and p_expectation is not None and len(p_expectation.candidates) > 1:
+    if alpha > 0 and p_expectation is not None and (len(p_expectation.candidates) > 1 or p_expectation.too_long):
         choice = p_expectation
     if expectation is not None:
         training.update(expectation.model_training(model_settings.p, choice))

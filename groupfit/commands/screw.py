@@ -162,7 +162,9 @@ def refuse_moving_source(run) -> None:
 
 # ----------------------------------------------------------------- identify
 def run_identify(args: argparse.Namespace) -> int:
-    out_dir = common.plan_outputs(args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",))
+    out_dir = common.plan_outputs(
+        args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",), json_model=True
+    )
     model = build_model(args)
     runs = _load_runs(args, args.runs)
     identify_runs(model, runs)
