@@ -274,8 +274,12 @@ def test_replay_says_when_a_run_leaves_the_modelling_range(tmp_path, capsys):
     hotter = tiny_frame(14)
     hotter["T1"] += 0.5 * (tiny_frame(13)["T1"].max() - tiny_frame(13)["T1"].min()) + 1.0  # beyond the span
     hotter.to_csv(tmp_path / "hotter.csv", index=False)
+    broken = tiny_frame(13)
+    broken.loc[40:45, "T1"] = -999.0  # a sensor fault the run-time rule holds, then flags: not the machine's state
+    broken.to_csv(tmp_path / "broken.csv", index=False)
     capsys.readouterr()
-    for data, outside in ((paths[0], False), (str(tmp_path / "hotter.csv"), True)):
+    runs = ((paths[0], False), (str(tmp_path / "hotter.csv"), True), (str(tmp_path / "broken.csv"), False))
+    for data, outside in runs:
         assert main(["replay", str(out / "model.json"), "--data", data, "--json", str(tmp_path / "r.json")]) == 0
         result = json.loads((tmp_path / "r.json").read_text())
         names = [b["input"] for b in result["beyond_modelling_range"]]

@@ -145,7 +145,7 @@ def run_replay(args: argparse.Namespace) -> int:
         rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     data.update(expectation_check(model, data, args.data))
-    span = range_check(model, run)
+    span = range_check(model, run, replay)
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residuals(run, replay))
     notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes
@@ -203,15 +203,17 @@ def load_readings(path, tables: RuleTables, *, time: str, error: str, **clock) -
     return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
 
 
-def range_check(model: ModelFile, run: Run) -> dict[str, Any]:
-    """The inputs of ``run`` beyond the modelling run's span (kept by ``fit`` in the model file), and a note."""
+def range_check(model: ModelFile, run: Run, replay: Replay) -> dict[str, Any]:
+    """The inputs of ``run`` beyond the modelling run's span (kept by ``fit`` in the model file), and a note;
+    samples the run-time rule met as a sensor fault or on held readings are not the machine's state."""
     span = (model.training or {}).get(SPAN_KEY)
     if not span:
         return {}
     try:
-        inputs = model.inputs(run.frame, run.source)
+        inputs = np.array(model.inputs(run.frame, run.source), dtype=float)
     except InputError:
         return {}
+    inputs[(replay.fault & (FAULT_SENSOR | FAULT_HELD)) != 0] = np.nan
     beyond = beyond_span(span, model.temps, inputs)
     note = span_note(beyond, run.n_samples)
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
