@@ -121,9 +121,15 @@ def choice_summary(expectation) -> str:
     """How p was chosen by the expected next-run error, when it was chosen among several, or why there was
     only one (else nothing)."""
     candidates, too_long = expectation.candidates, expectation.too_long
+    stride = expectation.scores.stride
     untried = (
-        f"p = {', '.join(str(p) for p in too_long)} not tried, the run before its first scored segment being too "
-        "short for that many groups; a longer run lets them be tried"
+        f"p = {', '.join(str(p) for p in too_long)} not tried, their groups not fitting in the run before its "
+        "first scored segment"
+        + (
+            f" as the estimate reads it (one sample in {stride}); fewer inputs (--select) would let them be tried"
+            if stride > 1
+            else "; a longer run or fewer inputs (--select) would let them be tried"
+        )
         if too_long
         else ""
     )

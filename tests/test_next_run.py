@@ -362,3 +362,8 @@ def test_the_edge_note_names_the_p_a_short_run_did_not_try():
     assert line.startswith("p       1: ") and "; p = 2, 3 not tried" in line and "--pmax" not in line
     unlimited = dataclasses.replace(edge, too_long=())
     assert "raise --pmax" in choice_summary(unlimited)
+    assert "a longer run or fewer inputs" in line
+    # a long run read one sample in k: a longer run is read as sparsely, only fewer inputs shorten the groups
+    thinned = dataclasses.replace(edge, scores=dataclasses.replace(edge.scores, stride=5))
+    assert "(one sample in 5); fewer inputs (--select) would let" in choice_summary(thinned)
+    assert "longer run" not in choice_summary(thinned)
