@@ -34,7 +34,7 @@ from groupfit.columns import usable_columns
 from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
 from groupfit.heldout.choice import pooled_error
-from groupfit.heldout.folds import make_folds
+from groupfit.heldout.folds import make_folds, setting_levels
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.runtime import replay_groups
@@ -136,7 +136,7 @@ def segment_starts(run: Run) -> tuple[list[int], str, int, bool]:
     labels = folds.labels
     starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
     if folds.kind == "condition":
-        values = run.frame[list(folds.columns)].to_numpy(dtype=float)
+        values = np.column_stack([setting_levels(run.frame[c].to_numpy(dtype=float)) for c in folds.columns])
         conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
         return starts, f"changes of {', '.join(folds.columns)}", conditions, False
     return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, True

@@ -1,0 +1,70 @@
+"""A setting read back with noise (a spindle speed logged as 2498…2502 r/min) is read by its levels."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+from groupfit.heldout.folds import make_folds, operating_columns, setting_levels
+
+PAPER = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets" / "paper_cycle.csv"
+PROGRAMME = np.repeat([0.0, 1250.0, 2500.0, 3750.0, 5000.0, 2500.0, 0.0], 60)
+
+
+def read_back(levels: np.ndarray, sigma: float, seed: int = 0) -> np.ndarray:
+    """The levels as a drive reports them: whole r/min with noise, 0 when stopped."""
+    noise = np.random.default_rng(seed).normal(0.0, sigma, len(levels)).round()
+    return np.where(levels > 0, levels + noise, 0.0)
+
+
+def test_a_clean_setting_is_its_own_levels():
+    np.testing.assert_array_equal(setting_levels(PROGRAMME), PROGRAMME)
+
+
+@pytest.mark.parametrize("sigma", [1.0, 5.0, 10.0])
+def test_a_noisy_setting_is_read_as_the_levels_it_was_set_to(sigma):
+    noisy = read_back(PROGRAMME, sigma)
+    levels = setting_levels(noisy)
+    assert np.all(np.abs(levels - PROGRAMME) <= 4.0 * sigma / np.sqrt(60) + 1.0)  # the median of its level
+    np.testing.assert_array_equal(np.flatnonzero(np.diff(levels)), np.flatnonzero(np.diff(PROGRAMME)))
+    frame = pd.DataFrame({"speed": noisy})
+    assert operating_columns(frame, ["speed"]) == ["speed"]
+    clean = make_folds([pd.DataFrame({"speed": PROGRAMME})], ["speed"])
+    folds = make_folds([frame], ["speed"])
+    assert folds.kind == clean.kind == "condition"
+    np.testing.assert_array_equal(folds.labels, clean.labels)
+
+
+@pytest.mark.parametrize(
+    "name, values",
+    [
+        ("a ramp", np.linspace(0.0, 5000.0, 420)),
+        ("a noisy drifting ambient", 20 + np.cumsum(np.random.default_rng(2).normal(0, 0.05, 420))),
+        ("two regimes with more spread than noise", np.repeat([18.0, 24.0], 210) + np.sin(np.arange(420)) * 0.4),
+    ],
+)
+def test_readings_that_do_not_fall_into_tight_levels_are_not_a_setting(name, values):
+    assert operating_columns(pd.DataFrame({"x": values}), ["x"]) == []
+    np.testing.assert_array_equal(setting_levels(values), values)
+
+
+def test_fit_reads_a_noisy_speed_column_as_the_clean_one(tmp_path):
+    frame = pd.read_csv(PAPER)
+    noisy = frame.assign(speed_rpm=read_back(frame["speed_rpm"].to_numpy(dtype=float), 3.0, seed=4))
+    assert (noisy["speed_rpm"] != frame["speed_rpm"]).mean() > 0.5
+    expected = {}
+    for name, data in (("clean", frame), ("noisy", noisy)):
+        path = tmp_path / f"{name}.csv"
+        data.to_csv(path, index=False)
+        report = tmp_path / f"{name}.json"
+        args = ["fit", "--data", str(path), "--recalibrate", "none", "--quiet", "--json", str(report)]
+        assert main([*args, "--out", str(tmp_path / name)]) == 0
+        fitted = json.loads(report.read_text())
+        expected[name] = (fitted["expected_next_run_rms_um"], fitted["expected_next_run_method"])
+    assert expected["noisy"] == expected["clean"]
+    assert "operating segments (changes of speed_rpm" in expected["noisy"][1]
