@@ -4,9 +4,14 @@ modelling run's duty cycle."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from groupfit.data import Run
 from groupfit.errors import InputError
+from groupfit.setting_levels import setting_levels
+
+LEVEL_TOLERANCE = 0.01
+"""Two runs hold the same level of a condition column when their levels differ by at most this share."""
 
 
 def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
@@ -15,14 +20,22 @@ def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
     for column in columns:
         if column not in run.frame.columns:
             raise InputError(f"{run.source}: condition column '{column}' not found; set [compare] conditions")
-        values = run.frame[column].to_numpy()
+        values = _levels_of(run, column)
         changes.update((np.flatnonzero(values[1:] != values[:-1]) + 1).tolist())
     return sorted(changes)
 
 
+def _levels_of(run: Run, column: str) -> np.ndarray:
+    """A condition column's values, a number read back with noise as the levels it was set to
+    (:func:`groupfit.setting_levels.setting_levels`)."""
+    values = run.frame[column].to_numpy()
+    numbers = pd.to_numeric(run.frame[column], errors="coerce").to_numpy(dtype=float)
+    return setting_levels(numbers) if np.isfinite(numbers).all() else values
+
+
 def condition_levels(run: Run, columns: tuple[str, ...]) -> tuple[list[tuple], list[int]]:
     """The sequence of operating-condition levels of a run and the samples (1-based) after which each ends."""
-    values = [tuple(row) for row in run.frame[list(columns)].to_numpy().tolist()] if columns else []
+    values = list(zip(*(_levels_of(run, column).tolist() for column in columns))) if columns else []
     levels, ends = [], []
     for i, value in enumerate(values):
         if not levels or value != levels[-1]:
@@ -44,11 +57,23 @@ def run_condition(run: Run, modelling: Run, columns: tuple[str, ...], tolerance:
         return "other condition"
     levels, ends = condition_levels(run, columns)
     model_levels, model_ends = condition_levels(modelling, columns)
-    if levels != model_levels:
+    if len(levels) != len(model_levels) or not all(map(_same_level, levels, model_levels)):
         return "other condition"
     if any(abs(a - b) > tolerance for a, b in zip(ends, model_ends)):
         return "other condition"
     return "same condition"
+
+
+def _same_level(level: tuple, other: tuple) -> bool:
+    """Two runs' levels of the condition columns: equal, numbers within :data:`LEVEL_TOLERANCE` (two runs'
+    medians of a speed read back with noise differ a little)."""
+    for a, b in zip(level, other):
+        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            if not np.isclose(a, b, rtol=LEVEL_TOLERANCE, atol=0.0):
+                return False
+        elif a != b:
+            return False
+    return True
 
 
 __all__ = ["condition_changes", "condition_levels", "run_condition"]

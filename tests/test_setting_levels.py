@@ -10,7 +10,8 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.heldout.folds import make_folds, operating_columns, setting_levels
+from groupfit.heldout.folds import make_folds, operating_columns
+from groupfit.setting_levels import setting_levels
 
 PAPER = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets" / "paper_cycle.csv"
 PROGRAMME = np.repeat([0.0, 1250.0, 2500.0, 3750.0, 5000.0, 2500.0, 0.0], 60)
@@ -68,3 +69,31 @@ def test_fit_reads_a_noisy_speed_column_as_the_clean_one(tmp_path):
         expected[name] = (fitted["expected_next_run_rms_um"], fitted["expected_next_run_method"])
     assert expected["noisy"] == expected["clean"]
     assert "operating segments (changes of speed_rpm" in expected["noisy"][1]
+
+
+def test_compare_reads_the_conditions_and_the_ar1_heat_levels_of_a_noisy_speed_as_the_clean_ones():
+    from groupfit.conditions import condition_changes, run_condition
+    from groupfit.data import load_run
+    from groupfit.models.ar1 import AR1Model
+
+    datasets = PAPER.parent
+    clean = {name: pd.read_csv(datasets / f"{name}.csv") for name in ("paper_cycle", "repeat_timing")}
+    runs = {}
+    for seed, (name, frame) in enumerate(clean.items()):
+        noisy = frame.assign(speed_rpm=read_back(frame["speed_rpm"].to_numpy(dtype=float), 3.0, seed=seed))
+        runs[name] = (load_run(frame, temps=["T1", "T2"]), load_run(noisy, temps=["T1", "T2"]))
+    (model_clean, model_noisy), (next_clean, next_noisy) = runs["paper_cycle"], runs["repeat_timing"]
+    columns = ("speed_rpm",)
+    assert condition_changes(model_noisy, columns) == condition_changes(model_clean, columns)
+    assert run_condition(next_noisy, model_noisy, columns, 5) == run_condition(next_clean, model_clean, columns, 5)
+    assert run_condition(next_clean, model_clean, columns, 5) == "same condition"
+    fitted = {}
+    for label, run in (("clean", model_clean), ("noisy", model_noisy)):
+        heat = run.frame["speed_rpm"].to_numpy(dtype=float)[:, None]
+        fitted[label] = AR1Model().fit(heat, run.error)
+    assert fitted["noisy"].c1_ == pytest.approx(fitted["clean"].c1_, rel=1e-12)
+    assert len(fitted["noisy"].c2_) == len(fitted["clean"].c2_)  # one C2 per level set, not per reading
+    for (level, c2), (clean_level, clean_c2) in zip(
+        sorted(fitted["noisy"].c2_.items()), sorted(fitted["clean"].c2_.items())
+    ):
+        assert level == pytest.approx(clean_level, rel=0.01) and c2 == pytest.approx(clean_c2, rel=1e-12)

@@ -27,22 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-MAX_LEVELS = 64
-"""An operating column takes at most this many distinct values (a speed spectrum has dozens)…"""
-MAX_CHANGE_FRACTION = 0.05
-"""…changes value on at most this share of its samples (a level is held for at least 20 samples on average)…"""
-FEW_LEVELS = 8
-MAX_FEW_LEVEL_CHANGE_FRACTION = 0.25
-"""…or, with at most ``FEW_LEVELS`` values (an on/off signal, a speed programme), on at most this share: such
-a column read on the rows of a probe cycle only (an error measured every few samples) is still a setting…"""
-MIN_STEP_FRACTION = 0.05
-"""…and moves in steps: its median change is at least this share of its range. A setting jumps from one
-level to another; a quantised measurement (an ambient read to 0.1 K) creeps by one quantum."""
-LEVEL_GAP_FRACTION = 0.05
-"""A setting read back with noise (a spindle speed logged as 2498…2502 r/min) is read as its levels when its
-sorted readings fall into groups this share of the range apart…"""
-LEVEL_SPREAD_FRACTION = 0.02
-"""…each group within this share of the range (the noise); a ramp or a drifting signal has no such groups."""
+from groupfit.setting_levels import is_setting, setting_levels
+
 MIN_FOLD_FRACTION = 0.03
 """A condition segment shorter than this share of the run is joined to the one before."""
 MIN_FOLDS = 3
@@ -131,54 +117,9 @@ def operating_columns(frame: pd.DataFrame, candidates: list[str]) -> list[str]:
         values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
         if not np.isfinite(values).all() or (np.ptp(values) == 0.0 and values[0] == 0.0):
             continue
-        if _is_setting(values) or _is_setting(_levels(values)):
+        if is_setting(values):
             found.append(column)
     return found
-
-
-def setting_levels(values: np.ndarray) -> np.ndarray:
-    """The values of an operating column as the setting's levels: the column itself when it is piecewise
-    constant, else (a setting read back with noise) each reading replaced by the median of its level's group
-    (:data:`LEVEL_GAP_FRACTION`), when the readings fall into such groups; else the column itself."""
-    values = np.asarray(values, dtype=float)
-    if _is_setting(values):
-        return values
-    levels = _levels(values)
-    return levels if _is_setting(levels) else values
-
-
-def _is_setting(values: np.ndarray | None) -> bool:
-    if values is None or not np.isfinite(values).all():
-        return False
-    if np.ptp(values) == 0.0:  # a source on from the start at its set-point: it heats from rest
-        return True
-    steps = np.abs(np.diff(values))
-    steps = steps[steps > 0]
-    levels = len(np.unique(values))
-    changes = MAX_CHANGE_FRACTION if levels > FEW_LEVELS else MAX_FEW_LEVEL_CHANGE_FRACTION
-    return bool(
-        levels <= MAX_LEVELS
-        and len(steps) <= changes * len(values)
-        and np.median(steps) >= MIN_STEP_FRACTION * np.ptp(values)
-    )
-
-
-def _levels(values: np.ndarray) -> np.ndarray | None:
-    """Each reading as the median of its group of sorted readings (see :data:`LEVEL_GAP_FRACTION`), or None."""
-    span = float(np.ptp(values)) if values.size and np.isfinite(values).all() else 0.0
-    if span == 0.0:
-        return None
-    ordered = np.sort(values)
-    cuts = np.flatnonzero(np.diff(ordered) > LEVEL_GAP_FRACTION * span)
-    if not cuts.size or cuts.size >= MAX_LEVELS:
-        return None
-    groups = np.searchsorted((ordered[cuts] + ordered[cuts + 1]) / 2.0, values)
-    medians = np.empty(cuts.size + 1)
-    for g, members in enumerate(np.split(ordered, cuts + 1)):
-        if np.ptp(members) > LEVEL_SPREAD_FRACTION * span:
-            return None
-        medians[g] = np.median(members)
-    return medians[groups]
 
 
 def condition_segments(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:

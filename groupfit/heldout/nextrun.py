@@ -34,12 +34,13 @@ from groupfit.columns import usable_columns
 from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
 from groupfit.heldout.choice import pooled_error
-from groupfit.heldout.folds import make_folds, setting_levels
+from groupfit.heldout.folds import make_folds
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.runtime import replay_groups
 from groupfit.runtime.rule import compensation_clamp
 from groupfit.search.exact import solve_exact
+from groupfit.setting_levels import setting_levels
 
 MAX_SAMPLES = 600
 """A run longer than this is thinned (every k-th row) for the estimate."""

@@ -34,6 +34,7 @@ from sklearn.utils.validation import check_array, check_is_fitted
 
 from groupfit.errors import InputError
 from groupfit.metrics import ljung_box
+from groupfit.setting_levels import setting_levels
 
 SCALINGS = ("heat_law", "rise")
 FIT_METHODS = ("one_step", "free_run")
@@ -169,10 +170,11 @@ class AR1Model(RegressorMixin, BaseEstimator):
         y = check_array(y, ensure_2d=False).ravel()
         gain = 0.0 if self.structural_gain is None else float(self.structural_gain)
         remainder = y - gain * rise
-        levels = np.unique(heat[1:][heat[1:] != 0])
+        set_heat = setting_levels(heat)  # a speed read back with noise: the levels it was set to
+        levels = np.unique(set_heat[1:][set_heat[1:] != 0])
         if levels.size == 0:
             raise InputError("the modelling run has no heat input (all heat levels are 0): AR(1) cannot be fitted")
-        design = np.column_stack([remainder[:-1]] + [(heat[1:] == level).astype(float) for level in levels])
+        design = np.column_stack([remainder[:-1]] + [(set_heat[1:] == level).astype(float) for level in levels])
         coef, *_ = np.linalg.lstsq(design, remainder[1:], rcond=None)
         initial = remainder[0] if self.start == "measured" else 0.0
         if self.fit_method == "free_run":
