@@ -26,7 +26,11 @@ LEVEL_GAP_FRACTION = 0.05
 """A setting read back with noise (a spindle speed logged as 2498…2502 r/min) is read as its levels when its
 sorted readings fall into groups this share of the range apart…"""
 LEVEL_SPREAD_FRACTION = 0.02
-"""…each group within this share of the range (the noise); a ramp or a drifting signal has no such groups."""
+"""…each group within this share of the range (the noise); a drifting signal has no such groups. Readings on a
+ramp between levels (a drive accelerating over several samples) are left out of the groups and read as the
+level the ramp reaches…"""
+MIN_STEADY_SHARE = 0.5
+"""…as long as most readings are steady (within that share of a neighbour)."""
 
 
 def is_setting(values: np.ndarray) -> bool:
@@ -37,8 +41,8 @@ def is_setting(values: np.ndarray) -> bool:
 
 def setting_levels(values: np.ndarray) -> np.ndarray:
     """The values of an operating column as the setting's levels: the column itself when it is piecewise
-    constant, else (a setting read back with noise) each reading replaced by the median of its level's group
-    (:data:`LEVEL_GAP_FRACTION`), when the readings fall into such groups; else the column itself."""
+    constant, else (a setting read back with noise) each reading replaced by its level, the median of a group
+    of steady readings (:data:`LEVEL_GAP_FRACTION`), when they fall into such groups; else the column itself."""
     values = np.asarray(values, dtype=float)
     if _piecewise_constant(values):
         return values
@@ -63,21 +67,42 @@ def _piecewise_constant(values: np.ndarray | None) -> bool:
 
 
 def _levels(values: np.ndarray) -> np.ndarray | None:
-    """Each reading as the median of its group of sorted readings (see :data:`LEVEL_GAP_FRACTION`), or None."""
-    span = float(np.ptp(values)) if values.size and np.isfinite(values).all() else 0.0
+    """Each steady reading as its nearest level, the levels being the medians of the groups of steady readings
+    (see :data:`LEVEL_GAP_FRACTION`), and a reading on a ramp as the level it reaches; None when the steady
+    readings fall into no such groups."""
+    span = float(np.ptp(values)) if values.size > 1 and np.isfinite(values).all() else 0.0
     if span == 0.0:
         return None
-    ordered = np.sort(values)
+    steady = _steady(values, LEVEL_SPREAD_FRACTION * span)
+    if np.count_nonzero(steady) < MIN_STEADY_SHARE * values.size:
+        return None
+    ordered = np.sort(values[steady])
     cuts = np.flatnonzero(np.diff(ordered) > LEVEL_GAP_FRACTION * span)
     if not cuts.size or cuts.size >= MAX_LEVELS:
         return None
-    groups = np.searchsorted((ordered[cuts] + ordered[cuts + 1]) / 2.0, values)
-    medians = np.empty(cuts.size + 1)
-    for g, members in enumerate(np.split(ordered, cuts + 1)):
+    medians = []
+    for members in np.split(ordered, cuts + 1):
         if np.ptp(members) > LEVEL_SPREAD_FRACTION * span:
             return None
-        medians[g] = np.median(members)
-    return medians[groups]
+        medians.append(float(np.median(members)))
+    levels = np.asarray(medians)
+    nearest = levels[np.argmin(np.abs(values[:, None] - levels[None, :]), axis=1)]
+    return _reached(nearest, steady)
+
+
+def _reached(levels: np.ndarray, steady: np.ndarray) -> np.ndarray:
+    """Readings on a ramp take the level the ramp reaches (the next steady reading's; the last one's at the
+    end): the setting changed when the ramp began, and a ramp passing a level is not a stay there."""
+    index = np.flatnonzero(steady)
+    following = np.searchsorted(index, np.arange(len(levels)))
+    return levels[index[np.minimum(following, len(index) - 1)]]
+
+
+def _steady(values: np.ndarray, tolerance: float) -> np.ndarray:
+    """Readings within ``tolerance`` of a neighbour: not on a ramp between levels (the last reading before a
+    step and the first after it are each close to the other side's neighbour)."""
+    close = np.abs(np.diff(values)) <= tolerance
+    return np.r_[False, close] | np.r_[close, False]
 
 
 __all__ = ["is_setting", "setting_levels"]

@@ -41,6 +41,19 @@ def test_a_noisy_setting_is_read_as_the_levels_it_was_set_to(sigma):
     np.testing.assert_array_equal(folds.labels, clean.labels)
 
 
+def test_readings_on_a_ramp_between_levels_are_read_as_the_level_it_reaches():
+    steps = np.flatnonzero(np.diff(PROGRAMME)) + 1
+    ramped = PROGRAMME.copy()
+    for i in steps:  # a drive taking four samples to reach the new speed
+        ramped[i : i + 4] = PROGRAMME[i - 1] + (PROGRAMME[i] - PROGRAMME[i - 1]) * np.arange(1, 5) / 5
+    noisy = read_back(ramped, 3.0, seed=6)
+    levels = setting_levels(noisy)
+    assert set(np.unique(levels).round(-1)) == set(np.unique(PROGRAMME))
+    changes = np.flatnonzero(np.diff(levels)) + 1
+    np.testing.assert_array_equal(changes, steps)  # the setting changed when the ramp began
+    assert operating_columns(pd.DataFrame({"speed": noisy}), ["speed"]) == ["speed"]
+
+
 @pytest.mark.parametrize(
     "name, values",
     [
