@@ -122,31 +122,34 @@ def test_a_printer_hot_end_is_a_reading_and_logger_overflows_are_not(tmp_path):
             load_run(path)
 
 
-def test_a_constant_column_among_the_default_inputs_is_left_out_with_a_note(tmp_path):
-    frame = good_frame().assign(T0_target=215.0)
+@pytest.mark.parametrize(
+    "column, value, note, refusal",
+    [
+        ("T0_target", 215.0, "constant over the whole run, left out of the inputs: 'T0_target' (215 °C)", "constant"),
+        ("T9", np.nan, "no reading in the whole run, left out of the inputs: 'T9'", "empty"),
+    ],
+)
+def test_a_constant_or_empty_column_among_the_default_inputs_is_left_out_with_a_note(
+    tmp_path, column, value, note, refusal
+):
+    frame = good_frame().assign(**{column: value})
     run = load_run(write_run(tmp_path, frame))
     assert run.temp_names == ("T1", "T2", "T3")
     np.testing.assert_array_equal(run.temps, frame[["T1", "T2", "T3"]].to_numpy())
-    assert any("left out of the inputs: 'T0_target' (215 °C)" in note for note in run.notes)
-    with pytest.raises(InputError, match=r"column 'T0_target' is constant \(215 °C\)"):  # named: refused
-        load_run(write_run(tmp_path, frame), temps=["T1", "T0_target"])
-    dead = frame.assign(T1=20.0, T2=20.0, T3=20.0).drop(columns="T0_target")
+    assert any(note in line for line in run.notes)
+    with pytest.raises(InputError, match=rf"column '{column}' is {refusal}"):  # named: refused
+        load_run(write_run(tmp_path, frame), temps=["T1", column])
+
+
+def test_a_run_with_no_input_left_or_an_input_with_readings_missed_is_refused(tmp_path):
+    dead = good_frame().assign(T1=20.0, T2=20.0, T3=20.0)
     with pytest.raises(InputError, match=r"column 'T1' is constant"):  # nothing left to model with
         load_run(write_run(tmp_path, dead))
-
-
-def test_an_empty_column_among_the_default_inputs_is_left_out_with_a_note(tmp_path):
-    frame = good_frame().assign(T9=np.nan)
-    run = load_run(write_run(tmp_path, frame))
-    assert run.temp_names == ("T1", "T2", "T3")
-    np.testing.assert_array_equal(run.temps, frame[["T1", "T2", "T3"]].to_numpy())
-    assert any("no reading in the whole run, left out of the inputs: 'T9'" in note for note in run.notes)
-    with pytest.raises(InputError, match=r"row 1, column 'T9' is empty"):  # named: refused
-        load_run(write_run(tmp_path, frame), temps=["T1", "T9"])
+    frame = good_frame()
     half = frame.assign(T9=np.where(np.arange(len(frame)) < 5, np.nan, 21.0))
-    with pytest.raises(InputError, match=r"row 1, column 'T9' is empty \(5 non-finite"):  # readings missed: refused
+    with pytest.raises(InputError, match=r"row 1, column 'T9' is empty \(5 non-finite"):
         load_run(write_run(tmp_path, half))
-    replayed = load_run(write_run(tmp_path, frame), require_error=False, allow_nonfinite=True)
+    replayed = load_run(write_run(tmp_path, frame.assign(T9=np.nan)), require_error=False, allow_nonfinite=True)
     assert replayed.temp_names == ("T1", "T2", "T3", "T9")  # a replay keeps what it reads
 
 
