@@ -15,14 +15,12 @@ LEVEL_TOLERANCE = 0.01
 
 
 def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
-    """Samples (1-based) after which an operating-condition column changes value."""
-    changes: set[int] = set()
+    """Samples (1-based) after which an operating-condition column changes value (the ends of
+    :func:`condition_levels`)."""
     for column in columns:
         if column not in run.frame.columns:
             raise InputError(f"{run.source}: condition column '{column}' not found; set [compare] conditions")
-        values = _levels_of(run, column)
-        changes.update((np.flatnonzero(values[1:] != values[:-1]) + 1).tolist())
-    return sorted(changes)
+    return condition_levels(run, columns)[1]
 
 
 def _levels_of(run: Run, column: str) -> np.ndarray:

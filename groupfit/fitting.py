@@ -120,30 +120,31 @@ def statistics_summary(stats: dict) -> str:
 def choice_summary(expectation) -> str:
     """How p was chosen by the expected next-run error, when it was chosen among several, or why there was
     only one (else nothing)."""
-    candidates, too_long = expectation.candidates, expectation.too_long
-    stride = expectation.scores.stride
-    untried = (
-        f"p = {', '.join(str(p) for p in too_long)} not tried, their groups not fitting in the run before its "
-        "first scored segment"
-        + (
-            f" as the estimate reads it (one sample in {stride}); fewer inputs (--select) would let them be tried"
-            if stride > 1
-            else "; a longer run or fewer inputs (--select) would let them be tried"
-        )
-        if too_long
-        else ""
-    )
+    candidates, not_tried = expectation.candidates, expectation.not_tried
+    untried = _untried(not_tried, expectation.scores.stride) if not_tried else ""
     if len(candidates) < 2:
         return f"p       {candidates[0]}: {untried}\n" if untried else ""
     table = ", ".join(f"p={p}: {expectation.expected(i)[0]:.3g} µm" for i, p in enumerate(candidates))
     chosen = candidates[expectation.chosen]
     line = f"p       {chosen}: {CHOICE_RULE} (expected next-run RMS {table}{'; ' + untried if untried else ''})\n"
-    if chosen > 0 and chosen == max(candidates) and not too_long:
+    if chosen > 0 and chosen == max(candidates) and not not_tried:
         line += (
             f"note    p = {chosen} is the largest p tried (the edge of the range): a larger p may hold better; "
             "raise --pmax to look further\n"
         )
     return line
+
+
+def _untried(not_tried, stride: int) -> str:
+    """Which p the estimate could not try (their groups do not fit before its first scored segment), and what
+    would let them be tried: on a run read one sample in ``stride``, a longer run is read as sparsely."""
+    listed = ", ".join(str(p) for p in not_tried)
+    said = f"p = {listed} not tried, their groups not fitting in the run before its first scored segment"
+    if stride > 1:
+        return (
+            f"{said} as the estimate reads it (one sample in {stride}); fewer inputs (--select) would let them be tried"
+        )
+    return f"{said}; a longer run or fewer inputs (--select) would let them be tried"
 
 
 def ridge_summary(ridge: RidgeSetting) -> str:

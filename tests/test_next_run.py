@@ -336,8 +336,8 @@ def test_the_p_a_short_run_cannot_try_are_named_and_the_choice_says_so(tmp_path,
             pass
     expectation = expect_next_run([run], (0, 1, 2, 3))
     assert expectation.candidates == tuple(fits)
-    too_long = tuple(p for p in (0, 1, 2, 3) if p not in fits)
-    assert expectation.too_long == too_long
+    not_tried = tuple(p for p in (0, 1, 2, 3) if p not in fits)
+    assert expectation.not_tried == not_tried
     path = tmp_path / "run.csv"
     frame.to_csv(path, index=False)
     out = tmp_path / "m"
@@ -345,12 +345,12 @@ def test_the_p_a_short_run_cannot_try_are_named_and_the_choice_says_so(tmp_path,
     assert main(["fit", "--data", str(path), *options, "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     choice = json.loads((out / "model.json").read_text())["training"]["model_choice"]
-    listed = ", ".join(str(p) for p in too_long)
-    assert choice.get("not_tried", []) == list(too_long)
-    assert (f"p = {listed} not tried" in printed) == bool(too_long)
+    listed = ", ".join(str(p) for p in not_tried)
+    assert choice.get("not_tried", []) == list(not_tried)
+    assert (f"p = {listed} not tried" in printed) == bool(not_tried)
     if len(fits) == 1:  # only p = 0 fits the first prefix: said, not shown as a choice among one
         assert f"p       0: p = {listed} not tried" in printed and choice["rule"] == "the only p the run allows"
-    assert "raise --pmax" not in printed or not too_long  # a larger --pmax cannot help a run too short
+    assert "raise --pmax" not in printed or not not_tried  # a larger --pmax cannot help a run too short
 
 
 def test_the_edge_note_names_the_p_a_short_run_did_not_try():
@@ -360,7 +360,7 @@ def test_the_edge_note_names_the_p_a_short_run_did_not_try():
     edge = dataclasses.replace(expectation, chosen=expectation.candidates.index(1))
     line = choice_summary(edge)
     assert line.startswith("p       1: ") and "; p = 2, 3 not tried" in line and "--pmax" not in line
-    unlimited = dataclasses.replace(edge, too_long=())
+    unlimited = dataclasses.replace(edge, not_tried=())
     assert "raise --pmax" in choice_summary(unlimited)
     assert "a longer run or fewer inputs" in line
     # a long run read one sample in k: a longer run is read as sparsely, only fewer inputs shorten the groups

@@ -210,7 +210,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if run.notes:
         training[DATA_NOTES_KEY] = loading_notes([run])
     choice = None  # the table p was chosen by, kept apart when the chosen global model got a penalty
-    if alpha > 0 and p_expectation is not None and (len(p_expectation.candidates) > 1 or p_expectation.too_long):
+    if alpha > 0 and p_expectation is not None and (len(p_expectation.candidates) > 1 or p_expectation.not_tried):
         choice = p_expectation
     if expectation is not None:
         training.update(expectation.model_training(model_settings.p, choice))

@@ -37,7 +37,7 @@ class NextRunExpectation:
     chosen: int
     """Index into ``scores.candidates``."""
     notes: tuple[str, ...]
-    too_long: tuple = ()
+    not_tried: tuple = ()
     """The p asked for that were not tried: their groups do not fit in the run before its first scored segment."""
 
     @property
@@ -91,7 +91,7 @@ class NextRunExpectation:
         choice = self if choice is None else choice
         data = choice.to_json()
         several = len(choice.candidates) > 1
-        only = "the only p the run allows" if choice.too_long else "given"
+        only = "the only p the run allows" if choice.not_tried else "given"
         return {
             **self.training(),
             "model_choice": {
@@ -99,7 +99,7 @@ class NextRunExpectation:
                 "rule": data["chosen"]["rule"] if several else only,
                 "candidates": data["candidates"],
                 "notes": data["notes"],
-                **({"not_tried": list(choice.too_long)} if choice.too_long else {}),
+                **({"not_tried": list(choice.not_tried)} if choice.not_tried else {}),
             },
         }
 
@@ -166,8 +166,8 @@ def expect_next_run(
             runs[0], list(p_values), n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
         )
     chosen = next_run_choice(*scores.pooled())
-    too_long = tuple(p for p in p_values if p not in scores.candidates) if len(runs) == 1 else ()
-    return NextRunExpectation(scores, chosen, trust_notes(scores), too_long)
+    not_tried = tuple(p for p in p_values if p not in scores.candidates) if len(runs) == 1 else ()
+    return NextRunExpectation(scores, chosen, trust_notes(scores), not_tried)
 
 
 def expect_for_model(model: ModelFile | Mapping[str, Any], runs: Sequence[Run]) -> NextRunExpectation | None:
