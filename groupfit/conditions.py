@@ -3,15 +3,44 @@ modelling run's duty cycle."""
 
 from __future__ import annotations
 
+import re
+from typing import Sequence
+
 import numpy as np
 import pandas as pd
 
+from groupfit.columns import usable_columns
 from groupfit.data import Run
 from groupfit.errors import InputError
+from groupfit.heldout.folds import operating_columns
 from groupfit.setting_levels import setting_levels
 
 LEVEL_TOLERANCE = 0.01
 """Two runs hold the same level of a condition column when their levels differ by at most this share."""
+
+SPEED_NAME = re.compile(r"rpm|speed|drehzahl|[ru]/min|1/min|min-1|min\^-1", re.IGNORECASE)
+"""A name that marks a speed column (``spindle_rpm``, ``S1 speed``, ``Drehzahl [1/min]``)."""
+
+
+def run_operating_columns(runs: Sequence[Run]) -> list[str]:
+    """The columns that set the first run's operating conditions (speeds, on/off of heat sources), found as
+    ``fit``'s held-out check finds them, that every run holds."""
+    first = runs[0]
+    exclude = {first.time_name, first.error_name, *first.temp_names}
+    if first.reference not in (None, "start"):
+        exclude.add(first.reference)
+    columns, _ = usable_columns(first.frame, exclude)
+    found = operating_columns(first.frame, columns)
+    return [c for c in found if all(c in run.frame.columns for run in runs[1:])]
+
+
+def heat_level_column(operating: Sequence[str]) -> str | None:
+    """The AR(1) model's heat level among a run's operating columns: the one named as a speed, else the
+    only one; None when that does not decide it."""
+    speeds = [c for c in operating if SPEED_NAME.search(str(c))]
+    if len(speeds) == 1:
+        return speeds[0]
+    return operating[0] if not speeds and len(operating) == 1 else None
 
 
 def condition_changes(run: Run, columns: tuple[str, ...]) -> list[int]:
@@ -74,4 +103,4 @@ def _same_level(level: tuple, other: tuple) -> bool:
     return True
 
 
-__all__ = ["condition_changes", "condition_levels", "run_condition"]
+__all__ = ["condition_changes", "condition_levels", "heat_level_column", "run_condition", "run_operating_columns"]

@@ -10,6 +10,7 @@ on or starting again.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -20,6 +21,7 @@ from groupfit.data import load_run, load_runs
 from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS, resample_frame
 
+DATASETS = Path(__file__).resolve().parents[1] / "datasets"
 N = 360
 
 
@@ -299,10 +301,10 @@ def test_compare_takes_the_heat_column_by_flag_or_leaves_the_ar1_out(tmp_path, c
     assert cli("compare", "--data", path, "--pmax", "1", "--heat", "speed_rpm", "--quiet", "--out", tmp_path) == 2
     err = capsys.readouterr().err
     assert "heat column 'speed_rpm'" in err and "--heat COLUMN" in err and "--heat none" in err
-    default = tmp_path / "default.json"  # the default heat level absent: the AR(1) is left out, with a note
+    default = tmp_path / "default.json"  # the default heat level absent: the run's only operating column, noted
     assert cli("compare", "--data", path, "--pmax", "1", "--quiet", "--json", default, "--out", tmp_path) == 0
-    assert json.loads(default.read_text())["ar1"] is None
-    assert "AR(1): left out: the run has no 'speed_rpm' column" in capsys.readouterr().out
+    assert json.loads(default.read_text())["ar1"]["heat"] == "bed_target"
+    assert "AR(1): heat level 'bed_target', the run's only operating column" in capsys.readouterr().out
     out = tmp_path / "c.json"
     assert (
         cli(
@@ -330,3 +332,40 @@ def test_compare_takes_the_heat_column_by_flag_or_leaves_the_ar1_out(tmp_path, c
     result = json.loads(out.read_text())
     assert result["ar1"] is None and not any(r["model"] == "ar1" for r in result["rows"])
     assert "AR(1): left out" in capsys.readouterr().out
+
+
+def compare_json(tmp_path, name: str, frame: pd.DataFrame, *args) -> dict:
+    path = tmp_path / f"{name}.csv"
+    frame.to_csv(path, index=False)
+    out = tmp_path / f"{name}.json"
+    assert cli("compare", "--data", path, "--pmax", "1", "--quiet", "--json", out, "--out", tmp_path / name, *args) == 0
+    return json.loads(out.read_text())
+
+
+def ar1_rows(result: dict) -> list[tuple]:
+    return [(r["run"], r["rms_um"], r["max_um"]) for r in result["rows"] if r["model"] == "ar1"]
+
+
+def test_a_speed_column_of_another_name_is_the_ar1_heat_level_and_the_condition_as_speed_rpm_is(tmp_path, capsys):
+    shipped = pd.read_csv(DATASETS / "paper_cycle.csv")
+    reference = compare_json(tmp_path, "shipped", shipped)
+    renamed = compare_json(tmp_path, "renamed", shipped.rename(columns={"speed_rpm": "Spindle speed [1/min]"}))
+    assert "AR(1): heat level 'Spindle speed [1/min]', the run's operating column named as a speed" in (
+        capsys.readouterr().out
+    )
+    assert renamed["ar1"]["heat"] == "Spindle speed [1/min]"
+    expected = [value for _, *values in ar1_rows(reference) for value in values]
+    assert [value for _, *values in ar1_rows(renamed) for value in values] == pytest.approx(expected, abs=1e-12)
+    assert renamed["condition_changes"] == reference["condition_changes"] != []
+
+
+def test_operating_columns_none_named_as_a_speed_leave_the_ar1_out_and_are_named(tmp_path, capsys):
+    shipped = pd.read_csv(DATASETS / "paper_cycle.csv")
+    frame = shipped.rename(columns={"speed_rpm": "programme"})
+    frame["coolant"] = np.where(np.arange(len(frame)) < len(frame) // 3, 1.0, 2.0)
+    result = compare_json(tmp_path, "two", frame)
+    assert result["ar1"] is None and not ar1_rows(result)
+    out = capsys.readouterr().out
+    assert "of its operating columns (programme, spindle_on, coolant) none is the one named as a speed" in out
+    named = compare_json(tmp_path, "named", frame, "--heat", "programme")
+    assert named["ar1"]["heat"] == "programme"

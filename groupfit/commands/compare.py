@@ -8,6 +8,7 @@ from pathlib import Path
 
 from groupfit.commands import common
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
+from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import with_histories
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
@@ -35,7 +36,8 @@ def add_parser(verbs) -> None:
     compare.add_argument(
         "--heat",
         metavar="COLUMN|none",
-        help="heat-level column of the AR(1) model (default speed_rpm, or [compare] heat); none leaves it out",
+        help="heat-level column of the AR(1) model (default speed_rpm, or [compare] heat; a run without it: its "
+        "operating column named as a speed, or its only one); none leaves it out",
     )
     common.add_reference_option(compare)
     compare.add_argument(
@@ -64,6 +66,33 @@ def add_parser(verbs) -> None:
         "0: at the first sample), as replay --probe-first",
     )
     compare.set_defaults(handler=run_compare)
+
+
+def settle_heat_and_conditions(args: argparse.Namespace, settings: ComparisonSettings, runs: list) -> str | None:
+    """The AR(1) heat level and the condition columns of a log without the default ``speed_rpm``: its
+    operating columns, found as ``fit``'s held-out check finds them; the note that says what was taken."""
+    columns = runs[0].frame.columns
+    default_heat = args.heat is None and settings.heat == CompareSettings.heat and settings.heat not in columns
+    default_conditions = settings.conditions == CompareSettings.conditions and any(
+        c not in columns for c in settings.conditions
+    )
+    if not (default_heat or default_conditions):
+        return None
+    operating = run_operating_columns(runs)
+    if default_conditions:
+        settings.conditions = tuple(operating)
+    if not default_heat:
+        return None
+    absent = settings.heat
+    settings.heat = heat_level_column(operating)
+    if settings.heat is not None:
+        why = "operating column named as a speed" if SPEED_NAME.search(str(settings.heat)) else "only operating column"
+        return (
+            f"AR(1): heat level '{settings.heat}', the run's {why} (the default '{absent}' is absent); "
+            "--heat COLUMN names another, --heat none leaves it out"
+        )
+    found = f"; of its operating columns ({', '.join(operating)}) none is the one named as a speed" if operating else ""
+    return f"AR(1): left out: the run has no '{absent}' column, its default heat level{found}; --heat COLUMN names one"
 
 
 def run_compare(args: argparse.Namespace) -> int:
@@ -99,15 +128,8 @@ def run_compare(args: argparse.Namespace) -> int:
             "with fit --p 0"
         )
     modelling = common.load_configured_run(data, missing_error=True)
-    heat_note = None
-    if args.heat is None and settings.heat == CompareSettings.heat and settings.heat not in modelling.frame.columns:
-        heat_note = (
-            f"AR(1): left out: the run has no '{settings.heat}' column, its default heat level; --heat COLUMN names one"
-        )
-        settings.heat = None
-    if (args.heat is not None or heat_note) and any(c not in modelling.frame.columns for c in settings.conditions):
-        settings.conditions = (settings.heat,) if settings.heat is not None else ()  # the default speed_rpm is absent
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
+    heat_note = settle_heat_and_conditions(args, settings, [modelling, *validation])
     common.print_notes([modelling, *validation], common.report_stream(args))
     if heat_note:
         print(f"note    {heat_note}", file=common.report_stream(args))
