@@ -72,6 +72,28 @@ def default_temperature_columns(columns: Sequence, exclude: Sequence[str | None]
     return sensors or [c for c in names if TEMPERATURE_NAME.search(c) and not is_ambient_name(c)]
 
 
+AMBIENT_NAME = re.compile(r"t?(?:amb|ambient|room|air|hall|shop)(?:temp|temperature)?")
+"""A bare name of the air's temperature, its letters only (``Ambient``, ``T_room``, ``air temp``)."""
+OTHER_QUANTITY = re.compile(r"humid|\brh\b|press|\bbar\b|\bpa\b|flow|speed|rpm|veloc|%|m/s", re.IGNORECASE)
+"""A name of another quantity of the air (humidity, pressure, flow)."""
+
+
+def ambient_columns(frame: pd.DataFrame, inputs: Sequence[str] = ()) -> list[str]:
+    """The columns named as the air's temperature (``Room [°C]``, ``Ambient``, ``T_air``, ``Hall temp``) that
+    are not inputs and hold a number on every row, in table order."""
+    found = []
+    for column in frame.columns:
+        name = str(column)
+        if column in inputs or not is_ambient_name(name) or OTHER_QUANTITY.search(name):
+            continue
+        bare = re.sub(r"[^a-z]", "", name.lower())
+        if not (TEMPERATURE_NAME.search(name) or AMBIENT_NAME.fullmatch(bare)):
+            continue
+        if np.isfinite(pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)).all():
+            found.append(name)
+    return found
+
+
 def error_like_columns(columns) -> list[str]:
     """The columns whose names say they hold a thermal error (or any length in µm), in table order."""
     return [
@@ -146,6 +168,7 @@ def _reads_as_time(frame: pd.DataFrame, name: str, label: str) -> bool:
 __all__ = [
     "DEFAULT_ERROR",
     "DEFAULT_TIME",
+    "ambient_columns",
     "default_temperature_columns",
     "error_like_columns",
     "found_error_column",

@@ -27,6 +27,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from groupfit.data import numeric_column
+from groupfit.default_columns import ambient_columns
 from groupfit.errors import InputError
 
 START = "start"
@@ -124,11 +125,18 @@ def with_reference(run, reference: str | None):
     return dataclasses.replace(run, temps=temps, reference=reference)
 
 
-def default_reference(frame, config_value: Any = None) -> str | None:
-    """The reference of a run: the configured one, else ``AMBIENT_COLUMN`` when the run has that column."""
+def default_reference(frame, config_value: Any = None, inputs: Sequence[str] = ()) -> str | None:
+    """The reference of a run: the configured one, else ``AMBIENT_COLUMN`` when the run has that column, else
+    the one column named as the air's temperature that is not an input
+    (:func:`groupfit.default_columns.ambient_columns`)."""
     if config_value is not None:
         return parse_reference(config_value)
-    return AMBIENT_COLUMN if frame is not None and AMBIENT_COLUMN in frame.columns else None
+    if frame is None:
+        return None
+    if AMBIENT_COLUMN in frame.columns:
+        return AMBIENT_COLUMN
+    found = ambient_columns(frame, inputs)
+    return found[0] if len(found) == 1 else None
 
 
 def describe(reference: str | None) -> str:

@@ -29,7 +29,6 @@ from groupfit.io import check_output_dir as check_output_dir  # the verbs import
 from groupfit.model_checks import MAX_RIDGE_ALPHA
 from groupfit.outputs import commit_outputs as commit_outputs  # the verbs import it from here
 from groupfit.outputs import current_plan
-from groupfit.reference import default_reference
 from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
 from groupfit.settings import DataSettings, RunSettings
@@ -437,41 +436,6 @@ class StageProgress:
         for bar in self.bars.values():
             bar.close()
         self.bars.clear()
-
-
-def add_reference_option(parser: argparse.ArgumentParser) -> None:
-    """``--reference COLUMN|start|none``: what the model's temperature inputs are taken relative to."""
-    parser.add_argument(
-        "--reference",
-        metavar="COLUMN|start|none",
-        help="take every input minus a reference sensor (e.g. T_amb), minus its first reading ('start'), "
-        "or as read ('none'); default: the --ambient column, else T_amb when the run has that column, else none",
-    )
-    parser.add_argument(
-        "--ambient",
-        metavar="COLUMN",
-        help="the ambient temperature, whatever its name (an air sensor logged as T15): never a default input, "
-        "and the default reference (default: T_amb)",
-    )
-
-
-def reference_is_default(args: argparse.Namespace, settings: RunSettings) -> bool:
-    """Whether neither ``--reference`` nor ``[model] reference`` names the reference."""
-    return getattr(args, "reference", None) is None and settings.model.reference is None
-
-
-def configured_reference(args: argparse.Namespace, settings: RunSettings, run: Run) -> str | None:
-    """The reference of ``--reference``, else ``[model] reference``, else T_amb when ``run`` has it."""
-    value = getattr(args, "reference", None)
-    if value is None:
-        value = settings.model.reference
-    ambient = settings.data.ambient
-    if value is None and ambient is not None:
-        if ambient not in run.frame.columns:
-            available = ", ".join(map(str, run.frame.columns))
-            raise InputError(f"{run.source}: --ambient column '{ambient}' not found; the columns are: {available}")
-        value = ambient
-    return default_reference(run.frame, value)
 
 
 def seed_value(text: str) -> int:

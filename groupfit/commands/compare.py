@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from groupfit.commands import common
+from groupfit.commands import common, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import with_histories
@@ -39,7 +39,7 @@ def add_parser(verbs) -> None:
         help="heat-level column of the AR(1) model (default speed_rpm, or [compare] heat; a run without it: its "
         "operating column named as a speed, or its only one); none leaves it out",
     )
-    common.add_reference_option(compare)
+    reference_options.add_reference_option(compare)
     compare.add_argument(
         "--continues",
         action="store_true",
@@ -133,9 +133,9 @@ def run_compare(args: argparse.Namespace) -> int:
     common.print_notes([modelling, *validation], common.report_stream(args))
     if heat_note:
         print(f"note    {heat_note}", file=common.report_stream(args))
-    reference = common.configured_reference(args, run_settings, modelling)
+    reference = reference_options.configured_reference(args, run_settings, modelling)
     choice = None
-    if common.reference_is_default(args, run_settings):
+    if reference_options.reference_is_default(args, run_settings):
         candidates = tuple(range(settings.fit_pmax + 1))  # as fit decides it
         choice = default_reference_choice(
             [modelling], reference, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept

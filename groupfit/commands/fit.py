@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import common, fit_mlr
+from groupfit.commands import common, fit_mlr, reference_options
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
@@ -67,7 +67,7 @@ def add_parser(verbs) -> None:
         help="GA: also run the exact search and print the gap (auto: when cheap; the default)",
     )
     fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
-    common.add_reference_option(fit)
+    reference_options.add_reference_option(fit)
     fit.add_argument(
         "--select",
         choices=SELECTION_METHODS,
@@ -302,9 +302,9 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)
-    reference = common.configured_reference(args, settings, run)
+    reference = reference_options.configured_reference(args, settings, run)
     choice = None
-    if position_run is None and common.reference_is_default(args, settings):
+    if position_run is None and reference_options.reference_is_default(args, settings):
         model = settings.model
         p_values = tuple(range(model.pmax + 1)) if model.p == "auto" else (model.p,)
         choice = default_reference_choice(

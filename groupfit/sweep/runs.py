@@ -86,10 +86,10 @@ def execute_run(spec: dict, path: str, content: bytes | None = None) -> dict:
 def fit_run(spec: dict, run: Run, sensors: list[str], timings: dict[str, float]) -> dict:
     """Fit the grouped model of one run; with a GA search, also compare with the exact optimum."""
     model, search = spec["model"], spec["search"]
-    # rises over T_amb when the run has it (groupfit.reference), as fit and compare default to; they may drop it
-    # by the next-run estimate when the ambient moves (docs/nextrun.md), a sweep keeps it so that every grid
-    # point fits the same inputs
-    reference = default_reference(run.frame, model.get("reference"))
+    # rises over the run's ambient, T_amb or one named as the air's (groupfit.reference), as fit and compare
+    # default to; they may drop it by the next-run estimate when the ambient moves (docs/nextrun.md), a sweep
+    # keeps it so that every grid point fits the same inputs
+    reference = default_reference(run.frame, model.get("reference"), sensors)
     reference = None if reference in sensors else reference  # an input is never its own reference
     X = referenced(run.frame[sensors].to_numpy(dtype=float), reference, run.frame, str(run.source))
     y = run.error
