@@ -7,9 +7,12 @@ column or value at fault, and nothing half-written).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
+import signal
 import sys
+import threading
 from typing import Sequence
 
 from groupfit import __version__
@@ -52,23 +55,45 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+TERMINATED = "terminated"
+"""The KeyboardInterrupt a SIGTERM (``kill``, ``timeout``, a service stop) raises: cleaned up as Ctrl-C is."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser(argv)
     args = parser.parse_args(argv)
     if getattr(args, "out_required", False) and args.out is None:
         parser.error(f"{args.verb}: the following argument is required: --out")
     try:
-        with OutputPlan(force=getattr(args, "force", False)).active():  # every output written together or none
-            return int(args.handler(args) or 0)
+        with _terminate_as_interrupt(), OutputPlan(force=getattr(args, "force", False)).active():
+            return int(args.handler(args) or 0)  # every output written together or none
     except InputError as exc:
         print(f"groupfit {args.verb}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
-    except KeyboardInterrupt:
-        print(f"groupfit {args.verb}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        terminated = exc.args == (TERMINATED,)
+        print(f"groupfit {args.verb}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+        return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """While a verb runs, SIGTERM raises :data:`TERMINATED` as a KeyboardInterrupt (the main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(TERMINATED)
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _chosen_verb(argv: Sequence[str]) -> str | None:

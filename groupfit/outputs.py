@@ -14,7 +14,8 @@ outputs behind.
 The rules:
 
 * an output that resolves to an input (same path after following symbolic
-  links, or the same file under another name) is refused;
+  links, each before the ``..`` after it, or the same file under another
+  name) is refused;
 * an existing data file named as an output (CSV, TSV, Excel, Parquet, TOML,
   or the data set of ``simulate --out``) is replaced only with ``--force``
   (the files a verb writes into its ``--out`` folder are its own, replaced
@@ -23,8 +24,11 @@ The rules:
   ``groupfit-model/1``, ``groupfit-ballscrew/1``) named as an output file
   (``--json``) of a report (``replay``, ``compare`` …) is replaced only with
   ``--force``: it may be the only copy of a model on a machine (a verb whose
-  ``--json`` is a model itself, ``fit`` or ``screw identify``, replaces it as
-  it replaces its own output on every run);
+  ``--json`` is a model itself, ``fit`` or ``screw identify``, replaces one
+  of its own kind as it replaces its own output on every run, not another's);
+* an existing file named as a ``--json`` output that is not a JSON document
+  (a compressed log, a ``.dat`` run, a database, notes) is replaced only with
+  ``--force``: only an earlier JSON result (or an empty file) is replaced;
 * an empty path (``--out ""``) is refused instead of meaning the current folder;
 * two outputs may not name one file (``--json DIR/model.json`` beside ``--out DIR``).
 """
@@ -43,14 +47,20 @@ from groupfit.io import STAGE, check_output_dir, check_output_file
 DATA_SUFFIXES = frozenset({".csv", ".tsv", ".xlsx", ".xls", ".parquet", ".pq", ".toml"})
 """Files an output named on the command line replaces only with ``--force``: the kinds a run or a
 configuration is read from (the files a verb writes into its ``--out`` folder are its own and replaced)."""
-MODEL_FORMATS = ("groupfit-model/", "groupfit-ballscrew/")
+GROUPED_MODELS = "groupfit-model/"
+"""The ``format`` prefix of the model files ``fit`` writes (grouped, global and AR(1) models)."""
+SCREW_MODELS = "groupfit-ballscrew/"
+"""The ``format`` prefix of the ball-screw model files ``screw identify`` writes."""
+MODEL_FORMATS = (GROUPED_MODELS, SCREW_MODELS)
 """The ``format`` of the model files an output file named on the command line replaces only with ``--force``."""
 MODEL_SNIFF_BYTES = 64 * 1024 * 1024
 """A JSON file larger than this is not read to tell whether it is a model file (none is that large)."""
 
 
 def _resolved(path: str | Path) -> Path:
-    return Path(os.path.abspath(Path(path).expanduser())).resolve()
+    """The file a path names: links followed before ``..`` is taken (``link/..`` is the parent of the link's
+    target, as the file system reads it)."""
+    return Path(os.path.realpath(Path(path).expanduser()))
 
 
 def _same_file(a: Path, b: Path) -> bool:
@@ -60,15 +70,24 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def _is_model_file(path: Path) -> bool:
-    """Whether ``path`` holds a groupfit model (a JSON object whose ``format`` is one of :data:`MODEL_FORMATS`)."""
+def _model_format(path: Path) -> str | None:
+    """The groupfit model format ``path`` holds (one of :data:`MODEL_FORMATS`), or None."""
     try:
-        if path.suffix.lower() != ".json" or path.stat().st_size > MODEL_SNIFF_BYTES:
-            return False
-        content = json.loads(path.read_text(encoding="utf-8"))
+        if path.stat().st_size > MODEL_SNIFF_BYTES or not _holds_json(path):
+            return None
+        content = json.loads(path.read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError, ValueError):
-        return False
-    return isinstance(content, dict) and str(content.get("format", "")).startswith(MODEL_FORMATS)
+        return None
+    if not isinstance(content, dict):
+        return None
+    return next((kind for kind in MODEL_FORMATS if str(content.get("format", "")).startswith(kind)), None)
+
+
+def _holds_json(path: Path) -> bool:
+    """Whether ``path`` is empty or starts as a JSON document does (an object or an array)."""
+    with open(path, "rb") as handle:
+        head = handle.read(4096).removeprefix(b"\xef\xbb\xbf").lstrip()
+    return not head or head[:1] in (b"{", b"[")
 
 
 class OutputPlan:
@@ -99,28 +118,40 @@ class OutputPlan:
                 self.inputs.setdefault(_resolved(path), str(path))
         return self
 
-    def file(self, path: str | Path | None, option: str, *, data: bool = False, model: bool = False) -> Path | None:
+    def file(
+        self, path: str | Path | None, option: str, *, data: bool = False, model: str | None = None, json: bool = False
+    ) -> Path | None:
         """Check that ``path`` (an output file) may be written; None and ``-`` (stdout) pass.
 
         ``data`` marks a data set the command writes (``simulate --out``): an existing file there is
-        replaced only with ``--force``, whatever its suffix. ``model``: the file written is itself a model file
-        (``fit --json``), so it replaces one as a run of the same command replaces its own output.
+        replaced only with ``--force``, whatever its suffix. ``model``: the format of the model file written
+        (``fit --json``), so it replaces a model of that format as a run of the same command replaces its own
+        output. ``json``: the file written is a JSON document, so an existing file that is not one (a log, an
+        archive, a database) is replaced only with ``--force``.
         """
         if path is None or str(path) == "-":
             return None
         target = self._target(path, option)
         self._check_input(target, option)
         self._claim(target, option)
-        if target.is_file() and (data or target.suffix.lower() in DATA_SUFFIXES) and not self.force:
-            raise InputError(
-                f"{target}: {option} would replace an existing data file; choose another {option}, or pass --force "
-                "to replace it"
-            )
-        if target.is_file() and not (self.force or model) and _is_model_file(target):
-            raise InputError(
-                f"{target}: {option} would replace a model file; choose another {option}, or pass --force to replace it"
-            )
+        if target.is_file() and not self.force:
+            self._check_replaced(target, option, data=data, model=model, json=json)
         return check_output_file(target, option)
+
+    def _check_replaced(self, target: Path, option: str, *, data: bool, model: str | None, json: bool) -> None:
+        """Refuse to replace, without ``--force``, a file that is not an earlier output of this kind."""
+        if data or target.suffix.lower() in DATA_SUFFIXES:
+            what = "an existing data file"
+        elif json and not _holds_json(target):
+            what = "an existing file that is not a JSON result (a log, an archive or a database?)"
+        else:
+            kind = _model_format(target)
+            if kind is None or kind == model:
+                return
+            what = "a model file" if model is None else f"a model file of another kind ({kind.rstrip('/')})"
+        raise InputError(
+            f"{target}: {option} would replace {what}; choose another {option}, or pass --force to replace it"
+        )
 
     def folder(self, path: str | Path | None, option: str, files: Iterable[str] = ()) -> Path | None:
         """Check that ``path`` (an output folder) may hold ``files``; None passes (no such output)."""
@@ -172,7 +203,7 @@ class OutputPlan:
     def commit(self) -> list[Path]:
         """Check every staged target against every input, then rename them all; return the files written."""
         for _, target in self.staged:
-            self._check_input(target, "the output")
+            self._check_input(target, self.outputs.get(_resolved(target), "the output path"))
             if target.is_dir():
                 raise InputError(f"{target}: is a folder; nothing was written (choose another output)")
         written = []
@@ -214,4 +245,4 @@ def commit_outputs() -> list[Path]:
     return plan.commit() if plan is not None else []
 
 
-__all__ = ["DATA_SUFFIXES", "OutputPlan", "commit_outputs", "current_plan"]
+__all__ = ["DATA_SUFFIXES", "GROUPED_MODELS", "SCREW_MODELS", "OutputPlan", "commit_outputs", "current_plan"]

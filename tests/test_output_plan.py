@@ -10,12 +10,14 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 
 import matplotlib
 import pandas as pd
 import pytest
 from test_switching_models import SYNTHETIC, synthetic_model
 
+import groupfit.commands.simulate as simulate_command
 from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text, note_read, save_figure
@@ -31,6 +33,7 @@ SCREW_RUN = SYNTHETIC.parent / "screw_A.csv"
 def inputs(tmp_path_factory):
     folder = tmp_path_factory.mktemp("plan_inputs")
     pd.read_csv(SYNTHETIC).iloc[:200].to_csv(folder / "run.csv", index=False)
+    pd.read_csv(SYNTHETIC).iloc[:100].to_csv(folder / "run0.csv", index=False)
     model, _ = synthetic_model(p=3, n=3)
     (folder / "model.json").write_text(json.dumps(model))
     (folder / "model_augmented.json").write_text(json.dumps(model))
@@ -75,6 +78,19 @@ CLOBBERS = [
     ),
     (("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{in}/model.json"), "model.json"),
     (("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{in}/run.csv"), "run.csv"),
+    (
+        (
+            "replay",
+            "{in}/model.json",
+            "--data",
+            "{in}/run.csv",
+            "--continues",
+            "{in}/run0.csv",
+            "--json",
+            "{in}/run0.csv",
+        ),
+        "run0.csv",
+    ),
     (("simulate", "{in}/lumped.toml", "--out", "{in}/lumped.toml", "--force"), "lumped.toml"),
     (("sweep", "{in}/sweep.toml", "--db", "{tmp}/s.sqlite", "--json", "{in}/sweep.toml", "--quiet"), "sweep.toml"),
     (("sweep", "{in}/sweep.toml", "--db", "{in}/run.csv", "--quiet"), "run.csv"),
@@ -106,7 +122,7 @@ def _run(argv, inputs, tmp_path, capsys):
     return status, err, before == _snapshot(inputs, tmp_path)
 
 
-@pytest.mark.parametrize("link", ["as given", "symbolic link", "hard link"])
+@pytest.mark.parametrize("link", ["as given", "symbolic link", "hard link", "through a link and .."])
 @pytest.mark.parametrize("argv, name", CLOBBERS, ids=IDS)
 def test_no_command_writes_to_a_path_it_read(inputs, tmp_path, capsys, argv, name, link):
     if "screw_A.csv" in " ".join(argv) and not (inputs / "screw_A.csv").exists():
@@ -117,14 +133,24 @@ def test_no_command_writes_to_a_path_it_read(inputs, tmp_path, capsys, argv, nam
         if not named:
             pytest.skip("the output is a folder: the file it would replace is named by the verb")
         alias = inputs / f"alias_{tmp_path.name}{(inputs / name).suffix}"
-        (os.symlink if link == "symbolic link" else os.link)(inputs / name, alias)
+        if link == "through a link and ..":
+            # tmp/link → inputs/deep, so tmp/link/../name is inputs/name, though the text reads tmp/name
+            (inputs / f"deep_{tmp_path.name}").mkdir()
+            alias = tmp_path / "link"
+            os.symlink(inputs / f"deep_{tmp_path.name}", alias)
+            named_as = f"{alias}/../{name}"
+        else:
+            (os.symlink if link == "symbolic link" else os.link)(inputs / name, alias)
+            named_as = str(alias)
         last = named[-1]
-        argv = (*argv[:last], str(alias), *argv[last + 1 :])
+        argv = (*argv[:last], named_as, *argv[last + 1 :])
     try:
         status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
     finally:
         if link != "as given":
             alias.unlink()
+        if link == "through a link and ..":
+            (inputs / f"deep_{tmp_path.name}").rmdir()
     assert status == 2 and len(err) == 1, err
     assert "a file this command reads" in err[0] and name in err[0], err[0]
     assert unchanged
@@ -236,3 +262,57 @@ def test_the_plan_writes_all_or_none_and_refuses_what_was_read_on_the_way(tmp_pa
         atomic_write_text(tmp_path / "x.json", "{}")
         assert not (tmp_path / "x.json").exists()  # staged, not yet there
     assert (tmp_path / "x.json").read_text() == "{}"
+
+
+@pytest.mark.parametrize(
+    "name, content",
+    [
+        ("log.csv.gz", b"\x1f\x8b\x08\x00 a gzipped run"),
+        ("log.dat", b"time_s;T1\n0;20\n"),
+        ("study.sqlite", b"SQLite format 3\x00"),
+        ("model_v2.bak", b"time,drift\n"),
+        ("notes.txt", b"measured on the 3rd"),
+    ],
+)
+def test_a_json_output_replaces_only_a_json_document_without_force(inputs, tmp_path, capsys, name, content):
+    (tmp_path / name).write_bytes(content)
+    argv = ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", f"{{tmp}}/{name}")
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and "not a JSON result" in err[0] and "--force" in err[0] and unchanged
+    assert _run((*argv, "--force"), inputs, tmp_path, capsys)[0] == 0
+    assert "rms_um" in json.loads((tmp_path / name).read_text())
+    # the report written, a run again replaces it; so it does an empty file
+    assert _run(argv, inputs, tmp_path, capsys)[0] == 0
+    (tmp_path / name).write_bytes(b"")
+    assert _run(argv, inputs, tmp_path, capsys)[0] == 0
+
+
+def test_a_model_output_replaces_only_a_model_of_its_own_kind(inputs, tmp_path, capsys):
+    (tmp_path / "screw.json").write_text('{"format": "groupfit-ballscrew/1", "kind": "ballscrew"}\n')
+    status, err, unchanged = _run(_fit("--json", "{tmp}/screw.json"), inputs, tmp_path, capsys)
+    assert status == 2 and "a model file of another kind (groupfit-ballscrew)" in err[0] and unchanged
+    assert _run(_fit("--json", "{tmp}/screw.json", "--force"), inputs, tmp_path, capsys)[0] == 0
+    if not (inputs / "screw_A.csv").exists():
+        pytest.skip("the shipped ball-screw run is not there")
+    # fit wrote a grouped model there: screw identify's --json is refused over it
+    argv = ("screw", "identify", "{in}/screw_A.csv", "--json", "{tmp}/screw.json", "--out", "{tmp}/s")
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and "a model file of another kind (groupfit-model)" in err[0] and unchanged
+
+
+def test_sigterm_leaves_no_output_and_no_temporary_file(inputs, tmp_path, monkeypatch, capsys):
+    """A verb stopped by SIGTERM (kill, timeout, a service stop) cleans up as one stopped by Ctrl-C."""
+
+    def staged_then_terminated(args):
+        atomic_write_text(tmp_path / "half.json", "{}")
+        assert [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")] != []  # staged beside its target
+        os.kill(os.getpid(), signal.SIGTERM)
+        raise AssertionError("SIGTERM did not stop the verb")
+
+    monkeypatch.setattr(simulate_command, "run_simulate", staged_then_terminated)
+    previous = signal.getsignal(signal.SIGTERM)
+    status = main(["simulate", str(inputs / "lumped.toml"), "--out", str(tmp_path / "x.csv")])
+    assert status == 128 + signal.SIGTERM
+    assert capsys.readouterr().err.strip() == "groupfit simulate: terminated"
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGTERM) == previous

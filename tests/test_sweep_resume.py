@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from groupfit.cli import main
+from groupfit.errors import InputError
 from groupfit.sweep.config import read_study
 from groupfit.sweep.store import StudyStore
 
@@ -165,3 +166,20 @@ def test_a_sweep_retries_the_journal_switch_another_sweep_holds(tmp_path, monkey
     refusals.clear()
     with pytest.raises(store.InputError, match="not a usable study database \\(database is locked\\)"):
         StudyStore(tmp_path / "other.sqlite")
+
+
+def test_a_database_of_something_else_is_refused_and_left_as_it_was(tmp_path):
+    app = tmp_path / "app.db"
+    with sqlite3.connect(app) as connection:
+        connection.execute("CREATE TABLE users (name TEXT)")
+        connection.execute("INSERT INTO users VALUES ('ada')")
+    connection.close()
+    before = app.read_bytes()
+    with pytest.raises(InputError, match=r"app.db: a database of something else \(tables users\)"):
+        StudyStore(app)
+    assert app.read_bytes() == before and not Path(f"{app}-wal").exists()
+    # a study database opened again is its own
+    with StudyStore(tmp_path / "study.sqlite"):
+        pass
+    with StudyStore(tmp_path / "study.sqlite") as study:
+        assert study.connection.execute("PRAGMA user_version").fetchone()[0] > 0

@@ -9,6 +9,7 @@ from groupfit.ar1.modelfile import STARTS
 from groupfit.commands import common
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
+from groupfit.outputs import GROUPED_MODELS
 from groupfit.plots import plot_fit
 
 AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
@@ -73,7 +74,7 @@ def run_fit(args: argparse.Namespace) -> int:
         args.closed_form,
         folder=args.out or settings.output_dir,
         files=("model.json", "fit.png"),
-        json_model=True,
+        json_model=GROUPED_MODELS,
     )
     if not data.paths:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")

@@ -159,7 +159,8 @@ def add_out_option(
 ) -> None:
     """``--out``: where a verb writes its files; the older spellings (``-o``, ``--output``, ``--report``) stay
     hidden aliases."""
-    parser.add_argument("--out", dest="out", metavar=metavar, default=default, help=help)
+    shown = f"{help} (default {default})" if default else help
+    parser.add_argument("--out", dest="out", metavar=metavar, default=default, help=shown)
     if aliases:
         parser.add_argument(*aliases, dest="out", metavar=metavar, help=argparse.SUPPRESS)
     if required:
@@ -168,27 +169,34 @@ def add_out_option(
 
 
 def add_force_option(parser: argparse.ArgumentParser) -> None:
-    """``--force``: replace an existing data file (CSV, Excel, Parquet, TOML) named as an output."""
+    """``--force``: replace an existing file that is not an earlier output of the same kind."""
     parser.add_argument(
         "--force",
         action="store_true",
-        help="replace an existing data or model file named as an output (never one the command reads)",
+        help="replace an existing data, model or other file named as an output that is not an earlier output of "
+        "the same kind (never one the command reads)",
     )
 
 
 def plan_outputs(
-    args: argparse.Namespace, *inputs, folder: str | Path | None = None, files=(), option="--out", json_model=False
+    args: argparse.Namespace,
+    *inputs,
+    folder: str | Path | None = None,
+    files=(),
+    option="--out",
+    json_model: str | None = None,
 ) -> Path | None:
     """Declare what a verb reads and writes, and check every output before any work (one line when refused).
 
     ``inputs`` are the files the verb reads (paths or lists of paths; None
     skipped); the outputs are ``--json`` and the files ``files`` in ``folder``
-    (``option`` names it; ``json_model``: the ``--json`` written is a model file). An output that is an
+    (``option`` names it; ``json_model``: the format of the model file the ``--json`` is, e.g.
+    ``groupfit-model/``). An output that is an
     input, an existing data file without ``--force``, or an empty path is refused
     (:class:`groupfit.outputs.OutputPlan`). Returns the folder (None when none).
     """
     plan = current_plan(force=getattr(args, "force", False)).read(*inputs)
-    plan.file(getattr(args, "json", None), "--json", model=json_model)
+    plan.file(getattr(args, "json", None), "--json", model=json_model or None, json=True)
     return plan.folder(folder, option, files)
 
 

@@ -24,6 +24,7 @@ from groupfit.heldout.span import SPAN_KEY, input_span
 from groupfit.inference.cli import add_interval_options, check_block, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
+from groupfit.outputs import GROUPED_MODELS
 from groupfit.plots import plot_fit
 from groupfit.position import PositionRun
 from groupfit.position_plot import plot_position
@@ -153,7 +154,7 @@ def run_fit(args: argparse.Namespace) -> int:
         return ar1_commands.run_fit(args)
     config_path, settings = fit_settings(args)
     common.plan_outputs(
-        args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES, json_model=True
+        args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES, json_model=GROUPED_MODELS
     )
     model_wanted = settings.model  # p chosen by the next-run estimate: a global model gets the penalty that holds
     penalty_by_default = (

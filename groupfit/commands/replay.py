@@ -94,7 +94,7 @@ def add_parser(verbs) -> None:
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    out_dir = common.plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
+    out_dir = common.plan_outputs(args, args.model, args.data, args.continues, folder=args.out, files=("replay.png",))
     if is_screw_file(args.model):
         return run_screw_replay(args)
     if is_ar1_file(args.model):

@@ -21,6 +21,7 @@ import numpy as np
 
 from groupfit.commands import common
 from groupfit.errors import InputError
+from groupfit.outputs import SCREW_MODELS
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
 from groupfit.screw.modelfile import load_model, model_to_dict, save_model
@@ -163,7 +164,7 @@ def refuse_moving_source(run) -> None:
 # ----------------------------------------------------------------- identify
 def run_identify(args: argparse.Namespace) -> int:
     out_dir = common.plan_outputs(
-        args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",), json_model=True
+        args, args.runs, folder=args.out or DEFAULT_OUT, files=("screw_model.json",), json_model=SCREW_MODELS
     )
     model = build_model(args)
     runs = _load_runs(args, args.runs)

@@ -116,6 +116,7 @@ class StudyStore:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.connection = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+            self._check_foreign_tables()
             _switch_to_wal(self.connection)
             self.connection.execute("PRAGMA synchronous = NORMAL")
             self._create()
@@ -123,6 +124,19 @@ class StudyStore:
             raise InputError(f"{self.path}: not a usable study database ({exc})") from None
         except OSError as exc:
             raise InputError(f"{self.path}: cannot create the study database ({exc.strerror})") from None
+
+    def _check_foreign_tables(self) -> None:
+        """Refuse a SQLite database that holds tables of something else (a study writes only its own)."""
+        names = self.connection.execute(
+            "SELECT name FROM sqlite_master WHERE type IN ('table', 'view') AND name NOT LIKE 'sqlite_%'"
+        ).fetchall()
+        foreign = sorted({name for (name,) in names} - {"runs", "claims"})
+        if foreign:
+            self.connection.close()
+            raise InputError(
+                f"{self.path}: a database of something else (tables {', '.join(foreign)}), not a study database; "
+                "give another --db"
+            )
 
     def _create(self) -> None:
         version = self.connection.execute("PRAGMA user_version").fetchone()[0]
