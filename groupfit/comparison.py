@@ -30,7 +30,7 @@ import pandas as pd
 
 from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
-from groupfit.data import Run, measured_rows
+from groupfit.data import Run, measured_rows, numeric_column
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.penalty import penalised_expectation, penalty_lines
@@ -193,7 +193,7 @@ def heat_column(run: Run, settings: ComparisonSettings) -> np.ndarray:
             f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; name it with --heat COLUMN "
             "(or [compare] heat), or leave the AR(1) model out with --heat none"
         )
-    return run.frame[settings.heat].to_numpy(dtype=float)
+    return numeric_column(run.frame, settings.heat, str(run.source), allow_nonfinite=True)
 
 
 def ar1_inputs(run: Run, settings: ComparisonSettings) -> np.ndarray:
@@ -201,7 +201,7 @@ def ar1_inputs(run: Run, settings: ComparisonSettings) -> np.ndarray:
     if settings.structural_sensor:
         if settings.structural_sensor not in run.frame.columns:
             raise InputError(f"{run.source}: structural sensor '{settings.structural_sensor}' not found")
-        columns.append(run.frame[settings.structural_sensor].to_numpy(dtype=float))
+        columns.append(numeric_column(run.frame, settings.structural_sensor, str(run.source), allow_nonfinite=True))
     return np.column_stack(columns)
 
 

@@ -36,7 +36,7 @@ from groupfit.glitches import without_glitches
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table
 from groupfit.resample import jitter_note, resample_frame
-from groupfit.timestamps import epoch_to_seconds, serial_days_to_seconds, unit_seconds
+from groupfit.timestamps import clock_restart, epoch_to_seconds, serial_days_to_seconds, unit_seconds
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
@@ -74,9 +74,6 @@ class Run:
         return len(self.time)
 
 
-RESTART_PERIODS = 10
-"""A clock that goes back by more than this many periods and goes on from there has started again (a logger
-restarted), not a sample out of order or a bad cell."""
 MAX_TIME_S = 1e11
 """Largest plausible time stamp in seconds (some 3000 years): a larger one is a corrupt cell."""
 
@@ -87,7 +84,7 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
     numbers = column in frame.columns and pd.api.types.is_numeric_dtype(frame[column])
     datetimes_to_seconds(frame, column, label)
     values = numeric_column(frame, column, label, allow_nonfinite=False)
-    scale = unit_seconds(column) if numbers else 1.0
+    scale = unit_seconds(column, label) if numbers else 1.0
     if scale != 1.0:
         values = values * scale
         frame[column] = values
@@ -112,14 +109,7 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
     step = np.diff(time)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0)) + 1
-        typical = float(np.median(step[step > 0])) if np.any(step > 0) else 0.0
-        after = time[i + 1 : i + 4]  # a restarted clock goes on from its new start; a bad cell is alone
-        if (
-            typical > 0
-            and time[i - 1] - time[i] > RESTART_PERIODS * typical
-            and after.size
-            and np.all(after < time[i - 1])
-        ):
+        if clock_restart(time) == i:  # a restarted clock goes on from its new start; a bad cell is alone
             raise InputError(
                 f"{label}: the clock in column '{column}' starts again at row {i + 1} ({time[i]:g} s after "
                 f"{time[i - 1]:g} s: the logger restarted?); split the file before row {i + 1} and give the parts "

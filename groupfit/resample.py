@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.errors import InputError
+from groupfit.timestamps import clock_restart
 
 GAP_PERIODS = 3
 """More empty periods in a row than this split the log into runs; fewer are interpolated."""
@@ -105,6 +106,13 @@ def resample_frame(
         row = int(bad[0])
         raise InputError(f"{label}: row {row + 1}, column '{time}': {frame[time].iloc[row]!r} is not a time in s")
     back = np.flatnonzero(np.diff(stamps) < 0)
+    if back.size and clock_restart(stamps) is not None:
+        i = int(back[0]) + 1
+        raise InputError(
+            f"{label}: the clock in column '{time}' starts again at row {i + 1} ({stamps[i]:g} s after "
+            f"{stamps[i - 1]:g} s: the logger restarted?); resampling would average two recordings together: "
+            f"split the file before row {i + 1} and give the parts as runs of their own (--data part1.csv part2.csv)"
+        )
     if back.size:
         i = int(back[0]) + 1
         raise InputError(

@@ -26,20 +26,34 @@ from groupfit.errors import InputError
 from groupfit.textlayout import is_number
 
 DATE_FORMATS = ("%Y-%m-%d", "%Y/%m/%d", "%d.%m.%Y", "%d.%m.%y", "%d/%m/%Y", "%m/%d/%Y", "%d-%m-%Y")
-TIME_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M", "%I:%M:%S.%f %p", "%I:%M:%S %p", "%I:%M %p")
+TIME_FORMATS = (
+    "%H:%M:%S.%f",
+    "%H:%M:%S,%f",
+    "%H:%M:%S:%f",
+    "%H:%M:%S",
+    "%H:%M",
+    "%I:%M:%S.%f %p",
+    "%I:%M:%S %p",
+    "%I:%M %p",
+)
 FORMATS = tuple(f"{d} {t}" for d in DATE_FORMATS for t in TIME_FORMATS) + TIME_FORMATS
 """Every form tried after ISO 8601, in order; the time-of-day forms last."""
 EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
 DAY_S = 86400.0
 UNIT_SECONDS = {
-    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds"), 1e-3),
-    **dict.fromkeys(("s", "sec", "secs", "second", "seconds"), 1.0),
-    **dict.fromkeys(("min", "mins", "minute", "minutes"), 60.0),
-    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours"), 3600.0),
-    **dict.fromkeys(("d", "day", "days"), 86400.0),
+    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds", "millisekunden"), 1e-3),
+    **dict.fromkeys(("s", "sec", "secs", "second", "seconds", "sek", "sekunden"), 1.0),
+    **dict.fromkeys(("min", "mins", "minute", "minutes", "minuten"), 60.0),
+    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours", "std", "stunde", "stunden"), 3600.0),
+    **dict.fromkeys(("d", "day", "days", "tag", "tage"), 86400.0),
 }
-"""Units a time column's name may end in (``time_ms``, ``Zeit [min]``, ``hours``), and their seconds."""
-NAMED_UNIT = re.compile(r"(?:^|[_\s\[(/])\s*([a-z]+)\s*[\])]?\s*$", re.IGNORECASE)
+"""Units a time column's name may end in (``time_ms``, ``Zeit [min]``, ``Zeit [Std]``, ``hours``), and their
+seconds; an abbreviation may end in a dot (``Zeit [Min.]``)."""
+NAMED_UNIT = re.compile(r"(?:^|[_\s\[(/])\s*([a-z]+)\.?\s*[\])]?\s*$", re.IGNORECASE)
+BRACKETED_UNIT = re.compile(r"[\[(]\s*([a-z]{1,12})\.?\s*[\])]\s*$", re.IGNORECASE)
+"""A unit in brackets at the end of a name (``Zeit [xyz]``): a time column's must be one of :data:`UNIT_SECONDS`."""
+TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", "mesz", "est", "pst"})
+"""Bracketed words a time column's name may end in that are not units (``Time (UTC)``)."""
 
 
 TIME_NAME = re.compile(
@@ -111,10 +125,25 @@ def names_a_unit(name: str) -> bool:
     return _named_time_unit(name) is not None
 
 
-def unit_seconds(name: str) -> float:
-    """Seconds per unit of a numeric time column, from the unit its name ends in (1 when it names none)."""
+def unit_seconds(name: str, label: str = "") -> float:
+    """Seconds per unit of a numeric time column, from the unit its name ends in (1 when it names none).
+
+    Raises
+    ------
+    InputError
+        The name ends in a bracketed unit that is not one of time (``Zeit [xyz]``): guessing seconds would
+        read the run on the wrong clock.
+    """
     unit = _named_time_unit(name)
-    return UNIT_SECONDS[unit] if unit else 1.0
+    if unit:
+        return UNIT_SECONDS[unit]
+    bracketed = BRACKETED_UNIT.search(str(name))
+    if bracketed and bracketed.group(1).lower() not in TIME_ZONES:
+        raise InputError(
+            f"{label}: column '{name}': '{bracketed.group(1)}' is not a unit of time groupfit reads (ms, s, min, "
+            "h, d, or their names); rename the column with its unit, e.g. 'time_s' or 'Zeit [min]'"
+        )
+    return 1.0
 
 
 def _named_time_unit(name: str) -> str | None:
@@ -122,6 +151,27 @@ def _named_time_unit(name: str) -> str | None:
     found = NAMED_UNIT.search(str(name))
     unit = found.group(1).lower() if found else None
     return unit if unit in UNIT_SECONDS else None
+
+
+RESTART_PERIODS = 10
+"""A clock that goes back by more than this many periods and goes on from there has started again (a logger
+restarted), not a sample out of order or a bad cell."""
+
+
+def clock_restart(time: np.ndarray) -> int | None:
+    """The row (0-based) where the clock first goes back, when it starts again there: it goes back by more than
+    :data:`RESTART_PERIODS` typical periods and goes on below where it was (a logger restarted, two recordings
+    in one file); None otherwise."""
+    step = np.diff(time)
+    forward = step[step > 0]
+    if not forward.size or np.all(step >= 0):
+        return None
+    typical = float(np.median(forward))
+    i = int(np.argmax(step < 0)) + 1
+    after = time[i + 1 : i + 4]
+    if time[i - 1] - time[i] > RESTART_PERIODS * typical and after.size and np.all(after < time[i - 1]):
+        return i
+    return None
 
 
 def is_text(column: pd.Series) -> bool:
@@ -162,6 +212,9 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
 
 
 def _readings(text: pd.Series, first: str, last: str):
+    elapsed = _elapsed_seconds(text)
+    if elapsed is not None:
+        yield elapsed
     try:
         stamps = pd.to_datetime(text, format="ISO8601", utc=True)
     except (ValueError, TypeError):
@@ -178,6 +231,25 @@ def _readings(text: pd.Series, first: str, last: str):
             continue
         seconds = _since_first(stamps)
         yield _past_midnight(seconds) if form in TIME_FORMATS else seconds
+
+
+ELAPSED = re.compile(r"(\d+):([0-5]\d):([0-5]\d(?:[.,]\d+)?)")
+"""An elapsed time ``h:mm:ss`` whose hours run past 23 (a spreadsheet's ``[h]:mm:ss``)."""
+
+
+def _elapsed_seconds(text: pd.Series) -> np.ndarray | None:
+    """Seconds since the first row of a column of elapsed times ``h:mm:ss`` (hours beyond 23 allowed); None
+    when a cell is not one."""
+    parts = text.str.fullmatch(ELAPSED.pattern)
+    if not bool(parts.all()):
+        return None
+    found = text.str.extract(ELAPSED.pattern)
+    seconds = (
+        found[0].astype(float) * 3600.0
+        + found[1].astype(float) * 60.0
+        + found[2].str.replace(",", ".", regex=False).astype(float)
+    ).to_numpy(dtype=float)
+    return seconds - seconds[0]
 
 
 def _first_unread(text: pd.Series) -> tuple[int, str] | None:
@@ -233,7 +305,9 @@ __all__ = [
     "EXAMPLES",
     "FORMATS",
     "TIME_FORMATS",
+    "RESTART_PERIODS",
     "UNIT_SECONDS",
+    "clock_restart",
     "is_text",
     "text_seconds",
     "time_like_columns",

@@ -369,3 +369,14 @@ def test_operating_columns_none_named_as_a_speed_leave_the_ar1_out_and_are_named
     assert "of its operating columns (programme, spindle_on, coolant) none is the one named as a speed" in out
     named = compare_json(tmp_path, "named", frame, "--heat", "programme")
     assert named["ar1"]["heat"] == "programme"
+
+
+def test_a_heat_column_of_text_is_named_with_its_cell_not_a_traceback(tmp_path, capsys):
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    frame["speed_rpm"] = frame["speed_rpm"].astype(object)
+    frame.loc[5, "speed_rpm"] = "high"  # a word where the speed should be
+    path = tmp_path / "text_speed.csv"
+    frame.to_csv(path, index=False)
+    assert cli("compare", "--data", path, "--pmax", "1", "--quiet", "--out", tmp_path / "o") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "column 'speed_rpm': 'high' is not a number" in err[0]

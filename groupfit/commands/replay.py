@@ -309,7 +309,18 @@ def earlier_recordings(args: argparse.Namespace, model: ModelFile, run: Run, loa
     found, note = continued_recording(model.training, run, args.model)
     if found is None:
         return [], [], note
-    history = load(found)
+    try:
+        history = load(found)
+    except InputError as exc:
+        reason = str(exc).split("; ")[0].removeprefix(f"{found}: ")
+        return (
+            [],
+            [],
+            (
+                f"{run.name}'s clock continues the modelling recording {found}, which is not read as one run here "
+                f"({reason}): the rule starts afresh; give the part before this run with --continues FILE"
+            ),
+        )
     if not same_recording(history, run):
         return (
             [],

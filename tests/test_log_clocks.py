@@ -1,0 +1,98 @@
+"""Clocks of real logs: units named in other words, elapsed hours past a day, a restart under --resample."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_switching_models import SYNTHETIC
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.errors import InputError
+
+TEMPS = ["T1", "T2", "T3", "T4"]
+
+
+@pytest.fixture(scope="module")
+def plain():
+    return load_run(SYNTHETIC, temps=TEMPS)
+
+
+@pytest.fixture(scope="module")
+def frame():
+    return pd.read_csv(SYNTHETIC)
+
+
+@pytest.mark.parametrize(
+    "name, per_second",
+    [("Zeit [Min.]", 1 / 60), ("Zeit [Std]", 1 / 3600), ("Time (hrs.)", 1 / 3600), ("Zeit [Sek]", 1.0)],
+)
+def test_a_unit_of_time_in_other_words_is_read(tmp_path, frame, plain, name, per_second):
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": name}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+    assert run.period == pytest.approx(plain.period, rel=1e-9)
+
+
+def test_a_bracketed_word_that_is_no_unit_of_time_is_refused_and_a_time_zone_is_not_one(tmp_path, frame, plain):
+    path = tmp_path / "log.csv"
+    frame.rename(columns={"time_s": "Zeit [Takte]"}).to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"column 'Zeit \[Takte\]': 'Takte' is not a unit of time"):
+        load_run(path, temps=TEMPS)
+    frame.rename(columns={"time_s": "Time (UTC)"}).to_csv(path, index=False)
+    np.testing.assert_array_equal(load_run(path, temps=TEMPS).time, plain.time)
+
+
+@pytest.mark.parametrize("form", ["elapsed", "comma", "colon"])
+def test_elapsed_hours_past_a_day_and_fractions_after_a_comma_or_colon_are_read(tmp_path, frame, plain, form):
+    seconds = frame["time_s"].to_numpy(dtype=float) * 3.7  # the synthetic run stretched past 24 h
+    assert seconds[-1] > 86400.0
+    if form == "elapsed":  # a spreadsheet's [h]:mm:ss
+        text = [f"{int(s // 3600)}:{int(s % 3600 // 60):02d}:{s % 60:06.3f}" for s in seconds]
+    else:  # a time of day with milliseconds after a comma (German) or a colon (a data logger)
+        seconds = frame["time_s"].to_numpy(dtype=float) / 10.0 + 0.25
+        mark = "," if form == "comma" else ":"
+        text = [f"08:{int(s // 60):02d}:{int(s % 60):02d}{mark}{round(s % 1 * 1000):03d}" for s in seconds]
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=text).rename(columns={"time_s": "Elapsed Time"}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time="Elapsed Time")
+    np.testing.assert_allclose(run.time, seconds - seconds[0], rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+
+
+def test_resample_refuses_two_recordings_in_one_file_instead_of_averaging_them(tmp_path, frame, capsys):
+    restarted = frame.copy()
+    restarted.loc[150:, "time_s"] -= restarted.loc[150, "time_s"]  # the logger powered up again at row 151
+    path = tmp_path / "two.csv"
+    restarted.to_csv(path, index=False)
+    argv = ["fit", "--data", str(path), "--temps", ",".join(TEMPS), "--resample", "100", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "starts again at row 151" in err[0] and "split the file before row 151" in err[0]
+    assert "sort the rows" not in err[0] and not (tmp_path / "o").exists()
+
+
+def test_a_modelling_file_not_read_as_one_run_is_not_continued_and_the_note_says_why(tmp_path, frame, capsys):
+    """A next run whose clock continues a modelling log with a gap (fitted with --resample) is replayed afresh."""
+    period = float(frame["time_s"].iloc[1] - frame["time_s"].iloc[0])
+    gapped = frame.iloc[:200].copy()
+    gapped.loc[120:, "time_s"] += 10 * period  # the logger paused
+    rest = frame.iloc[200:].copy()
+    rest["time_s"] += 10 * period  # the next run's clock goes on from the modelling file's
+    model_run, next_run = tmp_path / "model_run.csv", tmp_path / "next_run.csv"
+    gapped.to_csv(model_run, index=False)
+    rest.to_csv(next_run, index=False)
+    fit = ["fit", "--data", str(model_run), "--temps", ",".join(TEMPS), "--p", "0", "--resample", str(period)]
+    assert main([*fit, "--quiet", "--out", str(tmp_path / "m")]) == 0
+    model = str(tmp_path / "m" / "model.json")
+    capsys.readouterr()
+    assert main(["replay", model, "--data", str(next_run), "--json", str(tmp_path / "r.json")]) == 0
+    out = capsys.readouterr().out
+    assert "which is not read as one run here (sampling is not uniform" in out and "starts afresh" in out
+    assert main(["replay", model, "--data", str(next_run), "--fresh", "--json", str(tmp_path / "f.json")]) == 0
+    replayed, fresh = (json.loads((tmp_path / f).read_text()) for f in ("r.json", "f.json"))
+    assert replayed["rms_um"] == fresh["rms_um"] and replayed["samples"] == fresh["samples"]
