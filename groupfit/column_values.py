@@ -13,7 +13,13 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns, length_unit
+from groupfit.default_columns import (
+    DEFAULT_ERROR,
+    DEFAULT_TIME,
+    default_temperature_columns,
+    length_unit,
+    temperature_like_columns,
+)
 from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS
 
@@ -156,8 +162,16 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
     """
     temps, time, error, ambient = options.temps, options.time, options.error, options.ambient
     defaulted = temps is None
+    notes = []
     if defaulted:
         temps = default_temperature_columns(frame.columns, exclude=(time, error, ambient))
+        if not temps and options.require_error:
+            temps = temperature_like_columns(frame, exclude=(time, error, ambient))
+            if temps:
+                notes.append(
+                    f"{label}: no column is named as a temperature (T1, Temp …, °C): the inputs are the columns "
+                    f"whose readings look like temperatures in °C: {', '.join(temps)}; --temps names them"
+                )
         if not temps:
             raise InputError(
                 f"{label}: no temperature columns found (named T1, T2 … or in °C); name the inputs with --temps A,B,C. "
@@ -186,7 +200,6 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
         )
     kept = [j for j, t in enumerate(temps) if t not in constant]
     array = np.column_stack([columns[j] for j in kept]) if kept else np.empty((len(frame), 0))
-    notes = []
     if constant:
         listed = ", ".join(f"'{t}' ({v:g} °C)" for t, v in constant.items())
         notes.append(

@@ -16,7 +16,8 @@ the role is taken, with a note naming it:
   lists them;
 * the inputs: the columns named like sensors (``T1``, ``t12_C``), else those
   named as temperatures (``Spindle [°C]``, ``Temp3``, ``Motor temp``, ``TC2``), the ambient
-  left out (:func:`default_temperature_columns`).
+  left out (:func:`default_temperature_columns`); a log that names none, the columns whose
+  readings look like temperatures (:func:`temperature_like_columns`), with a note.
 
 A column asked for by name is never replaced.
 """
@@ -29,9 +30,10 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.columns import is_ambient_name
+from groupfit.columns import is_ambient_name, is_counter
 from groupfit.errors import InputError
 from groupfit.readtable import datetimes_to_seconds
+from groupfit.setting_levels import is_setting
 from groupfit.timestamps import time_like_columns
 
 DEFAULT_TIME = "time_s"
@@ -91,6 +93,39 @@ def ambient_columns(frame: pd.DataFrame, inputs: Sequence[str] = ()) -> list[str
             continue
         if np.isfinite(pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)).all():
             found.append(name)
+    return found
+
+
+OTHER_QUANTITY_NAME = re.compile(
+    r"rpm|speed|drehzahl|power|leistung|load|last|current|strom|volt|spannung|press|druck|flow|feed|vorschub|"
+    r"pos|axis|achse|humid|feucht|%|torque|moment|count|index|status|state|mode|program|tool|werkzeug|"
+    r"\b(?:on|off|id|nr|no|kw|w|a|v|hz)\b|\[(?:w|kw|a|v|hz|bar|mm/min|1/min)\]",
+    re.IGNORECASE,
+)
+"""A name of a quantity that is not a temperature (a speed, a power, a position, a state)."""
+PLAUSIBLE_TEMPERATURE_C = (-40.0, 200.0)
+"""Readings of a machine's temperature sensors in °C (coolant, structure, bearings, motors)."""
+
+
+def temperature_like_columns(frame: pd.DataFrame, exclude: Sequence[str | None] = ()) -> list[str]:
+    """The inputs of a log that names none as a temperature: the numeric columns whose readings look like a
+    machine's temperatures in °C (within :data:`PLAUSIBLE_TEMPERATURE_C`, varying, not a setting held at
+    levels, not a counter), whose names are not those of a time, an error, the air or another quantity."""
+    excluded = {e for e in exclude if e}
+    named = set(time_like_columns(frame.columns)) | set(error_like_columns(frame.columns))
+    found = []
+    for column in frame.columns:
+        name = str(column)
+        if column in excluded or name in named or is_ambient_name(name) or OTHER_QUANTITY_NAME.search(name):
+            continue
+        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+        finite = values[np.isfinite(values)]
+        if finite.size < max(3, len(values) // 2) or np.ptp(finite) == 0.0:
+            continue
+        low, high = PLAUSIBLE_TEMPERATURE_C
+        if finite.min() < low or finite.max() > high or is_setting(finite) or is_counter(finite):
+            continue
+        found.append(name)
     return found
 
 
@@ -174,4 +209,5 @@ __all__ = [
     "found_error_column",
     "found_time_column",
     "length_unit",
+    "temperature_like_columns",
 ]

@@ -557,9 +557,10 @@ def _write_inputs(folder: Path) -> None:
     good.assign(T4=21.0).to_csv(folder / "constant.csv", index=False)
     good.assign(error_um=0.0).to_csv(folder / "constant_error.csv", index=False)
     good.assign(time_s=good["time_s"] * 0.6).to_csv(folder / "fast.csv", index=False)
-    pd.DataFrame({"time_s": good["time_s"], "a": good["T1"], "b": good["T2"], "error_um": good["error_um"]}).to_csv(
-        folder / "no_sensors.csv", index=False
-    )
+    # neither named as a temperature nor reading like one (°C within -40...200)
+    pd.DataFrame(
+        {"time_s": good["time_s"], "a": good["T1"] * 100, "b": good["T2"] * 100, "error_um": good["error_um"]}
+    ).to_csv(folder / "no_sensors.csv", index=False)
     (folder / "empty.csv").write_text("")
     (folder / "header_only.csv").write_text(text[0] + "\n")
     positions = pd.concat([good.assign(P_mm=p, error_um=good["error_um"] + 0.01 * p) for p in (0.0, 100.0, 200.0)])
