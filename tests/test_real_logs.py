@@ -366,7 +366,7 @@ def test_operating_columns_none_named_as_a_speed_leave_the_ar1_out_and_are_named
     result = compare_json(tmp_path, "two", frame)
     assert result["ar1"] is None and not ar1_rows(result)
     out = capsys.readouterr().out
-    assert "of its operating columns (programme, spindle_on, coolant) none is the one named as a speed" in out
+    assert "of its operating columns (programme, spindle_on, coolant) none is named as a speed" in out
     named = compare_json(tmp_path, "named", frame, "--heat", "programme")
     assert named["ar1"]["heat"] == "programme"
 

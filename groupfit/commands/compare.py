@@ -91,7 +91,9 @@ def settle_heat_and_conditions(args: argparse.Namespace, settings: ComparisonSet
             f"AR(1): heat level '{settings.heat}', the run's {why} (the default '{absent}' is absent); "
             "--heat COLUMN names another, --heat none leaves it out"
         )
-    found = f"; of its operating columns ({', '.join(operating)}) none is the one named as a speed" if operating else ""
+    speeds = [c for c in operating if SPEED_NAME.search(str(c))]
+    which = f"{', '.join(speeds)} are all named as a speed" if speeds else "none is named as a speed"
+    found = f"; of its operating columns ({', '.join(operating)}) {which}" if operating else ""
     return f"AR(1): left out: the run has no '{absent}' column, its default heat level{found}; --heat COLUMN names one"
 
 
