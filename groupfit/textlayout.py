@@ -7,20 +7,39 @@ should not have to rewrite one before groupfit reads it:
   spreadsheet's "Unicode text" export), else UTF-8 (with or without a
   byte-order mark), else Windows-1252 (a ``°C`` written by a Windows
   program), else Latin-1;
-* the separator: a comma, a semicolon or a tab, whichever the header line
-  uses most (a comma on a tie); runs of spaces when the header has none of
-  them (a lab logger's ``.dat``; a name with a space in it cannot be told
-  from two there);
-* a preamble: lines before the header (a logger's name, the start date) are
-  skipped. The header is the first line of two or more fields, none of them a
-  number, whose next lines have as many fields;
+* line ends: ``\r\n`` and a lone ``\r`` (Excel for Mac's "CSV (Macintosh)")
+  are read as ``\n``;
+* the table's body: the longest run of lines that hold numbers and split into
+  as many fields (two or more) at one separator, among the first
+  :data:`SNIFF_LINES` lines. The separator is the one (a comma, a semicolon, a
+  tab, or runs of spaces for a lab logger's ``.dat``) that gives the longest
+  such run, the header's own deciding a tie: a name with a comma in it
+  (SINUMERIK's ``T1[u1,1]``) does not make the comma the separator of a
+  semicolon table. Runs cut by a line of one field (``Logging paused``) are
+  one body;
+* the header: of the lines of text directly above the body with about as many
+  fields (one more or fewer: a separator closing every data row), after the
+  last empty one (a spreadsheet's ``;;;;`` row) and but for ``#`` comments,
+  the topmost that names the most columns; else the line of text just above
+  the body. What lies above the header is a preamble and is skipped (a
+  logger's name, ``Start;2024-03-04 08:00``, a LabVIEW
+  ``***End_of_Header***``, Graphtec's channel list, a TwinCAT Scope or
+  SINUMERIK trace head). A text without such a body takes the first line of
+  two or more text fields whose next lines have as many;
 * the decimal mark: a comma when the separator is not one and a data cell is
   written so (``20,5``);
+* thousands separators: in a table of decimal commas, a column whose dotted
+  numbers all read as ``1.370`` or ``12.345,6`` is read without the dots (1370,
+  12345.6); any other dotted number there (``20.5``) is refused, naming the
+  column and the cell. In a table of decimal points, a column whose cells with
+  a comma all read as ``2,000`` or ``12,345.6`` (quoted in a comma-separated
+  table) is read without the commas;
 * a separator at the end of every data row (not of the header) is dropped
-  rather than shifting the columns;
-* a units row under the header (``s;°C;°C;µm``): a first row that holds text
-  and no number, above rows that hold numbers, is dropped and its columns read
-  as numbers;
+  rather than shifting the columns; a column with no name and no value in
+  any row (a spreadsheet's trailing ``;;;``) is dropped;
+* rows of units or descriptions under the header (``s;°C;°C;µm``): the first
+  rows that hold text and no number, above rows that hold numbers, are
+  dropped and their columns read as numbers;
 * a footer: lines after the last one that holds a number (``Logging stopped
   at 04:00``, ``END``) are not read; in a sheet, rows (:func:`without_footer_rows`).
 """
@@ -38,10 +57,12 @@ import numpy as np
 import pandas as pd
 
 DELIMITERS = (",", ";", "\t")
-"""Field separators of a text table, tried on its header line: the most frequent wins (a comma on a tie)."""
+"""Field separators of a text table, tried on its body; a tie goes to the one its header uses most (a comma
+on a tie there)."""
 WHITESPACE = " "
-"""The separator of a table whose header has none of :data:`DELIMITERS`: runs of spaces (a lab logger's
-``.dat``, a fixed-width export)."""
+"""The separator of a table split by runs of spaces (a lab logger's ``.dat``, a fixed-width export)."""
+SEPARATORS = (*DELIMITERS, WHITESPACE)
+"""Every separator a table's body is tried with, in the order a tie is given."""
 ENCODINGS = ("utf-8-sig", "cp1252", "latin-1")
 """Tried in this order; Latin-1 reads any byte."""
 BYTE_ORDER_MARKS = (
@@ -51,11 +72,16 @@ BYTE_ORDER_MARKS = (
     (codecs.BOM_UTF16_BE, "utf-16-be"),
 )
 """UTF-32 before UTF-16: the UTF-32 little-endian mark begins with UTF-16's."""
-SNIFF_LINES = 60
-"""Lines looked at for the header and, below it, for the decimal mark."""
+SNIFF_LINES = 200
+"""Lines looked at for the body, the header and, below it, the decimal mark."""
 AGREEING_LINES = 3
-"""Lines below a header candidate that must have as many fields as it."""
+"""Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
+DOT_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d+)?")
+"""A number with dots between its thousands (``1.370``, ``12.345,6``): the only dotted number a table of
+decimal commas holds."""
+COMMA_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d+)?")
+"""A number with commas between its thousands (``2,000``, ``12,345.6``) in a table of decimal points."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +92,24 @@ class TextLayout:
     header_line: int
     """0-based line of the header: the lines before it are a preamble."""
     decimal: str
+
+
+@dataclass(frozen=True)
+class _Row:
+    """A filled line of the sniffed text split at one separator."""
+
+    line: int
+    fields: list[str]
+    numeric: bool
+
+    @property
+    def filled(self) -> int:
+        return sum(1 for field in self.fields if field)
+
+    @property
+    def is_text(self) -> bool:
+        """Two fields or more and no number in most of them: a header, units, or a preamble line."""
+        return len(self.fields) >= 2 and not self.numeric
 
 
 def header_delimiter(line: str) -> str:
@@ -98,18 +142,113 @@ def decode(content: bytes) -> str:
     raise AssertionError("latin-1 decodes every byte")
 
 
+def with_newlines(text: str) -> str:
+    """The text with every line ended by ``\\n``: ``\\r\\n`` (Windows) and a lone ``\\r`` (classic Mac)."""
+    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
+
+
 def layout_of(text: str) -> TextLayout:
     """The layout of a table's text (see the module docstring)."""
-    lines = text.split("\n", SNIFF_LINES)[:SNIFF_LINES]
-    lines = [line.rstrip("\r") for line in lines]
-    header = _header_line(lines)
-    sep = header_delimiter(lines[header]) if lines else ","
+    lines = with_newlines(text).split("\n", SNIFF_LINES)[:SNIFF_LINES]
+    found = _body_layout(lines)
+    if found is None:
+        header = _first_agreeing_header(lines)
+        sep = header_delimiter(lines[header]) if lines else ","
+    else:
+        sep, header = found
     below = [line for line in lines[header + 1 :] if line.strip()]
     decimal = "," if sep != "," and any(_comma_number(f) for line in below for f in fields_of(line, sep)) else "."
     return TextLayout(sep=sep, header_line=header, decimal=decimal)
 
 
-def _header_line(lines: list[str]) -> int:
+def _rows(lines: list[str], sep: str) -> list[_Row]:
+    rows = []
+    for k, line in enumerate(lines):
+        if line.strip():
+            fields = [field.strip().strip('"').strip() for field in _split(line, sep)]
+            filled = [field for field in fields if field]
+            numbers = sum(1 for field in filled if is_number(field) or is_number(field, ","))
+            rows.append(_Row(k, fields, numeric=numbers > 0 and 2 * numbers >= len(filled)))
+    return rows
+
+
+def _split(line: str, sep: str) -> list[str]:
+    """A line's fields, a quoted separator kept inside its field."""
+    if sep == WHITESPACE:
+        return line.split()
+    try:
+        return next(csv.reader([line], delimiter=sep), [])
+    except csv.Error:
+        return line.split(sep)
+
+
+def _numeric_runs(rows: list[_Row]) -> list[tuple[int, int]]:
+    """``(first, end)`` positions in ``rows`` of each run of numeric rows of one width (two fields or more)."""
+    runs, start = [], None
+    for position, row in enumerate([*rows, None]):
+        if start is not None and (row is None or not row.numeric or len(row.fields) != len(rows[start].fields)):
+            runs.append((start, position))
+            start = None
+        if start is None and row is not None and row.numeric and len(row.fields) >= 2:
+            start = position
+    return runs
+
+
+def _body_layout(lines: list[str]) -> tuple[str, int] | None:
+    """The separator whose body of numbers is the longest, and the header line above that body; None when no
+    line holds numbers."""
+    best, best_score = None, (0, False)
+    for sep in SEPARATORS:
+        rows = _rows(lines, sep)
+        runs = _numeric_runs(rows)
+        if not runs:
+            continue
+        first, end = max(runs, key=lambda run: run[1] - run[0])
+        above = rows[first - 1] if first > 0 else None
+        header_agrees = above is not None and above.is_text and header_delimiter(lines[above.line]) == sep
+        score = (end - first, header_agrees)
+        if score > best_score:
+            best, best_score = (sep, rows, runs, first), score
+    if best is None:
+        return None
+    sep, rows, runs, first = best
+    first = _body_start(rows, runs, first)
+    return sep, _header_above(rows, first)
+
+
+def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> int:
+    """The start of the body that holds the run at ``first``: earlier runs of its width belong to it when
+    nothing between them could be a header (a ``Logging paused`` line, a cut row) but a repeat of a line above
+    them (a header written again after a logger's restart)."""
+    width = len(rows[first].fields)
+    for start, end in reversed([run for run in runs if run[1] <= first]):
+        seen_above = {tuple(row.fields) for row in rows[:start] if row.is_text}
+        between = [row for row in rows[end:first] if row.is_text and tuple(row.fields) not in seen_above]
+        if len(rows[start].fields) != width or between:
+            break
+        first = start
+    return first
+
+
+def _header_above(rows: list[_Row], first: int) -> int:
+    """The header line of the body that starts at ``rows[first]`` (see the module docstring)."""
+    width = len(rows[first].fields)
+    position = first
+    while position > 0 and rows[position - 1].is_text and abs(len(rows[position - 1].fields) - width) <= 1:
+        position -= 1
+    above = rows[position:first]
+    empty = [k for k, row in enumerate(above) if row.filled == 0]
+    above = above[empty[-1] + 1 :] if empty else above
+    above = [row for row in above if not row.fields[0].startswith("#")] or above  # a comment, unless all are
+    if above:
+        most = max(row.filled for row in above)
+        return next(row.line for row in above if row.filled == most)
+    if first > 0 and rows[first - 1].is_text:
+        return rows[first - 1].line
+    return rows[first].line
+
+
+def _first_agreeing_header(lines: list[str]) -> int:
     filled = [k for k, line in enumerate(lines) if line.strip()]
     for position, k in enumerate(filled):
         sep = header_delimiter(lines[k])
@@ -129,10 +268,10 @@ def _comma_number(field: str) -> bool:
 
 def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
     """A text table's frame and its header as written (pandas renames a repeated name on reading)."""
-    text = decode(content)
+    text = with_newlines(decode(content))
     layout = layout_of(text)
     body = _without_footer(_from_line(text, layout.header_line), layout)
-    header_text = body.split("\n", 1)[0].rstrip("\r")
+    header_text = body.split("\n", 1)[0]
     if layout.sep == WHITESPACE:
         header, sep = header_text.split(), r"\s+"
     else:
@@ -145,7 +284,10 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
             )
         except pd.errors.ParserWarning:
             raise ValueError("a row has more values than the header has names; name every column") from None
-    return without_units_row(frame, decimal=layout.decimal), [str(name) for name in header]
+    header = [str(name) for name in header]
+    frame, header = _without_empty_unnamed_columns(frame, header)
+    frame = without_units_row(frame, decimal=layout.decimal)
+    return _without_thousands_separators(frame, layout.decimal), header
 
 
 def _from_line(text: str, line: int) -> str:
@@ -165,6 +307,65 @@ def _without_footer(body: str, layout: TextLayout) -> str:
     return body
 
 
+def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tuple[pd.DataFrame, list[str]]:
+    """The frame and header without the columns that have no name and no value in any row (a spreadsheet's
+    trailing ``;;;``); a column with no name that holds a value is kept (and refused when named twice)."""
+    if len(header) != frame.shape[1]:
+        return frame, header
+    kept = [k for k, name in enumerate(header) if name.strip() or not frame.iloc[:, k].map(_empty).all()]
+    if len(kept) == len(header):
+        return frame, header
+    return frame.iloc[:, kept], [header[k] for k in kept]
+
+
+def _without_thousands_separators(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
+    """The frame with its text columns of numbers written with thousands separators read as numbers."""
+    changed = {}
+    for column in frame.columns:
+        if pd.api.types.is_numeric_dtype(frame[column]):
+            continue
+        text = frame[column].astype("string").str.strip()
+        plain = _plain_numbers(text, decimal, str(column), thousands_only=True)
+        if plain is not None:
+            values = pd.to_numeric(plain, errors="coerce")
+            filled = plain.notna() & (plain != "")
+            changed[column] = values.astype(float) if values[filled].notna().all() else plain.astype(object)
+    if not changed:
+        return frame
+    frame = frame.copy()
+    for column, values in changed.items():
+        frame[column] = values
+    return frame
+
+
+def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: bool = False) -> pd.Series | None:
+    """A column's stripped text cells with their numbers written with a decimal point and no thousands
+    separators; None when ``thousands_only`` and the column has none.
+
+    Raises
+    ------
+    ValueError
+        A table of decimal commas holds a dotted number that is not one with thousands separators.
+    """
+    cells = [cell for cell in text.dropna().unique() if cell]
+    if decimal == ",":
+        dotted = [cell for cell in cells if "." in cell and (DOT_THOUSANDS.fullmatch(cell) or is_number(cell))]
+        odd = next((cell for cell in dotted if not DOT_THOUSANDS.fullmatch(cell)), None)
+        if odd is not None:
+            raise ValueError(
+                f"column '{name}' holds '{odd}', a decimal point in a table of decimal commas, where a dot "
+                "can only separate thousands (1.370); write that column with decimal commas"
+            )
+        if thousands_only and not dotted:
+            return None
+        rewritten = {cell: cell.replace(".", "") if cell in dotted else cell for cell in cells}
+        return text.map(lambda cell: rewritten.get(cell, cell)).str.replace(",", ".", regex=False)
+    commas = [cell for cell in cells if "," in cell]
+    if not commas or not all(COMMA_THOUSANDS.fullmatch(cell) for cell in commas):
+        return None if thousands_only else text
+    return text.str.replace(",", "", regex=False)
+
+
 def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
     """A sheet's frame without the rows after its last one that holds a number (a footer), its columns read
     as numbers where the footer alone was text."""
@@ -174,23 +375,26 @@ def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
     kept = frame.iloc[: int(np.flatnonzero(numeric)[-1]) + 1].copy()
     for column in kept.columns:
         if not pd.api.types.is_numeric_dtype(kept[column]):
-            values = _as_numbers(kept[column], ".")
+            values = _as_numbers(kept[column], ".", str(column))
             if values is not None:
                 kept[column] = values
     return kept
 
 
 def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFrame:
-    """The frame without a units row under its header, its columns read as numbers where all of them are."""
-    if len(frame) < 2:
+    """The frame without the rows of units or descriptions under its header (its first rows that hold text
+    and no number), its columns read as numbers where all of the rest are."""
+    text_rows = 0
+    while text_rows < len(frame) - 1:
+        cells = [str(v).strip() for v in frame.iloc[text_rows] if not _empty(v)]
+        if not cells or any(is_number(cell, decimal) for cell in cells):
+            break  # a number in the row (or nothing in it): a data row
+        text_rows += 1
+    if text_rows == 0:
         return frame
-    first = frame.iloc[0]
-    cells = [str(v).strip() for v in first if not _empty(v)]
-    if not cells or any(is_number(cell, decimal) for cell in cells):
-        return frame  # a number in the first row (or nothing in it): a data row
-    rest = frame.iloc[1:].reset_index(drop=True)
+    rest = frame.iloc[text_rows:].reset_index(drop=True)
     text_columns = [c for c in rest.columns if not pd.api.types.is_numeric_dtype(rest[c])]
-    converted = {column: _as_numbers(rest[column], decimal) for column in text_columns}
+    converted = {column: _as_numbers(rest[column], decimal, str(column)) for column in text_columns}
     if all(values is None for values in converted.values()):
         return frame
     for column, values in converted.items():
@@ -213,11 +417,10 @@ def is_number(cell: str, decimal: str = ".") -> bool:
     return True
 
 
-def _as_numbers(column: pd.Series, decimal: str) -> pd.Series | None:
-    """The column as float64 when every filled cell is a number, else None."""
-    text = column.astype("string").str.strip()
-    if decimal == ",":
-        text = text.str.replace(",", ".", regex=False)
+def _as_numbers(column: pd.Series, decimal: str, name: str) -> pd.Series | None:
+    """The column as float64 when every filled cell is a number (thousands separators read as
+    :func:`_plain_numbers` reads them), else None."""
+    text = _plain_numbers(column.astype("string").str.strip(), decimal, name)
     values = pd.to_numeric(text, errors="coerce")
     filled = text.notna() & (text != "")
     if not filled.any() or values[filled].isna().any():
@@ -234,6 +437,7 @@ __all__ = [
     "is_number",
     "layout_of",
     "read_text_table",
+    "with_newlines",
     "without_footer_rows",
     "without_units_row",
 ]
