@@ -39,10 +39,15 @@ def test_the_comparison_table_never_runs_numbers_together():
 
 def test_breaks_without_operating_conditions_print_no_none(tmp_path, capsys):
     path = tmp_path / "printer.csv"
-    cycle_means().to_csv(path, index=False)
+    cycle_means().drop(columns=["bed_target"]).to_csv(path, index=False)
     assert cli("compare", "--data", path, "--pmax", "2", "--heat", "none", "--quiet", "--out", tmp_path) == 0
     report = capsys.readouterr().out
     assert "None" not in report and "no change of operating condition" in report
+    # with its heater's set-point logged, the breaks are set against the set-point's changes
+    cycle_means().to_csv(path, index=False)
+    assert cli("compare", "--data", path, "--pmax", "2", "--heat", "none", "--quiet", "--out", tmp_path) == 0
+    report = capsys.readouterr().out
+    assert "nearest change of operating condition at [100, 180, 280]" in report
 
 
 def test_a_heater_on_from_the_start_is_kept_and_a_sample_index_left_out():
