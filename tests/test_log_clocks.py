@@ -17,20 +17,17 @@ TEMPS = ["T1", "T2", "T3", "T4"]
 
 
 @pytest.fixture(scope="module")
-def plain():
-    return load_run(SYNTHETIC, temps=TEMPS)
-
-
-@pytest.fixture(scope="module")
-def frame():
-    return pd.read_csv(SYNTHETIC)
+def synthetic() -> tuple[pd.DataFrame, object]:
+    """The synthetic run as a table and as groupfit reads it."""
+    return pd.read_csv(SYNTHETIC), load_run(SYNTHETIC, temps=TEMPS)
 
 
 @pytest.mark.parametrize(
     "name, per_second",
     [("Zeit [Min.]", 1 / 60), ("Zeit [Std]", 1 / 3600), ("Time (hrs.)", 1 / 3600), ("Zeit [Sek]", 1.0)],
 )
-def test_a_unit_of_time_in_other_words_is_read(tmp_path, frame, plain, name, per_second):
+def test_a_unit_of_time_in_other_words_is_read(tmp_path, synthetic, name, per_second):
+    frame, plain = synthetic
     path = tmp_path / "log.csv"
     frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": name}).to_csv(path, index=False)
     run = load_run(path, temps=TEMPS)
@@ -38,7 +35,8 @@ def test_a_unit_of_time_in_other_words_is_read(tmp_path, frame, plain, name, per
     assert run.period == pytest.approx(plain.period, rel=1e-9)
 
 
-def test_a_bracketed_word_that_is_no_unit_of_time_is_refused_and_a_time_zone_is_not_one(tmp_path, frame, plain):
+def test_a_bracketed_word_that_is_no_unit_of_time_is_refused_and_a_time_zone_is_not_one(tmp_path, synthetic):
+    frame, plain = synthetic
     path = tmp_path / "log.csv"
     frame.rename(columns={"time_s": "Zeit [Takte]"}).to_csv(path, index=False)
     with pytest.raises(InputError, match=r"column 'Zeit \[Takte\]': 'Takte' is not a unit of time"):
@@ -48,7 +46,8 @@ def test_a_bracketed_word_that_is_no_unit_of_time_is_refused_and_a_time_zone_is_
 
 
 @pytest.mark.parametrize("form", ["elapsed", "comma", "colon"])
-def test_elapsed_hours_past_a_day_and_fractions_after_a_comma_or_colon_are_read(tmp_path, frame, plain, form):
+def test_elapsed_hours_past_a_day_and_fractions_after_a_comma_or_colon_are_read(tmp_path, synthetic, form):
+    frame, plain = synthetic
     seconds = frame["time_s"].to_numpy(dtype=float) * 3.7  # the synthetic run stretched past 24 h
     assert seconds[-1] > 86400.0
     if form == "elapsed":  # a spreadsheet's [h]:mm:ss
@@ -64,7 +63,8 @@ def test_elapsed_hours_past_a_day_and_fractions_after_a_comma_or_colon_are_read(
     np.testing.assert_array_equal(run.temps, plain.temps)
 
 
-def test_resample_refuses_two_recordings_in_one_file_instead_of_averaging_them(tmp_path, frame, capsys):
+def test_resample_refuses_two_recordings_in_one_file_instead_of_averaging_them(tmp_path, synthetic, capsys):
+    frame = synthetic[0]
     restarted = frame.copy()
     restarted.loc[150:, "time_s"] -= restarted.loc[150, "time_s"]  # the logger powered up again at row 151
     path = tmp_path / "two.csv"
@@ -76,8 +76,9 @@ def test_resample_refuses_two_recordings_in_one_file_instead_of_averaging_them(t
     assert "sort the rows" not in err[0] and not (tmp_path / "o").exists()
 
 
-def test_a_modelling_file_not_read_as_one_run_is_not_continued_and_the_note_says_why(tmp_path, frame, capsys):
+def test_a_modelling_file_not_read_as_one_run_is_not_continued_and_the_note_says_why(tmp_path, synthetic, capsys):
     """A next run whose clock continues a modelling log with a gap (fitted with --resample) is replayed afresh."""
+    frame = synthetic[0]
     period = float(frame["time_s"].iloc[1] - frame["time_s"].iloc[0])
     gapped = frame.iloc[:200].copy()
     gapped.loc[120:, "time_s"] += 10 * period  # the logger paused
