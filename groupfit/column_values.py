@@ -62,6 +62,13 @@ class LoadOptions:
     error_limit: float | None = ERROR_LIMIT_UM
     drop_glitches: bool = False
     """Take the error's glitches (:mod:`groupfit.glitches`) as not measured, with a note."""
+    check_ranges: bool | None = None
+    """Check ``temp_range`` and ``error_limit``; None: unless ``allow_nonfinite`` (a replay, whose run-time
+    rule meets an implausible reading as a sensor fault)."""
+
+    @property
+    def ranges_checked(self) -> bool:
+        return not self.allow_nonfinite if self.check_ranges is None else self.check_ranges
 
 
 def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
@@ -104,6 +111,27 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     return array
 
 
+def markers_emptied(frame: pd.DataFrame) -> pd.DataFrame:
+    """The table with every column of numbers and no-reading marks (:data:`NO_READING`: ``---``, ``OVL``, ``ERR``)
+    as float64, its marks empty, so that whatever reads the run's table later reads them as readings not taken.
+
+    Columns holding any other text (a date-time, a comment) are left as they are.
+    """
+    converted = {}
+    for column in frame.columns:
+        raw = frame[column]
+        if pd.api.types.is_numeric_dtype(raw):
+            continue
+        values = pd.to_numeric(raw, errors="coerce")
+        if not values.notna().any():
+            continue
+        text = raw.astype(str).str.strip()
+        unread = values.isna() & raw.notna() & (text != "") & (text.str.lower() != "nan")
+        if text[unread].str.fullmatch(NO_READING).all():
+            converted[column] = values.astype(float)
+    return frame.assign(**converted) if converted else frame
+
+
 def check_range(
     values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
 ) -> None:
@@ -126,7 +154,7 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
     The inputs (``--temps``, else the columns named like sensors) outside ``temp_range`` and errors beyond
     ``error_limit``; other columns (a speed, a setpoint) are left as they are.
     """
-    if options.allow_nonfinite:
+    if not options.ranges_checked:
         return frame, None
     temps = options.temps
     if temps is None:
@@ -250,6 +278,7 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
 __all__ = [
     "ERROR_LIMIT_UM",
     "NO_READING",
+    "markers_emptied",
     "TEMP_RANGE_C",
     "LoadOptions",
     "check_range",

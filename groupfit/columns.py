@@ -12,11 +12,15 @@ The diagnosis draws its candidates from these columns and the held-out folds
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 import pandas as pd
 
+from groupfit.errors import InputError
+
 DISPLACEMENT_SUFFIXES = ("_um", "_mm", "_µm")
-AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop")
+AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop", "umgebung", "raumtemp")
 """A column whose name holds one of these is an ambient temperature."""
 
 
@@ -81,3 +85,18 @@ def is_counter(values: np.ndarray) -> bool:
         return False
     step = np.diff(values)
     return bool(step[0] > 0 and np.all(np.abs(step - step[0]) <= 1e-9 * max(abs(step[0]), 1.0)))
+
+
+def refuse_other_inputs(expected: Sequence[str], given: Sequence[str], label: str) -> None:
+    """Refuse a run whose inputs ``given`` are not the modelling run's ``expected``, saying how they differ."""
+    if tuple(given) == tuple(expected):
+        return
+    missing = [c for c in expected if c not in given]
+    added = [c for c in given if c not in expected]
+    parts = [f"missing {', '.join(missing)}"] if missing else []
+    parts += [f"not in the modelling run: {', '.join(added)}"] if added else []
+    difference = "; ".join(parts) or f"in another order ({', '.join(given)})"
+    raise InputError(
+        f"{label}: temperature columns differ from the modelling run's ({difference}); name the same inputs in "
+        "both runs (--temps A,B,C)"
+    )

@@ -28,6 +28,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import pandas as pd
 
+from groupfit.columns import refuse_other_inputs
 from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
 from groupfit.data import Run, measured_rows, numeric_column
@@ -239,8 +240,7 @@ def compare_models(
     """
     histories = histories or {}
     for run in validation:
-        if run.temp_names != modelling.temp_names:
-            raise InputError(f"{run.source}: temperature columns differ from the modelling run's")
+        refuse_other_inputs(modelling.temp_names, run.temp_names, run.source)
         if abs(run.period - modelling.period) > 0.01 * modelling.period:
             raise InputError(
                 f"{run.source}: sampled every {run.period:g} s but the modelling run every {modelling.period:g} s"

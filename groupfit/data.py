@@ -22,7 +22,7 @@ from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
 from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
-from groupfit.column_values import implausible_as_missed, temperature_inputs, unit_note
+from groupfit.column_values import implausible_as_missed, markers_emptied, temperature_inputs, unit_note
 from groupfit.column_values import numeric_column as numeric_column
 from groupfit.default_columns import (
     DEFAULT_ERROR,
@@ -33,8 +33,9 @@ from groupfit.default_columns import (
 from groupfit.default_columns import length_unit as length_unit
 from groupfit.errors import InputError
 from groupfit.glitches import without_glitches
+from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
-from groupfit.readtable import datetimes_to_seconds, read_table
+from groupfit.readtable import datetimes_to_seconds, read_table, without_blank_rows
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.timestamps import clock_restart, epoch_to_seconds, serial_days_to_seconds, unit_seconds
 
@@ -83,6 +84,13 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
     in, :func:`groupfit.timestamps.unit_seconds`), in place; a bad or implausible cell named with its row."""
     numbers = column in frame.columns and pd.api.types.is_numeric_dtype(frame[column])
     datetimes_to_seconds(frame, column, label)
+    values = numeric_column(frame, column, label, allow_nonfinite=True)
+    unstamped = np.flatnonzero(np.isnan(values))
+    if unstamped.size:
+        raise InputError(
+            f"{label}: row {unstamped[0] + 1}, column '{column}' is empty ({unstamped.size} row(s) without a time "
+            "stamp): a reading cannot be placed without its time; fill in the time or delete the row"
+        )
     values = numeric_column(frame, column, label, allow_nonfinite=False)
     scale = unit_seconds(column, label) if numbers else 1.0
     if scale != 1.0:
@@ -150,6 +158,7 @@ def load_run(
     time_is_default: bool = False,
     error_is_default: bool = False,
     drop_glitches: bool = False,
+    check_ranges: bool | None = None,
 ) -> Run:
     """Read and validate a run.
 
@@ -203,6 +212,11 @@ def load_run(
         leave their neighbours and come back) as not measured, with a note
         naming their rows; for a run that may hold unmeasured rows
         (``missing_error`` or ``allow_nonfinite``).
+    check_ranges : bool, optional
+        Refuse readings outside ``temp_range`` and ``error_limit`` (with
+        ``resample``: take them as missed) even with ``allow_nonfinite``, for a
+        run whose residual is fitted rather than replayed (``diagnose``).
+        Default: unless ``allow_nonfinite``.
 
     Raises
     ------
@@ -211,7 +225,7 @@ def load_run(
     """
     options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
     options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
-    options.update(drop_glitches=drop_glitches)
+    options.update(drop_glitches=drop_glitches, check_ranges=check_ranges)
     runs = load_runs(
         source,
         name=name,
@@ -245,6 +259,7 @@ def load_runs(
     marks for the role (:mod:`groupfit.default_columns`), with a note.
     """
     frame, run_name, label = read_table(source, name)
+    frame, blank_note = without_blank_rows(frame, label)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     required = options.get("require_error", True)
@@ -252,7 +267,7 @@ def load_runs(
         frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default
     )
     runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
-    found = tuple(note for note in (time_note, serial_note, error_note) if note)
+    found = tuple(note for note in (blank_note, time_note, serial_note, error_note) if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 
@@ -312,9 +327,10 @@ def _validated(
     column) is never a default input."""
     options = LoadOptions(**given)
     time, error = options.time, options.error
-    allow_nonfinite = options.allow_nonfinite
     temp_range, error_limit = options.temp_range, options.error_limit
     time_values = time_seconds(frame, time, label)
+    if np.any(np.diff(time_values) <= 0):  # before check_time advises averaging the readings of each period
+        refuse_interleaved(frame, [stamp_groups(time_values)], time=time, label=label)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
@@ -325,7 +341,7 @@ def _validated(
     error_values = read_error_values(frame, error, label, options)
     in_other_unit = unit_note(error, label) if error_values is not None else None
     notes = notes + ((in_other_unit,) if in_other_unit else ())
-    if not allow_nonfinite:
+    if options.ranges_checked:
         if temp_range is not None:
             for j, t in enumerate(temps):
                 check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp=LOW,HIGH")
@@ -344,7 +360,7 @@ def _validated(
         error=error_values,
         error_name=error if error_values is not None else None,
         period=period,
-        frame=frame,
+        frame=markers_emptied(frame),
         time_name=time,
         notes=notes,
     )

@@ -74,8 +74,11 @@ def default_temperature_columns(columns: Sequence, exclude: Sequence[str | None]
     return sensors or [c for c in names if TEMPERATURE_NAME.search(c) and not is_ambient_name(c)]
 
 
-AMBIENT_NAME = re.compile(r"t?(?:amb|ambient|room|air|hall|shop)(?:temp|temperature)?")
-"""A bare name of the air's temperature, its letters only (``Ambient``, ``T_room``, ``air temp``)."""
+AMBIENT_NAME = re.compile(
+    r"t?(?:amb|ambient|room|air|hall|hallen|shop|umgebung|umgebungs|raum)(?:temp|temperatur|temperature)?"
+)
+"""A bare name of the air's temperature, its letters only (``Ambient``, ``T_room``, ``air temp``,
+``Umgebung``, ``Raumtemperatur``)."""
 OTHER_QUANTITY = re.compile(r"humid|\brh\b|press|\bbar\b|\bpa\b|flow|speed|rpm|veloc|%|m/s", re.IGNORECASE)
 """A name of another quantity of the air (humidity, pressure, flow)."""
 

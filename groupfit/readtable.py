@@ -97,6 +97,29 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     return frame, (name or stem), label
 
 
+def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
+    """The table without the rows empty in every cell (a blank row left in a spreadsheet), and a note naming
+    them (None: there were none). Rows after them are numbered without them."""
+    blank = np.ones(len(frame), dtype=bool)
+    for column in frame.columns:
+        cells = frame[column]
+        empty = cells.isna()
+        if not pd.api.types.is_numeric_dtype(cells):
+            empty |= cells.astype("string").str.strip().eq("").fillna(True)
+        blank &= empty.to_numpy(dtype=bool)
+        if not blank.any():
+            return frame, None
+    if blank.all():
+        return frame, None
+    rows = np.flatnonzero(blank)
+    shown = ", ".join(str(i + 1) for i in rows[:5]) + (" …" if rows.size > 5 else "")
+    note = (
+        f"{label}: {rows.size} row(s) empty in every column left out (row {shown}: a blank row in a spreadsheet); "
+        "rows after them are numbered without them"
+    )
+    return frame.loc[~blank].reset_index(drop=True), note
+
+
 def _decompressed(path: Path) -> bytes:
     """The bytes of a compressed text table (a zip archive must hold exactly one file)."""
     suffix = path.suffix.lower()
@@ -186,4 +209,4 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             frame[column] = seconds
 
 
-__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "read_table"]
+__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "read_table", "without_blank_rows"]

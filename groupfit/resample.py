@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.errors import InputError
+from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.timestamps import clock_restart
 
 GAP_PERIODS = 3
@@ -128,6 +129,7 @@ def resample_frame(
             numeric[column] = values.to_numpy(dtype=float)
     start = stamps[0] - np.mod(stamps[0] - bin_phase(stamps, period_s), period_s)
     index = np.floor((stamps - start) / period_s + 1e-9).astype(np.int64)
+    refuse_interleaved(frame, [stamp_groups(stamps), index], time=time, label=label)
     n_bins = int(index[-1]) + 1
     counts = np.bincount(index, minlength=n_bins)
     table = {}

@@ -29,7 +29,9 @@ def shipped() -> pd.DataFrame:
     return pd.read_csv(DATASETS / "paper_cycle.csv")
 
 
-@pytest.mark.parametrize("name", ["Room [°C]", "Ambient", "T_air", "hall temp", "room_degC"])
+@pytest.mark.parametrize(
+    "name", ["Room [°C]", "Ambient", "T_air", "hall temp", "room_degC", "Umgebung [°C]", "Raumtemperatur", "T_Umgebung"]
+)
 def test_an_ambient_of_another_name_is_the_reference_t_amb_would_be(tmp_path, shipped, name, capsys):
     reference, _ = fitted(tmp_path, "t_amb", shipped)
     assert reference["reference"] == "T_amb"
@@ -69,6 +71,8 @@ def test_what_is_not_the_air_temperature_is_not_taken():
             "room humidity %": np.full(n, 40.0),
             "hall_fan_speed_rpm": np.full(n, 900.0),
             "airflow": np.full(n, 2.0),
+            "Umgebungsfeuchte [%]": np.full(n, 40.0),
+            "Arbeitsraum [°C]": np.linspace(22.0, 25.0, n),  # inside the machine's enclosure, not the air outside
             "Room [°C]": [20.0, 20.1, np.nan, 20.2, 20.2],  # a reading missed: not a reference for every row
         }
     )

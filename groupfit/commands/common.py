@@ -45,6 +45,13 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
     parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
     parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
+    add_range_options(parser)
+    add_clock_options(parser)
+    add_glitch_option(parser)
+
+
+def add_range_options(parser: argparse.ArgumentParser) -> None:
+    """``--range-temp LOW,HIGH`` and ``--range-error MAX``: the plausible readings of a run."""
     parser.add_argument(
         "--range-temp",
         metavar="LOW,HIGH",
@@ -56,8 +63,16 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
         metavar="MAX",
         help="largest plausible |thermal error| in µm (default 1e5); a larger value is refused",
     )
-    add_clock_options(parser)
-    add_glitch_option(parser)
+
+
+def range_options(args: argparse.Namespace) -> dict[str, Any]:
+    """``temp_range`` and ``error_limit`` for :func:`groupfit.data.load_run` from ``--range-temp``/``--range-error``."""
+    temp_range = parse_temp_range(getattr(args, "range_temp", None))
+    error_limit = parse_error_limit(getattr(args, "range_error", None))
+    return {
+        "temp_range": TEMP_RANGE_C if temp_range is None else temp_range,
+        "error_limit": ERROR_LIMIT_UM if error_limit is None else error_limit,
+    }
 
 
 def add_glitch_option(parser: argparse.ArgumentParser) -> None:

@@ -40,6 +40,7 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     common.add_json_option(parser)
+    common.add_range_options(parser)
     common.add_clock_options(parser)
     common.add_glitch_option(parser)
     common.add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
@@ -158,7 +159,9 @@ def heat_exponent(text: str) -> float | str:
 def load_measured(path: str, model: dict[str, Any], time: str, **clock) -> Run:
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
-    run = load_run(path, temps=measured, time=time, error=model["error"], allow_nonfinite=True, **clock)
+    run = load_run(
+        path, temps=measured, time=time, error=model["error"], allow_nonfinite=True, check_ranges=True, **clock
+    )
     period = float(model["sampling_period_s"])
     if abs(run.period - period) > PERIOD_TOLERANCE * period:
         raise InputError(
@@ -200,7 +203,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         else ""
     )
     time = args.time or time_column(model)
-    clock = {**common.clock_options(args), "time_is_default": args.time is None}
+    clock = {**common.clock_options(args), **common.range_options(args), "time_is_default": args.time is None}
     glitches = {"drop_glitches": not args.keep_glitches}
     data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
     validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]

@@ -1,0 +1,224 @@
+"""Messy next runs and modelling logs: two recordings sorted into one clock, overflow values and
+no-reading marks, met the same way by every verb."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from support import independent_machine as machine
+
+from groupfit.cli import main
+from groupfit.interleaved import interleaved_recordings, stamp_groups
+
+DATASETS = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets"
+TEMPS = "T1,T2,T3,T4"
+QUICK = ["--temps", TEMPS, "--reference", "none", "--quiet", "--p", "0", "--ridge", "0", "--recalibrate", "none"]
+
+
+def cli(*args) -> int:
+    return main([str(a) for a in args])
+
+
+def sorted_together(first: pd.DataFrame, second: pd.DataFrame, shift_s: float, seed: int) -> pd.DataFrame:
+    """Two recordings on one clock (the second shifted by ``shift_s``), rows sorted by time in no stable order."""
+    n = min(len(first), len(second))
+    joined = pd.concat([first.iloc[:n], second.iloc[:n].assign(time_s=first["time_s"].to_numpy()[:n] + shift_s)])
+    shuffled = joined.sample(frac=1.0, random_state=seed)
+    return shuffled.sort_values("time_s", kind="quicksort").reset_index(drop=True)
+
+
+def bins(time: np.ndarray, period_s: float) -> np.ndarray:
+    return np.floor((time - time[0]) / period_s + 1e-9).astype(np.int64)
+
+
+@pytest.fixture(scope="module")
+def scenarios():
+    return machine.scenarios(["speed_rpm_2h_30s", "amb_T_amb_30s"]) + machine.random_scenarios(6)
+
+
+def test_every_pair_of_simulated_runs_sorted_together_reads_as_two_recordings(scenarios):
+    for k, scenario in enumerate(scenarios):
+        log = sorted_together(scenario.modelling, scenario.validation, 0.0, seed=k)
+        assert interleaved_recordings(log, stamp_groups(log["time_s"].to_numpy()), time="time_s"), scenario.name
+        period = float(np.median(np.diff(scenario.modelling["time_s"])))
+        shifted = sorted_together(scenario.modelling, scenario.validation, 0.4 * period, seed=k)
+        assert interleaved_recordings(shifted, bins(shifted["time_s"].to_numpy(), period), time="time_s")
+
+
+def test_no_single_run_reads_as_two_recordings_at_any_resampling(scenarios):
+    runs = [run for s in scenarios for run in (s.modelling, s.validation)]
+    runs += [pd.read_csv(path) for path in sorted(DATASETS.glob("*.csv"))]
+    for run in runs:
+        time = run["time_s"].to_numpy(dtype=float)
+        period = float(np.median(np.diff(time)))
+        for factor in (2, 3, 4, 10):
+            assert not interleaved_recordings(run, bins(time, factor * period), time="time_s")
+
+
+@pytest.mark.parametrize("per_stamp", [2, 3, 10])
+@pytest.mark.parametrize("noise", [0.0, 0.05, 1.0])
+def test_a_fast_logger_with_a_coarse_clock_is_one_recording(per_stamp, noise):
+    rng = np.random.default_rng(per_stamp)
+    time = np.arange(0.0, 3600.0, 1.0 / per_stamp)
+    warming = 20.0 + 5.0 * (1.0 - np.exp(-time / 900.0))
+    log = pd.DataFrame(
+        {
+            "time_s": np.floor(time),
+            "T1": warming + noise * rng.standard_normal(time.size),
+            "T2": 1.1 * warming + noise * rng.standard_normal(time.size),
+            "error_um": 10.0 * warming + noise * rng.standard_normal(time.size),
+        }
+    )
+    assert not interleaved_recordings(log, stamp_groups(log["time_s"].to_numpy()), time="time_s")
+    assert not interleaved_recordings(log, bins(log["time_s"].to_numpy(), 10.0), time="time_s")
+
+
+@pytest.mark.parametrize("resample", [None, "30", "120"])
+def test_fit_refuses_two_sorted_recordings_and_does_not_advise_averaging_them(tmp_path, scenarios, capsys, resample):
+    scenario = scenarios[0]
+    path = tmp_path / "two_days.csv"
+    sorted_together(scenario.modelling, scenario.validation, 0.0, seed=1).to_csv(path, index=False)
+    out = tmp_path / "out"
+    extra = ["--resample", resample] if resample else []
+    assert cli("fit", "--data", path, *QUICK[:2], "--out", out, *extra) == 2
+    message = capsys.readouterr().err.strip().splitlines()
+    assert len(message) == 1 and "two_days.csv" in message[0] and "two recordings" in message[0]
+    assert "--data a.csv b.csv" in message[0] and "--resample" not in message[0]
+    assert not out.exists()
+
+
+def test_a_fast_logger_is_still_averaged_by_resample(tmp_path, capsys):
+    rng = np.random.default_rng(5)
+    time = np.arange(0.0, 7200.0, 0.5)
+    warming = 1.0 - np.exp(-time / 1800.0)
+    log = pd.DataFrame(
+        {
+            "time_s": np.floor(time),
+            "T1": 20.0 + 4.0 * warming + 0.05 * rng.standard_normal(time.size),
+            "T2": 20.0 + 2.0 * warming**2 + 0.05 * rng.standard_normal(time.size),
+        }
+    )
+    log["error_um"] = 3.0 * (log["T1"] - 20.0) - 2.0 * (log["T2"] - 20.0) + 0.1 * rng.standard_normal(time.size)
+    path = tmp_path / "fast.csv"
+    log.to_csv(path, index=False)
+    report = tmp_path / "fit.json"
+    options = ["--p", "0", "--reference", "none", "--resample", "60", "--quiet", "--json", report]
+    assert cli("fit", "--data", path, "--temps", "T1,T2", *options, "--out", tmp_path / "out") == 0
+    fitted = json.loads(report.read_text())
+    assert fitted["n_samples"] == 121  # two hours of 60-s periods, the last one begun
+    np.testing.assert_allclose(fitted["coefficients"][0][1:], [3.0, -2.0], atol=0.02)
+
+
+# ----------------------------------------------------------------- overflow values and no-reading marks
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("model")
+    assert cli("fit", "--data", DATASETS / "paper_cycle.csv", *QUICK, "--out", folder) == 0
+    return folder / "model.json"
+
+
+def test_diagnose_refuses_an_overflow_value_as_fit_does_and_resample_takes_it_as_missed(tmp_path, model, capsys):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    log.loc[100, "T3"] = 9.9e37
+    path = tmp_path / "overflow.csv"
+    log.to_csv(path, index=False)
+    assert cli("fit", "--data", path, *QUICK, "--out", tmp_path / "fit") == 2
+    fit_message = capsys.readouterr().err
+    assert cli("diagnose", model, "--data", path, "--out", tmp_path / "diag") == 2
+    message = capsys.readouterr().err
+    assert "row 101, column 'T3': 9.9e+37 °C is outside the plausible range" in message
+    assert message.split(":", 1)[1] == fit_message.split(":", 1)[1]
+    assert not (tmp_path / "diag").exists()
+
+    emptied = tmp_path / "emptied.csv"
+    log.loc[100, "T3"] = np.nan
+    log.to_csv(emptied, index=False)
+    reports = []
+    for source in (path, emptied):
+        report = tmp_path / f"{source.stem}.json"
+        options = ["--resample", "100", "--json", report, "--out", tmp_path / source.stem]
+        assert cli("diagnose", model, "--data", source, *options) == 0
+        reports.append(json.loads(report.read_text()))
+    assert reports[0]["before"] == reports[1]["before"] and reports[0]["after"] == reports[1]["after"]
+
+
+def test_diagnose_takes_a_widened_range(tmp_path, model):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    log.loc[100, "T3"] = 700.0
+    path = tmp_path / "hot.csv"
+    log.to_csv(path, index=False)
+    assert cli("diagnose", model, "--data", path, "--out", tmp_path / "a") == 2
+    assert cli("diagnose", model, "--data", path, "--range-temp=-50,800", "--out", tmp_path / "b") == 0
+
+
+@pytest.mark.parametrize("mark", ["---", "OVL", "ERR", "-"])
+def test_a_no_reading_mark_in_a_next_run_is_an_empty_cell_to_replay_and_diagnose(tmp_path, model, capsys, mark):
+    log = pd.read_csv(DATASETS / "validation_speed.csv").astype({"T2": object})
+    empty = log.copy()
+    log.loc[50, "T2"] = mark
+    empty.loc[50, "T2"] = np.nan
+    marked, emptied = tmp_path / "marked.csv", tmp_path / "emptied.csv"
+    log.to_csv(marked, index=False)
+    empty.to_csv(emptied, index=False)
+    replays = []
+    for source in (marked, emptied):
+        report = tmp_path / f"{source.stem}.json"
+        assert cli("replay", model, "--data", source, "--json", report) == 0
+        replays.append(json.loads(report.read_text()))
+    assert replays[0]["samples"] == replays[1]["samples"]
+    assert replays[0]["rms_um"] == replays[1]["rms_um"] and replays[0]["faults"] == replays[1]["faults"]
+    messages = []
+    for source in (marked, emptied):
+        assert cli("diagnose", model, "--data", source, "--out", tmp_path / "d") == 2
+        messages.append(capsys.readouterr().err.split(".csv:", 1)[1])
+    assert messages[0] == messages[1] and "row 51" in messages[0]
+
+
+# ----------------------------------------------------------------- blank rows and rows without a time
+
+
+def test_blank_spreadsheet_rows_are_left_out_with_a_note_and_change_nothing_else(tmp_path, capsys):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    blank = pd.DataFrame([{column: np.nan for column in log.columns}])
+    with_blanks = pd.concat([log.iloc[:199], blank, log.iloc[199:400], blank, blank, log.iloc[400:]])
+    path, clean = tmp_path / "blanks.csv", tmp_path / "clean.csv"
+    with_blanks.to_csv(path, index=False)
+    log.to_csv(clean, index=False)
+    fitted = []
+    for source in (path, clean):
+        report = tmp_path / f"{source.stem}.json"
+        assert cli("fit", "--data", source, *QUICK, "--json", report, "--out", tmp_path / source.stem) == 0
+        fitted.append(json.loads(report.read_text()))
+    assert fitted[0]["coefficients"] == fitted[1]["coefficients"]
+    assert "3 row(s) empty in every column left out (row 200, 402, 403:" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("resample", [[], ["--resample", "100"]])
+def test_a_row_without_a_time_stamp_is_named_and_not_left_to_resample(tmp_path, capsys, resample):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    log.loc[199, "time_s"] = np.nan
+    path = tmp_path / "untimed.csv"
+    log.to_csv(path, index=False)
+    assert cli("fit", "--data", path, *QUICK, *resample, "--out", tmp_path / "out") == 2
+    message = capsys.readouterr().err.strip()
+    assert "row 200, column 'time_s' is empty" in message and "--resample" not in message
+
+
+def test_compare_names_the_input_a_validation_run_lacks(tmp_path, capsys):
+    next_run = pd.read_csv(DATASETS / "validation_speed.csv").rename(columns={"T3": "X3"})
+    path = tmp_path / "next.csv"
+    next_run.to_csv(path, index=False)
+    code = cli("compare", "--data", DATASETS / "paper_cycle.csv", "--validate", path, "--out", tmp_path / "out")
+    assert code == 2
+    message = capsys.readouterr().err.strip()
+    assert message.endswith(
+        "temperature columns differ from the modelling run's (missing T3); name the same "
+        "inputs in both runs (--temps A,B,C)"
+    )
+    assert not (tmp_path / "out").exists()
