@@ -280,7 +280,12 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
         warnings.simplefilter("error", pd.errors.ParserWarning)
         try:
             frame = pd.read_csv(
-                io.StringIO(body), sep=sep, decimal=layout.decimal, skipinitialspace=True, index_col=False
+                io.StringIO(body),
+                sep=sep,
+                decimal=layout.decimal,
+                skipinitialspace=True,
+                index_col=False,
+                low_memory=False,  # a column read whole: one type, not a type per chunk, and no warning
             )
         except pd.errors.ParserWarning:
             raise ValueError("a row has more values than the header has names; name every column") from None
