@@ -19,7 +19,9 @@ The rules:
 * an existing data file named as an output (CSV, TSV, Excel, Parquet, TOML,
   or the data set of ``simulate --out``) is replaced only with ``--force``
   (the files a verb writes into its ``--out`` folder are its own, replaced
-  on every run);
+  on every run; a table there, ``sweep``'s ``runs.csv``, only when its
+  header line is the one written in its place: another table of that name is
+  the user's);
 * an existing model file (JSON whose ``format`` is a groupfit model's:
   ``groupfit-model/1``, ``groupfit-ballscrew/1``) named as an output file
   (``--json``) of a report (``replay``, ``compare`` …) is replaced only with
@@ -83,6 +85,15 @@ def _model_format(path: Path) -> str | None:
     return next((kind for kind in MODEL_FORMATS if str(content.get("format", "")).startswith(kind)), None)
 
 
+def _first_line(path: Path) -> bytes:
+    """The first line of a file (its header, for a table); empty when it cannot be read."""
+    try:
+        with path.open("rb") as handle:
+            return handle.readline(1 << 20).rstrip(b"\r\n")
+    except OSError:
+        return b""
+
+
 def _holds_json(path: Path) -> bool:
     """Whether ``path`` is empty or starts as a JSON document does (an object or an array)."""
     with open(path, "rb") as handle:
@@ -107,6 +118,8 @@ class OutputPlan:
         """Every declared output file and the option that names it: two options may not name one file."""
         self.made: list[Path] = []
         """Folders created for staged files (deepest first), removed again when the plan is discarded."""
+        self.tables: dict[Path, str] = {}
+        """Tables in an output folder that exist (and the option): replaced only by one with their header."""
 
     # ------------------------------------------------------------ declaring
     def read(self, *paths) -> OutputPlan:
@@ -163,6 +176,8 @@ class OutputPlan:
             self._check_input(target, option)
             self._claim(target, option)
             check_output_file(target, option)
+            if target.is_file() and target.suffix.lower() in DATA_SUFFIXES and not self.force:
+                self.tables[_resolved(target)] = option
         return folder
 
     def _target(self, path: str | Path, option: str) -> Path:
@@ -206,6 +221,13 @@ class OutputPlan:
             self._check_input(target, self.outputs.get(_resolved(target), "the output path"))
             if target.is_dir():
                 raise InputError(f"{target}: is a folder; nothing was written (choose another output)")
+        for temporary, target in self.staged:
+            option = self.tables.get(_resolved(target))
+            if option is not None and target.is_file() and _first_line(target) != _first_line(temporary):
+                raise InputError(
+                    f"{target}: {option} would replace a table that is not an earlier output of this command (its "
+                    f"header differs); nothing was written: choose another {option}, or pass --force to replace it"
+                )
         written = []
         try:
             for temporary, target in self.staged:

@@ -316,3 +316,33 @@ def test_sigterm_leaves_no_output_and_no_temporary_file(inputs, tmp_path, monkey
     assert capsys.readouterr().err.strip() == "groupfit simulate: terminated"
     assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(signal.SIGTERM) == previous
+
+
+def test_a_table_in_an_output_folder_is_replaced_only_by_one_with_its_header(tmp_path):
+    folder = tmp_path / "report"
+    folder.mkdir()
+    earlier = "run_id,p,objective\n1,2,3.5\n"
+    (folder / "runs.csv").write_text(earlier)
+    plan = OutputPlan()
+    plan.folder(folder, "--out", files=("runs.csv", "summary.md"))
+    with plan.active():  # a run of the same study: the same header, replaced
+        atomic_write_text(folder / "runs.csv", "run_id,p,objective\n1,2,3.4\n")
+        atomic_write_text(folder / "summary.md", "# study\n")
+    assert (folder / "runs.csv").read_text().endswith("3.4\n")
+
+    users = "time_s,T1,error_um\n0,20.1,0.5\n"  # the user's own log of that name
+    (folder / "runs.csv").write_text(users)
+    (folder / "summary.md").unlink()
+    plan = OutputPlan()
+    plan.folder(folder, "--out", files=("runs.csv", "summary.md"))
+    with pytest.raises(InputError, match=r"runs.csv: --out would replace a table that is not an earlier output"):
+        with plan.active():
+            atomic_write_text(folder / "runs.csv", "run_id,p,objective\n1,2,3.4\n")
+            atomic_write_text(folder / "summary.md", "# study\n")
+    assert (folder / "runs.csv").read_text() == users
+    assert sorted(p.name for p in folder.iterdir()) == ["runs.csv"]  # nothing else written either
+    plan = OutputPlan(force=True)
+    plan.folder(folder, "--out", files=("runs.csv",))
+    with plan.active():
+        atomic_write_text(folder / "runs.csv", "run_id,p,objective\n1,2,3.4\n")
+    assert (folder / "runs.csv").read_text().startswith("run_id")

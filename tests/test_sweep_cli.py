@@ -161,3 +161,23 @@ def test_store_replaces_a_failed_row_when_the_run_is_done(tmp_path):
     assert rows[0]["breaks"] == [94]
     with sqlite3.connect(tmp_path / "s.sqlite") as connection:
         assert connection.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+
+
+def test_a_report_replaces_its_own_tables_but_not_a_users_table_of_that_name(tmp_path, capsys):
+    config = write_study(tmp_path, "p = [0, 1]")
+    report = tmp_path / "report"
+    assert sweep(config, tmp_path / "s.sqlite", "--workers", "1", "--report", str(report)) == 0
+    first = (report / "runs.csv").read_bytes()
+    assert sweep(config, tmp_path / "s.sqlite", "--workers", "1", "--report", str(report)) == 0
+    assert (report / "runs.csv").read_bytes().splitlines()[0] == first.splitlines()[0]
+
+    users = b"time_s,T1,error_um\n0,20.1,0.5\n"  # a log of the user's that happens to be called runs.csv
+    (report / "runs.csv").write_bytes(users)
+    before = {p.name: p.read_bytes() for p in report.iterdir()}
+    capsys.readouterr()
+    assert sweep(config, tmp_path / "s.sqlite", "--workers", "1", "--report", str(report)) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "runs.csv: --out would replace a table that is not an earlier output" in err[0]
+    assert {p.name: p.read_bytes() for p in report.iterdir()} == before
+    assert sweep(config, tmp_path / "s.sqlite", "--workers", "1", "--report", str(report), "--force") == 0
+    assert (report / "runs.csv").read_bytes().splitlines()[0] == first.splitlines()[0]
