@@ -111,6 +111,24 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     return array
 
 
+def refuse_bad_cells(frame: pd.DataFrame, label: str, *, skip: Sequence[str] = ()) -> None:
+    """Refuse the first cell of a column of numbers (nine in ten of its filled cells) that is neither a number,
+    empty, nor a mark of a reading not taken: averaging (``--resample``) would take it for a missed reading."""
+    for column in frame.columns:
+        raw = frame[column]
+        if column in skip or pd.api.types.is_numeric_dtype(raw):
+            continue
+        values = pd.to_numeric(raw, errors="coerce")
+        text = raw.astype(str).str.strip()
+        filled = raw.notna() & (text != "") & (text.str.lower() != "nan")
+        bad = values.isna() & filled & ~text.str.fullmatch(NO_READING)
+        if bad.any() and values.notna().sum() >= 0.9 * filled.sum():
+            row = int(np.flatnonzero(bad.to_numpy())[0])
+            raise InputError(
+                f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; fix or remove that row"
+            )
+
+
 def markers_emptied(frame: pd.DataFrame) -> pd.DataFrame:
     """The table with every column of numbers and no-reading marks (:data:`NO_READING`: ``---``, ``OVL``, ``ERR``)
     as float64, its marks empty, so that whatever reads the run's table later reads them as readings not taken.
@@ -224,7 +242,8 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
         t, value = next(iter(constant.items()))
         raise InputError(
             f"{label}: temperature column '{t}' is constant ({value:g} °C) over the whole run; "
-            "a fit cannot use it (a dead sensor?): leave it out of the model's inputs (--temps)"
+            "a fit cannot use it (a dead sensor?): repair it, or leave it out of the model's inputs "
+            "(groupfit fit --temps)"
         )
     kept = [j for j, t in enumerate(temps) if t not in constant]
     array = np.column_stack([columns[j] for j in kept]) if kept else np.empty((len(frame), 0))
@@ -279,6 +298,7 @@ __all__ = [
     "ERROR_LIMIT_UM",
     "NO_READING",
     "markers_emptied",
+    "refuse_bad_cells",
     "TEMP_RANGE_C",
     "LoadOptions",
     "check_range",

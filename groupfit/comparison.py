@@ -28,10 +28,11 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import pandas as pd
 
+from groupfit.ar1.inputs import ar1_inputs
 from groupfit.columns import refuse_other_inputs
 from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
-from groupfit.data import Run, measured_rows, numeric_column
+from groupfit.data import Run, measured_rows
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.penalty import penalised_expectation, penalty_lines
@@ -188,24 +189,6 @@ def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
     return rows
 
 
-def heat_column(run: Run, settings: ComparisonSettings) -> np.ndarray:
-    if settings.heat not in run.frame.columns:
-        raise InputError(
-            f"{run.source}: heat column '{settings.heat}' for the AR(1) model not found; name it with --heat COLUMN "
-            "(or [compare] heat), or leave the AR(1) model out with --heat none"
-        )
-    return numeric_column(run.frame, settings.heat, str(run.source), allow_nonfinite=True)
-
-
-def ar1_inputs(run: Run, settings: ComparisonSettings) -> np.ndarray:
-    columns = [heat_column(run, settings)]
-    if settings.structural_sensor:
-        if settings.structural_sensor not in run.frame.columns:
-            raise InputError(f"{run.source}: structural sensor '{settings.structural_sensor}' not found")
-        columns.append(numeric_column(run.frame, settings.structural_sensor, str(run.source), allow_nonfinite=True))
-    return np.column_stack(columns)
-
-
 def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
     """The physics AR(1) model of a run, as ``compare`` fits it."""
     return AR1Model(
@@ -214,7 +197,7 @@ def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
         heat_exponent=settings.heat_exponent,
         start=settings.ar1_start,
         fit_method=settings.ar1_fit,
-    ).fit(ar1_inputs(run, settings), run.error)
+    ).fit(ar1_inputs(run, settings.heat, settings.structural_sensor), run.error)
 
 
 def compare_models(
@@ -292,7 +275,9 @@ def compare_models(
             )
         if ar1 is not None:
             initial = first_measured(run.error) if settings.ar1_start == "measured" else 0.0
-            preds["ar1"] = ar1.predict(ar1_inputs(run, settings), initial_error=initial, rise_ratio=rise_ratio)
+            preds["ar1"] = ar1.predict(
+                ar1_inputs(run, settings.heat, settings.structural_sensor), initial_error=initial, rise_ratio=rise_ratio
+            )
         bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
         for p, model in grouped.items():
             groups = None

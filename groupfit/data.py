@@ -22,8 +22,15 @@ from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
 from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
-from groupfit.column_values import implausible_as_missed, markers_emptied, temperature_inputs, unit_note
+from groupfit.column_values import (
+    implausible_as_missed,
+    markers_emptied,
+    refuse_bad_cells,
+    temperature_inputs,
+    unit_note,
+)
 from groupfit.column_values import numeric_column as numeric_column
+from groupfit.data_options import MAX_PERIOD_TOLERANCE
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
@@ -35,7 +42,7 @@ from groupfit.errors import InputError
 from groupfit.glitches import without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
-from groupfit.readtable import datetimes_to_seconds, read_table, without_blank_rows
+from groupfit.readtable import datetimes_to_seconds, read_table, without_blank_rows, without_repeated_headers
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.timestamps import clock_restart, epoch_to_seconds, serial_days_to_seconds, unit_seconds
 
@@ -87,8 +94,10 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
     values = numeric_column(frame, column, label, allow_nonfinite=True)
     unstamped = np.flatnonzero(np.isnan(values))
     if unstamped.size:
+        cell = str(frame[column].iloc[unstamped[0]]).strip()
+        what = "is empty" if cell.lower() in ("", "nan", "<na>", "none") else f"holds {cell!r}, not a time"
         raise InputError(
-            f"{label}: row {unstamped[0] + 1}, column '{column}' is empty ({unstamped.size} row(s) without a time "
+            f"{label}: row {unstamped[0] + 1}, column '{column}' {what} ({unstamped.size} row(s) without a time "
             "stamp): a reading cannot be placed without its time; fill in the time or delete the row"
         )
     values = numeric_column(frame, column, label, allow_nonfinite=False)
@@ -121,7 +130,7 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
             raise InputError(
                 f"{label}: the clock in column '{column}' starts again at row {i + 1} ({time[i]:g} s after "
                 f"{time[i - 1]:g} s: the logger restarted?); split the file before row {i + 1} and give the parts "
-                "as runs of their own (--data part1.csv part2.csv)"
+                "as runs of their own (a fit on both: --data part1.csv part2.csv; a replay: one part at a time)"
             )
         raise InputError(
             f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
@@ -132,11 +141,16 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
     irregular = np.abs(step - period) > tolerance * period
     if np.any(irregular):
         i = int(np.argmax(irregular)) + 1
+        widen = (
+            "widen the tolerance with --period-tolerance PERCENT, "
+            if abs(step[i - 1] - period) < MAX_PERIOD_TOLERANCE * period
+            else ""
+        )
         raise InputError(
             f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
             f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
-            "average the readings of each period with --resample SECONDS (a gap then splits the run), "
-            "widen the tolerance with --period-tolerance PERCENT, or split the run at the gap"
+            "average the readings of each period with --resample SECONDS (up to 3 missed periods in a row "
+            f"are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
         )
     return period
 
@@ -260,14 +274,21 @@ def load_runs(
     """
     frame, run_name, label = read_table(source, name)
     frame, blank_note = without_blank_rows(frame, label)
+    frame, header_note = without_repeated_headers(frame, label)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     required = options.get("require_error", True)
     error, error_note = found_error_column(
         frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default
     )
-    runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
-    found = tuple(note for note in (blank_note, time_note, serial_note, error_note) if note)
+    try:
+        runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
+    except InputError as exc:
+        left_out = "; ".join(n.split(": ", 1)[1].split(";")[0] for n in (blank_note, header_note) if n)
+        if left_out and " row " in str(exc):
+            raise InputError(f"{exc} (rows are counted without those left out: {left_out})") from None
+        raise
+    found = tuple(note for note in (blank_note, header_note, time_note, serial_note, error_note) if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 
@@ -277,6 +298,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     time = options.get("time", DEFAULT_TIME)
     time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
+    refuse_bad_cells(frame, label, skip=(time,))
     frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
     frame, glitched = _glitches_as_missed(frame, label, LoadOptions(**options))
     binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
@@ -364,6 +386,24 @@ def _validated(
         time_name=time,
         notes=notes,
     )
+
+
+def without_implausible_errors(run: Run, limit: float = ERROR_LIMIT_UM) -> Run:
+    """The run with readings of its error beyond ``limit`` µm (a logger's overflow, 3e38) taken as not measured,
+    and a note naming them: a replay scores what was measured, never an overflow."""
+    if run.error is None:
+        return run
+    beyond = np.flatnonzero(np.abs(run.error) > limit)
+    if not beyond.size:
+        return run
+    rows = ", ".join(str(i + 1) for i in beyond[:5]) + (" …" if beyond.size > 5 else "")
+    note = (
+        f"{run.source}: {beyond.size} reading(s) of the error beyond ±{limit:g} µm (row {rows}, "
+        f"{run.error[beyond[0]]:g} µm first): not a thermal error, left out of the score as not measured"
+    )
+    error = run.error.copy()
+    error[beyond] = np.nan
+    return dataclasses.replace(run, error=error, notes=(*run.notes, note))
 
 
 def loading_notes(runs: Sequence[Run]) -> list[str]:

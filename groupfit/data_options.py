@@ -7,6 +7,10 @@ import numpy as np
 
 from groupfit.errors import InputError
 
+MAX_PERIOD_TOLERANCE = 0.5
+"""The widest ``--period-tolerance``: an interval half a period off the period is a missed or an extra
+sample, which ``--resample`` handles."""
+
 
 def parse_temp_range(text: str | None) -> tuple[float, float] | None:
     """``--range-temp=LOW,HIGH`` (°C; with ``=``, as LOW is usually negative)."""
@@ -42,8 +46,8 @@ def parse_period_tolerance(text: str | float | None) -> float | None:
         percent = float(str(text).strip().rstrip("%"))
     except ValueError:
         raise InputError(f"--period-tolerance {text!r}: give a percentage of the period, e.g. 2 or 5%") from None
-    if not (np.isfinite(percent) and 0 <= percent < 50):
-        raise InputError(f"--period-tolerance {text!r}: must be a percentage in [0, 50)")
+    if not (np.isfinite(percent) and 0 <= percent < 100 * MAX_PERIOD_TOLERANCE):
+        raise InputError(f"--period-tolerance {text!r}: must be a percentage in [0, {100 * MAX_PERIOD_TOLERANCE:g})")
     return percent / 100.0
 
 

@@ -111,6 +111,12 @@ def statistics_summary(stats: dict) -> str:
         else ""
     )
     centred = "" if stats["centred"] else " (uncentred: no intercept)"
+    dependent = stats.get("dependent_inputs")
+    if dependent:
+        terms = (
+            f"none per input: {', '.join(dependent)} are linearly dependent (a sensor logged twice, or one the "
+            "sum of others), so their coefficients split one effect arbitrarily; leave one out (--temps)"
+        )
     return (
         f"tests   {terms}\n        {f_text}R² = {stats['r_squared']:.5f}, adjusted R² = "
         f"{stats['adjusted_r_squared']:.5f}{centred}, σ = {stats['sigma_um']:.3g} µm"

@@ -97,6 +97,30 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     return frame, (name or stem), label
 
 
+def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
+    """The table without rows that repeat its header (a logger that started again and appended to the file),
+    its columns of numbers read as numbers again, and a note naming the rows (None: there were none)."""
+    names = [str(c).strip() for c in frame.columns]
+    if frame.empty or all(pd.api.types.is_numeric_dtype(frame[c]) for c in frame.columns):
+        return frame, None
+    text = frame.astype("string").apply(lambda column: column.str.strip())
+    repeated = (text == pd.Series(names, index=frame.columns)).sum(axis=1).to_numpy() >= max(2, len(names) // 2)
+    if not repeated.any():
+        return frame, None
+    rows = np.flatnonzero(repeated)
+    shown = ", ".join(str(i + 1) for i in rows[:5]) + (" …" if rows.size > 5 else "")
+    kept = frame.loc[~repeated].reset_index(drop=True)
+    for column in kept.columns:
+        numbers = pd.to_numeric(kept[column], errors="coerce")
+        if numbers.notna().sum() == kept[column].notna().sum():
+            kept[column] = numbers
+    note = (
+        f"{label}: {rows.size} row(s) repeating the header left out (row {shown}: the logger started again and "
+        "appended); rows after them are numbered without them"
+    )
+    return kept, note
+
+
 def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
     """The table without the rows empty in every cell (a blank row left in a spreadsheet), and a note naming
     them (None: there were none). Rows after them are numbered without them."""
@@ -209,4 +233,4 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             frame[column] = seconds
 
 
-__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "read_table", "without_blank_rows"]
+__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "read_table", "without_blank_rows", "without_repeated_headers"]

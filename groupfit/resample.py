@@ -112,7 +112,8 @@ def resample_frame(
         raise InputError(
             f"{label}: the clock in column '{time}' starts again at row {i + 1} ({stamps[i]:g} s after "
             f"{stamps[i - 1]:g} s: the logger restarted?); resampling would average two recordings together: "
-            f"split the file before row {i + 1} and give the parts as runs of their own (--data part1.csv part2.csv)"
+            f"split the file before row {i + 1} and give the parts as runs of their own (a fit on both: "
+            "--data part1.csv part2.csv; a replay: one part at a time)"
         )
     if back.size:
         i = int(back[0]) + 1

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.readtable import read_table
+from groupfit.readtable import read_table, without_repeated_headers
 from groupfit.textlayout import header_delimiter, layout_of, read_text_table
 
 PAPER = Path(__file__).resolve().parents[1] / "datasets" / "paper_cycle.csv"
@@ -199,12 +199,15 @@ def test_a_header_with_commas_in_its_names_takes_the_separator_of_its_rows(tmp_p
     assert layout_of("\n".join(lines)).sep == ";"
 
 
-def test_a_header_repeated_inside_the_first_lines_does_not_become_the_header(tmp_path, cells, capsys):
+def test_a_header_repeated_inside_the_first_lines_does_not_become_the_header_and_is_left_out(tmp_path, cells):
     lines = lines_of(cells, ",")
     lines.insert(21, lines[0])  # the logger wrote its header again as row 21
     path = write(tmp_path / "repeated.csv", lines)
     assert layout_of(path.read_text()).header_line == 0
-    assert "row 21, column 'time_s': 'time_s' is not a number" in refusal(path, tmp_path, capsys)
+    frame, label = read(path), str(path)
+    kept, note = without_repeated_headers(frame, label)
+    same_frame(kept, plain_truth(tmp_path, cells))
+    assert note.startswith(f"{label}: 1 row(s) repeating the header left out (row 21:")
 
 
 def test_repeated_time_columns_of_a_scope_export_are_refused_by_name(tmp_path, cells, capsys):

@@ -333,6 +333,8 @@ def write_exports(args: argparse.Namespace, files: dict[str, str]) -> None:
 
 def residual_line(result: dict[str, Any]) -> str:
     """The replay summary's residual line from ``rms_um``, ``max_um`` and ``scored_samples`` (or none)."""
+    if result["rms_um"] is None and result.get("measured_samples"):
+        return "residual none: no sample scored (every measured sample in sensor fault: the rule's safe output)"
     if result["rms_um"] is None:
         return "residual none (the run has no error column)"
     return (

@@ -21,7 +21,7 @@ from groupfit.commands.replay_probes import (
 )
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import same_recording, with_histories
-from groupfit.data import Run, load_run, numeric_column
+from groupfit.data import Run, load_run, numeric_column, without_implausible_errors
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
 from groupfit.glitches import scored_glitches
@@ -142,7 +142,8 @@ def run_replay(args: argparse.Namespace) -> int:
     data["continues"] = [str(path) for path in continued]
     if probes is not None:
         without = residuals(run, unchecked)
-        rms_without = float(np.sqrt(np.nanmean(without**2))) if without is not None else None
+        scored = without[np.isfinite(without)] if without is not None else np.empty(0)
+        rms_without = float(np.sqrt(np.mean(scored**2))) if scored.size else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     data.update(expectation_check(model, data, args.data))
     span = range_check(model, run, replay)
@@ -183,7 +184,9 @@ def load_readings(path, tables: RuleTables, *, time: str, error: str, **clock) -
     them as faults), and a missing one is named with the inputs it feeds.
     """
     measured = list(tables.raw_names[: tables.n_measured])
-    run = load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock)
+    run = without_implausible_errors(
+        load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock)
+    )
     if not tables.source_names:
         return run
     columns = []
@@ -381,6 +384,7 @@ def replay_result(
         "samples": samples,
         **metrics,
         "scored_samples": int(scored.size),
+        "measured_samples": int(np.isfinite(run.error).sum()) if run.error is not None else 0,
         "switches": replay.switch_samples(),
         "offline_breaks": list(tables.breaks),
         "offline_switch_samples": list(tables.window_first),

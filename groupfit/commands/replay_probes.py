@@ -48,9 +48,12 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
         every = max(1, int(round(args.probe_every / run.period)))
         rows = check_rows(run.n_samples, every, None if first is None else int(round(first / run.period)))
         if not rows.size:
+            last = (run.n_samples - 1) * run.period
             raise InputError(
-                f"--probe-first {first:g}: after the run's last sample ({(run.n_samples - 1) * run.period:g} s); "
-                "give an earlier first check"
+                f"--probe-first {first:g}: after the run's last sample ({last:g} s); give an earlier first check"
+                if first is not None
+                else f"--probe-every {args.probe_every:g}: the run ends at {last:g} s, before its first check; "
+                "give a shorter interval or --probe-first SECONDS"
             )
         rows = on_measured_rows(rows, np.isfinite(reading))
     probes[rows] = reading[rows]

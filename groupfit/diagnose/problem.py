@@ -201,6 +201,13 @@ def check_arguments(model: Model, data_runs: list[Run], *, ambient: Sequence[str
         )
 
 
+def _read_at(run: Run, column: str, row: int) -> bool:
+    """Whether ``column`` of the run's table holds a finite reading at the 1-based ``row``."""
+    if column not in run.frame.columns:
+        return False
+    return bool(np.isfinite(pd.to_numeric(run.frame[column].iloc[[row - 1]], errors="coerce")).all())
+
+
 def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
     """Refuse runs whose model inputs cannot be evaluated; note dead-looking inputs."""
     notes = []
@@ -214,8 +221,12 @@ def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
             )
         if bad.any():
             row = int(np.flatnonzero(bad)[0]) + 1
+            reference = getattr(model, "reference", None)
+            what = f"model input '{name}'"
+            if reference in run.frame.columns and _read_at(run, name, row) and not _read_at(run, reference, row):
+                what = f"the reference '{reference}' of model input '{name}'"
             raise InputError(
-                f"{run.source}: model input '{name}' is not finite at row {row} ({int(bad.sum())} rows): "
+                f"{run.source}: {what} is not finite at row {row} ({int(bad.sum())} rows): "
                 "repair or drop those rows before diagnosing, or let --resample SECONDS interpolate up to "
                 f"{GAP_PERIODS} missed readings in a row"
             )

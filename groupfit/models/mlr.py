@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import statsmodels.api as sm
 from scipy import stats
 from scipy.linalg import solve_triangular
 from sklearn.utils.validation import check_array, check_is_fitted
+from statsmodels.tools.sm_exceptions import SingularMatrixWarning
 
 from groupfit.errors import InputError
 from groupfit.models.grouped import GroupedRegressor
@@ -30,7 +33,20 @@ def ols_statistics(ols, names: list[str], *, fit_intercept: bool) -> dict:
         "sigma_um": float(np.sqrt(ols.scale)),
         "dof": float(ols.df_resid),
         "centred": bool(fit_intercept),
+        "dependent_inputs": dependent_columns(ols.model.exog, names),
     }
+
+
+def dependent_columns(design: np.ndarray, names: list[str]) -> list[str]:
+    """The columns of ``design`` in a linear dependence (a sensor logged twice, one the sum of others), by
+    name; empty when the design has full column rank. Their t-tests split one effect arbitrarily."""
+    scaled = design / np.maximum(np.linalg.norm(design, axis=0), np.finfo(float).tiny)
+    _, singular, vt = np.linalg.svd(scaled, full_matrices=False)
+    null = vt[singular < singular[0] * max(design.shape) * np.finfo(float).eps * 1e3]
+    if not null.size:
+        return []
+    involved = np.any(np.abs(null) > 1e-6, axis=0)
+    return [name for name, flag in zip(names, involved) if flag]
 
 
 def design_matrix(X, *, fit_intercept: bool) -> np.ndarray:
@@ -96,7 +112,9 @@ class MLR(GroupedRegressor):
         X = check_array(X)
         y = np.asarray(y, dtype=float).ravel()
         design = design_matrix(X, fit_intercept=self.fit_intercept)
-        self.ols_ = sm.OLS(y, design).fit()
+        with warnings.catch_warnings():  # a dependent design is named in statistics_ instead
+            warnings.simplefilter("ignore", SingularMatrixWarning)
+            self.ols_ = sm.OLS(y, design).fit()
         names = list(getattr(self, "feature_names_in_", [f"x{i + 1}" for i in range(X.shape[1])]))
         names = (["const"] if self.fit_intercept else []) + [str(n) for n in names]
         self.statistics_ = ols_statistics(self.ols_, names, fit_intercept=self.fit_intercept)

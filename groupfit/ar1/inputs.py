@@ -1,0 +1,40 @@
+"""The inputs of ``compare``'s AR(1) model from a run: the heat column (and a structural sensor), read on
+every row or refused naming the first row without a reading."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from groupfit.data import Run, numeric_column
+from groupfit.errors import InputError
+
+
+def heat_column(run: Run, heat: str) -> np.ndarray:
+    if heat not in run.frame.columns:
+        raise InputError(
+            f"{run.source}: heat column '{heat}' for the AR(1) model not found; name it with --heat COLUMN "
+            "(or [compare] heat), or leave the AR(1) model out with --heat none"
+        )
+    return read_on_every_row(run, heat)
+
+
+def read_on_every_row(run: Run, column: str) -> np.ndarray:
+    """An input of the AR(1) model, refused naming the first row without a finite reading."""
+    values = numeric_column(run.frame, column, str(run.source), allow_nonfinite=True)
+    unread = np.flatnonzero(~np.isfinite(values))
+    if unread.size:
+        raise InputError(
+            f"{run.source}: row {unread[0] + 1}, column '{column}' has no reading ({unread.size} row(s)); the AR(1) "
+            "model needs it on every row: fill it in, let --resample SECONDS interpolate up to 3 missed readings "
+            "in a row, or leave the AR(1) model out with --heat none"
+        )
+    return values
+
+
+def ar1_inputs(run: Run, heat: str, structural_sensor: str | None = None) -> np.ndarray:
+    columns = [heat_column(run, heat)]
+    if structural_sensor:
+        if structural_sensor not in run.frame.columns:
+            raise InputError(f"{run.source}: structural sensor '{structural_sensor}' not found")
+        columns.append(read_on_every_row(run, structural_sensor))
+    return np.column_stack(columns)
