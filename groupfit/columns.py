@@ -87,16 +87,16 @@ def is_counter(values: np.ndarray) -> bool:
     return bool(step[0] > 0 and np.all(np.abs(step - step[0]) <= 1e-9 * max(abs(step[0]), 1.0)))
 
 
-def refuse_other_inputs(expected: Sequence[str], given: Sequence[str], label: str) -> None:
-    """Refuse a run whose inputs ``given`` are not the modelling run's ``expected``, saying how they differ."""
-    if tuple(given) == tuple(expected):
-        return
+def input_order(expected: Sequence[str], given: Sequence[str], label: str) -> list[int]:
+    """Where each of the modelling run's inputs ``expected`` is among a run's inputs ``given`` (the same
+    columns in another order are the same inputs); a run with other inputs is refused, saying how they differ."""
+    if sorted(given) == sorted(expected) and len(set(given)) == len(given):
+        return [list(given).index(name) for name in expected]
     missing = [c for c in expected if c not in given]
     added = [c for c in given if c not in expected]
     parts = [f"missing {', '.join(missing)}"] if missing else []
     parts += [f"not in the modelling run: {', '.join(added)}"] if added else []
-    difference = "; ".join(parts) or f"in another order ({', '.join(given)})"
     raise InputError(
-        f"{label}: temperature columns differ from the modelling run's ({difference}); name the same inputs in "
-        "both runs (--temps A,B,C)"
+        f"{label}: temperature columns differ from the modelling run's ({'; '.join(parts)}); name the same inputs "
+        "in both runs (--temps A,B,C)"
     )

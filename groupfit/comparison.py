@@ -22,14 +22,14 @@ measured rows.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping
 
 import numpy as np
 import pandas as pd
 
 from groupfit.ar1.inputs import ar1_inputs
-from groupfit.columns import refuse_other_inputs
+from groupfit.columns import input_order
 from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
 from groupfit.data import Run, measured_rows
@@ -200,6 +200,12 @@ def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
     ).fit(ar1_inputs(run, settings.heat, settings.structural_sensor), run.error)
 
 
+def in_modelling_order(modelling: Run, run: Run) -> Run:
+    """``run`` with its inputs in the modelling run's order (a log may write its columns in another)."""
+    order = input_order(modelling.temp_names, run.temp_names, run.source)
+    return replace(run, temps=run.temps[:, order], temp_names=modelling.temp_names)
+
+
 def compare_models(
     modelling: Run,
     validation: list[Run],
@@ -222,8 +228,8 @@ def compare_models(
         (:mod:`groupfit.continuation`), so its state carries into the run.
     """
     histories = histories or {}
+    validation = [in_modelling_order(modelling, run) for run in validation]
     for run in validation:
-        refuse_other_inputs(modelling.temp_names, run.temp_names, run.source)
         if abs(run.period - modelling.period) > 0.01 * modelling.period:
             raise InputError(
                 f"{run.source}: sampled every {run.period:g} s but the modelling run every {modelling.period:g} s"

@@ -222,3 +222,16 @@ def test_compare_names_the_input_a_validation_run_lacks(tmp_path, capsys):
         "inputs in both runs (--temps A,B,C)"
     )
     assert not (tmp_path / "out").exists()
+
+
+def test_compare_reads_a_validation_run_whose_columns_come_in_another_order(tmp_path):
+    plain = pd.read_csv(DATASETS / "validation_speed.csv")
+    shuffled = plain[["error_um", "T4", "time_s", "T2", "T_amb", "T1", "speed_rpm", "T6", "T3", "spindle_on", "T5"]]
+    rows = []
+    for name, frame in (("plain", plain), ("shuffled", shuffled)):
+        path, report = tmp_path / f"{name}.csv", tmp_path / f"{name}.json"
+        frame.to_csv(path, index=False)
+        options = ["--validate", path, "--quiet", "--json", report, "--out", tmp_path / name]
+        assert cli("compare", "--data", DATASETS / "paper_cycle.csv", *options) == 0
+        rows.append([{**r, "run": None} for r in json.loads(report.read_text())["rows"] if r["run"] == name])
+    assert len(rows[0]) >= 3 and rows[0] == rows[1]
