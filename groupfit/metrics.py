@@ -16,10 +16,19 @@ def error_metrics(residuals: np.ndarray) -> dict[str, float]:
 
 
 def ljung_box(residual: np.ndarray, lags: int = 10) -> dict[str, float]:
-    """Ljung–Box Q of the residual's autocorrelations up to ``lags`` (statsmodels); white when p is large."""
+    """Ljung–Box Q of the residual's autocorrelations up to ``lags`` (statsmodels); white when p is large.
+
+    A series of no more than ``lags`` samples is tested up to half its length (``lags`` says how far); one of fewer than
+    four samples has no test (NaN).
+    """
     from statsmodels.stats.diagnostic import acorr_ljungbox
 
-    table = acorr_ljungbox(np.asarray(residual, dtype=float), lags=[lags])
+    residual = np.asarray(residual, dtype=float)
+    if len(residual) <= lags:
+        lags = len(residual) // 2
+    if lags < 2:
+        return {"lags": lags, "Q": float("nan"), "p_value": float("nan")}
+    table = acorr_ljungbox(residual, lags=[lags])
     return {"lags": lags, "Q": float(table["lb_stat"].iloc[0]), "p_value": float(table["lb_pvalue"].iloc[0])}
 
 

@@ -10,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from statsmodels.stats.diagnostic import acorr_ljungbox
 
 from groupfit.cli import main
+from groupfit.metrics import ljung_box
 from groupfit.models.mlr import dependent_columns
 
 DATASETS = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets"
@@ -197,3 +199,15 @@ def test_a_cell_that_is_no_number_is_named_and_never_averaged_as_a_missed_readin
     path.write_text("\n".join(lines) + "\n")
     assert cli("fit", "--data", path, *QUICK, *resample, "--out", tmp_path / "o") == 2
     assert "row 51, column 'T2': '22,08' is not a number" in one_line(capsys)
+
+
+def test_a_short_residual_is_tested_up_to_half_its_length_and_diagnose_takes_a_ten_row_run(tmp_path, model):
+    residual = np.random.default_rng(0).normal(size=10)
+    test = ljung_box(residual)
+    assert test["lags"] == 5
+    assert test["Q"] == pytest.approx(float(acorr_ljungbox(residual, lags=[5])["lb_stat"].iloc[0]), rel=1e-12)
+    assert np.isnan(ljung_box(residual[:3])["Q"])
+    assert ljung_box(np.r_[residual, residual[:1]])["lags"] == 10  # eleven samples: the full test, as before
+    path = tmp_path / "ten.csv"
+    pd.read_csv(DATASETS / "validation_speed.csv").iloc[:10].to_csv(path, index=False)
+    assert cli("diagnose", model, "--data", path, "--out", tmp_path / "d") == 0
