@@ -42,7 +42,13 @@ from groupfit.errors import InputError
 from groupfit.glitches import without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
-from groupfit.readtable import datetimes_to_seconds, read_table, without_blank_rows, without_repeated_headers
+from groupfit.readtable import (
+    datetimes_to_seconds,
+    read_table,
+    without_blank_rows,
+    without_repeated_headers,
+    without_repeated_rows,
+)
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.timestamps import clock_restart, epoch_to_seconds, serial_days_to_seconds, unit_seconds
 
@@ -275,6 +281,7 @@ def load_runs(
     frame, run_name, label = read_table(source, name)
     frame, blank_note = without_blank_rows(frame, label)
     frame, header_note = without_repeated_headers(frame, label)
+    frame, twice_note = without_repeated_rows(frame, label)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     required = options.get("require_error", True)
@@ -284,11 +291,11 @@ def load_runs(
     try:
         runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
     except InputError as exc:
-        left_out = "; ".join(n.split(": ", 1)[1].split(";")[0] for n in (blank_note, header_note) if n)
+        left_out = "; ".join(n.split(": ", 1)[1].split(";")[0] for n in (blank_note, header_note, twice_note) if n)
         if left_out and " row " in str(exc):
             raise InputError(f"{exc} (rows are counted without those left out: {left_out})") from None
         raise
-    found = tuple(note for note in (blank_note, header_note, time_note, serial_note, error_note) if note)
+    found = tuple(note for note in (blank_note, header_note, twice_note, time_note, serial_note, error_note) if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 

@@ -121,6 +121,28 @@ def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFr
     return kept, note
 
 
+def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
+    """The table without rows identical in every cell, time stamp included, to the row before (a logger that
+    wrote a row twice), and a note naming them (None: there were none)."""
+    if len(frame) < 2:
+        return frame, None
+    same = np.ones(len(frame) - 1, dtype=bool)
+    for column in frame.columns:
+        cells = frame[column]
+        now, before = cells.iloc[1:].to_numpy(), cells.iloc[:-1].to_numpy()
+        same &= (now == before) | (pd.isna(now) & pd.isna(before))
+        if not same.any():
+            return frame, None
+    repeated = np.r_[False, same]
+    rows = np.flatnonzero(repeated)
+    shown = ", ".join(str(i + 1) for i in rows[:5]) + (" …" if rows.size > 5 else "")
+    note = (
+        f"{label}: {rows.size} row(s) identical to the row before left out (row {shown}: a row written twice); "
+        "rows after them are numbered without them"
+    )
+    return frame.loc[~repeated].reset_index(drop=True), note
+
+
 def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
     """The table without the rows empty in every cell (a blank row left in a spreadsheet), and a note naming
     them (None: there were none). Rows after them are numbered without them."""
@@ -233,4 +255,11 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             frame[column] = seconds
 
 
-__all__ = ["TABLE_SUFFIXES", "datetimes_to_seconds", "read_table", "without_blank_rows", "without_repeated_headers"]
+__all__ = [
+    "TABLE_SUFFIXES",
+    "datetimes_to_seconds",
+    "read_table",
+    "without_blank_rows",
+    "without_repeated_headers",
+    "without_repeated_rows",
+]

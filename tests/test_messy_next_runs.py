@@ -201,13 +201,18 @@ def test_a_cell_that_is_no_number_is_named_and_never_averaged_as_a_missed_readin
     assert "row 51, column 'T2': '22,08' is not a number" in one_line(capsys)
 
 
-def test_a_short_residual_is_tested_up_to_half_its_length_and_diagnose_takes_a_ten_row_run(tmp_path, model):
+def test_a_short_residual_is_tested_up_to_half_its_length_and_diagnose_takes_a_ten_row_run(tmp_path, capsys):
     residual = np.random.default_rng(0).normal(size=10)
     test = ljung_box(residual)
     assert test["lags"] == 5
     assert test["Q"] == pytest.approx(float(acorr_ljungbox(residual, lags=[5])["lb_stat"].iloc[0]), rel=1e-12)
     assert np.isnan(ljung_box(residual[:3])["Q"])
     assert ljung_box(np.r_[residual, residual[:1]])["lags"] == 10  # eleven samples: the full test, as before
-    path = tmp_path / "ten.csv"
-    pd.read_csv(DATASETS / "validation_speed.csv").iloc[:10].to_csv(path, index=False)
-    assert cli("diagnose", model, "--data", path, "--out", tmp_path / "d") == 0
+    assert cli("fit", "--data", MODELLING, "--temps", "T1,T2", *QUICK, "--out", tmp_path / "m") == 0
+    model = tmp_path / "m" / "model.json"  # three coefficients: seven samples are enough to diagnose it
+    for rows, status in ((10, 0), (6, 2)):
+        path = tmp_path / f"rows{rows}.csv"
+        pd.read_csv(DATASETS / "validation_speed.csv").iloc[:rows].to_csv(path, index=False)
+        capsys.readouterr()
+        assert cli("diagnose", model, "--data", path, "--out", tmp_path / f"d{rows}") == status
+    assert "6 sample(s) in all; diagnose refits the model's 3 coefficients" in one_line(capsys)

@@ -235,3 +235,21 @@ def test_compare_reads_a_validation_run_whose_columns_come_in_another_order(tmp_
         assert cli("compare", "--data", DATASETS / "paper_cycle.csv", *options) == 0
         rows.append([{**r, "run": None} for r in json.loads(report.read_text())["rows"] if r["run"] == name])
     assert len(rows[0]) >= 3 and rows[0] == rows[1]
+
+
+@pytest.mark.parametrize("twice", [[200], "all"])
+def test_rows_written_twice_are_left_out_with_a_note(tmp_path, capsys, twice):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    rows = list(range(len(log))) if twice == "all" else twice
+    doubled = pd.concat([log, log.iloc[rows]]).sort_index(kind="stable")
+    path, clean = tmp_path / "twice.csv", tmp_path / "clean.csv"
+    doubled.to_csv(path, index=False)
+    log.to_csv(clean, index=False)
+    fitted = []
+    for source in (path, clean):
+        report = tmp_path / f"{source.stem}.json"
+        assert cli("fit", "--data", source, *QUICK, "--json", report, "--out", tmp_path / source.stem) == 0
+        fitted.append(json.loads(report.read_text())["coefficients"])
+    assert fitted[0] == fitted[1]
+    first = 202 if twice != "all" else 2
+    assert f"{len(rows)} row(s) identical to the row before left out (row {first}" in capsys.readouterr().out

@@ -185,6 +185,19 @@ def load_measured(path: str, model: dict[str, Any], time: str, **clock) -> Run:
     return run
 
 
+def refuse_too_short(runs: list[Run], model: dict[str, Any]) -> None:
+    """Refuse data too short to refit the model's coefficients on part of it: fewer than twice their number
+    and one more samples in all."""
+    coefficients = len(model["temps"]) + (1 if model.get("intercept", True) else 0)
+    least = 2 * coefficients + 1
+    total = sum(run.n_samples for run in runs)
+    if total < least:
+        raise InputError(
+            f"{runs[0].source}: {total} sample(s) in all; diagnose refits the model's {coefficients} coefficients on "
+            f"parts of the data and needs at least {least}: record a longer run, or give several with --data"
+        )
+
+
 def run_diagnose(args: argparse.Namespace) -> int:
     common.plan_outputs(
         args,
@@ -207,6 +220,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     glitches = {"drop_glitches": not args.keep_glitches}
     data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
     validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
+    refuse_too_short(data, model)
     common.print_notes([*data, *validate], common.report_stream(args))
     out_dir = common.check_output_dir(args.out)
     start = model
