@@ -50,7 +50,13 @@ from groupfit.readtable import (
     without_repeated_rows,
 )
 from groupfit.resample import jitter_note, resample_frame
-from groupfit.timestamps import clock_restart, epoch_to_seconds, serial_days_to_seconds, unit_seconds
+from groupfit.timestamps import (
+    clock_restart,
+    epoch_to_seconds,
+    refuse_clock_change,
+    serial_days_to_seconds,
+    unit_seconds,
+)
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
@@ -130,6 +136,7 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
     if len(time) < 2:
         raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
     step = np.diff(time)
+    refuse_clock_change(time, label, column)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0)) + 1
         if clock_restart(time) == i:  # a restarted clock goes on from its new start; a bad cell is alone

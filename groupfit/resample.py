@@ -28,7 +28,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.interleaved import refuse_interleaved, stamp_groups
-from groupfit.timestamps import clock_restart
+from groupfit.timestamps import clock_restart, refuse_clock_change
 
 GAP_PERIODS = 3
 """More empty periods in a row than this split the log into runs; fewer are interpolated."""
@@ -106,6 +106,7 @@ def resample_frame(
     if bad.size:
         row = int(bad[0])
         raise InputError(f"{label}: row {row + 1}, column '{time}': {frame[time].iloc[row]!r} is not a time in s")
+    refuse_clock_change(stamps, label, time)
     back = np.flatnonzero(np.diff(stamps) < 0)
     if back.size and clock_restart(stamps) is not None:
         i = int(back[0]) + 1

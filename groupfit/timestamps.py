@@ -158,6 +158,25 @@ RESTART_PERIODS = 10
 restarted), not a sample out of order or a bad cell."""
 
 
+def refuse_clock_change(time: np.ndarray, label: str, column: str) -> None:
+    """Refuse a clock of local time that goes back by an hour less one period (daylight saving time ended),
+    naming the row: a UTC offset on the stamps places the repeated hour. (A clock that jumps ahead by an hour
+    is not told from a pause in the logging.)"""
+    step = np.diff(time)
+    forward = step[step > 0]
+    if not forward.size:
+        return
+    period = float(np.median(forward))
+    back = np.flatnonzero(np.abs(step - (period - 3600.0)) <= 0.02 * period + 1e-9)
+    if back.size and period < 1800.0:
+        i = int(back[0]) + 1
+        raise InputError(
+            f"{label}: the clock in column '{column}' goes back one hour at row {i + 1} ({time[i - 1]:g} s to "
+            f"{time[i]:g} s: daylight saving time ended?); write the time stamps with their UTC offset "
+            "(2026-10-25T02:00:00+01:00) or in UTC"
+        )
+
+
 def clock_restart(time: np.ndarray) -> int | None:
     """The row (0-based) where the clock first goes back, when it starts again there: it goes back by more than
     :data:`RESTART_PERIODS` typical periods and goes on below where it was (a logger restarted, two recordings

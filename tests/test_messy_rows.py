@@ -253,3 +253,25 @@ def test_rows_written_twice_are_left_out_with_a_note(tmp_path, capsys, twice):
     assert fitted[0] == fitted[1]
     first = 202 if twice != "all" else 2
     assert f"{len(rows)} row(s) identical to the row before left out (row {first}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("resample", [[], ["--resample", "100"]])
+def test_a_local_clock_going_back_an_hour_is_named_as_daylight_saving_and_offsets_read(tmp_path, capsys, resample):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv").iloc[:120]
+    utc = pd.Timestamp("2026-10-25 00:00:00", tz="UTC") + pd.to_timedelta(log["time_s"], unit="s")
+    local = utc.dt.tz_convert("Europe/Berlin")  # summer time ends at 01:00 UTC, 03:00 back to 02:00 local
+    wall, offset = tmp_path / "wall.csv", tmp_path / "offset.csv"
+    log.assign(time_s=local.dt.strftime("%Y-%m-%d %H:%M:%S")).rename(columns={"time_s": "Timestamp"}).to_csv(
+        wall, index=False
+    )
+    log.assign(time_s=local.map(lambda t: t.isoformat())).rename(columns={"time_s": "Timestamp"}).to_csv(
+        offset, index=False
+    )
+    wall_clock = local.dt.tz_localize(None).to_numpy()
+    change = int(np.flatnonzero(np.diff(wall_clock) < np.timedelta64(0))[0]) + 2  # the first row after the change
+    assert cli("fit", "--data", wall, *QUICK, *resample, "--out", tmp_path / "a") == 2
+    message = capsys.readouterr().err
+    assert f"goes back one hour at row {change}" in message and "daylight saving time ended" in message
+    report = tmp_path / "offset.json"
+    assert cli("fit", "--data", offset, *QUICK, *resample, "--json", report, "--out", tmp_path / "b") == 0
+    assert json.loads(report.read_text())["n_samples"] == len(log)
