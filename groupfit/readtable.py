@@ -107,17 +107,11 @@ def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFr
     repeated = (text == pd.Series(names, index=frame.columns)).sum(axis=1).to_numpy() >= max(2, len(names) // 2)
     if not repeated.any():
         return frame, None
-    rows = np.flatnonzero(repeated)
-    shown = ", ".join(str(i + 1) for i in rows[:5]) + (" …" if rows.size > 5 else "")
-    kept = frame.loc[~repeated].reset_index(drop=True)
+    kept, note = _left_out(frame, repeated, label, "repeating the header", "the logger started again and appended")
     for column in kept.columns:
         numbers = pd.to_numeric(kept[column], errors="coerce")
         if numbers.notna().sum() == kept[column].notna().sum():
             kept[column] = numbers
-    note = (
-        f"{label}: {rows.size} row(s) repeating the header left out (row {shown}: the logger started again and "
-        "appended); rows after them are numbered without them"
-    )
     return kept, note
 
 
@@ -133,14 +127,7 @@ def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame
         same &= (now == before) | (pd.isna(now) & pd.isna(before))
         if not same.any():
             return frame, None
-    repeated = np.r_[False, same]
-    rows = np.flatnonzero(repeated)
-    shown = ", ".join(str(i + 1) for i in rows[:5]) + (" …" if rows.size > 5 else "")
-    note = (
-        f"{label}: {rows.size} row(s) identical to the row before left out (row {shown}: a row written twice); "
-        "rows after them are numbered without them"
-    )
-    return frame.loc[~repeated].reset_index(drop=True), note
+    return _left_out(frame, np.r_[False, same], label, "identical to the row before", "a row written twice")
 
 
 def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
@@ -157,13 +144,18 @@ def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, s
             return frame, None
     if blank.all():
         return frame, None
-    rows = np.flatnonzero(blank)
-    shown = ", ".join(str(i + 1) for i in rows[:5]) + (" …" if rows.size > 5 else "")
+    return _left_out(frame, blank, label, "empty in every column", "a blank row in a spreadsheet")
+
+
+def _left_out(frame: pd.DataFrame, rows: np.ndarray, label: str, what: str, why: str) -> tuple[pd.DataFrame, str]:
+    """The table without the flagged ``rows``, and the note naming them (the first five, 1-based)."""
+    flagged = np.flatnonzero(rows)
+    shown = ", ".join(str(i + 1) for i in flagged[:5]) + (" …" if flagged.size > 5 else "")
     note = (
-        f"{label}: {rows.size} row(s) empty in every column left out (row {shown}: a blank row in a spreadsheet); "
-        "rows after them are numbered without them"
+        f"{label}: {flagged.size} row(s) {what} left out (row {shown}: {why}); rows after them are numbered "
+        "without them"
     )
-    return frame.loc[~blank].reset_index(drop=True), note
+    return frame.loc[~rows].reset_index(drop=True), note
 
 
 def _decompressed(path: Path) -> bytes:

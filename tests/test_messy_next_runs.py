@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from statsmodels.stats.diagnostic import acorr_ljungbox
+from test_messy_rows import fitted_coefficients
 
 from groupfit.cli import main
 from groupfit.metrics import ljung_box
@@ -141,12 +142,8 @@ def test_a_repeated_header_is_left_out_and_a_restart_behind_it_is_refused(tmp_pa
     restarted.write_text("\n".join([header, *body, header, *body]) + "\n")
     clean = tmp_path / "clean.csv"
     next_run.to_csv(clean, index=False)
-    fitted = []
-    for source in (paused, clean):
-        report = tmp_path / f"{source.stem}.json"
-        assert cli("fit", "--data", source, *QUICK, "--json", report, "--out", tmp_path / source.stem) == 0
-        fitted.append(json.loads(report.read_text())["coefficients"])
-    assert fitted[0] == fitted[1]
+    headers_left_out, plain = fitted_coefficients(tmp_path, paused, clean, options=QUICK)
+    assert headers_left_out == plain
     assert "1 row(s) repeating the header left out (row 201" in capsys.readouterr().out
     assert cli("fit", "--data", restarted, *QUICK, "--out", tmp_path / "r") == 2
     message = one_line(capsys)
