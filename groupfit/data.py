@@ -49,7 +49,7 @@ from groupfit.readtable import (
     without_repeated_headers,
     without_repeated_rows,
 )
-from groupfit.resample import jitter_note, resample_frame
+from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
 from groupfit.timestamps import (
     clock_restart,
     epoch_to_seconds,
@@ -162,8 +162,8 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
         raise InputError(
             f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
             f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
-            "average the readings of each period with --resample SECONDS (up to 3 missed periods in a row "
-            f"are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
+            f"average the readings of each period with --resample SECONDS (up to {GAP_PERIODS} missed periods in a "
+            f"row are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
         )
     return period
 
