@@ -79,7 +79,9 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     """
     if column not in frame.columns:
         available = ", ".join(map(str, frame.columns))
-        raise InputError(f"{label}: column '{column}' not found; the columns are: {available}")
+        alike = [str(c) for c in frame.columns if str(c).strip().casefold() == str(column).strip().casefold()]
+        hint = f" ('{alike[0]}' differs only in case or spaces: rename it '{column}')" if len(alike) == 1 else ""
+        raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")
     raw = frame[column]
     values = pd.to_numeric(raw, errors="coerce")
     text = raw.astype(str).str.strip()

@@ -213,3 +213,10 @@ def test_a_short_residual_is_tested_up_to_half_its_length_and_diagnose_takes_a_t
         capsys.readouterr()
         assert cli("diagnose", model, "--data", path, "--out", tmp_path / f"d{rows}") == status
     assert "6 sample(s) in all; diagnose refits the model's 3 coefficients" in one_line(capsys)
+
+
+def test_a_next_run_naming_the_inputs_in_another_case_is_told_which_column_to_rename(tmp_path, model, next_run, capsys):
+    path = tmp_path / "lower.csv"
+    next_run.rename(columns={"T1": "t1", "T2": "t2"}).to_csv(path, index=False)
+    assert cli("replay", model, "--data", path) == 2
+    assert "column 'T1' not found ('t1' differs only in case or spaces: rename it 'T1')" in one_line(capsys)
