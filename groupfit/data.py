@@ -58,6 +58,8 @@ from groupfit.timestamps import (
     unit_seconds,
 )
 
+SLOWEST_PERIOD_S = 3600.0
+"""A period longer than this (s) is unlike a thermal log's: the time column may be in ms, and a note asks."""
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
 
@@ -370,6 +372,11 @@ def _validated(
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
+    if period > SLOWEST_PERIOD_S:
+        notes = notes + (
+            f"{label}: one sample every {period:g} s ({period / 3600:.3g} h) in column '{time}': if its unit is "
+            "not seconds, name it so (time_ms, Zeit [min]) or give --time another column",
+        )
 
     temps, temp_array, dropped = temperature_inputs(frame, label, options)
     notes = notes + ((dropped,) if dropped else ())

@@ -220,3 +220,14 @@ def test_a_next_run_naming_the_inputs_in_another_case_is_told_which_column_to_re
     next_run.rename(columns={"T1": "t1", "T2": "t2"}).to_csv(path, index=False)
     assert cli("replay", model, "--data", path) == 2
     assert "column 'T1' not found ('t1' differs only in case or spaces: rename it 'T1')" in one_line(capsys)
+
+
+def test_a_period_of_hours_asks_whether_the_time_is_in_seconds(tmp_path, next_run, capsys):
+    in_ms, plain = tmp_path / "in_ms.csv", tmp_path / "plain.csv"
+    next_run.assign(time_s=next_run["time_s"] * 1000.0).to_csv(in_ms, index=False)  # ms under a name in s
+    next_run.to_csv(plain, index=False)
+    for path in (in_ms, plain):
+        assert cli("fit", "--data", path, *QUICK, "--out", tmp_path / path.stem) == 0
+    out = capsys.readouterr().out
+    assert "in_ms.csv: one sample every 100000 s (27.8 h) in column 'time_s': if its unit is not seconds" in out
+    assert "plain.csv: one sample every" not in out
