@@ -100,11 +100,14 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
 def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
     """The table without rows that repeat its header (a logger that started again and appended to the file),
     its columns of numbers read as numbers again, and a note naming the rows (None: there were none)."""
-    names = [str(c).strip() for c in frame.columns]
-    if frame.empty or all(pd.api.types.is_numeric_dtype(frame[c]) for c in frame.columns):
+    needed = max(2, len(frame.columns) // 2)
+    texts = [c for c in frame.columns if not pd.api.types.is_numeric_dtype(frame[c])]
+    if frame.empty or len(texts) < needed:  # a header row makes every column it crosses one of text
         return frame, None
-    text = frame.astype("string").apply(lambda column: column.str.strip())
-    repeated = (text == pd.Series(names, index=frame.columns)).sum(axis=1).to_numpy() >= max(2, len(names) // 2)
+    matches = np.zeros(len(frame), dtype=int)
+    for column in texts:
+        matches += (frame[column].astype(str).str.strip() == str(column).strip()).to_numpy(dtype=int)
+    repeated = matches >= needed
     if not repeated.any():
         return frame, None
     kept, note = _left_out(frame, repeated, label, "repeating the header", "the logger started again and appended")
