@@ -83,9 +83,7 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
         hint = f" ('{alike[0]}' differs only in case or spaces: rename it '{column}')" if len(alike) == 1 else ""
         raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")
     raw = frame[column]
-    values = pd.to_numeric(raw, errors="coerce")
-    text = raw.astype(str).str.strip()
-    marked = raw.notna() & text.str.fullmatch(NO_READING)
+    values, text, marked = _cells(raw)
     bad_text = values.isna() & raw.notna() & (text.str.lower() != "nan") & ~marked
     if bad_text.any():
         row = int(np.flatnonzero(bad_text.to_numpy())[0])
@@ -113,6 +111,14 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     return array
 
 
+def _cells(raw: pd.Series) -> tuple[pd.Series, pd.Series, pd.Series]:
+    """A column's cells as numbers (NaN where there is none), as stripped text, and where they mark a reading
+    not taken (:data:`NO_READING`)."""
+    values = pd.to_numeric(raw, errors="coerce")
+    text = raw.astype(str).str.strip()
+    return values, text, raw.notna() & text.str.fullmatch(NO_READING)
+
+
 def refuse_bad_cells(frame: pd.DataFrame, label: str, *, skip: Sequence[str] = ()) -> None:
     """Refuse the first cell of a column of numbers (nine in ten of its filled cells) that is neither a number,
     empty, nor a mark of a reading not taken: averaging (``--resample``) would take it for a missed reading."""
@@ -120,10 +126,9 @@ def refuse_bad_cells(frame: pd.DataFrame, label: str, *, skip: Sequence[str] = (
         raw = frame[column]
         if column in skip or pd.api.types.is_numeric_dtype(raw):
             continue
-        values = pd.to_numeric(raw, errors="coerce")
-        text = raw.astype(str).str.strip()
+        values, text, marked = _cells(raw)
         filled = raw.notna() & (text != "") & (text.str.lower() != "nan")
-        bad = values.isna() & filled & ~text.str.fullmatch(NO_READING)
+        bad = values.isna() & filled & ~marked
         if bad.any() and values.notna().sum() >= 0.9 * filled.sum():
             row = int(np.flatnonzero(bad.to_numpy())[0])
             raise InputError(
@@ -142,12 +147,9 @@ def markers_emptied(frame: pd.DataFrame) -> pd.DataFrame:
         raw = frame[column]
         if pd.api.types.is_numeric_dtype(raw):
             continue
-        values = pd.to_numeric(raw, errors="coerce")
-        if not values.notna().any():
-            continue
-        text = raw.astype(str).str.strip()
+        values, text, marked = _cells(raw)
         unread = values.isna() & raw.notna() & (text != "") & (text.str.lower() != "nan")
-        if text[unread].str.fullmatch(NO_READING).all():
+        if values.notna().any() and not (unread & ~marked).any():
             converted[column] = values.astype(float)
     return frame.assign(**converted) if converted else frame
 

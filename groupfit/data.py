@@ -42,13 +42,7 @@ from groupfit.errors import InputError
 from groupfit.glitches import without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
-from groupfit.readtable import (
-    datetimes_to_seconds,
-    read_table,
-    without_blank_rows,
-    without_repeated_headers,
-    without_repeated_rows,
-)
+from groupfit.readtable import datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
 from groupfit.timestamps import (
     clock_restart,
@@ -114,7 +108,8 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
             f"{label}: row {unstamped[0] + 1}, column '{column}' {what} ({unstamped.size} row(s) without a time "
             "stamp): a reading cannot be placed without its time; fill in the time or delete the row"
         )
-    values = numeric_column(frame, column, label, allow_nonfinite=False)
+    if not np.isfinite(values).all():
+        numeric_column(frame, column, label, allow_nonfinite=False)  # names the infinite cell
     scale = unit_seconds(column, label) if numbers else 1.0
     if scale != 1.0:
         values = values * scale
@@ -288,9 +283,7 @@ def load_runs(
     marks for the role (:mod:`groupfit.default_columns`), with a note.
     """
     frame, run_name, label = read_table(source, name)
-    frame, blank_note = without_blank_rows(frame, label)
-    frame, header_note = without_repeated_headers(frame, label)
-    frame, twice_note = without_repeated_rows(frame, label)
+    frame, stray_notes, left_out = without_stray_rows(frame, label)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     required = options.get("require_error", True)
@@ -300,11 +293,10 @@ def load_runs(
     try:
         runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
     except InputError as exc:
-        left_out = "; ".join(n.split(": ", 1)[1].split(";")[0] for n in (blank_note, header_note, twice_note) if n)
         if left_out and " row " in str(exc):
             raise InputError(f"{exc} (rows are counted without those left out: {left_out})") from None
         raise
-    found = tuple(note for note in (blank_note, header_note, twice_note, time_note, serial_note, error_note) if note)
+    found = tuple(note for note in (*stray_notes, time_note, serial_note, error_note) if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 

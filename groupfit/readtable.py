@@ -150,14 +150,27 @@ def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, s
     return _left_out(frame, blank, label, "empty in every column", "a blank row in a spreadsheet")
 
 
+def without_stray_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, list[str], str]:
+    """The table without blank rows, repeated headers and rows written twice; the notes naming them, and what
+    was left out in one phrase (empty: nothing), for a refusal whose row numbers count without those rows."""
+    notes, phrases = [], []
+    for leave_out in (without_blank_rows, without_repeated_headers, without_repeated_rows):
+        frame, note = leave_out(frame, label)
+        if note is not None:
+            notes.append(note)
+            phrases.append(note[len(label) + 2 : note.index(LEFT_OUT_TAIL)])
+    return frame, notes, "; ".join(phrases)
+
+
+LEFT_OUT_TAIL = "; rows after them are numbered without them"
+"""How a note on rows left out ends."""
+
+
 def _left_out(frame: pd.DataFrame, rows: np.ndarray, label: str, what: str, why: str) -> tuple[pd.DataFrame, str]:
     """The table without the flagged ``rows``, and the note naming them (the first five, 1-based)."""
     flagged = np.flatnonzero(rows)
     shown = ", ".join(str(i + 1) for i in flagged[:5]) + (" …" if flagged.size > 5 else "")
-    note = (
-        f"{label}: {flagged.size} row(s) {what} left out (row {shown}: {why}); rows after them are numbered "
-        "without them"
-    )
+    note = f"{label}: {flagged.size} row(s) {what} left out (row {shown}: {why}){LEFT_OUT_TAIL}"
     return frame.loc[~rows].reset_index(drop=True), note
 
 
@@ -257,4 +270,5 @@ __all__ = [
     "without_blank_rows",
     "without_repeated_headers",
     "without_repeated_rows",
+    "without_stray_rows",
 ]

@@ -7,6 +7,7 @@ import numpy as np
 
 from groupfit.data import Run, numeric_column
 from groupfit.errors import InputError
+from groupfit.resample import GAP_PERIODS
 
 
 def heat_column(run: Run, heat: str) -> np.ndarray:
@@ -25,8 +26,8 @@ def read_on_every_row(run: Run, column: str) -> np.ndarray:
     if unread.size:
         raise InputError(
             f"{run.source}: row {unread[0] + 1}, column '{column}' has no reading ({unread.size} row(s)); the AR(1) "
-            "model needs it on every row: fill it in, let --resample SECONDS interpolate up to 3 missed readings "
-            "in a row, or leave the AR(1) model out with --heat none"
+            f"model needs it on every row: fill it in, let --resample SECONDS interpolate up to {GAP_PERIODS} missed "
+            "readings in a row, or leave the AR(1) model out with --heat none"
         )
     return values
 
