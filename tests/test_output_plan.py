@@ -217,6 +217,18 @@ def test_an_empty_output_path_is_refused(inputs, tmp_path, capsys, argv):
     assert status == 2 and len(err) == 1 and "empty path" in err[0] and unchanged
 
 
+@pytest.mark.parametrize("verb", ["fit", "compare"])
+def test_an_output_folder_from_the_configuration_is_named_as_such(inputs, tmp_path, capsys, verb):
+    (tmp_path / "taken").write_text("a file where the folder would be\n")
+    config = tmp_path / "run.toml"
+    config.write_text(f'[data]\npath = "{inputs}/run.csv"\ntemps = ["T1", "T2"]\n[output]\ndir = "{tmp_path}/taken"\n')
+    status, err, unchanged = _run((verb, str(config), "--quiet"), inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and unchanged, err
+    assert err[0].endswith(f"choose another [output] dir of {config}")
+    status, err, _ = _run((verb, str(config), "--quiet", "--out", "{tmp}/taken"), inputs, tmp_path, capsys)
+    assert status == 2 and err[0].endswith("choose another --out")
+
+
 @pytest.mark.parametrize(
     "argv, blocker",
     [

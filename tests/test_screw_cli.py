@@ -120,6 +120,23 @@ def test_compare_rows_for_screw_and_mlr(tmp_path, capsys):
     assert "paper 0.6 + 0.08·τ0" in out
 
 
+def test_compare_keeps_a_model_identified_from_other_runs(model_file, tmp_path, capsys):
+    folder = tmp_path / "out"
+    folder.mkdir()
+    identified = folder / "screw_model.json"
+    identified.write_bytes(model_file.read_bytes())  # identified from screw_H then screw_A
+    compare = ["screw", "compare", str(DATA / "screw_A.csv"), "--validate", str(DATA / "screw_H.csv")]
+    status, _, err = run_cli([*compare, "--out", str(folder)], capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1
+    assert "identified from other runs (screw_A.csv, screw_H.csv)" in err and "--force" in err
+    assert identified.read_bytes() == model_file.read_bytes()
+    assert sorted(p.name for p in folder.iterdir()) == ["screw_model.json"]  # no figure either
+    assert run_cli([*compare, "--out", str(folder), "--force"], capsys)[0] == 0
+    runs = json.loads(identified.read_text())["identification"]["runs"]
+    assert list(runs) == ["screw_A", "screw_H"]
+    assert run_cli([*compare, "--out", str(folder)], capsys)[0] == 0  # its own output, same runs: replaced
+
+
 def _expect_input_error(args, capsys, folder):
     status, out, err = run_cli(args, capsys)
     assert status == 2

@@ -193,26 +193,35 @@ def add_force_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def out_option(args: argparse.Namespace) -> str:
+    """How a refusal names the output folder: ``--out`` when given on the command line (or when the verb
+    names no run configuration), else the configuration's ``[output] dir`` it came from."""
+    if getattr(args, "out", None) is not None or not vars(args).get("config"):
+        return "--out"
+    return f"[output] dir of {args.config}"
+
+
 def plan_outputs(
     args: argparse.Namespace,
     *inputs,
     folder: str | Path | None = None,
     files=(),
-    option="--out",
+    option: str | None = None,
     json_model: str | None = None,
 ) -> Path | None:
     """Declare what a verb reads and writes, and check every output before any work (one line when refused).
 
     ``inputs`` are the files the verb reads (paths or lists of paths; None
     skipped); the outputs are ``--json`` and the files ``files`` in ``folder``
-    (``option`` names it; ``json_model``: the format of the model file the ``--json`` is, e.g.
-    ``groupfit-model/``). An output that is an
-    input, an existing data file without ``--force``, or an empty path is refused
+    (``option`` names it, by default :func:`out_option`; ``json_model``: the
+    format of the model file the ``--json`` is, e.g. ``groupfit-model/``). An
+    output that is an input, an existing data file without ``--force``, or an
+    empty path is refused
     (:class:`groupfit.outputs.OutputPlan`). Returns the folder (None when none).
     """
     plan = current_plan(force=getattr(args, "force", False)).read(*inputs)
     plan.file(getattr(args, "json", None), "--json", model=json_model or None, json=True)
-    return plan.folder(folder, option, files)
+    return plan.folder(folder, option or out_option(args), files)
 
 
 def add_register_options(

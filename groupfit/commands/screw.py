@@ -14,6 +14,7 @@ Sub-verbs:
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 from typing import Any
 
@@ -329,6 +330,7 @@ def run_compare(args: argparse.Namespace) -> int:
         folder=args.out or DEFAULT_OUT,
         files=["screw_model.json", *(f"screw_{kind}_{n}.png" for n in names for kind in ("rises", "error"))],
     )
+    keep_identified_model(out_dir / "screw_model.json", [args.run, *args.validate], force=args.force)
     model = build_model(args)
     runs = _load_runs(args, [args.run, *args.validate], require_error=True)
     for run in runs:
@@ -353,6 +355,36 @@ def run_compare(args: argparse.Namespace) -> int:
     common.commit_outputs()
     print(compare_report(result, runs, written), file=common.report_stream(args))
     return 0
+
+
+def keep_identified_model(path: Path, sources, *, force: bool) -> None:
+    """Refuse, without ``--force``, to replace a ball-screw model file identified from other runs than ``sources``.
+
+    ``screw identify`` and ``screw compare`` both write ``screw_model.json`` into
+    their ``--out`` folder; a model identified from other runs (or from the
+    same runs in another order: the first names the source identified in
+    full) may be the only copy of one in use. A file that is no ball-screw
+    model is the verb's own output, replaced as before.
+    """
+    if force or not path.is_file():
+        return
+    try:
+        existing = json.loads(path.read_text(encoding="utf-8"))
+        identified = existing["identification"]["runs"].values()
+    except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError, AttributeError):
+        return
+    if not str(existing.get("format", "")).startswith(SCREW_MODELS):
+        return
+    if [_resolved(s) for s in identified] != [_resolved(s) for s in sources]:
+        names = ", ".join(sorted(Path(str(s)).name for s in identified))
+        raise InputError(
+            f"{path}: --out holds a ball-screw model identified from other runs ({names}); screw compare would "
+            "replace it: choose another --out, or pass --force to replace it"
+        )
+
+
+def _resolved(path) -> Path:
+    return Path(str(path)).expanduser().resolve()
 
 
 def compare_json(result, runs) -> dict[str, Any]:
