@@ -93,6 +93,11 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     array = values.to_numpy(dtype=float)
     if not allow_nonfinite:
         nonfinite = ~np.isfinite(array)
+        if nonfinite.all() and not marked.any():
+            raise InputError(
+                f"{label}: column '{column}' holds no reading in the whole run (a channel not "
+                "connected?); leave it out of the inputs (--temps), or name the column that holds the readings"
+            )
         if nonfinite.any():
             row = int(np.flatnonzero(nonfinite)[0])
             what = (

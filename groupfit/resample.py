@@ -97,7 +97,8 @@ def resample_frame(
     Returns
     -------
     Resampled
-        Numeric columns only; a column with no number at all is left out.
+        Numeric columns only: a column of text is left out; one without any reading (a channel not
+        connected) stays, empty, for the loader to name.
     """
     if not (np.isfinite(period_s) and period_s > 0):
         raise InputError(f"--resample {period_s!r}: give the period in seconds, a number > 0")
@@ -127,7 +128,7 @@ def resample_frame(
         if column == time:
             continue
         values = pd.to_numeric(frame[column], errors="coerce")
-        if values.notna().any():
+        if values.notna().any() or _all_empty(frame[column]):
             numeric[column] = values.to_numpy(dtype=float)
     start = stamps[0] - np.mod(stamps[0] - bin_phase(stamps, period_s), period_s)
     index = np.floor((stamps - start) / period_s + 1e-9).astype(np.int64)
@@ -179,6 +180,11 @@ def _stretch_ends(occupied: np.ndarray) -> list[int]:
 def _next_occupied(occupied: np.ndarray, stop: int) -> int | None:
     later = np.flatnonzero(occupied[stop:])
     return None if later.size == 0 else stop + int(later[0])
+
+
+def _all_empty(column: pd.Series) -> bool:
+    """Every cell of ``column`` empty (NaN, or blank text)."""
+    return bool(column.isna().all() or column.astype(str).str.strip().eq("").all())
 
 
 def _interpolate_empty(
