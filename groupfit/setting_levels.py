@@ -31,6 +31,9 @@ ramp between levels (a drive accelerating over several samples) are left out of 
 level the ramp reaches…"""
 MIN_STEADY_SHARE = 0.5
 """…as long as most readings are steady (within that share of a neighbour)."""
+MAX_MISSED_FRACTION = 0.05
+"""A setting with at most this share of its readings missed (an empty cell, a ``---``) is read with each
+missed one held at the reading before it (:func:`held_setting`): a setting holds until it is changed."""
 
 
 def is_setting(values: np.ndarray) -> bool:
@@ -48,6 +51,19 @@ def setting_levels(values: np.ndarray) -> np.ndarray:
         return values
     levels = _levels(values)
     return levels if _piecewise_constant(levels) else values
+
+
+def held_setting(values: np.ndarray) -> np.ndarray | None:
+    """The readings of a column with each missed one (not finite) held at the reading before it (the first ones
+    at the first reading); None when more than :data:`MAX_MISSED_FRACTION` of them, or all, are missed."""
+    values = np.asarray(values, dtype=float)
+    read = np.isfinite(values)
+    if read.all():
+        return values
+    if not read.any() or np.count_nonzero(~read) > MAX_MISSED_FRACTION * values.size:
+        return None
+    last = np.maximum.accumulate(np.where(read, np.arange(values.size), -1))
+    return values[np.where(last >= 0, last, np.flatnonzero(read)[0])]
 
 
 def _piecewise_constant(values: np.ndarray | None) -> bool:
@@ -105,4 +121,4 @@ def _steady(values: np.ndarray, tolerance: float) -> np.ndarray:
     return np.r_[False, close] | np.r_[close, False]
 
 
-__all__ = ["is_setting", "setting_levels"]
+__all__ = ["MAX_MISSED_FRACTION", "held_setting", "is_setting", "setting_levels"]

@@ -10,10 +10,13 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
+from groupfit.data import load_run
 from groupfit.heldout.folds import make_folds, operating_columns
-from groupfit.setting_levels import setting_levels
+from groupfit.heldout.nextrun import forward_chaining
+from groupfit.setting_levels import MAX_MISSED_FRACTION, held_setting, setting_levels
 
-PAPER = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets" / "paper_cycle.csv"
+DATASETS = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets"
+PAPER = DATASETS / "paper_cycle.csv"
 PROGRAMME = np.repeat([0.0, 1250.0, 2500.0, 3750.0, 5000.0, 2500.0, 0.0], 60)
 
 
@@ -110,3 +113,33 @@ def test_compare_reads_the_conditions_and_the_ar1_heat_levels_of_a_noisy_speed_a
         sorted(fitted["noisy"].c2_.items()), sorted(fitted["clean"].c2_.items())
     ):
         assert level == pytest.approx(clean_level, rel=0.01) and c2 == pytest.approx(clean_c2, rel=1e-12)
+
+
+def test_a_missed_reading_of_a_setting_is_held_at_the_one_before():
+    rng = np.random.default_rng(7)
+    values = np.repeat(rng.choice([0.0, 1250.0, 2500.0, 3750.0], 12), 25)
+    for missed in ([0, 1, 140], [299], [60, 61, 62]):
+        gappy = values.copy()
+        gappy[missed] = np.nan
+        expected = pd.Series(gappy).ffill().bfill().to_numpy()
+        np.testing.assert_array_equal(held_setting(gappy), expected)
+    too_many = values.copy()
+    too_many[: int(MAX_MISSED_FRACTION * values.size) + 1] = np.nan
+    assert held_setting(too_many) is None and held_setting(np.full(5, np.nan)) is None
+    assert held_setting(values) is values or np.array_equal(held_setting(values), values)
+
+
+@pytest.mark.parametrize("mark", ["", "---"])
+def test_a_speed_with_a_missed_reading_still_cuts_the_next_run_estimate_into_its_segments(tmp_path, mark):
+    frame = pd.read_csv(DATASETS / "validation_speed.csv").drop(columns=["spindle_on"])
+    level_rows = np.flatnonzero(np.r_[False, np.diff(frame["speed_rpm"]) == 0])  # not at a change of speed
+    gappy = frame.astype({"speed_rpm": object})
+    gappy.loc[level_rows[[10, 200]], "speed_rpm"] = mark
+    paths = {name: tmp_path / f"{name}.csv" for name in ("clean", "gappy")}
+    frame.to_csv(paths["clean"], index=False)
+    gappy.to_csv(paths["gappy"], index=False)
+    runs = {name: load_run(path, temps=["T1", "T2"]) for name, path in paths.items()}
+    scores = {name: forward_chaining(run, [0, 1]) for name, run in runs.items()}
+    assert "changes of speed_rpm" in scores["gappy"].segments and not scores["gappy"].blocks_of_time
+    np.testing.assert_array_equal(scores["gappy"].counts, scores["clean"].counts)
+    np.testing.assert_allclose(scores["gappy"].sse, scores["clean"].sse, rtol=1e-12)

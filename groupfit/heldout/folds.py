@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from groupfit.setting_levels import is_setting, setting_levels
+from groupfit.columns import is_displacement
+from groupfit.setting_levels import held_setting, is_setting, setting_levels
 
 MIN_FOLD_FRACTION = 0.03
 """A condition segment shorter than this share of the run is joined to the one before."""
@@ -114,12 +115,33 @@ def operating_columns(frame: pd.DataFrame, candidates: list[str]) -> list[str]:
     """
     found = []
     for column in candidates:
-        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-        if not np.isfinite(values).all() or (np.ptp(values) == 0.0 and values[0] == 0.0):
+        values = held_setting(pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float))
+        if values is None or (np.ptp(values) == 0.0 and values[0] == 0.0):
             continue
         if is_setting(values):
             found.append(column)
     return found
+
+
+def setting_values(frame: pd.DataFrame, column: str) -> np.ndarray:
+    """An operating column's values as the setting's levels, a missed reading held at the one before it."""
+    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+    held = held_setting(values)
+    return setting_levels(values if held is None else held)
+
+
+def with_missed_settings(frame: pd.DataFrame, usable: list[str], exclude: set[str]) -> list[str]:
+    """``usable`` and the columns left out of it only for a few missed readings that are operating settings
+    once each missed reading is held (:func:`groupfit.setting_levels.held_setting`): a speed logged with
+    one empty cell still marks the run's conditions."""
+    missed = []
+    for column in frame.columns:
+        if column in exclude or column in usable or is_displacement(str(column)):
+            continue
+        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+        if not np.isfinite(values).all() and operating_columns(frame, [column]):
+            missed.append(column)
+    return [column for column in frame.columns if column in usable or column in missed]
 
 
 def condition_segments(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
@@ -127,8 +149,7 @@ def condition_segments(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
     n = len(frame)
     change = np.zeros(n, dtype=bool)
     for column in columns:
-        values = setting_levels(pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float))
-        change[1:] |= np.diff(values) != 0
+        change[1:] |= np.diff(setting_values(frame, column)) != 0
     starts = np.flatnonzero(change)
     min_length = max(2, int(np.ceil(MIN_FOLD_FRACTION * n)))
     kept = [0]

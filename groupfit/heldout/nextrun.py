@@ -34,13 +34,12 @@ from groupfit.columns import usable_columns
 from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
 from groupfit.heldout.choice import pooled_error
-from groupfit.heldout.folds import make_folds
+from groupfit.heldout.folds import make_folds, setting_values, with_missed_settings
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.runtime import replay_groups
 from groupfit.runtime.rule import compensation_clamp
 from groupfit.search.exact import solve_exact
-from groupfit.setting_levels import setting_levels
 
 MAX_SAMPLES = 600
 """A run longer than this is thinned (every k-th row) for the estimate."""
@@ -133,11 +132,11 @@ def segment_starts(run: Run) -> tuple[list[int], str, int, bool]:
     if run.reference not in (None, "start"):
         exclude.add(run.reference)
     columns, _ = usable_columns(run.frame, exclude)
-    folds = make_folds([run.frame], columns)
+    folds = make_folds([run.frame], with_missed_settings(run.frame, columns, exclude))
     labels = folds.labels
     starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
     if folds.kind == "condition":
-        values = np.column_stack([setting_levels(run.frame[c].to_numpy(dtype=float)) for c in folds.columns])
+        values = np.column_stack([setting_values(run.frame, c) for c in folds.columns])
         conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
         return starts, f"changes of {', '.join(folds.columns)}", conditions, False
     return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, True
