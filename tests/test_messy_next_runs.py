@@ -65,19 +65,25 @@ def test_compare_names_a_heat_reading_not_taken_and_resample_fills_it(tmp_path, 
     assert rows[0] == [{**r, "run": rows[0][k]["run"]} for k, r in enumerate(rows[1])]
 
 
-def test_replay_leaves_an_overflow_of_the_error_unscored_as_an_empty_cell(tmp_path, model, next_run, capsys):
+@pytest.mark.parametrize("reading, limit", [(3e38, None), (500.0, "100")])
+def test_replay_leaves_an_overflow_of_the_error_unscored_as_an_empty_cell(
+    tmp_path, model, next_run, capsys, reading, limit
+):
     overflow, empty = next_run.copy(), next_run.copy()
-    overflow.loc[100, "error_um"] = 3e38
+    overflow.loc[100, "error_um"] = reading
     empty.loc[100, "error_um"] = np.nan
     replays = []
     for name, frame in (("overflow", overflow), ("empty", empty)):
         path, report = tmp_path / f"{name}.csv", tmp_path / f"{name}.json"
         frame.to_csv(path, index=False)
-        assert cli("replay", model, "--data", path, "--json", report) == 0
+        limits = () if limit is None else ("--range-error", limit)
+        assert cli("replay", model, "--data", path, "--json", report, *limits) == 0
         replays.append(json.loads(report.read_text()))
     assert replays[0]["rms_um"] == replays[1]["rms_um"] < 1.0
     assert replays[0]["scored_samples"] == replays[1]["scored_samples"] == len(next_run) - 1
-    assert "1 reading(s) of the error beyond ±100000 µm (row 101" in capsys.readouterr().out
+    assert f"1 reading(s) of the error beyond ±{float(limit or 1e5):g} µm (row 101" in capsys.readouterr().out
+    assert cli("replay", model, "--data", tmp_path / "overflow.csv", "--range-error", "-3") == 2
+    assert "--range-error" in one_line(capsys)
 
 
 def test_a_dead_input_leaves_no_sample_scored_and_says_so_without_a_warning(tmp_path, model, next_run, capsys):

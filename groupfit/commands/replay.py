@@ -14,6 +14,7 @@ from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
 from groupfit.commands.replay_probes import (
+    add_probe_options,
     probe_report,
     probe_schedule,
     probe_summary,
@@ -21,7 +22,7 @@ from groupfit.commands.replay_probes import (
 )
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import same_recording, with_histories
-from groupfit.data import Run, load_run, numeric_column, without_implausible_errors
+from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
 from groupfit.glitches import scored_glitches
@@ -67,27 +68,8 @@ def add_parser(verbs) -> None:
         replay, "also report the compensation in integer controller counts of this many µm (e.g. 0.1)"
     )
     common.add_source_option(replay)
-    replay.add_argument(
-        "--probe-every",
-        type=float,
-        metavar="SECONDS",
-        help="replay a probe check every SECONDS (the error column, or --probe-column, at those samples), "
-        "folded into the compensation by the model's recalibration section",
-    )
-    replay.add_argument(
-        "--probe-first",
-        type=float,
-        metavar="SECONDS",
-        help="with --probe-every: the first check SECONDS after the run's first sample (default: one interval); "
-        "0 checks at the first sample, as a probe cycle at the start of a job does",
-    )
-    replay.add_argument(
-        "--probe-column",
-        metavar="COLUMN",
-        help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm); default: the run's error "
-        "column; "
-        "without --probe-every every row where it holds a number is a check",
-    )
+    add_probe_options(replay)
+    common.add_range_options(replay, temp=False, refused="left out of the score as not measured")
     common.add_json_option(replay, "the per-sample result")
     common.add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
@@ -106,7 +88,7 @@ def run_replay(args: argparse.Namespace) -> int:
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
-    options.update(error_is_default=args.error is None)
+    options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
     options.update(common.clock_options(args))
     run = load_readings(args.data, tables, **options)
     continued, history, found_note = earlier_recordings(
@@ -175,7 +157,9 @@ class ReplayResult:
         return replay_report(self.data)
 
 
-def load_readings(path, tables: RuleTables, *, time: str, error: str, **clock) -> Run:
+def load_readings(
+    path, tables: RuleTables, *, time: str, error: str, error_limit: float = ERROR_LIMIT_UM, **clock
+) -> Run:
     """A recorded run with the rule's readings as its ``temps``: measured inputs, then sources.
 
     The measured inputs load as ``groupfit fit`` loads temperatures; the
@@ -185,7 +169,8 @@ def load_readings(path, tables: RuleTables, *, time: str, error: str, **clock) -
     """
     measured = list(tables.raw_names[: tables.n_measured])
     run = without_implausible_errors(
-        load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock)
+        load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock),
+        error_limit,
     )
     if not tables.source_names:
         return run

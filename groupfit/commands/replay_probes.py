@@ -26,6 +26,31 @@ from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_R
 PROBE_NAMES = {PROBE_APPLIED: "applied", PROBE_REJECTED: "rejected", PROBE_IGNORED: "ignored"}
 
 
+def add_probe_options(replay: argparse.ArgumentParser) -> None:
+    """``--probe-every``, ``--probe-first`` and ``--probe-column``."""
+    replay.add_argument(
+        "--probe-every",
+        type=float,
+        metavar="SECONDS",
+        help="replay a probe check every SECONDS (the error column, or --probe-column, at those samples), "
+        "folded into the compensation by the model's recalibration section",
+    )
+    replay.add_argument(
+        "--probe-first",
+        type=float,
+        metavar="SECONDS",
+        help="with --probe-every: the first check SECONDS after the run's first sample (default: one interval); "
+        "0 checks at the first sample, as a probe cycle at the start of a job does",
+    )
+    replay.add_argument(
+        "--probe-column",
+        metavar="COLUMN",
+        help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm); default: the run's error "
+        "column; "
+        "without --probe-every every row where it holds a number is a check",
+    )
+
+
 def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
     """Per sample the probe reading (µm), NaN where there is no check; None without probe options."""
     check_probe_first(args.probe_first, args.probe_every)
