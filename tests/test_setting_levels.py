@@ -11,6 +11,7 @@ import pytest
 
 from groupfit.cli import main
 from groupfit.data import load_run
+from groupfit.heldout.check import held_out_folds
 from groupfit.heldout.folds import make_folds, operating_columns
 from groupfit.heldout.nextrun import forward_chaining
 from groupfit.setting_levels import MAX_MISSED_FRACTION, held_setting, setting_levels
@@ -143,3 +144,7 @@ def test_a_speed_with_a_missed_reading_still_cuts_the_next_run_estimate_into_its
     assert "changes of speed_rpm" in scores["gappy"].segments and not scores["gappy"].blocks_of_time
     np.testing.assert_array_equal(scores["gappy"].counts, scores["clean"].counts)
     np.testing.assert_allclose(scores["gappy"].sse, scores["clean"].sse, rtol=1e-12)
+    exclude = {"time_s", "error_um", "T1", "T2"}
+    folds = {name: held_out_folds([run.frame], exclude, run.error) for name, run in runs.items()}
+    assert folds["gappy"].kind == folds["clean"].kind == "condition"
+    np.testing.assert_array_equal(folds["gappy"].labels, folds["clean"].labels)
