@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 import pandas as pd
@@ -83,7 +83,7 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
         hint = f" ('{alike[0]}' differs only in case or spaces: rename it '{column}')" if len(alike) == 1 else ""
         raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")
     raw = frame[column]
-    values, text, marked = _cells(raw)
+    values, text, marked, _ = _cells(raw)
     bad_text = values.isna() & raw.notna() & (text.str.lower() != "nan") & ~marked
     if bad_text.any():
         row = int(np.flatnonzero(bad_text.to_numpy())[0])
@@ -116,12 +116,26 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
     return array
 
 
-def _cells(raw: pd.Series) -> tuple[pd.Series, pd.Series, pd.Series]:
-    """A column's cells as numbers (NaN where there is none), as stripped text, and where they mark a reading
-    not taken (:data:`NO_READING`)."""
+class _Cells(NamedTuple):
+    """A column's cells as numbers (NaN where there is none), as stripped text, where they mark a reading not
+    taken (:data:`NO_READING`) and where they hold anything (not empty, not ``nan``)."""
+
+    values: pd.Series
+    text: pd.Series
+    marked: pd.Series
+    filled: pd.Series
+
+    @property
+    def words(self) -> pd.Series:
+        """Filled cells that are neither a number nor a mark of a reading not taken."""
+        return self.values.isna() & self.filled & ~self.marked
+
+
+def _cells(raw: pd.Series) -> _Cells:
     values = pd.to_numeric(raw, errors="coerce")
     text = raw.astype(str).str.strip()
-    return values, text, raw.notna() & text.str.fullmatch(NO_READING)
+    filled = raw.notna() & (text != "") & (text.str.lower() != "nan")
+    return _Cells(values, text, raw.notna() & text.str.fullmatch(NO_READING), filled)
 
 
 def refuse_bad_cells(frame: pd.DataFrame, label: str, *, skip: Sequence[str] = ()) -> None:
@@ -131,10 +145,9 @@ def refuse_bad_cells(frame: pd.DataFrame, label: str, *, skip: Sequence[str] = (
         raw = frame[column]
         if column in skip or pd.api.types.is_numeric_dtype(raw):
             continue
-        values, text, marked = _cells(raw)
-        filled = raw.notna() & (text != "") & (text.str.lower() != "nan")
-        bad = values.isna() & filled & ~marked
-        if bad.any() and values.notna().sum() >= 0.9 * filled.sum():
+        cells = _cells(raw)
+        bad = cells.words
+        if bad.any() and cells.values.notna().sum() >= 0.9 * cells.filled.sum():
             row = int(np.flatnonzero(bad.to_numpy())[0])
             raise InputError(
                 f"{label}: row {row + 1}, column '{column}': {raw.iloc[row]!r} is not a number; fix or remove that row"
@@ -152,10 +165,9 @@ def markers_emptied(frame: pd.DataFrame) -> pd.DataFrame:
         raw = frame[column]
         if pd.api.types.is_numeric_dtype(raw):
             continue
-        values, text, marked = _cells(raw)
-        unread = values.isna() & raw.notna() & (text != "") & (text.str.lower() != "nan")
-        if values.notna().any() and not (unread & ~marked).any():
-            converted[column] = values.astype(float)
+        cells = _cells(raw)
+        if cells.values.notna().any() and not cells.words.any():
+            converted[column] = cells.values.astype(float)
     return frame.assign(**converted) if converted else frame
 
 

@@ -48,6 +48,7 @@ from groupfit.timestamps import (
     clock_restart,
     epoch_to_seconds,
     refuse_clock_change,
+    restart_refusal,
     serial_days_to_seconds,
     unit_seconds,
 )
@@ -137,11 +138,7 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0)) + 1
         if clock_restart(time) == i:  # a restarted clock goes on from its new start; a bad cell is alone
-            raise InputError(
-                f"{label}: the clock in column '{column}' starts again at row {i + 1} ({time[i]:g} s after "
-                f"{time[i - 1]:g} s: the logger restarted?); split the file before row {i + 1} and give the parts "
-                "as runs of their own (a fit on both: --data part1.csv part2.csv; a replay: one part at a time)"
-            )
+            raise restart_refusal(time, i, label, column)
         raise InputError(
             f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
             f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows, remove the duplicate, or average the "

@@ -59,7 +59,7 @@ MODEL_SNIFF_BYTES = 64 * 1024 * 1024
 """A JSON file larger than this is not read to tell whether it is a model file (none is that large)."""
 
 
-def _resolved(path: str | Path) -> Path:
+def resolved_path(path: str | Path) -> Path:
     """The file a path names: links followed before ``..`` is taken (``link/..`` is the parent of the link's
     target, as the file system reads it)."""
     return Path(os.path.realpath(Path(path).expanduser()))
@@ -128,7 +128,7 @@ class OutputPlan:
             if isinstance(path, (list, tuple)):
                 self.read(*path)
             elif isinstance(path, (str, Path)) and str(path) not in ("", "-"):
-                self.inputs.setdefault(_resolved(path), str(path))
+                self.inputs.setdefault(resolved_path(path), str(path))
         return self
 
     def file(
@@ -177,7 +177,7 @@ class OutputPlan:
             self._claim(target, option)
             check_output_file(target, option)
             if target.is_file() and target.suffix.lower() in DATA_SUFFIXES and not self.force:
-                self.tables[_resolved(target)] = option
+                self.tables[resolved_path(target)] = option
         return folder
 
     def _target(self, path: str | Path, option: str) -> Path:
@@ -187,12 +187,12 @@ class OutputPlan:
 
     def _claim(self, target: Path, option: str) -> None:
         """Refuse a file two outputs would both write (``--json DIR/model.json`` beside ``--out DIR``)."""
-        other = self.outputs.setdefault(_resolved(target), option)
+        other = self.outputs.setdefault(resolved_path(target), option)
         if other != option:
             raise InputError(f"{target}: {option} names a file {other} writes too; choose another {option}")
 
     def _check_input(self, target: Path, option: str) -> None:
-        resolved = _resolved(target)
+        resolved = resolved_path(target)
         for source, given in self.inputs.items():
             if resolved == source or _same_file(resolved, source):
                 raise InputError(
@@ -213,16 +213,18 @@ class OutputPlan:
 
     def stage(self, temporary: Path, target: Path) -> None:
         """A complete file at ``temporary`` to be renamed over ``target`` on :meth:`commit`."""
-        self.staged = [(t, g) for t, g in self.staged if _resolved(g) != _resolved(target)] + [(temporary, target)]
+        self.staged = [(t, g) for t, g in self.staged if resolved_path(g) != resolved_path(target)] + [
+            (temporary, target)
+        ]
 
     def commit(self) -> list[Path]:
         """Check every staged target against every input, then rename them all; return the files written."""
         for _, target in self.staged:
-            self._check_input(target, self.outputs.get(_resolved(target), "the output path"))
+            self._check_input(target, self.outputs.get(resolved_path(target), "the output path"))
             if target.is_dir():
                 raise InputError(f"{target}: is a folder; nothing was written (choose another output)")
         for temporary, target in self.staged:
-            option = self.tables.get(_resolved(target))
+            option = self.tables.get(resolved_path(target))
             if option is not None and target.is_file() and _first_line(target) != _first_line(temporary):
                 raise InputError(
                     f"{target}: {option} would replace a table that is not an earlier output of this command (its "
@@ -267,4 +269,12 @@ def commit_outputs() -> list[Path]:
     return plan.commit() if plan is not None else []
 
 
-__all__ = ["DATA_SUFFIXES", "GROUPED_MODELS", "SCREW_MODELS", "OutputPlan", "commit_outputs", "current_plan"]
+__all__ = [
+    "DATA_SUFFIXES",
+    "GROUPED_MODELS",
+    "SCREW_MODELS",
+    "OutputPlan",
+    "commit_outputs",
+    "current_plan",
+    "resolved_path",
+]

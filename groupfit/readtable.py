@@ -133,16 +133,20 @@ def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame
     return _left_out(frame, np.r_[False, same], label, "identical to the row before", "a row written twice")
 
 
+def empty_cells(cells: pd.Series) -> np.ndarray:
+    """Where a column's cells are empty: not a value, or text of nothing but spaces."""
+    empty = cells.isna()
+    if not pd.api.types.is_numeric_dtype(cells):
+        empty |= cells.astype("string").str.strip().eq("").fillna(True)
+    return empty.to_numpy(dtype=bool)
+
+
 def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
     """The table without the rows empty in every cell (a blank row left in a spreadsheet), and a note naming
     them (None: there were none). Rows after them are numbered without them."""
     blank = np.ones(len(frame), dtype=bool)
     for column in frame.columns:
-        cells = frame[column]
-        empty = cells.isna()
-        if not pd.api.types.is_numeric_dtype(cells):
-            empty |= cells.astype("string").str.strip().eq("").fillna(True)
-        blank &= empty.to_numpy(dtype=bool)
+        blank &= empty_cells(frame[column])
         if not blank.any():
             return frame, None
     if blank.all():
@@ -266,6 +270,7 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
 __all__ = [
     "TABLE_SUFFIXES",
     "datetimes_to_seconds",
+    "empty_cells",
     "read_table",
     "without_blank_rows",
     "without_repeated_headers",

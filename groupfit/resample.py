@@ -28,7 +28,8 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.interleaved import refuse_interleaved, stamp_groups
-from groupfit.timestamps import clock_restart, refuse_clock_change
+from groupfit.readtable import empty_cells
+from groupfit.timestamps import clock_restart, refuse_clock_change, restart_refusal
 
 GAP_PERIODS = 3
 """More empty periods in a row than this split the log into runs; fewer are interpolated."""
@@ -110,13 +111,7 @@ def resample_frame(
     refuse_clock_change(stamps, label, time)
     back = np.flatnonzero(np.diff(stamps) < 0)
     if back.size and clock_restart(stamps) is not None:
-        i = int(back[0]) + 1
-        raise InputError(
-            f"{label}: the clock in column '{time}' starts again at row {i + 1} ({stamps[i]:g} s after "
-            f"{stamps[i - 1]:g} s: the logger restarted?); resampling would average two recordings together: "
-            f"split the file before row {i + 1} and give the parts as runs of their own (a fit on both: "
-            "--data part1.csv part2.csv; a replay: one part at a time)"
-        )
+        raise restart_refusal(stamps, int(back[0]) + 1, label, time, resampling=True)
     if back.size:
         i = int(back[0]) + 1
         raise InputError(
@@ -128,7 +123,7 @@ def resample_frame(
         if column == time:
             continue
         values = pd.to_numeric(frame[column], errors="coerce")
-        if values.notna().any() or _all_empty(frame[column]):
+        if values.notna().any() or empty_cells(frame[column]).all():
             numeric[column] = values.to_numpy(dtype=float)
     start = stamps[0] - np.mod(stamps[0] - bin_phase(stamps, period_s), period_s)
     index = np.floor((stamps - start) / period_s + 1e-9).astype(np.int64)
@@ -180,11 +175,6 @@ def _stretch_ends(occupied: np.ndarray) -> list[int]:
 def _next_occupied(occupied: np.ndarray, stop: int) -> int | None:
     later = np.flatnonzero(occupied[stop:])
     return None if later.size == 0 else stop + int(later[0])
-
-
-def _all_empty(column: pd.Series) -> bool:
-    """Every cell of ``column`` empty (NaN, or blank text)."""
-    return bool(column.isna().all() or column.astype(str).str.strip().eq("").all())
 
 
 def _interpolate_empty(

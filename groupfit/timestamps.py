@@ -177,6 +177,17 @@ def refuse_clock_change(time: np.ndarray, label: str, column: str) -> None:
         )
 
 
+def restart_refusal(time: np.ndarray, i: int, label: str, column: str, *, resampling: bool = False) -> InputError:
+    """The refusal of a clock that starts again at row ``i`` (0-based; :func:`clock_restart`): the parts are
+    runs of their own (``resampling``: averaging would mix the two recordings)."""
+    averaged = "resampling would average two recordings together: " if resampling else ""
+    return InputError(
+        f"{label}: the clock in column '{column}' starts again at row {i + 1} ({time[i]:g} s after "
+        f"{time[i - 1]:g} s: the logger restarted?); {averaged}split the file before row {i + 1} and give the "
+        "parts as runs of their own (a fit on both: --data part1.csv part2.csv; a replay: one part at a time)"
+    )
+
+
 def clock_restart(time: np.ndarray) -> int | None:
     """The row (0-based) where the clock first goes back, when it starts again there: it goes back by more than
     :data:`RESTART_PERIODS` typical periods and goes on below where it was (a logger restarted, two recordings
@@ -328,6 +339,8 @@ __all__ = [
     "UNIT_SECONDS",
     "clock_restart",
     "is_text",
+    "refuse_clock_change",
+    "restart_refusal",
     "text_seconds",
     "time_like_columns",
     "unit_seconds",

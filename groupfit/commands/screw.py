@@ -22,7 +22,7 @@ import numpy as np
 
 from groupfit.commands import common
 from groupfit.errors import InputError
-from groupfit.outputs import SCREW_MODELS
+from groupfit.outputs import SCREW_MODELS, resolved_path
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
 from groupfit.screw.modelfile import load_model, model_to_dict, save_model
@@ -375,16 +375,12 @@ def keep_identified_model(path: Path, sources, *, force: bool) -> None:
         return
     if not str(existing.get("format", "")).startswith(SCREW_MODELS):
         return
-    if [_resolved(s) for s in identified] != [_resolved(s) for s in sources]:
+    if [resolved_path(str(s)) for s in identified] != [resolved_path(s) for s in sources]:
         names = ", ".join(sorted(Path(str(s)).name for s in identified))
         raise InputError(
             f"{path}: --out holds a ball-screw model identified from other runs ({names}); screw compare would "
             "replace it: choose another --out, or pass --force to replace it"
         )
-
-
-def _resolved(path) -> Path:
-    return Path(str(path)).expanduser().resolve()
 
 
 def compare_json(result, runs) -> dict[str, Any]:

@@ -12,10 +12,9 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.columns import usable_columns
 from groupfit.errors import InputError
 from groupfit.heldout.design import group_design, group_index, group_sample_floor
-from groupfit.heldout.folds import Folds, make_folds, with_missed_settings
+from groupfit.heldout.folds import Folds, fold_columns, make_folds
 from groupfit.heldout.records import OverfitCheck, RidgeScore, RidgeSetting
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.heldout.selection import select_sensors
@@ -51,9 +50,8 @@ def select_inputs(
 
 def held_out_folds(frames: Sequence[pd.DataFrame], exclude: set[str], y: np.ndarray) -> Folds:
     """The diagnosis's held-out folds over the runs' rows with a measured error ``y``."""
-    stacked = pd.concat(list(frames), ignore_index=True)
-    columns, _ = usable_columns(stacked, exclude)
-    return make_folds(list(frames), with_missed_settings(stacked, columns, exclude)).restricted(np.isfinite(y))
+    columns = fold_columns(pd.concat(list(frames), ignore_index=True), exclude)
+    return make_folds(list(frames), columns).restricted(np.isfinite(y))
 
 
 def held_out_check(

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from groupfit.columns import is_displacement
+from groupfit.columns import is_displacement, usable_columns
 from groupfit.setting_levels import held_setting, is_setting, setting_levels
 
 MIN_FOLD_FRACTION = 0.03
@@ -130,17 +130,21 @@ def setting_values(frame: pd.DataFrame, column: str) -> np.ndarray:
     return setting_levels(values if held is None else held)
 
 
-def with_missed_settings(frame: pd.DataFrame, usable: list[str], exclude: set[str]) -> list[str]:
-    """``usable`` and the columns left out of it only for a few missed readings that are operating settings
-    once each missed reading is held (:func:`groupfit.setting_levels.held_setting`): a speed logged with
-    one empty cell still marks the run's conditions."""
-    missed = []
-    for column in frame.columns:
-        if column in exclude or column in usable or is_displacement(str(column)):
-            continue
-        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-        if not np.isfinite(values).all() and operating_columns(frame, [column]):
-            missed.append(column)
+def fold_columns(frame: pd.DataFrame, exclude: set[str]) -> list[str]:
+    """The columns the folds may read operating conditions from: those that can explain a residual
+    (:func:`groupfit.columns.usable_columns`), and those left out of them only for a few missed readings that
+    are operating settings once each missed reading is held (:func:`groupfit.setting_levels.held_setting`): a
+    speed logged with one empty cell still marks the run's conditions."""
+    usable, _ = usable_columns(frame, exclude)
+    missed = [
+        column
+        for column in frame.columns
+        if column not in exclude
+        and column not in usable
+        and not is_displacement(str(column))
+        and not np.isfinite(pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)).all()
+        and operating_columns(frame, [column])
+    ]
     return [column for column in frame.columns if column in usable or column in missed]
 
 

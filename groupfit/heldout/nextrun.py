@@ -30,11 +30,10 @@ from typing import Sequence
 
 import numpy as np
 
-from groupfit.columns import usable_columns
 from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
 from groupfit.heldout.choice import pooled_error
-from groupfit.heldout.folds import make_folds, setting_values, with_missed_settings
+from groupfit.heldout.folds import fold_columns, make_folds, setting_values
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost
 from groupfit.runtime import replay_groups
@@ -131,8 +130,7 @@ def segment_starts(run: Run) -> tuple[list[int], str, int, bool]:
     exclude = {run.time_name, run.error_name, *run.temp_names}
     if run.reference not in (None, "start"):
         exclude.add(run.reference)
-    columns, _ = usable_columns(run.frame, exclude)
-    folds = make_folds([run.frame], with_missed_settings(run.frame, columns, exclude))
+    folds = make_folds([run.frame], fold_columns(run.frame, exclude))
     labels = folds.labels
     starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
     if folds.kind == "condition":
