@@ -108,8 +108,9 @@ class _Row:
 
     @property
     def is_text(self) -> bool:
-        """Two fields or more and no number in most of them: a header, units, or a preamble line."""
-        return len(self.fields) >= 2 and not self.numeric
+        """Two fields or more, one of them filled, and no number in most of them: a header, units, or a
+        preamble line (a line of separators alone is a blank row)."""
+        return len(self.fields) >= 2 and not self.numeric and self.filled > 0
 
 
 def header_delimiter(line: str) -> str:

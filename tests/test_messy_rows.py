@@ -205,6 +205,20 @@ def test_blank_spreadsheet_rows_are_left_out_with_a_note_and_change_nothing_else
     assert "3 row(s) empty in every column left out (row 200, 402, 403:" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("first_rows", [4, 60])
+def test_a_row_of_separators_alone_near_the_top_is_a_blank_row_not_the_header(tmp_path, capsys, first_rows):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    clean = tmp_path / "clean.csv"
+    log.to_csv(clean, index=False)
+    lines = clean.read_text().splitlines()
+    separators = "," * (len(log.columns) - 1)
+    path = tmp_path / "separators.csv"
+    path.write_text("\n".join([*lines[: 1 + first_rows], "", separators, *lines[1 + first_rows :]]) + "\n")
+    left_out, plain = fitted_coefficients(tmp_path, path, clean)
+    assert left_out == plain
+    assert f"1 row(s) empty in every column left out (row {first_rows + 1}:" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("resample", [[], ["--resample", "100"]])
 def test_a_row_without_a_time_stamp_is_named_and_not_left_to_resample(tmp_path, capsys, resample):
     log = pd.read_csv(DATASETS / "paper_cycle.csv")
