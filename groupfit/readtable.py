@@ -111,11 +111,39 @@ def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFr
     if not repeated.any():
         return frame, None
     kept, note = _left_out(frame, repeated, label, "repeating the header", "the logger started again and appended")
-    for column in kept.columns:
-        numbers = pd.to_numeric(kept[column], errors="coerce")
-        if numbers.notna().sum() == kept[column].notna().sum():
-            kept[column] = numbers
-    return kept, note
+    return _numbers_again(kept), note
+
+
+def without_message_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
+    """The table without rows whose one filled cell is text without a digit (a logger's ``Logging paused``,
+    a ruler ``-----``), its columns of numbers read as numbers again, and a note naming the rows (None: there
+    were none). A row holding a digit (``Paused at 12:00``, a time stamp without readings) is kept."""
+    texts = [c for c in frame.columns if not pd.api.types.is_numeric_dtype(frame[c])]
+    if frame.empty or not texts:
+        return frame, None
+    filled = np.zeros(len(frame), dtype=int)
+    for column in frame.columns:
+        filled += ~empty_cells(frame[column])
+    message = pd.Series(pd.NA, index=frame.index, dtype="string")
+    for column in texts:
+        cells = frame[column].astype("string").str.strip()
+        words = ~empty_cells(frame[column]) & ~cells.str.contains(r"\d", regex=True).fillna(True).to_numpy(bool)
+        message = message.mask(words & (filled == 1), cells)
+    rows = message.notna().to_numpy(bool)
+    if not rows.any():
+        return frame, None
+    why = f"a logger's message, such as {message[rows].iloc[0]!r}"
+    kept, note = _left_out(frame, rows, label, "holding a message alone", why)
+    return _numbers_again(kept), note
+
+
+def _numbers_again(frame: pd.DataFrame) -> pd.DataFrame:
+    """The frame with every column whose filled cells are all numbers read as numbers."""
+    for column in frame.columns:
+        numbers = pd.to_numeric(frame[column], errors="coerce")
+        if numbers.notna().sum() == frame[column].notna().sum():
+            frame[column] = numbers
+    return frame
 
 
 def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
@@ -155,10 +183,11 @@ def without_blank_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, s
 
 
 def without_stray_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, list[str], str]:
-    """The table without blank rows, repeated headers and rows written twice; the notes naming them, and what
-    was left out in one phrase (empty: nothing), for a refusal whose row numbers count without those rows."""
+    """The table without blank rows, message lines, repeated headers and rows written twice; the notes naming
+    them, and what was left out in one phrase (empty: nothing), for a refusal whose row numbers count without
+    those rows."""
     notes, phrases = [], []
-    for leave_out in (without_blank_rows, without_repeated_headers, without_repeated_rows):
+    for leave_out in (without_blank_rows, without_message_rows, without_repeated_headers, without_repeated_rows):
         frame, note = leave_out(frame, label)
         if note is not None:
             notes.append(note)
@@ -273,6 +302,7 @@ __all__ = [
     "empty_cells",
     "read_table",
     "without_blank_rows",
+    "without_message_rows",
     "without_repeated_headers",
     "without_repeated_rows",
     "without_stray_rows",

@@ -18,10 +18,11 @@ should not have to rewrite one before groupfit reads it:
   semicolon table. Runs cut by a line of one field (``Logging paused``) are
   one body;
 * the header: of the lines of text directly above the body with about as many
-  fields (one more or fewer: a separator closing every data row), after the
-  last empty one (a spreadsheet's ``;;;;`` row) and but for ``#`` comments,
-  the topmost that names the most columns; else the line of text just above
-  the body. What lies above the header is a preamble and is skipped (a
+  fields (one more or fewer: a separator closing every data row), below the
+  last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``) and but for
+  ``#`` comments, the topmost that names the most columns; else the line of
+  text just above the body. Blank rows and rulers between the header and the
+  body are passed over. What lies above the header is a preamble and is skipped (a
   logger's name, ``Start;2024-03-04 08:00``, a LabVIEW
   ``***End_of_Header***``, Graphtec's channel list, a TwinCAT Scope or
   SINUMERIK trace head). A text without such a body takes the first line of
@@ -76,6 +77,8 @@ SNIFF_LINES = 200
 """Lines looked at for the body, the header and, below it, the decimal mark."""
 AGREEING_LINES = 3
 """Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
+RULER = re.compile(r"[-=_~*+|\s]+")
+"""A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 DOT_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d+)?")
 """A number with dots between its thousands (``1.370``, ``12.345,6``): the only dotted number a table of
@@ -107,10 +110,15 @@ class _Row:
         return sum(1 for field in self.fields if field)
 
     @property
+    def blank(self) -> bool:
+        """Nothing but separators (a spreadsheet's ``;;;;`` row) or rulers (``-----``, ``=====``)."""
+        return all(RULER.fullmatch(field) for field in self.fields if field)
+
+    @property
     def is_text(self) -> bool:
-        """Two fields or more, one of them filled, and no number in most of them: a header, units, or a
-        preamble line (a line of separators alone is a blank row)."""
-        return len(self.fields) >= 2 and not self.numeric and self.filled > 0
+        """Two fields or more, not blank, and no number in most of them: a header, units, or a preamble
+        line."""
+        return len(self.fields) >= 2 and not self.numeric and not self.blank
 
 
 def header_delimiter(line: str) -> str:
@@ -234,18 +242,19 @@ def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> in
 def _header_above(rows: list[_Row], first: int) -> int:
     """The header line of the body that starts at ``rows[first]`` (see the module docstring)."""
     width = len(rows[first].fields)
-    position = first
+    top = first
+    while top > 0 and rows[top - 1].blank:  # a ruler or a blank row between the header and the body
+        top -= 1
+    position = top
     while position > 0 and rows[position - 1].is_text and abs(len(rows[position - 1].fields) - width) <= 1:
         position -= 1
-    above = rows[position:first]
-    empty = [k for k, row in enumerate(above) if row.filled == 0]
-    above = above[empty[-1] + 1 :] if empty else above
+    above = rows[position:top]
     above = [row for row in above if not row.fields[0].startswith("#")] or above  # a comment, unless all are
     if above:
         most = max(row.filled for row in above)
         return next(row.line for row in above if row.filled == most)
-    if first > 0 and rows[first - 1].is_text:
-        return rows[first - 1].line
+    if top > 0 and rows[top - 1].is_text:
+        return rows[top - 1].line
     return rows[first].line
 
 

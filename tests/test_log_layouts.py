@@ -258,7 +258,7 @@ def test_a_comment_line_as_wide_as_the_table_is_not_its_header(tmp_path):
 
 def test_a_line_of_one_field_inside_the_first_rows_does_not_move_the_header(tmp_path, cells, capsys):
     lines = lines_of(cells, ";", lambda column, cell: decimal_comma(cell))
-    lines.insert(11, "Logging paused")  # a longer run of rows follows it than precedes it
+    lines.insert(11, "Logging paused at 8:15")  # a longer run of rows follows it than precedes it
     path = write(tmp_path / "paused.csv", lines)
     assert layout_of(path.read_text()).header_line == 0
-    assert "row 11, column 'time_s': 'Logging paused' is not a number" in refusal(path, tmp_path, capsys)
+    assert "row 11, column 'time_s': 'Logging paused at 8:15' is not a number" in refusal(path, tmp_path, capsys)

@@ -480,9 +480,9 @@ def test_a_footer_after_the_last_row_of_data_is_not_read(tmp_path, frame, plain,
 def test_text_between_rows_of_data_is_still_refused_with_its_row(tmp_path, frame):
     path = tmp_path / "middle.csv"
     lines = frame.to_csv(index=False).splitlines()
-    lines.insert(11, "Logging paused")  # the header is line 0: this is data row 11
+    lines.insert(11, "Logging paused at 08:15")  # the header is line 0: this is data row 11
     path.write_text("\n".join(lines) + "\n")
-    with pytest.raises(InputError, match=r"row 11, column 'time_s': 'Logging paused' is not a number"):
+    with pytest.raises(InputError, match=r"row 11, column 'time_s': 'Logging paused at 08:15' is not a number"):
         load_run(path, temps=TEMPS)
 
 

@@ -205,18 +205,44 @@ def test_blank_spreadsheet_rows_are_left_out_with_a_note_and_change_nothing_else
     assert "3 row(s) empty in every column left out (row 200, 402, 403:" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("first_rows", [4, 60])
-def test_a_row_of_separators_alone_near_the_top_is_a_blank_row_not_the_header(tmp_path, capsys, first_rows):
-    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+def with_lines(tmp_path: Path, name: str, after_row: int, *inserted: str) -> tuple[Path, Path]:
+    """The FE modelling run written plainly, and with ``inserted`` lines after its data row ``after_row``."""
     clean = tmp_path / "clean.csv"
-    log.to_csv(clean, index=False)
+    pd.read_csv(DATASETS / "paper_cycle.csv").to_csv(clean, index=False)
     lines = clean.read_text().splitlines()
-    separators = "," * (len(log.columns) - 1)
-    path = tmp_path / "separators.csv"
-    path.write_text("\n".join([*lines[: 1 + first_rows], "", separators, *lines[1 + first_rows :]]) + "\n")
-    left_out, plain = fitted_coefficients(tmp_path, path, clean)
-    assert left_out == plain
-    assert f"1 row(s) empty in every column left out (row {first_rows + 1}:" in capsys.readouterr().out
+    path = tmp_path / f"{name}.csv"
+    path.write_text("\n".join([*lines[: 1 + after_row], *inserted, *lines[1 + after_row :]]) + "\n")
+    return path, clean
+
+
+SEPARATORS = "," * 10
+
+
+@pytest.mark.parametrize(
+    ("after_row", "inserted", "note"),
+    [
+        (4, ["", SEPARATORS], "1 row(s) empty in every column left out (row 5:"),
+        (60, ["", SEPARATORS], "1 row(s) empty in every column left out (row 61:"),
+        (0, [SEPARATORS, SEPARATORS], "2 row(s) empty in every column left out (row 1, 2:"),
+        (0, ["-" * 40], ""),
+        (0, [",".join(["-----"] * 11)], ""),
+        (3, ["Logging paused"], "1 row(s) holding a message alone left out (row 4: a logger's message, such as "),
+        (300, ["=" * 20], "1 row(s) holding a message alone left out (row 301: a logger's message, such as '="),
+        (300, [",,Pause" + "," * 8], "(row 301: a logger's message, such as 'Pause')"),
+    ],
+)
+def test_blank_rulers_and_message_lines_are_passed_over_and_change_nothing(tmp_path, capsys, after_row, inserted, note):
+    path, clean = with_lines(tmp_path, "messy", after_row, *inserted)
+    passed_over, plain = fitted_coefficients(tmp_path, path, clean)
+    assert passed_over == plain
+    assert note in capsys.readouterr().out
+
+
+def test_a_message_line_with_a_number_in_it_is_refused_naming_its_row(tmp_path, capsys):
+    path, _ = with_lines(tmp_path, "paused", 300, "Paused at 12:00")
+    assert cli("fit", "--data", path, *QUICK, "--out", tmp_path / "out") == 2
+    message = capsys.readouterr().err.strip()
+    assert message.endswith("row 301, column 'time_s': 'Paused at 12:00' is not a number; fix or remove that row")
 
 
 @pytest.mark.parametrize("resample", [[], ["--resample", "100"]])
