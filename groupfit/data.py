@@ -50,6 +50,7 @@ from groupfit.timestamps import (
     refuse_clock_change,
     restart_refusal,
     serial_days_to_seconds,
+    stamp_resolution,
     unit_seconds,
 )
 
@@ -130,7 +131,9 @@ def refuse_beyond(values: np.ndarray, limit: float, column: str, label: str, wha
 
 
 def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = PERIOD_TOLERANCE) -> float:
-    """Check that ``time`` is strictly increasing and uniformly sampled within ``tolerance``; return the period."""
+    """Check that ``time`` is strictly increasing and uniformly sampled within ``tolerance`` (or within the
+    stamps' resolution, :func:`~groupfit.timestamps.stamp_resolution`, their mean step then the period);
+    return the period."""
     if len(time) < 2:
         raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
     step = np.diff(time)
@@ -145,7 +148,8 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
             "readings of each period with --resample SECONDS"
         )
     period = float(np.median(step))
-    irregular = np.abs(step - period) > tolerance * period
+    deviation = np.abs(step - period)
+    irregular = deviation > max(tolerance * period, stamp_resolution(time, period) * (1 + 1e-9))
     if np.any(irregular):
         i = int(np.argmax(irregular)) + 1
         widen = (
@@ -159,6 +163,8 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = 
             f"average the readings of each period with --resample SECONDS (up to {GAP_PERIODS} missed periods in a "
             f"row are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
         )
+    if np.any(deviation > tolerance * period):  # stamps rounded to their resolution: the period is their mean
+        period = float(time[-1] - time[0]) / (len(time) - 1)
     return period
 
 

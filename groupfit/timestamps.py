@@ -330,7 +330,32 @@ def _is_iso(value: str) -> bool:
     return True
 
 
+STAMP_RESOLUTIONS_S = (60.0, 1.0, 0.1, 0.01, 0.001)
+"""Resolutions a log writes its time stamps to (whole minutes, seconds, tenths …), the coarsest first."""
+RESOLUTION_SHARE = 0.1
+"""A resolution up to this share of the period is taken as the stamps' rounding, not a missed sample."""
+
+
+def stamp_resolution(time: np.ndarray, period_s: float) -> float:
+    """How coarsely the time stamps are written (s): the coarsest of :data:`STAMP_RESOLUTIONS_S`, at most
+    :data:`RESOLUTION_SHARE` of the period, that every stamp is a whole multiple of, counted from the first
+    (0: none).
+
+    A logger every 10.4 s writing whole seconds stamps intervals of 10 and 11 s: a step of one resolution
+    around the period is the stamps' rounding, not an irregular clock.
+    """
+    offsets = np.asarray(time, dtype=float) - float(time[0])
+    for resolution in STAMP_RESOLUTIONS_S:
+        if resolution <= RESOLUTION_SHARE * period_s:
+            counts = offsets / resolution
+            if np.all(np.abs(counts - np.round(counts)) <= 1e-3):
+                return resolution
+    return 0.0
+
+
 __all__ = [
+    "RESOLUTION_SHARE",
+    "STAMP_RESOLUTIONS_S",
     "DATE_FORMATS",
     "EXAMPLES",
     "FORMATS",
@@ -341,6 +366,7 @@ __all__ = [
     "is_text",
     "refuse_clock_change",
     "restart_refusal",
+    "stamp_resolution",
     "text_seconds",
     "time_like_columns",
     "unit_seconds",

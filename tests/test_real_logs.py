@@ -90,6 +90,46 @@ def test_cycle_means_on_their_real_clock_fit_without_flags(tmp_path, capsys):
     assert json.loads((tmp_path / "m.json").read_text())["sampling_period_s"] == 60.0
 
 
+def rounded_clock(period_s: float, n: int = N) -> pd.DataFrame:
+    """:func:`cycle_means` sampled every ``period_s`` exactly, its stamps written to whole seconds."""
+    frame = cycle_means(n=n)
+    frame["time_s"] = np.round(np.arange(n) * period_s)
+    return frame
+
+
+@pytest.mark.parametrize("period_s", [10.4, 15.3, 29.6])
+def test_stamps_rounded_to_the_second_are_read_on_their_mean_step_and_fit_as_the_exact_clock(tmp_path, period_s):
+    rounded, exact = rounded_clock(period_s), cycle_means()
+    exact["time_s"] = np.arange(N) * period_s
+    steps = np.diff(rounded["time_s"].to_numpy())
+    beyond_tolerance = np.max(np.abs(steps - np.median(steps))) / np.median(steps) > 0.02
+    assert steps.max() - steps.min() == 1.0 and beyond_tolerance
+    run = load_run(rounded, temps=["T1", "T2"])
+    assert run.period == pytest.approx((rounded["time_s"].iloc[-1] - rounded["time_s"].iloc[0]) / (N - 1), rel=1e-12)
+    assert run.period == pytest.approx(period_s, abs=0.5 / (N - 1))
+    stamped = rounded.assign(time_s=None).rename(columns={"time_s": "Timestamp"})
+    stamped["Timestamp"] = (pd.Timestamp("2026-03-02 23:00:00") + pd.to_timedelta(rounded["time_s"], unit="s")).astype(
+        str
+    )
+    coefficients = []
+    for name, frame in (("rounded", rounded), ("text", stamped), ("exact", exact)):
+        path, report = tmp_path / f"{name}.csv", tmp_path / f"{name}.json"
+        frame.to_csv(path, index=False)
+        options = ["--p", "0", "--ridge", "0", "--recalibrate", "none", "--quiet", "--json", report]
+        assert cli("fit", "--data", path, "--temps", "T1,T2", *options, "--out", tmp_path / name) == 0
+        coefficients.append(json.loads(report.read_text())["coefficients"])
+    assert coefficients[0] == coefficients[1] == coefficients[2]
+
+
+def test_a_missed_sample_between_rounded_stamps_is_still_refused():
+    frame = rounded_clock(10.4).drop(index=150)
+    with pytest.raises(InputError, match=r"rows 150 to 151 of column 'time_s' are 2\d s apart but the period is 10 s"):
+        load_run(frame, temps=["T1", "T2"])
+    every_second = rounded_clock(1.0).drop(index=150)  # a resolution as coarse as the period tells nothing
+    with pytest.raises(InputError, match=r"rows 150 to 151 of column 'time_s' are 2 s apart"):
+        load_run(every_second, temps=["T1", "T2"])
+
+
 # ------------------------------------------------------------------------- several readings per period
 
 
