@@ -47,6 +47,7 @@ from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
 from groupfit.timestamps import (
     clock_restart,
     epoch_to_seconds,
+    names_a_unit,
     refuse_clock_change,
     restart_refusal,
     serial_days_to_seconds,
@@ -56,6 +57,9 @@ from groupfit.timestamps import (
 
 SLOWEST_PERIOD_S = 3600.0
 """A period longer than this (s) is unlike a thermal log's: the time column may be in ms, and a note asks."""
+SHORTEST_RUN_S = 1800.0
+"""A run shorter than this (s) on a time column whose name gives no unit is unlike a thermal log's: the column
+may count minutes or hours, and a note asks."""
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
 
@@ -361,12 +365,19 @@ def _validated(
     options = LoadOptions(**given)
     time, error = options.time, options.error
     temp_range, error_limit = options.temp_range, options.error_limit
+    counted = time in frame.columns and pd.api.types.is_numeric_dtype(frame[time]) and not names_a_unit(time)
     time_values = time_seconds(frame, time, label)
     if np.any(np.diff(time_values) <= 0):  # before check_time advises averaging the readings of each period
         refuse_interleaved(frame, [stamp_groups(time_values)], time=time, label=label)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
+    span = float(time_values[-1] - time_values[0])
+    if counted and span < SHORTEST_RUN_S:
+        notes = notes + (
+            f"{label}: the run lasts {span:g} s by column '{time}', read in seconds as its name gives no unit: a "
+            "thermal run lasts hours; if the column counts minutes or hours, name it so (time_min, Zeit [h])",
+        )
     if period > SLOWEST_PERIOD_S:
         notes = notes + (
             f"{label}: one sample every {period:g} s ({period / 3600:.3g} h) in column '{time}': if its unit is "

@@ -35,6 +35,23 @@ def test_a_unit_of_time_in_other_words_is_read(tmp_path, synthetic, name, per_se
     assert run.period == pytest.approx(plain.period, rel=1e-9)
 
 
+@pytest.mark.parametrize(
+    "name, per_second, asked",
+    [("Time", 1 / 60, True), ("elapsed", 1 / 3600, True), ("Time [min]", 1 / 60, False), ("Time", 1.0, False)],
+)
+def test_a_run_of_minutes_on_a_time_column_naming_no_unit_gets_a_note_asking_for_its_unit(
+    tmp_path, synthetic, name, per_second, asked
+):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": name}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS)
+    span = float(plain.time[-1] - plain.time[0])
+    assert span > 1800.0  # the run as it was logged lasts hours
+    note = f"the run lasts {span * per_second:g} s by column '{name}', read in seconds as its name gives no unit"
+    assert any(note in line for line in run.notes) == asked
+
+
 def test_a_bracketed_word_that_is_no_unit_of_time_is_refused_and_a_time_zone_is_not_one(tmp_path, synthetic):
     frame, plain = synthetic
     path = tmp_path / "log.csv"
