@@ -21,7 +21,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.textlayout import read_text_table, without_footer_rows, without_units_row
+from groupfit.textlayout import SNIFF_LINES, layout_of, read_text_table, without_footer_rows, without_units_row
 from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
@@ -42,7 +42,8 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
 
     ``label`` names the source in error messages. An Excel workbook is read
     from its sheet with the largest table of numbers (a cover sheet is passed
-    over, and the label names the sheet), with the first row as the header.
+    over, and the label names the sheet), its header found as in a text table
+    (a title or a preamble above it is passed over).
     """
     if isinstance(source, pd.DataFrame):
         label = name or "DataFrame"
@@ -60,12 +61,12 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     compressed = path.suffix.lower() in COMPRESSED
     stem = Path(path.stem).stem if compressed else path.stem
     kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
-    header, sheet = None, 0
+    header, sheet, line = None, 0, 0
     try:
         if kind == "CSV":
             frame, header = read_text_table(_decompressed(path) if compressed else path.read_bytes())
         elif kind == "Excel":
-            sheet, frame, first = _data_sheet(path)
+            sheet, frame, first, line = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
         else:
             frame = _read_parquet(path)
@@ -89,7 +90,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
     if header is None:
-        header = _excel_header(path, sheet) if kind == "Excel" else _parquet_header(path)
+        header = _excel_header(path, sheet, line) if kind == "Excel" else _parquet_header(path)
     if header is None or len(header) != frame.shape[1]:
         header = list(frame.columns)
     _check_unique_columns(header, label)
@@ -220,24 +221,39 @@ def _decompressed(path: Path) -> bytes:
         return archive.read(members[0])
 
 
-def _excel_header(path: Path, sheet: str | int = 0) -> list[str] | None:
-    """The header as written in the workbook (pandas renames a repeated ``T1`` to ``T1.1`` on reading)."""
+def _excel_header(path: Path, sheet: str | int = 0, line: int = 0) -> list[str] | None:
+    """The header as written in the workbook, on its row ``line`` (pandas renames a repeated ``T1`` to
+    ``T1.1`` on reading)."""
     try:
-        return [str(c) for c in pd.read_excel(path, sheet_name=sheet, header=None, nrows=1).iloc[0].tolist()]
+        rows = pd.read_excel(path, sheet_name=sheet, header=None, nrows=line + 1)
+        return [str(c) for c in rows.iloc[line].tolist()]
     except (ValueError, OSError, IndexError):
         return None
 
 
-def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool]:
-    """The workbook's sheet that holds the largest table of numbers, its frame, and whether it is the first.
+def _sheet_header_line(path: Path, sheet: str | int) -> int:
+    """The row of a sheet's header, found as in a text table (:mod:`groupfit.textlayout`): a title, a
+    blank row or a logger's preamble above it is passed over."""
+    rows = pd.read_excel(path, sheet_name=sheet, header=None, nrows=SNIFF_LINES)
+    layout = layout_of(rows.to_csv(index=False, header=False)) if len(rows) else None
+    return layout.header_line if layout is not None and layout.sep == "," else 0  # cells, not words, are fields
+
+
+def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool, int]:
+    """The workbook's sheet that holds the largest table of numbers, its frame, whether it is the first, and
+    the row of its header.
 
     A logger's export often opens with a cover sheet (the machine, the operator) or a small table of
     calibration constants beside the log; the sheet with the most numeric cells is the log (the first on a
     tie, and the first when none holds numbers).
     """
+    frames = pd.read_excel(path, sheet_name=None)
+    lines = {name: _sheet_header_line(path, name) for name in frames}
     sheets = {
-        name: without_units_row(without_footer_rows(frame))
-        for name, frame in pd.read_excel(path, sheet_name=None).items()
+        name: without_units_row(
+            without_footer_rows(pd.read_excel(path, sheet_name=name, header=lines[name]) if lines[name] else frame)
+        )
+        for name, frame in frames.items()
     }
     sizes = [
         int(frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().to_numpy().sum())
@@ -245,7 +261,7 @@ def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool]:
     ]
     k = int(np.argmax(sizes)) if max(sizes, default=0) > 0 else 0
     name = list(sheets)[k]
-    return name, sheets[name], k == 0
+    return name, sheets[name], k == 0, lines[name]
 
 
 def _parquet_header(path: Path) -> list[str] | None:

@@ -361,6 +361,23 @@ def test_a_workbook_is_read_from_its_largest_table_of_numbers_past_a_cover_and_a
         load_run(covers, temps=TEMPS)
 
 
+def test_a_workbook_with_a_title_and_a_preamble_above_its_header_reads_as_the_plain_run(tmp_path, frame, plain):
+    path = tmp_path / "titled.xlsx"
+    with pd.ExcelWriter(path) as workbook:
+        head = pd.DataFrame(
+            [["Thermal test, machine 7", None], [None, None], ["Start", "2026-03-02 08:00"], ["Operator", "A"]]
+        )
+        head.to_excel(workbook, sheet_name="Log", index=False, header=False)
+        frame.to_excel(workbook, sheet_name="Log", index=False, startrow=len(head) + 1)
+    same_run(load_run(path, temps=TEMPS), plain)
+    twice = tmp_path / "twice.xlsx"
+    with pd.ExcelWriter(twice) as workbook:
+        head.to_excel(workbook, sheet_name="Log", index=False, header=False)
+        frame.rename(columns={"T2": "T1"}).to_excel(workbook, sheet_name="Log", index=False, startrow=len(head) + 1)
+    with pytest.raises(InputError, match=r"twice.xlsx: column 'T1' appears twice \(columns 2 and 3\)"):
+        load_run(twice, temps=TEMPS)
+
+
 @pytest.mark.parametrize("name, per_second", [("time_ms", 1000.0), ("Zeit [min]", 1 / 60), ("hours", 1 / 3600)])
 def test_a_time_column_named_with_its_unit_is_read_in_seconds(tmp_path, frame, plain, name, per_second):
     path = tmp_path / "units.csv"
