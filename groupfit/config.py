@@ -13,7 +13,7 @@ A configuration has up to four tables; every key is optional::
     period_tolerance = 2       # % of the period an interval may deviate by (a jittering clock)
     resample_s = 60            # average the readings of every 60 s (a gap splits the log)
     ambient = "T15"            # the ambient sensor, whatever its name
-    keep_glitches = false      # true: keep error readings that leave their neighbours and come back
+    keep_glitches = false      # true: keep error and temperature readings that leave their neighbours and come back
 
     [model]
     p = "auto"                 # or a whole number; "auto": choose p by p_rule over 0…pmax

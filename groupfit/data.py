@@ -39,7 +39,7 @@ from groupfit.default_columns import (
 )
 from groupfit.default_columns import length_unit as length_unit
 from groupfit.errors import InputError
-from groupfit.glitches import without_glitches
+from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table, without_stray_rows
@@ -52,14 +52,10 @@ from groupfit.timestamps import (
     restart_refusal,
     serial_days_to_seconds,
     stamp_resolution,
+    unit_notes,
     unit_seconds,
 )
 
-SLOWEST_PERIOD_S = 3600.0
-"""A period longer than this (s) is unlike a thermal log's: the time column may be in ms, and a note asks."""
-SHORTEST_RUN_S = 1800.0
-"""A run shorter than this (s) on a time column whose name gives no unit is unlike a thermal log's: the column
-may count minutes or hours, and a note asks."""
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
 
@@ -372,17 +368,7 @@ def _validated(
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
-    span = float(time_values[-1] - time_values[0])
-    if counted and span < SHORTEST_RUN_S:
-        notes = notes + (
-            f"{label}: the run lasts {span:g} s by column '{time}', read in seconds as its name gives no unit: a "
-            "thermal run lasts hours; if the column counts minutes or hours, name it so (time_min, Zeit [h])",
-        )
-    if period > SLOWEST_PERIOD_S:
-        notes = notes + (
-            f"{label}: one sample every {period:g} s ({period / 3600:.3g} h) in column '{time}': if its unit is "
-            "not seconds, name it so (time_ms, Zeit [min]) or give --time another column",
-        )
+    notes = notes + unit_notes(label, time, time_values, period, unit_named=not counted)
 
     temps, temp_array, dropped = temperature_inputs(frame, label, options)
     notes = notes + ((dropped,) if dropped else ())
@@ -396,6 +382,9 @@ def _validated(
                 check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp=LOW,HIGH")
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
+    if options.drop_glitches:  # after the ranges: an implausible reading is refused, not interpolated
+        temp_array, glitched = temperatures_without_glitches(temp_array, temps, label)
+        notes = notes + ((glitched,) if glitched else ())
     if options.drop_glitches and error_values is not None:
         error_values, _, glitched = without_glitches(error_values, error, label)
         notes = notes + ((glitched,) if glitched else ())

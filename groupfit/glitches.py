@@ -41,8 +41,14 @@ SHOWN = 5
 """Glitches named in the note; the rest are counted."""
 
 
-def error_glitches(error: np.ndarray) -> np.ndarray:
-    """Indices (0-based, sorted) of the glitches in ``error`` (NaN: not measured, never a glitch)."""
+TEMPERATURE_RANGE_SHARE = 2.0
+"""Share of a sensor's range a temperature glitch departs by at least (a DS18B20's 85 °C power-on reading
+on a frame at 22 °C): a short bump of a real sensor (a coolant jet, a door opened) stays within its range."""
+
+
+def error_glitches(error: np.ndarray, *, range_share: float = RANGE_SHARE) -> np.ndarray:
+    """Indices (0-based, sorted) of the glitches in ``error`` (NaN: not measured, never a glitch); a glitch
+    departs by ``range_share`` of the range at least."""
     error = np.asarray(error, dtype=float)
     rows = np.flatnonzero(np.isfinite(error))
     half = WINDOW // 2
@@ -53,7 +59,7 @@ def error_glitches(error: np.ndarray) -> np.ndarray:
     departure = values - median
     spread = 1.4826 * float(np.median(np.abs(departure - np.median(departure))))
     low, high = np.percentile(median, [1, 99])  # the running median's: glitches do not widen it
-    threshold = max(SIGMAS * spread, RANGE_SHARE * float(high - low))
+    threshold = max(SIGMAS * spread, range_share * float(high - low))
     if not threshold > 0:
         return np.array([], dtype=int)
     flagged = np.abs(departure) > threshold
@@ -83,6 +89,28 @@ def without_glitches(error: np.ndarray, column: str, label: str) -> tuple[np.nda
     return error, glitches, note
 
 
+def temperatures_without_glitches(temps: np.ndarray, names: list[str], label: str) -> tuple[np.ndarray, str | None]:
+    """The readings with each sensor's glitches (departing by :data:`TEMPERATURE_RANGE_SHARE` of its range)
+    interpolated from their neighbours, and a note naming them (None: none)."""
+    temps = np.array(temps, dtype=float)
+    found = []
+    for j, name in enumerate(names):
+        glitches = error_glitches(temps[:, j], range_share=TEMPERATURE_RANGE_SHARE)
+        if glitches.size:
+            found += [f"'{name}' row {i + 1}: {temps[i, j]:.4g} °C" for i in glitches]
+            kept = np.setdiff1d(np.flatnonzero(np.isfinite(temps[:, j])), glitches)
+            temps[glitches, j] = np.interp(glitches, kept, temps[kept, j])
+    if not found:
+        return temps, None
+    more = f" and {len(found) - SHOWN} more" if len(found) > SHOWN else ""
+    note = (
+        f"{label}: {len(found)} temperature reading(s) leave their neighbours and come back "
+        f"({', '.join(found[:SHOWN])}{more}), a sensor's glitch: interpolated from its neighbours; "
+        "--keep-glitches keeps them"
+    )
+    return temps, note
+
+
 def scored_glitches(error: np.ndarray | None, residual: np.ndarray | None) -> tuple[dict, list[str]]:
     """A replay's glitches: ``{"glitch_rows": [...], "rms_without_glitches_um": x}`` and a note, or nothing.
 
@@ -110,9 +138,11 @@ __all__ = [
     "MIN_MEASURED_SHARE",
     "RANGE_SHARE",
     "SIGMAS",
+    "TEMPERATURE_RANGE_SHARE",
     "WINDOW",
     "error_glitches",
     "glitch_note",
     "scored_glitches",
+    "temperatures_without_glitches",
     "without_glitches",
 ]

@@ -353,6 +353,32 @@ def stamp_resolution(time: np.ndarray, period_s: float) -> float:
     return 0.0
 
 
+SLOWEST_PERIOD_S = 3600.0
+"""A period longer than this (s) is unlike a thermal log's: the time column may be in ms, and a note asks."""
+SHORTEST_RUN_S = 1800.0
+"""A run shorter than this (s) on a time column whose name gives no unit is unlike a thermal log's: the column
+may count minutes or hours, and a note asks."""
+
+
+def unit_notes(label: str, column: str, time: np.ndarray, period_s: float, *, unit_named: bool) -> tuple[str, ...]:
+    """Notes asking for the time column's unit when the run's clock in seconds is unlike a thermal log's: a
+    whole run shorter than :data:`SHORTEST_RUN_S` on a column whose name gives no unit (``unit_named`` False),
+    a period longer than :data:`SLOWEST_PERIOD_S`."""
+    notes = []
+    span = float(time[-1] - time[0])
+    if not unit_named and span < SHORTEST_RUN_S:
+        notes.append(
+            f"{label}: the run lasts {span:g} s by column '{column}', read in seconds as its name gives no unit: a "
+            "thermal run lasts hours; if the column counts minutes or hours, name it so (time_min, Zeit [h])"
+        )
+    if period_s > SLOWEST_PERIOD_S:
+        notes.append(
+            f"{label}: one sample every {period_s:g} s ({period_s / 3600:.3g} h) in column '{column}': if its unit "
+            "is not seconds, name it so (time_ms, Zeit [min]) or give --time another column"
+        )
+    return tuple(notes)
+
+
 __all__ = [
     "RESOLUTION_SHARE",
     "STAMP_RESOLUTIONS_S",
@@ -361,6 +387,8 @@ __all__ = [
     "FORMATS",
     "TIME_FORMATS",
     "RESTART_PERIODS",
+    "SHORTEST_RUN_S",
+    "SLOWEST_PERIOD_S",
     "UNIT_SECONDS",
     "clock_restart",
     "is_text",
@@ -369,5 +397,6 @@ __all__ = [
     "stamp_resolution",
     "text_seconds",
     "time_like_columns",
+    "unit_notes",
     "unit_seconds",
 ]

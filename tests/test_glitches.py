@@ -9,12 +9,20 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.glitches import MIN_MEASURED_SHARE, WINDOW, error_glitches
+from groupfit.data import load_run
+from groupfit.glitches import (
+    MIN_MEASURED_SHARE,
+    TEMPERATURE_RANGE_SHARE,
+    WINDOW,
+    error_glitches,
+    temperatures_without_glitches,
+)
 from groupfit.model import ModelFile
 from groupfit.model import model_file_problem as model_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"
+MEASURED = ROOT.parent / "shared" / "data" / "fl_thermal" / "spindle_step_test.csv"
 sys.path.insert(0, str(ROOT / "bench"))
 import independent_machine as machine  # noqa: E402
 
@@ -243,3 +251,65 @@ def test_diagnose_keeps_its_own_runs_loading_notes(glitched, clean_model):
         written = next(out.glob("model_*.json"))
         notes = ModelFile.load(written).training.get("data_notes", [])
         assert any("leave their neighbours" in note for note in notes) == expected
+
+
+# ------------------------------------------------------------------------- a sensor's glitch
+
+
+def test_no_temperature_of_a_shipped_or_simulated_run_is_a_glitch():
+    frames = [pd.read_csv(path) for path in sorted(DATASETS.glob("*.csv"))]
+    for seed in range(12):
+        scenario = machine.random_spec(seed, "absolute").make()
+        frames += [scenario.modelling, scenario.validation]
+    checked = 0
+    for frame in frames:
+        for column in [c for c in frame.columns if str(c).startswith("T")]:
+            values = frame[column].to_numpy(dtype=float)
+            assert error_glitches(values, range_share=TEMPERATURE_RANGE_SHARE).size == 0, column
+            checked += 1
+    assert checked > 200
+
+
+@pytest.mark.measured
+@pytest.mark.skipif(not MEASURED.exists(), reason="../shared/data absent (a fresh clone has no measured data)")
+def test_the_short_bumps_of_a_measured_sensor_are_no_glitches():
+    frame = pd.read_csv(MEASURED)  # t16_C rises by 2-3 K for a few samples, five times
+    sensors = [f"t{k}_C" for k in range(1, 17)]
+    _, note = temperatures_without_glitches(frame[sensors].to_numpy(dtype=float), sensors, "measured")
+    assert note is None
+
+
+@pytest.fixture(scope="module")
+def spiked(tmp_path_factory):
+    """The FE modelling run with a DS18B20's 85 °C power-on reading in T4 at data row 251, and plainly."""
+    tmp = tmp_path_factory.mktemp("spiked")
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    frame.to_csv(tmp / "clean.csv", index=False)
+    frame.loc[250, "T4"] = 85.0
+    frame.to_csv(tmp / "spiked.csv", index=False)
+    return tmp, frame
+
+
+def test_a_temperature_glitch_is_interpolated_from_its_neighbours_and_named(spiked):
+    tmp, frame = spiked
+    clean = load_run(tmp / "clean.csv", temps=TEMPS.split(","))
+    run = load_run(tmp / "spiked.csv", temps=TEMPS.split(","), drop_glitches=True)
+    expected = clean.temps.copy()
+    expected[250, 3] = 0.5 * (clean.temps[249, 3] + clean.temps[251, 3])  # straight across its neighbours
+    np.testing.assert_allclose(run.temps, expected, rtol=0, atol=1e-12)
+    assert any(
+        "1 temperature reading(s) leave their neighbours and come back ('T4' row 251: 85 °C)" in n for n in run.notes
+    )
+    kept = load_run(tmp / "spiked.csv", temps=TEMPS.split(","))
+    assert kept.temps[250, 3] == 85.0 and not any("temperature reading" in n for n in kept.notes)
+
+
+def test_fit_on_a_spiked_sensor_comes_near_the_clean_fit_and_keep_glitches_does_not(spiked):
+    tmp, _ = spiked
+    clean, _ = fitted(tmp, "clean.csv", "clean")
+    cleaned, report = fitted(tmp, "spiked.csv", "cleaned")
+    kept, _ = fitted(tmp, "spiked.csv", "kept", "--keep-glitches")
+    assert "a sensor's glitch: interpolated from its neighbours" in report
+    near = np.abs(coefficients(cleaned) - coefficients(clean)).max()
+    far = np.abs(coefficients(kept) - coefficients(clean)).max()
+    assert near < 0.05 * np.abs(coefficients(clean)).max() and far > 10 * near

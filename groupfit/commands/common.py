@@ -83,8 +83,9 @@ def add_glitch_option(parser: argparse.ArgumentParser) -> None:
         "--keep-glitches",
         action="store_true",
         default=None,
-        help="keep error readings that leave their neighbours and come back (by default such a measuring glitch "
-        "is left out as not measured, with a note naming its rows)",
+        help="keep error and temperature readings that leave their neighbours and come back (by default such a "
+        "glitch of the error is left out as not measured, one of a temperature interpolated from its neighbours, "
+        "with a note naming its rows)",
     )
 
 

@@ -17,7 +17,7 @@ A study file has up to four tables::
                                      # (default: the columns named T<digit>…)
     period_tolerance = 2             # % an interval may deviate from the period (a jittering clock)
     resample_s = 60                  # average the readings of every 60 s (optional)
-    keep_glitches = false            # true: fit on the error's measuring glitches too
+    keep_glitches = false            # true: fit on the error's and temperatures' glitches too
 
     [grid]                        # one run per combination of these
     p = {start = 0, stop = 4}     # a range (stop included, optional step) …
