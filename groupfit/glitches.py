@@ -27,6 +27,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from groupfit.default_columns import ambient_columns
+
 WINDOW = 7
 """Readings in the running median (centred)."""
 SIGMAS = 10.0
@@ -89,26 +91,45 @@ def without_glitches(error: np.ndarray, column: str, label: str) -> tuple[np.nda
     return error, glitches, note
 
 
-def temperatures_without_glitches(temps: np.ndarray, names: list[str], label: str) -> tuple[np.ndarray, str | None]:
-    """The readings with each sensor's glitches (departing by :data:`TEMPERATURE_RANGE_SHARE` of its range)
-    interpolated from their neighbours, and a note naming them (None: none)."""
-    temps = np.array(temps, dtype=float)
+def temperatures_without_glitches(
+    frame: pd.DataFrame, temps: list[str], readings: np.ndarray, label: str
+) -> tuple[pd.DataFrame, np.ndarray, str | None]:
+    """The inputs' ``readings`` and the frame's columns of the air's temperature (the references the inputs
+    may be taken against, :func:`~groupfit.default_columns.ambient_columns`) with each sensor's glitches
+    (departing by :data:`TEMPERATURE_RANGE_SHARE` of its range) interpolated from its neighbours, and a note
+    naming them (None: none; the frame and readings are then those given)."""
+    readings = np.array(readings, dtype=float)
     found = []
-    for j, name in enumerate(names):
-        glitches = error_glitches(temps[:, j], range_share=TEMPERATURE_RANGE_SHARE)
-        if glitches.size:
-            found += [f"'{name}' row {i + 1}: {temps[i, j]:.4g} °C" for i in glitches]
-            kept = np.setdiff1d(np.flatnonzero(np.isfinite(temps[:, j])), glitches)
-            temps[glitches, j] = np.interp(glitches, kept, temps[kept, j])
+    for j, name in enumerate(temps):
+        readings[:, j], shown = _interpolated_glitches(readings[:, j], name)
+        found += shown
+    cleaned = {}
+    for name in ambient_columns(frame, temps):
+        values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
+        cleaned[name], shown = _interpolated_glitches(values, name)
+        found += shown
     if not found:
-        return temps, None
+        return frame, readings, None
+    frame = frame.assign(**{name: values for name, values in cleaned.items()}) if cleaned else frame
     more = f" and {len(found) - SHOWN} more" if len(found) > SHOWN else ""
     note = (
         f"{label}: {len(found)} temperature reading(s) leave their neighbours and come back "
         f"({', '.join(found[:SHOWN])}{more}), a sensor's glitch: interpolated from its neighbours; "
         "--keep-glitches keeps them"
     )
-    return temps, note
+    return frame, readings, note
+
+
+def _interpolated_glitches(values: np.ndarray, name: str) -> tuple[np.ndarray, list[str]]:
+    """One sensor's readings with its glitches interpolated from its neighbours, and the glitches named."""
+    glitches = error_glitches(values, range_share=TEMPERATURE_RANGE_SHARE)
+    if not glitches.size:
+        return values, []
+    shown = [f"'{name}' row {i + 1}: {values[i]:.4g} °C" for i in glitches]
+    kept = np.setdiff1d(np.flatnonzero(np.isfinite(values)), glitches)
+    values = values.copy()
+    values[glitches] = np.interp(glitches, kept, values[kept])
+    return values, shown
 
 
 def scored_glitches(error: np.ndarray | None, residual: np.ndarray | None) -> tuple[dict, list[str]]:

@@ -275,7 +275,7 @@ def test_no_temperature_of_a_shipped_or_simulated_run_is_a_glitch():
 def test_the_short_bumps_of_a_measured_sensor_are_no_glitches():
     frame = pd.read_csv(MEASURED)  # t16_C rises by 2-3 K for a few samples, five times
     sensors = [f"t{k}_C" for k in range(1, 17)]
-    _, note = temperatures_without_glitches(frame[sensors].to_numpy(dtype=float), sensors, "measured")
+    _, _, note = temperatures_without_glitches(frame, sensors, frame[sensors].to_numpy(dtype=float), "measured")
     assert note is None
 
 
@@ -313,3 +313,16 @@ def test_fit_on_a_spiked_sensor_comes_near_the_clean_fit_and_keep_glitches_does_
     near = np.abs(coefficients(cleaned) - coefficients(clean)).max()
     far = np.abs(coefficients(kept) - coefficients(clean)).max()
     assert near < 0.05 * np.abs(coefficients(clean)).max() and far > 10 * near
+
+
+def test_a_glitch_of_the_air_temperature_the_inputs_are_taken_against_is_interpolated_too(spiked):
+    tmp, frame = spiked
+    air = pd.read_csv(DATASETS / "paper_cycle.csv")
+    air.loc[300, "T_amb"] = 85.0
+    air.to_csv(tmp / "air.csv", index=False)
+    run = load_run(tmp / "air.csv", temps=TEMPS.split(","), drop_glitches=True)
+    plain = air["T_amb"].to_numpy(dtype=float)
+    assert run.frame["T_amb"].iloc[300] == pytest.approx(0.5 * (plain[299] + plain[301]), abs=1e-12)
+    np.testing.assert_array_equal(np.delete(run.frame["T_amb"].to_numpy(), 300), np.delete(plain, 300))
+    assert any("('T_amb' row 301: 85 °C)" in note for note in run.notes)
+    assert load_run(tmp / "air.csv", temps=TEMPS.split(",")).frame["T_amb"].iloc[300] == 85.0
