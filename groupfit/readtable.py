@@ -21,7 +21,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.textlayout import SNIFF_LINES, layout_of, read_text_table, without_footer_rows, without_units_row
+from groupfit.textlayout import RULER, SNIFF_LINES, layout_of, read_text_table, without_footer_rows, without_units_row
 from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
@@ -116,9 +116,10 @@ def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFr
 
 
 def without_message_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
-    """The table without rows whose one filled cell is text without a digit (a logger's ``Logging paused``,
-    a ruler ``-----``), its columns of numbers read as numbers again, and a note naming the rows (None: there
-    were none). A row holding a digit (``Paused at 12:00``, a time stamp without readings) is kept."""
+    """The table without rows whose one filled cell is words without a digit (a logger's ``Logging paused``)
+    or a ruler (``-----``), its columns of numbers read as numbers again, and a note naming the rows (None:
+    there were none). A row holding a digit (``Paused at 12:00``, a time stamp without readings) or nothing
+    legible (a line of NUL bytes from a logger's power loss) is kept, to be refused."""
     texts = [c for c in frame.columns if not pd.api.types.is_numeric_dtype(frame[c])]
     if frame.empty or not texts:
         return frame, None
@@ -128,8 +129,9 @@ def without_message_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame,
     message = pd.Series(pd.NA, index=frame.index, dtype="string")
     for column in texts:
         cells = frame[column].astype("string").str.strip()
-        words = ~empty_cells(frame[column]) & ~cells.str.contains(r"\d", regex=True).fillna(True).to_numpy(bool)
-        message = message.mask(words & (filled == 1), cells)
+        written = cells.str.contains(r"[^\W\d_]", regex=True) | cells.str.fullmatch(RULER.pattern)  # not NULs
+        words = written & ~cells.str.contains(r"\d", regex=True)
+        message = message.mask(words.fillna(False).to_numpy(bool) & (filled == 1), cells)
     rows = message.notna().to_numpy(bool)
     if not rows.any():
         return frame, None

@@ -238,11 +238,12 @@ def test_blank_rulers_and_message_lines_are_passed_over_and_change_nothing(tmp_p
     assert note in capsys.readouterr().out
 
 
-def test_a_message_line_with_a_number_in_it_is_refused_naming_its_row(tmp_path, capsys):
-    path, _ = with_lines(tmp_path, "paused", 300, "Paused at 12:00")
+@pytest.mark.parametrize("line", ["Paused at 12:00", "\x00" * 40])  # a digit; nothing legible (a power loss)
+def test_a_line_with_a_number_or_nothing_legible_is_refused_naming_its_row(tmp_path, capsys, line):
+    path, _ = with_lines(tmp_path, "paused", 300, line)
     assert cli("fit", "--data", path, *QUICK, "--out", tmp_path / "out") == 2
     message = capsys.readouterr().err.strip()
-    assert message.endswith("row 301, column 'time_s': 'Paused at 12:00' is not a number; fix or remove that row")
+    assert message.endswith(f"row 301, column 'time_s': {line!r} is not a number; fix or remove that row")
 
 
 @pytest.mark.parametrize("resample", [[], ["--resample", "100"]])
