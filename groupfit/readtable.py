@@ -14,6 +14,7 @@ import bz2
 import gzip
 import lzma
 import zipfile
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,15 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.textlayout import RULER, SNIFF_LINES, layout_of, read_text_table, without_footer_rows, without_units_row
+from groupfit.textlayout import (
+    RULER,
+    SNIFF_LINES,
+    as_numbers,
+    layout_of,
+    read_text_table,
+    without_footer_rows,
+    without_units_row,
+)
 from groupfit.timestamps import is_text, text_seconds
 
 TABLE_SUFFIXES = {
@@ -98,7 +107,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     return frame, (name or stem), label
 
 
-def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
+def without_repeated_headers(frame: pd.DataFrame, label: str, decimal: str = ".") -> tuple[pd.DataFrame, str | None]:
     """The table without rows that repeat its header (a logger that started again and appended to the file),
     its columns of numbers read as numbers again, and a note naming the rows (None: there were none)."""
     needed = max(2, len(frame.columns) // 2)
@@ -112,40 +121,55 @@ def without_repeated_headers(frame: pd.DataFrame, label: str) -> tuple[pd.DataFr
     if not repeated.any():
         return frame, None
     kept, note = _left_out(frame, repeated, label, "repeating the header", "the logger started again and appended")
-    return _numbers_again(kept), note
+    return _numbers_again(kept, decimal), note
 
 
-def without_message_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
-    """The table without rows whose one filled cell is words without a digit (a logger's ``Logging paused``)
-    or a ruler (``-----``), its columns of numbers read as numbers again, and a note naming the rows (None:
-    there were none). A row holding a digit (``Paused at 12:00``, a time stamp without readings) or nothing
-    legible (a line of NUL bytes from a logger's power loss) is kept, to be refused."""
+def without_message_rows(frame: pd.DataFrame, label: str, decimal: str = ".") -> tuple[pd.DataFrame, str | None]:
+    """The table without a logger's message lines, its columns of numbers read as numbers again (in the
+    table's ``decimal`` mark), and a note naming the rows (None: there were none).
+
+    A message line fills fewer than half the columns, each filled cell with words without a digit
+    (``Logging paused``, split at the spaces of a ``.dat``) or a ruler (``-----``). A row holding a digit
+    (``Paused at 12:00``, a time stamp without readings), nothing legible (a line of NUL bytes from a
+    logger's power loss) or words in most columns (another header) is kept, to be refused.
+    """
     texts = [c for c in frame.columns if not pd.api.types.is_numeric_dtype(frame[c])]
     if frame.empty or not texts:
         return frame, None
     filled = np.zeros(len(frame), dtype=int)
     for column in frame.columns:
         filled += ~empty_cells(frame[column])
-    message = pd.Series(pd.NA, index=frame.index, dtype="string")
+    worded = np.zeros(len(frame), dtype=int)
+    message = pd.Series("", index=frame.index, dtype="string")
     for column in texts:
         cells = frame[column].astype("string").str.strip()
         written = cells.str.contains(r"[^\W\d_]", regex=True) | cells.str.fullmatch(RULER.pattern)  # not NULs
-        words = written & ~cells.str.contains(r"\d", regex=True)
-        message = message.mask(words.fillna(False).to_numpy(bool) & (filled == 1), cells)
-    rows = message.notna().to_numpy(bool)
+        words = (written & ~cells.str.contains(r"\d", regex=True)).fillna(False).to_numpy(bool)
+        worded += words
+        message = message.mask(words, (message + " " + cells).str.strip())
+    rows = (filled > 0) & (worded == filled) & (2 * filled < len(frame.columns))
     if not rows.any():
         return frame, None
     why = f"a logger's message, such as {message[rows].iloc[0]!r}"
     kept, note = _left_out(frame, rows, label, "holding a message alone", why)
-    return _numbers_again(kept), note
+    return _numbers_again(kept, decimal), note
 
 
-def _numbers_again(frame: pd.DataFrame) -> pd.DataFrame:
-    """The frame with every column whose filled cells are all numbers read as numbers."""
+def _numbers_again(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
+    """The frame with every column whose filled cells are all numbers, written with the table's ``decimal``
+    mark, read as numbers (a column a stray row had left as text)."""
     for column in frame.columns:
-        numbers = pd.to_numeric(frame[column], errors="coerce")
-        if numbers.notna().sum() == frame[column].notna().sum():
-            frame[column] = numbers
+        if pd.api.types.is_numeric_dtype(frame[column]):
+            continue
+        try:
+            values = as_numbers(frame[column], decimal, str(column))
+        except ValueError:  # a dotted number in a table of decimal commas: refused later, naming its cell
+            values = None
+        if values is None:
+            numbers = pd.to_numeric(frame[column], errors="coerce")
+            values = numbers if numbers.notna().sum() == frame[column].notna().sum() else None
+        if values is not None:
+            frame[column] = values
     return frame
 
 
@@ -190,7 +214,12 @@ def without_stray_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, l
     them, and what was left out in one phrase (empty: nothing), for a refusal whose row numbers count without
     those rows."""
     notes, phrases = [], []
-    for leave_out in (without_blank_rows, without_message_rows, without_repeated_headers, without_repeated_rows):
+    decimal = frame.attrs.get("decimal", ".")  # of a text table: columns a stray row left as text use it
+    messages, headers = (
+        partial(without_message_rows, decimal=decimal),
+        partial(without_repeated_headers, decimal=decimal),
+    )
+    for leave_out in (without_blank_rows, messages, headers, without_repeated_rows):
         frame, note = leave_out(frame, label)
         if note is not None:
             notes.append(note)

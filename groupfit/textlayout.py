@@ -301,8 +301,9 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
             raise ValueError("a row has more values than the header has names; name every column") from None
     header = [str(name) for name in header]
     frame, header = _without_empty_unnamed_columns(frame, header)
-    frame = without_units_row(frame, decimal=layout.decimal)
-    return _without_thousands_separators(frame, layout.decimal), header
+    frame = _without_thousands_separators(without_units_row(frame, decimal=layout.decimal), layout.decimal)
+    frame.attrs["decimal"] = layout.decimal  # for the columns left as text by a stray row, read when it goes
+    return frame, header
 
 
 def _from_line(text: str, line: int) -> str:
@@ -390,7 +391,7 @@ def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
     kept = frame.iloc[: int(np.flatnonzero(numeric)[-1]) + 1].copy()
     for column in kept.columns:
         if not pd.api.types.is_numeric_dtype(kept[column]):
-            values = _as_numbers(kept[column], ".", str(column))
+            values = as_numbers(kept[column], ".", str(column))
             if values is not None:
                 kept[column] = values
     return kept
@@ -409,7 +410,7 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
         return frame
     rest = frame.iloc[text_rows:].reset_index(drop=True)
     text_columns = [c for c in rest.columns if not pd.api.types.is_numeric_dtype(rest[c])]
-    converted = {column: _as_numbers(rest[column], decimal, str(column)) for column in text_columns}
+    converted = {column: as_numbers(rest[column], decimal, str(column)) for column in text_columns}
     if all(values is None for values in converted.values()):
         return frame
     for column, values in converted.items():
@@ -432,7 +433,7 @@ def is_number(cell: str, decimal: str = ".") -> bool:
     return True
 
 
-def _as_numbers(column: pd.Series, decimal: str, name: str) -> pd.Series | None:
+def as_numbers(column: pd.Series, decimal: str, name: str) -> pd.Series | None:
     """The column as float64 when every filled cell is a number (thousands separators read as
     :func:`_plain_numbers` reads them), else None."""
     text = _plain_numbers(column.astype("string").str.strip(), decimal, name)
@@ -447,6 +448,7 @@ __all__ = [
     "DELIMITERS",
     "ENCODINGS",
     "TextLayout",
+    "as_numbers",
     "decode",
     "header_delimiter",
     "is_number",

@@ -238,6 +238,34 @@ def test_blank_rulers_and_message_lines_are_passed_over_and_change_nothing(tmp_p
     assert note in capsys.readouterr().out
 
 
+def european(line: str, sep: str) -> str:
+    """A line of the FE run's CSV as a German logger writes it: decimal commas, ``sep`` between the fields."""
+    return sep.join(field.replace(".", ",") for field in line.split(","))
+
+
+@pytest.mark.parametrize(
+    ("sep", "stray", "note"),
+    [
+        (";", "header", "1 row(s) repeating the header left out (row 301:"),
+        (";", "Logging paused", "(row 301: a logger's message, such as 'Logging paused')"),
+        ("  ", "Logging paused", "(row 301: a logger's message, such as 'Logging paused')"),
+    ],
+)
+def test_a_stray_row_in_a_table_of_decimal_commas_leaves_its_columns_read_as_numbers(
+    tmp_path, capsys, sep, stray, note
+):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    log["time_s"] = log["time_s"] + 0.5  # a time column with decimals too
+    clean = tmp_path / "clean.csv"
+    log.to_csv(clean, index=False)
+    lines = [european(line, sep) for line in clean.read_text().splitlines()]
+    path = tmp_path / "german.csv"
+    path.write_text("\n".join([*lines[:301], lines[0] if stray == "header" else stray, *lines[301:]]) + "\n")
+    read, plain = fitted_coefficients(tmp_path, path, clean)
+    assert read == plain
+    assert note in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("line", ["Paused at 12:00", "\x00" * 40])  # a digit; nothing legible (a power loss)
 def test_a_line_with_a_number_or_nothing_legible_is_refused_naming_its_row(tmp_path, capsys, line):
     path, _ = with_lines(tmp_path, "paused", 300, line)
