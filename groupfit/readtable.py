@@ -70,15 +70,15 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     compressed = path.suffix.lower() in COMPRESSED
     stem = Path(path.stem).stem if compressed else path.stem
     kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
-    header, sheet, line = None, 0, 0
+    header = None
     try:
         if kind == "CSV":
             frame, header = read_text_table(_decompressed(path) if compressed else path.read_bytes())
         elif kind == "Excel":
-            sheet, frame, first, line = _data_sheet(path)
+            sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
         else:
-            frame = _read_parquet(path)
+            frame, header = _read_parquet(path), _parquet_header(path)
     except InputError:
         raise
     except pd.errors.EmptyDataError:
@@ -98,8 +98,6 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         raise InputError(f"{label}: not a readable {kind} table ({first})") from None
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
-    if header is None:
-        header = _excel_header(path, sheet, line) if kind == "Excel" else _parquet_header(path)
     if header is None or len(header) != frame.shape[1]:
         header = list(frame.columns)
     _check_unique_columns(header, label)
@@ -252,39 +250,32 @@ def _decompressed(path: Path) -> bytes:
         return archive.read(members[0])
 
 
-def _excel_header(path: Path, sheet: str | int = 0, line: int = 0) -> list[str] | None:
-    """The header as written in the workbook, on its row ``line`` (pandas renames a repeated ``T1`` to
-    ``T1.1`` on reading)."""
-    try:
-        rows = pd.read_excel(path, sheet_name=sheet, header=None, nrows=line + 1)
-        return [str(c) for c in rows.iloc[line].tolist()]
-    except (ValueError, OSError, IndexError):
-        return None
+def _sheet_header_line(rows: pd.DataFrame) -> int:
+    """The row of a sheet's header, from its cells read without a header, found as in a text table
+    (:mod:`groupfit.textlayout`): a title, a blank row or a logger's preamble above it is passed over."""
+    if not len(rows):
+        return 0
+    layout = layout_of(rows.head(SNIFF_LINES).to_csv(index=False, header=False))
+    return layout.header_line if layout.sep == "," else 0  # cells, not words, are fields
 
 
-def _sheet_header_line(path: Path, sheet: str | int) -> int:
-    """The row of a sheet's header, found as in a text table (:mod:`groupfit.textlayout`): a title, a
-    blank row or a logger's preamble above it is passed over."""
-    rows = pd.read_excel(path, sheet_name=sheet, header=None, nrows=SNIFF_LINES)
-    layout = layout_of(rows.to_csv(index=False, header=False)) if len(rows) else None
-    return layout.header_line if layout is not None and layout.sep == "," else 0  # cells, not words, are fields
-
-
-def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool, int]:
+def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool, list[str] | None]:
     """The workbook's sheet that holds the largest table of numbers, its frame, whether it is the first, and
-    the row of its header.
+    its header as written (pandas renames a repeated ``T1`` to ``T1.1`` on reading; None: an empty sheet).
 
     A logger's export often opens with a cover sheet (the machine, the operator) or a small table of
     calibration constants beside the log; the sheet with the most numeric cells is the log (the first on a
     tie, and the first when none holds numbers).
     """
-    frames = pd.read_excel(path, sheet_name=None)
-    lines = {name: _sheet_header_line(path, name) for name in frames}
+    cells = pd.read_excel(path, sheet_name=None, header=None)
+    lines = {name: _sheet_header_line(rows) for name, rows in cells.items()}
+    first_row = [name for name, line in lines.items() if not line]
+    headed = pd.read_excel(path, sheet_name=first_row) if first_row else {}
     sheets = {
         name: without_units_row(
-            without_footer_rows(pd.read_excel(path, sheet_name=name, header=lines[name]) if lines[name] else frame)
+            without_footer_rows(headed[name] if not line else pd.read_excel(path, sheet_name=name, header=line))
         )
-        for name, frame in frames.items()
+        for name, line in lines.items()
     }
     sizes = [
         int(frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().to_numpy().sum())
@@ -292,7 +283,9 @@ def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool, int]:
     ]
     k = int(np.argmax(sizes)) if max(sizes, default=0) > 0 else 0
     name = list(sheets)[k]
-    return name, sheets[name], k == 0, lines[name]
+    rows = cells[name]
+    header = [str(c) for c in rows.iloc[lines[name]].tolist()] if len(rows) else None
+    return name, sheets[name], k == 0, header
 
 
 def _parquet_header(path: Path) -> list[str] | None:
