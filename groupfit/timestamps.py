@@ -79,13 +79,21 @@ DATE_WORD = re.compile(r"date|datum", re.IGNORECASE)
 def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
     """A date column of spreadsheet serial dates converted to seconds in place, and its note (None: not one).
 
-    A column named as a date (``Date``, ``Datum/Zeit``) without a unit whose numbers all lie among the
-    serial dates of 1954 … 2119, less than a day apart, is a spreadsheet's date-time written as a number.
+    A time column without a unit whose numbers all lie among the serial dates of 1954 … 2119, less than a
+    day apart, is a spreadsheet's date-time written as a number when its name says it is a date (``Date``,
+    ``Datum/Zeit``), or when only the reading in days makes a thermal run of it: read in seconds it lasts
+    less than :data:`SHORTEST_RUN_S`, read in days it lasts longer, sampled at least every
+    :data:`SLOWEST_PERIOD_S` (``Timestamp`` 46082.333, 46082.334 …).
     """
-    days = _numbers_without_unit(frame, column) if DATE_WORD.search(str(column)) else None
+    days = _numbers_without_unit(frame, column)
     if days is None or len(days) < 2 or days.min() < SERIAL_DAYS[0] or days.max() > SERIAL_DAYS[1]:
         return None
-    if not 0.0 < float(np.median(np.diff(days))) < 1.0:
+    step = float(np.median(np.diff(days)))
+    if not 0.0 < step < 1.0:
+        return None
+    span = float(days[-1] - days[0])
+    a_run_in_days = span < SHORTEST_RUN_S <= span * DAY_S and step * DAY_S <= SLOWEST_PERIOD_S
+    if not (DATE_WORD.search(str(column)) or a_run_in_days):
         return None
     frame[column] = days * DAY_S
     return f"{label}: column '{column}' holds spreadsheet serial dates (days since 1899-12-30): read in seconds"
@@ -263,21 +271,22 @@ def _readings(text: pd.Series, first: str, last: str):
         yield _past_midnight(seconds) if form in TIME_FORMATS else seconds
 
 
-ELAPSED = re.compile(r"(\d+):([0-5]\d):([0-5]\d(?:[.,]\d+)?)")
-"""An elapsed time ``h:mm:ss`` whose hours run past 23 (a spreadsheet's ``[h]:mm:ss``)."""
+ELAPSED = re.compile(r"(?:(\d+)\s*(?:days?|d),?\s+)?(\d+):([0-5]\d):([0-5]\d(?:[.,]\d+)?)", re.IGNORECASE)
+"""An elapsed time ``h:mm:ss`` whose hours run past 23 (a spreadsheet's ``[h]:mm:ss``), or led by days
+(``1 day, 2:00:00``, ``0 days 00:00:15``, ``2d 03:00:00``: a duration as Python or pandas writes it)."""
 
 
 def _elapsed_seconds(text: pd.Series) -> np.ndarray | None:
-    """Seconds since the first row of a column of elapsed times ``h:mm:ss`` (hours beyond 23 allowed); None
-    when a cell is not one."""
-    parts = text.str.fullmatch(ELAPSED.pattern)
-    if not bool(parts.all()):
+    """Seconds since the first row of a column of elapsed times ``[d days] h:mm:ss`` (hours beyond 23
+    allowed); None when a cell is not one."""
+    found = text.str.extract("^" + ELAPSED.pattern + "$", flags=ELAPSED.flags)
+    if bool(found[1].isna().any()):
         return None
-    found = text.str.extract(ELAPSED.pattern)
     seconds = (
-        found[0].astype(float) * 3600.0
-        + found[1].astype(float) * 60.0
-        + found[2].str.replace(",", ".", regex=False).astype(float)
+        found[0].fillna("0").astype(float) * DAY_S
+        + found[1].astype(float) * 3600.0
+        + found[2].astype(float) * 60.0
+        + found[3].str.replace(",", ".", regex=False).astype(float)
     ).to_numpy(dtype=float)
     return seconds - seconds[0]
 

@@ -80,6 +80,42 @@ def test_elapsed_hours_past_a_day_and_fractions_after_a_comma_or_colon_are_read(
     np.testing.assert_array_equal(run.temps, plain.temps)
 
 
+@pytest.mark.parametrize("form", ["pandas", "python", "short"])
+def test_a_duration_led_by_days_is_read_as_pandas_reads_it(tmp_path, synthetic, form):
+    frame, plain = synthetic
+    durations = pd.to_timedelta(frame["time_s"].to_numpy(dtype=float) * 3.7, unit="s")  # past 24 h
+    if form == "pandas":  # 1 days 02:13:20
+        text = durations.astype(str)
+    elif form == "python":  # 1 day, 2:13:20
+        text = [str(duration.to_pytimedelta()) for duration in durations]
+    else:  # 1d 02:13:20
+        text = [f"{d.days}d {d.seconds // 3600:02d}:{d.seconds // 60 % 60:02d}:{d.seconds % 60:02d}" for d in durations]
+    assert any("day" in str(cell) or "d " in str(cell) for cell in text)
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=text).rename(columns={"time_s": "Elapsed"}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time="Elapsed")
+    seconds = pd.to_timedelta(pd.Series(durations)).dt.total_seconds().to_numpy()
+    np.testing.assert_allclose(run.time, seconds - seconds[0], rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+
+
+@pytest.mark.parametrize("name", ["Timestamp", "Time"])
+def test_serial_days_under_a_time_name_are_read_in_days_when_only_days_make_a_run_of_them(tmp_path, synthetic, name):
+    frame, plain = synthetic
+    days = 46082.25 + frame["time_s"].to_numpy(dtype=float) / 86400.0  # a spreadsheet's date-times as numbers
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=days).rename(columns={"time_s": name}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time=name)
+    np.testing.assert_allclose(run.time - run.time[0], plain.time - plain.time[0], rtol=0, atol=1e-4)
+    assert any("holds spreadsheet serial dates" in note for note in run.notes)
+    assert not any("the run lasts" in note for note in run.notes)
+    seconds = 40000.0 + frame["time_s"].to_numpy(dtype=float) / 10.0  # seconds since midnight, a run of hours
+    assert seconds[-1] - seconds[0] > 1800.0
+    frame.assign(time_s=seconds).rename(columns={"time_s": name}).to_csv(path, index=False)
+    in_seconds = load_run(path, temps=TEMPS, time=name)
+    np.testing.assert_allclose(in_seconds.time - in_seconds.time[0], seconds - seconds[0], rtol=1e-9)
+
+
 def test_resample_refuses_two_recordings_in_one_file_instead_of_averaging_them(tmp_path, synthetic, capsys):
     frame = synthetic[0]
     restarted = frame.copy()
