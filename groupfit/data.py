@@ -55,6 +55,7 @@ from groupfit.timestamps import (
     unit_notes,
     unit_seconds,
 )
+from groupfit.units_row import read_in_row_units
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
@@ -288,10 +289,11 @@ def load_runs(
     frame, run_name, label = read_table(source, name)
     frame, stray_notes, left_out = without_stray_rows(frame, label)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
+    lengths, units_notes = read_in_row_units(frame, time, label)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     required = options.get("require_error", True)
     error, error_note = found_error_column(
-        frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default
+        frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default, lengths=lengths
     )
     try:
         runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
@@ -299,7 +301,7 @@ def load_runs(
         if left_out and " row " in str(exc):
             raise InputError(f"{exc} (rows are counted without those left out: {left_out})") from None
         raise
-    found = tuple(note for note in (*stray_notes, time_note, serial_note, error_note) if note)
+    found = tuple(note for note in (*stray_notes, time_note, *units_notes, serial_note, error_note) if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 

@@ -54,12 +54,12 @@ LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/])(mm|um|µm|μm|microns?|nm)\s*[\])]?\s
 
 def length_unit(name: str | None) -> tuple[str, float]:
     """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none)."""
-    unit = _named_length_unit(name)
+    unit = named_length_unit(name)
     scale = MICROMETRES_PER_UNIT[unit] if unit else 1.0
     return (unit if scale != 1.0 else "µm"), scale
 
 
-def _named_length_unit(name: str | None) -> str | None:
+def named_length_unit(name: str | None) -> str | None:
     match = LENGTH_UNIT.search(str(name)) if name is not None else None
     return match.group(1).lower() if match else None
 
@@ -135,7 +135,7 @@ def temperature_like_columns(frame: pd.DataFrame, exclude: Sequence[str | None] 
 def error_like_columns(columns) -> list[str]:
     """The columns whose names say they hold a thermal error (or any length in µm), in table order."""
     return [
-        str(c) for c in columns if ERROR_NAME.match(str(c)) or MICROMETRES_PER_UNIT.get(_named_length_unit(c)) == 1.0
+        str(c) for c in columns if ERROR_NAME.match(str(c)) or MICROMETRES_PER_UNIT.get(named_length_unit(c)) == 1.0
     ]
 
 
@@ -158,12 +158,20 @@ def found_time_column(frame: pd.DataFrame, time: str, label: str, *, default: bo
 
 
 def found_error_column(
-    frame: pd.DataFrame, error: str | None, label: str, *, required: bool = True, default: bool = False
+    frame: pd.DataFrame,
+    error: str | None,
+    label: str,
+    *,
+    required: bool = True,
+    default: bool = False,
+    lengths: Sequence[str] = (),
 ) -> tuple[str | None, str | None]:
     """The thermal-error column to read, and a note when it is not the one asked for (module docstring).
 
     ``default``: ``error`` was not asked for (the column a model was fitted
     with), so a log without it is read on the one column named as an error.
+    ``lengths``: the columns a row of units gives in a unit of length, the
+    candidates when no column is named as an error.
     Not ``required`` (a replay, which runs without the error too): never a
     guess between several.
 
@@ -174,7 +182,7 @@ def found_error_column(
     """
     if error is None or error in frame.columns or not (default or (required and error == DEFAULT_ERROR)):
         return error, None
-    names = error_like_columns(frame.columns)
+    names = error_like_columns(frame.columns) or [str(c) for c in lengths]
     if not names:
         return error, None
     if len(names) > 1 and not required:
@@ -212,5 +220,6 @@ __all__ = [
     "found_error_column",
     "found_time_column",
     "length_unit",
+    "named_length_unit",
     "temperature_like_columns",
 ]

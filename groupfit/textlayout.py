@@ -416,6 +416,10 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
     for column, values in converted.items():
         if values is not None:
             rest[column] = values
+    rest.attrs["text_rows"] = [
+        {str(column): str(value).strip() for column, value in frame.iloc[row].items() if not _empty(value)}
+        for row in range(text_rows)
+    ]  # a units row among them gives the columns' units (groupfit.units_row)
     return rest
 
 

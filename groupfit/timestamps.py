@@ -130,7 +130,7 @@ def _numbers_without_unit(frame: pd.DataFrame, column: str) -> np.ndarray | None
 
 def names_a_unit(name: str) -> bool:
     """Whether a column's name ends in a unit of time (``time_s``, ``Zeit [min]``)."""
-    return _named_time_unit(name) is not None
+    return named_time_unit(name) is not None
 
 
 def unit_seconds(name: str, label: str = "") -> float:
@@ -142,7 +142,7 @@ def unit_seconds(name: str, label: str = "") -> float:
         The name ends in a bracketed unit that is not one of time (``Zeit [xyz]``): guessing seconds would
         read the run on the wrong clock.
     """
-    unit = _named_time_unit(name)
+    unit = named_time_unit(name)
     if unit:
         return UNIT_SECONDS[unit]
     bracketed = BRACKETED_UNIT.search(str(name))
@@ -154,7 +154,7 @@ def unit_seconds(name: str, label: str = "") -> float:
     return 1.0
 
 
-def _named_time_unit(name: str) -> str | None:
+def named_time_unit(name: str) -> str | None:
     """The unit of time a column's name ends in (a key of :data:`UNIT_SECONDS`), None when it names none."""
     found = NAMED_UNIT.search(str(name))
     unit = found.group(1).lower() if found else None
@@ -406,6 +406,7 @@ __all__ = [
     "stamp_resolution",
     "text_seconds",
     "time_like_columns",
+    "named_time_unit",
     "unit_notes",
     "unit_seconds",
 ]

@@ -1,0 +1,114 @@
+"""A logger's row of units under the header: the columns it gives in mm, nm, minutes, °F or K read in µm, s, °C.
+
+Many loggers write the units in a row of their own under the names (``Time,CH1,CH8`` over ``s,degC,mm``)
+instead of in the names (``error_mm``). :mod:`groupfit.textlayout` leaves such rows out of the data and keeps
+their cells; here the row that names the most units is read, and
+
+* a column in another unit of length than µm, of time than s (the time column), or of temperature than °C is
+  converted in place, with a note, when its name gives no unit; a name and a units row that disagree are
+  refused, naming both;
+* the columns in a unit of length are the candidates for the thermal error when the log has no column named
+  as one (``CH8`` over ``um``).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pandas as pd
+
+from groupfit.default_columns import MICROMETRES_PER_UNIT, named_length_unit
+from groupfit.errors import InputError
+from groupfit.timestamps import UNIT_SECONDS, named_time_unit
+
+CELSIUS_BY_UNIT = {
+    **dict.fromkeys(("°c", "degc", "deg c", "℃", "celsius", "c"), (1.0, 0.0)),
+    **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
+    **dict.fromkeys(("°f", "degf", "deg f", "℉", "fahrenheit"), (5.0 / 9.0, -32.0 * 5.0 / 9.0)),
+}
+"""Units of temperature a units row may give, and their (scale, offset) to °C."""
+BRACKETS = re.compile(r"^[\[(]\s*(.*?)\s*[\])]$")
+
+
+def unit_of(cell: str) -> tuple[str, str] | None:
+    """``(kind, unit)`` of a units-row cell (kind ``"length"``, ``"time"`` or ``"temperature"``), None when it
+    gives no unit groupfit converts (``rpm``, ``%``, a description)."""
+    text = str(cell).strip()
+    bracketed = BRACKETS.match(text)
+    unit = (bracketed.group(1) if bracketed else text).strip().rstrip(".").lower()
+    if unit in MICROMETRES_PER_UNIT:
+        return "length", unit
+    if unit in UNIT_SECONDS:
+        return "time", unit
+    if unit in CELSIUS_BY_UNIT:
+        return "temperature", unit
+    return None
+
+
+def row_units(frame: pd.DataFrame) -> dict[str, tuple[str, str]]:
+    """The units of the frame's columns by the text row under its header that names the most (empty: none)."""
+    rows = frame.attrs.get("text_rows") or []
+    found = [{column: unit for column, cell in row.items() if (unit := unit_of(cell))} for row in rows]
+    return max(found, key=len, default={})
+
+
+def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[str], tuple[str, ...]]:
+    """Convert, in place, the columns the units row gives in other units (see the module docstring).
+
+    Returns
+    -------
+    lengths, notes
+        The columns in a unit of length (in table order), and the notes naming the conversions.
+
+    Raises
+    ------
+    InputError
+        A column whose name and units row give different units.
+    """
+    units = row_units(frame)
+    lengths, converted = [], []
+    for column in frame.columns:
+        kind, unit = units.get(str(column), (None, None))
+        if kind is None or not pd.api.types.is_numeric_dtype(frame[column]):
+            continue
+        if kind == "length":
+            lengths.append(str(column))
+        scale, offset = _to_base(column, kind, unit, time, label)
+        if (scale, offset) != (1.0, 0.0):
+            frame[column] = frame[column].to_numpy(dtype=float) * scale + offset
+            converted.append(f"'{column}' from {unit}")
+    notes = ()
+    if converted:
+        notes = (
+            f"{label}: read in the units of the row under the header, converted to µm, s and °C: "
+            + ", ".join(converted),
+        )
+    return lengths, notes
+
+
+def _to_base(column, kind: str, unit: str, time: str, label: str) -> tuple[float, float]:
+    """(scale, offset) that take a column from its row unit to µm, s or °C; (1, 0) when its name gives the unit."""
+    if kind == "length":
+        named, scale = named_length_unit(str(column)), MICROMETRES_PER_UNIT[unit]
+        named_scale = MICROMETRES_PER_UNIT.get(named) if named else None
+        offset = 0.0
+    elif kind == "time":
+        if str(column) != time:
+            return 1.0, 0.0
+        named, scale, offset = named_time_unit(str(column)), UNIT_SECONDS[unit], 0.0
+        named_scale = UNIT_SECONDS.get(named) if named else None
+    else:
+        named, named_scale = None, None
+        scale, offset = CELSIUS_BY_UNIT[unit]
+    if named_scale is None:
+        return scale, offset
+    if not np.isclose(named_scale, scale):
+        raise InputError(
+            f"{label}: column '{column}' is named in {named} but the row of units under the header gives "
+            f"'{unit}'; correct the one that is wrong"
+        )
+    return 1.0, 0.0  # the name's unit is read where the column is
+
+
+__all__ = ["read_in_row_units", "row_units", "unit_of"]

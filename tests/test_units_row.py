@@ -1,0 +1,116 @@
+"""A row of units under the header read as the units of its columns: the truth is the same run written in µm,
+s and °C without a units row."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_switching_models import SYNTHETIC
+
+from groupfit.cli import main
+from groupfit.data import load_run
+from groupfit.errors import InputError
+from groupfit.units_row import unit_of
+
+TEMPS = ["T1", "T2", "T3", "T4"]
+
+
+@pytest.fixture(scope="module")
+def plain():
+    return load_run(SYNTHETIC, temps=TEMPS)
+
+
+@pytest.fixture(scope="module")
+def frame():
+    return pd.read_csv(SYNTHETIC)
+
+
+def with_units_row(frame: pd.DataFrame, units: dict[str, str]) -> str:
+    header, body = frame.to_csv(index=False).split("\n", 1)
+    return header + "\n" + ",".join(units.get(c, "") for c in frame.columns) + "\n" + body
+
+
+@pytest.mark.parametrize(
+    "unit, per_um", [("mm", 1e-3), ("[mm]", 1e-3), ("nm", 1e3), ("µm", 1.0), ("um", 1.0), ("(microns)", 1.0)]
+)
+def test_an_error_in_the_unit_of_its_units_row_is_read_in_micrometres(tmp_path, frame, plain, unit, per_um):
+    logged = frame.assign(error_um=frame["error_um"] * per_um).rename(columns={"error_um": "Error"})
+    path = tmp_path / "log.csv"
+    path.write_text(with_units_row(logged, {"time_s": "s", "Error": unit, **dict.fromkeys(TEMPS, "°C")}))
+    run = load_run(path, temps=TEMPS, error="Error")
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    converted = any(f"'Error' from {unit.strip('[]()').lower()}" in note for note in run.notes)
+    assert converted == (per_um != 1.0)
+
+
+@pytest.mark.parametrize("unit, per_second", [("min", 1 / 60), ("h", 1 / 3600), ("[ms]", 1e3), ("s", 1.0)])
+def test_a_time_column_in_the_unit_of_its_units_row_is_read_in_seconds(tmp_path, frame, plain, unit, per_second):
+    logged = frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": "Time"})
+    path = tmp_path / "log.csv"
+    path.write_text(with_units_row(logged, {"Time": unit, "error_um": "µm"}))
+    run = load_run(path, temps=TEMPS, time="Time")
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+    assert run.period == pytest.approx(plain.period, rel=1e-9)
+    assert not any("the run lasts" in note for note in run.notes)
+
+
+@pytest.mark.parametrize("unit", ["degF", "°F", "K", "[K]"])
+def test_temperatures_in_fahrenheit_or_kelvin_by_the_units_row_are_read_in_celsius(tmp_path, frame, plain, unit):
+    celsius = frame[TEMPS].to_numpy(dtype=float)
+    logged = celsius * 9.0 / 5.0 + 32.0 if "F" in unit else celsius + 273.15
+    path = tmp_path / "log.csv"
+    path.write_text(with_units_row(frame.assign(**dict(zip(TEMPS, logged.T))), dict.fromkeys(TEMPS, unit)))
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_allclose(run.temps, plain.temps, rtol=0, atol=1e-9)
+    fitted = tmp_path / "model"
+    plain_model = tmp_path / "plain"
+    argv = ["--temps", ",".join(TEMPS), "--p", "0", "--ridge", "0", "--seed", "1"]
+    assert main(["fit", "--data", str(path), "--out", str(fitted), *argv]) == 0
+    assert main(["fit", "--data", str(SYNTHETIC), "--out", str(plain_model), *argv]) == 0
+    ours, theirs = (json.loads((out / "model.json").read_text())["coefficients"] for out in (fitted, plain_model))
+    np.testing.assert_allclose(ours, theirs, rtol=1e-7, atol=1e-9)
+
+
+def test_a_logger_table_of_channels_finds_its_error_by_the_units_row_and_names_two_candidates(tmp_path, frame, plain):
+    channels = {"T1": "CH1", "T2": "CH2", "T3": "CH3", "T4": "CH4", "error_um": "CH5"}
+    logged = frame.assign(error_um=frame["error_um"] / 1000.0).rename(columns=channels)
+    units = {"time_s": "s", **dict.fromkeys(["CH1", "CH2", "CH3", "CH4"], "degC"), "CH5": "mm"}
+    path = tmp_path / "log.csv"
+    path.write_text(with_units_row(logged, units))
+    run = load_run(path, temps=["CH1", "CH2", "CH3", "CH4"], error_is_default=True)
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+    assert any("thermal error from column 'CH5'" in note for note in run.notes)
+    path.write_text(with_units_row(logged.assign(CH6=logged["CH5"]), {**units, "CH6": "mm"}))
+    with pytest.raises(InputError, match=r"2 could be the thermal error \(CH5, CH6\)"):
+        load_run(path, temps=["CH1", "CH2", "CH3", "CH4"], error_is_default=True)
+
+
+def test_a_name_and_a_units_row_that_disagree_are_refused_naming_both(tmp_path, frame):
+    path = tmp_path / "log.csv"
+    path.write_text(with_units_row(frame, {"error_um": "mm"}))
+    with pytest.raises(InputError, match=r"column 'error_um' is named in um but the row of units .* gives 'mm'"):
+        load_run(path, temps=TEMPS)
+    path.write_text(with_units_row(frame.rename(columns={"time_s": "Zeit [min]"}), {"Zeit [min]": "s"}))
+    with pytest.raises(InputError, match=r"column 'Zeit \[min\]' is named in min but the row of units"):
+        load_run(path, temps=TEMPS, time="Zeit [min]")
+
+
+def test_a_workbook_units_row_converts_as_a_text_tables_does(tmp_path, frame, plain):
+    units = {"Time": "min", "Error": "mm"}
+    logged = frame.assign(time_s=frame["time_s"] / 60.0, error_um=frame["error_um"] / 1000.0)
+    logged = logged.rename(columns={"time_s": "Time", "error_um": "Error"})
+    path = tmp_path / "log.xlsx"
+    row = pd.DataFrame([{c: units.get(c, "°C") for c in logged.columns}])
+    pd.concat([row, logged.astype(object)], ignore_index=True).to_excel(path, index=False)
+    run = load_run(path, temps=TEMPS, time="Time", error="Error")
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+
+
+def test_cells_that_are_no_unit_convert_nothing():
+    assert [unit_of(cell) for cell in ("rpm", "%", "front bearing", "", "V")] == [None] * 5
+    assert unit_of(" [µm] ") == ("length", "µm") and unit_of("Min.") == ("time", "min")
