@@ -13,6 +13,7 @@ from __future__ import annotations
 import bz2
 import gzip
 import lzma
+import re
 import zipfile
 from functools import partial
 from pathlib import Path
@@ -39,9 +40,14 @@ TABLE_SUFFIXES = {
     ".xlsx": "Excel",
     ".xlsm": "Excel",
     ".xls": "Excel",
+    ".ods": "OpenDocument",
     ".parquet": "Parquet",
 }
 """File types a run is read from, by suffix (anything else is read as CSV)."""
+WORKBOOK_SIGNATURES = (b"PK\x03\x04", b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1")
+"""How a workbook's bytes begin (a zip: .xlsx, .ods; an OLE compound file: .xls). A file named as a workbook
+that begins otherwise is a text table a program saved under a workbook's name, and is read as one."""
+PACKAGE_PROMPT = re.compile(r"install the (\S+) package|optional dependency '([^']+)'")
 COMPRESSED = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress, ".zip": None}
 """A text table compressed by a logger or for mail (``log.csv.gz``, a zip of one table), by suffix."""
 
@@ -70,11 +76,13 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     compressed = path.suffix.lower() in COMPRESSED
     stem = Path(path.stem).stem if compressed else path.stem
     kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
+    if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
+        kind = "CSV"
     header = None
     try:
         if kind == "CSV":
             frame, header = read_text_table(_decompressed(path) if compressed else path.read_bytes())
-        elif kind == "Excel":
+        elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
         else:
@@ -84,7 +92,10 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     except pd.errors.EmptyDataError:
         raise InputError(f"{label}: the file is empty; a header line and one row per sample are needed") from None
     except ImportError as exc:
-        raise InputError(f"{label}: reading {kind} files needs the package '{exc.name}'; pip install it") from None
+        raise InputError(
+            f"{label}: reading {kind} files needs the package '{_missing_package(exc)}'; pip install it, or save "
+            "the table as .xlsx or CSV"
+        ) from None
     except (
         pd.errors.ParserError,
         UnicodeDecodeError,
@@ -103,6 +114,20 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     _check_unique_columns(header, label)
     frame.columns = [str(c).strip() for c in frame.columns]
     return frame, (name or stem), label
+
+
+def _begins_as_workbook(path: Path) -> bool:
+    with path.open("rb") as file:
+        start = file.read(8)
+    return any(start.startswith(signature) for signature in WORKBOOK_SIGNATURES) or not start
+
+
+def _missing_package(exc: ImportError) -> str:
+    """The package pandas asks for to read a workbook (its name as pip knows it)."""
+    if exc.name:
+        return {"odf": "odfpy"}.get(exc.name, exc.name)
+    found = PACKAGE_PROMPT.search(str(exc))
+    return next((name for name in found.groups() if name), "") if found else str(exc)
 
 
 def without_repeated_headers(frame: pd.DataFrame, label: str, decimal: str = ".") -> tuple[pd.DataFrame, str | None]:
