@@ -81,6 +81,9 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
         available = ", ".join(map(str, frame.columns))
         alike = [str(c) for c in frame.columns if str(c).strip().casefold() == str(column).strip().casefold()]
         hint = f" ('{alike[0]}' differs only in case or spaces: rename it '{column}')" if len(alike) == 1 else ""
+        cut = [str(c) for c in frame.columns if "," in str(c) and str(c).startswith(f"{column},")]
+        if cut and not hint:
+            hint = f" (a name with a comma in it is quoted in a list: --temps '\"{cut[0]}\",…')"
         raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")
     raw = frame[column]
     values, text, marked, _ = _cells(raw)

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import csv
+
 import numpy as np
 
 from groupfit.errors import InputError
@@ -52,10 +54,15 @@ def parse_period_tolerance(text: str | float | None) -> float | None:
 
 
 def split_names(text: str | None) -> list[str] | None:
-    """Split a comma-separated column list from the command line."""
+    """Split a comma-separated column list from the command line; a name in double quotes may hold a comma
+    (``"Temp, °C (S/N 1)","Temp, °C (S/N 2)"``, as a HOBO logger names its columns)."""
     if text is None:
         return None
-    names = [t.strip() for t in text.split(",") if t.strip()]
+    try:
+        fields = next(csv.reader([text], skipinitialspace=True), [])
+    except csv.Error:
+        fields = text.split(",")
+    names = [t.strip() for t in fields if t.strip()]
     if not names:
         raise InputError(f"--temps {text!r}: give at least one column name, comma separated")
     return names

@@ -29,12 +29,10 @@ should not have to rewrite one before groupfit reads it:
   two or more text fields whose next lines have as many;
 * the decimal mark: a comma when the separator is not one and a data cell is
   written so (``20,5``);
-* thousands separators: in a table of decimal commas, a column whose dotted
-  numbers all read as ``1.370`` or ``12.345,6`` is read without the dots (1370,
-  12345.6); any other dotted number there (``20.5``) is refused, naming the
-  column and the cell. In a table of decimal points, a column whose cells with
-  a comma all read as ``2,000`` or ``12,345.6`` (quoted in a comma-separated
-  table) is read without the commas;
+* how a cell writes a number (thousands separators, a typeset minus, a unit after it):
+  :mod:`groupfit.numbercells`;
+* a comment mark before the header's first name (NumPy's ``savetxt``: ``# time_s,T1``) is dropped; a column
+  named ``#`` alone (a HOBO logger's row number) keeps its name;
 * a separator at the end of every data row (not of the header) is dropped
   rather than shifting the columns; a column with no name and no value in
   any row (a spreadsheet's trailing ``;;;``) is dropped;
@@ -56,6 +54,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+
+from groupfit.numbercells import as_numbers, is_number, without_cell_units, without_thousands_separators
 
 DELIMITERS = (",", ";", "\t")
 """Field separators of a text table, tried on its body; a tie goes to the one its header uses most (a comma
@@ -80,11 +80,6 @@ AGREEING_LINES = 3
 RULER = re.compile(r"[-=_~*+|\s]+")
 """A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
-DOT_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d+)?")
-"""A number with dots between its thousands (``1.370``, ``12.345,6``): the only dotted number a table of
-decimal commas holds."""
-COMMA_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d+)?")
-"""A number with commas between its thousands (``2,000``, ``12,345.6``) in a table of decimal points."""
 
 
 @dataclass(frozen=True)
@@ -280,7 +275,7 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
     """A text table's frame and its header as written (pandas renames a repeated name on reading)."""
     text = with_newlines(decode(content))
     layout = layout_of(text)
-    body = _without_footer(_from_line(text, layout.header_line), layout)
+    body = _without_comment_mark(_without_footer(_from_line(text, layout.header_line), layout), layout.sep)
     header_text = body.split("\n", 1)[0]
     if layout.sep == WHITESPACE:
         header, sep = header_text.split(), r"\s+"
@@ -301,9 +296,30 @@ def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
             raise ValueError("a row has more values than the header has names; name every column") from None
     header = [str(name) for name in header]
     frame, header = _without_empty_unnamed_columns(frame, header)
-    frame = _without_thousands_separators(without_units_row(frame, decimal=layout.decimal), layout.decimal)
+    frame = without_thousands_separators(without_units_row(frame, decimal=layout.decimal), layout.decimal)
+    frame = without_cell_units(frame, layout.decimal)
     frame.attrs["decimal"] = layout.decimal  # for the columns left as text by a stray row, read when it goes
     return frame, header
+
+
+COMMENT_MARK = re.compile(r"^\s*(?:#|%|//)\s*(?=\S)")
+"""A comment mark before a header's first name (NumPy's ``savetxt``: ``# time_s,T1``; MATLAB: ``% time T1``)."""
+
+
+def _without_comment_mark(body: str, sep: str) -> str:
+    """The body with the comment mark before its header's first name dropped; a column named ``#`` alone (a
+    HOBO logger's row number: ``"#","Date Time"``) is a name, not a mark."""
+    header, _, rows = body.partition("\n")
+    if sep == WHITESPACE:
+        fields = header.split()
+        rest = rows.split("\n", 1)[0].split()
+        if fields and fields[0] in ("#", "%", "//") and len(fields) == len(rest) + 1:
+            return header.split(fields[0], 1)[1].lstrip() + "\n" + rows
+        return body
+    first = header.split(sep, 1)[0]
+    if COMMENT_MARK.match(first) and first.strip().strip('"') not in ("#", "%", "//"):
+        return COMMENT_MARK.sub("", header, count=1) + "\n" + rows
+    return body
 
 
 def _from_line(text: str, line: int) -> str:
@@ -332,54 +348,6 @@ def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tu
     if len(kept) == len(header):
         return frame, header
     return frame.iloc[:, kept], [header[k] for k in kept]
-
-
-def _without_thousands_separators(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
-    """The frame with its text columns of numbers written with thousands separators read as numbers."""
-    changed = {}
-    for column in frame.columns:
-        if pd.api.types.is_numeric_dtype(frame[column]):
-            continue
-        text = frame[column].astype("string").str.strip()
-        plain = _plain_numbers(text, decimal, str(column), thousands_only=True)
-        if plain is not None:
-            values = pd.to_numeric(plain, errors="coerce")
-            filled = plain.notna() & (plain != "")
-            changed[column] = values.astype(float) if values[filled].notna().all() else plain.astype(object)
-    if not changed:
-        return frame
-    frame = frame.copy()
-    for column, values in changed.items():
-        frame[column] = values
-    return frame
-
-
-def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: bool = False) -> pd.Series | None:
-    """A column's stripped text cells with their numbers written with a decimal point and no thousands
-    separators; None when ``thousands_only`` and the column has none.
-
-    Raises
-    ------
-    ValueError
-        A table of decimal commas holds a dotted number that is not one with thousands separators.
-    """
-    cells = [cell for cell in text.dropna().unique() if cell]
-    if decimal == ",":
-        dotted = [cell for cell in cells if "." in cell and (DOT_THOUSANDS.fullmatch(cell) or is_number(cell))]
-        odd = next((cell for cell in dotted if not DOT_THOUSANDS.fullmatch(cell)), None)
-        if odd is not None:
-            raise ValueError(
-                f"column '{name}' holds '{odd}', a decimal point in a table of decimal commas, where a dot "
-                "can only separate thousands (1.370); write that column with decimal commas"
-            )
-        if thousands_only and not dotted:
-            return None
-        rewritten = {cell: cell.replace(".", "") if cell in dotted else cell for cell in cells}
-        return text.map(lambda cell: rewritten.get(cell, cell)).str.replace(",", ".", regex=False)
-    commas = [cell for cell in cells if "," in cell]
-    if not commas or not all(COMMA_THOUSANDS.fullmatch(cell) for cell in commas):
-        return None if thousands_only else text
-    return text.str.replace(",", "", regex=False)
 
 
 def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
@@ -425,27 +393,6 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
 
 def _empty(value) -> bool:
     return value is None or (isinstance(value, float) and np.isnan(value)) or (str(value).strip() == "")
-
-
-def is_number(cell: str, decimal: str = ".") -> bool:
-    """Whether a cell's text is a number, its decimal mark ``decimal``."""
-    text = cell.replace(",", ".") if decimal == "," else cell
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def as_numbers(column: pd.Series, decimal: str, name: str) -> pd.Series | None:
-    """The column as float64 when every filled cell is a number (thousands separators read as
-    :func:`_plain_numbers` reads them), else None."""
-    text = _plain_numbers(column.astype("string").str.strip(), decimal, name)
-    values = pd.to_numeric(text, errors="coerce")
-    filled = text.notna() & (text != "")
-    if not filled.any() or values[filled].isna().any():
-        return None
-    return values.astype(float)
 
 
 __all__ = [

@@ -25,7 +25,18 @@ import pandas as pd
 from groupfit.errors import InputError
 from groupfit.textlayout import is_number
 
-DATE_FORMATS = ("%Y-%m-%d", "%Y/%m/%d", "%d.%m.%Y", "%d.%m.%y", "%d/%m/%Y", "%m/%d/%Y", "%d-%m-%Y")
+DATE_FORMATS = (
+    "%Y-%m-%d",
+    "%Y/%m/%d",
+    "%d.%m.%Y",
+    "%d.%m.%y",
+    "%d/%m/%Y",
+    "%m/%d/%Y",
+    "%d/%m/%y",
+    "%m/%d/%y",
+    "%d-%m-%Y",
+)
+"""Dates as loggers write them; a two-digit year after the four-digit ones (a HOBO logger's ``03/01/26``)."""
 TIME_FORMATS = (
     "%H:%M:%S.%f",
     "%H:%M:%S,%f",

@@ -1,8 +1,9 @@
 """A logger's row of units under the header: the columns it gives in mm, nm, minutes, °F or K read in µm, s, °C.
 
 Many loggers write the units in a row of their own under the names (``Time,CH1,CH8`` over ``s,degC,mm``)
-instead of in the names (``error_mm``). :mod:`groupfit.textlayout` leaves such rows out of the data and keeps
-their cells; here the row that names the most units is read, and
+instead of in the names (``error_mm``), or in every cell (``20.5 °C``). :mod:`groupfit.textlayout` leaves such
+rows out of the data, and the units out of the cells, and keeps them; here the row that names the most units
+(and the units of the cells) is read, and
 
 * a column in another unit of length than µm, of time than s (the time column), or of temperature than °C is
   converted in place, with a note, when its name gives no unit; a name and a units row that disagree are
@@ -47,10 +48,12 @@ def unit_of(cell: str) -> tuple[str, str] | None:
 
 
 def row_units(frame: pd.DataFrame) -> dict[str, tuple[str, str]]:
-    """The units of the frame's columns by the text row under its header that names the most (empty: none)."""
+    """The units of the frame's columns by the text row under its header that names the most, and by the
+    units written in their cells (``20.5 °C``; empty: none)."""
     rows = frame.attrs.get("text_rows") or []
     found = [{column: unit for column, cell in row.items() if (unit := unit_of(cell))} for row in rows]
-    return max(found, key=len, default={})
+    in_cells = {column: unit for column, cell in frame.attrs.get("cell_units", {}).items() if (unit := unit_of(cell))}
+    return {**max(found, key=len, default={}), **in_cells}
 
 
 def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[str], tuple[str, ...]]:
@@ -81,7 +84,7 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
     notes = ()
     if converted:
         notes = (
-            f"{label}: read in the units of the row under the header, converted to µm, s and °C: "
+            f"{label}: converted to µm, s and °C from the units under the header or in the cells: "
             + ", ".join(converted),
         )
     return lengths, notes

@@ -12,6 +12,7 @@ from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.data import load_run
+from groupfit.data_options import split_names
 from groupfit.errors import InputError
 from groupfit.units_row import unit_of
 
@@ -114,3 +115,117 @@ def test_a_workbook_units_row_converts_as_a_text_tables_does(tmp_path, frame, pl
 def test_cells_that_are_no_unit_convert_nothing():
     assert [unit_of(cell) for cell in ("rpm", "%", "front bearing", "", "V")] == [None] * 5
     assert unit_of(" [µm] ") == ("length", "µm") and unit_of("Min.") == ("time", "min")
+
+
+@pytest.mark.parametrize("unit, per_um", [("µm", 1.0), ("mm", 1e-3), (" [nm]", 1e3)])
+def test_units_written_in_every_cell_are_read_as_a_row_of_units(tmp_path, frame, plain, unit, per_um):
+    cells = frame.astype(object).rename(columns={"error_um": "Error"})
+    for column in TEMPS:
+        cells[column] = [f"{value} °C" for value in frame[column]]
+    cells["Error"] = [f"{value * per_um!r}{unit}" for value in frame["error_um"]]
+    path = tmp_path / "log.csv"
+    cells.to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, error="Error")
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+    assert any("'Error' from" in note for note in run.notes) == (per_um != 1.0)
+
+
+@pytest.mark.parametrize(
+    "form",
+    ["unicode minus", "spaced thousands", "apostrophe thousands", "no-break thousands", "savetxt", "matlab"],
+)
+def test_numbers_and_headers_as_other_programs_write_them_are_read_as_the_plain_table(tmp_path, frame, plain, form):
+    speed = frame.assign(speed=np.where(frame["spindle_on"] > 0, -12500.5, 0.0))  # a direction of rotation
+    text = speed.to_csv(index=False)
+    if form == "unicode minus":
+        assert ",-" in text
+        text = text.replace(",-", ",\u2212")
+    elif form == "spaced thousands":
+        text = speed.to_csv(index=False, sep=";", decimal=",").replace("12500,5", "12 500,5")
+    elif form == "apostrophe thousands":
+        text = text.replace("12500.5", "12'500.5")
+    elif form == "no-break thousands":
+        text = speed.to_csv(index=False, sep=";", decimal=",").replace("12500,5", "12\u202f500,5")
+    elif form == "savetxt":  # NumPy's savetxt(header=...) marks its header as a comment
+        text = "# " + text
+    else:  # MATLAB's % comment before the names, columns split by spaces
+        text = "% " + speed.to_csv(index=False, sep=" ")
+    path = tmp_path / "log.csv"
+    path.write_text(text, encoding="utf-8")
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    np.testing.assert_array_equal(run.time, plain.time)
+    np.testing.assert_array_equal(run.frame["speed"].to_numpy(dtype=float), speed["speed"].to_numpy())
+
+
+def test_a_column_named_hash_alone_is_a_name_not_a_comment_mark(tmp_path, frame, plain):
+    path = tmp_path / "hobo.csv"
+    frame.rename_axis("#").reset_index().assign(**{"#": lambda f: f["#"] + 1}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.frame["#"].to_numpy(), np.arange(1, len(frame) + 1))
+
+
+def test_a_hobo_export_is_read_with_its_two_digit_year_and_its_event_columns(tmp_path, frame, plain):
+    stamps = pd.Timestamp("2026-03-01 08:00:00") + pd.to_timedelta(frame["time_s"] - frame["time_s"].iloc[0], unit="s")
+    names = [f"Temp, °C (LGR S/N: 20{k}, SEN S/N: 20{k})" for k in range(1, 5)]
+    log = pd.DataFrame(
+        {"#": np.arange(1, len(frame) + 1), "Date Time, GMT+01:00": stamps.dt.strftime("%m/%d/%y %I:%M:%S %p")}
+    )
+    log = log.assign(**dict(zip(names, frame[TEMPS].to_numpy().T)), **{"Z drift, µm": frame["error_um"]})
+    log["Coupler Detached (LGR S/N: 201)"] = ["Logged"] + [""] * (len(frame) - 1)
+    path = tmp_path / "hobo.csv"
+    path.write_text('"Plot Title: spindle"\n' + log.to_csv(index=False, quoting=1))
+    run = load_run(path, temps=names, time_is_default=True, error_is_default=True)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    np.testing.assert_allclose(run.time - run.time[0], plain.time - plain.time[0], rtol=0, atol=1e-9)
+
+
+def test_names_holding_commas_are_given_in_quotes_and_a_name_cut_at_its_comma_says_so(tmp_path, frame):
+    names = [f"Temp, °C (S/N {k})" for k in range(1, 5)]
+    path = tmp_path / "log.csv"
+    frame.rename(columns=dict(zip(TEMPS, names))).to_csv(path, index=False)
+    listed = ", ".join(f'"{name}"' for name in names[:2])
+    assert split_names(listed) == names[:2]
+    assert split_names("T1, T2 ,T3") == ["T1", "T2", "T3"]
+    out = tmp_path / "model"
+    assert main(["fit", "--data", str(path), "--temps", listed, "--p", "0", "--out", str(out)]) == 0
+    assert json.loads((out / "model.json").read_text())["temps"][:2] == names[:2]
+    with pytest.raises(InputError, match=r"column 'Temp' not found \(a name with a comma in it is quoted in a list"):
+        load_run(path, temps=split_names(names[0]))
+
+
+@pytest.mark.parametrize("suffix", [".xls", ".xlsx", ".ods"])
+def test_a_text_table_saved_under_a_workbooks_name_is_read_as_text(tmp_path, frame, plain, suffix):
+    path = tmp_path / f"export{suffix}"
+    frame.to_csv(path, sep="\t", index=False)  # a web export's "Excel" file: tab-separated text
+    same = load_run(path, temps=TEMPS)
+    np.testing.assert_array_equal(same.temps, plain.temps)
+    np.testing.assert_array_equal(same.error, plain.error)
+
+
+def test_a_binary_workbook_whose_reader_is_missing_names_the_package_to_install(tmp_path, monkeypatch):
+    path = tmp_path / "old.xls"
+    path.write_bytes(b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + bytes(600))  # an Excel 97-2003 compound file
+
+    def missing(*args, **kwargs):
+        raise ImportError("Missing optional dependency 'xlrd'.  Use pip or conda to install xlrd.")
+
+    monkeypatch.setattr(pd, "read_excel", missing)
+    with pytest.raises(InputError, match=r"old.xls: reading Excel files needs the package 'xlrd'; pip install it"):
+        load_run(path, temps=TEMPS)
+
+
+def test_an_opendocument_spreadsheet_is_read_as_a_workbook(tmp_path, frame, plain):
+    pytest.importorskip("odf")
+    path = tmp_path / "log.ods"
+    with pd.ExcelWriter(path, engine="odf") as book:
+        pd.DataFrame({"Machine": ["lathe 7"]}).to_excel(book, sheet_name="Cover", index=False)
+        frame.to_excel(book, sheet_name="Log", index=False)
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_allclose(run.temps, plain.temps, rtol=1e-12)
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12)
+    assert "sheet 'Log'" in run.source

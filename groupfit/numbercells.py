@@ -1,0 +1,149 @@
+"""How a cell writes a number: its decimal mark, thousands separators, a typeset minus, a unit after it.
+
+A logger or a spreadsheet writes a number in the conventions of its country and its program, and groupfit
+reads it as written:
+
+* a decimal comma in a table that does not separate its fields with commas (``20,5``);
+* thousands separators: in a table of decimal commas, a column whose dotted numbers all read as ``1.370`` or
+  ``12.345,6`` is read without the dots; any other dotted number there (``20.5``) is refused, naming the column
+  and the cell. In a table of decimal points, a column whose cells with a comma all read as ``2,000`` or
+  ``12,345.6`` is read without the commas; spaces (French, ISO 31-0: ``12 500,5``) and apostrophes (Swiss:
+  ``12'500.5``) between the thousands are read in either;
+* the minus sign a typesetting program writes (``−0.5``, U+2212);
+* a unit after the number in every cell of a column (``20.5 °C``, ``1.25µm``): read as the column's unit
+  (:mod:`groupfit.units_row`).
+"""
+
+from __future__ import annotations
+
+import re
+
+import pandas as pd
+
+DOT_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d+)?")
+"""A number with dots between its thousands (``1.370``, ``12.345,6``): the only dotted number a table of
+decimal commas holds."""
+COMMA_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d+)?")
+"""A number with commas between its thousands (``2,000``, ``12,345.6``) in a table of decimal points."""
+GROUP_MARK = re.compile("[ \u00a0\u202f'\u2019]")
+SPACED_THOUSANDS = re.compile(r"[+\-\u2212]?[1-9]\d{0,2}(?:[ \u00a0\u202f'\u2019]\d{3})+(?:[.,]\d+)?")
+"""A number with spaces (French, ISO 31-0) or apostrophes (Swiss) between its thousands: ``2 000``,
+``12 345,6``, ``1'234.5``."""
+UNICODE_MINUS = "\u2212"
+"""The minus sign a typesetting program writes (``−0.5``), read as ``-``."""
+
+
+def is_number(cell: str, decimal: str = ".") -> bool:
+    """Whether a cell's text is a number, its decimal mark ``decimal``."""
+    text = cell.replace(",", ".") if decimal == "," else cell
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def as_numbers(column: pd.Series, decimal: str, name: str) -> pd.Series | None:
+    """The column as float64 when every filled cell is a number (thousands separators read as
+    :func:`_plain_numbers` reads them), else None."""
+    text = _plain_numbers(column.astype("string").str.strip(), decimal, name)
+    values = pd.to_numeric(text, errors="coerce")
+    filled = text.notna() & (text != "")
+    if not filled.any() or values[filled].isna().any():
+        return None
+    return values.astype(float)
+
+
+def without_thousands_separators(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
+    """The frame with its text columns of numbers written with thousands separators read as numbers."""
+    changed = {}
+    for column in frame.columns:
+        if pd.api.types.is_numeric_dtype(frame[column]):
+            continue
+        text = frame[column].astype("string").str.strip()
+        plain = _plain_numbers(text, decimal, str(column), thousands_only=True)
+        if plain is not None:
+            values = pd.to_numeric(plain, errors="coerce")
+            filled = plain.notna() & (plain != "")
+            changed[column] = values.astype(float) if values[filled].notna().all() else plain.astype(object)
+    if not changed:
+        return frame
+    frame = frame.copy()
+    for column, values in changed.items():
+        frame[column] = values
+    return frame
+
+
+def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: bool = False) -> pd.Series | None:
+    """A column's stripped text cells with their numbers written with a decimal point and no thousands
+    separators; None when ``thousands_only`` and the column has none.
+
+    Raises
+    ------
+    ValueError
+        A table of decimal commas holds a dotted number that is not one with thousands separators.
+    """
+    written = text
+    text = text.map(_without_group_spaces, na_action="ignore").str.replace(UNICODE_MINUS, "-", regex=False)
+    respelled = not text.equals(written)
+    cells = [cell for cell in text.dropna().unique() if cell]
+    if decimal == ",":
+        dotted = [cell for cell in cells if "." in cell and (DOT_THOUSANDS.fullmatch(cell) or is_number(cell))]
+        odd = next((cell for cell in dotted if not DOT_THOUSANDS.fullmatch(cell)), None)
+        if odd is not None:
+            raise ValueError(
+                f"column '{name}' holds '{odd}', a decimal point in a table of decimal commas, where a dot "
+                "can only separate thousands (1.370); write that column with decimal commas"
+            )
+        if thousands_only and not dotted and not respelled:
+            return None
+        rewritten = {cell: cell.replace(".", "") if cell in dotted else cell for cell in cells}
+        return text.map(lambda cell: rewritten.get(cell, cell)).str.replace(",", ".", regex=False)
+    commas = [cell for cell in cells if "," in cell]
+    if not commas or not all(COMMA_THOUSANDS.fullmatch(cell) for cell in commas):
+        return None if thousands_only and not respelled else text
+    return text.str.replace(",", "", regex=False)
+
+
+CELL_WITH_UNIT = re.compile(r"([^\s°µμ%\[(a-df-zA-DF-Z]+?)\s*([°µμ%]?[\[(]?[a-zA-Z°µμ%./]+[\])]?)")
+"""A number followed by a unit in the same cell (``20.5 °C``, ``1.25µm``, ``12 [mm]``)."""
+
+
+def without_cell_units(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
+    """The frame with its text columns whose every filled cell is a number and one same unit (``20.5 °C``)
+    read as numbers; the units kept as the columns' (``frame.attrs["cell_units"]``, read as a row of units)."""
+    units = {}
+    for column in frame.columns:
+        if pd.api.types.is_numeric_dtype(frame[column]):
+            continue
+        text = frame[column].astype("string").str.strip()
+        filled = text.notna() & (text != "")
+        parts = text[filled].str.fullmatch(CELL_WITH_UNIT.pattern)
+        if not filled.any() or not bool(parts.all()):
+            continue
+        found = text[filled].str.extract("^" + CELL_WITH_UNIT.pattern + "$")
+        if found[1].nunique() != 1:
+            continue
+        values = as_numbers(text.str.extract("^" + CELL_WITH_UNIT.pattern + "$")[0], decimal, str(column))
+        if values is None:
+            continue
+        frame = frame.copy()
+        frame[column] = values
+        units[str(column)] = str(found[1].iloc[0])
+    if units:
+        frame.attrs["cell_units"] = units
+    return frame
+
+
+def _without_group_spaces(cell: str) -> str:
+    """A number with spaces or apostrophes between its thousands (``2 000``, ``12 345,6``, ``1'234.5``) written
+    without them; any other cell as it is."""
+    return GROUP_MARK.sub("", cell) if SPACED_THOUSANDS.fullmatch(cell) else cell
+
+
+__all__ = [
+    "as_numbers",
+    "is_number",
+    "without_cell_units",
+    "without_thousands_separators",
+]
