@@ -77,7 +77,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     stem = Path(path.stem).stem if compressed else path.stem
     kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
     if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
-        kind = "CSV"
+        return _text_under_a_workbooks_name(path, kind, name or stem, label)
     header = None
     try:
         if kind == "CSV":
@@ -114,6 +114,26 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     _check_unique_columns(header, label)
     frame.columns = [str(c).strip() for c in frame.columns]
     return frame, (name or stem), label
+
+
+def _text_under_a_workbooks_name(path: Path, kind: str, name: str, label: str) -> tuple[pd.DataFrame, str, str]:
+    """A file named as a workbook whose bytes are not one, read as the text table a program saved under that
+    name (a web export's tab-separated "Excel" file); refused as no readable workbook when it holds no table
+    of numbers."""
+    refusal = InputError(
+        f"{label}: not a readable {kind} table (its bytes begin as no workbook does, and they are no text table "
+        "of numbers either); open it in the program that wrote it and save it as .xlsx or CSV"
+    )
+    try:
+        frame, header = read_text_table(path.read_bytes())
+    except (InputError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError):
+        raise refusal from None
+    numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().to_numpy()
+    if frame.shape[0] == 0 or frame.shape[1] < 2 or numeric.mean(axis=0).max() < 0.5:
+        raise refusal
+    _check_unique_columns(header if len(header) == frame.shape[1] else list(frame.columns), label)
+    frame.columns = [str(c).strip() for c in frame.columns]
+    return frame, name, label
 
 
 def _begins_as_workbook(path: Path) -> bool:

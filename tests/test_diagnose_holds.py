@@ -248,7 +248,7 @@ def test_a_broken_workbook_is_one_line(tmp_path, capsys):
     bad.write_bytes(b"not a workbook")
     assert main(["fit", "--data", str(bad), "--temps", "T1", "--p", "0", "--out", str(tmp_path / "m")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "broken.xlsx: not a readable Excel table" in err[0]
+    assert len(err) == 1 and "broken.xlsx: not a readable Excel table (its bytes begin as no workbook" in err[0]
     assert not (tmp_path / "m").exists()
 
 
