@@ -385,7 +385,7 @@ def _validated(
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
     if options.drop_glitches:  # after the ranges: an implausible reading is refused, not interpolated
-        frame, temp_array, glitched = temperatures_without_glitches(frame, temps, temp_array, label)
+        frame, temp_array, glitched = temperatures_without_glitches(frame, temps, temp_array, label, options.ambient)
         notes = notes + ((glitched,) if glitched else ())
     if options.drop_glitches and error_values is not None:
         error_values, _, glitched = without_glitches(error_values, error, label)

@@ -92,19 +92,21 @@ def without_glitches(error: np.ndarray, column: str, label: str) -> tuple[np.nda
 
 
 def temperatures_without_glitches(
-    frame: pd.DataFrame, temps: list[str], readings: np.ndarray, label: str
+    frame: pd.DataFrame, temps: list[str], readings: np.ndarray, label: str, ambient: str | None = None
 ) -> tuple[pd.DataFrame, np.ndarray, str | None]:
     """The inputs' ``readings`` and the frame's columns of the air's temperature (the references the inputs
-    may be taken against, :func:`~groupfit.default_columns.ambient_columns`) with each sensor's glitches
-    (departing by :data:`TEMPERATURE_RANGE_SHARE` of its range) interpolated from its neighbours, and a note
-    naming them (None: none; the frame and readings are then those given)."""
+    may be taken against: ``ambient``, the column ``--ambient`` names, and those named as the air's,
+    :func:`~groupfit.default_columns.ambient_columns`) with each sensor's glitches (departing by
+    :data:`TEMPERATURE_RANGE_SHARE` of its range) interpolated from its neighbours, and a note naming them
+    (None: none; the frame and readings are then those given)."""
     readings = np.array(readings, dtype=float)
     found = []
     for j, name in enumerate(temps):
         readings[:, j], shown = _interpolated_glitches(readings[:, j], name)
         found += shown
     cleaned = {}
-    for name in ambient_columns(frame, temps):
+    named = [ambient] if ambient in frame.columns and ambient not in temps else []
+    for name in dict.fromkeys([*named, *ambient_columns(frame, temps)]):
         values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
         cleaned[name], shown = _interpolated_glitches(values, name)
         found += shown

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.data import load_run
+from groupfit.data import load_run, load_runs
 from groupfit.glitches import (
     MIN_MEASURED_SHARE,
     TEMPERATURE_RANGE_SHARE,
@@ -326,3 +326,16 @@ def test_a_glitch_of_the_air_temperature_the_inputs_are_taken_against_is_interpo
     np.testing.assert_array_equal(np.delete(run.frame["T_amb"].to_numpy(), 300), np.delete(plain, 300))
     assert any("('T_amb' row 301: 85 °C)" in note for note in run.notes)
     assert load_run(tmp / "air.csv", temps=TEMPS.split(",")).frame["T_amb"].iloc[300] == 85.0
+
+
+def test_a_glitch_of_the_air_temperature_named_by_ambient_is_interpolated_whatever_its_name(spiked):
+    tmp, _ = spiked
+    air = pd.read_csv(DATASETS / "paper_cycle.csv").rename(columns={"T_amb": "T15"})  # the air logged as a sensor
+    air.loc[300, "T15"] = 85.0
+    air.to_csv(tmp / "t15.csv", index=False)
+    plain = air["T15"].to_numpy(dtype=float)
+    (named,) = load_runs(tmp / "t15.csv", temps=TEMPS.split(","), drop_glitches=True, ambient="T15")  # --ambient T15
+    assert named.frame["T15"].iloc[300] == pytest.approx(0.5 * (plain[299] + plain[301]), abs=1e-12)
+    assert any("('T15' row 301: 85 °C)" in note for note in named.notes)
+    unnamed = load_run(tmp / "t15.csv", temps=TEMPS.split(","), drop_glitches=True)
+    assert unnamed.frame["T15"].iloc[300] == 85.0  # no column named as the air's: T15 is no reference
