@@ -30,6 +30,10 @@ CELSIUS_BY_UNIT = {
 }
 """Units of temperature a units row may give, and their (scale, offset) to °C."""
 BRACKETS = re.compile(r"^[\[(]\s*(.*?)\s*[\])]$")
+NAMED_TEMPERATURE_UNIT = re.compile(
+    r"(°\s*[CF](?![a-z])|(?<![a-z])deg\s*[CF](?![a-z])|℃|℉|fahrenheit|kelvin|[\[(]\s*°?[CFK]\s*[\])])", re.IGNORECASE
+)
+"""A unit of temperature in a column's name (``T1 [°F]``, ``Temp, °F (LGR S/N: 2001)``, ``bed_degF``, ``T1 (K)``)."""
 
 
 def unit_of(cell: str) -> tuple[str, str] | None:
@@ -56,6 +60,13 @@ def row_units(frame: pd.DataFrame) -> dict[str, tuple[str, str]]:
     return {**max(found, key=len, default={}), **in_cells}
 
 
+def named_temperature_unit(name: str) -> str | None:
+    """The unit of temperature a column's name gives (a key of :data:`CELSIUS_BY_UNIT`), None when none."""
+    found = NAMED_TEMPERATURE_UNIT.search(str(name))
+    unit = unit_of(found.group(1).replace(" ", "")) if found else None
+    return unit[1] if unit and unit[0] == "temperature" else None
+
+
 def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[str], tuple[str, ...]]:
     """Convert, in place, the columns the units row gives in other units (see the module docstring).
 
@@ -72,7 +83,8 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
     units = row_units(frame)
     lengths, converted = [], []
     for column in frame.columns:
-        kind, unit = units.get(str(column), (None, None))
+        named = named_temperature_unit(str(column))
+        kind, unit = units.get(str(column), ("temperature", named) if named else (None, None))
         if kind is None or not pd.api.types.is_numeric_dtype(frame[column]):
             continue
         if kind == "length":
@@ -84,7 +96,7 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
     notes = ()
     if converted:
         notes = (
-            f"{label}: converted to µm, s and °C from the units under the header or in the cells: "
+            f"{label}: converted to µm, s and °C from the units of their names, cells or the row under the header: "
             + ", ".join(converted),
         )
     return lengths, notes
@@ -102,8 +114,15 @@ def _to_base(column, kind: str, unit: str, time: str, label: str) -> tuple[float
         named, scale, offset = named_time_unit(str(column)), UNIT_SECONDS[unit], 0.0
         named_scale = UNIT_SECONDS.get(named) if named else None
     else:
-        named, named_scale = None, None
+        named = named_temperature_unit(str(column))
+        named_scale = CELSIUS_BY_UNIT[named] if named else None
         scale, offset = CELSIUS_BY_UNIT[unit]
+        if named_scale is not None and named_scale != (scale, offset):
+            raise InputError(
+                f"{label}: column '{column}' is named in {named} but its cells or the row of units under the "
+                f"header give '{unit}'; correct the one that is wrong"
+            )
+        return scale, offset
     if named_scale is None:
         return scale, offset
     if not np.isclose(named_scale, scale):

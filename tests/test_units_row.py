@@ -229,3 +229,18 @@ def test_an_opendocument_spreadsheet_is_read_as_a_workbook(tmp_path, frame, plai
     np.testing.assert_allclose(run.temps, plain.temps, rtol=1e-12)
     np.testing.assert_allclose(run.error, plain.error, rtol=1e-12)
     assert "sheet 'Log'" in run.source
+
+
+@pytest.mark.parametrize("suffix", [" [°F]", "_degF", " (K)", ", °F (LGR S/N: 2001)"])
+def test_temperatures_named_in_fahrenheit_or_kelvin_are_read_in_celsius(tmp_path, frame, plain, suffix):
+    celsius = frame[TEMPS].to_numpy(dtype=float)
+    logged = celsius + 273.15 if "K" in suffix else celsius * 9.0 / 5.0 + 32.0
+    names = [f"{name}{suffix}" for name in TEMPS]
+    path = tmp_path / "log.csv"
+    frame.drop(columns=TEMPS).assign(**dict(zip(names, logged.T))).to_csv(path, index=False)
+    run = load_run(path, temps=split_names(",".join(f'"{name}"' for name in names)))
+    np.testing.assert_allclose(run.temps, plain.temps, rtol=0, atol=1e-9)
+    assert any(f"'{names[0]}' from" in note for note in run.notes)
+    path.write_text(with_units_row(frame.rename(columns={"T1": "T1 [°C]"}), {"T1 [°C]": "degF"}))
+    with pytest.raises(InputError, match=r"column 'T1 \[°C\]' is named in °c but its cells or the row of units"):
+        load_run(path, temps=["T1 [°C]", "T2"])
