@@ -90,6 +90,8 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
         if kind == "length":
             lengths.append(str(column))
         scale, offset = _to_base(column, kind, unit, time, label)
+        if unit in ("k", "kelvin") and not _absolute_kelvin(frame[column]):
+            continue  # readings of a few kelvin: a temperature difference (over a reference), kept as logged
         if (scale, offset) != (1.0, 0.0):
             frame[column] = frame[column].to_numpy(dtype=float) * scale + offset
             converted.append(f"'{column}' from {unit}")
@@ -100,6 +102,17 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
             + ", ".join(converted),
         )
     return lengths, notes
+
+
+COLDEST_KELVIN = 173.15
+"""Readings in K all above this (−100 °C) are absolute temperatures; one below it makes the column a temperature
+difference in K (the German convention, ``ΔT [K]``), which is read as logged."""
+
+
+def _absolute_kelvin(values: pd.Series) -> bool:
+    finite = values.to_numpy(dtype=float)
+    finite = finite[np.isfinite(finite)]
+    return bool(finite.size) and float(finite.min()) > COLDEST_KELVIN
 
 
 def _to_base(column, kind: str, unit: str, time: str, label: str) -> tuple[float, float]:

@@ -244,3 +244,12 @@ def test_temperatures_named_in_fahrenheit_or_kelvin_are_read_in_celsius(tmp_path
     path.write_text(with_units_row(frame.rename(columns={"T1": "T1 [°C]"}), {"T1 [°C]": "degF"}))
     with pytest.raises(InputError, match=r"column 'T1 \[°C\]' is named in °c but its cells or the row of units"):
         load_run(path, temps=["T1 [°C]", "T2"])
+
+
+def test_differences_in_kelvin_are_read_as_logged(tmp_path, frame, plain):
+    rise = frame[TEMPS] - frame[TEMPS].iloc[0]  # ΔT [K]: each sensor's rise over its first reading
+    path = tmp_path / "log.csv"
+    frame.assign(**{f"{name} [K]": rise[name] for name in TEMPS}).drop(columns=TEMPS).to_csv(path, index=False)
+    run = load_run(path, temps=[f"{name} [K]" for name in TEMPS])
+    np.testing.assert_allclose(run.temps, plain.temps - plain.temps[0], rtol=0, atol=1e-9)
+    assert not any("from k" in note for note in run.notes)
