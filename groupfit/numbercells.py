@@ -131,7 +131,7 @@ def without_cell_units(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
         frame[column] = values
         units[str(column)] = str(found[1].iloc[0])
     if units:
-        frame.attrs["cell_units"] = units
+        frame.attrs["cell_units"] = {**frame.attrs.get("cell_units", {}), **units}
     return frame
 
 

@@ -23,6 +23,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
+from groupfit.numbercells import without_cell_units
 from groupfit.textlayout import (
     RULER,
     SNIFF_LINES,
@@ -213,7 +214,7 @@ def _numbers_again(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
             values = numbers if numbers.notna().sum() == frame[column].notna().sum() else None
         if values is not None:
             frame[column] = values
-    return frame
+    return without_cell_units(frame, decimal)
 
 
 def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:

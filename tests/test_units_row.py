@@ -253,3 +253,17 @@ def test_differences_in_kelvin_are_read_as_logged(tmp_path, frame, plain):
     run = load_run(path, temps=[f"{name} [K]" for name in TEMPS])
     np.testing.assert_allclose(run.temps, plain.temps - plain.temps[0], rtol=0, atol=1e-9)
     assert not any("from k" in note for note in run.notes)
+
+
+def test_units_in_the_cells_of_a_log_with_a_message_line_are_read_once_the_line_is_left_out(tmp_path, frame, plain):
+    cells = frame.astype(object).rename(columns={"error_um": "Error"})
+    cells["Error"] = [f"{value / 1000.0!r} mm" for value in frame["error_um"]]
+    lines = cells.to_csv(index=False).splitlines()
+    at = list(cells.columns).index("Error")
+    lines.insert(120, "," * at + "Logging paused" + "," * (len(cells.columns) - at - 1))  # in the Error column
+    path = tmp_path / "log.csv"
+    path.write_text("\n".join(lines) + "\n")
+    run = load_run(path, temps=TEMPS, error="Error")
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+    assert any("holding a message alone left out" in note for note in run.notes)
+    assert any("'Error' from mm" in note for note in run.notes)
