@@ -35,8 +35,14 @@ DATE_FORMATS = (
     "%d/%m/%y",
     "%m/%d/%y",
     "%d-%m-%Y",
+    "%d-%m-%y",
+    "%d-%b-%Y",
+    "%d-%b-%y",
+    "%d %b %Y",
+    "%b %d %Y",
 )
-"""Dates as loggers write them; a two-digit year after the four-digit ones (a HOBO logger's ``03/01/26``)."""
+"""Dates as loggers write them; a two-digit year after the four-digit ones (a HOBO logger's ``03/01/26``), and
+English month names (``01-Mar-2026``)."""
 TIME_FORMATS = (
     "%H:%M:%S.%f",
     "%H:%M:%S,%f",
@@ -240,6 +246,7 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
     empty = np.flatnonzero((text.isna() | (text == "")).to_numpy())
     if empty.size:
         raise InputError(f"{label}: row {empty[0] + 1}, column '{name}' is empty; fix or remove that row")
+    text, zone_hours = _without_zone_names(text)
     first, last = str(text.iloc[0]), str(text.iloc[-1])
     if is_number(first, ","):
         return None
@@ -257,7 +264,29 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
             f"{label}: row {row + 1}, column '{name}': {str(text.iloc[row])!r} is not a date-time in the form "
             f"of the rows above it ({form}); fix or remove that row"
         )
-    return min(readings, key=_unevenness)
+    return min(readings, key=_unevenness) - 3600.0 * (zone_hours - zone_hours[0])
+
+
+ZONE_HOURS = {
+    **dict.fromkeys(("utc", "gmt", "z", "wet"), 0.0),
+    **dict.fromkeys(("west", "bst", "cet", "mez"), 1.0),
+    **dict.fromkeys(("cest", "mesz", "eet"), 2.0),
+    "eest": 3.0,
+    **{"est": -5.0, "edt": -4.0, "cst": -6.0, "cdt": -5.0, "mst": -7.0, "mdt": -6.0, "pst": -8.0, "pdt": -7.0},
+    **dict.fromkeys(("jst", "kst"), 9.0),
+}
+"""Time zones a logger may name after its stamps (``2026-03-01 08:00:00 CET``), in hours ahead of UTC."""
+ZONE_NAME = re.compile(r"^(.*\S)\s+([A-Za-z]{1,4})$")
+
+
+def _without_zone_names(text: pd.Series) -> tuple[pd.Series, np.ndarray]:
+    """The stamps without the time zone named after each (when every one names one), and each stamp's zone in
+    hours ahead of UTC (zeros when none is named): a change from CET to CEST is a clock change, not a gap."""
+    found = text.str.extract(ZONE_NAME.pattern)
+    hours = found[1].str.lower().map(ZONE_HOURS)
+    if bool(hours.isna().any()):
+        return text, np.zeros(len(text))
+    return found[0].astype("string"), hours.to_numpy(dtype=float)
 
 
 def _readings(text: pd.Series, first: str, last: str):

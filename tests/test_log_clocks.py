@@ -12,6 +12,7 @@ from test_switching_models import SYNTHETIC
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.errors import InputError
+from groupfit.timestamps import text_seconds
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 
@@ -150,3 +151,19 @@ def test_a_modelling_file_not_read_as_one_run_is_not_continued_and_the_note_says
     assert main(["replay", model, "--data", str(next_run), "--fresh", "--json", str(tmp_path / "f.json")]) == 0
     replayed, fresh = (json.loads((tmp_path / f).read_text()) for f in ("r.json", "f.json"))
     assert replayed["rms_um"] == fresh["rms_um"] and replayed["samples"] == fresh["samples"]
+
+
+@pytest.mark.parametrize("form", ["%Y-%m-%d %H:%M:%S %Z", "%d.%m.%Y %H:%M:%S %Z", "%d-%b-%Y %H:%M:%S %Z"])
+def test_stamps_naming_their_time_zone_cross_a_clock_change_evenly(form):
+    # Central Europe changes to summer time at 01:00 UTC on 2026-03-29: CET 01:59 is followed by CEST 03:00
+    utc = pd.date_range("2026-03-29 00:30", periods=90, freq="60s", tz="UTC")
+    column = pd.Series(utc.tz_convert("Europe/Berlin").strftime(form))
+    assert column.str.endswith(" CET").any() and column.str.endswith(" CEST").any()
+    np.testing.assert_array_equal(text_seconds(column, "time", "run.csv"), 60.0 * np.arange(90))
+
+
+@pytest.mark.parametrize("form", ["%d-%m-%y %H:%M:%S", "%d-%b-%Y %H:%M:%S", "%d %b %Y %H:%M", "%b %d %Y %I:%M %p"])
+def test_dates_with_two_digit_years_or_month_names_are_read(form):
+    stamps = pd.date_range("2026-02-27 22:00", periods=200, freq="120s")  # across the end of February
+    column = pd.Series(stamps.strftime(form))
+    np.testing.assert_array_equal(text_seconds(column, "time", "run.csv"), 120.0 * np.arange(200))
