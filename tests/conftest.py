@@ -6,11 +6,14 @@ import os
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import settings
 from support import SHARED_DATA
+from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
+from groupfit.data import load_run
 from groupfit.grouping import Constraints, soft_groups
 from groupfit.synthetic import simulate_lumped
 
@@ -176,3 +179,10 @@ def fitted_on_monday(tmp_path):
         return data, other, tmp_path / "m" / "model.json"
 
     return fit
+
+
+@pytest.fixture(scope="session")
+def synthetic():
+    """The synthetic cycle as a table and as groupfit reads it (inputs T1-T4): the truth a log of the same run
+    written in another form is read against."""
+    return pd.read_csv(SYNTHETIC), load_run(SYNTHETIC, temps=["T1", "T2", "T3", "T4"])

@@ -7,7 +7,6 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.data import load_run
@@ -15,12 +14,6 @@ from groupfit.errors import InputError
 from groupfit.timestamps import text_seconds
 
 TEMPS = ["T1", "T2", "T3", "T4"]
-
-
-@pytest.fixture(scope="module")
-def synthetic() -> tuple[pd.DataFrame, object]:
-    """The synthetic run as a table and as groupfit reads it."""
-    return pd.read_csv(SYNTHETIC), load_run(SYNTHETIC, temps=TEMPS)
 
 
 @pytest.mark.parametrize(

@@ -19,16 +19,6 @@ from groupfit.units_row import unit_of
 TEMPS = ["T1", "T2", "T3", "T4"]
 
 
-@pytest.fixture(scope="module")
-def plain():
-    return load_run(SYNTHETIC, temps=TEMPS)
-
-
-@pytest.fixture(scope="module")
-def frame():
-    return pd.read_csv(SYNTHETIC)
-
-
 def with_units_row(frame: pd.DataFrame, units: dict[str, str]) -> str:
     header, body = frame.to_csv(index=False).split("\n", 1)
     return header + "\n" + ",".join(units.get(c, "") for c in frame.columns) + "\n" + body
@@ -37,7 +27,8 @@ def with_units_row(frame: pd.DataFrame, units: dict[str, str]) -> str:
 @pytest.mark.parametrize(
     "unit, per_um", [("mm", 1e-3), ("[mm]", 1e-3), ("nm", 1e3), ("µm", 1.0), ("um", 1.0), ("(microns)", 1.0)]
 )
-def test_an_error_in_the_unit_of_its_units_row_is_read_in_micrometres(tmp_path, frame, plain, unit, per_um):
+def test_an_error_in_the_unit_of_its_units_row_is_read_in_micrometres(tmp_path, synthetic, unit, per_um):
+    frame, plain = synthetic
     logged = frame.assign(error_um=frame["error_um"] * per_um).rename(columns={"error_um": "Error"})
     path = tmp_path / "log.csv"
     path.write_text(with_units_row(logged, {"time_s": "s", "Error": unit, **dict.fromkeys(TEMPS, "°C")}))
@@ -49,7 +40,8 @@ def test_an_error_in_the_unit_of_its_units_row_is_read_in_micrometres(tmp_path, 
 
 
 @pytest.mark.parametrize("unit, per_second", [("min", 1 / 60), ("h", 1 / 3600), ("[ms]", 1e3), ("s", 1.0)])
-def test_a_time_column_in_the_unit_of_its_units_row_is_read_in_seconds(tmp_path, frame, plain, unit, per_second):
+def test_a_time_column_in_the_unit_of_its_units_row_is_read_in_seconds(tmp_path, synthetic, unit, per_second):
+    frame, plain = synthetic
     logged = frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": "Time"})
     path = tmp_path / "log.csv"
     path.write_text(with_units_row(logged, {"Time": unit, "error_um": "µm"}))
@@ -60,7 +52,8 @@ def test_a_time_column_in_the_unit_of_its_units_row_is_read_in_seconds(tmp_path,
 
 
 @pytest.mark.parametrize("unit", ["degF", "°F", "K", "[K]"])
-def test_temperatures_in_fahrenheit_or_kelvin_by_the_units_row_are_read_in_celsius(tmp_path, frame, plain, unit):
+def test_temperatures_in_fahrenheit_or_kelvin_by_the_units_row_are_read_in_celsius(tmp_path, synthetic, unit):
+    frame, plain = synthetic
     celsius = frame[TEMPS].to_numpy(dtype=float)
     logged = celsius * 9.0 / 5.0 + 32.0 if "F" in unit else celsius + 273.15
     path = tmp_path / "log.csv"
@@ -76,7 +69,8 @@ def test_temperatures_in_fahrenheit_or_kelvin_by_the_units_row_are_read_in_celsi
     np.testing.assert_allclose(ours, theirs, rtol=1e-7, atol=1e-9)
 
 
-def test_a_logger_table_of_channels_finds_its_error_by_the_units_row_and_names_two_candidates(tmp_path, frame, plain):
+def test_a_logger_table_of_channels_finds_its_error_by_the_units_row_and_names_two_candidates(tmp_path, synthetic):
+    frame, plain = synthetic
     channels = {"T1": "CH1", "T2": "CH2", "T3": "CH3", "T4": "CH4", "error_um": "CH5"}
     logged = frame.assign(error_um=frame["error_um"] / 1000.0).rename(columns=channels)
     units = {"time_s": "s", **dict.fromkeys(["CH1", "CH2", "CH3", "CH4"], "degC"), "CH5": "mm"}
@@ -90,7 +84,8 @@ def test_a_logger_table_of_channels_finds_its_error_by_the_units_row_and_names_t
         load_run(path, temps=["CH1", "CH2", "CH3", "CH4"], error_is_default=True)
 
 
-def test_a_name_and_a_units_row_that_disagree_are_refused_naming_both(tmp_path, frame):
+def test_a_name_and_a_units_row_that_disagree_are_refused_naming_both(tmp_path, synthetic):
+    frame = synthetic[0]
     path = tmp_path / "log.csv"
     path.write_text(with_units_row(frame, {"error_um": "mm"}))
     with pytest.raises(InputError, match=r"column 'error_um' is named in um but the row of units .* gives 'mm'"):
@@ -100,7 +95,8 @@ def test_a_name_and_a_units_row_that_disagree_are_refused_naming_both(tmp_path, 
         load_run(path, temps=TEMPS, time="Zeit [min]")
 
 
-def test_a_workbook_units_row_converts_as_a_text_tables_does(tmp_path, frame, plain):
+def test_a_workbook_units_row_converts_as_a_text_tables_does(tmp_path, synthetic):
+    frame, plain = synthetic
     units = {"Time": "min", "Error": "mm"}
     logged = frame.assign(time_s=frame["time_s"] / 60.0, error_um=frame["error_um"] / 1000.0)
     logged = logged.rename(columns={"time_s": "Time", "error_um": "Error"})
@@ -118,7 +114,8 @@ def test_cells_that_are_no_unit_convert_nothing():
 
 
 @pytest.mark.parametrize("unit, per_um", [("µm", 1.0), ("mm", 1e-3), (" [nm]", 1e3)])
-def test_units_written_in_every_cell_are_read_as_a_row_of_units(tmp_path, frame, plain, unit, per_um):
+def test_units_written_in_every_cell_are_read_as_a_row_of_units(tmp_path, synthetic, unit, per_um):
+    frame, plain = synthetic
     cells = frame.astype(object).rename(columns={"error_um": "Error"})
     for column in TEMPS:
         cells[column] = [f"{value} °C" for value in frame[column]]
@@ -135,7 +132,8 @@ def test_units_written_in_every_cell_are_read_as_a_row_of_units(tmp_path, frame,
     "form",
     ["unicode minus", "spaced thousands", "apostrophe thousands", "no-break thousands", "savetxt", "matlab"],
 )
-def test_numbers_and_headers_as_other_programs_write_them_are_read_as_the_plain_table(tmp_path, frame, plain, form):
+def test_numbers_and_headers_as_other_programs_write_them_are_read_as_the_plain_table(tmp_path, synthetic, form):
+    frame, plain = synthetic
     speed = frame.assign(speed=np.where(frame["spindle_on"] > 0, -12500.5, 0.0))  # a direction of rotation
     text = speed.to_csv(index=False)
     if form == "unicode minus":
@@ -160,7 +158,8 @@ def test_numbers_and_headers_as_other_programs_write_them_are_read_as_the_plain_
     np.testing.assert_array_equal(run.frame["speed"].to_numpy(dtype=float), speed["speed"].to_numpy())
 
 
-def test_a_column_named_hash_alone_is_a_name_not_a_comment_mark(tmp_path, frame, plain):
+def test_a_column_named_hash_alone_is_a_name_not_a_comment_mark(tmp_path, synthetic):
+    frame, plain = synthetic
     path = tmp_path / "hobo.csv"
     frame.rename_axis("#").reset_index().assign(**{"#": lambda f: f["#"] + 1}).to_csv(path, index=False)
     run = load_run(path, temps=TEMPS)
@@ -168,7 +167,8 @@ def test_a_column_named_hash_alone_is_a_name_not_a_comment_mark(tmp_path, frame,
     np.testing.assert_array_equal(run.frame["#"].to_numpy(), np.arange(1, len(frame) + 1))
 
 
-def test_a_hobo_export_is_read_with_its_two_digit_year_and_its_event_columns(tmp_path, frame, plain):
+def test_a_hobo_export_is_read_with_its_two_digit_year_and_its_event_columns(tmp_path, synthetic):
+    frame, plain = synthetic
     stamps = pd.Timestamp("2026-03-01 08:00:00") + pd.to_timedelta(frame["time_s"] - frame["time_s"].iloc[0], unit="s")
     names = [f"Temp, °C (LGR S/N: 20{k}, SEN S/N: 20{k})" for k in range(1, 5)]
     log = pd.DataFrame(
@@ -184,7 +184,8 @@ def test_a_hobo_export_is_read_with_its_two_digit_year_and_its_event_columns(tmp
     np.testing.assert_allclose(run.time - run.time[0], plain.time - plain.time[0], rtol=0, atol=1e-9)
 
 
-def test_names_holding_commas_are_given_in_quotes_and_a_name_cut_at_its_comma_says_so(tmp_path, frame):
+def test_names_holding_commas_are_given_in_quotes_and_a_name_cut_at_its_comma_says_so(tmp_path, synthetic):
+    frame = synthetic[0]
     names = [f"Temp, °C (S/N {k})" for k in range(1, 5)]
     path = tmp_path / "log.csv"
     frame.rename(columns=dict(zip(TEMPS, names))).to_csv(path, index=False)
@@ -199,7 +200,8 @@ def test_names_holding_commas_are_given_in_quotes_and_a_name_cut_at_its_comma_sa
 
 
 @pytest.mark.parametrize("suffix", [".xls", ".xlsx", ".ods"])
-def test_a_text_table_saved_under_a_workbooks_name_is_read_as_text(tmp_path, frame, plain, suffix):
+def test_a_text_table_saved_under_a_workbooks_name_is_read_as_text(tmp_path, synthetic, suffix):
+    frame, plain = synthetic
     path = tmp_path / f"export{suffix}"
     frame.to_csv(path, sep="\t", index=False)  # a web export's "Excel" file: tab-separated text
     same = load_run(path, temps=TEMPS)
@@ -219,7 +221,8 @@ def test_a_binary_workbook_whose_reader_is_missing_names_the_package_to_install(
         load_run(path, temps=TEMPS)
 
 
-def test_an_opendocument_spreadsheet_is_read_as_a_workbook(tmp_path, frame, plain):
+def test_an_opendocument_spreadsheet_is_read_as_a_workbook(tmp_path, synthetic):
+    frame, plain = synthetic
     pytest.importorskip("odf")
     path = tmp_path / "log.ods"
     with pd.ExcelWriter(path, engine="odf") as book:
@@ -232,7 +235,8 @@ def test_an_opendocument_spreadsheet_is_read_as_a_workbook(tmp_path, frame, plai
 
 
 @pytest.mark.parametrize("suffix", [" [°F]", "_degF", " (K)", ", °F (LGR S/N: 2001)"])
-def test_temperatures_named_in_fahrenheit_or_kelvin_are_read_in_celsius(tmp_path, frame, plain, suffix):
+def test_temperatures_named_in_fahrenheit_or_kelvin_are_read_in_celsius(tmp_path, synthetic, suffix):
+    frame, plain = synthetic
     celsius = frame[TEMPS].to_numpy(dtype=float)
     logged = celsius + 273.15 if "K" in suffix else celsius * 9.0 / 5.0 + 32.0
     names = [f"{name}{suffix}" for name in TEMPS]
@@ -246,7 +250,8 @@ def test_temperatures_named_in_fahrenheit_or_kelvin_are_read_in_celsius(tmp_path
         load_run(path, temps=["T1 [°C]", "T2"])
 
 
-def test_differences_in_kelvin_are_read_as_logged(tmp_path, frame, plain):
+def test_differences_in_kelvin_are_read_as_logged(tmp_path, synthetic):
+    frame, plain = synthetic
     rise = frame[TEMPS] - frame[TEMPS].iloc[0]  # ΔT [K]: each sensor's rise over its first reading
     path = tmp_path / "log.csv"
     frame.assign(**{f"{name} [K]": rise[name] for name in TEMPS}).drop(columns=TEMPS).to_csv(path, index=False)
@@ -255,7 +260,8 @@ def test_differences_in_kelvin_are_read_as_logged(tmp_path, frame, plain):
     assert not any("from k" in note for note in run.notes)
 
 
-def test_units_in_the_cells_of_a_log_with_a_message_line_are_read_once_the_line_is_left_out(tmp_path, frame, plain):
+def test_units_in_the_cells_of_a_log_with_a_message_line_are_read_once_the_line_is_left_out(tmp_path, synthetic):
+    frame, plain = synthetic
     cells = frame.astype(object).rename(columns={"error_um": "Error"})
     cells["Error"] = [f"{value / 1000.0!r} mm" for value in frame["error_um"]]
     lines = cells.to_csv(index=False).splitlines()
