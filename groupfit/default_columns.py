@@ -44,9 +44,9 @@ ERROR_NAME = re.compile(
     re.IGNORECASE,
 )
 TEMPERATURE_NAME = re.compile(
-    r"°C|deg[\s_]?C\b|\[C\]|\(C\)|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d", re.IGNORECASE
+    r"°[CF]|deg[\s_]?[CF]\b|[\[(][CFK][\])]|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d", re.IGNORECASE
 )
-"""A name that marks a temperature column."""
+"""A name that marks a temperature column (in °C, °F or K)."""
 MICROMETRES_PER_UNIT = {"mm": 1000.0, "um": 1.0, "µm": 1.0, "μm": 1.0, "micron": 1.0, "microns": 1.0, "nm": 1e-3}
 """Length units a column's name may end in (``error_mm``, ``dZ [µm]``, ``drift (nm)``), in µm."""
 LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/])(mm|um|µm|μm|microns?|nm)\s*[\])]?\s*$", re.IGNORECASE)

@@ -29,6 +29,11 @@ CELSIUS_BY_UNIT = {
     **dict.fromkeys(("°f", "degf", "deg f", "℉", "fahrenheit"), (5.0 / 9.0, -32.0 * 5.0 / 9.0)),
 }
 """Units of temperature a units row may give, and their (scale, offset) to °C."""
+SHOWN = {
+    **dict.fromkeys(("°f", "degf", "deg f", "℉", "fahrenheit"), "°F"),
+    **dict.fromkeys(("k", "kelvin"), "K"),
+}
+"""How a unit of temperature is named in a note."""
 BRACKETS = re.compile(r"^[\[(]\s*(.*?)\s*[\])]$")
 NAMED_TEMPERATURE_UNIT = re.compile(
     r"(°\s*[CF](?![a-z])|(?<![a-z])deg\s*[CF](?![a-z])|℃|℉|fahrenheit|kelvin|[\[(]\s*°?[CFK]\s*[\])])", re.IGNORECASE
@@ -94,7 +99,7 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
             continue  # readings of a few kelvin: a temperature difference (over a reference), kept as logged
         if (scale, offset) != (1.0, 0.0):
             frame[column] = frame[column].to_numpy(dtype=float) * scale + offset
-            converted.append(f"'{column}' from {unit}")
+            converted.append(f"'{column}' from {SHOWN.get(unit, unit)}")
     notes = ()
     if converted:
         notes = (

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from test_switching_models import SYNTHETIC
+from test_switching_models import DATASETS, SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.data import load_run
@@ -257,7 +257,7 @@ def test_differences_in_kelvin_are_read_as_logged(tmp_path, synthetic):
     frame.assign(**{f"{name} [K]": rise[name] for name in TEMPS}).drop(columns=TEMPS).to_csv(path, index=False)
     run = load_run(path, temps=[f"{name} [K]" for name in TEMPS])
     np.testing.assert_allclose(run.temps, plain.temps - plain.temps[0], rtol=0, atol=1e-9)
-    assert not any("from k" in note for note in run.notes)
+    assert not any("from K" in note for note in run.notes)
 
 
 def test_units_in_the_cells_of_a_log_with_a_message_line_are_read_once_the_line_is_left_out(tmp_path, synthetic):
@@ -273,3 +273,27 @@ def test_units_in_the_cells_of_a_log_with_a_message_line_are_read_once_the_line_
     np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
     assert any("holding a message alone left out" in note for note in run.notes)
     assert any("'Error' from mm" in note for note in run.notes)
+
+
+def test_an_air_temperature_named_in_fahrenheit_is_the_reference_as_one_in_celsius(tmp_path):
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")  # the FE run, its inputs taken over T_amb
+    sensors = [name for name in frame.columns if name.startswith("T")]
+    fahrenheit = tmp_path / "f.csv"
+    in_f = {f"{name} [°F]": frame[name] * 1.8 + 32.0 for name in sensors}
+    frame.drop(columns=sensors).assign(**in_f).to_csv(fahrenheit, index=False)
+    models = []
+    for path, folder in ((DATASETS / "paper_cycle.csv", tmp_path / "c"), (fahrenheit, tmp_path / "f")):
+        assert main(["fit", "--data", str(path), "--p", "0", "--ridge", "0", "--out", str(folder)]) == 0
+        models.append(json.loads((folder / "model.json").read_text()))
+    assert models[0]["reference"] == "T_amb" and models[1]["reference"] == "T_amb [°F]"
+    np.testing.assert_allclose(models[1]["coefficients"], models[0]["coefficients"], rtol=1e-6, atol=1e-8)
+
+
+def test_units_written_in_the_cells_of_a_workbook_are_read_as_in_a_text_table(tmp_path, synthetic):
+    frame, plain = synthetic
+    cells = frame.astype(object).rename(columns={"error_um": "Error"})
+    cells["Error"] = [f"{value / 1000.0!r} mm" for value in frame["error_um"]]
+    path = tmp_path / "log.xlsx"
+    cells.to_excel(path, index=False)
+    run = load_run(path, temps=TEMPS, error="Error")
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
