@@ -38,9 +38,21 @@ ERROR_LIMIT_UM = 1.0e5
 """Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
 
 
+SIGNAL_UNIT = re.compile(
+    r"(?:[\[(]\s*(v|vdc|vac|mv|ma|a|counts?|digits?|inc)\s*[\])]|[_\s](vdc|vac|mv|volts?))\s*$", re.IGNORECASE
+)
+"""A transducer's signal unit at the end of a name (``105 (VDC)``, ``probe [mV]``, ``disp_mV``): not a length."""
+
+
 def unit_note(name: str | None, label: str) -> str | None:
     """The note of an error column read in another unit than µm (None for one in µm)."""
     unit, scale = length_unit(name)
+    signal = SIGNAL_UNIT.search(str(name)) if name is not None else None
+    if scale == 1.0 and signal:
+        return (
+            f"{label}: column '{name}' is named in {signal.group(1) or signal.group(2)}, a transducer's signal, not "
+            "a length: read as µm; scale it to µm first (by the transducer's µm per volt or per count)"
+        )
     if scale == 1.0:
         return None
     return f"{label}: column '{name}' is in {unit} by its name: read ×{scale:g} as µm (rename it to read it as µm)"

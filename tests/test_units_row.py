@@ -297,3 +297,16 @@ def test_units_written_in_the_cells_of_a_workbook_are_read_as_in_a_text_table(tm
     cells.to_excel(path, index=False)
     run = load_run(path, temps=TEMPS, error="Error")
     np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "name, flagged",
+    [("105 (VDC)", True), ("probe [mV]", True), ("Z [counts]", True), ("drift A", False), ("dZ [µm]", False)],
+)
+def test_an_error_named_in_a_transducers_signal_unit_gets_a_note_to_scale_it(tmp_path, synthetic, name, flagged):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    frame.rename(columns={"error_um": name}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, error=name)
+    np.testing.assert_array_equal(run.error, plain.error)  # read as logged, in µm
+    assert any("a transducer's signal, not a length" in note for note in run.notes) == flagged
