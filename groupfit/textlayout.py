@@ -15,8 +15,8 @@ should not have to rewrite one before groupfit reads it:
   tab, or runs of spaces for a lab logger's ``.dat``) that gives the longest
   such run, the header's own deciding a tie: a name with a comma in it
   (SINUMERIK's ``T1[u1,1]``) does not make the comma the separator of a
-  semicolon table. Runs cut by a line of one field (``Logging paused``) are
-  one body;
+  semicolon table. Runs cut by a line of one field (``Logging paused``), or by a
+  message on a row of the table's width (``;Logging paused;;;``), are one body;
 * the header: of the lines of text directly above the body with about as many
   fields (one more or fewer: a separator closing every data row), below the
   last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``) and but for
@@ -77,6 +77,8 @@ SNIFF_LINES = 200
 """Lines looked at for the body, the header and, below it, the decimal mark."""
 AGREEING_LINES = 3
 """Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
+WORDS = re.compile(r"[^\W\d_]")
+DIGIT = re.compile(r"\d")
 RULER = re.compile(r"[-=_~*+|\s]+")
 """A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
@@ -108,6 +110,18 @@ class _Row:
     def blank(self) -> bool:
         """Nothing but separators (a spreadsheet's ``;;;;`` row) or rulers (``-----``, ``=====``)."""
         return all(RULER.fullmatch(field) for field in self.fields if field)
+
+    @property
+    def message(self) -> bool:
+        """A logger's message on a row of the table's width (``;Logging paused;;;``): fewer than half the fields
+        filled, each with words and no digit; no header (:func:`groupfit.readtable.without_message_rows`
+        leaves it out)."""
+        filled = [field for field in self.fields if field]
+        return (
+            bool(filled)
+            and 2 * len(filled) < len(self.fields)
+            and all(WORDS.search(field) and not DIGIT.search(field) for field in filled)
+        )
 
     @property
     def is_text(self) -> bool:
@@ -222,12 +236,14 @@ def _body_layout(lines: list[str]) -> tuple[str, int] | None:
 
 def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> int:
     """The start of the body that holds the run at ``first``: earlier runs of its width belong to it when
-    nothing between them could be a header (a ``Logging paused`` line, a cut row) but a repeat of a line above
-    them (a header written again after a logger's restart)."""
+    nothing between them could be a header (a ``Logging paused`` line, a message on a row of separators, a cut
+    row) but a repeat of a line above them (a header written again after a logger's restart)."""
     width = len(rows[first].fields)
     for start, end in reversed([run for run in runs if run[1] <= first]):
         seen_above = {tuple(row.fields) for row in rows[:start] if row.is_text}
-        between = [row for row in rows[end:first] if row.is_text and tuple(row.fields) not in seen_above]
+        between = [
+            row for row in rows[end:first] if row.is_text and not row.message and tuple(row.fields) not in seen_above
+        ]
         if len(rows[start].fields) != width or between:
             break
         first = start

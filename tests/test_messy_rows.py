@@ -229,6 +229,8 @@ SEPARATORS = "," * 10
         (3, ["Logging paused"], "1 row(s) holding a message alone left out (row 4: a logger's message, such as "),
         (300, ["=" * 20], "1 row(s) holding a message alone left out (row 301: a logger's message, such as '="),
         (300, [",,Pause" + "," * 8], "(row 301: a logger's message, such as 'Pause')"),
+        (3, [",,Pause" + "," * 8], "(row 4: a logger's message, such as 'Pause')"),  # the longer body below it
+        (30, [",Logging paused" + "," * 9], "(row 31: a logger's message, such as 'Logging paused')"),
     ],
 )
 def test_blank_rulers_and_message_lines_are_passed_over_and_change_nothing(tmp_path, capsys, after_row, inserted, note):
