@@ -25,8 +25,10 @@ from groupfit.errors import InputError
 from groupfit.io import note_read
 from groupfit.numbercells import without_cell_units
 from groupfit.textlayout import (
+    DIGIT,
     RULER,
     SNIFF_LINES,
+    WORDS,
     as_numbers,
     layout_of,
     read_text_table,
@@ -165,7 +167,7 @@ def without_repeated_headers(frame: pd.DataFrame, label: str, decimal: str = "."
     if not repeated.any():
         return frame, None
     kept, note = _left_out(frame, repeated, label, "repeating the header", "the logger started again and appended")
-    return _numbers_again(kept, decimal), note
+    return _numbers_again(kept, decimal, label), note
 
 
 def without_message_rows(frame: pd.DataFrame, label: str, decimal: str = ".") -> tuple[pd.DataFrame, str | None]:
@@ -187,8 +189,8 @@ def without_message_rows(frame: pd.DataFrame, label: str, decimal: str = ".") ->
     message = pd.Series("", index=frame.index, dtype="string")
     for column in texts:
         cells = frame[column].astype("string").str.strip()
-        written = cells.str.contains(r"[^\W\d_]", regex=True) | cells.str.fullmatch(RULER.pattern)  # not NULs
-        words = (written & ~cells.str.contains(r"\d", regex=True)).fillna(False).to_numpy(bool)
+        written = cells.str.contains(WORDS.pattern, regex=True) | cells.str.fullmatch(RULER.pattern)  # not NULs
+        words = (written & ~cells.str.contains(DIGIT.pattern, regex=True)).fillna(False).to_numpy(bool)
         worded += words
         message = message.mask(words, (message + " " + cells).str.strip())
     rows = (filled > 0) & (worded == filled) & (2 * filled < len(frame.columns))
@@ -196,12 +198,13 @@ def without_message_rows(frame: pd.DataFrame, label: str, decimal: str = ".") ->
         return frame, None
     why = f"a logger's message, such as {message[rows].iloc[0]!r}"
     kept, note = _left_out(frame, rows, label, "holding a message alone", why)
-    return _numbers_again(kept, decimal), note
+    return _numbers_again(kept, decimal, label), note
 
 
-def _numbers_again(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
+def _numbers_again(frame: pd.DataFrame, decimal: str, label: str) -> pd.DataFrame:
     """The frame with every column whose filled cells are all numbers, written with the table's ``decimal``
-    mark, read as numbers (a column a stray row had left as text)."""
+    mark (and a unit after each, :func:`~groupfit.numbercells.without_cell_units`), read as numbers (a column
+    a stray row had left as text)."""
     for column in frame.columns:
         if pd.api.types.is_numeric_dtype(frame[column]):
             continue
@@ -214,7 +217,10 @@ def _numbers_again(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
             values = numbers if numbers.notna().sum() == frame[column].notna().sum() else None
         if values is not None:
             frame[column] = values
-    return without_cell_units(frame, decimal)
+    try:
+        return without_cell_units(frame, decimal)
+    except ValueError as exc:  # units after dotted numbers in a table of decimal commas, refused as on reading
+        raise InputError(f"{label}: not a readable CSV table ({exc})") from None
 
 
 def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:

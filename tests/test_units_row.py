@@ -11,7 +11,7 @@ import pytest
 from test_switching_models import DATASETS, SYNTHETIC
 
 from groupfit.cli import main
-from groupfit.data import load_run
+from groupfit.data import load_run, load_runs
 from groupfit.data_options import split_names
 from groupfit.errors import InputError
 from groupfit.units_row import unit_of
@@ -310,3 +310,24 @@ def test_an_error_named_in_a_transducers_signal_unit_gets_a_note_to_scale_it(tmp
     run = load_run(path, temps=TEMPS, error=name)
     np.testing.assert_array_equal(run.error, plain.error)  # read as logged, in µm
     assert any("a transducer's signal, not a length" in note for note in run.notes) == flagged
+
+
+@pytest.mark.parametrize("message", [False, True])
+def test_units_after_dotted_numbers_in_a_table_of_decimal_commas_are_refused_with_or_without_a_message_line(
+    tmp_path, synthetic, message
+):
+    frame, _ = synthetic
+    lines = frame.to_csv(index=False, sep=";", decimal=",").splitlines()
+    at = list(frame.columns).index("T1")
+    for k in range(1, len(lines)):
+        cells = lines[k].split(";")
+        cells[at] = f"{frame['T1'].iloc[k - 1]:.2f} °C"  # a decimal point, where the table writes commas
+        lines[k] = ";".join(cells)
+    if message:
+        lines.insert(50, ";" * at + "Logging paused" + ";" * (len(frame.columns) - at - 1))
+    path = tmp_path / "log.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(
+        InputError, match=r"log.csv: not a readable CSV table \(column 'T1' holds '\d+\.\d+', a decimal"
+    ):
+        load_runs(path, temps=TEMPS)
