@@ -112,26 +112,25 @@ CELL_WITH_UNIT = re.compile(r"([^\s°µμ%\[(a-df-zA-DF-Z]+?)\s*([°µμ%]?[\[(]
 def without_cell_units(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
     """The frame with its text columns whose every filled cell is a number and one same unit (``20.5 °C``)
     read as numbers; the units kept as the columns' (``frame.attrs["cell_units"]``, read as a row of units)."""
-    units = {}
+    read, units = {}, {}
     for column in frame.columns:
         if pd.api.types.is_numeric_dtype(frame[column]):
             continue
         text = frame[column].astype("string").str.strip()
         filled = text.notna() & (text != "")
-        parts = text[filled].str.fullmatch(CELL_WITH_UNIT.pattern)
-        if not filled.any() or not bool(parts.all()):
+        found = text.str.extract("^" + CELL_WITH_UNIT.pattern + "$")
+        written = found[1][filled]
+        if not filled.any() or bool(written.isna().any()) or written.nunique() != 1:
             continue
-        found = text[filled].str.extract("^" + CELL_WITH_UNIT.pattern + "$")
-        if found[1].nunique() != 1:
-            continue
-        values = as_numbers(text.str.extract("^" + CELL_WITH_UNIT.pattern + "$")[0], decimal, str(column))
-        if values is None:
-            continue
-        frame = frame.copy()
+        values = as_numbers(found[0], decimal, str(column))
+        if values is not None:
+            read[column], units[str(column)] = values, str(written.iloc[0])
+    if not read:
+        return frame
+    frame = frame.copy()
+    for column, values in read.items():
         frame[column] = values
-        units[str(column)] = str(found[1].iloc[0])
-    if units:
-        frame.attrs["cell_units"] = {**frame.attrs.get("cell_units", {}), **units}
+    frame.attrs["cell_units"] = {**frame.attrs.get("cell_units", {}), **units}
     return frame
 
 
