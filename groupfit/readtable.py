@@ -79,11 +79,11 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     compressed = path.suffix.lower() in COMPRESSED
     stem = Path(path.stem).stem if compressed else path.stem
     kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
-    if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
-        return _text_under_a_workbooks_name(path, kind, name or stem, label)
     header = None
     try:
-        if kind == "CSV":
+        if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
+            frame, header = _text_under_a_workbooks_name(path, kind, label)
+        elif kind == "CSV":
             frame, header = read_text_table(_decompressed(path) if compressed else path.read_bytes())
         elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
@@ -119,7 +119,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     return frame, (name or stem), label
 
 
-def _text_under_a_workbooks_name(path: Path, kind: str, name: str, label: str) -> tuple[pd.DataFrame, str, str]:
+def _text_under_a_workbooks_name(path: Path, kind: str, label: str) -> tuple[pd.DataFrame, list[str]]:
     """A file named as a workbook whose bytes are not one, read as the text table a program saved under that
     name (a web export's tab-separated "Excel" file); refused as no readable workbook when it holds no table
     of numbers."""
@@ -134,9 +134,7 @@ def _text_under_a_workbooks_name(path: Path, kind: str, name: str, label: str) -
     numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().to_numpy()
     if frame.shape[0] == 0 or frame.shape[1] < 2 or numeric.mean(axis=0).max() < 0.5:
         raise refusal
-    _check_unique_columns(header if len(header) == frame.shape[1] else list(frame.columns), label)
-    frame.columns = [str(c).strip() for c in frame.columns]
-    return frame, name, label
+    return frame, header
 
 
 def _begins_as_workbook(path: Path) -> bool:
