@@ -44,6 +44,7 @@ from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
+from groupfit.split_stamps import with_milliseconds
 from groupfit.timestamps import (
     clock_restart,
     epoch_to_seconds,
@@ -291,6 +292,7 @@ def load_runs(
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     lengths, units_notes = read_in_row_units(frame, time, label)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
+    millis_note = with_milliseconds(frame, time, label)
     required = options.get("require_error", True)
     error, error_note = found_error_column(
         frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default, lengths=lengths
@@ -301,7 +303,8 @@ def load_runs(
         if left_out and " row " in str(exc):
             raise InputError(f"{exc} (rows are counted without those left out: {left_out})") from None
         raise
-    found = tuple(note for note in (*stray_notes, time_note, *units_notes, serial_note, error_note) if note)
+    notes = (*stray_notes, time_note, *units_notes, serial_note, millis_note, error_note)
+    found = tuple(note for note in notes if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 
 

@@ -160,3 +160,65 @@ def test_dates_with_two_digit_years_or_month_names_are_read(form):
     stamps = pd.date_range("2026-02-27 22:00", periods=200, freq="120s")  # across the end of February
     column = pd.Series(stamps.strftime(form))
     np.testing.assert_array_equal(text_seconds(column, "time", "run.csv"), 120.0 * np.arange(200))
+
+
+def _split_stamps(frame: pd.DataFrame, period_s: float, *, name: str = "ms", fractions: bool = False) -> pd.DataFrame:
+    """The run at ``period_s``, stamped as a Graphtec logger stamps it: the date-time in whole seconds (or with
+    its fractions, ``fractions``), then its milliseconds in a column of their own."""
+    stamps = pd.Timestamp("2026-03-01 23:59:00") + pd.to_timedelta(np.arange(len(frame)) * period_s, unit="s")
+    form = "%Y/%m/%d %H:%M:%S.%f" if fractions else "%Y/%m/%d %H:%M:%S"
+    split = pd.DataFrame({"Date&Time": stamps.strftime(form), name: stamps.microsecond // 1000})
+    return pd.concat([split, frame.drop(columns="time_s")], axis=1)
+
+
+@pytest.mark.parametrize("period_s, name", [(0.5, "ms"), (0.25, "msec"), (0.1, "[ms]"), (0.2, "Millisekunden")])
+def test_a_stamp_in_whole_seconds_with_its_milliseconds_in_the_next_column_is_read_as_one_time(
+    tmp_path, synthetic, period_s, name
+):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    _split_stamps(frame, period_s, name=name).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS)
+    truth = (plain.time - plain.time[0]) * period_s / plain.period
+    np.testing.assert_allclose(run.time, truth, atol=1e-9)  # across midnight, as the stamps start at 23:59
+    assert run.period == pytest.approx(period_s, rel=1e-9)
+    assert name not in run.frame.columns
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    assert any(f"with the milliseconds of column '{name}'" in note for note in run.notes)
+
+
+def test_milliseconds_are_added_only_to_a_stamp_in_whole_seconds_and_only_from_the_column_after_it(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    truth = (plain.time - plain.time[0]) * 0.5 / plain.period
+    _split_stamps(frame, 0.5, fractions=True).to_csv(path, index=False)  # the stamp has its own fractions
+    np.testing.assert_allclose(load_run(path, temps=TEMPS).time, truth, atol=1e-9)
+    elsewhere = _split_stamps(frame, 0.5)
+    elsewhere = elsewhere[[c for c in elsewhere.columns if c != "ms"] + ["ms"]]
+    elsewhere.to_csv(path, index=False)
+    with pytest.raises(InputError, match="not strictly increasing"):
+        load_run(path, temps=TEMPS)
+    slow = _split_stamps(frame, plain.period)  # whole seconds: the column of zeros is dropped without a note
+    slow.to_csv(path, index=False)
+    run = load_run(path)
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], atol=1e-9)
+    assert "ms" not in run.frame.columns and "ms" not in run.temp_names
+    assert not any("with the milliseconds of column" in note for note in run.notes)
+
+
+def test_a_graphtec_log_at_half_a_second_fits_the_model_of_the_plain_run(tmp_path, synthetic):
+    frame, _ = synthetic
+    plain = frame.assign(time_s=np.arange(len(frame)) * 0.5)
+    plain.to_csv(tmp_path / "plain.csv", index=False)
+    split = _split_stamps(frame, 0.5)
+    units = pd.DataFrame([["", ""] + ["degC" if c.startswith("T") else "um" for c in split.columns[2:]]])
+    units.columns = split.columns
+    header = ['"MODEL","GL240"', '"Interval","500ms"', ""]
+    body = pd.concat([units, split.astype(object)]).to_csv(index=False)
+    (tmp_path / "graphtec.csv").write_text("\n".join(header) + "\n" + body)
+    fits = []
+    for name in ("plain", "graphtec"):
+        assert main(["fit", "--data", str(tmp_path / f"{name}.csv"), "--p", "0", "--temps", ",".join(TEMPS),
+                     "--out", str(tmp_path / name), "--json", str(tmp_path / f"{name}.json")]) == 0  # fmt: skip
+        fits.append(json.loads((tmp_path / f"{name}.json").read_text()))
+    np.testing.assert_allclose(fits[1]["coefficients"], fits[0]["coefficients"], rtol=1e-9)
