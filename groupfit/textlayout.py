@@ -40,7 +40,9 @@ should not have to rewrite one before groupfit reads it:
   rows that hold text and no number, above rows that hold numbers, are
   dropped and their columns read as numbers;
 * a footer: lines after the last one that holds a number (``Logging stopped
-  at 04:00``, ``END``) are not read; in a sheet, rows (:func:`without_footer_rows`).
+  at 04:00``, ``END``), and rows of statistics under the readings (``Max``,
+  ``Min``, ``Avg``: :data:`STATISTIC`), are not read; in a sheet, rows
+  (:func:`without_footer_rows`).
 """
 
 from __future__ import annotations
@@ -82,6 +84,12 @@ DIGIT = re.compile(r"\d")
 RULER = re.compile(r"[-=_~*+|\s]+")
 """A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
+STATISTIC = re.compile(
+    r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
+    r"count|median|range|mittelwert|mittel|summe|anzahl)\.?\s*:?",
+    re.IGNORECASE,
+)
+"""The label of a row of statistics a logger writes under its readings (``Max``, ``Min``, ``Avg``, ``P-P``)."""
 
 
 @dataclass(frozen=True)
@@ -346,13 +354,20 @@ def _from_line(text: str, line: int) -> str:
 
 
 def _without_footer(body: str, layout: TextLayout) -> str:
-    """The table's lines up to its last one that holds a number: what follows is a footer, not data."""
+    """The table's lines up to its last one that holds a number and is no row of statistics: what follows is
+    a footer (``Logging stopped``, ``Max;25.3;26.1``), not data."""
     lines = body.split("\n")
     for end in range(len(lines), 1, -1):
-        fields = fields_of(lines[end - 1].rstrip("\r"), layout.sep)
-        if any(is_number(field.strip().strip('"'), layout.decimal) for field in fields):
+        fields = [field.strip().strip('"') for field in fields_of(lines[end - 1].rstrip("\r"), layout.sep)]
+        if any(is_number(field, layout.decimal) for field in fields) and not _statistics_row(fields):
             return body if end == len(lines) else "\n".join(lines[:end]) + "\n"
     return body
+
+
+def _statistics_row(cells) -> bool:
+    """Whether a row's first filled cell labels it as statistics (:data:`STATISTIC`)."""
+    filled = [str(cell).strip() for cell in cells if not _empty(cell)]
+    return bool(filled) and STATISTIC.fullmatch(filled[0]) is not None
 
 
 def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tuple[pd.DataFrame, list[str]]:
@@ -370,6 +385,7 @@ def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
     """A sheet's frame without the rows after its last one that holds a number (a footer), its columns read
     as numbers where the footer alone was text."""
     numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().any(axis=1).to_numpy()
+    numeric = numeric & np.array([not _statistics_row(row) for row in frame.itertuples(index=False)], dtype=bool)
     if not numeric.any() or numeric[-1]:
         return frame
     kept = frame.iloc[: int(np.flatnonzero(numeric)[-1]) + 1].copy()

@@ -494,6 +494,32 @@ def test_a_footer_after_the_last_row_of_data_is_not_read(tmp_path, frame, plain,
     same_run(load_run(sheet, temps=TEMPS), plain)
 
 
+@pytest.mark.parametrize("sep, decimal", [(",", "."), (";", ",")])
+@pytest.mark.parametrize("labels", [("Max", "Min", "Avg"), ("Maximum:", "Minimum:", "Mittelwert:", "P-P")])
+def test_rows_of_statistics_under_the_readings_are_a_footer_and_not_read(tmp_path, frame, plain, sep, decimal, labels):
+    readings = frame.drop(columns="time_s")
+    statistics = pd.DataFrame(
+        [[label, *readings.agg(how)] for label, how in zip(labels, ("max", "min", "mean", "std"))],
+        columns=frame.columns,
+    )
+    table = pd.concat([frame.astype(object), statistics], ignore_index=True)
+    path = tmp_path / "statistics.csv"
+    path.write_text(table.to_csv(index=False, sep=sep, decimal=decimal) + f"Logging stopped{sep}\n")
+    same_run(load_run(path, temps=TEMPS), plain)
+    sheet = tmp_path / "statistics.xlsx"
+    table.to_excel(sheet, index=False)
+    same_run(load_run(sheet, temps=TEMPS), plain)
+
+
+def test_a_row_of_statistics_between_rows_of_data_is_still_refused_with_its_row(tmp_path, frame):
+    path = tmp_path / "middle.csv"
+    lines = frame.to_csv(index=False).splitlines()
+    lines.insert(11, "Max," + ",".join(["25.0"] * (len(frame.columns) - 1)))
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"row 11, column 'time_s': 'Max' is not a number"):
+        load_run(path, temps=TEMPS)
+
+
 def test_text_between_rows_of_data_is_still_refused_with_its_row(tmp_path, frame):
     path = tmp_path / "middle.csv"
     lines = frame.to_csv(index=False).splitlines()
