@@ -83,9 +83,16 @@ class LoadOptions:
         return not self.allow_nonfinite if self.check_ranges is None else self.check_ranges
 
 
-def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool) -> np.ndarray:
+MISSING_TIME = "name the time column with --time COLUMN"
+MISSING_ERROR = "name the thermal error's column with --error COLUMN"
+
+
+def numeric_column(
+    frame: pd.DataFrame, column: str, label: str, *, allow_nonfinite: bool, missing: str = ""
+) -> np.ndarray:
     """Return one column as float64, naming the first bad cell if there is one; a cell marking a reading not
-    taken (:data:`NO_READING`) is empty.
+    taken (:data:`NO_READING`) is empty. ``missing``: what to do when the column is absent and no column's
+    name is a near miss of it (``name the time column with --time COLUMN``).
 
     Rows are reported 1-based, counting data rows (the header is not a row).
     """
@@ -96,6 +103,8 @@ def numeric_column(frame: pd.DataFrame, column: str, label: str, *, allow_nonfin
         cut = [str(c) for c in frame.columns if "," in str(c) and str(c).startswith(f"{column},")]
         if cut and not hint:
             hint = f" (a name with a comma in it is quoted in a list: --temps '\"{cut[0]}\",…')"
+        if missing and not hint:
+            hint = f" ({missing})"
         raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")
     raw = frame[column]
     values, text, marked, _ = _cells(raw)
@@ -310,7 +319,9 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
     allow_nonfinite = options.allow_nonfinite
     if error is None or not (require_error or error in frame.columns):
         return None
-    error_values = numeric_column(frame, error, label, allow_nonfinite=allow_nonfinite or missing_error)
+    error_values = numeric_column(
+        frame, error, label, allow_nonfinite=allow_nonfinite or missing_error, missing=MISSING_ERROR
+    )
     if missing_error and not allow_nonfinite:
         infinite = np.flatnonzero(np.isinf(error_values))
         if infinite.size:

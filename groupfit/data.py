@@ -18,17 +18,18 @@ import numpy as np
 import pandas as pd
 
 from groupfit.column_values import ERROR_LIMIT_UM as ERROR_LIMIT_UM
-from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
-from groupfit.column_values import LoadOptions as LoadOptions
-from groupfit.column_values import check_range as check_range
-from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import (
+    MISSING_TIME,
     implausible_as_missed,
     markers_emptied,
     refuse_bad_cells,
     temperature_inputs,
     unit_note,
 )
+from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
+from groupfit.column_values import LoadOptions as LoadOptions
+from groupfit.column_values import check_range as check_range
+from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import numeric_column as numeric_column
 from groupfit.data_options import MAX_PERIOD_TOLERANCE
 from groupfit.default_columns import (
@@ -103,7 +104,7 @@ def time_seconds(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
     in, :func:`groupfit.timestamps.unit_seconds`), in place; a bad or implausible cell named with its row."""
     numbers = column in frame.columns and pd.api.types.is_numeric_dtype(frame[column])
     datetimes_to_seconds(frame, column, label)
-    values = numeric_column(frame, column, label, allow_nonfinite=True)
+    values = numeric_column(frame, column, label, allow_nonfinite=True, missing=MISSING_TIME)
     unstamped = np.flatnonzero(np.isnan(values))
     if unstamped.size:
         cell = str(frame[column].iloc[unstamped[0]]).strip()

@@ -74,11 +74,15 @@ TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", 
 
 
 TIME_NAME = re.compile(
-    r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|datum|date|uhrzeit|time|zeit|elapsed)"
+    r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
+    r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|seconds|secs?|sekunden|minutes|minuten|hours|stunden)"
     r"(?=$|[^a-z0-9])",
     re.IGNORECASE,
 )
-"""Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``)."""
+"""Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``,
+``Relative Time``, ``Laufzeit [s]``, ``Seconds``, LabVIEW's ``X_Value``)."""
+OF_DAY = re.compile(r"\bof[\s_-]+day\s*$", re.IGNORECASE)
+"""A time of day (``Time of day``): its last word is no unit."""
 BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")\s*[\])]?)?\s*$", re.IGNORECASE)
 """``t``, ``t_s``, ``t [min]``: a lone t with a unit or none (not ``T1`` or ``T_amb``, which are sensors)."""
 
@@ -173,7 +177,7 @@ def unit_seconds(name: str, label: str = "") -> float:
 
 def named_time_unit(name: str) -> str | None:
     """The unit of time a column's name ends in (a key of :data:`UNIT_SECONDS`), None when it names none."""
-    found = NAMED_UNIT.search(str(name))
+    found = None if OF_DAY.search(str(name)) else NAMED_UNIT.search(str(name))
     unit = found.group(1).lower() if found else None
     return unit if unit in UNIT_SECONDS else None
 

@@ -222,3 +222,41 @@ def test_a_graphtec_log_at_half_a_second_fits_the_model_of_the_plain_run(tmp_pat
                      "--out", str(tmp_path / name), "--json", str(tmp_path / f"{name}.json")]) == 0  # fmt: skip
         fits.append(json.loads((tmp_path / f"{name}.json").read_text()))
     np.testing.assert_allclose(fits[1]["coefficients"], fits[0]["coefficients"], rtol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "name, per_second",
+    [
+        ("Relative Time", 1.0),
+        ("Run time [s]", 1.0),
+        ("Sample time", 1.0),
+        ("Laufzeit [min]", 1 / 60),
+        ("Messzeit", 1.0),
+        ("Zeitpunkt", 1.0),
+        ("X_Value", 1.0),
+        ("Seconds", 1.0),
+        ("Sekunden", 1.0),
+        ("Hours", 1 / 3600),
+        ("Time of day", 1.0),
+    ],
+)
+def test_a_time_column_named_in_other_words_is_found_and_read_in_its_unit(tmp_path, synthetic, name, per_second):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": name}).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time_is_default=True)
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+    assert any(f"time from column '{name}'" in note for note in run.notes)
+
+
+def test_a_log_without_a_time_or_an_error_column_named_as_one_says_which_option_names_it(tmp_path, synthetic):
+    frame, _ = synthetic
+    path = tmp_path / "log.csv"
+    frame.rename(columns={"time_s": "Uhr"}).to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"column 'time_s' not found \(name the time column with --time COLUMN\)"):
+        load_run(path, temps=TEMPS, time_is_default=True)
+    frame.rename(columns={"error_um": "Z-Achse"}).to_csv(path, index=False)
+    with pytest.raises(
+        InputError, match=r"'error_um' not found \(name the thermal error's column with --error COLUMN\)"
+    ):
+        load_run(path, temps=TEMPS, error_is_default=True)

@@ -457,7 +457,10 @@ def test_only_the_default_time_column_is_looked_for_and_a_bad_stamp_still_named(
     with pytest.raises(InputError, match=r"column 'Clock' not found"):  # a column asked for is never replaced
         load_run(split, temps=TEMPS, time="Clock", name="split.csv")
     unnamed = split.drop(columns="Date").rename(columns={"Time": "Clock"})
-    with pytest.raises(InputError, match=r"column 'time_s' not found; the columns are: Clock, T1"):
+    with pytest.raises(
+        InputError,
+        match=r"column 'time_s' not found \(name the time column with --time COLUMN\); the columns are: Clock, T1",
+    ):
         load_run(unnamed, temps=TEMPS, name="unnamed.csv")
     split.loc[4, "Time"] = "ERR"
     with pytest.raises(InputError, match=r"row 5, column 'Time': 'ERR' is not a date-time"):
