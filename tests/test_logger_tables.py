@@ -579,3 +579,26 @@ def test_an_axis_drift_and_a_temperature_word_anywhere_are_recognised():
     ]
     names = ["Time", "Spindle_Temp", "Motor temp", "Tempo", "attempt", "Ambient temp", "Z drift"]
     assert default_temperature_columns(names) == ["Spindle_Temp", "Motor temp"]
+
+
+@pytest.mark.parametrize("suffix", [".xlsx", ".csv"])
+def test_a_date_column_or_a_unix_stamp_beside_the_time_fits_the_model_of_the_plain_run(tmp_path, frame, suffix):
+    """Columns no input can be derived from (a date, a Unix time, a counter beyond the rule's limit) are kept
+    out of the model's source ranges; the model file they once made invalid fits and diagnoses."""
+    stamps = pd.Timestamp("2026-03-02 20:00:00") + pd.to_timedelta(frame["time_s"] - frame["time_s"][0], unit="s")
+    extra = frame.assign(Date=stamps.dt.normalize(), Unix=1.77e9 + frame["time_s"], Counter=1e13 + frame["time_s"])
+    path = tmp_path / f"log{suffix}"
+    if suffix == ".xlsx":
+        extra.to_excel(path, index=False)
+    else:
+        extra.assign(Date=stamps.dt.strftime("%Y-%m-%d")).to_csv(path, index=False)
+    args = ["--temps", ",".join(TEMPS), "--p", "1", "--search", "exact", "--recalibrate", "none", "--quiet"]
+    models = {}
+    for name, data in (("plain", SYNTHETIC), ("extra", path)):
+        assert main(["fit", "--data", str(data), *args, "--out", str(tmp_path / name)]) == 0
+        models[name] = json.loads((tmp_path / name / "model.json").read_text())
+    assert models["extra"]["coefficients"] == models["plain"]["coefficients"]
+    ranges = models["extra"]["switching"]["source_ranges"]
+    assert "T1" in ranges and not {"Date", "Unix", "Counter"} & set(ranges)
+    diagnosed = ["diagnose", str(tmp_path / "extra" / "model.json"), "--data", str(path)]
+    assert main([*diagnosed, "--out", str(tmp_path / "diagnose")]) == 0

@@ -18,6 +18,7 @@ import numpy as np
 from groupfit.errors import InputError
 from groupfit.grouping import serving_group_index
 from groupfit.model import RULE_KEYS, ModelFile, Switching
+from groupfit.switching_checks import RULE_LIMIT
 
 RULE_FORMAT = "groupfit-switch/1"
 COUNT_MAX = 2_000_000_000
@@ -264,7 +265,8 @@ def _single_outward(low: float, high: float) -> tuple[float, float]:
 
 
 def source_ranges(frame, exclude: Sequence[str | None] = ()) -> dict[str, list[float]]:
-    """Valid range (:func:`source_valid_range`) of every numeric column of a modelling run.
+    """Valid range (:func:`source_valid_range`) of every numeric column of a modelling run (not a date-time,
+    nor one beyond the rule's limit, such as a Unix time stamp, that no input is derived from).
 
     Stored in a model file's switching section (:data:`SOURCE_RANGES_KEY`):
     a derived input added later (``groupfit diagnose``) may take any of these
@@ -274,11 +276,11 @@ def source_ranges(frame, exclude: Sequence[str | None] = ()) -> dict[str, list[f
 
     ranges = {}
     for column in frame.columns:
-        if column in exclude:
+        cells = frame[column]
+        if column in exclude or pd.api.types.is_datetime64_any_dtype(cells) or pd.api.types.is_timedelta64_dtype(cells):
             continue
-        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-        valid = source_valid_range(values)
-        if valid is not None:
+        valid = source_valid_range(pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float))
+        if valid is not None and max(abs(valid[0]), abs(valid[1])) <= RULE_LIMIT:
             ranges[str(column)] = [valid[0], valid[1]]
     return ranges
 
