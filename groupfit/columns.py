@@ -20,7 +20,7 @@ import pandas as pd
 from groupfit.errors import InputError
 
 DISPLACEMENT_SUFFIXES = ("_um", "_mm", "_µm")
-AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop", "umgebung", "raumtemp")
+AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop", "umgebung", "raumtemp", "环境", "環境", "室温", "気温", "外气")
 """A column whose name holds one of these is an ambient temperature."""
 
 

@@ -18,7 +18,7 @@ from groupfit.setting_levels import setting_levels
 LEVEL_TOLERANCE = 0.01
 """Two runs hold the same level of a condition column when their levels differ by at most this share."""
 
-SPEED_NAME = re.compile(r"rpm|speed|drehzahl|[ru]/min|1/min|min-1|min\^-1", re.IGNORECASE)
+SPEED_NAME = re.compile(r"rpm|speed|drehzahl|[ru]/min|1/min|min-1|min\^-1|转速|回転数|回転速度", re.IGNORECASE)
 """A name that marks a speed column (``spindle_rpm``, ``S1 speed``, ``Drehzahl [1/min]``)."""
 
 

@@ -47,7 +47,6 @@ should not have to rewrite one before groupfit reads it:
 
 from __future__ import annotations
 
-import codecs
 import csv
 import io
 import re
@@ -58,6 +57,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.numbercells import as_numbers, is_number, without_cell_units, without_thousands_separators
+from groupfit.textencoding import decode
 
 DELIMITERS = (",", ";", "\t")
 """Field separators of a text table, tried on its body; a tie goes to the one its header uses most (a comma
@@ -66,15 +66,6 @@ WHITESPACE = " "
 """The separator of a table split by runs of spaces (a lab logger's ``.dat``, a fixed-width export)."""
 SEPARATORS = (*DELIMITERS, WHITESPACE)
 """Every separator a table's body is tried with, in the order a tie is given."""
-ENCODINGS = ("utf-8-sig", "cp1252", "latin-1")
-"""Tried in this order; Latin-1 reads any byte."""
-BYTE_ORDER_MARKS = (
-    (codecs.BOM_UTF32_LE, "utf-32-le"),
-    (codecs.BOM_UTF32_BE, "utf-32-be"),
-    (codecs.BOM_UTF16_LE, "utf-16-le"),
-    (codecs.BOM_UTF16_BE, "utf-16-be"),
-)
-"""UTF-32 before UTF-16: the UTF-32 little-endian mark begins with UTF-16's."""
 SNIFF_LINES = 200
 """Lines looked at for the body, the header and, below it, the decimal mark."""
 AGREEING_LINES = 3
@@ -149,23 +140,6 @@ def header_delimiter(line: str) -> str:
 def fields_of(line: str, sep: str) -> list[str]:
     """A line's fields: split at ``sep``, or at runs of spaces (:data:`WHITESPACE`)."""
     return line.split() if sep == WHITESPACE else line.split(sep)
-
-
-def decode(content: bytes) -> str:
-    """The text of a file: in the Unicode form its byte-order mark names, else the first of :data:`ENCODINGS`
-    that reads it."""
-    for mark, encoding in BYTE_ORDER_MARKS:
-        if content.startswith(mark):
-            try:
-                return content[len(mark) :].decode(encoding)
-            except UnicodeDecodeError:
-                break
-    for encoding in ENCODINGS:
-        try:
-            return content.decode(encoding)
-        except UnicodeDecodeError:
-            continue
-    raise AssertionError("latin-1 decodes every byte")
 
 
 def with_newlines(text: str) -> str:
@@ -429,7 +403,6 @@ def _empty(value) -> bool:
 
 __all__ = [
     "DELIMITERS",
-    "ENCODINGS",
     "TextLayout",
     "as_numbers",
     "decode",

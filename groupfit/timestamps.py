@@ -40,9 +40,11 @@ DATE_FORMATS = (
     "%d-%b-%y",
     "%d %b %Y",
     "%b %d %Y",
+    "%Y.%m.%d",
+    "%Y年%m月%d日",
 )
-"""Dates as loggers write them; a two-digit year after the four-digit ones (a HOBO logger's ``03/01/26``), and
-English month names (``01-Mar-2026``)."""
+"""Dates as loggers write them; a two-digit year after the four-digit ones (a HOBO logger's ``03/01/26``),
+English month names (``01-Mar-2026``), and a Chinese or Japanese date (``2026年3月2日``)."""
 TIME_FORMATS = (
     "%H:%M:%S.%f",
     "%H:%M:%S,%f",
@@ -58,16 +60,18 @@ FORMATS = tuple(f"{d} {t}" for d in DATE_FORMATS for t in TIME_FORMATS) + TIME_F
 EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
 DAY_S = 86400.0
 UNIT_SECONDS = {
-    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds", "millisekunden"), 1e-3),
-    **dict.fromkeys(("s", "sec", "secs", "second", "seconds", "sek", "sekunden"), 1.0),
-    **dict.fromkeys(("min", "mins", "minute", "minutes", "minuten"), 60.0),
-    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours", "std", "stunde", "stunden"), 3600.0),
-    **dict.fromkeys(("d", "day", "days", "tag", "tage"), 86400.0),
+    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds", "millisekunden", "毫秒", "ミリ秒"), 1e-3),
+    **dict.fromkeys(("s", "sec", "secs", "second", "seconds", "sek", "sekunden", "秒"), 1.0),
+    **dict.fromkeys(("min", "mins", "minute", "minutes", "minuten", "分", "分钟"), 60.0),
+    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours", "std", "stunde", "stunden", "小时"), 3600.0),
+    **dict.fromkeys(("d", "day", "days", "tag", "tage", "天"), 86400.0),
 }
 """Units a time column's name may end in (``time_ms``, ``Zeit [min]``, ``Zeit [Std]``, ``hours``), and their
 seconds; an abbreviation may end in a dot (``Zeit [Min.]``)."""
-NAMED_UNIT = re.compile(r"(?:^|[_\s\[(/])\s*([a-z]+)\.?\s*[\])]?\s*$", re.IGNORECASE)
-BRACKETED_UNIT = re.compile(r"[\[(]\s*([a-z]{1,12})\.?\s*[\])]\s*$", re.IGNORECASE)
+NAMED_UNIT = re.compile(
+    r"(?:^|[_\s\[(/（［])\s*([a-z]+|毫秒|ミリ秒|秒|分钟|分|小时|天)\.?\s*[\])）］]?\s*$", re.IGNORECASE
+)
+BRACKETED_UNIT = re.compile(r"[\[(（［]\s*([a-z]{1,12})\.?\s*[\])）］]\s*$", re.IGNORECASE)
 """A unit in brackets at the end of a name (``Zeit [xyz]``): a time column's must be one of :data:`UNIT_SECONDS`."""
 TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", "mesz", "est", "pst"})
 """Bracketed words a time column's name may end in that are not units (``Time (UTC)``)."""
@@ -75,12 +79,13 @@ TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", 
 
 TIME_NAME = re.compile(
     r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
-    r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|seconds|secs?|sekunden|minutes|minuten|hours|stunden)"
+    r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
+    r"[\u3040-\u30ff\u4e00-\u9fff]{0,4}?(?:时间|時間|时刻|時刻|日时|日時|日期))"
     r"(?=$|[^a-z0-9])",
     re.IGNORECASE,
 )
 """Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``,
-``Relative Time``, ``Laufzeit [s]``, ``Seconds``, LabVIEW's ``X_Value``)."""
+``Relative Time``, ``Laufzeit [s]``, ``Seconds``, LabVIEW's ``X_Value``, ``时间``, ``経過時間``, ``日時``)."""
 OF_DAY = re.compile(r"\bof[\s_-]+day\s*$", re.IGNORECASE)
 """A time of day (``Time of day``): its last word is no unit."""
 BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")\s*[\])]?)?\s*$", re.IGNORECASE)

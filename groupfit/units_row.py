@@ -34,9 +34,10 @@ SHOWN = {
     **dict.fromkeys(("k", "kelvin"), "K"),
 }
 """How a unit of temperature is named in a note."""
-BRACKETS = re.compile(r"^[\[(]\s*(.*?)\s*[\])]$")
+BRACKETS = re.compile(r"^[\[(（［]\s*(.*?)\s*[\])）］]$")
 NAMED_TEMPERATURE_UNIT = re.compile(
-    r"(°\s*[CF](?![a-z])|(?<![a-z])deg\s*[CF](?![a-z])|℃|℉|fahrenheit|kelvin|[\[(]\s*°?[CFK]\s*[\])])", re.IGNORECASE
+    r"(°\s*[CF](?![a-z])|(?<![a-z])deg\s*[CF](?![a-z])|℃|℉|fahrenheit|kelvin|[\[(（［]\s*°?[CFK]\s*[\])）］])",
+    re.IGNORECASE,
 )
 """A unit of temperature in a column's name (``T1 [°F]``, ``Temp, °F (LGR S/N: 2001)``, ``bed_degF``, ``T1 (K)``)."""
 

@@ -1,0 +1,88 @@
+"""The text of a log file: which encoding wrote it.
+
+Tried in this order:
+
+* the Unicode form a byte-order mark names (UTF-8, UTF-16, UTF-32);
+* UTF-8;
+* a Chinese or Japanese code page, when the bytes outside ASCII read as one
+  (:func:`east_asian`): GBK/GB 18030, which Excel and most data-acquisition
+  programs on a Chinese Windows write (``时间,温度1(℃)``), or Shift-JIS (CP932),
+  which Japanese loggers write (``日時,温度(℃)``);
+* Windows-1252, then Latin-1, which reads any byte.
+
+A Western file does not pass for an East Asian one by chance: the text
+must read without a fault in the code page, and hold a word of two Chinese or
+Japanese characters or more (``时间``, ``温度``: four bytes outside ASCII in a
+row) or a full-width unit sign (``℃``, ``μ``, ``（）``). The accented letters of
+a Western file stand alone (``Température``) or in pairs (``Größe``).
+"""
+
+from __future__ import annotations
+
+import codecs
+import re
+
+BYTE_ORDER_MARKS = (
+    (codecs.BOM_UTF32_LE, "utf-32-le"),
+    (codecs.BOM_UTF32_BE, "utf-32-be"),
+    (codecs.BOM_UTF16_LE, "utf-16-le"),
+    (codecs.BOM_UTF16_BE, "utf-16-be"),
+    (codecs.BOM_UTF8, "utf-8"),
+)
+"""UTF-32 before UTF-16: the UTF-32 little-endian mark begins with UTF-16's."""
+WESTERN = ("cp1252", "latin-1")
+"""Tried after UTF-8 and the East Asian code pages, in this order; Latin-1 reads any byte."""
+EAST_ASIAN = ("gb2312", "cp932", "gb18030")
+"""GB 2312 (both bytes of every character from 0xA1: simplified Chinese proper) before Shift-JIS, whose
+common kanji begin below 0xA1, then GB 18030 (GBK's characters beyond GB 2312)."""
+ENCODINGS = ("utf-8", *EAST_ASIAN, *WESTERN)
+HIGH_BYTE = re.compile(rb"[\x80-\xff]")
+CJK_WORD = re.compile(r"[\u3040-\u30ff\u3400-\u4dbf\u4e00-\u9fff]{2,}")
+"""Two Chinese characters, kanji or kana in a row: a word of a Chinese or Japanese header."""
+UNIT_SIGNS = re.compile(r"[℃℉μ（）［］：～]")
+"""Full-width signs a header marks a unit with (``T1(℃)``, ``位移（μm）``): no Western byte pair reads as one."""
+HALF_WIDTH_KANA = re.compile(r"[\uff61-\uff9f]")
+"""Half-width katakana: what a Chinese text read as Shift-JIS turns into, not what a header is written in."""
+
+
+def decode(content: bytes) -> str:
+    """The text of a file in the encoding that wrote it (module docstring)."""
+    for mark, encoding in BYTE_ORDER_MARKS:
+        if content.startswith(mark):
+            try:
+                return content[len(mark) :].decode(encoding)
+            except UnicodeDecodeError:
+                break
+    try:
+        return content.decode("utf-8")
+    except UnicodeDecodeError:
+        pass
+    text = east_asian(content)
+    if text is not None:
+        return text
+    for encoding in WESTERN:
+        try:
+            return content.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+    raise AssertionError("latin-1 decodes every byte")
+
+
+def east_asian(content: bytes) -> str | None:
+    """The text read in a Chinese or Japanese code page (:data:`EAST_ASIAN`), None when it does not read as
+    one (module docstring)."""
+    if not HIGH_BYTE.search(content):
+        return None
+    for encoding in EAST_ASIAN:
+        try:
+            text = content.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+        if HALF_WIDTH_KANA.search(text):
+            continue
+        if CJK_WORD.search(text) or UNIT_SIGNS.search(text):
+            return text
+    return None
+
+
+__all__ = ["BYTE_ORDER_MARKS", "ENCODINGS", "decode", "east_asian"]

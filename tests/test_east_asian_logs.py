@@ -1,0 +1,109 @@
+"""Logs written on a Chinese or Japanese system: GBK or Shift-JIS bytes, names in Chinese or Japanese."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.columns import is_ambient_name
+from groupfit.data import load_run
+from groupfit.textencoding import decode
+
+TEMPS = ["T1", "T2", "T3", "T4"]
+CHINESE = {"time_s": "时间(s)", "T1": "主轴温度1(℃)", "T2": "主轴温度2(℃)", "T3": "床身温度(℃)", "T4": "立柱温度(℃)"}
+JAPANESE = {"time_s": "経過時間[s]", "T1": "主軸温度1(℃)", "T2": "主軸温度2(℃)", "T3": "ベッド温度", "T4": "コラム温度"}
+
+
+def header(names) -> str:
+    return ",".join(names) + "\n1,2,3\n"
+
+
+@pytest.mark.parametrize(
+    "names, encoding",
+    [
+        (["时间(s)", "温度1(℃)", "Z向热误差(μm)"], "gbk"),
+        (["时间(s)", "温度1(℃)", "Z向热误差(μm)"], "gb18030"),
+        (["时间", "主轴温度", "位移（μm）"], "gbk"),
+        (["T1(℃)", "T2(℃)"], "gbk"),  # no word in Chinese: the sign marks it
+        (["経過時間", "主軸温度(℃)", "変位(μm)"], "cp932"),
+        (["日時", "スピンドル温度", "ベッド温度"], "cp932"),
+        (["时间(s)", "温度1(℃)"], "utf-8"),
+        (["時間", "温度"], "utf-16"),
+        (["Température (°C)", "Größe T2 [°C]", "Verlagerung [µm]"], "cp1252"),
+        (["Außentemperatur ÄÖÜ (°C)", "Öl ÖÄ", "T1 °C"], "cp1252"),
+        (["Temp. 1 [°F]", "ΔT"], "utf-8"),
+    ],
+)
+def test_a_log_is_read_in_the_encoding_that_wrote_it(names, encoding):
+    text = header(names)
+    assert decode(text.encode(encoding)) == text
+
+
+@pytest.mark.parametrize("encoding", ["gbk", "utf-8-sig"])
+def test_a_chinese_log_is_read_on_the_columns_its_names_mark_and_gives_the_plain_run(tmp_path, synthetic, encoding):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    names = {**CHINESE, "error_um": "Z向热误差(μm)"}
+    frame.rename(columns=names).to_csv(path, index=False, encoding=encoding)
+    run = load_run(path, time_is_default=True, error_is_default=True)
+    assert run.temp_names == tuple(CHINESE[t] for t in TEMPS)
+    assert (run.time_name, run.error_name) == ("时间(s)", "Z向热误差(μm)")
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    np.testing.assert_array_equal(run.time, plain.time)
+
+
+def test_a_japanese_log_in_shift_jis_with_its_stamps_gives_the_plain_run(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    stamps = pd.Timestamp("2026-03-02 08:00:00") + pd.to_timedelta(frame["time_s"], unit="s")
+    named = frame.rename(columns={**JAPANESE, "error_um": "Z軸変位(μm)"}).drop(columns="経過時間[s]")
+    named.insert(0, "日時", stamps.dt.strftime("%Y/%m/%d %H:%M:%S"))
+    named.to_csv(path, index=False, encoding="cp932")
+    run = load_run(path, time_is_default=True, error_is_default=True)
+    assert run.temp_names == tuple(JAPANESE[t] for t in TEMPS)
+    assert (run.time_name, run.error_name) == ("日時", "Z軸変位(μm)")
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "error_name, per_um, time_name, per_second",
+    [
+        ("位移(mm)", 1e-3, "时间(分钟)", 1 / 60),
+        ("位移（毫米）", 1e-3, "时间（秒）", 1.0),
+        ("热漂移（nm）", 1e3, "采样时间(小时)", 1 / 3600),
+        ("変位[μm]", 1.0, "時間(分)", 1 / 60),
+    ],
+)
+def test_units_named_in_chinese_or_in_full_width_brackets_are_read(
+    tmp_path, synthetic, error_name, per_um, time_name, per_second
+):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    frame.assign(error_um=frame["error_um"] * per_um, time_s=frame["time_s"] * per_second).rename(
+        columns={"error_um": error_name, "time_s": time_name}
+    ).to_csv(path, index=False, encoding="gbk" if "変" not in error_name else "cp932")
+    run = load_run(path, temps=TEMPS, time_is_default=True, error_is_default=True)
+    assert (run.time_name, run.error_name) == (time_name, error_name)
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+
+
+def test_a_chinese_date_and_a_temperature_in_fahrenheit_are_read(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    stamps = pd.Timestamp("2026-03-02 08:00:00") + pd.to_timedelta(frame["time_s"], unit="s")
+    written = frame.assign(T1=frame["T1"] * 9 / 5 + 32).rename(columns={"T1": "主轴温度(℉)"})
+    written["time_s"] = [f"{s.year}年{s.month}月{s.day}日 {s.hour}:{s.minute:02d}:{s.second:02d}" for s in stamps]
+    written.rename(columns={"time_s": "日期时间"}).to_csv(path, index=False, encoding="gbk")
+    run = load_run(path, temps=["主轴温度(℉)", "T2", "T3", "T4"], time_is_default=True)
+    np.testing.assert_allclose(run.temps, plain.temps, atol=1e-9)
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], atol=1e-9)
+
+
+def test_the_air_named_in_chinese_or_japanese_is_the_ambient():
+    assert all(is_ambient_name(name) for name in ("环境温度", "室温(℃)", "気温", "雰囲気温度", "環境温度"))
+    assert not any(is_ambient_name(name) for name in ("主轴温度", "床身温度", "ベッド温度"))
