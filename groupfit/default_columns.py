@@ -41,7 +41,7 @@ DEFAULT_ERROR = "error_um"
 ERROR_NAME = re.compile(
     r"^\s*(?:[xyz][\s_-]?)?(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|"
     r"abweichung|verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])"
-    r"|^\s*[^\W\d_]{0,6}?(?:误差|誤差|位移|变形|変形|变位|変位|偏移|漂移|伸长|伸び)",
+    r"|^\s*[^\W\d_]{0,8}?(?:误差|誤差|位移|变形|変形|变位|変位|偏移|漂移|伸长|伸び)",
     re.IGNORECASE,
 )
 TEMPERATURE_NAME = re.compile(

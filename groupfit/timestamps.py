@@ -80,7 +80,7 @@ TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", 
 TIME_NAME = re.compile(
     r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
     r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
-    r"[\u3040-\u30ff\u4e00-\u9fff]{0,4}?(?:时间|時間|时刻|時刻|日时|日時|日期))"
+    r"[\u3040-\u30ff\u4e00-\u9fff]{0,8}?(?:时间|時間|时刻|時刻|日时|日時|日期|日付))"
     r"(?=$|[^a-z0-9])",
     re.IGNORECASE,
 )

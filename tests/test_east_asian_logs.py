@@ -107,3 +107,18 @@ def test_a_chinese_date_and_a_temperature_in_fahrenheit_are_read(tmp_path, synth
 def test_the_air_named_in_chinese_or_japanese_is_the_ambient():
     assert all(is_ambient_name(name) for name in ("环境温度", "室温(℃)", "気温", "雰囲気温度", "環境温度"))
     assert not any(is_ambient_name(name) for name in ("主轴温度", "床身温度", "ベッド温度"))
+
+
+def test_a_graphtec_log_in_japanese_with_its_milliseconds_gives_the_plain_run(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    stamps = pd.Timestamp("2026-03-02 08:00:00") + pd.to_timedelta(np.arange(len(frame)) * 0.5, unit="s")
+    named = frame.drop(columns="time_s").rename(columns={**JAPANESE, "error_um": "サンプリング変位(μm)"})
+    named.insert(0, "ms", stamps.microsecond // 1000)
+    named.insert(0, "日付 時間", stamps.strftime("%Y/%m/%d %H:%M:%S"))
+    named.insert(0, "番号", np.arange(1, len(frame) + 1))
+    path.write_bytes(("測定器,GL840\n\n" + named.to_csv(index=False)).encode("cp932"))
+    run = load_run(path, time_is_default=True, error_is_default=True)
+    assert (run.time_name, run.error_name) == ("日付 時間", "サンプリング変位(μm)")
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_allclose(run.time, np.arange(len(frame)) * 0.5, atol=1e-9)
