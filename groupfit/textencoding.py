@@ -6,8 +6,9 @@ Tried in this order:
 * UTF-8;
 * a Chinese or Japanese code page, when the bytes outside ASCII read as one
   (:func:`east_asian`): GBK/GB 18030, which Excel and most data-acquisition
-  programs on a Chinese Windows write (``时间,温度1(℃)``), or Shift-JIS (CP932),
-  which Japanese loggers write (``日時,温度(℃)``);
+  programs on a Chinese Windows write (``时间,温度1(℃)``), Shift-JIS (CP932),
+  which Japanese loggers write (``日時,温度(℃)``), or Big5 (CP950), as in
+  Taiwan (``時間(s),溫度1(°C)``);
 * Windows-1252, then Latin-1, which reads any byte.
 
 A Western file does not pass for an East Asian one by chance: the text
@@ -32,17 +33,19 @@ BYTE_ORDER_MARKS = (
 """UTF-32 before UTF-16: the UTF-32 little-endian mark begins with UTF-16's."""
 WESTERN = ("cp1252", "latin-1")
 """Tried after UTF-8 and the East Asian code pages, in this order; Latin-1 reads any byte."""
-EAST_ASIAN = ("gb2312", "cp932", "gb18030")
+EAST_ASIAN = ("gb2312", "cp932", "cp950", "gb18030")
 """GB 2312 (both bytes of every character from 0xA1: simplified Chinese proper) before Shift-JIS, whose
-common kanji begin below 0xA1, then GB 18030 (GBK's characters beyond GB 2312)."""
+common kanji begin below 0xA1, and Big5, whose second bytes are often below 0xA1; GB 18030 (GBK's
+characters beyond GB 2312), which reads almost any bytes, last."""
 ENCODINGS = ("utf-8", *EAST_ASIAN, *WESTERN)
 HIGH_BYTE = re.compile(rb"[\x80-\xff]")
 CJK_WORD = re.compile(r"[\u3040-\u30ff\u3400-\u4dbf\u4e00-\u9fff]{2,}")
 """Two Chinese characters, kanji or kana in a row: a word of a Chinese or Japanese header."""
 UNIT_SIGNS = re.compile(r"[℃℉μ（）［］：～]")
 """Full-width signs a header marks a unit with (``T1(℃)``, ``位移（μm）``): no Western byte pair reads as one."""
-HALF_WIDTH_KANA = re.compile(r"[\uff61-\uff9f]")
-"""Half-width katakana: what a Chinese text read as Shift-JIS turns into, not what a header is written in."""
+MISREAD = re.compile(r"[\uff61-\uff9f\ue000-\uf8ff]")
+"""Half-width katakana, what a Chinese text read as Shift-JIS turns into, and characters of private use, what
+Big5 read as GB 18030 turns into: never what a header is written in."""
 
 
 def decode(content: bytes) -> str:
@@ -78,7 +81,7 @@ def east_asian(content: bytes) -> str | None:
             text = content.decode(encoding)
         except UnicodeDecodeError:
             continue
-        if HALF_WIDTH_KANA.search(text):
+        if MISREAD.search(text):
             continue
         if CJK_WORD.search(text) or UNIT_SIGNS.search(text):
             return text

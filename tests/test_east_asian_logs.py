@@ -28,6 +28,8 @@ def header(names) -> str:
         (["T1(℃)", "T2(℃)"], "gbk"),  # no word in Chinese: the sign marks it
         (["経過時間", "主軸温度(℃)", "変位(μm)"], "cp932"),
         (["日時", "スピンドル温度", "ベッド温度"], "cp932"),
+        (["時間(s)", "spindle(RPM)", "t1(°C)", "溫度1(°C)", "熱變位(um)"], "cp950"),
+        (["时间", "溫度", "熱誤差"], "gbk"),  # traditional characters in GBK: beyond GB 2312
         (["时间(s)", "温度1(℃)"], "utf-8"),
         (["時間", "温度"], "utf-16"),
         (["Température (°C)", "Größe T2 [°C]", "Verlagerung [µm]"], "cp1252"),
@@ -122,3 +124,16 @@ def test_a_graphtec_log_in_japanese_with_its_milliseconds_gives_the_plain_run(tm
     assert (run.time_name, run.error_name) == ("日付 時間", "サンプリング変位(μm)")
     np.testing.assert_array_equal(run.temps, plain.temps)
     np.testing.assert_allclose(run.time, np.arange(len(frame)) * 0.5, atol=1e-9)
+
+
+def test_a_taiwanese_log_in_big5_named_as_its_program_names_it_gives_the_plain_run(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    named = frame.rename(columns={"time_s": "時間(s)", **{t: f"t{k}(°C)" for k, t in enumerate(TEMPS, 1)}})
+    named = named.rename(columns={"error_um": "ch3(um)"}).assign(**{"ch1(um)": frame["error_um"] / 2})
+    named.to_csv(path, index=False, encoding="cp950")
+    run = load_run(path, error="ch3(um)", time_is_default=True)
+    assert run.time_name == "時間(s)" and run.temp_names == ("t1(°C)", "t2(°C)", "t3(°C)", "t4(°C)")
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    np.testing.assert_array_equal(run.time, plain.time)
