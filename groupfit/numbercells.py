@@ -105,6 +105,55 @@ def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: 
     return text.str.replace(",", "", regex=False)
 
 
+COMMA_GROUPS = re.compile(r"[+-]?[1-9]\d{0,2}(?:,\d{3})+")
+"""A number whose comma may separate thousands or decimals alike (``1,250``, ``20,013``)."""
+
+
+def sheet_text_numbers(frame: pd.DataFrame) -> pd.DataFrame:
+    """A sheet's frame with its columns of numbers stored as text and written with a comma read as numbers:
+    the comma as a thousands separator where a cell of the column holds a decimal point (``1,250.5``), as a
+    decimal comma where a cell cannot hold thousands (``20,5``, ``1234,5``).
+
+    Raises
+    ------
+    ValueError
+        A column of numbers whose every comma could be either (``1,250``; ``20,013``), named with a cell.
+    """
+    read = {}
+    for column in frame.columns:
+        if pd.api.types.is_numeric_dtype(frame[column]):
+            continue
+        text = frame[column].astype("string").str.strip()
+        cells = [cell for cell in text.dropna().unique() if cell]
+        commas = [cell for cell in cells if "," in cell]
+        if not commas:
+            continue
+        if any("." in cell for cell in cells):
+            values = as_numbers(text, ".", str(column))
+        elif all(COMMA_GROUPS.fullmatch(cell) for cell in commas):
+            if as_numbers(text, ".", str(column)) is not None:
+                raise ValueError(
+                    f"column '{column}' holds numbers as text, such as '{commas[0]}', whose comma may separate "
+                    "thousands or decimals; format the column's cells as numbers, or save the sheet as CSV"
+                )
+            continue
+        else:
+            values = None
+        if values is None:
+            try:
+                values = as_numbers(text, ",", str(column))
+            except ValueError:
+                continue
+        if values is not None:
+            read[column] = values
+    if not read:
+        return frame
+    frame = frame.copy()
+    for column, values in read.items():
+        frame[column] = values
+    return frame
+
+
 CELL_WITH_UNIT = re.compile(r"([^\s°µμ%\[(a-df-zA-DF-Z]+?)\s*([°µμ%]?[\[(]?[a-zA-Z°µμ%./]+[\])]?)")
 """A number followed by a unit in the same cell (``20.5 °C``, ``1.25µm``, ``12 [mm]``)."""
 
@@ -143,6 +192,7 @@ def _without_group_spaces(cell: str) -> str:
 __all__ = [
     "as_numbers",
     "is_number",
+    "sheet_text_numbers",
     "without_cell_units",
     "without_thousands_separators",
 ]

@@ -23,7 +23,7 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
-from groupfit.numbercells import without_cell_units
+from groupfit.numbercells import sheet_text_numbers, without_cell_units
 from groupfit.textlayout import (
     DIGIT,
     RULER,
@@ -322,11 +322,13 @@ def _data_sheet(path: Path) -> tuple[str | int, pd.DataFrame, bool, list[str] | 
     first_row = [name for name, line in lines.items() if not line]
     headed = pd.read_excel(path, sheet_name=first_row) if first_row else {}
     sheets = {
-        name: without_cell_units(
-            without_units_row(
-                without_footer_rows(headed[name] if not line else pd.read_excel(path, sheet_name=name, header=line))
-            ),
-            ".",
+        name: sheet_text_numbers(
+            without_cell_units(
+                without_units_row(
+                    without_footer_rows(headed[name] if not line else pd.read_excel(path, sheet_name=name, header=line))
+                ),
+                ".",
+            )
         )
         for name, line in lines.items()
     }

@@ -602,3 +602,29 @@ def test_a_date_column_or_a_unix_stamp_beside_the_time_fits_the_model_of_the_pla
     assert "T1" in ranges and not {"Date", "Unix", "Counter"} & set(ranges)
     diagnosed = ["diagnose", str(tmp_path / "extra" / "model.json"), "--data", str(path)]
     assert main([*diagnosed, "--out", str(tmp_path / "diagnose")]) == 0
+
+
+def test_numbers_stored_as_text_with_a_comma_in_a_sheet_are_read_where_the_comma_says_what_it_is(
+    tmp_path, frame, plain
+):
+    sheet = tmp_path / "text.xlsx"
+    written = frame.astype(object).assign(
+        T1=[f"{v:.2f}".replace(".", ",") for v in frame["T1"]],  # 20,5: a decimal comma
+        T2=[f"{v:.4f}" for v in frame["T2"]],  # a decimal point
+        note=["a, b"] + [""] * (len(frame) - 1),  # words with a comma stay words
+    )
+    written.to_excel(sheet, index=False)
+    run = load_run(sheet, temps=TEMPS)
+    np.testing.assert_allclose(run.temps, plain.temps, atol=5e-3)
+    np.testing.assert_array_equal(run.error, plain.error)
+    written.assign(T1=[f"{1000 * v:,.1f}" for v in frame["T1"]]).to_excel(sheet, index=False)  # 20,512.3
+    np.testing.assert_allclose(
+        load_run(sheet, temps=TEMPS, check_ranges=False).temps[:, 0], 1000 * plain.temps[:, 0], atol=0.05
+    )
+
+
+def test_numbers_stored_as_text_whose_comma_may_be_either_are_refused_naming_the_column(tmp_path, frame):
+    sheet = tmp_path / "text.xlsx"
+    frame.astype(object).assign(T3=[f"{v:.3f}".replace(".", ",") for v in frame["T3"]]).to_excel(sheet, index=False)
+    with pytest.raises(InputError, match=r"text.xlsx: .*column 'T3' holds numbers as text, such as '\d+,\d{3}'"):
+        load_run(sheet, temps=TEMPS)
