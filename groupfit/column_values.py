@@ -308,9 +308,10 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
 
 
 def _without_readings(frame: pd.DataFrame, column: str) -> bool:
-    """Whether a column holds no finite number at all (a logger's channel with nothing connected)."""
-    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-    return not np.isfinite(values).any()
+    """Whether a column holds no finite number at all, every cell empty or marking a reading not taken (a
+    logger's channel with nothing connected); one holding other text is refused by the reading, naming it."""
+    cells = _cells(frame[column])
+    return not np.isfinite(cells.values.to_numpy(dtype=float)).any() and not cells.words.any()
 
 
 def error_values(frame: pd.DataFrame, error: str | None, label: str, options: LoadOptions) -> np.ndarray | None:

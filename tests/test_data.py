@@ -143,6 +143,18 @@ def test_a_constant_or_empty_column_among_the_default_inputs_is_left_out_with_a_
         load_run(write_run(tmp_path, frame), temps=["T1", column], resample=period)
 
 
+@pytest.mark.parametrize("cells", [["---"], ["OVL", "", "n.a."]])
+def test_a_default_input_marked_as_not_read_in_every_row_is_left_out_and_one_of_words_refused(tmp_path, cells):
+    frame = good_frame()
+    marked = frame.astype({"T3": object}).assign(T3=[cells[k % len(cells)] for k in range(len(frame))])
+    run = load_run(write_run(tmp_path, marked))
+    assert run.temp_names == ("T1", "T2") and any("no reading in the whole run" in n for n in run.notes)
+    units = ("deg", "Grad")  # numbers with words, no one unit: not a channel without readings
+    worded = frame.astype({"T3": object}).assign(T3=[f"{v:.2f} {units[k % 2]}" for k, v in enumerate(frame["T3"])])
+    with pytest.raises(InputError, match=r"row 1, column 'T3': '[\d.]+ deg' is not a number"):
+        load_run(write_run(tmp_path, worded))
+
+
 def test_a_run_with_no_input_left_or_an_input_with_readings_missed_is_refused(tmp_path):
     dead = good_frame().assign(T1=20.0, T2=20.0, T3=20.0)
     with pytest.raises(InputError, match=r"column 'T1' is constant"):  # nothing left to model with
