@@ -16,7 +16,7 @@ The rules:
 * an output that resolves to an input (same path after following symbolic
   links, each before the ``..`` after it, or the same file under another
   name) is refused;
-* an existing data file named as an output (CSV, TSV, Excel, Parquet, TOML,
+* an existing data file named as an output (CSV, TSV, Excel, OpenDocument, Parquet, MATLAB, TOML,
   or the data set of ``simulate --out``) is replaced only with ``--force``
   (the files a verb writes into its ``--out`` folder are its own, replaced
   on every run; a table there, ``sweep``'s ``runs.csv``, only when its
@@ -46,7 +46,7 @@ from typing import Iterable, Iterator
 from groupfit.errors import InputError
 from groupfit.io import STAGE, check_output_dir, check_output_file
 
-DATA_SUFFIXES = frozenset({".csv", ".tsv", ".xlsx", ".xls", ".parquet", ".pq", ".toml"})
+DATA_SUFFIXES = frozenset({".csv", ".tsv", ".xlsx", ".xlsm", ".xls", ".ods", ".parquet", ".pq", ".mat", ".toml"})
 """Files an output named on the command line replaces only with ``--force``: the kinds a run or a
 configuration is read from (the files a verb writes into its ``--out`` folder are its own and replaced)."""
 GROUPED_MODELS = "groupfit-model/"

@@ -1,4 +1,4 @@
-"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel or Parquet by suffix, or a DataFrame.
+"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel, Parquet or MATLAB by suffix, or a DataFrame.
 
 A text table is read as it was written (:mod:`groupfit.textlayout`: its
 encoding, separator, a preamble, decimal commas, a units row), and a time
@@ -23,7 +23,9 @@ import pandas as pd
 
 from groupfit.errors import InputError
 from groupfit.io import note_read
+from groupfit.matfile import read_mat
 from groupfit.numbercells import sheet_text_numbers, without_cell_units
+from groupfit.textencoding import looks_binary
 from groupfit.textlayout import (
     DIGIT,
     RULER,
@@ -45,6 +47,7 @@ TABLE_SUFFIXES = {
     ".xls": "Excel",
     ".ods": "OpenDocument",
     ".parquet": "Parquet",
+    ".mat": "MATLAB",
 }
 """File types a run is read from, by suffix (anything else is read as CSV)."""
 WORKBOOK_SIGNATURES = (b"PK\x03\x04", b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1")
@@ -56,7 +59,7 @@ COMPRESSED = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decomp
 
 
 def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
-    """Read a run's table (CSV, Excel or Parquet, by suffix) or take a DataFrame; return ``(frame, name, label)``.
+    """Read a run's table (CSV, Excel, Parquet or MATLAB, by suffix) or take a DataFrame: ``(frame, name, label)``.
 
     ``label`` names the source in error messages. An Excel workbook is read
     from its sheet with the largest table of numbers (a cover sheet is passed
@@ -70,7 +73,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     path = Path(source)
     label = str(path)
     if path.is_dir():
-        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel or Parquet)")
+        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet or MATLAB)")
     if path.exists() and not path.is_file():
         raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
     if not path.is_file():
@@ -84,7 +87,9 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
             frame, header = _text_under_a_workbooks_name(path, kind, label)
         elif kind == "CSV":
-            frame, header = read_text_table(_decompressed(path) if compressed else path.read_bytes())
+            frame, header = read_text_table(_text_content(path, label, compressed=compressed))
+        elif kind == "MATLAB":
+            frame = read_mat(path, label)
         elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
@@ -364,6 +369,17 @@ def _check_unique_columns(header, label: str) -> None:
                 "rename one so that every column name is unique"
             )
         seen[name] = position
+
+
+def _text_content(path: Path, label: str, *, compressed: bool) -> bytes:
+    """A text table's bytes; binary data (a program's own format) refused in one line."""
+    content = _decompressed(path) if compressed else path.read_bytes()
+    if looks_binary(content):
+        raise InputError(
+            f"{label}: binary data, not a text table (a program's own format?); groupfit reads CSV and other "
+            "text tables, .xlsx, .xls, .ods, Parquet and MATLAB .mat files: export the log as one of them"
+        )
+    return content
 
 
 def _read_parquet(path: Path) -> pd.DataFrame:

@@ -48,6 +48,20 @@ MISREAD = re.compile(r"[\uff61-\uff9f\ue000-\uf8ff]")
 Big5 read as GB 18030 turns into: never what a header is written in."""
 
 
+CONTROL_BYTES = re.compile(rb"[\x01-\x08\x0e-\x1f\x7f]")
+"""Bytes no text holds (a NUL is left out: a logger's power loss writes lines of them into a text log)."""
+BINARY_SHARE = 0.05
+"""Share of :data:`CONTROL_BYTES` in a file's first 4 KiB beyond which it is binary data, not text."""
+
+
+def looks_binary(content: bytes) -> bool:
+    """Whether a file is binary data (a program's own format) rather than text in any encoding read here."""
+    if any(content.startswith(mark) for mark, _ in BYTE_ORDER_MARKS):
+        return False
+    sample = content[:4096]
+    return bool(sample) and len(CONTROL_BYTES.findall(sample)) > BINARY_SHARE * len(sample)
+
+
 def decode(content: bytes) -> str:
     """The text of a file in the encoding that wrote it (module docstring)."""
     for mark, encoding in BYTE_ORDER_MARKS:
@@ -88,4 +102,4 @@ def east_asian(content: bytes) -> str | None:
     return None
 
 
-__all__ = ["BYTE_ORDER_MARKS", "ENCODINGS", "decode", "east_asian"]
+__all__ = ["BYTE_ORDER_MARKS", "ENCODINGS", "decode", "east_asian", "looks_binary"]

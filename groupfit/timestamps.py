@@ -99,20 +99,32 @@ def time_like_columns(columns) -> list[str]:
 
 SERIAL_DAYS = (20000.0, 80000.0)
 """Spreadsheet serial dates (days since 1899-12-30) of 1954 … 2119: a date column exported as numbers."""
+DATENUM_OFFSET = 693960.0
+"""MATLAB's datenum (days since the year 0) less a spreadsheet's serial date of the same day."""
+SERIAL_KINDS = (
+    (0.0, "spreadsheet serial dates (days since 1899-12-30)"),
+    (DATENUM_OFFSET, "MATLAB datenums (days since the year 0)"),
+)
 DATE_WORD = re.compile(r"date|datum", re.IGNORECASE)
 
 
 def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
-    """A date column of spreadsheet serial dates converted to seconds in place, and its note (None: not one).
+    """A date column of spreadsheet serial dates or MATLAB datenums converted to seconds in place, and its note
+    (None: not one).
 
-    A time column without a unit whose numbers all lie among the serial dates of 1954 … 2119, less than a
-    day apart, is a spreadsheet's date-time written as a number when its name says it is a date (``Date``,
-    ``Datum/Zeit``), or when only the reading in days makes a thermal run of it: read in seconds it lasts
-    less than :data:`SHORTEST_RUN_S`, read in days it lasts longer, sampled at least every
-    :data:`SLOWEST_PERIOD_S` (``Timestamp`` 46082.333, 46082.334 …).
+    A time column without a unit whose numbers all lie among the serial dates of 1954 … 2119 (or the
+    datenums of those years), less than a day apart, is a date-time written as a number when its name says
+    it is a date (``Date``, ``Datum/Zeit``), or when only the reading in days makes a thermal run of it:
+    read in seconds it lasts less than :data:`SHORTEST_RUN_S`, read in days it lasts longer, sampled at least
+    every :data:`SLOWEST_PERIOD_S` (``Timestamp`` 46082.333, 46082.334 …; ``time`` 740042.333 …).
     """
     days = _numbers_without_unit(frame, column)
-    if days is None or len(days) < 2 or days.min() < SERIAL_DAYS[0] or days.max() > SERIAL_DAYS[1]:
+    if days is None or len(days) < 2:
+        return None
+    kind = next(
+        (what for offset, what in SERIAL_KINDS if SERIAL_DAYS[0] <= days.min() - offset <= SERIAL_DAYS[1]), None
+    )
+    if kind is None or days.max() - days.min() > SERIAL_DAYS[1] - SERIAL_DAYS[0]:
         return None
     step = float(np.median(np.diff(days)))
     if not 0.0 < step < 1.0:
@@ -122,7 +134,7 @@ def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str 
     if not (DATE_WORD.search(str(column)) or a_run_in_days):
         return None
     frame[column] = days * DAY_S
-    return f"{label}: column '{column}' holds spreadsheet serial dates (days since 1899-12-30): read in seconds"
+    return f"{label}: column '{column}' holds {kind}: read in seconds"
 
 
 EPOCH_UNITS = (

@@ -168,6 +168,12 @@ def test_an_existing_data_file_is_replaced_only_with_force(inputs, tmp_path, cap
     argv = ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", "{tmp}/old.csv")
     status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
     assert status == 2 and "--force" in err[0] and unchanged
+    for suffix in (".mat", ".ods", ".xlsm"):  # every kind a run is read from
+        (tmp_path / f"old{suffix}").write_bytes(b"a run of the user's")
+        argv = ("replay", "{in}/model.json", "--data", "{in}/run.csv", "--json", f"{{tmp}}/old{suffix}")
+        status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+        assert status == 2 and "would replace an existing data file" in err[0] and unchanged, suffix
+        assert (tmp_path / f"old{suffix}").read_bytes() == b"a run of the user's"
 
 
 def test_an_existing_model_file_is_replaced_only_with_force(inputs, tmp_path, capsys):

@@ -1,0 +1,56 @@
+"""A run saved by MATLAB or Octave (``save run.mat time T1 T2 error``): its vectors as the columns of a table.
+
+A MAT file of version 4, 5 or 7 (MATLAB's default) is read with SciPy; each
+variable that is a vector of numbers becomes a column named as the variable,
+in the file's order, and the vectors of the most common length make the run.
+A file of version 7.3 (HDF5), a matrix without column names and a MATLAB
+``table`` or ``timetable`` object (which only MATLAB reads) are refused, each
+saying how to save the run so that it is read.
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.io
+from scipy.io.matlab import MatReadError
+
+from groupfit.errors import InputError
+
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+EXPORT = "save the run as separate vectors (save('run.mat', 'time_s', 'T1', …, '-v7')) or as CSV (writetable)"
+
+
+def read_mat(path: Path, label: str) -> pd.DataFrame:
+    """The vectors of a MAT file as a table (module docstring); refused in one line when it holds none."""
+    with open(path, "rb") as handle:
+        head = handle.read(1024)
+    if HDF5_SIGNATURE in head:
+        raise InputError(f"{label}: a MAT file of version 7.3 (HDF5), which groupfit does not read; {EXPORT}")
+    try:
+        variables = scipy.io.loadmat(path, squeeze_me=True, chars_as_strings=True)
+    except (MatReadError, ValueError, TypeError, IndexError, KeyError, EOFError, OSError, zlib.error) as exc:
+        why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{label}: not a readable MAT file ({why}); {EXPORT}") from None
+    vectors = {}
+    matrices = []
+    for name, value in variables.items():
+        if name.startswith("__") or not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+            continue
+        if value.ndim == 1 and value.size > 1:
+            vectors[name] = value.astype(float)
+        elif value.ndim == 2:
+            matrices.append(f"'{name}' ({value.shape[0]}×{value.shape[1]})")
+    lengths = Counter(len(v) for v in vectors.values())
+    if not lengths or max(lengths.values()) < 2:
+        held = f"a matrix without column names, {matrices[0]}" if matrices else "no vectors of numbers"
+        raise InputError(f"{label}: holds {held} (a MATLAB table or timetable is read only by MATLAB); {EXPORT}")
+    length = max(lengths, key=lambda n: (lengths[n], n))
+    return pd.DataFrame({name: v for name, v in vectors.items() if len(v) == length})
+
+
+__all__ = ["read_mat"]
