@@ -2,7 +2,8 @@
 
 A MAT file of version 4, 5 or 7 (MATLAB's default) is read with SciPy; each
 variable that is a vector of numbers becomes a column named as the variable,
-in the file's order, and the vectors of the most common length make the run.
+in the file's order, and the vectors of the most common length make the run
+(or the fields of the one struct that holds vectors: ``run.time_s``, ``run.T1``).
 A file of version 7.3 (HDF5), a matrix without column names and a MATLAB
 ``table`` or ``timetable`` object (which only MATLAB reads) are refused, each
 saying how to save the run so that it is read.
@@ -36,21 +37,39 @@ def read_mat(path: Path, label: str) -> pd.DataFrame:
     except (MatReadError, ValueError, TypeError, IndexError, KeyError, EOFError, OSError, zlib.error) as exc:
         why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{label}: not a readable MAT file ({why}); {EXPORT}") from None
-    vectors = {}
-    matrices = []
-    for name, value in variables.items():
-        if name.startswith("__") or not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
-            continue
-        if value.ndim == 1 and value.size > 1:
-            vectors[name] = value.astype(float)
-        elif value.ndim == 2:
-            matrices.append(f"'{name}' ({value.shape[0]}×{value.shape[1]})")
+    variables = {name: value for name, value in variables.items() if not name.startswith("__")}
+    vectors, matrices = _vectors(variables)
+    if not vectors:  # one struct of vectors (run.time_s, run.T1 …) is the run
+        found = [found for found in (_vectors(_fields(value))[0] for value in variables.values()) if found]
+        vectors = found[0] if len(found) == 1 else {}
     lengths = Counter(len(v) for v in vectors.values())
     if not lengths or max(lengths.values()) < 2:
         held = f"a matrix without column names, {matrices[0]}" if matrices else "no vectors of numbers"
         raise InputError(f"{label}: holds {held} (a MATLAB table or timetable is read only by MATLAB); {EXPORT}")
     length = max(lengths, key=lambda n: (lengths[n], n))
     return pd.DataFrame({name: v for name, v in vectors.items() if len(v) == length})
+
+
+def _vectors(variables: dict) -> tuple[dict[str, np.ndarray], list[str]]:
+    """The vectors of numbers among ``variables`` (as float), and the matrices of numbers, described."""
+    vectors, matrices = {}, []
+    for name, value in variables.items():
+        if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+            continue
+        if value.ndim == 1 and value.size > 1:
+            vectors[name] = value.astype(float)
+        elif value.ndim == 2:
+            matrices.append(f"'{name}' ({value.shape[0]}×{value.shape[1]})")
+    return vectors, matrices
+
+
+def _fields(value) -> dict:
+    """The fields of a MATLAB struct of one element (empty: not one)."""
+    names = getattr(getattr(value, "dtype", None), "names", None)
+    if not names or getattr(value, "size", 0) != 1:
+        return {}
+    record = value.reshape(-1)[0]
+    return {name: record[name] for name in names}
 
 
 __all__ = ["read_mat"]

@@ -32,6 +32,16 @@ def test_a_run_saved_as_matlab_vectors_is_the_plain_run(tmp_path, synthetic, col
     np.testing.assert_array_equal(run.error, plain.error)
 
 
+def test_a_run_saved_as_one_struct_of_vectors_is_the_plain_run(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "run.mat"
+    scipy.io.savemat(path, {"run": {name: frame[name].to_numpy() for name in frame.columns}, "gain": 2.0})
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_array_equal(run.time, plain.time)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+
+
 def test_a_matlab_run_with_datenums_and_a_constant_beside_it_fits_the_model_of_the_plain_run(tmp_path, synthetic):
     frame, _ = synthetic
     datenum = 740042.0 + 1 / 3 + (frame["time_s"] - frame["time_s"][0]) / 86400.0  # 2026-03-02 08:00
