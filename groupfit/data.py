@@ -31,6 +31,7 @@ from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import numeric_column as numeric_column
+from groupfit.cut_stamps import spread_within_stamps
 from groupfit.data_options import MAX_PERIOD_TOLERANCE
 from groupfit.default_columns import (
     DEFAULT_ERROR,
@@ -369,11 +370,13 @@ def _validated(
     temp_range, error_limit = options.temp_range, options.error_limit
     counted = time in frame.columns and pd.api.types.is_numeric_dtype(frame[time]) and not names_a_unit(time)
     time_values = time_seconds(frame, time, label)
+    spread = None
     if np.any(np.diff(time_values) <= 0):  # before check_time advises averaging the readings of each period
         refuse_interleaved(frame, [stamp_groups(time_values)], time=time, label=label)
+        time_values, spread = spread_within_stamps(time_values, label, time)
     period = check_time(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
-    notes = tuple(notes) + ((jitter,) if jitter and not notes else ())
+    notes = tuple(notes) + ((jitter,) if jitter and not notes else ()) + ((spread,) if spread else ())
     notes = notes + unit_notes(label, time, time_values, period, unit_named=not counted)
 
     temps, temp_array, dropped = temperature_inputs(frame, label, options)
