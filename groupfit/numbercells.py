@@ -66,12 +66,7 @@ def without_thousands_separators(frame: pd.DataFrame, decimal: str) -> pd.DataFr
             values = pd.to_numeric(plain, errors="coerce")
             filled = plain.notna() & (plain != "")
             changed[column] = values.astype(float) if values[filled].notna().all() else plain.astype(object)
-    if not changed:
-        return frame
-    frame = frame.copy()
-    for column, values in changed.items():
-        frame[column] = values
-    return frame
+    return _with_columns(frame, changed)
 
 
 def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: bool = False) -> pd.Series | None:
@@ -146,12 +141,7 @@ def sheet_text_numbers(frame: pd.DataFrame) -> pd.DataFrame:
                 continue
         if values is not None:
             read[column] = values
-    if not read:
-        return frame
-    frame = frame.copy()
-    for column, values in read.items():
-        frame[column] = values
-    return frame
+    return _with_columns(frame, read)
 
 
 CELL_WITH_UNIT = re.compile(r"([^\s°µμ%\[(a-df-zA-DF-Z]+?)\s*([°µμ%]?[\[(]?[a-zA-Z°µμ%./]+[\])]?)")
@@ -176,10 +166,18 @@ def without_cell_units(frame: pd.DataFrame, decimal: str) -> pd.DataFrame:
             read[column], units[str(column)] = values, str(written.iloc[0])
     if not read:
         return frame
-    frame = frame.copy()
-    for column, values in read.items():
-        frame[column] = values
+    frame = _with_columns(frame, read)
     frame.attrs["cell_units"] = {**frame.attrs.get("cell_units", {}), **units}
+    return frame
+
+
+def _with_columns(frame: pd.DataFrame, columns: dict) -> pd.DataFrame:
+    """The frame with ``columns`` (name: values) in place of its own, copied once (the frame itself: none)."""
+    if not columns:
+        return frame
+    frame = frame.copy()
+    for column, values in columns.items():
+        frame[column] = values
     return frame
 
 

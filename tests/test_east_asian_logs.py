@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from support import same_run
 
 from groupfit.columns import is_ambient_name
 from groupfit.data import load_run
@@ -51,9 +52,7 @@ def test_a_chinese_log_is_read_on_the_columns_its_names_mark_and_gives_the_plain
     run = load_run(path, time_is_default=True, error_is_default=True)
     assert run.temp_names == tuple(CHINESE[t] for t in TEMPS)
     assert (run.time_name, run.error_name) == ("时间(s)", "Z向热误差(μm)")
-    np.testing.assert_array_equal(run.temps, plain.temps)
-    np.testing.assert_array_equal(run.error, plain.error)
-    np.testing.assert_array_equal(run.time, plain.time)
+    same_run(run, plain)
 
 
 def test_a_japanese_log_in_shift_jis_with_its_stamps_gives_the_plain_run(tmp_path, synthetic):
@@ -134,6 +133,4 @@ def test_a_taiwanese_log_in_big5_named_as_its_program_names_it_gives_the_plain_r
     named.to_csv(path, index=False, encoding="cp950")
     run = load_run(path, error="ch3(um)", time_is_default=True)
     assert run.time_name == "時間(s)" and run.temp_names == ("t1(°C)", "t2(°C)", "t3(°C)", "t4(°C)")
-    np.testing.assert_array_equal(run.temps, plain.temps)
-    np.testing.assert_array_equal(run.error, plain.error)
-    np.testing.assert_array_equal(run.time, plain.time)
+    same_run(run, plain)

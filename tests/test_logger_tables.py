@@ -15,6 +15,7 @@ import zipfile
 import numpy as np
 import pandas as pd
 import pytest
+from support import same_run
 from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
@@ -37,14 +38,6 @@ def plain():
 @pytest.fixture(scope="module")
 def frame():
     return pd.read_csv(SYNTHETIC)
-
-
-def same_run(run, plain, *, time=True):
-    np.testing.assert_array_equal(run.temps, plain.temps)
-    np.testing.assert_array_equal(run.error, plain.error)
-    if time:
-        np.testing.assert_array_equal(run.time, plain.time)
-    assert run.period == pytest.approx(plain.period)
 
 
 @pytest.mark.parametrize("sep", [";", "\t"])

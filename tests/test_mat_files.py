@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import scipy.io
+from support import same_run
 
 from groupfit.cli import main
 from groupfit.data import load_run
@@ -27,9 +28,7 @@ def test_a_run_saved_as_matlab_vectors_is_the_plain_run(tmp_path, synthetic, col
     path = tmp_path / "run.mat"
     save_vectors(path, frame, column_vectors=column_vectors)
     run = load_run(path, temps=TEMPS)
-    np.testing.assert_array_equal(run.time, plain.time)
-    np.testing.assert_array_equal(run.temps, plain.temps)
-    np.testing.assert_array_equal(run.error, plain.error)
+    same_run(run, plain)
 
 
 def test_a_run_saved_as_one_struct_of_vectors_is_the_plain_run(tmp_path, synthetic):
@@ -37,9 +36,7 @@ def test_a_run_saved_as_one_struct_of_vectors_is_the_plain_run(tmp_path, synthet
     path = tmp_path / "run.mat"
     scipy.io.savemat(path, {"run": {name: frame[name].to_numpy() for name in frame.columns}, "gain": 2.0})
     run = load_run(path, temps=TEMPS)
-    np.testing.assert_array_equal(run.time, plain.time)
-    np.testing.assert_array_equal(run.temps, plain.temps)
-    np.testing.assert_array_equal(run.error, plain.error)
+    same_run(run, plain)
 
 
 def test_a_matlab_run_with_datenums_and_a_constant_beside_it_fits_the_model_of_the_plain_run(tmp_path, synthetic):
