@@ -10,14 +10,22 @@ second) its stamp names, that clock is the run's: ``a + i·P`` with
 ``R``). The period ``P`` is taken from the stamps by least squares (rounded
 to whole seconds, tenths … when that fits as well), the start ``a`` in the
 middle of the starts every row allows. A log whose rows cannot all be so
-placed (a duplicated row, a gap, two recordings) is left to be refused.
+placed (a duplicated row, a gap, two recordings) is left to be refused. The
+stamps are taken as cut when most rows share theirs with another, or when
+none does and they are coarser than a tenth of the period (a run every 100 s
+stamped in whole minutes steps 60 and 120 s) but no whole multiple of it (a
+run every 60 s stamped in whole minutes steps 60 s: a step of 120 s is a
+missed sample). A uniform clock's cut stamps step by one of two neighbouring
+numbers of stamps; a longer step is a gap, and refused.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from groupfit.timestamps import STAMP_RESOLUTIONS_S
+from groupfit.timestamps import RESOLUTION_SHARE, STAMP_RESOLUTIONS_S
 
 SHARED_SHARE = 0.8
 """Least share of the rows that share their stamp with another row for the stamps to be taken as cut."""
@@ -29,9 +37,6 @@ def spread_within_stamps(time: np.ndarray, label: str, column: str) -> tuple[np.
     steps = np.diff(time)
     if time.size < 3 or np.any(steps < 0):
         return time, None
-    shared = np.r_[steps == 0, False] | np.r_[False, steps == 0]
-    if shared.mean() < SHARED_SHARE:
-        return time, None
     offsets = time - time[0]
     resolution = next(
         (r for r in STAMP_RESOLUTIONS_S if np.all(np.abs(offsets / r - np.round(offsets / r)) <= 1e-6)), None
@@ -40,6 +45,15 @@ def spread_within_stamps(time: np.ndarray, label: str, column: str) -> tuple[np.
         return time, None
     rows = np.arange(time.size, dtype=float)
     fitted = float(np.polyfit(rows, time + resolution / 2, 1)[0])
+    shared = np.r_[steps == 0, False] | np.r_[False, steps == 0]
+    per_stamp = fitted / resolution
+    coarse = not shared.any() and resolution > RESOLUTION_SHARE * fitted
+    if (shared.mean() < SHARED_SHARE and not coarse) or (
+        coarse and abs(per_stamp - round(per_stamp)) < 0.01 * per_stamp
+    ):
+        return time, None  # stamps as fine as the clock: a step of another length is a gap
+    if not set(np.round(steps / resolution).astype(int)) <= {math.floor(per_stamp), math.floor(per_stamp) + 1}:
+        return time, None  # a uniform clock's cut stamps step by one of two neighbouring whole stamps
     for period in dict.fromkeys((*(round(fitted, digits) for digits in range(4)), fitted)):
         if period <= 0:
             continue
@@ -49,8 +63,9 @@ def spread_within_stamps(time: np.ndarray, label: str, column: str) -> tuple[np.
             spread = start + rows * period
             unit = {60.0: "minutes", 1.0: "seconds"}.get(resolution, f"multiples of {resolution:g} s")
             return spread - spread[0], (
-                f"{label}: column '{column}' stamps its rows in whole {unit}, about {resolution / period:.3g} under "
-                f"each: the rows are spread evenly, every {period:.6g} s, each within its stamp"
+                f"{label}: column '{column}' stamps its rows in whole {unit}, coarser than its clock: the rows are "
+                f"spread evenly, every {period:.6g} s, each within its stamp (a row missed within a stamp would not "
+                "show)"
             )
     return time, None
 

@@ -31,8 +31,6 @@ from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import numeric_column as numeric_column
-from groupfit.cut_stamps import spread_within_stamps
-from groupfit.data_options import MAX_PERIOD_TOLERANCE
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
@@ -45,16 +43,13 @@ from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table, without_stray_rows
-from groupfit.resample import GAP_PERIODS, jitter_note, resample_frame
+from groupfit.resample import jitter_note, resample_frame
+from groupfit.sampling import clock_of
 from groupfit.split_stamps import with_milliseconds
 from groupfit.timestamps import (
-    clock_restart,
     epoch_to_seconds,
     names_a_unit,
-    refuse_clock_change,
-    restart_refusal,
     serial_days_to_seconds,
-    stamp_resolution,
     unit_notes,
     unit_seconds,
 )
@@ -132,44 +127,6 @@ def refuse_beyond(values: np.ndarray, limit: float, column: str, label: str, wha
             f"{label}: row {huge[0] + 1}, column '{column}': {values[huge[0]]:g} {what} (beyond {limit:g}); "
             "repair that cell"
         )
-
-
-def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float = PERIOD_TOLERANCE) -> float:
-    """Check that ``time`` is strictly increasing and uniformly sampled within ``tolerance`` (or within the
-    stamps' resolution, :func:`~groupfit.timestamps.stamp_resolution`, their mean step then the period);
-    return the period."""
-    if len(time) < 2:
-        raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
-    step = np.diff(time)
-    refuse_clock_change(time, label, column)
-    if np.any(step <= 0):
-        i = int(np.argmax(step <= 0)) + 1
-        if clock_restart(time) == i:  # a restarted clock goes on from its new start; a bad cell is alone
-            raise restart_refusal(time, i, label, column)
-        raise InputError(
-            f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
-            f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows, remove the duplicate, or average the "
-            "readings of each period with --resample SECONDS"
-        )
-    period = float(np.median(step))
-    deviation = np.abs(step - period)
-    irregular = deviation > max(tolerance * period, stamp_resolution(time, period) * (1 + 1e-9))
-    if np.any(irregular):
-        i = int(np.argmax(irregular)) + 1
-        widen = (
-            "widen the tolerance with --period-tolerance PERCENT, "
-            if abs(step[i - 1] - period) < MAX_PERIOD_TOLERANCE * period
-            else ""
-        )
-        raise InputError(
-            f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
-            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
-            f"average the readings of each period with --resample SECONDS (up to {GAP_PERIODS} missed periods in a "
-            f"row are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
-        )
-    if np.any(deviation > tolerance * period):  # stamps rounded to their resolution: the period is their mean
-        period = float(time[-1] - time[0]) / (len(time) - 1)
-    return period
 
 
 def load_run(
@@ -370,11 +327,9 @@ def _validated(
     temp_range, error_limit = options.temp_range, options.error_limit
     counted = time in frame.columns and pd.api.types.is_numeric_dtype(frame[time]) and not names_a_unit(time)
     time_values = time_seconds(frame, time, label)
-    spread = None
     if np.any(np.diff(time_values) <= 0):  # before check_time advises averaging the readings of each period
         refuse_interleaved(frame, [stamp_groups(time_values)], time=time, label=label)
-        time_values, spread = spread_within_stamps(time_values, label, time)
-    period = check_time(time_values, label, time, tolerance=period_tolerance)
+    time_values, period, spread = clock_of(time_values, label, time, tolerance=period_tolerance)
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ()) + ((spread,) if spread else ())
     notes = notes + unit_notes(label, time, time_values, period, unit_named=not counted)

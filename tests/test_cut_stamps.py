@@ -26,6 +26,8 @@ def cut_log(frame: pd.DataFrame, period_s: float, start: str, form: str) -> pd.D
         (20.0, "2026-03-02 23:50:41", "%d.%m.%Y %H:%M"),  # across midnight
         (7.0, "2026-03-02 08:00:00", "%Y-%m-%d %H:%M"),  # a period that does not divide the minute
         (0.25, "2026-03-02 08:00:00.5", "%Y-%m-%d %H:%M:%S"),  # a fast logger stamping whole seconds
+        (100.0, "2026-03-02 08:00:30", "%Y-%m-%d %H:%M"),  # no stamp repeats: steps of 60 and 120 s
+        (7.5, "2026-03-02 08:00:00.2", "%H:%M:%S"),  # seconds: 1 or 2 rows a stamp, no row alone in most
     ],
 )
 def test_rows_under_cut_stamps_are_spread_as_the_uniform_clock_that_wrote_them(
@@ -47,6 +49,10 @@ def test_stamps_no_uniform_clock_fits_are_still_refused(tmp_path, synthetic):
     log = cut_log(frame, 15.0, "2026-03-02 08:00:00", "%Y-%m-%d %H:%M")
     log.drop(index=range(100, 140)).to_csv(path, index=False)  # ten minutes missing: no one clock fits
     with pytest.raises(InputError, match=r"column 'Time' is not strictly increasing"):
+        load_run(path, temps=TEMPS, time_is_default=True)
+    minutes = cut_log(frame, 60.0, "2026-03-02 08:00:20", "%Y-%m-%d %H:%M").drop(index=50)  # one sample missed
+    minutes.to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"sampling is not uniform: rows 50 to 51 of column 'Time'"):
         load_run(path, temps=TEMPS, time_is_default=True)
     seconds = frame.copy()
     seconds.loc[10, "time_s"] = seconds.loc[9, "time_s"]  # one duplicated stamp in a log of distinct ones

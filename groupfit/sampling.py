@@ -1,0 +1,65 @@
+"""A run's clock: uniformly sampled, or stamps cut coarser than the period spread as the clock that wrote them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from groupfit.cut_stamps import spread_within_stamps
+from groupfit.data_options import MAX_PERIOD_TOLERANCE
+from groupfit.errors import InputError
+from groupfit.resample import GAP_PERIODS
+from groupfit.timestamps import clock_restart, refuse_clock_change, restart_refusal, stamp_resolution
+
+
+def clock_of(time: np.ndarray, label: str, column: str, *, tolerance: float) -> tuple[np.ndarray, float, str | None]:
+    """The run's times, its period and a note: as stamped when they pass :func:`check_time`, else spread within
+    stamps cut coarser than the period (:func:`~groupfit.cut_stamps.spread_within_stamps`) when one uniform
+    clock places every row inside its own; refused as :func:`check_time` refuses them otherwise."""
+    try:
+        return time, check_time(time, label, column, tolerance=tolerance), None
+    except InputError:
+        spread, note = spread_within_stamps(time, label, column)
+        if note is None:
+            raise
+    return spread, check_time(spread, label, column, tolerance=tolerance), note
+
+
+def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float) -> float:
+    """Check that ``time`` is strictly increasing and uniformly sampled within ``tolerance`` (or within the
+    stamps' resolution, :func:`~groupfit.timestamps.stamp_resolution`, their mean step then the period);
+    return the period."""
+    if len(time) < 2:
+        raise InputError(f"{label}: only {len(time)} sample(s); a run needs at least two")
+    step = np.diff(time)
+    refuse_clock_change(time, label, column)
+    if np.any(step <= 0):
+        i = int(np.argmax(step <= 0)) + 1
+        if clock_restart(time) == i:  # a restarted clock goes on from its new start; a bad cell is alone
+            raise restart_refusal(time, i, label, column)
+        raise InputError(
+            f"{label}: column '{column}' is not strictly increasing at row {i + 1} "
+            f"({time[i]:g} s after {time[i - 1]:g} s); sort the rows, remove the duplicate, or average the "
+            "readings of each period with --resample SECONDS"
+        )
+    period = float(np.median(step))
+    deviation = np.abs(step - period)
+    irregular = deviation > max(tolerance * period, stamp_resolution(time, period) * (1 + 1e-9))
+    if np.any(irregular):
+        i = int(np.argmax(irregular)) + 1
+        widen = (
+            "widen the tolerance with --period-tolerance PERCENT, "
+            if abs(step[i - 1] - period) < MAX_PERIOD_TOLERANCE * period
+            else ""
+        )
+        raise InputError(
+            f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
+            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
+            f"average the readings of each period with --resample SECONDS (up to {GAP_PERIODS} missed periods in a "
+            f"row are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
+        )
+    if np.any(deviation > tolerance * period):  # stamps rounded to their resolution: the period is their mean
+        period = float(time[-1] - time[0]) / (len(time) - 1)
+    return period
+
+
+__all__ = ["check_time", "clock_of"]
