@@ -356,13 +356,15 @@ def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tu
 
 
 def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
-    """A sheet's frame without the rows after its last one that holds a number (a footer), its columns read
-    as numbers where the footer alone was text."""
+    """A sheet's frame without the rows after its last one that holds a number and is no row of statistics
+    (a footer), its columns read as numbers where the footer alone was text."""
     numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().any(axis=1).to_numpy()
-    numeric = numeric & np.array([not _statistics_row(row) for row in frame.itertuples(index=False)], dtype=bool)
-    if not numeric.any() or numeric[-1]:
+    end = len(frame)
+    while end and (not numeric[end - 1] or _statistics_row(frame.iloc[end - 1])):  # only the last rows are read
+        end -= 1
+    if end in (0, len(frame)):
         return frame
-    kept = frame.iloc[: int(np.flatnonzero(numeric)[-1]) + 1].copy()
+    kept = frame.iloc[:end].copy()
     for column in kept.columns:
         if not pd.api.types.is_numeric_dtype(kept[column]):
             values = as_numbers(kept[column], ".", str(column))
