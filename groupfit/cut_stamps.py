@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from groupfit.timestamps import RESOLUTION_SHARE, STAMP_RESOLUTIONS_S
+from groupfit.timestamps import RESOLUTION_SHARE, stamp_resolution
 
 SHARED_SHARE = 0.8
 """Least share of the rows that share their stamp with another row for the stamps to be taken as cut."""
@@ -37,11 +37,8 @@ def spread_within_stamps(time: np.ndarray, label: str, column: str) -> tuple[np.
     steps = np.diff(time)
     if time.size < 3 or np.any(steps < 0):
         return time, None
-    offsets = time - time[0]
-    resolution = next(
-        (r for r in STAMP_RESOLUTIONS_S if np.all(np.abs(offsets / r - np.round(offsets / r)) <= 1e-6)), None
-    )
-    if resolution is None:
+    resolution = stamp_resolution(time)
+    if not resolution:
         return time, None
     rows = np.arange(time.size, dtype=float)
     fitted = float(np.polyfit(rows, time + resolution / 2, 1)[0])

@@ -406,17 +406,17 @@ RESOLUTION_SHARE = 0.1
 """A resolution up to this share of the period is taken as the stamps' rounding, not a missed sample."""
 
 
-def stamp_resolution(time: np.ndarray, period_s: float) -> float:
+def stamp_resolution(time: np.ndarray, period_s: float | None = None) -> float:
     """How coarsely the time stamps are written (s): the coarsest of :data:`STAMP_RESOLUTIONS_S`, at most
-    :data:`RESOLUTION_SHARE` of the period, that every stamp is a whole multiple of, counted from the first
-    (0: none).
+    :data:`RESOLUTION_SHARE` of the period (any, when ``period_s`` is None), that every stamp is a whole
+    multiple of, counted from the first (0: none).
 
     A logger every 10.4 s writing whole seconds stamps intervals of 10 and 11 s: a step of one resolution
     around the period is the stamps' rounding, not an irregular clock.
     """
     offsets = np.asarray(time, dtype=float) - float(time[0])
     for resolution in STAMP_RESOLUTIONS_S:
-        if resolution <= RESOLUTION_SHARE * period_s:
+        if period_s is None or resolution <= RESOLUTION_SHARE * period_s:
             counts = offsets / resolution
             if np.all(np.abs(counts - np.round(counts)) <= 1e-3):
                 return resolution
