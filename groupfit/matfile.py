@@ -20,7 +20,7 @@ import pandas as pd
 import scipy.io
 from scipy.io.matlab import MatReadError
 
-from groupfit.errors import InputError
+from groupfit.errors import InputError, first_line
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 EXPORT = "save the run as separate vectors (save('run.mat', 'time_s', 'T1', …, '-v7')) or as CSV (writetable)"
@@ -35,8 +35,7 @@ def read_mat(path: Path, label: str) -> pd.DataFrame:
     try:
         variables = scipy.io.loadmat(path, squeeze_me=True, chars_as_strings=True)
     except (MatReadError, ValueError, TypeError, IndexError, KeyError, EOFError, OSError, zlib.error) as exc:
-        why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{label}: not a readable MAT file ({why}); {EXPORT}") from None
+        raise InputError(f"{label}: not a readable MAT file ({first_line(exc)}); {EXPORT}") from None
     variables = {name: value for name, value in variables.items() if not name.startswith("__")}
     vectors, matrices = _vectors(variables)
     if not vectors:  # one struct of vectors (run.time_s, run.T1 …) is the run

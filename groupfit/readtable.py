@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from groupfit.errors import InputError
+from groupfit.errors import InputError, first_line
 from groupfit.io import note_read
 from groupfit.matfile import read_mat
 from groupfit.numbercells import sheet_text_numbers, without_cell_units
@@ -113,8 +113,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         zipfile.BadZipFile,
         lzma.LZMAError,
     ) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{label}: not a readable {kind} table ({first})") from None
+        raise InputError(f"{label}: not a readable {kind} table ({first_line(exc)})") from None
     if frame.shape[0] == 0:
         raise InputError(f"{label}: the table has a header but no rows")
     if header is None or len(header) != frame.shape[1]:

@@ -37,7 +37,6 @@ EAST_ASIAN = ("gb2312", "cp932", "cp950", "gb18030")
 """GB 2312 (both bytes of every character from 0xA1: simplified Chinese proper) before Shift-JIS, whose
 common kanji begin below 0xA1, and Big5, whose second bytes are often below 0xA1; GB 18030 (GBK's
 characters beyond GB 2312), which reads almost any bytes, last."""
-ENCODINGS = ("utf-8", *EAST_ASIAN, *WESTERN)
 HIGH_BYTE = re.compile(rb"[\x80-\xff]")
 CJK_WORD = re.compile(r"[\u3040-\u30ff\u3400-\u4dbf\u4e00-\u9fff]{2,}")
 """Two Chinese characters, kanji or kana in a row: a word of a Chinese or Japanese header."""
@@ -102,4 +101,4 @@ def east_asian(content: bytes) -> str | None:
     return None
 
 
-__all__ = ["BYTE_ORDER_MARKS", "ENCODINGS", "decode", "east_asian", "looks_binary"]
+__all__ = ["BYTE_ORDER_MARKS", "decode", "east_asian", "looks_binary"]

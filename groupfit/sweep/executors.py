@@ -14,7 +14,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Iterator, Sequence
 
-from groupfit.errors import InputError
+from groupfit.errors import InputError, first_line
 from groupfit.sweep.config import RunSpec
 from groupfit.sweep.runs import execute_run
 
@@ -124,8 +124,7 @@ class DaskExecutor:
         try:
             self.client = Client(address, timeout=f"{connect_timeout}s", set_as_default=False)
         except Exception as exc:  # noqa: BLE001 - any failure to connect is the address's fault
-            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise InputError(f"--scheduler {address}: cannot reach the Dask scheduler ({reason})") from None
+            raise InputError(f"--scheduler {address}: cannot reach the Dask scheduler ({first_line(exc)})") from None
 
     def describe(self) -> str:
         workers = self.client.scheduler_info().get("workers", {})
