@@ -31,9 +31,10 @@ def with_milliseconds(frame: pd.DataFrame, column: str, label: str) -> str | Non
     whole seconds (a stamp that carries its own fractions is left as it is).
     """
     columns = [str(c) for c in frame.columns]
-    if column not in columns or columns.index(column) + 1 >= len(columns):
+    after = columns.index(column) + 1 if column in columns else len(columns)
+    if after >= len(columns):
         return None
-    following = frame.columns[columns.index(column) + 1]
+    following = frame.columns[after]
     if not MILLISECOND_NAME.match(str(following)):
         return None
     millis = pd.to_numeric(frame[following], errors="coerce").to_numpy(dtype=float)
@@ -45,7 +46,8 @@ def with_milliseconds(frame: pd.DataFrame, column: str, label: str) -> str | Non
     if not pd.api.types.is_numeric_dtype(frame[column]):
         return None
     seconds = frame[column].to_numpy(dtype=float)
-    if not (seconds[np.isfinite(seconds)] == np.round(seconds[np.isfinite(seconds)])).all():
+    stamped = seconds[np.isfinite(seconds)]
+    if not (stamped == np.round(stamped)).all():
         return None
     frame[column] = seconds + (millis - millis[0]) / 1000.0
     del frame[following]
