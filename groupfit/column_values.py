@@ -72,8 +72,9 @@ class LoadOptions:
     """A column that is never a default input (the ambient temperature, whatever its name)."""
     temp_range: tuple[float, float] | None = TEMP_RANGE_C
     error_limit: float | None = ERROR_LIMIT_UM
-    drop_glitches: bool = False
-    """Take the error's glitches (:mod:`groupfit.glitches`) as not measured, with a note."""
+    drop_glitches: bool | None = None
+    """Take the error's glitches (:mod:`groupfit.glitches`) as not measured, with a note; None (not said): only
+    where readings are averaged (``--resample``, readings in bursts): a glitch is left out of its period's mean."""
     check_ranges: bool | None = None
     """Check ``temp_range`` and ``error_limit``; None: unless ``allow_nonfinite`` (a replay, whose run-time
     rule meets an implausible reading as a sensor fault)."""

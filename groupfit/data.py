@@ -44,7 +44,7 @@ from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.readtable import datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.resample import jitter_note, resample_frame
-from groupfit.sampling import clock_of
+from groupfit.sampling import burst_cycle, clock_of
 from groupfit.split_stamps import with_milliseconds
 from groupfit.timestamps import (
     epoch_to_seconds,
@@ -145,7 +145,7 @@ def load_run(
     resample: float | None = None,
     time_is_default: bool = False,
     error_is_default: bool = False,
-    drop_glitches: bool = False,
+    drop_glitches: bool | None = None,
     check_ranges: bool | None = None,
 ) -> Run:
     """Read and validate a run.
@@ -195,11 +195,13 @@ def load_run(
     error_is_default : bool
         The same for ``error`` (a replay of a model on a log that names its
         error otherwise): the one column named as an error is read, with a note.
-    drop_glitches : bool
+    drop_glitches : bool, optional
         Take the error's glitches (:mod:`groupfit.glitches`: readings that
         leave their neighbours and come back) as not measured, with a note
         naming their rows; for a run that may hold unmeasured rows
-        (``missing_error`` or ``allow_nonfinite``).
+        (``missing_error`` or ``allow_nonfinite``). None (not said): only where
+        readings are averaged (``resample``, readings in bursts), a glitch
+        left out of its period's mean.
     check_ranges : bool, optional
         Refuse readings outside ``temp_range`` and ``error_limit`` (with
         ``resample``: take them as missed) even with ``allow_nonfinite``, for a
@@ -268,9 +270,16 @@ def load_runs(
 
 
 def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> list[Run]:
-    if resample is None:
-        return [_validated(frame, run_name, label, period_tolerance=period_tolerance, notes=(), **options)]
     time = options.get("time", DEFAULT_TIME)
+    bursts = None
+    if resample is None:
+        try:
+            return [_validated(frame.copy(), run_name, label, period_tolerance=period_tolerance, notes=(), **options)]
+        except InputError:
+            bursts = _bursts(frame, time, label)
+            if bursts is None:
+                raise
+        resample = bursts[1]
     time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
     refuse_bad_cells(frame, label, skip=(time,))
@@ -278,6 +287,11 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     frame, glitched = _glitches_as_missed(frame, label, LoadOptions(**options))
     binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
+    if bursts is not None:
+        note = (
+            f"{label}: the readings come in bursts of {bursts[0]} every {bursts[1]:g} s: each burst averaged into "
+            f"one sample (as --resample {bursts[1]:g} does); " + note.split(": ", 1)[1]
+        )
     notes = tuple(n for n in (missed, glitched) if n) + (note,)
     if len(binned.pieces) == 1:
         return [
@@ -297,10 +311,19 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     ]
 
 
+def _bursts(frame: pd.DataFrame, time: str, label: str) -> tuple[int, float] | None:
+    """The readings per burst and the period of a log read in bursts (:func:`~groupfit.sampling.burst_cycle`)."""
+    try:
+        seconds = time_seconds(frame.copy(), time, label)
+    except InputError:
+        return None
+    return burst_cycle(seconds)
+
+
 def _glitches_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[pd.DataFrame, str | None]:
     """The log with its error's glitches emptied before ``--resample`` averages them in, and a note."""
     error = options.error
-    if not options.drop_glitches or error is None or error not in frame.columns:
+    if options.drop_glitches is False or error is None or error not in frame.columns:
         return frame, None
     values = pd.to_numeric(frame[error], errors="coerce").to_numpy(dtype=float) * length_unit(error)[1]
     _, glitches, note = without_glitches(values, error, label)

@@ -50,6 +50,8 @@ TABLE_SUFFIXES = {
     ".mat": "MATLAB",
 }
 """File types a run is read from, by suffix (anything else is read as CSV)."""
+RECORD_SUFFIXES = frozenset({".json", ".jsonl", ".ndjson"})
+"""Logs of records (a 3-D printer's JSON lines, a web interface's dump), refused with what to do."""
 WORKBOOK_SIGNATURES = (b"PK\x03\x04", b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1")
 """How a workbook's bytes begin (a zip: .xlsx, .ods; an OLE compound file: .xls). A file named as a workbook
 that begins otherwise is a text table a program saved under a workbook's name, and is read as one."""
@@ -72,12 +74,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         return source.reset_index(drop=True), (name or "data"), label
     path = Path(source)
     label = str(path)
-    if path.is_dir():
-        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet or MATLAB)")
-    if path.exists() and not path.is_file():
-        raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
-    if not path.is_file():
-        raise InputError(f"{label}: data file not found; check the path given to --data")
+    _refuse_unreadable(path, label)
     note_read(path)
     compressed = path.suffix.lower() in COMPRESSED
     stem = Path(path.stem).stem if compressed else path.stem
@@ -121,6 +118,21 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     _check_unique_columns(header, label)
     frame.columns = [str(c).strip() for c in frame.columns]
     return frame, (name or stem), label
+
+
+def _refuse_unreadable(path: Path, label: str) -> None:
+    """One line for a path that is no data file groupfit reads: a folder, a device, nothing, a JSON log."""
+    if path.is_dir():
+        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet or MATLAB)")
+    if path.exists() and not path.is_file():
+        raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
+    if not path.is_file():
+        raise InputError(f"{label}: data file not found; check the path given to --data")
+    if path.suffix.lower() in RECORD_SUFFIXES:
+        raise InputError(
+            f"{label}: a JSON log is not read (groupfit reads CSV, Excel, OpenDocument, Parquet and MATLAB tables); "
+            "convert it to a CSV table with a header and one row per sample"
+        )
 
 
 def _text_under_a_workbooks_name(path: Path, kind: str, label: str) -> tuple[pd.DataFrame, list[str]]:

@@ -62,4 +62,41 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float) -
     return period
 
 
-__all__ = ["check_time", "clock_of"]
+PAUSE_RATIO = 2.0
+"""A pause between bursts is at least this many times as long as any step within a burst."""
+
+
+def burst_cycle(time: np.ndarray) -> tuple[int, float] | None:
+    """The readings per burst (the most common count) and the mean period of a log whose readings come in
+    bursts (a 3-D printer that probes three times 4 s apart about once a minute); None when the log is not one.
+
+    The steps of such a log fall in two kinds: those within a burst, and pauses at least :data:`PAUSE_RATIO`
+    times as long as any of those. The log is one when it holds at least four bursts, most of two readings or
+    more, and periods of the mean length, laid from the first burst on (a burst missed leaves one period empty),
+    hold each burst whole: its start strays from that clock, plus its length, by less than half a period.
+    """
+    step = np.diff(time)
+    if time.size < 6 or np.any(step <= 0):
+        return None
+    ordered = np.sort(step)
+    jumps = ordered[1:] / ordered[:-1]
+    split = int(np.argmax(jumps))
+    if jumps[split] < PAUSE_RATIO:
+        return None
+    starts = np.concatenate([[0], np.flatnonzero(step > ordered[split]) + 1])
+    ends = np.append(starts[1:], time.size) - 1
+    readings = int(np.bincount(ends - starts + 1).argmax())
+    if readings < 2 or starts.size < 4:
+        return None
+    between = np.diff(time[starts])
+    cycles = np.round(between / np.median(between))
+    if np.any(cycles < 1):
+        return None
+    period = float(time[starts[-1]] - time[0]) / cycles.sum()
+    stray = time[starts] - time[0] - period * np.concatenate([[0.0], np.cumsum(cycles)])
+    if np.ptp(stray) + np.max(time[ends] - time[starts]) < period / 2:
+        return readings, period
+    return None
+
+
+__all__ = ["burst_cycle", "check_time", "clock_of"]

@@ -55,7 +55,10 @@ TIME_FORMATS = (
     "%I:%M:%S %p",
     "%I:%M %p",
 )
-FORMATS = tuple(f"{d} {t}" for d in DATE_FORMATS for t in TIME_FORMATS) + TIME_FORMATS
+DATE_TIME_JOINERS = (" ", "-", "_", ", ")
+"""What loggers write between a stamp's date and its time of day: a space, a hyphen or an underscore (a script's
+``2021/06/05-13:24:41``, ``2026-03-02_08:00:00``), a comma (a browser's ``3/2/2026, 8:00:00 AM``)."""
+FORMATS = tuple(f"{d}{j}{t}" for d in DATE_FORMATS for j in DATE_TIME_JOINERS for t in TIME_FORMATS) + TIME_FORMATS
 """Every form tried after ISO 8601, in order; the time-of-day forms last."""
 EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
 DAY_S = 86400.0
@@ -453,6 +456,7 @@ __all__ = [
     "RESOLUTION_SHARE",
     "STAMP_RESOLUTIONS_S",
     "DATE_FORMATS",
+    "DATE_TIME_JOINERS",
     "EXAMPLES",
     "FORMATS",
     "TIME_FORMATS",

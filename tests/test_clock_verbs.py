@@ -7,7 +7,7 @@ compare``, ``replay`` of a ball-screw or an AR(1) model, ``fit --model ar1``,
 Each log is made from a file with a uniform clock, so that the file itself is
 the truth: a jittered copy (stamps moved by up to 0.6 % of the period) is
 taken with a note and scores as the file does; a copy with three readings per
-period (offsets -d, 0, +d around each value) is refused as it is and, with
+period (offsets -d, 0, +d around each value) is read as bursts and, as with
 ``--resample``, scores as the file does.
 """
 
@@ -71,6 +71,13 @@ def run_json(capsys, *args) -> tuple[dict, str]:
     return json.loads(captured.out), captured.err
 
 
+def read_as_bursts(capsys, *args) -> dict:
+    """The verb's JSON on a log of three readings per period, which it reads as bursts (with a note)."""
+    result, report = run_json(capsys, *args)
+    assert "the readings come in bursts of 3 every" in report
+    return result
+
+
 def refused(capsys, *args) -> str:
     capsys.readouterr()
     assert main([str(a) for a in args]) == 2
@@ -100,12 +107,12 @@ def test_screw_predict_takes_a_jittered_clock_with_a_note_and_resamples_three_re
     assert "note" in report and "largest deviation" in report
     assert jitter["metrics"]["max_um"] == pytest.approx(truth["metrics"]["max_um"], rel=0.05)
     three = three_readings(SCREW, tmp_path / "three.csv", screw_sensors())
-    assert "--resample SECONDS" in refused(capsys, *predict, three)
     resampled, report = run_json(capsys, *predict, three, "--resample", period_of(SCREW))
     assert f"{3 * len(truth['time_s'])} reading(s) averaged" in report
-    assert resampled["predicted_error_um"] == pytest.approx(truth["predicted_error_um"], abs=1e-9)
-    for key in ("max_um", "rms_um", "max_temp_K", "rms_temp_K"):
-        assert resampled["metrics"][key] == pytest.approx(truth["metrics"][key], abs=1e-9)
+    for result in (resampled, read_as_bursts(capsys, *predict, three)):
+        assert result["predicted_error_um"] == pytest.approx(truth["predicted_error_um"], abs=1e-9)
+        for key in ("max_um", "rms_um", "max_temp_K", "rms_temp_K"):
+            assert result["metrics"][key] == pytest.approx(truth["metrics"][key], abs=1e-9)
 
 
 def test_screw_identify_and_compare_resample_and_widen_the_tolerance(screw_model, tmp_path, capsys):
@@ -127,11 +134,12 @@ def test_screw_identify_and_compare_resample_and_widen_the_tolerance(screw_model
 def test_replay_of_a_screw_model_reads_the_clock_as_the_other_verbs(screw_model, tmp_path, capsys):
     three = three_readings(SCREW, tmp_path / "three.csv", screw_sensors())
     truth, _ = run_json(capsys, "replay", screw_model, "--data", SCREW, "--json", "-")
-    assert "--resample SECONDS" in refused(capsys, "replay", screw_model, "--data", three, "--json", "-")
     resampled, _ = run_json(
         capsys, "replay", screw_model, "--data", three, "--resample", period_of(SCREW), "--json", "-"
     )
+    bursts = read_as_bursts(capsys, "replay", screw_model, "--data", three, "--json", "-")
     assert resampled["rms_um"] == pytest.approx(truth["rms_um"], abs=1e-9)
+    assert bursts["rms_um"] == pytest.approx(truth["rms_um"], abs=1e-9)
 
 
 # ------------------------------------------------------------------------- AR(1)
@@ -141,11 +149,11 @@ def test_fit_and_replay_of_an_ar1_model_resample_three_readings(tmp_path, capsys
     fit = ["fit", "--model", "ar1", "--heat", "q_W_m2", "--heat-exponent", "1", "--quiet", "--json", "-"]
     truth, _ = run_json(capsys, *fit, "--data", ROD, "--out", tmp_path / "a")
     three = three_readings(ROD, tmp_path / "three.csv", ("error_um",))
-    assert "--resample SECONDS" in refused(capsys, *fit, "--data", three, "--out", tmp_path / "b")
     resampled, report = run_json(capsys, *fit, "--data", three, "--resample", period_of(ROD), "--out", tmp_path / "c")
     assert "averaged" in report
-    assert resampled["c1"] == pytest.approx(truth["c1"], rel=1e-9)
-    assert resampled["c2_um"] == pytest.approx(truth["c2_um"], rel=1e-9)
+    for result in (resampled, read_as_bursts(capsys, *fit, "--data", three, "--out", tmp_path / "b")):
+        assert result["c1"] == pytest.approx(truth["c1"], rel=1e-9)
+        assert result["c2_um"] == pytest.approx(truth["c2_um"], rel=1e-9)
     replay = ["replay", tmp_path / "a" / "model.json", "--json", "-", "--data"]
     replayed, _ = run_json(capsys, *replay, ROD)
     again, _ = run_json(capsys, *replay, three, "--resample", period_of(ROD))
@@ -177,8 +185,10 @@ def test_a_sweep_study_resamples_by_its_data_key_or_the_flag(tmp_path, capsys):
     assert again["objective"] == pytest.approx(direct["objective"], rel=1e-9)
 
     plain = write_study(tmp_path, three)
+    (bursts,) = read_study(plain).runs  # without the key, the three readings are read as bursts
+    read = execute_run(bursts.spec, bursts.path)
+    assert read["breaks"] == direct["breaks"] and read["objective"] == pytest.approx(direct["objective"], rel=1e-9)
     sweep = ["sweep", plain, "--db", tmp_path / "s.sqlite", "--quiet", "--workers", "1", "--json", "-"]
-    assert "--resample SECONDS" in refused(capsys, *sweep)
     done, report = run_json(capsys, *sweep, "--resample", period)
     assert done["done"] == 1 and done["failed"] == 0 and "averaged" in report
     with pytest.raises(InputError, match=r"config key 'data.resample_s': must be positive, got -1"):

@@ -145,16 +145,18 @@ def test_three_readings_per_cycle_are_averaged_into_their_minute():
     np.testing.assert_allclose(piece["time_s"].to_numpy(), 60.0 * np.arange(N) + 11.0, atol=1e-9)
 
 
-def test_the_raw_log_is_refused_as_it_is_and_fits_with_resample(tmp_path, capsys):
+def test_the_raw_log_is_read_as_bursts_as_it_is_and_as_resample_reads_it(tmp_path, capsys):
     path = tmp_path / "printer_raw.csv"
     three_per_cycle(cycle_means()).to_csv(path, index=False)
-    assert cli("fit", "--data", path, "--p", "2", "--out", tmp_path) == 2
-    assert "--resample SECONDS" in capsys.readouterr().err
-    assert (
-        cli("fit", "--data", path, "--p", "2", "--resample", "60", "--json", tmp_path / "m.json", "--out", tmp_path)
-        == 0
-    )
-    assert f"{3 * N} reading(s) averaged into {N} period(s), 0 empty" in capsys.readouterr().out
+    reports = []
+    for name, extra in (("plain", ()), ("resampled", ("--resample", "60"))):
+        report = tmp_path / f"{name}.json"
+        assert cli("fit", "--data", path, "--p", "2", *extra, "--json", report, "--out", tmp_path / name) == 0
+        reports.append(json.loads(report.read_text()))
+        out = capsys.readouterr().out
+        assert f"{3 * N} reading(s) averaged into {N} period(s), 0 empty" in out
+        assert ("bursts of 3 every 60 s" in out) == (name == "plain")
+    assert reports[0]["coefficients"] == reports[1]["coefficients"] and reports[0]["breaks"] == reports[1]["breaks"]
     config = tmp_path / "printer.toml"
     config.write_text(f'[data]\npath = "{path.name}"\ntemps = ["T1", "T2"]\nresample_s = 60\n[model]\np = 2\n')
     assert cli("fit", config, "--out", tmp_path / "c") == 0

@@ -59,6 +59,13 @@ def add_parser(verbs) -> None:
     )
     common.add_clock_options(replay)
     replay.add_argument(
+        "--keep-glitches",
+        action="store_true",
+        help="where readings are averaged (--resample, readings in bursts), average the error's glitches (readings "
+        "that leave their neighbours and come back) in with the others of their period; by default they are left "
+        "out of its mean, with a note. A sample read alone is scored as read either way",
+    )
+    replay.add_argument(
         "--precision",
         choices=("double", "single"),
         default="double",
@@ -89,7 +96,7 @@ def run_replay(args: argparse.Namespace) -> int:
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
     options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
-    options.update(common.clock_options(args))
+    options.update(common.clock_options(args), **({"drop_glitches": False} if args.keep_glitches else {}))
     run = load_readings(args.data, tables, **options)
     continued, history, found_note = earlier_recordings(
         args, model, run, lambda path: load_readings(path, tables, **options)
