@@ -290,7 +290,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     if bursts is not None:
         note = (
             f"{label}: the readings come in bursts of {bursts[0]} every {bursts[1]:g} s: each burst averaged into "
-            f"one sample (as --resample {bursts[1]:g} does); " + note.split(": ", 1)[1]
+            f"one sample (as --resample {bursts[1]:g} does); " + note.removeprefix(f"{label}: ")
         )
     notes = tuple(n for n in (missed, glitched) if n) + (note,)
     if len(binned.pieces) == 1:
