@@ -23,6 +23,7 @@ from groupfit.commands.replay_probes import (
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import same_recording, with_histories
 from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
+from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
 from groupfit.glitches import scored_glitches
@@ -138,9 +139,11 @@ def run_replay(args: argparse.Namespace) -> int:
     span = range_check(model, run, replay)
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residuals(run, replay))
-    notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes
+    expected = (model.training or {}).get("expected_next_run_rms_um")
+    offset, offset_notes = zero_offset(residuals(run, replay if unchecked is None else unchecked), expected)
+    notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
     result = ReplayResult(
-        {**data, **span, **glitches, "clamped_samples": clamped, **({"notes": notes} if notes else {})}
+        {**data, **span, **glitches, **offset, "clamped_samples": clamped, **({"notes": notes} if notes else {})}
     )
     written = []
     if out_dir is not None:

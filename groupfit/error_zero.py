@@ -1,0 +1,43 @@
+"""A next run whose thermal error is measured from another zero than the modelling run's.
+
+A probe's trigger position logged as it is (a 3-D printer's ``mcu_pos_z`` after
+a re-homing), a displacement sensor re-mounted between two days: the error of
+the next run then differs from the modelling run's by a constant far larger
+than any thermal drift, and the compensation's residual is that constant. The
+RMS a replay reports stays what the log says (a probe check does not mend it:
+its innovation gate rejects so large a correction as a bad reading);
+:func:`zero_offset` adds a note that names the constant and what to do.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+SPREAD_RATIO = 5.0
+"""The residual's mean is a constant offset when it exceeds its spread (standard deviation) this many times."""
+EXPECTED_RATIO = 10.0
+"""… and this many times the model file's expected next-run RMS."""
+
+
+def zero_offset(residual: np.ndarray | None, expected_rms_um: float | None) -> tuple[dict, list[str]]:
+    """``{"constant_offset_um": m}`` and a note when the replay's residual (without probe checks) is nearly a
+    constant far beyond what the model expected of a next run; nothing otherwise."""
+    if residual is None or not isinstance(expected_rms_um, (int, float)) or not expected_rms_um > 0:
+        return {}, []
+    scored = residual[np.isfinite(residual)]
+    if scored.size < 3:
+        return {}, []
+    mean, spread = float(np.mean(scored)), float(np.std(scored))
+    if not (abs(mean) > SPREAD_RATIO * spread and abs(mean) > EXPECTED_RATIO * expected_rms_um):
+        return {}, []
+    times = abs(mean) / expected_rms_um
+    note = (
+        f"the residual is nearly a constant {mean:.4g} µm (its spread {spread:.3g} µm), {times:.0f}× the expected "
+        "next-run RMS: this run's error seems measured from another zero than the modelling run's (a probe's "
+        "position after re-homing, a sensor re-mounted); measure both runs' error from the same zero (e.g. each "
+        "from its first reading) and refit; a probe check rejects so large a correction as a bad reading"
+    )
+    return {"constant_offset_um": mean}, [note]
+
+
+__all__ = ["EXPECTED_RATIO", "SPREAD_RATIO", "zero_offset"]
