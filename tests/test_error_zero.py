@@ -38,7 +38,8 @@ def test_a_next_run_from_another_zero_is_scored_as_logged_and_its_offset_named(m
     next_run = pd.read_csv(DATASETS / "validation_speed.csv")
     plain, _ = replayed(capsys, model, next_run, tmp_path / "plain.csv")
     assert "constant_offset_um" not in plain
-    shifted, report = replayed(capsys, model, next_run.assign(error_um=next_run.error_um + shift_um), tmp_path / "s.csv")
+    moved = next_run.assign(error_um=next_run.error_um + shift_um)
+    shifted, report = replayed(capsys, model, moved, tmp_path / "shifted.csv")
     residual = np.array([s["residual_um"] for s in plain["samples"]], dtype=float)
     assert shifted["constant_offset_um"] == pytest.approx(np.nanmean(residual) + shift_um, abs=1e-6)
     assert shifted["rms_um"] == pytest.approx(np.sqrt(np.nanmean((residual + shift_um) ** 2)), rel=1e-9)
