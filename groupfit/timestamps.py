@@ -141,23 +141,25 @@ def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str 
 
 
 EPOCH_UNITS = (
-    (1e12, 1e13, 1e-3, "milliseconds"),
-    (1e15, 1e16, 1e-6, "microseconds"),
-    (1e18, 1e19, 1e-9, "nanoseconds"),
+    (1e12, 1e13, 1e-3, "Unix times in milliseconds"),
+    (1e15, 1e16, 1e-6, "Unix times in microseconds"),
+    (1.2e17, 2.2e17, 1e-7, "Windows file times (100 ns since 1601)"),
+    (1e18, 1e19, 1e-9, "Unix times in nanoseconds"),
 )
-"""Unix times of 2001 … 2286 in ms, µs and ns: far beyond any time in seconds, so read in their unit."""
+"""Unix times of 2001 … 2286 in ms, µs and ns, and Windows FILETIME stamps of 1981 … 2286 (a controller's log):
+far beyond any time in seconds, so read in their unit."""
 
 
 def epoch_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
-    """A numeric time column of Unix times in ms, µs or ns (its name giving no unit) converted to seconds in
-    place, and its note (None: not one)."""
+    """A numeric time column of Unix times in ms, µs or ns or of Windows file times (its name giving no unit)
+    converted to seconds in place, and its note (None: not one)."""
     values = _numbers_without_unit(frame, column)
     if values is None or not values.size:
         return None
     for low, high, scale, unit in EPOCH_UNITS:
         if values.min() >= low and values.max() < high:
             frame[column] = values * scale
-            return f"{label}: column '{column}' holds Unix times in {unit}: read in seconds"
+            return f"{label}: column '{column}' holds {unit}: read in seconds"
     return None
 
 

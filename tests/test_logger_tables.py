@@ -330,6 +330,17 @@ def test_unix_times_in_ms_us_or_ns_are_read_in_seconds_unless_the_name_says_seco
         load_run(named, temps=TEMPS)
 
 
+def test_windows_file_times_are_read_in_seconds(tmp_path, frame, plain):
+    path = tmp_path / "filetime.csv"
+    unix = 1.77e9 + frame["time_s"].to_numpy()
+    stamps = np.round((unix + 11644473600.0) * 1e7).astype(np.int64)  # 100 ns ticks since 1601-01-01
+    frame.drop(columns="time_s").assign(timestamp=stamps).to_csv(path, index=False)
+    run = load_run(path, temps=TEMPS, time="timestamp")
+    same_run(run, plain, time=False)
+    np.testing.assert_allclose(run.time - run.time[0], plain.time - plain.time[0], rtol=0, atol=1e-5)
+    assert any("holds Windows file times (100 ns since 1601)" in note for note in run.notes)
+
+
 def test_numbers_in_the_serial_range_are_seconds_unless_the_column_is_named_as_a_date(tmp_path, frame, plain):
     path = tmp_path / "elapsed.csv"
     seconds = 30000.0 + (frame["time_s"] - frame["time_s"].iloc[0]) / 1000.0  # elapsed s, sampled every 0.1 s
