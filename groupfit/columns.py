@@ -12,6 +12,7 @@ The diagnosis draws its candidates from these columns and the held-out folds
 
 from __future__ import annotations
 
+import re
 from typing import Sequence
 
 import numpy as np
@@ -20,13 +21,20 @@ import pandas as pd
 from groupfit.errors import InputError
 
 DISPLACEMENT_SUFFIXES = ("_um", "_mm", "_µm")
-AMBIENT_WORDS = ("amb", "room", "air", "hall", "shop", "umgebung", "raumtemp", "环境", "環境", "室温", "気温", "外气")
-"""A column whose name holds one of these is an ambient temperature."""
+AMBIENT_WORDS = (
+    "room", "air", "hall", "shop", "chamber", "enclosure", "umgebung", "raumtemp",
+    "环境", "環境", "室温", "気温", "外气",
+)  # fmt: skip
+"""A column whose name holds one of these is an ambient temperature: an enclosure's chamber (a 3-D printer's
+``chamber_t``) is the air around the frame inside it."""
+AMBIENT_ABBREVIATION = re.compile(r"(?:^|[^a-z])t?amb")
+"""``amb`` at the start of a word, or after a lone ``t`` (``T_amb``, ``Tamb``, ``Ambient``), not inside one
+(``lambda``, ``camber``)."""
 
 
 def is_ambient_name(column: str) -> bool:
     lowered = column.lower()
-    return any(word in lowered for word in AMBIENT_WORDS)
+    return any(word in lowered for word in AMBIENT_WORDS) or AMBIENT_ABBREVIATION.search(lowered) is not None
 
 
 def is_sensor_column(column: str) -> bool:

@@ -19,6 +19,7 @@ from support import same_run
 from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
+from groupfit.columns import is_ambient_name
 from groupfit.data import load_run
 from groupfit.default_columns import default_temperature_columns, error_like_columns
 from groupfit.errors import InputError
@@ -643,3 +644,11 @@ def test_numbers_stored_as_text_whose_comma_may_be_either_are_refused_naming_the
     frame.astype(object).assign(T3=[f"{v:.3f}".replace(".", ",") for v in frame["T3"]]).to_excel(sheet, index=False)
     with pytest.raises(InputError, match=r"text.xlsx: .*column 'T3' holds numbers as text, such as '\d+,\d{3}'"):
         load_run(sheet, temps=TEMPS)
+
+
+def test_the_air_is_told_by_its_word_not_by_three_letters_inside_another():
+    ambient = ("T_amb", "Tamb", "tamb_C", "Ambient [°C]", "AMB_TEMP", "Room", "chamber_t", "Chamber [°C]", "Enclosure")
+    assert all(is_ambient_name(name) for name in ambient)
+    assert not any(is_ambient_name(name) for name in ("lambda_1", "camber_T", "T1", "frame_t", "gamba_temp"))
+    columns = ["time", "frame_t", "chamber_t", "bed_t", "he_t", "lambda_temp"]
+    assert default_temperature_columns(columns) == ["lambda_temp"]  # the one named as a temperature
