@@ -70,16 +70,18 @@ def burst_cycle(time: np.ndarray) -> tuple[int, float] | None:
     """The readings per burst (the most common count) and the mean period of a log whose readings come in
     bursts (a 3-D printer that probes three times 4 s apart about once a minute); None when the log is not one.
 
-    The steps of such a log fall in two kinds: those within a burst, and pauses at least :data:`PAUSE_RATIO`
-    times as long as any of those. The log is one when it holds at least four bursts, most of two readings or
+    The steps of such a log fall in two kinds: those within a burst (0 where the readings of a burst share a
+    stamp written to the second), and pauses at least :data:`PAUSE_RATIO` times as long as any of those, or as
+    the stamps' resolution. The log is one when it holds at least four bursts, most of two readings or
     more, and periods of the mean length, laid from the first burst on (a burst missed leaves one period empty),
     hold each burst whole: its start strays from that clock, plus its length, by less than half a period.
     """
     step = np.diff(time)
-    if time.size < 6 or np.any(step <= 0):
+    if time.size < 6 or np.any(step < 0):
         return None
     ordered = np.sort(step)
-    jumps = ordered[1:] / ordered[:-1]
+    floor = max(stamp_resolution(time), np.finfo(float).tiny)  # readings of a burst may share a coarse stamp
+    jumps = ordered[1:] / np.maximum(ordered[:-1], floor)
     split = int(np.argmax(jumps))
     if jumps[split] < PAUSE_RATIO:
         return None

@@ -26,11 +26,11 @@ def burst_times(n_bursts: int, *, seed: int = 0, readings: int = 3, spacing_s: f
     return np.round((starts[:, None] + spacing_s * np.arange(readings)[None, :]).ravel())
 
 
-def printer_log(n_bursts: int = 150, seed: int = 3) -> pd.DataFrame:
+def printer_log(n_bursts: int = 150, seed: int = 3, spacing_s: float = 4.0) -> pd.DataFrame:
     """A frame-drift log in bursts of three: the burst's index, stamps with a hyphen between date and time, a
     step count as the error (the frame grows as it warms), temperatures read with noise."""
     rng = np.random.default_rng(seed)
-    time = burst_times(n_bursts, seed=seed)
+    time = burst_times(n_bursts, seed=seed, spacing_s=spacing_s)
     k = np.repeat(np.arange(n_bursts), 3)
     frame_t = 25.0 + 12.0 * (1.0 - np.exp(-k / 60.0)) + rng.normal(0, 0.03, k.size)
     chamber_t = 27.0 + 20.0 * (1.0 - np.exp(-k / 25.0)) + rng.normal(0, 0.1, k.size)
@@ -111,11 +111,12 @@ def test_bursts_whose_clock_wanders_by_half_a_period_are_not_taken_for_one():
 # ------------------------------------------------------------------------- the verbs
 
 
-def test_a_log_in_bursts_fits_as_the_same_log_averaged_by_hand(tmp_path, capsys):
-    log = printer_log()
+@pytest.mark.parametrize("spacing_s", [4.0, 0.4])
+def test_a_log_in_bursts_fits_as_the_same_log_averaged_by_hand(tmp_path, capsys, spacing_s):
+    log = printer_log(spacing_s=spacing_s)  # 0.4 s: a burst's readings share a stamp written to the second
     path = tmp_path / "frame_temp_v_pos.csv"
     log.to_csv(path, index=False)
-    _, period = burst_cycle(burst_times(150, seed=3))
+    _, period = burst_cycle(burst_times(150, seed=3, spacing_s=spacing_s))
     truth = tmp_path / "by_hand.csv"
     averaged_by_hand(log, period).to_csv(truth, index=False)
     (read, _), (expected, _) = fitted(tmp_path, path, "--out", tmp_path / "a"), fitted(tmp_path, truth)
