@@ -280,7 +280,8 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
             if bursts is None:
                 raise
         resample = bursts[1]
-    time_seconds(frame, time, label)
+    else:
+        time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
     refuse_bad_cells(frame, label, skip=(time,))
     frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
@@ -312,9 +313,10 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
 
 
 def _bursts(frame: pd.DataFrame, time: str, label: str) -> tuple[int, float] | None:
-    """The readings per burst and the period of a log read in bursts (:func:`~groupfit.sampling.burst_cycle`)."""
+    """The readings per burst and the period of a log read in bursts (:func:`~groupfit.sampling.burst_cycle`),
+    its time column read in seconds in place; None when it is not one (or its time cannot be read)."""
     try:
-        seconds = time_seconds(frame.copy(), time, label)
+        seconds = time_seconds(frame, time, label)
     except InputError:
         return None
     return burst_cycle(seconds)

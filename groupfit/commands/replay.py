@@ -130,17 +130,17 @@ def run_replay(args: argparse.Namespace) -> int:
         print(f"note     {note}", file=common.report_stream(args))
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     data["continues"] = [str(path) for path in continued]
+    residual = residuals(run, replay)
+    without = residual if unchecked is None else residuals(run, unchecked)  # the residual without probe checks
     if probes is not None:
-        without = residuals(run, unchecked)
         scored = without[np.isfinite(without)] if without is not None else np.empty(0)
         rms_without = float(np.sqrt(np.mean(scored**2))) if scored.size else None
         data["probes"] = probe_summary(args, replay, probes, rms_without)
     data.update(expectation_check(model, data, args.data))
     span = range_check(model, run, replay)
     clamped, clamp_note = clamp_check(rule.tables, replay)
-    glitches, glitch_notes = scored_glitches(run.error, residuals(run, replay))
-    expected = (model.training or {}).get("expected_next_run_rms_um")
-    offset, offset_notes = zero_offset(residuals(run, replay if unchecked is None else unchecked), expected)
+    glitches, glitch_notes = scored_glitches(run.error, residual)
+    offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"))
     notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
     result = ReplayResult(
         {**data, **span, **glitches, **offset, "clamped_samples": clamped, **({"notes": notes} if notes else {})}
