@@ -16,6 +16,7 @@ import pandas as pd
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
+    ambient_columns,
     default_temperature_columns,
     length_unit,
     temperature_like_columns,
@@ -260,9 +261,19 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
         if not temps and options.require_error:
             temps = temperature_like_columns(frame, exclude=(time, error, ambient))
             if temps:
+                references = ambient_columns(frame, temps)  # the air a reference is taken from is not left out
+                air = temperature_like_columns(frame, (time, error, ambient), air=True)
+                air = [c for c in air if c not in references]
+                every = ",".join(str(c) for c in frame.columns if c in temps or c in air)
+                named = (
+                    f"; {', '.join(air)} {'is' if len(air) == 1 else 'are'} named as the air and not an input: "
+                    f"--temps {every} takes {'it' if len(air) == 1 else 'them'} too"
+                    if air
+                    else "; --temps names them"
+                )
                 notes.append(
                     f"{label}: no column is named as a temperature (T1, Temp …, °C): the inputs are the columns "
-                    f"whose readings look like temperatures in °C: {', '.join(temps)}; --temps names them"
+                    f"whose readings look like temperatures in °C: {', '.join(temps)}{named}"
                 )
         if not temps:
             raise InputError(

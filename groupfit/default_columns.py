@@ -116,16 +116,19 @@ PLAUSIBLE_TEMPERATURE_C = (-40.0, 200.0)
 """Readings of a machine's temperature sensors in °C (coolant, structure, bearings, motors)."""
 
 
-def temperature_like_columns(frame: pd.DataFrame, exclude: Sequence[str | None] = ()) -> list[str]:
+def temperature_like_columns(
+    frame: pd.DataFrame, exclude: Sequence[str | None] = (), *, air: bool = False
+) -> list[str]:
     """The inputs of a log that names none as a temperature: the numeric columns whose readings look like a
     machine's temperatures in °C (within :data:`PLAUSIBLE_TEMPERATURE_C`, varying, not a setting held at
-    levels, not a counter), whose names are not those of a time, an error, the air or another quantity."""
+    levels, not a counter), whose names are not those of a time, an error, the air or another quantity.
+    With ``air``, the columns named as the air whose readings look so instead."""
     excluded = {e for e in exclude if e}
     named = set(time_like_columns(frame.columns)) | set(error_like_columns(frame.columns))
     found = []
     for column in frame.columns:
         name = str(column)
-        if column in excluded or name in named or is_ambient_name(name) or OTHER_QUANTITY_NAME.search(name):
+        if column in excluded or name in named or is_ambient_name(name) != air or OTHER_QUANTITY_NAME.search(name):
             continue
         values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
         finite = values[np.isfinite(values)]

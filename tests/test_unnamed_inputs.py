@@ -56,3 +56,17 @@ def test_a_log_with_nothing_like_a_temperature_is_still_refused_in_one_line(tmp_
     assert main(["fit", "--data", str(path), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no temperature columns found" in err[0] and "--temps" in err[0]
+
+
+def test_a_column_named_as_the_air_is_left_out_and_the_note_says_how_to_take_it(tmp_path, generic, capsys):
+    frame = generic.copy()
+    rng = np.random.default_rng(1)
+    frame.insert(2, "chamber_t", frame["frame_left"] + 3.0 + rng.normal(0, 0.05, len(frame)))
+    assert temperature_like_columns(frame, exclude=("time_s", "error_um"), air=True) == ["chamber_t", "T_amb"]
+    found = fitted(tmp_path, frame)
+    note = capsys.readouterr().out
+    assert "chamber_t" not in found["temps"]
+    listed = ",".join([*list(GENERIC.values())[:1], "chamber_t", *list(GENERIC.values())[1:]])
+    assert f"chamber_t is named as the air and not an input: --temps {listed} takes it too" in note
+    named = fitted(tmp_path, frame, "--temps", listed)
+    assert "chamber_t" in named["temps"]

@@ -1,0 +1,127 @@
+"""The next-run estimate on runs of two conditions: a warm-up, then a cool-down, repeated on another day.
+
+Run from the repository root: ``python bench/bench_two_conditions.py`` (about a minute).
+
+A run of two conditions is the sharpest case of forward chaining (docs/nextrun.md): its first scored segment is
+the first of the cool-down, fitted on the warm-up alone, and it decides both the figure and the choice. A next run
+of the same programme brings no condition the model was not fitted on, so one may leave that segment out
+("the first segment of a new condition is not scored when the run before it holds one condition"). This bench
+builds such pairs on the independent machine (``independent_machine.py``: random machines and workshop days; the
+spindle at one speed for 3-8 h, then stopped for 3-8 h; the next run the same programme, each stretch ±15 %, on
+another day) and scores both rules with the panel's own scoring (``next_run_panel.score_pair``): the share of
+pairs whose actual / expected lies in [0.5, 2], and the share whose chosen model is within 1.5× of the best p.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import independent_machine as machine  # noqa: E402
+import next_run_panel as panel  # noqa: E402
+
+from groupfit.heldout import calibration, nextrun  # noqa: E402
+from groupfit.heldout.folds import fold_columns, make_folds, setting_values  # noqa: E402
+
+SPEEDS = (2000, 3000, 4000, 5000, 6000)
+
+
+def warm_cool_pair(seed: int) -> panel.Pair:
+    """Pair ``w<seed>``: a warm-up at one speed and a cool-down, then the same programme on another day."""
+    rng = np.random.default_rng(seed)
+    kind = machine.RANDOM_KINDS[seed % len(machine.RANDOM_KINDS)]
+    period = float(rng.choice([10, 20, 30, 60, 120]))
+    tau_h = float(rng.uniform(0.4, 4.0))
+    speed = float(rng.choice(SPEEDS))
+    warm_h, cool_h = float(rng.uniform(3, 8)), float(rng.uniform(3, 8))
+    recipes = []
+    for k in range(2):
+        warm, cool = warm_h * rng.uniform(0.85, 1.15), cool_h * rng.uniform(0.85, 1.15)
+        ambient = machine._random_ambient(rng)
+        schedule = [(warm, speed), (cool + 1.0, 0.0)]
+        recipes.append(
+            machine._recipe(
+                warm + cool, period, 2 * seed + k, ambient, spindle_part_tau_h=tau_h, pump_part_tau_h=tau_h,
+                speed=schedule,
+            )
+        )  # fmt: skip
+    hidden, log = None, {}
+    if kind == "ambient":
+        hidden, log = "U", {"extra_gains": {"U": float(rng.uniform(1.5, 4.0))}}
+    elif kind == "speed":
+        hidden, log = "S", {"extra_gains": {"S": float(rng.uniform(2.0, 5.0))}}
+    build = machine._pair(*recipes, hidden, heat_driven_only=kind == "speed", **log)
+    spec = machine.ScenarioSpec(f"w{seed}_{kind}", "warm-up, cool-down", (), build)
+    scenario = spec.make()
+    model = panel.frame_run(scenario.modelling, f"{scenario.name}_model", scenario.temps)
+    following = panel.frame_run(scenario.validation, f"{scenario.name}_next", scenario.temps)
+    return panel.make_pair(scenario.name, "warm/cool", model, following)
+
+
+def condition_codes(run) -> np.ndarray | None:
+    """Each sample's operating condition (a code per combination of the settings' levels); None without any."""
+    exclude = {run.time_name, run.error_name, *run.temp_names}
+    if run.reference not in (None, "start"):
+        exclude.add(run.reference)
+    folds = make_folds([run.frame], fold_columns(run.frame, exclude))
+    if folds.kind != "condition":
+        return None
+    values = np.column_stack([setting_values(run.frame, column) for column in folds.columns])
+    return np.unique(values, axis=0, return_inverse=True)[1].reshape(-1)
+
+
+def seen_after_one_condition(shipped):
+    """``forward_folds`` less the folds of a new condition whose run before holds one condition."""
+
+    def folds(run, starts, min_train=nextrun.MIN_TRAIN_FRACTION):
+        scored = shipped(run, starts, min_train)
+        codes = condition_codes(run)
+        if codes is None:
+            return scored
+        kept = [(a, b) for a, b in scored if codes[a] in codes[:a] or len(np.unique(codes[:a])) > 1]
+        return kept or scored
+
+    return folds
+
+
+def summary(rows: list[dict], label: str) -> None:
+    ratio = np.array([r["actual_um"] / calibration.expected(r["raw_um"])[0] for r in rows])
+    inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
+    chosen = np.mean([r["within_chosen"] for r in rows])
+    print(
+        f"{label}: {len(rows)} pairs, actual/expected median {np.median(ratio):.2f}, in [0.5, 2]: "
+        f"{100 * inside:.0f} %; chosen model within 1.5x of the best p: {100 * chosen:.0f} %"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pairs", type=int, default=30, help="how many pairs (seeds 200 on)")
+    args = parser.parse_args()
+    pairs = [warm_cool_pair(seed) for seed in range(200, 200 + args.pairs)]
+    shipped = nextrun.forward_folds
+    rows = {"shipped (every segment after 40 % scored)": [panel.score_pair(pair) for pair in pairs]}
+    nextrun.forward_folds = seen_after_one_condition(shipped)
+    try:
+        rows["first cool-down segment not scored"] = [panel.score_pair(pair) for pair in pairs]
+    finally:
+        nextrun.forward_folds = shipped
+    print(f"{'pair':<18} {'rule':<8} {'p':>2} {'expect':>8} {'actual':>8} {'ratio':>6} {'best':>4}  actual by p")
+    for label, scored in rows.items():
+        for row in scored:
+            expected = calibration.expected(row["raw_um"])[0]
+            by_p = " ".join(f"{v:.3g}" for v in row["actual_by_p"].values())
+            print(
+                f"{row['pair']:<18} {label[:8]:<8} {row['chosen_p']:>2} {expected:>8.3g} {row['actual_um']:>8.3g} "
+                f"{row['actual_um'] / expected:>6.2f} {row['best_p']:>4}  {by_p}"
+            )
+    for label, scored in rows.items():
+        summary(scored, label)
+
+
+if __name__ == "__main__":
+    main()
