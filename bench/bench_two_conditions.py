@@ -25,7 +25,6 @@ import independent_machine as machine  # noqa: E402
 import next_run_panel as panel  # noqa: E402
 
 from groupfit.heldout import calibration, nextrun  # noqa: E402
-from groupfit.heldout.folds import fold_columns, make_folds, setting_values  # noqa: E402
 
 SPEEDS = (2000, 3000, 4000, 5000, 6000)
 
@@ -62,27 +61,13 @@ def warm_cool_pair(seed: int) -> panel.Pair:
     return panel.make_pair(scenario.name, "warm/cool", model, following)
 
 
-def condition_codes(run) -> np.ndarray | None:
-    """Each sample's operating condition (a code per combination of the settings' levels); None without any."""
-    exclude = {run.time_name, run.error_name, *run.temp_names}
-    if run.reference not in (None, "start"):
-        exclude.add(run.reference)
-    folds = make_folds([run.frame], fold_columns(run.frame, exclude))
-    if folds.kind != "condition":
-        return None
-    values = np.column_stack([setting_values(run.frame, column) for column in folds.columns])
-    return np.unique(values, axis=0, return_inverse=True)[1].reshape(-1)
-
-
 def seen_after_one_condition(shipped):
     """``forward_folds`` less the folds of a new condition whose run before holds one condition."""
 
     def folds(run, starts, min_train=nextrun.MIN_TRAIN_FRACTION):
         scored = shipped(run, starts, min_train)
-        codes = condition_codes(run)
-        if codes is None:
-            return scored
-        kept = [(a, b) for a, b in scored if codes[a] in codes[:a] or len(np.unique(codes[:a])) > 1]
+        codes = nextrun.segment_starts(run)[4]
+        kept = [(a, b) for a, b in scored if not nextrun.leaves_one_condition([(a, b)], codes)]
         return kept or scored
 
     return folds

@@ -208,11 +208,28 @@ def test_an_error_measured_on_every_tenth_row_keeps_the_operating_conditions():
 
 
 def test_too_few_conditions_are_noted():
-    run = tiny_run(8, speeds=(0, 1000), segment=60)  # one change of speed: two conditions
-    scores = forward_chaining(run, [0])
-    assert scores.n_conditions == 2
+    early = tiny_run(8, speeds=(0, 1000, 1000, 1000), segment=30)  # one change of speed, at a quarter of the run
+    scores = forward_chaining(early, [0])
+    assert scores.n_conditions == 2 and not scores.leaves_one_condition
     assert any("only 2 operating conditions" in note for note in trust_notes(scores))
     assert trust_notes(forward_chaining(tiny_run(9), [0])) == ()  # six conditions
+
+
+@pytest.mark.parametrize(
+    "speeds, leaves",
+    [
+        ((0, 1000), True),  # the second condition starts at half the run, fitted on the first alone
+        ((0, 0, 1000, 1000, 1000, 1000), False),  # it starts at a third: the first scored segment repeats it
+        ((0, 1000, 0, 1000, 1000), False),  # both seen before 40 %
+        ((0, 0, 0, 1000, 2000), True),  # the first scored segment's run before holds 0 r/min alone
+    ],
+)
+def test_a_segment_that_leaves_the_one_condition_before_it_is_noted(speeds, leaves):
+    run = tiny_run(8, speeds=speeds, segment=40)
+    scores = forward_chaining(run, [0])
+    assert scores.leaves_one_condition == leaves
+    noted = any("never saw" in note and "--data A B" in note for note in trust_notes(scores))
+    assert noted == leaves
 
 
 def test_two_runs_left_out_are_noted():

@@ -225,6 +225,15 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
             "see another programme or day; record a run on another condition (another speed programme or "
             "another day) and fit on both (--data A B --p 0)"
         )
+    elif scores.leaves_one_condition:
+        notes.append(
+            "a scored segment starts a condition the run before it never saw (a cool-down after the warm-up "
+            "alone): every candidate extrapolates there, and that segment weighs most in the figure and the "
+            "choice, which price a next run into an unseen condition rather than a repeat of the programme (a "
+            "3-D printer's heat-then-cool repeats came out at 0.3-0.5 × the figure, simulated warm-up/cool-down "
+            "repeats on another day at 0.8-30 ×); a rough estimate: record a second run and fit on both "
+            "(--data A B --p 0)"
+        )
     elif scores.n_conditions < MIN_SEGMENTS:
         notes.append(
             f"only {scores.n_conditions} operating conditions in the run: the later segments repeat what the "

@@ -76,6 +76,9 @@ class NextRunScores:
     """Stretches of one operating condition in the run (1 with no operating column; 0: not counted)."""
     blocks_of_time: bool = False
     """The scored folds are equal blocks of time, not operating segments."""
+    leaves_one_condition: bool = False
+    """A scored segment starts a condition the run before it has not seen, that run holding one condition alone
+    (:func:`leaves_one_condition`)."""
 
     @property
     def n_folds(self) -> int:
@@ -123,10 +126,11 @@ def sliced(run: Run, rows: np.ndarray, *, period: float | None = None) -> Run:
     )
 
 
-def segment_starts(run: Run) -> tuple[list[int], str, int, bool]:
+def segment_starts(run: Run) -> tuple[list[int], str, int, bool, np.ndarray | None]:
     """First sample of every operating segment of ``run`` (0-based), how they were found, how many
-    stretches of one operating condition the run holds (a long one is cut into several segments), and
-    whether the segments are equal blocks of time (the run has no operating column)."""
+    stretches of one operating condition the run holds (a long one is cut into several segments), whether
+    the segments are equal blocks of time (the run has no operating column), and each sample's condition
+    (one code per combination of the operating columns' levels; None for blocks of time)."""
     exclude = {run.time_name, run.error_name, *run.temp_names}
     if run.reference not in (None, "start"):
         exclude.add(run.reference)
@@ -136,8 +140,9 @@ def segment_starts(run: Run) -> tuple[list[int], str, int, bool]:
     if folds.kind == "condition":
         values = np.column_stack([setting_values(run.frame, c) for c in folds.columns])
         conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
-        return starts, f"changes of {', '.join(folds.columns)}", conditions, False
-    return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, True
+        codes = np.unique(values, axis=0, return_inverse=True)[1].reshape(-1)
+        return starts, f"changes of {', '.join(folds.columns)}", conditions, False, codes
+    return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, True, None
 
 
 def forward_folds(run: Run, starts: Sequence[int], min_train: float = MIN_TRAIN_FRACTION) -> list[tuple[int, int]]:
@@ -145,6 +150,14 @@ def forward_folds(run: Run, starts: Sequence[int], min_train: float = MIN_TRAIN_
     n = run.n_samples
     edges = [*starts, n]
     return [(a, b) for a, b in zip(edges[:-1], edges[1:]) if a >= min_train * n and b > a]
+
+
+def leaves_one_condition(folds: Sequence[tuple[int, int]], codes: np.ndarray | None) -> bool:
+    """Whether a scored segment starts a condition its run before has not seen, that run holding one condition
+    alone (a cool-down scored on a model of the warm-up): every candidate extrapolates there."""
+    if codes is None:
+        return False
+    return any(codes[a] not in codes[:a] and len(np.unique(codes[:a])) == 1 for a, _ in folds)
 
 
 def feasible_pmax(n_samples: int, *, n: int, c: float, n_coef: int, pmax: int) -> int:
@@ -202,8 +215,8 @@ def forward_chaining(
     else:
         sse = np.hstack([phase[1][[phase[0].index(p) for p in candidates]] for phase in phases])
         counts = np.concatenate([phase[2] for phase in phases])
-    _, _, _, how, conditions, blocks, n_thin = phases[0]
-    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, n_thin, conditions, blocks)
+    _, _, _, how, conditions, blocks, n_thin, leaves = phases[0]
+    return NextRunScores(candidates, sse, counts, FORWARD, how, stride, n_thin, conditions, blocks, leaves)
 
 
 def phase_offsets(stride: int, phases: int = PHASES) -> list[int]:
@@ -220,8 +233,9 @@ def thinned_from(run: Run, stride: int, offset: int) -> Run:
 
 
 def _phase_scores(thin: Run, p_values, n, c, fit_intercept, ridge_alpha, min_train):
-    """Forward chaining on one thinned run: candidates, sse, counts, how, conditions, blocks, samples."""
-    starts, how, conditions, blocks = segment_starts(thin)
+    """Forward chaining on one thinned run: candidates, sse, counts, how, conditions, blocks, samples, and
+    whether a scored segment leaves the one condition of the run before it."""
+    starts, how, conditions, blocks, codes = segment_starts(thin)
     folds = forward_folds(thin, starts, min_train)
     if not folds:  # no segment starts late enough: score the run's last blocks of time
         folds = forward_folds(thin, _blocks(thin.n_samples), min_train)
@@ -248,7 +262,7 @@ def _phase_scores(thin: Run, p_values, n, c, fit_intercept, ridge_alpha, min_tra
             estimator.fit(prefix.temps, prefix.error)
             prediction = rule_prediction(estimator, prefix, X[:end])
             sse[i, k] = float(np.sum((y[scored] - prediction[scored]) ** 2))
-    return candidates, sse, counts, how, conditions, blocks, thin.n_samples
+    return candidates, sse, counts, how, conditions, blocks, thin.n_samples, leaves_one_condition(folds, codes)
 
 
 def prefix_breaks(prefix: Run, pmax: int, *, n: int, c: float, fit_intercept: bool) -> dict[int, list[int]]:
