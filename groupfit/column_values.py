@@ -19,6 +19,7 @@ from groupfit.default_columns import (
     ambient_columns,
     default_temperature_columns,
     length_unit,
+    named_length_unit,
     temperature_like_columns,
 )
 from groupfit.errors import InputError
@@ -45,8 +46,14 @@ SIGNAL_UNIT = re.compile(
 """A transducer's signal unit at the end of a name (``105 (VDC)``, ``probe [mV]``, ``disp_mV``): not a length."""
 
 
-def unit_note(name: str | None, label: str) -> str | None:
-    """The note of an error column read in another unit than µm (None for one in µm)."""
+SMALLEST_ERROR_SPAN_UM = 0.1
+"""An error that spans less than this over a whole run (µm) is below what thermal drift and a displacement sensor
+show: a column in mm (or m) whose name gives no unit, read as µm, looks like this."""
+
+
+def unit_note(name: str | None, label: str, values: np.ndarray | None = None) -> str | None:
+    """The note of an error column read in another unit than µm (None for one in µm); with its ``values`` (µm),
+    also of one whose name gives no unit and whose span over the run is too small for µm."""
     unit, scale = length_unit(name)
     signal = SIGNAL_UNIT.search(str(name)) if name is not None else None
     if scale == 1.0 and signal:
@@ -54,6 +61,15 @@ def unit_note(name: str | None, label: str) -> str | None:
             f"{label}: column '{name}' is named in {signal.group(1) or signal.group(2)}, a transducer's signal, not "
             "a length: read as µm; scale it to µm first (by the transducer's µm per volt or per count)"
         )
+    if scale == 1.0 and values is not None and named_length_unit(name) is None:
+        measured = values[np.isfinite(values)]
+        span = float(np.ptp(measured)) if measured.size > 1 else None
+        if span is not None and 0.0 < span < SMALLEST_ERROR_SPAN_UM:
+            return (
+                f"{label}: column '{name}' spans only {span:.3g} µm over the run, read as µm (its name gives no "
+                f"unit): less than thermal drift and a displacement sensor show; if it is in mm, name it "
+                f"'{name}_mm' (or '{name} [mm]') to read it ×1000"
+            )
     if scale == 1.0:
         return None
     return f"{label}: column '{name}' is in {unit} by its name: read ×{scale:g} as µm (rename it to read it as µm)"
@@ -359,6 +375,7 @@ __all__ = [
     "NO_READING",
     "markers_emptied",
     "refuse_bad_cells",
+    "SMALLEST_ERROR_SPAN_UM",
     "TEMP_RANGE_C",
     "LoadOptions",
     "check_range",

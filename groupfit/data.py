@@ -363,7 +363,7 @@ def _validated(
     notes = notes + ((dropped,) if dropped else ())
 
     error_values = read_error_values(frame, error, label, options)
-    in_other_unit = unit_note(error, label) if error_values is not None else None
+    in_other_unit = unit_note(error, label, error_values) if error_values is not None else None
     notes = notes + ((in_other_unit,) if in_other_unit else ())
     if options.ranges_checked:
         if temp_range is not None:

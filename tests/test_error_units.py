@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
+from groupfit.column_values import SMALLEST_ERROR_SPAN_UM
 from groupfit.data import length_unit, load_run
 
 DATASETS = Path(__file__).resolve().parents[1] / "datasets"
@@ -43,6 +44,24 @@ def test_a_run_in_mm_loads_as_the_same_run_in_um_with_a_note(tmp_path):
     np.testing.assert_allclose(scaled.error, plain.error, rtol=1e-12, atol=1e-12)
     assert any("'dZ [mm]' is in mm by its name: read ×1000 as µm" in note for note in scaled.notes)
     assert not any("by its name" in note for note in plain.notes)
+
+
+def test_an_error_in_mm_whose_name_gives_no_unit_is_named_and_its_renamed_column_reads_as_the_run(tmp_path):
+    in_millimetres(DATASETS / "paper_cycle.csv", tmp_path / "bare.csv", "dZ")
+    bare = load_run(tmp_path / "bare.csv", temps=["T1", "T2"], error="dZ")
+    span = np.ptp(bare.error)
+    assert 0 < span < SMALLEST_ERROR_SPAN_UM  # a thermal error of some µm, read in mm as µm
+    note = f"column 'dZ' spans only {span:.3g} µm over the run, read as µm (its name gives no unit)"
+    assert any(note in n and "name it 'dZ_mm'" in n for n in bare.notes)
+    in_millimetres(DATASETS / "paper_cycle.csv", tmp_path / "named.csv", "dZ_mm")  # as the note says
+    named = load_run(tmp_path / "named.csv", temps=["T1", "T2"], error="dZ_mm")
+    plain = load_run(DATASETS / "paper_cycle.csv", temps=["T1", "T2"])
+    np.testing.assert_allclose(named.error, plain.error, rtol=1e-12, atol=1e-12)
+    assert not any("spans only" in n for n in named.notes + plain.notes)
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv").rename(columns={"error_um": "dZ"})
+    frame["dZ"] *= 1.01 * SMALLEST_ERROR_SPAN_UM / np.ptp(frame["dZ"])  # just above the smallest span
+    frame.to_csv(tmp_path / "least.csv", index=False)
+    assert not any("spans only" in n for n in load_run(tmp_path / "least.csv", temps=["T1", "T2"], error="dZ").notes)
 
 
 def test_the_plausible_range_applies_in_um(tmp_path):
