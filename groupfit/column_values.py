@@ -49,6 +49,9 @@ SIGNAL_UNIT = re.compile(
 SMALLEST_ERROR_SPAN_UM = 0.1
 """An error that spans less than this over a whole run (µm) is below what thermal drift and a displacement sensor
 show: a column in mm (or m) whose name gives no unit, read as µm, looks like this."""
+LARGEST_ERROR_SPAN_UM = 1000.0
+"""An error that spans more than this over a whole run (µm) is beyond a machine tool's thermal drift: a column in
+nm whose name gives no unit, read as µm, looks like this."""
 
 
 def unit_note(name: str | None, label: str, values: np.ndarray | None = None) -> str | None:
@@ -69,6 +72,12 @@ def unit_note(name: str | None, label: str, values: np.ndarray | None = None) ->
                 f"{label}: column '{name}' spans only {span:.3g} µm over the run, read as µm (its name gives no "
                 f"unit): less than thermal drift and a displacement sensor show; if it is in mm, name it "
                 f"'{name}_mm' (or '{name} [mm]') to read it ×1000"
+            )
+        if span is not None and span > LARGEST_ERROR_SPAN_UM:
+            return (
+                f"{label}: column '{name}' spans {span:.4g} µm over the run, read as µm (its name gives no unit): "
+                f"more than a machine tool's thermal drift; if it is in nm, name it '{name}_nm' (or '{name} [nm]') "
+                "to read it ×0.001"
             )
     if scale == 1.0:
         return None
@@ -375,6 +384,7 @@ __all__ = [
     "NO_READING",
     "markers_emptied",
     "refuse_bad_cells",
+    "LARGEST_ERROR_SPAN_UM",
     "SMALLEST_ERROR_SPAN_UM",
     "TEMP_RANGE_C",
     "LoadOptions",

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from groupfit.cli import main
-from groupfit.column_values import SMALLEST_ERROR_SPAN_UM
+from groupfit.column_values import LARGEST_ERROR_SPAN_UM, SMALLEST_ERROR_SPAN_UM
 from groupfit.data import length_unit, load_run
 
 DATASETS = Path(__file__).resolve().parents[1] / "datasets"
@@ -62,6 +62,20 @@ def test_an_error_in_mm_whose_name_gives_no_unit_is_named_and_its_renamed_column
     frame["dZ"] *= 1.01 * SMALLEST_ERROR_SPAN_UM / np.ptp(frame["dZ"])  # just above the smallest span
     frame.to_csv(tmp_path / "least.csv", index=False)
     assert not any("spans only" in n for n in load_run(tmp_path / "least.csv", temps=["T1", "T2"], error="dZ").notes)
+
+
+def test_an_error_in_nm_whose_name_gives_no_unit_is_named(tmp_path):
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    frame["drift"] = frame.pop("error_um") * 1000.0  # in nm
+    frame.to_csv(tmp_path / "nm.csv", index=False)
+    run = load_run(tmp_path / "nm.csv", temps=["T1", "T2"], error="drift")
+    span = np.ptp(run.error)
+    assert span > LARGEST_ERROR_SPAN_UM
+    assert any(f"column 'drift' spans {span:.4g} µm" in n and "name it 'drift_nm'" in n for n in run.notes)
+    frame.rename(columns={"drift": "drift_nm"}).to_csv(tmp_path / "named.csv", index=False)
+    named = load_run(tmp_path / "named.csv", temps=["T1", "T2"], error="drift_nm")
+    np.testing.assert_allclose(named.error, run.error / 1000.0, rtol=1e-12)
+    assert not any("spans" in n for n in named.notes)
 
 
 def test_the_plausible_range_applies_in_um(tmp_path):
