@@ -54,7 +54,8 @@ def warm_cool_pair(seed: int) -> panel.Pair:
     elif kind == "speed":
         hidden, log = "S", {"extra_gains": {"S": float(rng.uniform(2.0, 5.0))}}
     build = machine._pair(*recipes, hidden, heat_driven_only=kind == "speed", **log)
-    spec = machine.ScenarioSpec(f"w{seed}_{kind}", "warm-up, cool-down", (), build)
+    missing = kind if hidden else "none"  # the other kinds' pumps and on/off spindles are not simulated here
+    spec = machine.ScenarioSpec(f"w{seed}_{missing}", "warm-up, cool-down", (), build)
     scenario = spec.make()
     model = panel.frame_run(scenario.modelling, f"{scenario.name}_model", scenario.temps)
     following = panel.frame_run(scenario.validation, f"{scenario.name}_next", scenario.temps)
