@@ -56,7 +56,8 @@ nm whose name gives no unit, read as µm, looks like this."""
 
 def unit_note(name: str | None, label: str, values: np.ndarray | None = None) -> str | None:
     """The note of an error column read in another unit than µm (None for one in µm); with its ``values`` (µm),
-    also of one whose name gives no unit and whose span over the run is too small for µm."""
+    also of one whose name gives no unit and whose span over the run is too small or too large for µm
+    (:data:`SMALLEST_ERROR_SPAN_UM`, :data:`LARGEST_ERROR_SPAN_UM`)."""
     unit, scale = length_unit(name)
     signal = SIGNAL_UNIT.search(str(name)) if name is not None else None
     if scale == 1.0 and signal:
