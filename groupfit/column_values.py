@@ -20,6 +20,7 @@ from groupfit.default_columns import (
     default_temperature_columns,
     length_unit,
     named_length_unit,
+    scaled_name,
     temperature_like_columns,
 )
 from groupfit.errors import InputError
@@ -63,8 +64,11 @@ def unit_note(name: str | None, label: str, values: np.ndarray | None = None) ->
     if scale == 1.0 and signal:
         return (
             f"{label}: column '{name}' is named in {signal.group(1) or signal.group(2)}, a transducer's signal, not "
-            "a length: read as µm; scale it to µm first (by the transducer's µm per volt or per count)"
+            f"a length: read as µm; give its µm per volt or per count K as --error '{name}*K'"
         )
+    scaled = scaled_name(name)
+    if scaled is not None:
+        return None if scale == 1.0 else f"{label}: column '{scaled[0]}' read ×{scale:g} as µm (--error '{name}')"
     if scale == 1.0 and values is not None and named_length_unit(name) is None:
         measured = values[np.isfinite(values)]
         span = float(np.ptp(measured)) if measured.size > 1 else None
@@ -78,7 +82,7 @@ def unit_note(name: str | None, label: str, values: np.ndarray | None = None) ->
             return (
                 f"{label}: column '{name}' spans {span:.4g} µm over the run, read as µm (its name gives no unit): "
                 f"more than a machine tool's thermal drift; if it is in nm, name it '{name}_nm' (or '{name} [nm]') "
-                "to read it ×0.001"
+                f"to read it ×0.001; in steps or counts, give their µm K as --error '{name}*K'"
             )
     if scale == 1.0:
         return None
@@ -252,7 +256,7 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
         temps = default_temperature_columns(frame.columns, exclude=(options.time, options.error, options.ambient))
     bounds = {t: options.temp_range for t in temps if options.temp_range is not None}
     if options.error is not None and options.error_limit is not None:
-        limit = options.error_limit / length_unit(options.error)[1]
+        limit = options.error_limit / abs(length_unit(options.error)[1])
         bounds[options.error] = (-limit, limit)
     counts = {}
     frame = frame.copy()
@@ -261,6 +265,8 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
             continue
         values = pd.to_numeric(frame[column], errors="coerce")
         outside = (values < low) | (values > high)
+        if column == options.error and outside.any() and not (values.notna() & ~outside).any():
+            _refuse_error_outside(values.to_numpy(dtype=float) * length_unit(column)[1], column, label, options)
         if outside.any():
             frame.loc[outside.to_numpy(), column] = np.nan
             counts[column] = int(outside.sum())
@@ -268,6 +274,16 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
         return frame, None
     listed = ", ".join(f"{count} in '{column}'" for column, count in counts.items())
     return frame, f"{label}: readings outside the plausible range taken as missed ({listed})"
+
+
+def _refuse_error_outside(values: np.ndarray, column: str, label: str, options: LoadOptions) -> None:
+    """Refuse an error column none of whose readings (µm) is plausible: nothing would be left to take as missed."""
+    limit = options.error_limit
+    row = int(np.flatnonzero(np.isfinite(values))[0])
+    raise InputError(
+        f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
+        f"{values[row]:g} µm); widen the range with --range-error MAX, or name the thermal error's column"
+    )
 
 
 def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[list, np.ndarray, str | None]:

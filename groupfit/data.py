@@ -38,6 +38,7 @@ from groupfit.default_columns import (
     found_time_column,
 )
 from groupfit.default_columns import length_unit as length_unit
+from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
@@ -255,8 +256,10 @@ def load_runs(
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     millis_note = with_milliseconds(frame, time, label)
     required = options.get("require_error", True)
+    asked = options.get("error", DEFAULT_ERROR)
+    frame = with_scaled_error(frame, asked, label, lengths=lengths, required=required and not error_is_default)
     error, error_note = found_error_column(
-        frame, options.get("error", DEFAULT_ERROR), label, required=required, default=error_is_default, lengths=lengths
+        frame, asked, label, required=required, default=error_is_default, lengths=lengths
     )
     try:
         runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})

@@ -1,5 +1,5 @@
-"""The command-line forms of the loader's options: ``--temps``, ``--range-temp``, ``--range-error``,
-``--period-tolerance`` (and the same keys of a configuration's ``[data]`` table)."""
+"""The command-line forms of the loader's options: ``--error`` (its help), ``--temps``, ``--range-temp``,
+``--range-error``, ``--period-tolerance`` (and the same keys of a configuration's ``[data]`` table)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,10 @@ import numpy as np
 
 from groupfit.errors import InputError
 
+ERROR_HELP = (
+    "thermal-error column in µm, or mm, nm by its name (default error_um); COLUMN*K reads it ×K µm per unit as "
+    "logged (steps, counts, inches; K < 0 flips its sign)"
+)
 MAX_PERIOD_TOLERANCE = 0.5
 """The widest ``--period-tolerance``: an interval half a period off the period is a missed or an extra
 sample, which ``--resample`` handles."""
@@ -68,4 +72,4 @@ def split_names(text: str | None) -> list[str] | None:
     return names
 
 
-__all__ = ["parse_error_limit", "parse_period_tolerance", "parse_temp_range", "split_names"]
+__all__ = ["ERROR_HELP", "parse_error_limit", "parse_period_tolerance", "parse_temp_range", "split_names"]

@@ -58,8 +58,23 @@ MICROMETRES_PER_UNIT = {
 LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/（［])(mm|um|µm|μm|microns?|nm|微米|毫米|纳米)\s*[\])）］]?\s*$", re.IGNORECASE)
 
 
+SCALED_NAME = re.compile(r"^(?P<column>.*\S)\s*\*\s*(?P<factor>[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*$")
+"""A column read with a factor, as ``--error`` may name it: ``mcu_pos_z*2.5`` is column ``mcu_pos_z`` ×2.5 µm
+per unit as logged (:mod:`groupfit.error_scale`)."""
+
+
+def scaled_name(name: str | None) -> tuple[str, float] | None:
+    """``(column, factor)`` of a name that asks for a column read with a factor (``z*2.5``); None otherwise."""
+    match = SCALED_NAME.match(str(name)) if name is not None else None
+    return (match.group("column"), float(match.group("factor"))) if match else None
+
+
 def length_unit(name: str | None) -> tuple[str, float]:
-    """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none)."""
+    """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none); a name read with
+    a factor (``z*2.5``, :func:`scaled_name`) gives ``("×2.5", 2.5)``."""
+    scaled = scaled_name(name)
+    if scaled is not None:
+        return f"×{scaled[1]:g}", scaled[1]
     unit = named_length_unit(name)
     scale = MICROMETRES_PER_UNIT[unit] if unit else 1.0
     return (unit if scale != 1.0 else "µm"), scale
@@ -230,5 +245,6 @@ __all__ = [
     "found_time_column",
     "length_unit",
     "named_length_unit",
+    "scaled_name",
     "temperature_like_columns",
 ]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
+from groupfit.error_scale import factor_problem
 from groupfit.errors import InputError
 from groupfit.grouping import hard_groups, soft_groups
 from groupfit.model_recalibration import recalibration_problem
@@ -114,6 +115,8 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
         return f"intercept = {model['intercept']!r}: must be true or false"
     if model["error"] is not None and not isinstance(model["error"], str):
         return f"error = {model['error']!r}: must be a column name or null"
+    if factor_problem(model["error"]):
+        return factor_problem(model["error"])
     if not is_whole(model["p"]) or model["p"] < 0:
         return f"p = {model['p']!r}: must be a whole number ≥ 0"
     if not is_whole(model["n"]) or model["n"] < 0:

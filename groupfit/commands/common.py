@@ -21,7 +21,7 @@ from groupfit.data import (
     load_runs,
     loading_notes,
 )
-from groupfit.data_options import parse_error_limit, parse_period_tolerance, parse_temp_range, split_names
+from groupfit.data_options import ERROR_HELP, parse_error_limit, parse_period_tolerance, parse_temp_range, split_names
 from groupfit.errors import InputError
 from groupfit.export import write
 from groupfit.io import atomic_write_text, to_json
@@ -44,7 +44,7 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
     parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
-    parser.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default error_um)")
+    parser.add_argument("--error", metavar="COLUMN", help=ERROR_HELP)
     add_range_options(parser)
     add_clock_options(parser)
     add_glitch_option(parser)

@@ -43,7 +43,9 @@ def add_parser(verbs) -> None:
     common.add_model_run_options(
         replay, "the recorded run (with the model's temperature columns and the source columns of its derived inputs)"
     )
-    replay.add_argument("--error", metavar="COLUMN", help="thermal-error column in µm (default: the model's)")
+    replay.add_argument(
+        "--error", metavar="COLUMN", help="thermal-error column in µm, or COLUMN*K (default: the model's)"
+    )
     replay.add_argument(
         "--continues",
         nargs="+",

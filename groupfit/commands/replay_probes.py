@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from groupfit.data import length_unit, numeric_column
+from groupfit.error_scale import scaled_values
 from groupfit.errors import InputError
 from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
@@ -45,8 +46,8 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
     replay.add_argument(
         "--probe-column",
         metavar="COLUMN",
-        help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm); default: the run's error "
-        "column; "
+        help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm), or COLUMN*K (×K µm per "
+        "unit as logged); default: the run's error column; "
         "without --probe-every every row where it holds a number is a check",
     )
 
@@ -60,8 +61,9 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
         raise InputError(f"--probe-every {args.probe_every:g}: must be a number of seconds > 0")
     first = args.probe_first
     if args.probe_column is not None:
-        reading = numeric_column(run.frame, args.probe_column, run.source, allow_nonfinite=True)
-        reading = reading * length_unit(args.probe_column)[1]  # ``probe_mm``: read in µm
+        column, factor = scaled_values(run.frame, args.probe_column, run.source)
+        reading = numeric_column(run.frame, column, run.source, allow_nonfinite=True)
+        reading = reading * factor * length_unit(column)[1]  # ``probe*2.5``, ``probe_mm``: read in µm
     elif run.error is not None:
         reading = np.asarray(run.error, dtype=float)
     else:
