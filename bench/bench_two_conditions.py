@@ -48,18 +48,25 @@ def warm_cool_pair(seed: int) -> panel.Pair:
                 speed=schedule,
             )
         )  # fmt: skip
-    hidden, log = None, {}
-    if kind == "ambient":
-        hidden, log = "U", {"extra_gains": {"U": float(rng.uniform(1.5, 4.0))}}
-    elif kind == "speed":
-        hidden, log = "S", {"extra_gains": {"S": float(rng.uniform(2.0, 5.0))}}
+    hidden, log = hidden_part(kind, rng)
     build = machine._pair(*recipes, hidden, heat_driven_only=kind == "speed", **log)
-    missing = kind if hidden else "none"  # the other kinds' pumps and on/off spindles are not simulated here
+    missing = kind if hidden else "none"
     spec = machine.ScenarioSpec(f"w{seed}_{missing}", "warm-up, cool-down", (), build)
     scenario = spec.make()
     model = panel.frame_run(scenario.modelling, f"{scenario.name}_model", scenario.temps)
     following = panel.frame_run(scenario.validation, f"{scenario.name}_next", scenario.temps)
     return panel.make_pair(scenario.name, "warm/cool", model, following)
+
+
+def hidden_part(kind: str, rng: np.random.Generator) -> tuple[str | None, dict]:
+    """The unsensed part that carries a missing effect of ``kind`` (``"ambient"``: a part driven by the air;
+    ``"speed"``: a part heated by the spindle), with its gain drawn from ``rng``; ``(None, {})`` for the others,
+    whose pumps and on/off spindles these one-speed runs do not simulate."""
+    if kind == "ambient":
+        return "U", {"extra_gains": {"U": float(rng.uniform(1.5, 4.0))}}
+    if kind == "speed":
+        return "S", {"extra_gains": {"S": float(rng.uniform(2.0, 5.0))}}
+    return None, {}
 
 
 def seen_after_one_condition(shipped):

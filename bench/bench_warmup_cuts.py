@@ -23,6 +23,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import independent_machine as machine  # noqa: E402
 import next_run_panel as panel  # noqa: E402
+from bench_two_conditions import hidden_part  # noqa: E402
 
 from groupfit.heldout import calibration  # noqa: E402
 from groupfit.heldout.nextrun import sliced  # noqa: E402
@@ -43,11 +44,7 @@ def warmup_cut(seed: int) -> panel.Pair:
         warm_h + rest_h, period, 2 * seed, machine._random_ambient(rng), spindle_part_tau_h=tau_h,
         pump_part_tau_h=tau_h, speed=[(rest_h, 0.0), (warm_h + 1.0, speed)],
     )  # fmt: skip
-    hidden, log = None, {}
-    if kind == "ambient":
-        hidden, log = "U", {"extra_gains": {"U": float(rng.uniform(1.5, 4.0))}}
-    elif kind == "speed":
-        hidden, log = "S", {"extra_gains": {"S": float(rng.uniform(2.0, 5.0))}}
+    hidden, log = hidden_part(kind, rng)
     build = machine._pair(recipe, recipe, hidden, heat_driven_only=kind == "speed", **log)
     spec = machine.ScenarioSpec(f"u{seed}_{kind if hidden else 'none'}", "one warm-up", (), build)
     scenario = spec.make()
