@@ -4,7 +4,7 @@ Every compared model's residual on every validation run is replayed with a
 check every T through the offset hold (each check's residual held until the
 next; :mod:`groupfit.runtime.recalibration` with ``method = "hold"`` and no
 bound acting), so a user reads off the longest interval that meets a
-tolerance. The hold is the one filter every model can take without tuning;
+tolerance (``--tolerance UM`` prints it per model). The hold is the one filter every model can take without tuning;
 a model file tuned with ``fit --recalibrate`` usually does better
 (``groupfit replay --probe-every``).
 """
@@ -100,6 +100,55 @@ def interval_table(
     return {"method": "offset hold", "intervals_s": [float(t) for t in intervals_s], "first_s": first_s, "rows": rows}
 
 
+def interval_plan(table: Mapping[str, Any], tolerance_um: float) -> dict[str, Any]:
+    """Per model the longest interval of ``table`` whose RMS with checks is at most ``tolerance_um`` on every
+    run (the ``--json`` object ``plan``).
+
+    Per model: ``longest_interval_s`` (None when no interval meets it) and
+    ``without_checks`` (the RMS without checks meets it on every run already).
+    """
+    intervals = table["intervals_s"]
+    models: dict[str, dict[str, Any]] = {}
+    for row in table["rows"]:
+        entry = models.setdefault(row["model"], {"meets": [True] * len(intervals), "without_checks": True})
+        entry["meets"] = [m and v <= tolerance_um for m, v in zip(entry["meets"], row["rms_um"])]
+        entry["without_checks"] = entry["without_checks"] and row["rms_none_um"] <= tolerance_um
+    plan = {}
+    for model, entry in models.items():
+        meeting = [t for t, ok in zip(intervals, entry["meets"]) if ok]
+        plan[model] = {
+            "longest_interval_s": max(meeting) if meeting else None,
+            "without_checks": entry["without_checks"],
+        }
+    return {"tolerance_um": float(tolerance_um), "models": plan}
+
+
+def plan_summary(plan: Mapping[str, Any]) -> str:
+    """The lines ``compare --probe-every … --tolerance UM`` prints: per model the longest interval that meets it."""
+    tolerance = plan["tolerance_um"]
+    lines = [f"plan    the longest check interval with RMS ≤ {tolerance:g} µm on every run (offset hold):"]
+    for model, entry in plan["models"].items():
+        if entry["without_checks"]:
+            said = "no checks needed (RMS without checks meets it)"
+        elif entry["longest_interval_s"] is None:
+            said = "none of the intervals tried: check more often or improve the model"
+        else:
+            said = f"a check every {_label(entry['longest_interval_s'])}"
+        lines.append(f"        {model:<12} {said}")
+    return "\n".join(lines)
+
+
+def parse_tolerance(text: str) -> float:
+    """``--tolerance UM``: a finite number of µm > 0 (InputError otherwise)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"--tolerance {text!r}: give the largest acceptable RMS error in µm, e.g. 2") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"--tolerance {text!r}: must be a number of µm > 0")
+    return value
+
+
 def _rms(values: np.ndarray) -> float:
     values = values[np.isfinite(values)]
     return float(np.sqrt(np.mean(values**2))) if values.size else math.nan
@@ -124,16 +173,21 @@ def interval_summary(table: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def plot_intervals(table: Mapping[str, Any], path: Path) -> None:
-    """RMS against the check interval, one line per model and run (the none value at the right edge)."""
+def plot_intervals(table: Mapping[str, Any], path: Path, tolerance_um: float | None = None) -> None:
+    """RMS against the check interval, one line per model and run (dotted: without checks; dashed: the
+    tolerance, when given)."""
     fig = Figure(figsize=(8, 5), layout="constrained")
     ax = fig.subplots()
     minutes = np.asarray(table["intervals_s"]) / 60.0
     for row in table["rows"]:
         line = ax.plot(minutes, row["rms_um"], marker="o", lw=1.2, label=f"{row['model']} on {row['run']}")
         ax.axhline(row["rms_none_um"], color=line[0].get_color(), lw=0.6, ls=":")
+    if tolerance_um is not None:
+        ax.axhline(tolerance_um, color="k", lw=1.0, ls="--", label=f"tolerance {tolerance_um:g} µm")
     ax.set_xscale("log")
-    ax.set_xlabel("probe check every (min)")
+    ax.set_xticks(minutes, [_label(t) for t in table["intervals_s"]])
+    ax.minorticks_off()
+    ax.set_xlabel("probe check every")
     ax.set_ylabel("RMS error with checks (µm); dotted: without")
     ax.set_title(f"error against the check interval ({table['method']})")
     ax.legend(fontsize=7, loc="best")
@@ -144,8 +198,11 @@ __all__ = [
     "check_probe_first",
     "check_rows",
     "hold_residual",
+    "interval_plan",
     "interval_summary",
     "interval_table",
     "parse_intervals",
+    "parse_tolerance",
+    "plan_summary",
     "plot_intervals",
 ]

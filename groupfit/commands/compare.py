@@ -17,9 +17,12 @@ from groupfit.inference.cli import add_interval_options, check_block, interval_s
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import (
     check_probe_first,
+    interval_plan,
     interval_summary,
     interval_table,
     parse_intervals,
+    parse_tolerance,
+    plan_summary,
     plot_intervals,
 )
 from groupfit.reference import with_reference
@@ -65,6 +68,12 @@ def add_parser(verbs) -> None:
         help="with --probe-every: the first check SECONDS after each run's first sample (default: one interval; "
         "0: at the first sample), as replay --probe-first",
     )
+    compare.add_argument(
+        "--tolerance",
+        metavar="UM",
+        help="with --probe-every: print per model the longest interval whose RMS with checks is at most UM µm on "
+        "every run (and in --json: probe_intervals.plan)",
+    )
     compare.set_defaults(handler=run_compare)
 
 
@@ -109,6 +118,9 @@ def run_compare(args: argparse.Namespace) -> int:
     if run_settings.compare.pmax < 0:
         raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
     check_probe_first(args.probe_first, args.probe_every)
+    if args.tolerance is not None and not args.probe_every:
+        raise InputError("--tolerance needs --probe-every: give the check intervals to try, e.g. 15m,30m,60m,120m")
+    tolerance = None if args.tolerance is None else parse_tolerance(args.tolerance)
     runs = [p for p in [data.path, *data.validate] if isinstance(p, (str, Path))]
     common.plan_outputs(
         args,
@@ -218,9 +230,12 @@ def run_compare(args: argparse.Namespace) -> int:
             args.probe_first,
         )
         figure = out_dir / "error_against_check_interval.png"
-        plot_intervals(table, figure)
+        plot_intervals(table, figure, tolerance)
         written.append(figure)
         data["probe_intervals"], summary = table, summary + "\n\n" + interval_summary(table)
+        if tolerance is not None:
+            table["plan"] = interval_plan(table, tolerance)
+            summary += "\n" + plan_summary(table["plan"])
     written.append(common.write_json(args.json, data))
     common.commit_outputs()
     print(summary + "\nwrote   " + common.wrote_line(written), file=common.report_stream(args))
