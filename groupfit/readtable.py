@@ -1,4 +1,5 @@
-"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel, Parquet or MATLAB by suffix, or a DataFrame.
+"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel, Parquet, MATLAB or TDMS by suffix, or a
+DataFrame.
 
 A text table is read as it was written (:mod:`groupfit.textlayout`: its
 encoding, separator, a preamble, decimal commas, a units row), and a time
@@ -25,6 +26,7 @@ from groupfit.errors import InputError, first_line
 from groupfit.io import note_read
 from groupfit.matfile import read_mat
 from groupfit.numbercells import sheet_text_numbers, without_cell_units
+from groupfit.tdmsfile import read_tdms
 from groupfit.textencoding import looks_binary
 from groupfit.textlayout import (
     DIGIT,
@@ -48,6 +50,7 @@ TABLE_SUFFIXES = {
     ".ods": "OpenDocument",
     ".parquet": "Parquet",
     ".mat": "MATLAB",
+    ".tdms": "TDMS",
 }
 """File types a run is read from, by suffix (anything else is read as CSV)."""
 RECORD_SUFFIXES = frozenset({".json", ".jsonl", ".ndjson"})
@@ -61,7 +64,8 @@ COMPRESSED = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decomp
 
 
 def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
-    """Read a run's table (CSV, Excel, Parquet or MATLAB, by suffix) or take a DataFrame: ``(frame, name, label)``.
+    """Read a run's table (CSV, Excel, Parquet, MATLAB or TDMS, by suffix) or take a DataFrame: ``(frame, name,
+    label)``.
 
     ``label`` names the source in error messages. An Excel workbook is read
     from its sheet with the largest table of numbers (a cover sheet is passed
@@ -87,6 +91,8 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
             frame, header = read_text_table(_text_content(path, label, compressed=compressed))
         elif kind == "MATLAB":
             frame = read_mat(path, label)
+        elif kind == "TDMS":
+            frame = read_tdms(path, label)
         elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
@@ -123,14 +129,15 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
 def _refuse_unreadable(path: Path, label: str) -> None:
     """One line for a path that is no data file groupfit reads: a folder, a device, nothing, a JSON log."""
     if path.is_dir():
-        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet or MATLAB)")
+        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet, MATLAB or TDMS)")
     if path.exists() and not path.is_file():
         raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
     if not path.is_file():
         raise InputError(f"{label}: data file not found; check the path given to --data")
     if path.suffix.lower() in RECORD_SUFFIXES:
         raise InputError(
-            f"{label}: a JSON log is not read (groupfit reads CSV, Excel, OpenDocument, Parquet and MATLAB tables); "
+            f"{label}: a JSON log is not read (groupfit reads CSV, Excel, OpenDocument, Parquet, MATLAB and TDMS "
+            "tables); "
             "convert it to a CSV table with a header and one row per sample"
         )
 
@@ -388,7 +395,7 @@ def _text_content(path: Path, label: str, *, compressed: bool) -> bytes:
     if looks_binary(content):
         raise InputError(
             f"{label}: binary data, not a text table (a program's own format?); groupfit reads CSV and other "
-            "text tables, .xlsx, .xls, .ods, Parquet and MATLAB .mat files: export the log as one of them"
+            "text tables, .xlsx, .xls, .ods, Parquet, MATLAB .mat and TDMS files: export the log as one of them"
         )
     return content
 

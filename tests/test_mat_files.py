@@ -69,7 +69,7 @@ def test_mat_files_groupfit_cannot_read_are_refused_saying_how_to_save_the_run(t
         load_run(broken, temps=TEMPS)
 
 
-@pytest.mark.parametrize("suffix", [".tdms", ".csv", ".dat"])
+@pytest.mark.parametrize("suffix", [".csv", ".dat"])
 def test_binary_data_under_any_name_is_refused_as_no_text_table(tmp_path, suffix):
     path = tmp_path / f"log{suffix}"
     rng = np.random.default_rng(1)
