@@ -47,16 +47,20 @@ def clock_runs_on(last_time_s: float, period_s: float, first_time_s: float) -> b
 
 
 def continues(previous: Run, run: Run) -> bool:
-    """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period."""
-    return same_recording(previous, run) and clock_runs_on(previous.time[-1], previous.period, run.time[0])
+    """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period (two
+    logs stamped with dates: by their date-times, each file's clock counting from its first row)."""
+    if not same_recording(previous, run) or (previous.clock_origin_s is None) != (run.clock_origin_s is None):
+        return False
+    last, first = previous.time[-1] + (previous.clock_origin_s or 0.0), run.time[0] + (run.clock_origin_s or 0.0)
+    return clock_runs_on(last, previous.period, first)
 
 
 def restamped(run: Run, previous: Run) -> Run:
-    """``run`` with its time stamps going on one sampling period after ``previous``'s last."""
+    """``run`` with its time stamps going on one sampling period after ``previous``'s last (on its clock)."""
     time = run.time - run.time[0] + previous.time[-1] + previous.period
     frame = run.frame.copy()
     frame[run.time_name] = time
-    return replace(run, time=time, frame=frame)
+    return replace(run, time=time, frame=frame, clock_origin_s=previous.clock_origin_s)
 
 
 def preceding_run(run: Run, candidates: Sequence[Run]) -> Run | None:

@@ -42,8 +42,8 @@ from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
+from groupfit.readtable import CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
-from groupfit.readtable import datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.sampling import burst_cycle, clock_of
 from groupfit.split_stamps import with_milliseconds
@@ -86,6 +86,9 @@ class Run:
     column or ``"start"`` once :func:`groupfit.reference.with_reference` has applied it."""
     notes: tuple[str, ...] = ()
     """What loading did to the log (a jittering clock accepted, readings resampled), one line each."""
+    clock_origin_s: float | None = None
+    """The date-time ``time`` counts from, in seconds since 1970, when the log's stamps were dates (None: a clock
+    of its own, in seconds); a file whose stamps go on from another's continues it."""
 
     @property
     def n_samples(self) -> int:
@@ -286,6 +289,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     else:
         time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
+    origin = frame.attrs.get(CLOCK_ORIGIN)
     refuse_bad_cells(frame, label, skip=(time,))
     frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
     frame, glitched = _glitches_as_missed(frame, label, LoadOptions(**options))
@@ -299,7 +303,15 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     notes = tuple(n for n in (missed, glitched) if n) + (note,)
     if len(binned.pieces) == 1:
         return [
-            _validated(binned.pieces[0], run_name, label, period_tolerance=period_tolerance, notes=notes, **options)
+            _validated(
+                binned.pieces[0],
+                run_name,
+                label,
+                period_tolerance=period_tolerance,
+                notes=notes,
+                clock_origin=origin,
+                **options,
+            )  # fmt: skip
         ]
     total = len(binned.pieces)
     return [
@@ -309,6 +321,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
             f"{label} (part {k} of {total})",
             period_tolerance=period_tolerance,
             notes=notes if k == 1 else (),
+            clock_origin=origin,
             **options,
         )
         for k, piece in enumerate(binned.pieces, start=1)
@@ -346,6 +359,7 @@ def _validated(
     *,
     period_tolerance: float = PERIOD_TOLERANCE,
     notes: tuple[str, ...] = (),
+    clock_origin: float | None = None,
     **given,
 ) -> Run:
     """The checks of :func:`load_run` on a table already read (its keywords in ``given``); ``ambient`` (a
@@ -355,6 +369,7 @@ def _validated(
     temp_range, error_limit = options.temp_range, options.error_limit
     counted = time in frame.columns and pd.api.types.is_numeric_dtype(frame[time]) and not names_a_unit(time)
     time_values = time_seconds(frame, time, label)
+    clock_origin = frame.attrs.get(CLOCK_ORIGIN, clock_origin)
     if np.any(np.diff(time_values) <= 0):  # before check_time advises averaging the readings of each period
         refuse_interleaved(frame, [stamp_groups(time_values)], time=time, label=label)
     time_values, period, spread = clock_of(time_values, label, time, tolerance=period_tolerance)
@@ -393,6 +408,7 @@ def _validated(
         frame=markers_emptied(frame),
         time_name=time,
         notes=notes,
+        clock_origin_s=clock_origin,
     )
 
 

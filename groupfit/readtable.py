@@ -39,7 +39,7 @@ from groupfit.textlayout import (
     without_footer_rows,
     without_units_row,
 )
-from groupfit.timestamps import is_text, text_seconds
+from groupfit.timestamps import is_text, text_clock
 
 TABLE_SUFFIXES = {
     ".csv": "CSV",
@@ -407,9 +407,15 @@ def _read_parquet(path: Path) -> pd.DataFrame:
     return pd.read_parquet(path)
 
 
+CLOCK_ORIGIN = "clock_origin_s"
+"""``frame.attrs`` key: the date-time of the first row of a time column read as seconds since that row, in seconds
+since 1970 (naive stamps taken as UTC), so that a file whose stamps go on from another's can be told."""
+
+
 def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
     """A date-time column (a Parquet or Excel time stamp, or text such as ``2026-03-02 08:00:00``) as the
-    seconds since its first row, a duration as its seconds, in place; other columns are left as they are."""
+    seconds since its first row, a duration as its seconds, in place; other columns are left as they are.
+    The first row's date-time is kept as ``frame.attrs[CLOCK_ORIGIN]``."""
     if column not in frame.columns:
         return
     raw = frame[column]
@@ -417,15 +423,21 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
         missing = np.flatnonzero(raw.isna().to_numpy())
         if missing.size:
             raise InputError(f"{label}: row {missing[0] + 1}, column '{column}' is empty; fix or remove that row")
-        start = raw.iloc[0] if pd.api.types.is_datetime64_any_dtype(raw) else pd.Timedelta(0)
+        dated = pd.api.types.is_datetime64_any_dtype(raw)
+        start = raw.iloc[0] if dated else pd.Timedelta(0)
         frame[column] = (raw - start).dt.total_seconds()
+        if dated:
+            frame.attrs[CLOCK_ORIGIN] = float(start.timestamp())
     elif is_text(raw):
-        seconds = text_seconds(raw, column, label)
-        if seconds is not None:
-            frame[column] = seconds
+        clock = text_clock(raw, column, label)
+        if clock is not None:
+            frame[column] = clock[0]
+            if clock[1] is not None:
+                frame.attrs[CLOCK_ORIGIN] = float(clock[1])
 
 
 __all__ = [
+    "CLOCK_ORIGIN",
     "TABLE_SUFFIXES",
     "datetimes_to_seconds",
     "empty_cells",

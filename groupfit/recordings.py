@@ -9,8 +9,9 @@ where its clock ends. ``replay`` of a run whose clock picks up one sampling
 period after such a recording ends replays that file first, as ``--continues
 FILE`` does, when it is still there with the same contents (``--fresh``: start
 afresh all the same). A file whose time stamps are dates starts its clock at
-0 (:func:`groupfit.readtable.datetimes_to_seconds`), so it is never taken for
-a continuation this way; ``--continues`` still joins it.
+0 (:func:`groupfit.readtable.datetimes_to_seconds`) and keeps the date-time of
+its first row (``clock_origin_s``, seconds since 1970): the next file of a
+logger that rolls its files is told by its date-times.
 """
 
 from __future__ import annotations
@@ -19,9 +20,12 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+import pandas as pd
+
 from groupfit.continuation import clock_runs_on
 from groupfit.data import Run
 from groupfit.io import file_sha256
+from groupfit.readtable import CLOCK_ORIGIN
 from groupfit.training_checks import RECORDINGS_KEY
 
 
@@ -54,6 +58,8 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
             "last_time_s": float(own[-1].time[-1]),
             "period_s": float(own[-1].period),
         }
+        if own[0].clock_origin_s is not None:
+            entry[CLOCK_ORIGIN] = float(own[0].clock_origin_s)
         if model_dir is not None:
             entry["path_from_model"] = Path(os.path.relpath(path.resolve(), Path(model_dir).resolve())).as_posix()
         entries.append(entry)
@@ -73,7 +79,11 @@ def continued_recording(
     says why it was not.
     """
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
-        if not clock_runs_on(entry["last_time_s"], entry["period_s"], float(run.time[0])):
+        origin = entry.get(CLOCK_ORIGIN)
+        if (origin is None) != (run.clock_origin_s is None):
+            continue
+        last, first = entry["last_time_s"] + (origin or 0.0), float(run.time[0]) + (run.clock_origin_s or 0.0)
+        if not clock_runs_on(last, entry["period_s"], first):
             continue
         places = [Path(entry["path"])]
         if model_path is not None and entry.get("path_from_model"):
@@ -83,7 +93,7 @@ def continued_recording(
         if not present:
             return None, (
                 f"{run.name}'s clock continues the modelling recording {entry['path']} (it ended at "
-                f"{entry['last_time_s']:g} s), which is no longer there: the rule starts afresh; give the file "
+                f"{_ended(entry)}), which is no longer there: the rule starts afresh; give the file "
                 "with --continues FILE to carry its history"
             )
         if path is None:
@@ -92,11 +102,19 @@ def continued_recording(
                 "since the fit: the rule starts afresh; give the earlier file with --continues FILE"
             )
         return path, (
-            f"{run.name}'s clock continues the modelling recording {path} (it ended at {entry['last_time_s']:g} s): "
+            f"{run.name}'s clock continues the modelling recording {path} (it ended at {_ended(entry)}): "
             "replayed after it, as --continues does, so that the rule and its derived inputs carry their history "
             "as on the controller; --fresh starts them afresh"
         )
     return None, None
+
+
+def _ended(entry: Mapping[str, Any]) -> str:
+    """Where a recording's clock ended: its last date-time (UTC when the stamps named a zone) or its seconds."""
+    origin = entry.get(CLOCK_ORIGIN)
+    if origin is None:
+        return f"{entry['last_time_s']:g} s"
+    return pd.Timestamp(origin + entry["last_time_s"], unit="s").isoformat(sep=" ")
 
 
 def is_modelling_file(training: Mapping[str, Any] | None, path: Any) -> bool:

@@ -260,7 +260,14 @@ def is_text(column: pd.Series) -> bool:
 
 
 def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
-    """Seconds since the first row of a text column of date-times; None when its first cell is a number.
+    """Seconds since the first row of a text column of date-times; None when its first cell is a number."""
+    clock = text_clock(column, name, label)
+    return None if clock is None else clock[0]
+
+
+def text_clock(column: pd.Series, name: str, label: str) -> tuple[np.ndarray, float | None] | None:
+    """:func:`text_seconds` and the first row's date-time in seconds since 1970 (UTC when the stamps name their
+    zone; None for times of day or elapsed times, which name no date); None when the first cell is a number.
 
     Raises
     ------
@@ -276,7 +283,7 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
     first, last = str(text.iloc[0]), str(text.iloc[-1])
     if is_number(first, ","):
         return None
-    readings = [seconds for seconds in _readings(text, first, last) if seconds is not None]
+    readings = [reading for reading in _readings(text, first, last) if reading[0] is not None]
     if not readings:
         bad = _first_unread(text)
         if bad is None:
@@ -290,7 +297,8 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
             f"{label}: row {row + 1}, column '{name}': {str(text.iloc[row])!r} is not a date-time in the form "
             f"of the rows above it ({form}); fix or remove that row"
         )
-    return min(readings, key=_unevenness) - 3600.0 * (zone_hours - zone_hours[0])
+    seconds, origin = min(readings, key=lambda reading: _unevenness(reading[0]))
+    return seconds - 3600.0 * (zone_hours - zone_hours[0]), None if origin is None else origin - 3600.0 * zone_hours[0]
 
 
 ZONE_HOURS = {
@@ -316,15 +324,17 @@ def _without_zone_names(text: pd.Series) -> tuple[pd.Series, np.ndarray]:
 
 
 def _readings(text: pd.Series, first: str, last: str):
+    """``(seconds since the first row, the first row in seconds since 1970 or None)`` of every form that reads
+    the column."""
     elapsed = _elapsed_seconds(text)
     if elapsed is not None:
-        yield elapsed
+        yield elapsed, None
     try:
         stamps = pd.to_datetime(text, format="ISO8601", utc=True)
     except (ValueError, TypeError):
         stamps = None
     if stamps is not None:
-        yield _since_first(stamps)
+        yield _since_first(stamps), stamps.iloc[0].timestamp()
         return
     for form in FORMATS:
         if not (_parses(first, form) and _parses(last, form)):
@@ -334,7 +344,7 @@ def _readings(text: pd.Series, first: str, last: str):
         except (ValueError, TypeError):
             continue
         seconds = _since_first(stamps)
-        yield _past_midnight(seconds) if form in TIME_FORMATS else seconds
+        yield (_past_midnight(seconds), None) if form in TIME_FORMATS else (seconds, stamps.iloc[0].timestamp())
 
 
 ELAPSED = re.compile(r"(?:(\d+)\s*(?:days?|d),?\s+)?(\d+):([0-5]\d):([0-5]\d(?:[.,]\d+)?)", re.IGNORECASE)
@@ -471,6 +481,7 @@ __all__ = [
     "refuse_clock_change",
     "restart_refusal",
     "stamp_resolution",
+    "text_clock",
     "text_seconds",
     "time_like_columns",
     "named_time_unit",

@@ -99,6 +99,8 @@ def recordings_problem(training: Mapping[str, Any]) -> str | None:
             return f"{where}: first_time_s, last_time_s and period_s must be finite numbers"
         if not (clock[0] <= clock[1] and clock[2] > 0):
             return f"{where}: first_time_s <= last_time_s and period_s > 0 are needed"
+        if "clock_origin_s" in entry and not is_number(entry["clock_origin_s"]):
+            return f"{where}.clock_origin_s must be the first row's date-time in seconds since 1970"
     return None
 
 
