@@ -311,7 +311,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
                 notes=notes,
                 clock_origin=origin,
                 **options,
-            )  # fmt: skip
+            )
         ]
     total = len(binned.pieces)
     return [
