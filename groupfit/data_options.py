@@ -33,15 +33,22 @@ def parse_temp_range(text: str | None) -> tuple[float, float] | None:
 
 def parse_error_limit(text: str | None) -> float | None:
     """``--range-error MAX`` (µm)."""
-    if text is None:
-        return None
+    return (
+        None
+        if text is None
+        else positive_number(text, "--range-error", "the largest plausible |error| in µm, e.g. 1e5")
+    )
+
+
+def positive_number(text: str, option: str, asked: str) -> float:
+    """``text`` as a finite number > 0; InputError naming ``option`` and what to give (``asked``) otherwise."""
     try:
-        limit = float(text)
+        value = float(text)
     except ValueError:
-        raise InputError(f"--range-error {text!r}: give the largest plausible |error| in µm, e.g. 1e5") from None
-    if not (np.isfinite(limit) and limit > 0):
-        raise InputError(f"--range-error {text!r}: must be a finite number > 0")
-    return limit
+        raise InputError(f"{option} {text!r}: give {asked}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"{option} {text!r}: must be a finite number > 0")
+    return value
 
 
 def parse_period_tolerance(text: str | float | None) -> float | None:
@@ -72,4 +79,11 @@ def split_names(text: str | None) -> list[str] | None:
     return names
 
 
-__all__ = ["ERROR_HELP", "parse_error_limit", "parse_period_tolerance", "parse_temp_range", "split_names"]
+__all__ = [
+    "ERROR_HELP",
+    "parse_error_limit",
+    "positive_number",
+    "parse_period_tolerance",
+    "parse_temp_range",
+    "split_names",
+]

@@ -19,6 +19,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
+from groupfit.data_options import positive_number
 from groupfit.errors import InputError
 from groupfit.io import save_figure
 
@@ -140,13 +141,7 @@ def plan_summary(plan: Mapping[str, Any]) -> str:
 
 def parse_tolerance(text: str) -> float:
     """``--tolerance UM``: a finite number of µm > 0 (InputError otherwise)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise InputError(f"--tolerance {text!r}: give the largest acceptable RMS error in µm, e.g. 2") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"--tolerance {text!r}: must be a number of µm > 0")
-    return value
+    return positive_number(text, "--tolerance", "the largest acceptable RMS error in µm, e.g. 2")
 
 
 def _rms(values: np.ndarray) -> float:

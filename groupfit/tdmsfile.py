@@ -31,9 +31,10 @@ def read_tdms(path: Path, label: str) -> pd.DataFrame:
     """The channels of a TDMS file as a table (module docstring); refused in one line when it holds none."""
     from nptdms import TdmsFile  # an optional dependency: ImportError tells the reader to install it
 
-    reader_log = logging.getLogger("nptdms")
-    level = reader_log.level
-    reader_log.setLevel(logging.ERROR)  # a cut-short file is refused below in one line, not warned about too
+    readers = [log for name, log in logging.Logger.manager.loggerDict.items() if name.split(".")[0] == "nptdms"]
+    levels = [(log, log.level) for log in readers if isinstance(log, logging.Logger)]
+    for log, _ in levels:  # a cut-short file is refused below in one line, not warned about by the reader too
+        log.setLevel(logging.ERROR)
     try:
         tdms = TdmsFile.read(path)
         channels = [(group.name, channel) for group in tdms.groups() for channel in group.channels()]
@@ -41,7 +42,8 @@ def read_tdms(path: Path, label: str) -> pd.DataFrame:
     except (ValueError, KeyError, IndexError, EOFError, OSError, TypeError) as exc:
         raise InputError(f"{label}: not a readable TDMS file ({first_line(exc)}); {EXPORT}") from None
     finally:
-        reader_log.setLevel(level)
+        for log, level in levels:
+            log.setLevel(level)
     usable = [
         (group, channel)
         for group, channel in channels

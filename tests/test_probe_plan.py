@@ -93,8 +93,8 @@ def brute_force_from_table(table: dict, tolerance: float) -> dict:
     "args, message",
     [
         (["--tolerance", "2"], "--tolerance needs --probe-every"),
-        (["--probe-every", "30m", "--tolerance", "0"], "--tolerance '0': must be a number of µm > 0"),
-        (["--probe-every", "30m", "--tolerance=-1"], "--tolerance '-1': must be a number of µm > 0"),
+        (["--probe-every", "30m", "--tolerance", "0"], "--tolerance '0': must be a finite number > 0"),
+        (["--probe-every", "30m", "--tolerance=-1"], "--tolerance '-1': must be a finite number > 0"),
         (["--probe-every", "30m", "--tolerance", "two"], "--tolerance 'two': give the largest acceptable RMS error"),
     ],
 )

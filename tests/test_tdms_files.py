@@ -107,6 +107,7 @@ def test_fit_reads_a_tdms_log_as_its_csv_and_a_broken_one_is_refused_in_one_line
             "not a readable TDMS file (Segment does not start with b'TDSm'",
         ),
         "cut.tdms": ((tmp_path / "run.tdms").read_bytes()[:30], "holds no channel of numbers or time stamps"),
+        "noise.tdms": (b"TDSm\x04\x00\x00\x00" + bytes(range(256)) * 16, "holds no channel of numbers or time stamps"),
     }
     for name, (content, says) in broken.items():
         (tmp_path / name).write_bytes(content)
