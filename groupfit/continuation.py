@@ -41,18 +41,36 @@ def same_recording(previous: Run, run: Run) -> bool:
     )
 
 
-def clock_runs_on(last_time_s: float, period_s: float, first_time_s: float) -> bool:
-    """Whether a clock that ended at ``last_time_s`` picks up at ``first_time_s`` one sampling period later."""
-    return bool(abs(first_time_s - last_time_s - period_s) <= CONTIGUITY_TOLERANCE * period_s)
+def clock_runs_on(
+    last_time_s: float,
+    period_s: float,
+    first_time_s: float,
+    *,
+    last_origin_s: float | None = None,
+    first_origin_s: float | None = None,
+) -> bool:
+    """Whether a clock that ended at ``last_time_s`` picks up at ``first_time_s`` one sampling period later.
+
+    ``*_origin_s``: the date-time each clock counts from (:attr:`groupfit.data.Run.clock_origin_s`); two logs
+    stamped with dates are compared by their date-times, a dated log never goes on from one on a clock of its
+    own (or the other way round).
+    """
+    if (last_origin_s is None) != (first_origin_s is None):
+        return False
+    gap = (first_time_s + (first_origin_s or 0.0)) - (last_time_s + (last_origin_s or 0.0))
+    return bool(abs(gap - period_s) <= CONTIGUITY_TOLERANCE * period_s)
 
 
 def continues(previous: Run, run: Run) -> bool:
     """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period (two
     logs stamped with dates: by their date-times, each file's clock counting from its first row)."""
-    if not same_recording(previous, run) or (previous.clock_origin_s is None) != (run.clock_origin_s is None):
-        return False
-    last, first = previous.time[-1] + (previous.clock_origin_s or 0.0), run.time[0] + (run.clock_origin_s or 0.0)
-    return clock_runs_on(last, previous.period, first)
+    return same_recording(previous, run) and clock_runs_on(
+        previous.time[-1],
+        previous.period,
+        run.time[0],
+        last_origin_s=previous.clock_origin_s,
+        first_origin_s=run.clock_origin_s,
+    )
 
 
 def restamped(run: Run, previous: Run) -> Run:

@@ -45,19 +45,17 @@ def with_scaled_error(
         The factor is 0 or not finite, the column gives its own unit, or
         (``required``) the log has no such column.
     """
-    scaled = scaled_name(error)
-    if scaled is None or error in frame.columns:
+    column, _ = scaled_values(frame, error, label)
+    if column == error:
         return frame
-    column, factor = scaled
-    check_factor(error, column, factor, label)
     if column not in frame.columns:
         if not required:
             return frame
         available = ", ".join(map(str, frame.columns))
         raise InputError(f"{label}: --error '{error}': column '{column}' not found; the columns are: {available}")
-    unit = named_length_unit(column) or ("its row of units" if column in lengths else None)
-    if unit is not None:
-        how = f"in {unit} by its name" if column not in lengths else "given a unit of length by the row of units"
+    named = named_length_unit(column)
+    if named is not None or column in lengths:
+        how = "given a unit of length by the row of units" if column in lengths else f"in {named} by its name"
         raise InputError(
             f"{label}: --error '{error}': column '{column}' is {how} and read as µm without a factor; "
             f"give --error '{column}'"
@@ -65,9 +63,10 @@ def with_scaled_error(
     return frame.rename(columns={column: error})
 
 
-def scaled_values(frame: pd.DataFrame, name: str, label: str) -> tuple[str, float]:
+def scaled_values(frame: pd.DataFrame, name: str | None, label: str) -> tuple[str | None, float]:
     """The column ``name`` reads and its factor to µm: ``("z", 2.5)`` for ``z*2.5`` when the frame has no
-    column of that name, ``(name, 1.0)`` otherwise (its unit, if any, is the caller's)."""
+    column of that name, ``(name, 1.0)`` otherwise (its unit, if any, is the caller's); a factor of 0 or not
+    finite refused."""
     scaled = scaled_name(name)
     if scaled is None or name in frame.columns:
         return name, 1.0

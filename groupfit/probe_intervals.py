@@ -139,8 +139,13 @@ def plan_summary(plan: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def parse_tolerance(text: str) -> float:
-    """``--tolerance UM``: a finite number of µm > 0 (InputError otherwise)."""
+def parse_tolerance(text: str | None, intervals) -> float | None:
+    """``--tolerance UM``: with ``--probe-every``, a finite number of µm > 0 (InputError otherwise); None when
+    not given."""
+    if text is None:
+        return None
+    if not intervals:
+        raise InputError("--tolerance needs --probe-every: give the check intervals to try, e.g. 15m,30m,60m,120m")
     return positive_number(text, "--tolerance", "the largest acceptable RMS error in µm, e.g. 2")
 
 

@@ -79,11 +79,13 @@ def continued_recording(
     says why it was not.
     """
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
-        origin = entry.get(CLOCK_ORIGIN)
-        if (origin is None) != (run.clock_origin_s is None):
-            continue
-        last, first = entry["last_time_s"] + (origin or 0.0), float(run.time[0]) + (run.clock_origin_s or 0.0)
-        if not clock_runs_on(last, entry["period_s"], first):
+        if not clock_runs_on(
+            entry["last_time_s"],
+            entry["period_s"],
+            float(run.time[0]),
+            last_origin_s=entry.get(CLOCK_ORIGIN),
+            first_origin_s=run.clock_origin_s,
+        ):
             continue
         places = [Path(entry["path"])]
         if model_path is not None and entry.get("path_from_model"):

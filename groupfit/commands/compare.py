@@ -118,9 +118,7 @@ def run_compare(args: argparse.Namespace) -> int:
     if run_settings.compare.pmax < 0:
         raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
     check_probe_first(args.probe_first, args.probe_every)
-    if args.tolerance is not None and not args.probe_every:
-        raise InputError("--tolerance needs --probe-every: give the check intervals to try, e.g. 15m,30m,60m,120m")
-    tolerance = None if args.tolerance is None else parse_tolerance(args.tolerance)
+    tolerance = parse_tolerance(args.tolerance, args.probe_every)
     runs = [p for p in [data.path, *data.validate] if isinstance(p, (str, Path))]
     common.plan_outputs(
         args,
