@@ -24,6 +24,8 @@ import pandas as pd
 
 from groupfit.data import PERIOD_TOLERANCE, Run
 from groupfit.errors import InputError
+from groupfit.features import Feature
+from groupfit.pickup import run_picks_up
 
 CONTIGUITY_TOLERANCE = 0.5
 """The gap between the two runs may differ from one sampling period by this share of it."""
@@ -61,16 +63,23 @@ def clock_runs_on(
     return bool(abs(gap - period_s) <= CONTIGUITY_TOLERANCE * period_s)
 
 
-def continues(previous: Run, run: Run) -> bool:
-    """Whether ``run`` starts one sampling period after ``previous`` ends, with the same columns and period (two
-    logs stamped with dates: by their date-times, each file's clock counting from its first row)."""
-    return same_recording(previous, run) and clock_runs_on(
+def clock_continues(previous: Run, run: Run) -> bool:
+    """Whether ``run``'s clock picks up one sampling period after ``previous``'s ends (two logs stamped with dates:
+    by their date-times, each file's clock counting from its first row)."""
+    return clock_runs_on(
         previous.time[-1],
         previous.period,
         run.time[0],
         last_origin_s=previous.clock_origin_s,
         first_origin_s=run.clock_origin_s,
     )
+
+
+def continues(previous: Run, run: Run) -> bool:
+    """Whether ``run`` is the rest of ``previous``'s recording: the same columns and period, and either its clock
+    goes on one sampling period after ``previous`` ends or, on a clock started again, its first row picks up
+    where ``previous``'s last left off (:mod:`groupfit.pickup`)."""
+    return same_recording(previous, run) and (clock_continues(previous, run) or run_picks_up(previous, run))
 
 
 def restamped(run: Run, previous: Run) -> Run:
@@ -136,10 +145,14 @@ def with_histories(
             )
             history = joined_of[id(history)]
         elif history is not None:
+            if clock_continues(history, run):
+                how = "its first time stamp one sampling period after the last"
+            else:
+                how = f"its clock starts again, but its first row picks up where {history.name}'s last left off"
+                run = restamped(run, history)
             notes.append(
-                f"{run.name} continues {history.name} (its first time stamp one sampling period after the "
-                f"last): judged with {history.name} in front, so that its derived inputs and run-time state "
-                "carry their history, as on the controller"
+                f"{run.name} continues {history.name} ({how}): judged with {history.name} in front, so that its "
+                "derived inputs and run-time state carry their history, as on the controller"
             )
             history = joined_of[id(history)]
         run_with_history, rows = with_history(run, history)
@@ -148,3 +161,37 @@ def with_histories(
         joined_of[id(run)] = run_with_history
         candidates.append(run)
     return joined, skipped, notes
+
+
+COLD_START_NOTE = "starts with a source on,"
+"""What a note on a validation run that starts hot without its history says (the report puts it first)."""
+
+
+def started_running_notes(
+    runs: Sequence[Run], skipped: Sequence[int], features: Sequence[Feature], lag_of: str = "the effect's"
+) -> list[str]:
+    """A note for each run that starts with a source on, carries no history, and has a lag of it (``lag_of``:
+    whose lag the note names).
+
+    A lag from rest (``start="rest"``) takes the source as off before the run, as after a controller restart.
+    A file cut from a longer recording, whose time stamps start again, starts hot instead: the lag starts
+    cold there, and the validation of the effect is pessimistic for its first time constants.
+    """
+    notes = []
+    for run, rows in zip(runs, skipped):
+        if rows:  # judged with its history in front
+            continue
+        for feature in features:
+            if feature.start != "rest" or feature.column not in run.frame.columns:
+                continue
+            first = pd.to_numeric(run.frame[feature.column], errors="coerce").to_numpy(dtype=float)[0]
+            if np.isfinite(first) and first != 0.0:
+                lag = feature.describe().replace(", from rest", "")
+                notes.append(
+                    f"{run.name} {COLD_START_NOTE} {feature.column} = {first:g}, and is not the continuation of "
+                    f"a modelling run: {lag_of} {lag} starts there from rest (the source off before the "
+                    "file), as after a controller restart; if the file is the rest of the modelling recording, "
+                    "keep its time stamps going on from the modelling run's (one sampling period after its last), "
+                    "or say so with --continues, and it is judged with that history"
+                )
+    return notes

@@ -11,7 +11,9 @@ FILE`` does, when it is still there with the same contents (``--fresh``: start
 afresh all the same). A file whose time stamps are dates starts its clock at
 0 (:func:`groupfit.readtable.datetimes_to_seconds`) and keeps the date-time of
 its first row (``clock_origin_s``, seconds since 1970): the next file of a
-logger that rolls its files is told by its date-times.
+logger that rolls its files is told by its date-times. A file whose clock
+starts again is told by its first row (:mod:`groupfit.pickup`), against the
+recording's last row kept in the entry.
 """
 
 from __future__ import annotations
@@ -20,13 +22,15 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+import numpy as np
 import pandas as pd
 
 from groupfit.continuation import clock_runs_on
-from groupfit.data import Run
+from groupfit.data import PERIOD_TOLERANCE, Run
 from groupfit.io import file_sha256
+from groupfit.pickup import clock_starts_again, last_readings, picks_up, pickup_limit, reading_steps
 from groupfit.readtable import CLOCK_ORIGIN
-from groupfit.training_checks import RECORDINGS_KEY
+from groupfit.training_checks import LAST_READINGS, PICKUP_LIMIT, READING_STEPS, RECORDINGS_KEY
 
 
 def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str | Path | None = None) -> list[dict]:
@@ -60,10 +64,40 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
         }
         if own[0].clock_origin_s is not None:
             entry[CLOCK_ORIGIN] = float(own[0].clock_origin_s)
+        steps = reading_steps(own[-1])
+        limit = pickup_limit(own[-1], steps)
+        if np.isfinite(limit):
+            entry.update({LAST_READINGS: last_readings(own[-1]), READING_STEPS: steps, PICKUP_LIMIT: limit})
         if model_dir is not None:
             entry["path_from_model"] = Path(os.path.relpath(path.resolve(), Path(model_dir).resolve())).as_posix()
         entries.append(entry)
     return entries
+
+
+def _continued_by(entry: Mapping[str, Any], run: Run) -> str | None:
+    """How ``run`` continues the recording of ``entry``: "clock", "readings" (its clock starts again and its first
+    row picks up where the recording's last left off, :mod:`groupfit.pickup`), or None."""
+    last_origin, first_origin = entry.get(CLOCK_ORIGIN), run.clock_origin_s
+    first_time = float(run.time[0])
+    if clock_runs_on(
+        entry["last_time_s"], entry["period_s"], first_time, last_origin_s=last_origin, first_origin_s=first_origin
+    ):
+        return "clock"
+    if any(key not in entry for key in (LAST_READINGS, READING_STEPS, PICKUP_LIMIT)):
+        return None
+    if abs(run.period - entry["period_s"]) > PERIOD_TOLERANCE * entry["period_s"]:
+        return None
+    if not clock_starts_again(entry["last_time_s"], first_time, last_origin_s=last_origin, first_origin_s=first_origin):
+        return None
+    if picks_up(entry[LAST_READINGS], entry[READING_STEPS], entry[PICKUP_LIMIT], run) and not _same_file(entry, run):
+        return "readings"
+    return None
+
+
+def _same_file(entry: Mapping[str, Any], run: Run) -> bool:
+    """Whether ``run`` was read from the recording's own file."""
+    path = Path(str(run.source))
+    return path.is_file() and file_sha256(path) == entry["sha256"]
 
 
 def continued_recording(
@@ -73,20 +107,24 @@ def continued_recording(
 
     The run continues a recording when its first time stamp follows the
     recording's last by one sampling period
-    (:func:`groupfit.continuation.clock_runs_on`). The file is
+    (:func:`groupfit.continuation.clock_runs_on`), or when its clock starts
+    again and its first row picks up where the recording's last row left off
+    (:mod:`groupfit.pickup`; entries written before the last row was kept are
+    told by the clock alone). The file is
     looked for where it lies from the model file (``model_path``), then at its
     absolute path, and used only with the recorded SHA-256; otherwise the note
     says why it was not.
     """
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
-        if not clock_runs_on(
-            entry["last_time_s"],
-            entry["period_s"],
-            float(run.time[0]),
-            last_origin_s=entry.get(CLOCK_ORIGIN),
-            first_origin_s=run.clock_origin_s,
-        ):
+        how = _continued_by(entry, run)
+        if how is None:
             continue
+        continues = (
+            f"{run.name}'s clock continues the modelling recording"
+            if how == "clock"
+            else f"{run.name}'s clock starts again, but its first row picks up where the modelling recording"
+        )
+        ended = f"(it ended at {_ended(entry)})" if how == "clock" else f"left off (at {_ended(entry)})"
         places = [Path(entry["path"])]
         if model_path is not None and entry.get("path_from_model"):
             places.insert(0, Path(model_path).resolve().parent / entry["path_from_model"])
@@ -94,19 +132,17 @@ def continued_recording(
         path = next((p for p in present if file_sha256(p) == entry["sha256"]), None)
         if not present:
             return None, (
-                f"{run.name}'s clock continues the modelling recording {entry['path']} (it ended at "
-                f"{_ended(entry)}), which is no longer there: the rule starts afresh; give the file "
-                "with --continues FILE to carry its history"
+                f"{continues} {entry['path']} {ended}, which is no longer there: the rule starts afresh; give the "
+                "file with --continues FILE to carry its history"
             )
         if path is None:
             return None, (
-                f"{run.name}'s clock continues the modelling recording {present[0]}, but that file has changed "
-                "since the fit: the rule starts afresh; give the earlier file with --continues FILE"
+                f"{continues} {present[0]} {ended}, but that file has changed since the fit: the rule starts "
+                "afresh; give the earlier file with --continues FILE"
             )
         return path, (
-            f"{run.name}'s clock continues the modelling recording {path} (it ended at {_ended(entry)}): "
-            "replayed after it, as --continues does, so that the rule and its derived inputs carry their history "
-            "as on the controller; --fresh starts them afresh"
+            f"{continues} {path} {ended}: replayed after it, as --continues does, so that the rule and its derived "
+            "inputs carry their history as on the controller; --fresh starts them afresh"
         )
     return None, None
 

@@ -18,6 +18,12 @@ RECORDINGS_KEY = "recordings"
 DATA_NOTES_KEY = "data_notes"
 """The model file's ``training`` key: what loading did to the modelling logs (glitches left out, a resampling)."""
 RECORDING_KEYS = ("path", "sha256", "first_time_s", "last_time_s", "period_s")
+LAST_READINGS = "last_readings"
+"""A recording's optional key: its last row's input temperatures and error, by column (:mod:`groupfit.pickup`)."""
+READING_STEPS = "reading_steps"
+"""A recording's optional key: per column of ``last_readings``, its typical change from one sample to the next."""
+PICKUP_LIMIT = "pickup_limit"
+"""A recording's optional key: how far a next file's first row may be from ``last_readings`` to pick up there."""
 
 
 FAST_KEY = "fast_response"
@@ -101,6 +107,15 @@ def recordings_problem(training: Mapping[str, Any]) -> str | None:
             return f"{where}: first_time_s <= last_time_s and period_s > 0 are needed"
         if "clock_origin_s" in entry and not is_number(entry["clock_origin_s"]):
             return f"{where}.clock_origin_s must be the first row's date-time in seconds since 1970"
+        for key, least in ((LAST_READINGS, -math.inf), (READING_STEPS, 0.0)):
+            readings = entry.get(key, {})
+            if not isinstance(readings, Mapping) or not all(
+                isinstance(column, str) and is_number(value) and value >= least for column, value in readings.items()
+            ):
+                kind = "numbers" if key == LAST_READINGS else "numbers >= 0"
+                return f"{where}.{key} must map each column to {kind}"
+        if PICKUP_LIMIT in entry and not (is_number(entry[PICKUP_LIMIT]) and entry[PICKUP_LIMIT] >= 0):
+            return f"{where}.{PICKUP_LIMIT} must be a number >= 0"
     return None
 
 

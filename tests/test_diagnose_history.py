@@ -110,8 +110,8 @@ def test_a_chain_of_files_carries_the_history_through_every_one():
 
 
 def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
-    # the log cut while the spindle runs fast, the second file's clock started again: its lag of the speed
-    # starts from rest on a hot machine, and the report says why the validation may look worse
+    # the log cut while the spindle runs fast, the second file's clock started again 20 min later: its lag of
+    # the speed starts from rest on a hot machine, and the report says why the validation may look worse
     frame = spindle_run(8, hours=16.0)
     speed = frame["speed_rpm"].to_numpy()
     at = int(np.flatnonzero(speed >= 4000.0)[-1]) - 60
@@ -123,10 +123,12 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
         later["time_s"] -= later["time_s"].iloc[0]  # the logger's clock started again
         return diagnose(model, modelling, load_run(later, temps=TEMPS, name="evening"), live_rule=replay_groups)
 
-    hot = diagnosed_from(at)
+    paused = at + 40
+    hot = diagnosed_from(paused)
+    assert not [n for n in hot.notes_of(HISTORY) if "continues" in n]  # not where the modelling file left off
     assert hot.added[0].feature.column == "speed_rpm" and hot.added[0].feature.start == "rest"
     said = hot.notes_of(COLD_START)
-    assert len(said) == 1 and said[0].startswith(f"evening {COLD_START_NOTE} speed_rpm = {speed[at]:g}")
+    assert len(said) == 1 and said[0].startswith(f"evening {COLD_START_NOTE} speed_rpm = {speed[paused]:g}")
     lines = hot.summary().splitlines()
     if lines[0].startswith("the augmented model is worse"):
         assert lines[1] == f"  ({said[0]})" and not any(line == f"note: {said[0]}" for line in lines)
@@ -137,17 +139,18 @@ def test_a_validation_file_that_starts_hot_without_its_history_is_said_to():
     assert not diagnosed_from(cold_row).notes_of(COLD_START)
 
 
-def test_continues_judges_a_restarted_clock_as_the_rest_of_the_recording(tmp_path, capsys):
-    """The second file's clock starts again at 0: from rest without the flag; with it, as the continuing log."""
+def test_a_restarted_clock_is_the_rest_of_the_recording_by_its_first_row_or_by_continues(tmp_path, capsys):
+    """The second file's clock starts again at 0: where its first row picks up the modelling file's last, it
+    continues it unasked; after a pause, from rest without the flag and as the continuing log with it."""
     frame = spindle_run(8, hours=16.0)
     at = int(np.flatnonzero(frame["speed_rpm"].to_numpy() >= 4000.0)[-1]) - 60  # cut while the spindle runs fast
-    modelling, continuing = split(frame, at)
-    restarted = frame.iloc[at:].reset_index(drop=True)
-    restarted["time_s"] -= restarted["time_s"].iloc[0]
-    paths = {"modelling": tmp_path / "a.csv", "continuing": tmp_path / "b.csv", "restarted": tmp_path / "c.csv"}
+    paths = {name: tmp_path / f"{name[0]}.csv" for name in ("modelling", "continuing", "restarted", "paused")}
     frame.iloc[:at].to_csv(paths["modelling"], index=False)
     frame.iloc[at:].to_csv(paths["continuing"], index=False)
-    restarted.to_csv(paths["restarted"], index=False)
+    for name, row in (("restarted", at), ("paused", at + 40)):
+        later = frame.iloc[row:].reset_index(drop=True)
+        later["time_s"] -= later["time_s"].iloc[0]
+        later.to_csv(paths[name], index=False)
     fit = ["fit", "--data", str(paths["modelling"]), "--temps", ",".join(TEMPS), "--p", "0", "--reference", "none"]
     assert main([*fit, "--quiet", "--out", str(tmp_path / "m")]) == 0
     capsys.readouterr()
@@ -161,18 +164,29 @@ def test_continues_judges_a_restarted_clock_as_the_rest_of_the_recording(tmp_pat
         return json.loads(capsys.readouterr().out)
 
     as_logged = diagnosed("continuing")
-    from_rest = diagnosed("restarted")
+    picked_up = diagnosed("restarted")
     declared = diagnosed("restarted", "--continues")
-    assert declared["validation_runs"] == [{**as_logged["validation_runs"][0], "name": "c"}]
-    assert declared["added"] == as_logged["added"] == from_rest["added"]
-    assert any(n.startswith("c is taken to continue a (--continues)") for n in declared["notes"])
+    for other in (picked_up, declared):
+        assert other["validation_runs"] == [{**as_logged["validation_runs"][0], "name": "r"}]
+    assert declared["added"] == as_logged["added"] == picked_up["added"]
+    for other in (picked_up, declared):  # told by the first row, --continues or not
+        assert any(n.startswith("r continues m (its clock starts again, but its first row") for n in other["notes"])
+    from_rest, paused_declared = diagnosed("paused"), diagnosed("paused", "--continues")
+    assert from_rest["added"] == as_logged["added"]
     assert any(COLD_START_NOTE in n and "--continues" in n for n in from_rest["notes"])
-    assert from_rest["after"]["validate"]["rms_um"] > as_logged["after"]["validate"]["rms_um"]
+    assert any(n.startswith("p is taken to continue m (--continues)") for n in paused_declared["notes"])
+    assert from_rest["after"]["validate"]["rms_um"] > paused_declared["after"]["validate"]["rms_um"]
+    # replay says the same of the augmented model's lag of the speed: started from rest on the paused file alone
+    augmented = tmp_path / "d" / "model_augmented.json"
+    for name, said in (("paused", True), ("restarted", False)):
+        assert main(["replay", str(augmented), "--data", str(paths[name]), "--json", str(tmp_path / "r.json")]) == 0
+        notes = [line for line in capsys.readouterr().out.splitlines() if COLD_START_NOTE in line]
+        assert len(notes) == int(said) and all("the derived input's heat law" in line for line in notes)
     # another recording cannot be declared the rest of this one: one line, exit 2
     other = frame.iloc[at:].drop(columns="T8")
     other.to_csv(tmp_path / "d.csv", index=False)
     args = ["diagnose", str(tmp_path / "m" / "model.json"), "--data", str(paths["modelling"]), "--continues"]
     assert main([*args, "--validate", str(tmp_path / "d.csv"), "--out", str(tmp_path / "x")]) == 2
     error = capsys.readouterr().err.strip().splitlines()
-    assert len(error) == 1 and "--continues, but it cannot be the rest of a" in error[0]
+    assert len(error) == 1 and "--continues, but it cannot be the rest of m" in error[0]
     assert not (tmp_path / "x").exists()

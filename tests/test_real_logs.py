@@ -268,8 +268,21 @@ def test_the_rest_whose_clock_continues_the_modelling_file_is_replayed_after_it_
     assert unasked["continues"] == [recording["path"]]
     fresh = replayed(folder, "--data", folder / "rest.csv", "--fresh")
     assert fresh["continues"] == [] and fresh["samples"][0]["group"] == 1 < unasked["samples"][0]["group"]
-    restarted = replayed(folder, "--data", folder / "rest_restarted.csv")  # its clock does not continue
-    assert restarted["continues"] == [] and restarted["samples"][0]["group"] == 1
+
+
+def test_the_rest_whose_clock_starts_again_is_told_by_its_first_row_and_replayed_after_the_modelling_file(
+    split_recording, capsys
+):
+    folder = split_recording
+    capsys.readouterr()
+    restarted = replayed(folder, "--data", folder / "rest_restarted.csv")
+    assert "its first row picks up where the modelling recording" in capsys.readouterr().out
+    declared = replayed(folder, "--data", folder / "rest.csv", "--continues", folder / "first.csv")
+    assert restarted["history_samples"] == 330 and restarted["continues"] == declared["continues"]
+    own_clock = [{**sample, "time_s": None} for sample in restarted["samples"]]  # each file's own time stamps
+    assert own_clock == [{**sample, "time_s": None} for sample in declared["samples"]]
+    fresh = replayed(folder, "--data", folder / "rest_restarted.csv", "--fresh")
+    assert fresh["continues"] == [] and fresh["samples"][0]["group"] == 1 < restarted["samples"][0]["group"]
 
 
 def test_a_folder_moved_whole_keeps_the_model_and_its_modelling_file_together(split_recording, tmp_path):
@@ -315,10 +328,15 @@ def test_fresh_and_continues_together_are_refused(split_recording, capsys):
     assert "--fresh and --continues" in capsys.readouterr().err
 
 
-def test_compare_detects_a_continuing_clock_and_takes_continues_for_a_restarted_one(split_recording, capsys):
+def test_compare_detects_a_continuing_clock_or_first_row_and_takes_continues_for_a_restarted_one(
+    split_recording, tmp_path, capsys
+):
     folder = split_recording
+    later = pd.read_csv(folder / "rest_restarted.csv")
+    later.iloc[60:].to_csv(tmp_path / "rest_later.csv", index=False)  # its clock starts again, half an hour on
     results = {}
-    for rest, extra in (("rest.csv", ()), ("rest_restarted.csv", ("--continues",)), ("rest_restarted.csv", ())):
+    cases = (("rest.csv", ()), ("rest_restarted.csv", ("--continues",)), ("rest_restarted.csv", ()))
+    for rest, extra in (*cases, (tmp_path / "rest_later.csv", ()), (tmp_path / "rest_later.csv", ("--continues",))):
         out = folder / "compare.json"
         args = ("--data", folder / "first.csv", "--validate", folder / rest, "--pmax", "1", "--heat", "bed_target")
         assert cli("compare", *args, *extra, "--quiet", "--json", out, "--out", folder / "c") == 0
@@ -327,11 +345,13 @@ def test_compare_detects_a_continuing_clock_and_takes_continues_for_a_restarted_
             r for r in rows if r["model"] == "grouped" and r["p"] == 1 and r["run"] != "first"
         )
         report = capsys.readouterr().out
-        assert ("continue" in report) == (rest == "rest.csv" or bool(extra))
+        assert ("continue" in report) == (rest != tmp_path / "rest_later.csv" or bool(extra))
     assert results[("rest.csv", ())]["rms_um"] == pytest.approx(
         results[("rest_restarted.csv", ("--continues",))]["rms_um"]
     )
-    assert results[("rest.csv", ())]["rms_um"] != results[("rest_restarted.csv", ())]["rms_um"]
+    assert results[("rest.csv", ())]["rms_um"] == pytest.approx(results[("rest_restarted.csv", ())]["rms_um"])
+    later = (tmp_path / "rest_later.csv", ())
+    assert results[later]["rms_um"] != results[(tmp_path / "rest_later.csv", ("--continues",))]["rms_um"]
 
 
 # ------------------------------------------------------------------------- compare's heat column

@@ -21,7 +21,7 @@ from groupfit.commands.replay_probes import (
     sample_probe,
 )
 from groupfit.commands.screw_deploy import run_screw_replay
-from groupfit.continuation import same_recording, with_histories
+from groupfit.continuation import same_recording, started_running_notes, with_histories
 from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
 from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
@@ -57,8 +57,9 @@ def add_parser(verbs) -> None:
     replay.add_argument(
         "--fresh",
         action="store_true",
-        help="start the rule and its derived inputs afresh even when --data's clock continues a modelling file "
-        "the model names (training.recordings; by default that file is replayed first, as --continues does)",
+        help="start the rule and its derived inputs afresh even when --data continues a modelling file the model "
+        "names, by its clock or by a first row that picks up where the file's last left off "
+        "(training.recordings; by default that file is replayed first, as --continues does)",
     )
     common.add_clock_options(replay)
     replay.add_argument(
@@ -128,6 +129,8 @@ def run_replay(args: argparse.Namespace) -> int:
             f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
             "file is the rest of a recording, give the earlier file(s) with --continues FILE"
         )
+    if not history:
+        notes += started_running_notes([run], [0], model.derived_inputs or (), lag_of="the derived input's")
     for note in notes:
         print(f"note     {note}", file=common.report_stream(args))
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
@@ -317,7 +320,7 @@ def earlier_recordings(args: argparse.Namespace, model: ModelFile, run: Run, loa
             [],
             [],
             (
-                f"{run.name}'s clock continues the modelling recording {found}, which is not read as one run here "
+                f"{run.name} looks like the rest of the modelling recording {found}, which is not read as one run here "
                 f"({reason}): the rule starts afresh; give the part before this run with --continues FILE"
             ),
         )
@@ -326,8 +329,8 @@ def earlier_recordings(args: argparse.Namespace, model: ModelFile, run: Run, loa
             [],
             [],
             (
-                f"{run.name}'s clock continues the modelling recording {found}, but its columns, inputs or sampling "
-                "period differ: the rule starts afresh"
+                f"{run.name} looks like the rest of the modelling recording {found}, but its columns, inputs or "
+                "sampling period differ: the rule starts afresh"
             ),
         )
     return [found], [history], note

@@ -6,7 +6,9 @@ the validation file alone starts from rest at its first row, while the
 machine is hot: the derived inputs are wrong for the first time constants of
 the run, a fault the controller, which ran through, does not have. When a
 validation run's first time stamp follows a modelling run's last by one
-sampling period, the two are one recording: the validation run is judged
+sampling period, or its clock starts again at a first row that picks up where
+the modelling run's last left off (:mod:`groupfit.pickup`), the two are one
+recording: the validation run is judged
 with the modelling run in front of it, its error left out, so that the
 derived inputs, a reference taken at the start and the run-time switching
 carry their history into it. Only the validation rows are scored. A log
@@ -18,14 +20,16 @@ rows before it in front): their derived inputs are those of the whole log.
 
 from __future__ import annotations
 
-from typing import Sequence
-
-import numpy as np
-import pandas as pd
-
-from groupfit.continuation import continues, preceding_run, restamped, same_recording, with_histories, with_history
-from groupfit.data import Run
-from groupfit.features import Feature
+from groupfit.continuation import (
+    COLD_START_NOTE,
+    continues,
+    preceding_run,
+    restamped,
+    same_recording,
+    started_running_notes,
+    with_histories,
+    with_history,
+)
 
 __all__ = [
     "COLD_START_NOTE",
@@ -37,33 +41,3 @@ __all__ = [
     "with_histories",
     "with_history",
 ]
-
-COLD_START_NOTE = "starts with a source on,"
-"""What a note on a validation run that starts hot without its history says (the report puts it first)."""
-
-
-def started_running_notes(runs: Sequence[Run], skipped: Sequence[int], features: Sequence[Feature]) -> list[str]:
-    """A note for each validation run that starts with a source on, carries no history, and has a lag of it.
-
-    A lag from rest (``start="rest"``) takes the source as off before the run, as after a controller restart.
-    A file cut from a longer recording, whose time stamps start again, starts hot instead: the lag starts
-    cold there, and the validation of the effect is pessimistic for its first time constants.
-    """
-    notes = []
-    for run, rows in zip(runs, skipped):
-        if rows:  # judged with its history in front
-            continue
-        for feature in features:
-            if feature.start != "rest" or feature.column not in run.frame.columns:
-                continue
-            first = pd.to_numeric(run.frame[feature.column], errors="coerce").to_numpy(dtype=float)[0]
-            if np.isfinite(first) and first != 0.0:
-                lag = feature.describe().replace(", from rest", "")
-                notes.append(
-                    f"{run.name} {COLD_START_NOTE} {feature.column} = {first:g}, and is not the continuation of "
-                    f"a modelling run: the effect's {lag} starts there from rest (the source off before the "
-                    "file), as after a controller restart; if the file is the rest of the modelling recording, "
-                    "keep its time stamps going on from the modelling run's (one sampling period after its last), "
-                    "or say so with --continues, and it is judged with that history"
-                )
-    return notes
