@@ -49,7 +49,7 @@ sys.path.insert(0, str(HERE))
 from independent_machine import scenarios  # noqa: E402
 
 from groupfit.cli import main  # noqa: E402
-from groupfit.commands.replay import load_readings  # noqa: E402
+from groupfit.commands.replay_readings import load_readings  # noqa: E402
 from groupfit.model import ModelFile, time_column  # noqa: E402
 from groupfit.probe_intervals import check_rows  # noqa: E402
 from groupfit.recalibration_tuning import choose_recalibration  # noqa: E402

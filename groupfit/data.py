@@ -231,7 +231,8 @@ def load_run(
     )
     if len(runs) > 1:
         raise InputError(
-            f"{runs[0].source.split(' (part')[0]}: --resample {resample:g} splits the log into {len(runs)} runs at "
+            f"{runs[0].source.split(' (part')[0]}: {f'--resample {resample:g}' if resample else 'the clock'} splits "
+            f"the log into {len(runs)} runs at "
             "gaps; this takes one run: cut the file at the gap, or give the parts as separate runs"
         )
     return runs[0]

@@ -102,8 +102,9 @@ def _same_file(entry: Mapping[str, Any], run: Run) -> bool:
 
 def continued_recording(
     training: Mapping[str, Any] | None, run: Run, model_path: str | Path | None = None
-) -> tuple[Path | None, str | None]:
-    """The modelling file ``run`` continues, and a note on what was found.
+) -> tuple[Path | None, str | None, Mapping[str, Any] | None]:
+    """The modelling file ``run`` continues, a note on what was found, and the recording's entry (None: ``run``
+    continues none).
 
     The run continues a recording when its first time stamp follows the
     recording's last by one sampling period
@@ -131,20 +132,23 @@ def continued_recording(
         present = [p for p in places if p.is_file()]
         path = next((p for p in present if file_sha256(p) == entry["sha256"]), None)
         if not present:
-            return None, (
+            note = (
                 f"{continues} {entry['path']} {ended}, which is no longer there: the rule starts afresh; give the "
                 "file with --continues FILE to carry its history"
             )
+            return None, note, entry
         if path is None:
-            return None, (
+            note = (
                 f"{continues} {present[0]} {ended}, but that file has changed since the fit: the rule starts "
                 "afresh; give the earlier file with --continues FILE"
             )
-        return path, (
+            return None, note, entry
+        note = (
             f"{continues} {path} {ended}: replayed after it, as --continues does, so that the rule and its derived "
             "inputs carry their history as on the controller; --fresh starts them afresh"
         )
-    return None, None
+        return path, note, entry
+    return None, None, None
 
 
 def _ended(entry: Mapping[str, Any]) -> str:

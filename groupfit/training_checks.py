@@ -22,6 +22,9 @@ LAST_READINGS = "last_readings"
 """A recording's optional key: its last row's input temperatures and error, by column (:mod:`groupfit.pickup`)."""
 READING_STEPS = "reading_steps"
 """A recording's optional key: per column of ``last_readings``, its typical change from one sample to the next."""
+END_STATE = "end_state"
+"""A recording's optional key: the run-time rule's state at the file's end, ``{"samples", "double", "single"}``
+(:mod:`groupfit.runtime.state`), checked against the rule when it is used."""
 PICKUP_LIMIT = "pickup_limit"
 """A recording's optional key: how far a next file's first row may be from ``last_readings`` to pick up there."""
 
@@ -114,6 +117,14 @@ def recordings_problem(training: Mapping[str, Any]) -> str | None:
             ):
                 kind = "numbers" if key == LAST_READINGS else "numbers >= 0"
                 return f"{where}.{key} must map each column to {kind}"
+        saved = entry.get(END_STATE)
+        if saved is not None and not (
+            isinstance(saved, Mapping)
+            and isinstance(saved.get("samples"), int)
+            and saved["samples"] > 0
+            and all(isinstance(saved.get(p), Mapping) for p in ("double", "single"))
+        ):
+            return f"{where}.{END_STATE} must hold samples (a whole number > 0) and the double and single states"
         if PICKUP_LIMIT in entry and not (is_number(entry[PICKUP_LIMIT]) and entry[PICKUP_LIMIT] >= 0):
             return f"{where}.{PICKUP_LIMIT} must be a number >= 0"
     return None

@@ -300,13 +300,16 @@ def test_a_folder_moved_whole_keeps_the_model_and_its_modelling_file_together(sp
 
 
 @pytest.mark.parametrize("change", ["edited", "moved", "other columns"])
+@pytest.mark.parametrize("state_kept", [True, False], ids=["state kept", "older file"])
 def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the_note_says_why(
-    split_recording, tmp_path, capsys, change
+    split_recording, tmp_path, capsys, change, state_kept
 ):
     for name in ("model.json", "first.csv", "rest.csv"):
         (tmp_path / name).write_bytes((split_recording / name).read_bytes())
     model = json.loads((tmp_path / "model.json").read_text())
     model["training"]["recordings"][0]["path"] = str(tmp_path / "first.csv")
+    if not state_kept:
+        del model["training"]["recordings"][0]["end_state"]
     (tmp_path / "model.json").write_text(json.dumps(model))
     if change == "edited":
         (tmp_path / "first.csv").write_text((tmp_path / "first.csv").read_text().replace(",", ", ", 1))
@@ -316,9 +319,15 @@ def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the
         rest = pd.read_csv(tmp_path / "rest.csv").assign(spare=0.0)
         rest.to_csv(tmp_path / "rest.csv", index=False)
     result = replayed(tmp_path, "--data", tmp_path / "rest.csv")
-    assert result["continues"] == [] and result["samples"][0]["group"] == 1
+    said = capsys.readouterr().out
     expected = {"edited": "has changed", "moved": "no longer there", "other columns": "columns, inputs or"}
-    assert expected[change] in capsys.readouterr().out
+    assert expected[change] in said
+    if state_kept and change != "other columns":  # the rule's state at the file's end stands in for it
+        declared = replayed(split_recording, "--data", split_recording / "rest.csv")
+        assert result["samples"] == declared["samples"] and result["history_samples"] == 330
+        assert "replayed from the rule's state at that file's end" in said
+    else:
+        assert result["continues"] == [] and result["samples"][0]["group"] == 1
 
 
 def test_fresh_and_continues_together_are_refused(split_recording, capsys):

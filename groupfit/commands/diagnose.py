@@ -13,6 +13,7 @@ import numpy as np
 
 from groupfit.commands import common
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
+from groupfit.commands.replay_readings import with_end_states
 from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
@@ -271,7 +272,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
             ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate
         )
         model_path = out_dir / ("model_augmented.json" if result.changed else "model_recalibrated.json")
-        augmented.save(model_path)  # checked: an invalid model is never written
+        with_end_states(augmented, common.clock_options(args)).save(model_path)  # an invalid model is never written
         written.append(model_path)
     figure = out_dir / "diagnose.png"
     runs = {"data": data, **({"validate": validate} if validate else {})}

@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import common, fit_mlr, reference_options
+from groupfit.commands import common, fit_mlr, reference_options, replay_readings
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
@@ -244,7 +244,7 @@ def run_fit(args: argparse.Namespace) -> int:
     result = FitResult(
         estimator,
         fit_run,
-        model,
+        replay_readings.with_end_states(model, common.clock_options(args, settings.data)),  # the rule after each file
         selection,
         data.input_selection,
         intervals,

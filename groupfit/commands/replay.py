@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,9 +19,10 @@ from groupfit.commands.replay_probes import (
     probe_summary,
     sample_probe,
 )
+from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.screw_deploy import run_screw_replay
-from groupfit.continuation import same_recording, started_running_notes, with_histories
-from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
+from groupfit.continuation import started_running_notes, with_histories
+from groupfit.data import Run
 from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
@@ -31,7 +31,7 @@ from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
-from groupfit.recordings import continued_recording, is_modelling_file
+from groupfit.recordings import is_modelling_file
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
 from groupfit.screw.modelfile import is_screw_file
@@ -102,7 +102,7 @@ def run_replay(args: argparse.Namespace) -> int:
     options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
     options.update(common.clock_options(args), **({"drop_glitches": False} if args.keep_glitches else {}))
     run = load_readings(args.data, tables, **options)
-    continued, history, found_note = earlier_recordings(
+    continued, history, found_note, saved = earlier_recordings(
         args, model, run, lambda path: load_readings(path, tables, **options)
     )
     try:
@@ -119,17 +119,20 @@ def run_replay(args: argparse.Namespace) -> int:
         replay = rule.replay(temps, checks).tail(rows)
         unchecked = rule.replay(temps).tail(rows) if probes is not None else None
     else:
-        replay = rule.replay(run.temps, probes)
-        unchecked = rule.replay(run.temps) if probes is not None else None
+        state = None if saved is None else saved.state
+        replay = rule.replay(run.temps, probes, state)
+        unchecked = rule.replay(run.temps, state=state) if probes is not None else None
+        if saved is not None:
+            rows, continued = saved.samples, [saved.path]
     common.print_notes([run, *history], common.report_stream(args))
     if found_note is not None:
-        notes = [found_note] if history else [found_note, *notes]  # the one note of what was continued
+        notes = [found_note] if history or saved else [found_note, *notes]  # the one note of what was continued
     elif not history and run.time[0] > 2 * run.period:
         notes.append(
             f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
             "file is the rest of a recording, give the earlier file(s) with --continues FILE"
         )
-    if not history:
+    if not history and saved is None:
         notes += started_running_notes([run], [0], model.derived_inputs or (), lag_of="the derived input's")
     for note in notes:
         print(f"note     {note}", file=common.report_stream(args))
@@ -170,40 +173,6 @@ class ReplayResult:
 
     def summary(self) -> str:
         return replay_report(self.data)
-
-
-def load_readings(
-    path, tables: RuleTables, *, time: str, error: str, error_limit: float = ERROR_LIMIT_UM, **clock
-) -> Run:
-    """A recorded run with the rule's readings as its ``temps``: measured inputs, then sources.
-
-    The measured inputs load as ``groupfit fit`` loads temperatures; the
-    source columns of derived inputs (an ambient temperature, a speed, an
-    on/off signal) load as they are, non-finite values kept (the rule treats
-    them as faults), and a missing one is named with the inputs it feeds.
-    """
-    measured = list(tables.raw_names[: tables.n_measured])
-    run = without_implausible_errors(
-        load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock),
-        error_limit,
-    )
-    if not tables.source_names:
-        return run
-    columns = []
-    for r, name in enumerate(tables.raw_names[tables.n_measured :], start=tables.n_measured):
-        if name not in run.frame.columns:
-            fed = ", ".join(d.name for d in tables.derived if d.reading == r)
-            available = ", ".join(map(str, run.frame.columns))
-            uses = (
-                f"the model computes its input(s) {fed} from it"
-                if fed
-                else "the model reads it as the "
-                + ("axis position (mm)" if r == tables.position_reading else "reference of its dead band")
-            )
-            raise InputError(f"{run.source}: column '{name}' not found; {uses}. The columns are: {available}")
-        columns.append(numeric_column(run.frame, name, run.source, allow_nonfinite=True))
-    readings = np.column_stack([run.temps, *columns])
-    return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
 
 
 def range_check(model: ModelFile, run: Run, replay: Replay) -> dict[str, Any]:
@@ -300,40 +269,6 @@ def residuals(run, replay: Replay) -> np.ndarray | None:
 def offline_groups(model: ModelFile, n_samples: int) -> np.ndarray:
     """1-based group the offline model serves at each sample index."""
     return model.serving_groups(n_samples) + 1
-
-
-def earlier_recordings(args: argparse.Namespace, model: ModelFile, run: Run, load) -> tuple[list, list, str | None]:
-    """The files replayed before ``run`` (``--continues``, else the modelling file its clock runs on from), their
-    readings (``load(path)``), and the note on a modelling file found by its clock (None: none was)."""
-    if args.continues and args.fresh:
-        raise InputError("--fresh and --continues: give one of them (--fresh starts the rule afresh)")
-    if args.continues or args.fresh:
-        return list(args.continues or []), [load(path) for path in args.continues or []], None
-    found, note = continued_recording(model.training, run, args.model)
-    if found is None:
-        return [], [], note
-    try:
-        history = load(found)
-    except InputError as exc:
-        reason = str(exc).split("; ")[0].removeprefix(f"{found}: ")
-        return (
-            [],
-            [],
-            (
-                f"{run.name} looks like the rest of the modelling recording {found}, which is not read as one run here "
-                f"({reason}): the rule starts afresh; give the part before this run with --continues FILE"
-            ),
-        )
-    if not same_recording(history, run):
-        return (
-            [],
-            [],
-            (
-                f"{run.name} looks like the rest of the modelling recording {found}, but its columns, inputs or "
-                "sampling period differ: the rule starts afresh"
-            ),
-        )
-    return [found], [history], note
 
 
 def replay_result(

@@ -33,6 +33,7 @@ from groupfit.runtime.rule import (
     SWITCH_FORCED,
     SWITCH_NONE,
 )
+from groupfit.runtime.state import restore
 from groupfit.runtime.tables import RuleTables
 
 PROBE_CODE_OFFSET = 2
@@ -438,8 +439,9 @@ class SwitchingRule:
         """
         return self.recal.probe(measured_error_um)
 
-    def replay(self, readings, probes=None) -> Replay:
-        """Reset, then step through every row of an (N, k) array of readings.
+    def replay(self, readings, probes=None, state=None) -> Replay:
+        r"""Reset (to ``state``, a :func:`groupfit.runtime.state.capture`\ d one, when given), then step through
+        every row of an (N, k) array of readings.
 
         ``probes``: optional length-N array of probe readings (µm), NaN where
         there is no check; a check at row i follows row i's step.
@@ -451,6 +453,8 @@ class SwitchingRule:
                 f"({', '.join(self.tables.raw_names)})"
             )
         self.reset()
+        if state is not None:
+            restore(self, state)
         n_samples = len(readings)
         group = np.empty(n_samples, dtype=int)
         target = np.empty(n_samples)
