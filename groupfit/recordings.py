@@ -7,8 +7,10 @@ the controller does not have. ``fit`` and ``diagnose`` record in the model
 file's ``training.recordings`` where each modelling file is, its SHA-256 and
 where its clock ends. ``replay`` of a run whose clock picks up one sampling
 period after such a recording ends replays that file first, as ``--continues
-FILE`` does, when it is still there with the same contents (``--fresh``: start
-afresh all the same). A file whose time stamps are dates starts its clock at
+FILE`` does, when it is still there with the same contents, and from the
+rule's state at that file's end, which the entry keeps, when it is not
+(:mod:`groupfit.commands.replay_readings`; ``--fresh``: start afresh all the
+same). A file whose time stamps are dates starts its clock at
 0 (:func:`groupfit.readtable.datetimes_to_seconds`) and keeps the date-time of
 its first row (``clock_origin_s``, seconds since 1970): the next file of a
 logger that rolls its files is told by its date-times. A file whose clock
