@@ -54,10 +54,13 @@ def _values(run: Run, column: str) -> np.ndarray:
     return np.asarray(run.frame[column].to_numpy(), dtype=float)
 
 
+def _row(run: Run, index: int) -> dict[str, float]:
+    return {column: float(_values(run, column)[index]) for column in reading_columns(run)}
+
+
 def last_readings(run: Run) -> dict[str, float]:
     """The run's last row on :func:`reading_columns` (the readings that are numbers)."""
-    last = {column: float(_values(run, column)[-1]) for column in reading_columns(run)}
-    return {column: value for column, value in last.items() if np.isfinite(value)}
+    return {column: value for column, value in _row(run, -1).items() if np.isfinite(value)}
 
 
 def reading_steps(run: Run) -> dict[str, float]:
@@ -123,7 +126,14 @@ def clock_starts_again(
 
 def first_readings(run: Run) -> dict[str, float]:
     """The run's first row on :func:`reading_columns`."""
-    return {column: float(_values(run, column)[0]) for column in reading_columns(run)}
+    return _row(run, 0)
+
+
+def end_row(run: Run) -> tuple[dict[str, float], dict[str, float], float]:
+    """What a next file's first row is compared with: the run's :func:`last_readings`, :func:`reading_steps` and
+    :func:`pickup_limit`."""
+    steps = reading_steps(run)
+    return last_readings(run), steps, pickup_limit(run, steps)
 
 
 def picks_up(last: Mapping[str, float], steps: Mapping[str, float], limit: float, run: Run) -> bool:
@@ -146,8 +156,7 @@ def run_picks_up(previous: Run, run: Run) -> bool:
         first_origin_s=run.clock_origin_s,
     ):
         return False
-    steps = reading_steps(previous)
-    return picks_up(last_readings(previous), steps, pickup_limit(previous, steps), run)
+    return picks_up(*end_row(previous), run)
 
 
 __all__ = [
@@ -155,6 +164,7 @@ __all__ = [
     "LOCAL_ROWS",
     "clock_starts_again",
     "distance",
+    "end_row",
     "first_readings",
     "last_readings",
     "pickup_limit",

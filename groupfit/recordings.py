@@ -30,9 +30,9 @@ import pandas as pd
 from groupfit.continuation import clock_runs_on
 from groupfit.data import PERIOD_TOLERANCE, Run
 from groupfit.io import file_sha256
-from groupfit.pickup import clock_starts_again, last_readings, picks_up, pickup_limit, reading_steps
+from groupfit.pickup import clock_starts_again, end_row, picks_up
 from groupfit.readtable import CLOCK_ORIGIN
-from groupfit.training_checks import LAST_READINGS, PICKUP_LIMIT, READING_STEPS, RECORDINGS_KEY
+from groupfit.training_checks import END_STATE, LAST_READINGS, PICKUP_LIMIT, READING_STEPS, RECORDINGS_KEY
 
 
 def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str | Path | None = None) -> list[dict]:
@@ -66,10 +66,9 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
         }
         if own[0].clock_origin_s is not None:
             entry[CLOCK_ORIGIN] = float(own[0].clock_origin_s)
-        steps = reading_steps(own[-1])
-        limit = pickup_limit(own[-1], steps)
+        last, steps, limit = end_row(own[-1])
         if np.isfinite(limit):
-            entry.update({LAST_READINGS: last_readings(own[-1]), READING_STEPS: steps, PICKUP_LIMIT: limit})
+            entry.update({LAST_READINGS: last, READING_STEPS: steps, PICKUP_LIMIT: limit})
         if model_dir is not None:
             entry["path_from_model"] = Path(os.path.relpath(path.resolve(), Path(model_dir).resolve())).as_posix()
         entries.append(entry)
@@ -105,8 +104,8 @@ def _same_file(entry: Mapping[str, Any], run: Run) -> bool:
 def continued_recording(
     training: Mapping[str, Any] | None, run: Run, model_path: str | Path | None = None
 ) -> tuple[Path | None, str | None, Mapping[str, Any] | None]:
-    """The modelling file ``run`` continues, a note on what was found, and the recording's entry (None: ``run``
-    continues none).
+    """The modelling file ``run`` continues, a note on what was found, and the recording's entry when its kept
+    state (``end_state``) is to stand in for a file that is not at hand (otherwise None).
 
     The run continues a recording when its first time stamp follows the
     recording's last by one sampling period
@@ -115,8 +114,9 @@ def continued_recording(
     (:mod:`groupfit.pickup`; entries written before the last row was kept are
     told by the clock alone). The file is
     looked for where it lies from the model file (``model_path``), then at its
-    absolute path, and used only with the recorded SHA-256; otherwise the note
-    says why it was not.
+    absolute path, and used only with the recorded SHA-256; otherwise the
+    rule's state at the file's end stands in for it, when the entry keeps one
+    and ``run`` is sampled on the file's period, and the note says which.
     """
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
         how = _continued_by(entry, run)
@@ -133,23 +133,28 @@ def continued_recording(
             places.insert(0, Path(model_path).resolve().parent / entry["path_from_model"])
         present = [p for p in places if p.is_file()]
         path = next((p for p in present if file_sha256(p) == entry["sha256"]), None)
-        if not present:
+        if path is not None:
             note = (
-                f"{continues} {entry['path']} {ended}, which is no longer there: the rule starts afresh; give the "
-                "file with --continues FILE to carry its history"
+                f"{continues} {path} {ended}: replayed after it, as --continues does, so that the rule and its "
+                "derived inputs carry their history as on the controller; --fresh starts them afresh"
             )
-            return None, note, entry
-        if path is None:
-            note = (
-                f"{continues} {present[0]} {ended}, but that file has changed since the fit: the rule starts "
-                "afresh; give the earlier file with --continues FILE"
-            )
-            return None, note, entry
+            return path, note, None
+        if present:
+            found = f"{continues} {present[0]} {ended}, but that file has changed since the fit"
+            ask = "give the earlier file with --continues FILE"
+        else:
+            found = f"{continues} {entry['path']} {ended}, which is no longer there"
+            ask = "give the file with --continues FILE to carry its history"
+        if END_STATE not in entry:
+            return None, f"{found}: the rule starts afresh; {ask}", None
+        if abs(run.period - entry["period_s"]) > PERIOD_TOLERANCE * entry["period_s"]:
+            return None, f"{found}; this run is sampled on another period: the rule starts afresh", None
         note = (
-            f"{continues} {path} {ended}: replayed after it, as --continues does, so that the rule and its derived "
-            "inputs carry their history as on the controller; --fresh starts them afresh"
+            f"{found}: replayed from the rule's state at that file's end, kept in the model file "
+            f"(training.recordings[].{END_STATE}), as the controller, which ran through, goes on; --fresh starts "
+            "afresh"
         )
-        return path, note, entry
+        return None, note, entry
     return None, None, None
 
 

@@ -19,7 +19,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from groupfit.continuation import same_recording
-from groupfit.data import ERROR_LIMIT_UM, PERIOD_TOLERANCE, Run, load_run, numeric_column, without_implausible_errors
+from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
 from groupfit.errors import InputError
 from groupfit.model import ModelFile, time_column
 from groupfit.recordings import continued_recording
@@ -85,21 +85,14 @@ def earlier_recordings(
         return list(args.continues or []), [load(path) for path in args.continues or []], None, None
     found, note, entry = continued_recording(model.training, run, args.model)
     if found is None:
-        saved = (entry or {}).get(END_STATE)
-        if entry is None or not saved:
+        if entry is None:
             return [], [], note, None
-        if abs(run.period - entry["period_s"]) > PERIOD_TOLERANCE * entry["period_s"]:
-            other = f"{note.split(': the rule starts afresh')[0]}; this run is sampled on another period"
-            return [], [], f"{other}: the rule starts afresh", None
         precision = getattr(args, "precision", "double")
         k = list(model.training[RECORDINGS_KEY]).index(entry)
+        saved = entry[END_STATE]
         where = f"{args.model}: training.recordings[{k}].{END_STATE}.{precision}"
-        restore(SwitchingRule(model, precision=precision, period_s=run.period), saved[precision], where)
-        note = note.split(": the rule starts afresh")[0] + (
-            ": replayed from the rule's state at that file's end, kept in the model file "
-            "(training.recordings[].end_state), as the controller, which ran through, goes on; --fresh starts "
-            "afresh"
-        )
+        rule = SwitchingRule(model, precision=precision, period_s=run.period)
+        restore(rule, saved[precision], where)  # a state that does not fit the rule is refused, named by its key
         return [], [], note, SavedState(entry["path"], int(saved["samples"]), saved[precision])
     try:
         history = load(found)

@@ -26,9 +26,7 @@ CONFIGURATION = frozenset({"tables", "precision", "recal", "table"})
 def _plain(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
-    if isinstance(value, bool):
-        return value
-    if isinstance(value, int):
+    if isinstance(value, int):  # a bool too
         return value
     return float(value)
 
