@@ -3,7 +3,10 @@
 Run from the repository root: ``python bench/bench_next_run.py`` (a few minutes).
 Prints, per pair (model run → next run), the raw figure, the expected RMS
 (calibrated), the actual RMS of the chosen model replayed through the run-time
-rule over the next run, their ratio, and whether the chosen p, BIC's p and the
+rule over the next run, their ratio, how many inputs the next run takes beyond
+the model run's span (``out``: where ``groupfit replay`` notes that the
+expected figure does not cover the run; the share in [0.5, 2] is also given
+apart for the pairs that stay within it and those that leave it), and whether the chosen p, BIC's p and the
 old default p = 3 are within 1.5× of the best p = 0…3 there; then the same for
 the cuts of the shared measured test (``../shared``). Then derives the
 calibration (:func:`groupfit.heldout.calibration.derive_calibration`) on the
@@ -34,7 +37,7 @@ from groupfit.heldout import calibration  # noqa: E402
 def table(rows: list[dict], title: str) -> None:
     print(f"\n{title}")
     print(
-        f"{'pair':<42} {'src':<9} {'p':>2} {'raw':>8} {'expect':>8} {'actual':>8} {'ratio':>6}  "
+        f"{'pair':<42} {'src':<9} {'p':>2} {'raw':>8} {'expect':>8} {'actual':>8} {'ratio':>6} {'out':>3}  "
         f"{'best':>4} {'bic':>3}  ok(ch/bic/p3)  actual by p"
     )
     for r in rows:
@@ -44,9 +47,24 @@ def table(rows: list[dict], title: str) -> None:
         ok = "".join("y" if r[k] else "." for k in ("within_chosen", "within_bic", "within_default"))
         print(
             f"{r['pair'][:42]:<42} {r['source'][:9]:<9} {r['chosen_p']:>2} {r['raw_um']:>8.3g} {expected:>8.3g} "
-            f"{r['actual_um']:>8.3g} {ratio:>6.2f}  {r['best_p']:>4} {r['bic_p']:>3}  {ok:^13}  {by_p}"
+            f"{r['actual_um']:>8.3g} {ratio:>6.2f} {len(r['inputs_beyond_span']):>3}  "
+            f"{r['best_p']:>4} {r['bic_p']:>3}  {ok:^13}  {by_p}"
         )
     summary(rows, calibration.FACTOR, "all")
+    within_span(rows, calibration.FACTOR)
+
+
+def within_span(rows: list[dict], factor: float) -> None:
+    """The share in [0.5, 2] apart for the pairs whose next run stays within the model run's span and for those
+    it leaves (where ``groupfit replay`` notes that the expected figure does not cover the run)."""
+    for label, part in (
+        ("next run within the modelling range", [r for r in rows if not r["inputs_beyond_span"]]),
+        ("next run beyond it (replay notes it)", [r for r in rows if r["inputs_beyond_span"]]),
+    ):
+        if part:
+            ratio = np.array([r["actual_um"] / (factor * r["raw_um"]) for r in part])
+            inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
+            print(f"  {label}: {len(part)} pairs, in [0.5, 2]: {100 * inside:.0f} %")
 
 
 def summary(rows: list[dict], factor: float, label: str) -> None:
@@ -120,6 +138,7 @@ def main() -> None:
     summary(both[0::2], derived["factor"], "on the even-numbered pairs themselves")
     print(f"derived on all {len(both)} pairs (what ships): {calibration.derive_calibration(raw, actual)}")
     summary(both, calibration.FACTOR, f"all {len(both)} pairs with the shipped factor")
+    within_span(both, calibration.FACTOR)
     print(ceiling(both))
     blind = [] if args.quick else [panel.score_pair(panel.without_operating_columns(p)) for p in all_pairs]
     if blind:

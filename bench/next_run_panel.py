@@ -35,6 +35,7 @@ from groupfit.heldout.folds import operating_columns
 from groupfit.heldout.nextrun import rule_prediction, sliced
 from groupfit.heldout.penalty import run_penalty
 from groupfit.heldout.reference_choice import choose_reference
+from groupfit.heldout.span import beyond_span, input_span
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.reference import default_reference, is_column_reference, with_reference
@@ -229,9 +230,18 @@ def score_pair(pair: Pair) -> dict:
         "next_error_sd_um": float(np.std(pair.next.error)),
         "raw_by_p": dict(zip(expectation.candidates, map(float, expectation.scores.raw_rms()))),
         "n_folds": expectation.scores.n_folds,
+        "inputs_beyond_span": inputs_beyond_span(model, with_reference(pair.next, chosen_reference)),
         "n_model": n_model,
         "n_next": pair.next.n_samples,
     }
+
+
+def inputs_beyond_span(model: Run, next_run: Run) -> list[str]:
+    """The inputs the next run takes beyond the model run's span, as ``groupfit replay`` checks them
+    (:mod:`groupfit.heldout.span`): where it notes that the expected figure does not cover the run."""
+    names = list(model.temp_names)
+    beyond = beyond_span(input_span(names, model.temps), names, next_run.temps)
+    return [entry["input"] for entry in beyond]
 
 
 def actual_by_p(

@@ -29,6 +29,11 @@ candidate whose gate rejects good checks pays for it), and the hold's own
 noise is sized so that its gate passes every held-out check with a factor of
 two to spare.
 
+A modelling run too short for the longest intervals is scored on the
+intervals its held-out stretches hold at least one interval of samples
+after the first check for; when none does, the default hold takes its first
+check's prior from the model's expected next-run range all the same.
+
 Every candidate runs through one vectorised replay of the filter of
 :mod:`groupfit.runtime.recalibration` (double precision, without the
 compensation's clamp and rate limit).
@@ -60,6 +65,8 @@ CONFIRM_AFTER = 2
 GATE_SPARE = 2.0
 METHODS = ("auto", "hold", "kalman", "none")
 MIN_TRAIN_SAMPLES = 20
+DEFAULT_INITIAL_OFFSET_UM = 10.0
+"""The prior of a new run's offset in the default hold, unless the model's expected next-run range is wider."""
 
 
 @dataclass(frozen=True)
@@ -309,11 +316,28 @@ def choose_recalibration(
     period = float(model.sampling_period_s)
     series = held_out_series(model, runs, cuts=cuts)
     if not series:
-        return _default(offset_max, rate, intervals, reason="the modelling runs are too short to hold part out")
+        return _default(
+            offset_max,
+            rate,
+            intervals,
+            reason="the modelling runs are too short to hold part out",
+            initial_offset=initial_offset_sigma(model, math.nan, offset_max),
+        )
     residuals = np.concatenate([s.residual for s in series])
     measured = residuals[np.isfinite(residuals)]
     rms_none = float(np.sqrt(np.mean(measured**2))) if measured.size else math.nan
     everies = [max(1, int(round(t / period))) for t in intervals]
+    scored = [i for i, every in enumerate(everies) if _scored_samples(series, every) >= every]
+    if not scored:
+        return _default(
+            offset_max,
+            rate,
+            intervals,
+            reason=f"the held-out stretches are too short to score a check every {min(intervals) / 60:g} min",
+            initial_offset=initial_offset_sigma(model, rms_none, offset_max),
+        )
+    left_out = [intervals[i] for i in range(len(intervals)) if i not in scored]
+    intervals, everies = tuple(intervals[i] for i in scored), [everies[i] for i in scored]
     probe_sigma = white_sigma(series)
     candidates = candidate_grid(
         hold_sigma=_hold_sigma(series, everies, period),
@@ -327,7 +351,11 @@ def choose_recalibration(
         rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
     if not np.all(np.isfinite(rms)) or not np.all(rms[:, 0] > 0):
         return _default(
-            offset_max, rate, intervals, reason="the held-out checks leave nothing to compare the filters on"
+            offset_max,
+            rate,
+            intervals,
+            reason="the held-out checks leave nothing to compare the filters on",
+            initial_offset=initial_offset_sigma(model, rms_none, offset_max),
         )
     best = _most_responsive_of_the_best(
         candidates, np.mean(np.log(rms / rms[:, :1]), axis=0), kalman=method == "kalman"
@@ -348,6 +376,9 @@ def choose_recalibration(
         "rms_none_by_interval_um": unchecked,
         "candidates": len(candidates),
     }
+    if left_out:
+        chosen["intervals_not_scored_s"] = left_out
+        chosen["intervals_not_scored_why"] = "held-out stretches too short to score one interval after the first check"
     return Tuning(
         candidates.section(best, offset_max_um=offset_max, rate_um=rate, chosen=chosen),
         intervals,
@@ -356,6 +387,11 @@ def choose_recalibration(
         tuple(float(v) for v in rms[:, best]),
         tuple(unchecked),
     )
+
+
+def _scored_samples(series: Sequence[HeldOut], every: int) -> int:
+    """The measured samples a replay with a check every ``every`` samples scores (those from the first check on)."""
+    return sum(int(np.isfinite(s.residual[every:]).sum()) for s in series)
 
 
 def _rms_unchecked(series: Sequence[HeldOut], every: int) -> float:
@@ -415,11 +451,14 @@ def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: flo
     return max(1.0, GATE_SPARE * worst / GATE_SIGMAS)
 
 
-def _default(offset_max: float, rate: float, intervals, *, reason: str) -> Tuning:
+def _default(
+    offset_max: float, rate: float, intervals, *, reason: str, initial_offset: float = DEFAULT_INITIAL_OFFSET_UM
+) -> Tuning:
+    """The hold with default noise; its first check's prior (and so its gate) at least ``initial_offset``."""
     section = Recalibration(
         method="hold",
         offset_sigma_um_per_sqrt_h=5.0,
-        initial_offset_sigma_um=10.0,
+        initial_offset_sigma_um=max(DEFAULT_INITIAL_OFFSET_UM, min(initial_offset, offset_max)),
         gate_sigmas=GATE_SIGMAS,
         confirm_after=CONFIRM_AFTER,
         offset_max_um=offset_max,
