@@ -12,6 +12,7 @@ import pytest
 from test_recalibration import ramp_run
 from test_switching_models import synthetic_model
 
+from groupfit.cli import main
 from groupfit.model import ModelFile
 from groupfit.recalibration_tuning import CUTS, DEFAULT_INITIAL_OFFSET_UM, INTERVALS_S, choose_recalibration
 from groupfit.runtime import PROBE_APPLIED, PROBE_CODE_OFFSET, PROBE_REJECTED, SwitchingRule
@@ -75,3 +76,15 @@ def test_the_default_hold_of_a_run_too_short_to_tune_on_takes_the_offset_the_nex
         codes[label] = [int(replay.probe[i]) - PROBE_CODE_OFFSET for i in rows]
     assert codes["range"] == [PROBE_APPLIED] * len(rows)
     assert codes["default"][0] == PROBE_REJECTED
+
+
+def test_fit_on_a_short_run_says_which_check_intervals_it_could_not_score(tmp_path, capsys):
+    temps, runs = short_run(100)
+    frame, error = runs[0]
+    path = tmp_path / "short.csv"
+    frame.assign(time_s=100.0 * np.arange(len(frame)), error_um=error).to_csv(path, index=False)
+    assert main(["fit", "--data", str(path), "--p", "0", "--out", str(tmp_path / "fit")]) == 0
+    line = next(s for s in capsys.readouterr().out.splitlines() if s.startswith("recal"))
+    chosen = ModelFile.load(tmp_path / "fit" / "model.json").recalibration.chosen
+    assert list(chosen["intervals_s"]) == [900.0, 1800.0] and list(chosen["intervals_not_scored_s"]) == [3600.0, 7200.0]
+    assert "a check every 15/30 min" in line and line.endswith("every 60/120 min not scored: the run is too short")

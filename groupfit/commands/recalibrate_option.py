@@ -45,6 +45,10 @@ def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFi
             f"{_per_interval(tuning.rms_chosen_um)} µm (offset hold {_per_interval(tuning.rms_hold_um)}, "
             f"no checks {tuning.rms_none_um:.3g})"
         )
+        left_out = section.chosen.get("intervals_not_scored_s")
+        if left_out:
+            line += f"; every {'/'.join(f'{t / 60:g}' for t in left_out)} min not scored: the run is too short"
+
     else:
         line += f" ({section.chosen.get('reason', 'default')})"
     return model.replace(recalibration=section), line
