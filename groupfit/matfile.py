@@ -1,12 +1,13 @@
 """A run saved by MATLAB or Octave (``save run.mat time T1 T2 error``): its vectors as the columns of a table.
 
-A MAT file of version 4, 5 or 7 (MATLAB's default) is read with SciPy; each
-variable that is a vector of numbers becomes a column named as the variable,
-in the file's order, and the vectors of the most common length make the run
-(or the fields of the one struct that holds vectors: ``run.time_s``, ``run.T1``).
-A file of version 7.3 (HDF5), a matrix without column names and a MATLAB
-``table`` or ``timetable`` object (which only MATLAB reads) are refused, each
-saying how to save the run so that it is read.
+A MAT file of version 4, 5 or 7 (MATLAB's default) is read with SciPy, one
+of version 7.3 (HDF5, ``-v7.3``) with h5py (:mod:`groupfit.matfile_hdf5`, an
+optional dependency); each variable that is a vector of numbers becomes a
+column named as the variable, in the file's order, and the vectors of the
+most common length make the run (or the fields of the one struct that holds
+vectors: ``run.time_s``, ``run.T1``). A matrix without column names and a
+MATLAB ``table`` or ``timetable`` object (which only MATLAB reads) are
+refused, each saying how to save the run so that it is read.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import scipy.io
 from scipy.io.matlab import MatReadError
 
 from groupfit.errors import InputError, first_line
+from groupfit.matfile_hdf5 import read_hdf5_variables
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 EXPORT = "save the run as separate vectors (save('run.mat', 'time_s', 'T1', …, '-v7')) or as CSV (writetable)"
@@ -31,11 +33,12 @@ def read_mat(path: Path, label: str) -> pd.DataFrame:
     with open(path, "rb") as handle:
         head = handle.read(1024)
     if HDF5_SIGNATURE in head:
-        raise InputError(f"{label}: a MAT file of version 7.3 (HDF5), which groupfit does not read; {EXPORT}")
-    try:
-        variables = scipy.io.loadmat(path, squeeze_me=True, chars_as_strings=True)
-    except (MatReadError, ValueError, TypeError, IndexError, KeyError, EOFError, OSError, zlib.error) as exc:
-        raise InputError(f"{label}: not a readable MAT file ({first_line(exc)}); {EXPORT}") from None
+        variables = _version_73(path, label)
+    else:
+        try:
+            variables = scipy.io.loadmat(path, squeeze_me=True, chars_as_strings=True)
+        except (MatReadError, ValueError, TypeError, IndexError, KeyError, EOFError, OSError, zlib.error) as exc:
+            raise InputError(f"{label}: not a readable MAT file ({first_line(exc)}); {EXPORT}") from None
     variables = {name: value for name, value in variables.items() if not name.startswith("__")}
     vectors, matrices = _vectors(variables)
     if not vectors:  # one struct of vectors (run.time_s, run.T1 …) is the run
@@ -47,6 +50,18 @@ def read_mat(path: Path, label: str) -> pd.DataFrame:
         raise InputError(f"{label}: holds {held} (a MATLAB table or timetable is read only by MATLAB); {EXPORT}")
     length = max(lengths, key=lambda n: (lengths[n], n))
     return pd.DataFrame({name: v for name, v in vectors.items() if len(v) == length})
+
+
+def _version_73(path: Path, label: str) -> dict:
+    try:
+        return read_hdf5_variables(path)
+    except ImportError:
+        raise InputError(
+            f"{label}: a MAT file of version 7.3 (HDF5): reading it needs the package h5py (pip install h5py, or "
+            f'"groupfit[mat73]"); or {EXPORT}'
+        ) from None
+    except (OSError, ValueError, TypeError, KeyError) as exc:
+        raise InputError(f"{label}: not a readable MAT file of version 7.3 ({first_line(exc)}); {EXPORT}") from None
 
 
 def _vectors(variables: dict) -> tuple[dict[str, np.ndarray], list[str]]:
@@ -64,6 +79,8 @@ def _vectors(variables: dict) -> tuple[dict[str, np.ndarray], list[str]]:
 
 def _fields(value) -> dict:
     """The fields of a MATLAB struct of one element (empty: not one)."""
+    if isinstance(value, dict):
+        return value
     names = getattr(getattr(value, "dtype", None), "names", None)
     if not names or getattr(value, "size", 0) != 1:
         return {}
