@@ -1,6 +1,6 @@
 """Tuning the recalibration filter on a modelling run too short for the longest check intervals: the filter is
-chosen on the intervals its held-out stretches can score, and the hold a run gets by default sizes its gate by
-the model's expected next-run range."""
+chosen on the intervals its held-out stretches can score; and the hold a run gets by default (too short to tune
+on, or a model file without a section) sizes its gate by the model's expected next-run range."""
 
 from __future__ import annotations
 
@@ -88,3 +88,19 @@ def test_fit_on_a_short_run_says_which_check_intervals_it_could_not_score(tmp_pa
     chosen = ModelFile.load(tmp_path / "fit" / "model.json").recalibration.chosen
     assert list(chosen["intervals_s"]) == [900.0, 1800.0] and list(chosen["intervals_not_scored_s"]) == [3600.0, 7200.0]
     assert "a check every 15/30 min" in line and line.endswith("every 60/120 min not scored: the run is too short")
+
+
+@pytest.mark.parametrize("high_um, first", [(30.0, PROBE_APPLIED), (5.0, PROBE_REJECTED), (None, PROBE_REJECTED)])
+def test_a_model_without_a_section_replays_checks_through_the_hold_gated_by_its_next_run_range(high_um, first):
+    model = trained(high_um if high_um is not None else 1.0)
+    if high_um is None:  # an older model file: no expected next-run range
+        model = model.replace(training={k: v for k, v in model.training.items() if "expected" not in k})
+    model = model.replace(recalibration=None)
+    temps, _ = short_run(60)
+    plain = SwitchingRule(model).replay(temps).prediction_um
+    probes = np.full(len(temps), np.nan)
+    probes[2] = plain[2] + 52.0  # beyond five priors of 10 µm, within five of 30 µm
+    table = SwitchingRule(model).tables.recalibration
+    assert table.method == "hold" and table.p0[0] == pytest.approx(max(10.0, high_um or 0.0) ** 2)
+    replay = SwitchingRule(model).replay(temps, probes)
+    assert int(replay.probe[2]) - PROBE_CODE_OFFSET == first

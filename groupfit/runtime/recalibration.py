@@ -162,11 +162,18 @@ class RecalTable:
 
 
 def model_section(model: ModelFile, *, comp_limit_um: float, rate_limit_um: float) -> Recalibration:
-    """The model's section, or :data:`DEFAULT_SECTION` bounded by the rule's clamp and rate limit."""
+    """The model's section, or :data:`DEFAULT_SECTION` bounded by the rule's clamp and rate limit, its first
+    check's prior (and so its gate) widened to the high end of the model's expected next-run range
+    (``training.expected_next_run_range_um``) within the clamp, as a tuned section's is."""
     if model.recalibration is not None:
         return model.recalibration
+    bounds = (model.training or {}).get("expected_next_run_range_um") or (0.0, 0.0)
+    high = float(bounds[1]) if math.isfinite(float(bounds[1])) else 0.0
+    prior = max(DEFAULT_SECTION["initial_offset_sigma_um"], min(high, comp_limit_um))
     return Recalibration(
-        **{**DEFAULT_SECTION, "terms": ("offset",)}, offset_max_um=comp_limit_um, rate_um_per_sample=rate_limit_um
+        **{**DEFAULT_SECTION, "terms": ("offset",), "initial_offset_sigma_um": prior},
+        offset_max_um=comp_limit_um,
+        rate_um_per_sample=rate_limit_um,
     )
 
 
