@@ -51,6 +51,7 @@ import numpy as np
 from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
 from groupfit.models.ridge import input_spreads, penalty_diagonal, ridge_solve
+from groupfit.runtime.recalibration import DEFAULT_SECTION, default_section, expected_range_high
 
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
 CUTS = (0.5, 0.7)
@@ -65,7 +66,7 @@ CONFIRM_AFTER = 2
 GATE_SPARE = 2.0
 METHODS = ("auto", "hold", "kalman", "none")
 MIN_TRAIN_SAMPLES = 20
-DEFAULT_INITIAL_OFFSET_UM = 10.0
+DEFAULT_INITIAL_OFFSET_UM = DEFAULT_SECTION["initial_offset_sigma_um"]
 """The prior of a new run's offset in the default hold, unless the model's expected next-run range is wider."""
 
 
@@ -409,8 +410,7 @@ def initial_offset_sigma(model: ModelFile, rms_none: float, offset_max: float) -
     end of the model's expected next-run range (``training``), at least twice
     the held-out RMS without checks and 1 µm, at most the offset's bound.
     """
-    bounds = (model.training or {}).get("expected_next_run_range_um") or (0.0, 0.0)
-    sigma = max(1.0, 2.0 * rms_none if math.isfinite(rms_none) else 0.0, float(bounds[1]))
+    sigma = max(1.0, 2.0 * rms_none if math.isfinite(rms_none) else 0.0, expected_range_high(model))
     return min(sigma, offset_max)
 
 
@@ -451,18 +451,13 @@ def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: flo
     return max(1.0, GATE_SPARE * worst / GATE_SIGMAS)
 
 
-def _default(
-    offset_max: float, rate: float, intervals, *, reason: str, initial_offset: float = DEFAULT_INITIAL_OFFSET_UM
-) -> Tuning:
-    """The hold with default noise; its first check's prior (and so its gate) at least ``initial_offset``."""
-    section = Recalibration(
-        method="hold",
-        offset_sigma_um_per_sqrt_h=5.0,
-        initial_offset_sigma_um=max(DEFAULT_INITIAL_OFFSET_UM, min(initial_offset, offset_max)),
-        gate_sigmas=GATE_SIGMAS,
-        confirm_after=CONFIRM_AFTER,
+def _default(offset_max: float, rate: float, intervals, *, reason: str, initial_offset: float) -> Tuning:
+    """The default hold (:func:`groupfit.runtime.recalibration.default_section`); its first check's prior (and so
+    its gate) at least ``initial_offset``."""
+    section = default_section(
         offset_max_um=offset_max,
         rate_um_per_sample=rate,
+        initial_offset_um=initial_offset,
         chosen={"by": "default", "reason": reason},
     )
     return Tuning(section, intervals, math.nan, (), ())

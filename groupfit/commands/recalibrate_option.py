@@ -48,7 +48,6 @@ def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFi
         left_out = section.chosen.get("intervals_not_scored_s")
         if left_out:
             line += f"; every {'/'.join(f'{t / 60:g}' for t in left_out)} min not scored: the run is too short"
-
     else:
         line += f" ({section.chosen.get('reason', 'default')})"
     return model.replace(recalibration=section), line

@@ -161,19 +161,40 @@ class RecalTable:
         )
 
 
+def expected_range_high(model: ModelFile) -> float:
+    """The high end of the model's expected next-run range (``training.expected_next_run_range_um``, µm); 0 when
+    the model file has none."""
+    bounds = (model.training or {}).get("expected_next_run_range_um") or (0.0, 0.0)
+    high = float(bounds[1])
+    return high if math.isfinite(high) else 0.0
+
+
+def default_section(
+    *, offset_max_um: float, rate_um_per_sample: float, initial_offset_um: float, chosen: dict | None = None
+) -> Recalibration:
+    """:data:`DEFAULT_SECTION` bounded by ``offset_max_um`` and ``rate_um_per_sample``, its first check's prior
+    (and so its gate) widened to ``initial_offset_um`` within the bound."""
+    prior = max(DEFAULT_SECTION["initial_offset_sigma_um"], min(initial_offset_um, offset_max_um))
+    return Recalibration(
+        **{
+            **DEFAULT_SECTION,
+            "terms": ("offset",),
+            "initial_offset_sigma_um": prior,
+            **({"chosen": chosen} if chosen else {}),
+        },
+        offset_max_um=offset_max_um,
+        rate_um_per_sample=rate_um_per_sample,
+    )
+
+
 def model_section(model: ModelFile, *, comp_limit_um: float, rate_limit_um: float) -> Recalibration:
-    """The model's section, or :data:`DEFAULT_SECTION` bounded by the rule's clamp and rate limit, its first
-    check's prior (and so its gate) widened to the high end of the model's expected next-run range
-    (``training.expected_next_run_range_um``) within the clamp, as a tuned section's is."""
+    """The model's section, or the :func:`default_section` bounded by the rule's clamp and rate limit, its first
+    check's prior widened to the high end of the model's expected next-run range (:func:`expected_range_high`),
+    as a tuned section's is."""
     if model.recalibration is not None:
         return model.recalibration
-    bounds = (model.training or {}).get("expected_next_run_range_um") or (0.0, 0.0)
-    high = float(bounds[1]) if math.isfinite(float(bounds[1])) else 0.0
-    prior = max(DEFAULT_SECTION["initial_offset_sigma_um"], min(high, comp_limit_um))
-    return Recalibration(
-        **{**DEFAULT_SECTION, "terms": ("offset",), "initial_offset_sigma_um": prior},
-        offset_max_um=comp_limit_um,
-        rate_um_per_sample=rate_limit_um,
+    return default_section(
+        offset_max_um=comp_limit_um, rate_um_per_sample=rate_limit_um, initial_offset_um=expected_range_high(model)
     )
 
 
@@ -347,6 +368,8 @@ class Recalibrator:
 
 __all__ = [
     "DEFAULT_SECTION",
+    "default_section",
+    "expected_range_high",
     "PROBE_APPLIED",
     "PROBE_IGNORED",
     "PROBE_LIMIT_UM",
