@@ -22,6 +22,7 @@ from datetime import datetime
 import numpy as np
 import pandas as pd
 
+from groupfit.elapsed_times import DAY_S, elapsed_seconds, two_field_seconds
 from groupfit.errors import InputError
 from groupfit.textlayout import is_number
 
@@ -61,7 +62,6 @@ DATE_TIME_JOINERS = (" ", "-", "_", ", ")
 FORMATS = tuple(f"{d}{j}{t}" for d in DATE_FORMATS for j in DATE_TIME_JOINERS for t in TIME_FORMATS) + TIME_FORMATS
 """Every form tried after ISO 8601, in order; the time-of-day forms last."""
 EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
-DAY_S = 86400.0
 UNIT_SECONDS = {
     **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds", "millisekunden", "毫秒", "ミリ秒"), 1e-3),
     **dict.fromkeys(("s", "sec", "secs", "second", "seconds", "sek", "sekunden", "秒"), 1.0),
@@ -283,7 +283,7 @@ def text_clock(column: pd.Series, name: str, label: str) -> tuple[np.ndarray, fl
     first, last = str(text.iloc[0]), str(text.iloc[-1])
     if is_number(first, ","):
         return None
-    readings = [reading for reading in _readings(text, first, last) if reading[0] is not None]
+    readings = [reading for reading in _readings(text, first, last, name, label) if reading[0] is not None]
     if not readings:
         bad = _first_unread(text)
         if bad is None:
@@ -323,12 +323,16 @@ def _without_zone_names(text: pd.Series) -> tuple[pd.Series, np.ndarray]:
     return found[0].astype("string"), hours.to_numpy(dtype=float)
 
 
-def _readings(text: pd.Series, first: str, last: str):
+def _readings(text: pd.Series, first: str, last: str, name: str, label: str):
     """``(seconds since the first row, the first row in seconds since 1970 or None)`` of every form that reads
     the column."""
-    elapsed = _elapsed_seconds(text)
+    elapsed = elapsed_seconds(text)
     if elapsed is not None:
         yield elapsed, None
+    unit = named_time_unit(name)
+    two_fields = two_field_seconds(text, name, label, UNIT_SECONDS[unit] if unit else None)
+    if two_fields is not None:  # before a time of day, which it equals unless it passes midnight
+        yield two_fields, None
     try:
         stamps = pd.to_datetime(text, format="ISO8601", utc=True)
     except (ValueError, TypeError):
@@ -345,26 +349,6 @@ def _readings(text: pd.Series, first: str, last: str):
             continue
         seconds = _since_first(stamps)
         yield (_past_midnight(seconds), None) if form in TIME_FORMATS else (seconds, stamps.iloc[0].timestamp())
-
-
-ELAPSED = re.compile(r"(?:(\d+)\s*(?:days?|d),?\s+)?(\d+):([0-5]\d):([0-5]\d(?:[.,]\d+)?)", re.IGNORECASE)
-"""An elapsed time ``h:mm:ss`` whose hours run past 23 (a spreadsheet's ``[h]:mm:ss``), or led by days
-(``1 day, 2:00:00``, ``0 days 00:00:15``, ``2d 03:00:00``: a duration as Python or pandas writes it)."""
-
-
-def _elapsed_seconds(text: pd.Series) -> np.ndarray | None:
-    """Seconds since the first row of a column of elapsed times ``[d days] h:mm:ss`` (hours beyond 23
-    allowed); None when a cell is not one."""
-    found = text.str.extract("^" + ELAPSED.pattern + "$", flags=ELAPSED.flags)
-    if bool(found[1].isna().any()):
-        return None
-    seconds = (
-        found[0].fillna("0").astype(float) * DAY_S
-        + found[1].astype(float) * 3600.0
-        + found[2].astype(float) * 60.0
-        + found[3].str.replace(",", ".", regex=False).astype(float)
-    ).to_numpy(dtype=float)
-    return seconds - seconds[0]
 
 
 def _first_unread(text: pd.Series) -> tuple[int, str] | None:
