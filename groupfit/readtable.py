@@ -1,4 +1,4 @@
-"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel, Parquet, MATLAB or TDMS by suffix, or a
+"""Reading a run's table: CSV (comma, semicolon or tab separated), Excel, Parquet, MATLAB, TDMS or JSON by suffix, or a
 DataFrame.
 
 A text table is read as it was written (:mod:`groupfit.textlayout`: its
@@ -24,6 +24,7 @@ import pandas as pd
 
 from groupfit.errors import InputError, first_line
 from groupfit.io import note_read
+from groupfit.jsonlog import read_json_log
 from groupfit.matfile import read_mat
 from groupfit.numbercells import sheet_text_numbers, without_cell_units
 from groupfit.tdmsfile import read_tdms
@@ -51,10 +52,11 @@ TABLE_SUFFIXES = {
     ".parquet": "Parquet",
     ".mat": "MATLAB",
     ".tdms": "TDMS",
+    ".json": "JSON",
+    ".jsonl": "JSON",
+    ".ndjson": "JSON",
 }
 """File types a run is read from, by suffix (anything else is read as CSV)."""
-RECORD_SUFFIXES = frozenset({".json", ".jsonl", ".ndjson"})
-"""Logs of records (a 3-D printer's JSON lines, a web interface's dump), refused with what to do."""
 WORKBOOK_SIGNATURES = (b"PK\x03\x04", b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1")
 """How a workbook's bytes begin (a zip: .xlsx, .ods; an OLE compound file: .xls). A file named as a workbook
 that begins otherwise is a text table a program saved under a workbook's name, and is read as one."""
@@ -64,7 +66,7 @@ COMPRESSED = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decomp
 
 
 def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
-    """Read a run's table (CSV, Excel, Parquet, MATLAB or TDMS, by suffix) or take a DataFrame: ``(frame, name,
+    """Read a run's table (CSV, Excel, Parquet, MATLAB, TDMS or JSON, by suffix) or take a DataFrame: ``(frame, name,
     label)``.
 
     ``label`` names the source in error messages. An Excel workbook is read
@@ -93,6 +95,8 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
             frame = read_mat(path, label)
         elif kind == "TDMS":
             frame = read_tdms(path, label)
+        elif kind == "JSON":
+            frame = read_json_log(_text_content(path, label, compressed=False), label)
         elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
@@ -127,19 +131,13 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
 
 
 def _refuse_unreadable(path: Path, label: str) -> None:
-    """One line for a path that is no data file groupfit reads: a folder, a device, nothing, a JSON log."""
+    """One line for a path that is no data file groupfit reads: a folder, a device, nothing."""
     if path.is_dir():
-        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet, MATLAB or TDMS)")
+        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet, MATLAB, TDMS or JSON)")
     if path.exists() and not path.is_file():
         raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
     if not path.is_file():
         raise InputError(f"{label}: data file not found; check the path given to --data")
-    if path.suffix.lower() in RECORD_SUFFIXES:
-        raise InputError(
-            f"{label}: a JSON log is not read (groupfit reads CSV, Excel, OpenDocument, Parquet, MATLAB and TDMS "
-            "tables); "
-            "convert it to a CSV table with a header and one row per sample"
-        )
 
 
 def _text_under_a_workbooks_name(path: Path, kind: str, label: str) -> tuple[pd.DataFrame, list[str]]:

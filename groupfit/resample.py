@@ -16,7 +16,12 @@ there into separate runs, never bridged by made-up samples. A column read in
 none of the rows of a period (an empty cell: one sensor missed a reading) is
 interpolated in that period the same way when it misses at most
 :data:`GAP_PERIODS` periods in a row between two readings; a longer silence
-stays empty, and the loader names its first row.
+stays empty, and the loader names its first row. At either end of a stretch,
+the periods before a column's first reading or after its last (records of
+several kinds that start and stop at other times: a temperature record every
+20 s among probe readings every 2 s) are dropped when there are at most
+:data:`GAP_PERIODS` of them; the measured columns, which may be read on some
+periods alone, do not count.
 """
 
 from __future__ import annotations
@@ -49,6 +54,8 @@ class Resampled:
     """Each gap that split the log: the time of the last reading before it and of the first after it (s)."""
     missed: int = 0
     """Missed readings of a column (a period with readings, none of that column) filled by interpolation."""
+    trimmed: int = 0
+    """Periods dropped at the ends of stretches, before a column's first reading or after its last."""
 
     def note(self, label: str, period_s: float, n_bins: int) -> str:
         """The line a verb prints about the resampling."""
@@ -58,6 +65,8 @@ class Resampled:
         )
         if self.missed:
             text += f", {self.missed} missed reading(s) of a column interpolated"
+        if self.trimmed:
+            text += f", {self.trimmed} period(s) at the ends without a reading of every column dropped"
         if self.gaps:
             where = ", ".join(f"{a:g} s to {b:g} s" for a, b in self.gaps)
             text += (
@@ -139,19 +148,40 @@ def resample_frame(
             table[column] = np.where(hits > 0, sums / np.maximum(hits, 1), np.nan)
     centres = start + (np.arange(n_bins) + 0.5) * period_s
     occupied = counts > 0
-    pieces, gaps, empty, unread = [], [], 0, 0
+    pieces, gaps, empty, unread, trimmed = [], [], 0, 0, 0
     first = 0
     for stop in _stretch_ends(occupied):
         piece = pd.DataFrame({time: centres[first:stop], **{c: v[first:stop] for c, v in table.items()}})
         filled, missed = _interpolate_empty(piece, occupied[first:stop], time, measured)
         empty += filled
         unread += missed
+        piece, dropped = _without_ragged_ends(piece, (time, *measured))
+        trimmed += dropped
         pieces.append(piece)
         following = _next_occupied(occupied, stop)
         if following is not None:
             gaps.append((float(stamps[index == stop - 1][-1]), float(stamps[index == following][0])))
             first = following
-    return Resampled(pieces=pieces, combined=int(len(stamps)), empty=empty, gaps=gaps, missed=unread)
+    return Resampled(pieces=pieces, combined=int(len(stamps)), empty=empty, gaps=gaps, missed=unread, trimmed=trimmed)
+
+
+def _without_ragged_ends(piece: pd.DataFrame, exempt: tuple[str, ...]) -> tuple[pd.DataFrame, int]:
+    """``piece`` without the periods at its ends that come before a column's first reading or after its last,
+    where there are at most :data:`GAP_PERIODS` of them (a longer silence is left for the loader to name), and
+    how many were dropped. The ``exempt`` columns (the time, the measured error, which may be read on some
+    periods alone) do not count."""
+    n = len(piece)
+    known = np.isfinite(piece.drop(columns=[c for c in exempt if c in piece.columns]).to_numpy(dtype=float))
+    read = known.any(axis=0)
+    if n <= 2 * GAP_PERIODS + 1 or not read.any():
+        return piece, 0
+    leads = np.argmax(known[:, read], axis=0)
+    tails = np.argmax(known[::-1, read], axis=0)
+    lead = int(max((k for k in leads if k <= GAP_PERIODS), default=0))
+    tail = int(max((k for k in tails if k <= GAP_PERIODS), default=0))
+    if not lead + tail:
+        return piece, 0
+    return piece.iloc[lead : n - tail].reset_index(drop=True), lead + tail
 
 
 def _stretch_ends(occupied: np.ndarray) -> list[int]:

@@ -82,13 +82,14 @@ TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", 
 
 TIME_NAME = re.compile(
     r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
-    r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
+    r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|ts|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
     r"[\u3040-\u30ff\u4e00-\u9fff]{0,8}?(?:时间|時間|时刻|時刻|日时|日時|日期|日付))"
     r"(?=$|[^a-z0-9])",
     re.IGNORECASE,
 )
 """Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``,
-``Relative Time``, ``Laufzeit [s]``, ``Seconds``, LabVIEW's ``X_Value``, ``时间``, ``経過時間``, ``日時``)."""
+``Relative Time``, ``Laufzeit [s]``, ``Seconds``, LabVIEW's ``X_Value``, a JSON log's ``ts``, ``时间``,
+``経過時間``, ``日時``)."""
 OF_DAY = re.compile(r"\bof[\s_-]+day\s*$", re.IGNORECASE)
 """A time of day (``Time of day``): its last word is no unit."""
 BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")\s*[\])]?)?\s*$", re.IGNORECASE)

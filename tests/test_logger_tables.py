@@ -292,17 +292,6 @@ def test_an_archive_of_several_files_or_a_broken_one_is_refused_in_one_line(tmp_
         load_run(broken, temps=TEMPS)
 
 
-@pytest.mark.parametrize("suffix", [".json", ".jsonl", ".ndjson"])
-def test_a_json_log_of_records_is_refused_in_one_line_with_what_to_do(tmp_path, capsys, suffix):
-    path = tmp_path / f"probe_accuracy{suffix}"
-    records = [{"ts": 1771948547.59 + 2.0 * k, "z": 0.01} for k in range(20)]
-    path.write_text("\n".join(json.dumps(record) for record in records) + "\n")
-    assert main(["fit", "--data", str(path), "--out", str(tmp_path / "out")]) == 2
-    (line,) = capsys.readouterr().err.strip().splitlines()
-    assert f"probe_accuracy{suffix}: a JSON log is not read" in line and "convert it to a CSV table" in line
-    assert not (tmp_path / "out").exists()
-
-
 @pytest.mark.parametrize("name", ["Date", "Datum/Zeit", "DateTime"])
 def test_a_date_column_of_spreadsheet_serial_days_is_read_in_seconds(tmp_path, frame, plain, name):
     path = tmp_path / "serial.csv"

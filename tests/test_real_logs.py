@@ -188,17 +188,18 @@ def test_a_sensor_missing_a_few_readings_is_interpolated_and_a_longer_silence_re
     holes = means.copy()
     holes.loc[40:42, "T1"] = np.nan  # three readings missed in a row: filled
     holes.loc[90, "T2"] = np.nan
-    holes.loc[0, "T2"] = np.nan  # before any reading of T2: nothing to fill it from
+    holes.loc[0, "T2"] = np.nan  # before any reading of T2: nothing to fill it from, the period is dropped
     binned = resample_frame(holes, time="time_s", period_s=60.0, label="holes", measured=("error_um",))
     (piece,) = binned.pieces
-    assert binned.missed == 4 and binned.empty == 0
-    assert "4 missed reading(s) of a column interpolated" in binned.note("holes", 60.0, len(piece))
+    assert binned.missed == 4 and binned.empty == 0 and binned.trimmed == 1
+    note = binned.note("holes", 60.0, len(piece))
+    assert "4 missed reading(s) of a column interpolated, 1 period(s) at the ends without a reading" in note
+    assert len(piece) == N - 1 and piece["T2"].notna().all()
     t = piece["time_s"].to_numpy()
-    for column, rows in (("T1", [40, 41, 42]), ("T2", [90])):
+    for column, rows in (("T1", [39, 40, 41]), ("T2", [89])):
         known = [rows[0] - 1, rows[-1] + 1]
         truth = np.interp(t[rows], t[known], piece[column].to_numpy()[known])  # a line between the neighbours
         np.testing.assert_allclose(piece[column].to_numpy()[rows], truth, rtol=0, atol=1e-12)
-    assert np.isnan(piece["T2"].iloc[0])
     path = tmp_path / "holes.csv"
     holes.iloc[1:].to_csv(path, index=False)
     assert cli("fit", "--data", path, "--temps", "T1,T2", "--p", "0", "--out", tmp_path) == 2
