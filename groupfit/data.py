@@ -44,8 +44,9 @@ from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
+from groupfit.record_kinds import record_kinds_cycle
 from groupfit.resample import jitter_note, resample_frame
-from groupfit.sampling import burst_cycle, clock_of
+from groupfit.sampling import clock_of, described_burst_cycle
 from groupfit.split_stamps import with_milliseconds
 from groupfit.timestamps import (
     epoch_to_seconds,
@@ -297,10 +298,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
     if bursts is not None:
-        note = (
-            f"{label}: the readings come in bursts of {bursts[0]} every {bursts[1]:g} s: each burst averaged into "
-            f"one sample (as --resample {bursts[1]:g} does); " + note.removeprefix(f"{label}: ")
-        )
+        note = f"{label}: {bursts[0]} (as --resample {bursts[1]:g} does); " + note.removeprefix(f"{label}: ")
     notes = tuple(n for n in (missed, glitched) if n) + (note,)
     if len(binned.pieces) == 1:
         return [
@@ -329,14 +327,15 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     ]
 
 
-def _bursts(frame: pd.DataFrame, time: str, label: str) -> tuple[int, float] | None:
-    """The readings per burst and the period of a log read in bursts (:func:`~groupfit.sampling.burst_cycle`),
-    its time column read in seconds in place; None when it is not one (or its time cannot be read)."""
+def _bursts(frame: pd.DataFrame, time: str, label: str) -> tuple[str, float] | None:
+    """What the note says and the period of a log read in bursts (:func:`~groupfit.sampling.burst_cycle`) or of
+    records of several kinds (:mod:`groupfit.record_kinds`), its time column read in seconds in place; None
+    when it is neither (or its time cannot be read)."""
     try:
         seconds = time_seconds(frame, time, label)
     except InputError:
         return None
-    return burst_cycle(seconds)
+    return described_burst_cycle(seconds) or record_kinds_cycle(frame, time, seconds)
 
 
 def _glitches_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions) -> tuple[pd.DataFrame, str | None]:

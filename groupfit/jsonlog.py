@@ -10,8 +10,8 @@ column ``spindle.T``; a list of objects that name themselves
 (``"atherms": [{"id": "C", "temp": 26.6}]``) gives ``atherms.C.temp``, other
 lists their positions (``T.0``, ``T.1``). Records of several kinds (a
 temperature record every 20 s, a probe reading every 2 s) leave each
-other's columns empty; ``--resample SECONDS`` averages them into common
-periods, as it does a logger's CSV.
+other's columns empty; the loader averages them onto the slowest kind's
+period (:mod:`groupfit.record_kinds`), as ``--resample`` does a logger's CSV.
 """
 
 from __future__ import annotations

@@ -101,4 +101,15 @@ def burst_cycle(time: np.ndarray) -> tuple[int, float] | None:
     return None
 
 
-__all__ = ["burst_cycle", "check_time", "clock_of"]
+def described_burst_cycle(time: np.ndarray) -> tuple[str, float] | None:
+    """What a note says of a log read in bursts and its period (:func:`burst_cycle`); None when it is not one."""
+    cycle = burst_cycle(time)
+    if cycle is None:
+        return None
+    return (
+        f"the readings come in bursts of {cycle[0]} every {cycle[1]:g} s: each burst averaged into one sample",
+        cycle[1],
+    )
+
+
+__all__ = ["burst_cycle", "check_time", "clock_of", "described_burst_cycle"]

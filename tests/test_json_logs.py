@@ -15,6 +15,7 @@ from test_switching_models import SYNTHETIC
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.errors import InputError
+from groupfit.record_kinds import record_kinds_cycle
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 
@@ -69,9 +70,11 @@ def test_nested_values_are_columns_named_by_their_path_and_a_list_by_the_names_i
     np.testing.assert_array_equal(run.error, frame["error_um"].to_numpy())
 
 
-def test_records_of_two_kinds_merge_into_period_means_with_resample(tmp_path):
-    """A temperature record every 20 s amid probe readings every 0.5 s (a printer's probe log): each period of
-    20 s averages its probe readings and takes its temperature record."""
+@pytest.mark.parametrize("resample", [20.0, None])
+def test_records_of_two_kinds_merge_into_period_means(tmp_path, resample):
+    """A temperature record every 20 s amid probe readings every 2 s (a printer's probe log): each period of
+    20 s averages its probe readings and takes its temperature record, with ``--resample 20`` or unasked (the
+    slowest kind's period)."""
     rng = np.random.default_rng(3)
     n_periods, period = 150, 20.0
     temps = 25.0 + np.cumsum(rng.normal(0, 0.05, (n_periods, 2)), axis=0)
@@ -79,19 +82,47 @@ def test_records_of_two_kinds_merge_into_period_means_with_resample(tmp_path):
     probe_means = []
     for k in range(n_periods):
         start = 1771948547.0 + k * period
-        z = 10.0 + 0.02 * k + rng.normal(0, 0.5, 9)
+        z = 10.0 + 0.02 * k + rng.normal(0, 0.5, 10)
         probe_means.append(z.mean())
-        lines += [{"ts": start + 8.0 + 0.5 * j, "z": value} for j, value in enumerate(z[:4])]
+        lines += [{"ts": start + 1.0 + 2.0 * j, "z": value} for j, value in enumerate(z[:5])]
         lines.append({"ts": start + 10.0, "btemp": temps[k, 0], "atherms": [{"id": "C", "temp": temps[k, 1]}]})
-        lines += [{"ts": start + 10.5 + 0.5 * j, "z": value} for j, value in enumerate(z[4:])]
-    lines.append({"ts": 1771948547.0 + n_periods * period + 10.0, "z": 99.0})  # a probe reading after the last record
+        lines += [{"ts": start + 11.0 + 2.0 * j, "z": value} for j, value in enumerate(z[5:])]
+    lines.append({"ts": 1771948547.0 + n_periods * period + 1.0, "z": 99.0})  # a probe reading after the last record
     path = tmp_path / "probe_log.jsonl"
     path.write_text("\n".join(json.dumps(line) for line in lines))
-    run = load_run(path, temps=["btemp", "atherms.C.temp"], error="z", resample=period)
+    run = load_run(path, temps=["btemp", "atherms.C.temp"], error="z", resample=resample)
     np.testing.assert_allclose(run.temps, temps, rtol=0, atol=1e-12)
     np.testing.assert_allclose(run.error, probe_means, rtol=0, atol=1e-12)
-    assert run.period == period
+    assert run.period == pytest.approx(period, rel=1e-9)
     assert any("1 period(s) at the ends without a reading of every column dropped" in note for note in run.notes)
+    kinds = "the rows are records of 2 kinds (z every 2 s; btemp, atherms.C.temp every 20 s)"
+    assert any(kinds in note for note in run.notes) == (resample is None)
+
+
+def kinds_table(n: int = 60, stray: int = 0, shared: bool = False) -> pd.DataFrame:
+    """A temperature record every 10 s amid two probe records (3 s and 6 s later); ``stray`` rows of a third
+    kind; the probe records carrying the temperature too when ``shared``."""
+    rows = []
+    for k in range(n):
+        rows.append({"time_s": 10.0 * k, "T1": 20.0 + 0.01 * k})
+        for lag in (3.0, 6.0):
+            rows.append({"time_s": 10.0 * k + lag, "z": 0.1 * k, **({"T1": 20.0} if shared else {})})
+    rows += [{"time_s": 10.0 * n + k, "spindle": 1.0} for k in range(stray)]
+    return pd.DataFrame(rows)
+
+
+def test_records_of_several_kinds_are_told_from_a_log_with_stray_rows_or_shared_values():
+    frame = kinds_table()
+    what, period = record_kinds_cycle(frame, "time_s", frame["time_s"].to_numpy())
+    assert period == 10.0 and "records of 2 kinds (z every 3 s; T1 every 10 s)" in what
+    alone = frame.dropna(subset=["T1"])  # one kind: a plain log
+    assert record_kinds_cycle(alone, "time_s", alone["time_s"].to_numpy()) is None
+    stray = kinds_table(stray=10)  # 10 of 190 rows of a third kind: covered 95 %, a kind of its own
+    assert record_kinds_cycle(stray, "time_s", stray["time_s"].to_numpy())[1] == 10.0
+    mixed = kinds_table(stray=3)  # 3 rows: too few to count, and the others still cover 98 %
+    assert record_kinds_cycle(mixed, "time_s", mixed["time_s"].to_numpy())[1] == 10.0
+    shared = kinds_table(shared=True)  # every row holds T1: kinds that share a value are no record kinds
+    assert record_kinds_cycle(shared, "time_s", shared["time_s"].to_numpy()) is None
 
 
 def test_a_longer_silence_at_an_end_is_named_not_dropped(tmp_path, frame):
