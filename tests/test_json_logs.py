@@ -10,7 +10,6 @@ import numpy as np
 import pandas as pd
 import pytest
 from support import same_run
-from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.data import load_run
@@ -20,22 +19,13 @@ from groupfit.record_kinds import record_kinds_cycle
 TEMPS = ["T1", "T2", "T3", "T4"]
 
 
-@pytest.fixture(scope="module")
-def plain():
-    return load_run(SYNTHETIC, temps=TEMPS)
-
-
-@pytest.fixture(scope="module")
-def frame():
-    return pd.read_csv(SYNTHETIC)
-
-
 def records(frame: pd.DataFrame) -> list[dict]:
     return json.loads(frame.to_json(orient="records"))
 
 
 @pytest.mark.parametrize("form", ["lines", "array", "columns", "held"])
-def test_a_json_log_reads_as_the_plain_table(tmp_path, frame, plain, form):
+def test_a_json_log_reads_as_the_plain_table(tmp_path, synthetic, form):
+    frame, plain = synthetic
     if form == "lines":
         path = tmp_path / "log.jsonl"
         path.write_text("\n".join(json.dumps(record) for record in records(frame)) + "\n")
@@ -51,7 +41,8 @@ def test_a_json_log_reads_as_the_plain_table(tmp_path, frame, plain, form):
     same_run(load_run(path, temps=TEMPS), plain)
 
 
-def test_nested_values_are_columns_named_by_their_path_and_a_list_by_the_names_its_objects_give(tmp_path, frame):
+def test_nested_values_are_columns_named_by_their_path_and_a_list_by_the_names_its_objects_give(tmp_path, synthetic):
+    frame = synthetic[0]
     nested = [
         {
             "time_s": row.time_s,
@@ -125,7 +116,8 @@ def test_records_of_several_kinds_are_told_from_a_log_with_stray_rows_or_shared_
     assert record_kinds_cycle(shared, "time_s", shared["time_s"].to_numpy()) is None
 
 
-def test_a_longer_silence_at_an_end_is_named_not_dropped(tmp_path, frame):
+def test_a_longer_silence_at_an_end_is_named_not_dropped(tmp_path, synthetic):
+    frame = synthetic[0]
     sparse = frame.copy()
     sparse.loc[sparse.index[-5:], "T2"] = np.nan  # T2 stops five periods before the end
     path = tmp_path / "stopped.csv"
