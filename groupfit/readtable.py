@@ -84,7 +84,8 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     note_read(path)
     compressed = path.suffix.lower() in COMPRESSED
     stem = Path(path.stem).stem if compressed else path.stem
-    kind = "CSV" if compressed else TABLE_SUFFIXES.get(path.suffix.lower(), "CSV")
+    kind = TABLE_SUFFIXES.get((Path(path.stem) if compressed else path).suffix.lower(), "CSV")
+    kind = "CSV" if compressed and kind != "JSON" else kind  # a compressed text table or JSON log
     header = None
     try:
         if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
@@ -96,7 +97,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
         elif kind == "TDMS":
             frame = read_tdms(path, label)
         elif kind == "JSON":
-            frame = read_json_log(_text_content(path, label, compressed=False), label)
+            frame = read_json_log(_text_content(path, label, compressed=compressed), label)
         elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"

@@ -4,6 +4,7 @@ written as a plain CSV table, and period means taken by hand."""
 
 from __future__ import annotations
 
+import gzip
 import json
 
 import numpy as np
@@ -23,12 +24,16 @@ def records(frame: pd.DataFrame) -> list[dict]:
     return json.loads(frame.to_json(orient="records"))
 
 
-@pytest.mark.parametrize("form", ["lines", "array", "columns", "held"])
+@pytest.mark.parametrize("form", ["lines", "array", "columns", "held", "gzip"])
 def test_a_json_log_reads_as_the_plain_table(tmp_path, synthetic, form):
     frame, plain = synthetic
-    if form == "lines":
+    if form in ("lines", "gzip"):
+        text = "\n".join(json.dumps(record) for record in records(frame)) + "\n"
         path = tmp_path / "log.jsonl"
-        path.write_text("\n".join(json.dumps(record) for record in records(frame)) + "\n")
+        path.write_text(text)
+        if form == "gzip":
+            path = tmp_path / "log.jsonl.gz"
+            path.write_bytes(gzip.compress(text.encode()))
     else:
         if form == "array":
             document = records(frame)
