@@ -149,6 +149,28 @@ def test_an_error_whose_every_reading_is_beyond_the_plausible_range_is_refused_w
     assert code == 2 and not (tmp_path / "o").exists() and len(err.splitlines()) == 1
     first = frame["mcu_pos_z"].iloc[0] * STEP_UM
     assert f"every reading is beyond the plausible ±100000 µm (row 1: {first:g} µm)" in err
+    spread = np.ptp(frame["mcu_pos_z"].to_numpy() * STEP_UM)  # the drift, within any plausible range
+    assert f"while they span only {spread:.4g} µm: a position logged from the machine's zero" in err
+    assert "log each reading less the run's first" in err
+    wild = frame.assign(mcu_pos_z=frame["mcu_pos_z"] * 1e4)  # readings that spread beyond the range too
+    wild.to_csv(tmp_path / "wild.csv", index=False)
+    wild_fit = [
+        *fit[:2],
+        str(tmp_path / "wild.csv"),
+        *fit[3:],
+        "--resample",
+        f"{period:g}",
+        "--out",
+        str(tmp_path / "o"),
+    ]
+    assert main(wild_fit) == 2
+    err = capsys.readouterr().err.strip()
+    assert "or name the thermal error's column" in err and "machine's zero" not in err
+    marked = frame.assign(mcu_pos_z=frame["mcu_pos_z"] * 0 + 3.9e37)  # a marker, not a position: no drift at all
+    marked.to_csv(tmp_path / "wild.csv", index=False)
+    assert main(wild_fit) == 2
+    err = capsys.readouterr().err.strip()
+    assert "or name the thermal error's column" in err and "machine's zero" not in err
     assert (
         main([*fit, "--resample", f"{period:g}", "--range-error", "1e6", "--out", str(tmp_path / "o"), "--quiet"]) == 0
     )
