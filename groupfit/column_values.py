@@ -283,19 +283,18 @@ POSITION_LIMIT_UM = 1e8
 def _refuse_error_outside(values: np.ndarray, column: str, label: str, options: LoadOptions) -> None:
     """Refuse an error column none of whose readings (µm) is plausible: nothing would be left to take as missed."""
     limit = options.error_limit
-    finite = values[np.isfinite(values)]
-    row = int(np.flatnonzero(np.isfinite(values))[0])
+    rows = np.flatnonzero(np.isfinite(values))
+    finite, row = values[rows], int(rows[0])
+    beyond = f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
     spread = float(np.ptp(finite))
     if 0.0 < spread < limit and np.max(np.abs(finite)) <= POSITION_LIMIT_UM:  # drift plausible, level not
         raise InputError(
-            f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
-            f"{values[row]:g} µm), while they span only {spread:.4g} µm: a position logged from the machine's "
-            "zero, not a thermal error; log each reading less the run's first (the drift since the start), or "
-            "widen the range with --range-error MAX"
+            f"{beyond}{values[row]:g} µm), while they span only {spread:.4g} µm: a position logged from the "
+            "machine's zero, not a thermal error; log each reading less the run's first (the drift since the "
+            "start), or widen the range with --range-error MAX"
         )
     raise InputError(
-        f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
-        f"{values[row]:g} µm); widen the range with --range-error MAX, or name the thermal error's column"
+        f"{beyond}{values[row]:g} µm); widen the range with --range-error MAX, or name the thermal error's column"
     )
 
 

@@ -77,7 +77,7 @@ def _records(document: Any, label: str) -> list[dict]:
         columns = {key: value for key, value in document.items() if isinstance(value, list)}
         lengths = {len(value) for value in columns.values()}
         scalars = all(not isinstance(v, (dict, list)) for value in columns.values() for v in value)
-        if len(columns) >= 2 and len(lengths) == 1 and scalars and columns == document:
+        if len(document) == len(columns) >= 2 and len(lengths) == 1 and scalars:
             (n,) = lengths
             return [{key: value[i] for key, value in columns.items()} for i in range(n)]
         arrays = [value for value in columns.values() if value and all(isinstance(item, dict) for item in value)]
@@ -94,8 +94,7 @@ def _table(records: list[dict], label: str) -> pd.DataFrame:
     rows = [_flat(record) for record in records]
     if not rows:
         raise InputError(f"{label}: the file holds no records; one JSON record per sample is needed")
-    frame = pd.DataFrame(rows)
-    return frame.reindex(columns=list(dict.fromkeys(key for row in rows for key in row)))
+    return pd.DataFrame(rows)  # columns in the order they first appear, as pandas lays out a list of dicts
 
 
 def _flat(value: Any, path: str = "", into: dict | None = None) -> dict:

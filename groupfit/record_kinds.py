@@ -29,7 +29,7 @@ def record_kinds_cycle(frame: pd.DataFrame, time: str, seconds: np.ndarray) -> t
     """
     values = frame.drop(columns=[time]).apply(pd.to_numeric, errors="coerce")
     filled = values.notna().to_numpy()
-    if filled.shape[1] < 2 or len(seconds) != len(frame):
+    if filled.shape[1] < 2:
         return None
     patterns, rows = np.unique(filled, axis=0, return_inverse=True)
     rows = rows.ravel()
