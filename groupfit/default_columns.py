@@ -41,11 +41,11 @@ DEFAULT_ERROR = "error_um"
 ERROR_NAME = re.compile(
     r"^\s*(?:[xyz][\s_-]?)?(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|"
     r"abweichung|verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])"
-    r"|^\s*[^\W\d_]{0,8}?(?:误差|誤差|位移|变形|変形|变位|変位|偏移|漂移|伸长|伸び)",
+    r"|^\s*(?:[^\W\d_]{1,8}\s)?[^\W\d_]{0,8}?(?:误差|誤差|位移|变形|変形|变位|変位|偏移|漂移|伸长|伸び|오차|변위|변형)",
     re.IGNORECASE,
 )
 TEMPERATURE_NAME = re.compile(
-    r"°[CF]|℃|℉|温度|気温|deg[\s_]?[CF]\b|[\[(（][CFK][\])）]|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d",
+    r"°[CF]|℃|℉|温度|気温|온도|기온|deg[\s_]?[CF]\b|[\[(（][CFK][\])）]|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d",
     re.IGNORECASE,
 )
 """A name that marks a temperature column (in °C, °F or K)."""

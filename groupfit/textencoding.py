@@ -4,6 +4,9 @@ Tried in this order:
 
 * the Unicode form a byte-order mark names (UTF-8, UTF-16, UTF-32);
 * UTF-8;
+* Korean (CP949, the EUC-KR that Excel and loggers write on a Korean
+  Windows: ``시간(초),온도1(℃)``), when the bytes outside ASCII read as
+  Hangul words and no Chinese character (:func:`korean`);
 * a Chinese or Japanese code page, when the bytes outside ASCII read as one
   (:func:`east_asian`): GBK/GB 18030, which Excel and most data-acquisition
   programs on a Chinese Windows write (``时间,温度1(℃)``), Shift-JIS (CP932),
@@ -33,6 +36,8 @@ BYTE_ORDER_MARKS = (
 """UTF-32 before UTF-16: the UTF-32 little-endian mark begins with UTF-16's."""
 WESTERN = ("cp1252", "latin-1")
 """Tried after UTF-8 and the East Asian code pages, in this order; Latin-1 reads any byte."""
+KOREAN = "cp949"
+"""Korean Windows' code page: EUC-KR and the syllables beyond it."""
 EAST_ASIAN = ("gb2312", "cp932", "cp950", "gb18030")
 """GB 2312 (both bytes of every character from 0xA1: simplified Chinese proper) before Shift-JIS, whose
 common kanji begin below 0xA1, and Big5, whose second bytes are often below 0xA1; GB 18030 (GBK's
@@ -42,6 +47,30 @@ CJK_WORD = re.compile(r"[\u3040-\u30ff\u3400-\u4dbf\u4e00-\u9fff]{2,}")
 """Two Chinese characters, kanji or kana in a row: a word of a Chinese or Japanese header."""
 UNIT_SIGNS = re.compile(r"[℃℉μ（）［］：～]")
 """Full-width signs a header marks a unit with (``T1(℃)``, ``位移（μm）``): no Western byte pair reads as one."""
+HANGUL = re.compile(r"[\uac00-\ud7a3]")
+HANGUL_WORD = re.compile(r"[\uac00-\ud7a3]{2,}")
+NOT_KOREAN = re.compile(r"[\u3040-\u30ff\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\uff61-\uff9f\ue000-\uf8ff]")
+"""Kana, Chinese characters (a Korean log writes none), half-width katakana and private use: a misread."""
+COMMON_HANGUL = frozenset(
+    "가각간갈감값강개거건검게겨격결경계고곡골공과관광교구국군굴궤귀규균그극근글금급기긴길김깊"
+    "나난날남내냉너널네녀년노높누는늘능니님"
+    "다단달담답당대더던데도독돌동되된두둘드득들등디따때또뜨"
+    "라락란람랑래량러럼레력련렬령로록론료루류률르른를름리린립"
+    "마막만많말맞매머먼메며면명모목무문물미민밀"
+    "바박반받발방배백버번벌범법베벨변별병보복본볼부북분불브블비빈빌빛"
+    "사산살상새색생서석선설섬성세센셀소속손송쇄수숙순술스습승시식신실심"
+    "아안알압앙앞애액야약양어억언얼업없에엔여역연열염영예오온올완왕외요용우운울움원월웨위유율으은을음응의이익인일임입있"
+    "자작잔장재저적전절점접정제조족존종좌주준줄중즈즉증지직진질집짜째"
+    "차착찰참창채책처척천철첨청체초총최추축출충취측층치칙침칩"
+    "카칼커컨케켈코콘콜쿨크큰클키"
+    "타탄탈태터털테텔토톤통투튜트특틀티팅"
+    "파판팔패퍼펌페펜편평포폭표푸품프플피핀필"
+    "하학한할함합항해핵행향허헤현형호혹혼화확환활회획효후휴흐흡흰히"
+)
+"""Hangul syllables that make up most Korean words, and every word of a log's header (``시간``, ``온도``,
+``변위``, ``주축``, ``냉각수``, ``센서``): about 400 of EUC-KR's 2350."""
+COMMON_SHARE = 0.8
+"""The least share of a text's Hangul syllables that are common for it to read as Korean."""
 MISREAD = re.compile(r"[\uff61-\uff9f\ue000-\uf8ff]")
 """Half-width katakana, what a Chinese text read as Shift-JIS turns into, and characters of private use, what
 Big5 read as GB 18030 turns into: never what a header is written in."""
@@ -73,15 +102,31 @@ def decode(content: bytes) -> str:
         return content.decode("utf-8")
     except UnicodeDecodeError:
         pass
-    text = east_asian(content)
-    if text is not None:
-        return text
+    for guess in (korean, east_asian):
+        text = guess(content)
+        if text is not None:
+            return text
     for encoding in WESTERN:
         try:
             return content.decode(encoding)
         except UnicodeDecodeError:
             continue
     raise AssertionError("latin-1 decodes every byte")
+
+
+def korean(content: bytes) -> str | None:
+    """The text read as Korean (:data:`KOREAN`), None when it does not read as Korean (module docstring)."""
+    if not HIGH_BYTE.search(content):
+        return None
+    try:
+        text = content.decode(KOREAN)
+    except UnicodeDecodeError:
+        return None
+    syllables = HANGUL.findall(text)
+    if NOT_KOREAN.search(text) or not HANGUL_WORD.search(text):
+        return None
+    common = sum(syllable in COMMON_HANGUL for syllable in syllables)
+    return text if common >= COMMON_SHARE * len(syllables) else None
 
 
 def east_asian(content: bytes) -> str | None:
@@ -101,4 +146,4 @@ def east_asian(content: bytes) -> str | None:
     return None
 
 
-__all__ = ["BYTE_ORDER_MARKS", "decode", "east_asian", "looks_binary"]
+__all__ = ["BYTE_ORDER_MARKS", "decode", "east_asian", "korean", "looks_binary"]

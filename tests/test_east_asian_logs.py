@@ -1,4 +1,4 @@
-"""Logs written on a Chinese or Japanese system: GBK or Shift-JIS bytes, names in Chinese or Japanese."""
+"""Logs written on a Chinese, Japanese or Korean system: GBK, Shift-JIS or CP949 bytes, names in their language."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from groupfit.textencoding import decode
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 CHINESE = {"time_s": "时间(s)", "T1": "主轴温度1(℃)", "T2": "主轴温度2(℃)", "T3": "床身温度(℃)", "T4": "立柱温度(℃)"}
+KOREAN = {"time_s": "경과시간(초)", "T1": "주축 온도1(℃)", "T2": "주축 온도2(℃)", "T3": "베드 온도", "T4": "칼럼 온도"}
 JAPANESE = {"time_s": "経過時間[s]", "T1": "主軸温度1(℃)", "T2": "主軸温度2(℃)", "T3": "ベッド温度", "T4": "コラム温度"}
 
 
@@ -33,6 +34,11 @@ def header(names) -> str:
         (["时间", "溫度", "熱誤差"], "gbk"),  # traditional characters in GBK: beyond GB 2312
         (["时间(s)", "温度1(℃)"], "utf-8"),
         (["時間", "温度"], "utf-16"),
+        (["시간(초)", "온도1(℃)", "Z축 열변위(μm)"], "cp949"),
+        (["경과시간", "스핀들 온도", "베드 온도", "냉각수 온도", "실내온도"], "euc-kr"),
+        (["일시", "모터 온도", "X축 변위"], "cp949"),
+        (["传感器1", "传感器2"], "gbk"),  # reads as Hangul in EUC-KR (눈먁포), of syllables no Korean word uses
+        (["长度", "编号", "测点"], "gbk"),  # the same
         (["Température (°C)", "Größe T2 [°C]", "Verlagerung [µm]"], "cp1252"),
         (["Außentemperatur ÄÖÜ (°C)", "Öl ÖÄ", "T1 °C"], "cp1252"),
         (["Temp. 1 [°F]", "ΔT"], "utf-8"),
@@ -134,3 +140,37 @@ def test_a_taiwanese_log_in_big5_named_as_its_program_names_it_gives_the_plain_r
     run = load_run(path, error="ch3(um)", time_is_default=True)
     assert run.time_name == "時間(s)" and run.temp_names == ("t1(°C)", "t2(°C)", "t3(°C)", "t4(°C)")
     same_run(run, plain)
+
+
+def test_a_korean_log_in_cp949_is_read_on_the_columns_its_names_mark_and_gives_the_plain_run(tmp_path, synthetic):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    names = {**KOREAN, "error_um": "Z축 열변위(μm)"}
+    frame.rename(columns=names).to_csv(path, index=False, encoding="cp949")
+    run = load_run(path, time_is_default=True, error_is_default=True)
+    assert run.temp_names == tuple(KOREAN[t] for t in TEMPS)
+    assert (run.time_name, run.error_name) == ("경과시간(초)", "Z축 열변위(μm)")
+    same_run(run, plain)
+
+
+@pytest.mark.parametrize("time_name, per_second", [("시간(분)", 1 / 60), ("경과 시간 [초]", 1.0)])
+def test_a_korean_date_and_units_of_time_are_read(tmp_path, synthetic, time_name, per_second):
+    frame, plain = synthetic
+    path = tmp_path / "log.csv"
+    frame.assign(time_s=frame["time_s"] * per_second).rename(columns={"time_s": time_name}).to_csv(
+        path, index=False, encoding="cp949"
+    )
+    run = load_run(path, temps=TEMPS, time_is_default=True)
+    assert run.time_name == time_name
+    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
+    stamps = pd.Timestamp("2026-03-02 08:00:00") + pd.to_timedelta(frame["time_s"], unit="s")
+    frame.assign(time_s=stamps.dt.strftime("%Y-%m-%d %H:%M:%S")).rename(columns={"time_s": "일시"}).to_csv(
+        path, index=False, encoding="cp949"
+    )
+    run = load_run(path, temps=TEMPS, time_is_default=True)
+    np.testing.assert_allclose(run.time, plain.time - plain.time[0], atol=1e-9)
+
+
+def test_the_air_named_in_korean_is_the_ambient():
+    assert all(is_ambient_name(name) for name in ("실온", "실내온도", "주변 온도(℃)", "외기온도"))
+    assert not any(is_ambient_name(name) for name in ("주축 온도", "베드 온도", "모터 온도"))
