@@ -23,6 +23,7 @@ from groupfit.default_columns import (
     scaled_name,
     temperature_like_columns,
 )
+from groupfit.error_start import from_start, is_from_start
 from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS
 
@@ -235,6 +236,14 @@ def check_range(
     outside = np.flatnonzero((values < low) | (values > high))
     if outside.size:
         row = int(outside[0])
+        finite = values[np.isfinite(values)]
+        position = outside.size == finite.size and 0.0 < np.ptp(finite) < high - low
+        if option == "--range-error MAX" and position and np.max(np.abs(finite)) <= POSITION_LIMIT_UM:
+            raise InputError(
+                f"{label}: column '{column}': every reading is beyond the plausible range {low:g}…{high:g} {unit} "
+                f"(row {row + 1}: {values[row]:g} {unit}), while they span only {np.ptp(finite):.4g} {unit}: "
+                f"{_from_zero(column)}"
+            )
         raise InputError(
             f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "
             f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, widen the range with {option}, "
@@ -255,7 +264,7 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
     if temps is None:
         temps = default_temperature_columns(frame.columns, exclude=(options.time, options.error, options.ambient))
     bounds = {t: options.temp_range for t in temps if options.temp_range is not None}
-    if options.error is not None and options.error_limit is not None:
+    if options.error is not None and options.error_limit is not None and not is_from_start(options.error):
         limit = options.error_limit / abs(length_unit(options.error)[1])
         bounds[options.error] = (-limit, limit)
     counts = {}
@@ -276,6 +285,14 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
     return frame, f"{label}: readings outside the plausible range taken as missed ({listed})"
 
 
+def _from_zero(column: str) -> str:
+    """What an error column of positions logged from the machine's zero is, and what to do."""
+    return (
+        "a position logged from the machine's zero, not a thermal error; read each reading less the run's first "
+        f"(the drift since the start) with --error '{column}-start', or widen the range with --range-error MAX"
+    )
+
+
 POSITION_LIMIT_UM = 1e8
 """The largest position (µm, 100 m) a machine's axis logs; beyond it a reading is a marker (``3e38``), not one."""
 
@@ -288,11 +305,7 @@ def _refuse_error_outside(values: np.ndarray, column: str, label: str, options: 
     beyond = f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
     spread = float(np.ptp(finite))
     if 0.0 < spread < limit and np.max(np.abs(finite)) <= POSITION_LIMIT_UM:  # drift plausible, level not
-        raise InputError(
-            f"{beyond}{values[row]:g} µm), while they span only {spread:.4g} µm: a position logged from the "
-            "machine's zero, not a thermal error; log each reading less the run's first (the drift since the "
-            "start), or widen the range with --range-error MAX"
-        )
+        raise InputError(f"{beyond}{values[row]:g} µm), while they span only {spread:.4g} µm: {_from_zero(column)}")
     raise InputError(
         f"{beyond}{values[row]:g} µm); widen the range with --range-error MAX, or name the thermal error's column"
     )
@@ -399,6 +412,8 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
         if np.isnan(error_values).all():
             raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
     error_values = error_values * length_unit(error)[1]
+    if is_from_start(error):
+        error_values = from_start(error_values)
     measured = error_values[np.isfinite(error_values)]
     if require_error and measured.size > 1 and np.ptp(measured) == 0.0:
         raise InputError(

@@ -11,7 +11,9 @@ that the derived inputs, a reference taken at the start and the run-time
 switching carry their history into it. Only the later run's rows are scored.
 A log split into more files chains. ``diagnose``, ``replay`` and ``compare``
 use this; ``--continues`` takes a run as the rest of the one before it whatever
-its time stamps.
+its time stamps. An error read from the run's start (``--error COLUMN-start``,
+:mod:`groupfit.error_start`) is read in the rest from the recording's start
+(:func:`picked_up`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ import numpy as np
 import pandas as pd
 
 from groupfit.data import PERIOD_TOLERANCE, Run
+from groupfit.default_columns import length_unit
+from groupfit.error_start import is_from_start
 from groupfit.errors import InputError
 from groupfit.features import Feature
 from groupfit.pickup import run_picks_up
@@ -90,6 +94,33 @@ def restamped(run: Run, previous: Run) -> Run:
     return replace(run, time=time, frame=frame, clock_origin_s=previous.clock_origin_s)
 
 
+def logged_error(run: Run) -> np.ndarray:
+    """The run's error as logged (µm, scaled by its name, not taken from its start)."""
+    values = pd.to_numeric(run.frame[run.error_name], errors="coerce").to_numpy(dtype=float)
+    return values * length_unit(run.error_name)[1]
+
+
+def zero_of(run: Run) -> float | None:
+    """The reading (µm, as logged) the run's error is taken from; None when it is not read from a start
+    (``COLUMN-start``)."""
+    if run.error is None or not is_from_start(run.error_name) or run.error_name not in run.frame.columns:
+        return None
+    logged = logged_error(run)
+    if logged.shape != run.error.shape:
+        return None
+    both = np.isfinite(logged) & np.isfinite(run.error)
+    return float(np.median(logged[both] - run.error[both])) if both.any() else None
+
+
+def picked_up(run: Run, zero: float | None) -> Run:
+    """``run`` with its error taken from ``zero`` (µm, as logged: the first reading of the recording it is the
+    rest of) instead of from its own first reading; itself when its error is not read from a start."""
+    own = zero_of(run)
+    if zero is None or own is None:
+        return run
+    return replace(run, error=run.error + (own - zero))
+
+
 def preceding_run(run: Run, candidates: Sequence[Run]) -> Run | None:
     """The run among ``candidates`` that ``run`` continues, if any."""
     return next((previous for previous in candidates if continues(previous, run)), None)
@@ -137,7 +168,7 @@ def with_histories(
                     f"{run.source}: --continues, but it cannot be the rest of {history.name}: its columns, "
                     "inputs or sampling period differ; leave --continues out for a separate run"
                 )
-            run = restamped(run, history)
+            run = picked_up(restamped(run, history), zero_of(history))
             notes.append(
                 f"{run.name} is taken to continue {history.name} (--continues), whatever its time stamps: judged "
                 f"with {history.name} in front, so that its derived inputs and run-time state carry their "
@@ -145,6 +176,7 @@ def with_histories(
             )
             history = joined_of[id(history)]
         elif history is not None:
+            run = picked_up(run, zero_of(history))
             if clock_continues(history, run):
                 how = "its first time stamp one sampling period after the last"
             else:

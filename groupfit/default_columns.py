@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.columns import is_ambient_name, is_counter
+from groupfit.error_start import logged_spec
 from groupfit.errors import InputError
 from groupfit.readtable import datetimes_to_seconds
 from groupfit.setting_levels import is_setting
@@ -64,14 +65,17 @@ per unit as logged (:mod:`groupfit.error_scale`)."""
 
 
 def scaled_name(name: str | None) -> tuple[str, float] | None:
-    """``(column, factor)`` of a name that asks for a column read with a factor (``z*2.5``); None otherwise."""
+    """``(column, factor)`` of a name that asks for a column read with a factor (``z*2.5``, also
+    ``z*2.5-start``, :mod:`groupfit.error_start`); None otherwise."""
+    name = logged_spec(name) or name
     match = SCALED_NAME.match(str(name)) if name is not None else None
     return (match.group("column"), float(match.group("factor"))) if match else None
 
 
 def length_unit(name: str | None) -> tuple[str, float]:
     """The length unit a column's name ends in and its µm (``"µm", 1.0`` when it names none); a name read with
-    a factor (``z*2.5``, :func:`scaled_name`) gives ``("×2.5", 2.5)``."""
+    a factor (``z*2.5``, :func:`scaled_name`) gives ``("×2.5", 2.5)``; ``-start`` after either is read past."""
+    name = logged_spec(name) or name
     scaled = scaled_name(name)
     if scaled is not None:
         return f"×{scaled[1]:g}", scaled[1]

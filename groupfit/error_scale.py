@@ -21,6 +21,7 @@ from typing import Sequence
 import pandas as pd
 
 from groupfit.default_columns import named_length_unit, scaled_name
+from groupfit.error_start import logged_spec
 from groupfit.errors import InputError
 
 
@@ -48,13 +49,14 @@ def with_scaled_error(
     column, _ = scaled_values(frame, error, label)
     if column == error:
         return frame
+    factor = scaled_name(error) is not None
     if column not in frame.columns:
         if not required:
             return frame
         available = ", ".join(map(str, frame.columns))
         raise InputError(f"{label}: --error '{error}': column '{column}' not found; the columns are: {available}")
     named = named_length_unit(column)
-    if named is not None or column in lengths:
+    if factor and (named is not None or column in lengths):
         how = "given a unit of length by the row of units" if column in lengths else f"in {named} by its name"
         raise InputError(
             f"{label}: --error '{error}': column '{column}' is {how} and read as µm without a factor; "
@@ -68,8 +70,10 @@ def scaled_values(frame: pd.DataFrame, name: str | None, label: str) -> tuple[st
     column of that name, ``(name, 1.0)`` otherwise (its unit, if any, is the caller's); a factor of 0 or not
     finite refused."""
     scaled = scaled_name(name)
-    if scaled is None or name in frame.columns:
+    if name in frame.columns:
         return name, 1.0
+    if scaled is None:
+        return logged_spec(name) or name, 1.0
     column, factor = scaled
     check_factor(name, column, factor, label)
     return column, factor

@@ -6,7 +6,9 @@ the next run then differs from the modelling run's by a constant far larger
 than any thermal drift, and the compensation's residual is that constant. The
 RMS a replay reports stays what the log says (a probe check does not mend it:
 its innovation gate rejects so large a correction as a bad reading);
-:func:`zero_offset` adds a note that names the constant and what to do.
+:func:`zero_offset` adds a note that names the constant and what to do: read
+each run's error from its first reading, ``--error 'COLUMN-start'``
+(:mod:`groupfit.error_start`).
 """
 
 from __future__ import annotations
@@ -34,8 +36,8 @@ def zero_offset(residual: np.ndarray | None, expected_rms_um: float | None) -> t
     note = (
         f"the residual is nearly a constant {mean:.4g} µm (its spread {spread:.3g} µm), {times:.0f}× the expected "
         "next-run RMS: this run's error seems measured from another zero than the modelling run's (a probe's "
-        "position after re-homing, a sensor re-mounted); measure both runs' error from the same zero (e.g. each "
-        "from its first reading) and refit; a probe check rejects so large a correction as a bad reading"
+        "position after re-homing, a sensor re-mounted); read both runs' error from their first readings "
+        "(fit with --error 'COLUMN-start') and refit; a probe check rejects so large a correction as a bad reading"
     )
     return {"constant_offset_um": mean}, [note]
 

@@ -27,8 +27,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.continuation import clock_runs_on
+from groupfit.continuation import clock_runs_on, zero_of
 from groupfit.data import PERIOD_TOLERANCE, Run
+from groupfit.error_start import ZERO_KEY
 from groupfit.io import file_sha256
 from groupfit.pickup import clock_starts_again, end_row, picks_up
 from groupfit.readtable import CLOCK_ORIGIN
@@ -66,6 +67,9 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
         }
         if own[0].clock_origin_s is not None:
             entry[CLOCK_ORIGIN] = float(own[0].clock_origin_s)
+        zero = zero_of(own[-1])  # the part a next file goes on from
+        if zero is not None:
+            entry[ZERO_KEY] = zero
         last, steps, limit = end_row(own[-1])
         if np.isfinite(limit):
             entry.update({LAST_READINGS: last, READING_STEPS: steps, PICKUP_LIMIT: limit})

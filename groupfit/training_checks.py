@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
+from groupfit.error_start import ZERO_KEY
 from groupfit.features import Feature
 
 
@@ -84,6 +85,15 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str], n_groups: i
     return None
 
 
+def _numbers_problem(entry: Mapping[str, Any], where: str) -> str | None:
+    """What is wrong with an entry's optional numbers: its clock's origin and its error's zero."""
+    if "clock_origin_s" in entry and not is_number(entry["clock_origin_s"]):
+        return f"{where}.clock_origin_s must be the first row's date-time in seconds since 1970"
+    if ZERO_KEY in entry and not is_number(entry[ZERO_KEY]):
+        return f"{where}.{ZERO_KEY} must be the error's first reading as logged (µm)"
+    return None
+
+
 def recordings_problem(training: Mapping[str, Any]) -> str | None:
     """What is wrong with ``training.recordings`` (None: absent or well formed)."""
     entries = training.get(RECORDINGS_KEY)
@@ -108,8 +118,9 @@ def recordings_problem(training: Mapping[str, Any]) -> str | None:
             return f"{where}: first_time_s, last_time_s and period_s must be finite numbers"
         if not (clock[0] <= clock[1] and clock[2] > 0):
             return f"{where}: first_time_s <= last_time_s and period_s > 0 are needed"
-        if "clock_origin_s" in entry and not is_number(entry["clock_origin_s"]):
-            return f"{where}.clock_origin_s must be the first row's date-time in seconds since 1970"
+        numbers = _numbers_problem(entry, where)
+        if numbers:
+            return numbers
         for key, least in ((LAST_READINGS, -math.inf), (READING_STEPS, 0.0)):
             readings = entry.get(key, {})
             if not isinstance(readings, Mapping) or not all(

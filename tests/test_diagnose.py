@@ -246,3 +246,10 @@ def test_candidates_that_score_alike_keep_the_order_they_were_tried_in():
     assert within_one_se(tried[1], tried[0]) and within_one_se(tried[0], tried[1])
     worse = candidate("T_oil", 0.4, (1.5, 2.6, 3.4))
     assert not within_one_se(worse, tried[0])
+
+
+def test_a_fold_the_candidate_leaves_as_it_was_but_for_rounding_is_not_counted_as_improved():
+    feature = Feature("T_amb", "lowpass", tau_s=3600.0)
+    ratios = (1.0 - 4e-16, 0.93, 1.0 + 4e-16, 1.0, 0.999)  # a fit left as it was moves by the last digits alone
+    candidate = Candidate(feature, score=0.01, coefficient=1.0, explained_rms_um=0.1, fold_ratios=ratios)
+    assert candidate.n_folds_improved == 2 and candidate.folds_improved == pytest.approx(2 / 5)

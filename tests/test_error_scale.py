@@ -151,7 +151,7 @@ def test_an_error_whose_every_reading_is_beyond_the_plausible_range_is_refused_w
     assert f"every reading is beyond the plausible ±100000 µm (row 1: {first:g} µm)" in err
     spread = np.ptp(frame["mcu_pos_z"].to_numpy() * STEP_UM)  # the drift, within any plausible range
     assert f"while they span only {spread:.4g} µm: a position logged from the machine's zero" in err
-    assert "log each reading less the run's first" in err
+    assert "less the run's first (the drift since the start) with --error 'mcu_pos_z*2.5-start'" in err
     wild = frame.assign(mcu_pos_z=frame["mcu_pos_z"] * 1e4)  # readings that spread beyond the range too
     wild.to_csv(tmp_path / "wild.csv", index=False)
     wild_fit = [

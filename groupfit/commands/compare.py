@@ -9,7 +9,7 @@ from pathlib import Path
 from groupfit.commands import common, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
-from groupfit.continuation import with_histories
+from groupfit.continuation import picked_up, with_histories, zero_of
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
 from groupfit.heldout.reference_choice import default_reference_choice
@@ -156,6 +156,7 @@ def run_compare(args: argparse.Namespace) -> int:
     modelling = with_reference(modelling, reference)
     validation = [with_reference(run, reference) for run in validation]
     joined, skipped, notes = with_histories(validation, [modelling], assume_continued=args.continues)
+    validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
     histories = {run.name: whole.temps[:rows] for run, whole, rows in zip(validation, joined, skipped) if rows}
     for note in notes:
         print(

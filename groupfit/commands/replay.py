@@ -21,7 +21,7 @@ from groupfit.commands.replay_probes import (
 )
 from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.screw_deploy import run_screw_replay
-from groupfit.continuation import started_running_notes, with_histories
+from groupfit.continuation import picked_up, started_running_notes, with_histories, zero_of
 from groupfit.data import Run
 from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
@@ -109,12 +109,16 @@ def run_replay(args: argparse.Namespace) -> int:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
         raise InputError(f"{run.source}: {exc}") from None
-    probes = probe_schedule(args, run)
+    if saved is not None:
+        run = picked_up(run, saved.error_zero_um)
     rows, notes = 0, []
     if history:
         joined, skipped, notes = with_histories([*history[1:], run], history[:1], assume_continued=True)
         rows = skipped[-1]
         temps = joined[-1].temps
+        run = picked_up(run, zero_of(joined[-1]))  # an error read from the start: from the recording's
+    probes = probe_schedule(args, run, continued=bool(history) or saved is not None)
+    if history:
         checks = None if probes is None else np.r_[np.full(rows, np.nan), probes]  # checks on this file only
         replay = rule.replay(temps, checks).tail(rows)
         unchecked = rule.replay(temps).tail(rows) if probes is not None else None

@@ -19,6 +19,7 @@ import numpy as np
 
 from groupfit.data import length_unit, numeric_column
 from groupfit.error_scale import scaled_values
+from groupfit.error_start import from_start, is_from_start, logged_spec
 from groupfit.errors import InputError
 from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
@@ -47,13 +48,17 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
         "--probe-column",
         metavar="COLUMN",
         help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm), or COLUMN*K (×K µm per "
-        "unit as logged); default: the run's error column; "
+        "unit as logged), COLUMN-start less the run's first check; default: the run's error column; "
         "without --probe-every every row where it holds a number is a check",
     )
 
 
-def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
-    """Per sample the probe reading (µm), NaN where there is no check; None without probe options."""
+def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) -> np.ndarray | None:
+    """Per sample the probe reading (µm), NaN where there is no check; None without probe options.
+
+    ``--probe-column COLUMN-start`` reads the checks less the run's first one; not on a run replayed as the rest
+    of a recording (``continued``), whose first check is not the recording's start.
+    """
     check_probe_first(args.probe_first, args.probe_every)
     if args.probe_every is None and args.probe_column is None:
         return None
@@ -64,6 +69,14 @@ def probe_schedule(args: argparse.Namespace, run) -> np.ndarray | None:
         column, factor = scaled_values(run.frame, args.probe_column, run.source)
         reading = numeric_column(run.frame, column, run.source, allow_nonfinite=True)
         reading = reading * factor * length_unit(column)[1]  # ``probe*2.5``, ``probe_mm``: read in µm
+        if is_from_start(args.probe_column):
+            if continued:
+                raise InputError(
+                    f"--probe-column '{args.probe_column}': {run.name} is replayed as the rest of a recording, and "
+                    "its first check is not the recording's start; give the checks from the recording's start "
+                    f"(--probe-column '{logged_spec(args.probe_column)}')"
+                )
+            reading = from_start(reading)
     elif run.error is not None:
         reading = np.asarray(run.error, dtype=float)
     else:

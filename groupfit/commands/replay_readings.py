@@ -20,6 +20,7 @@ import numpy as np
 
 from groupfit.continuation import same_recording
 from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
+from groupfit.error_start import ZERO_KEY
 from groupfit.errors import InputError
 from groupfit.model import ModelFile, time_column
 from groupfit.recordings import continued_recording
@@ -66,11 +67,13 @@ def load_readings(
 
 @dataclass(frozen=True)
 class SavedState:
-    """The rule's state at the end of a modelling file that is not at hand: where, after how many samples."""
+    """The rule's state at the end of a modelling file that is not at hand: where, after how many samples, and the
+    reading its error was taken from (``COLUMN-start``; None: the error is read as logged)."""
 
     path: str
     samples: int
     state: Mapping[str, Any]
+    error_zero_um: float | None = None
 
 
 def earlier_recordings(
@@ -93,7 +96,7 @@ def earlier_recordings(
         where = f"{args.model}: training.recordings[{k}].{END_STATE}.{precision}"
         rule = SwitchingRule(model, precision=precision, period_s=run.period)
         restore(rule, saved[precision], where)  # a state that does not fit the rule is refused, named by its key
-        return [], [], note, SavedState(entry["path"], int(saved["samples"]), saved[precision])
+        return [], [], note, SavedState(entry["path"], int(saved["samples"]), saved[precision], entry.get(ZERO_KEY))
     try:
         history = load(found)
     except InputError as exc:

@@ -45,6 +45,9 @@ COLLINEAR_R = 0.95
 """A candidate correlated this closely (|r|) with one of the model's inputs is *collinear* with it."""
 RANK_DIGITS = 9
 """Decimals of the score candidates are ranked by; scores that agree to these are a tie."""
+FOLD_TIE = 10.0**-RANK_DIGITS
+"""A fold whose error ratio is within this of 1 is not improved: a candidate that leaves the fit as it was
+moves its folds by the last digits of the linear algebra alone, which differ from one machine to another."""
 
 
 @dataclass(frozen=True)
@@ -89,7 +92,7 @@ class Candidate:
     @property
     def n_folds_improved(self) -> int:
         """Number of the held-out folds on which the candidate lowers the error."""
-        return int(np.count_nonzero(np.asarray(self.fold_ratios) < 1.0))
+        return int(np.count_nonzero(np.asarray(self.fold_ratios) < 1.0 - FOLD_TIE))
 
     def family(self) -> tuple:
         """Candidates that differ only in their low-pass time constant."""
