@@ -24,6 +24,7 @@ DISPLACEMENT_SUFFIXES = ("_um", "_mm", "_µm")
 AMBIENT_WORDS = (
     "room", "air", "hall", "shop", "chamber", "enclosure", "umgebung", "raumtemp",
     "环境", "環境", "室温", "気温", "外气", "실온", "실내", "주변", "외기", "환경",
+    "окружающ", "воздух", "помещени", "цех",
 )  # fmt: skip
 """A column whose name holds one of these is an ambient temperature: an enclosure's chamber (a 3-D printer's
 ``chamber_t``) is the air around the frame inside it."""

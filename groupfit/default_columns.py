@@ -42,21 +42,24 @@ DEFAULT_ERROR = "error_um"
 ERROR_NAME = re.compile(
     r"^\s*(?:[xyz][\s_-]?)?(?:thermal[\s_-]?)?(?:error|err|deviation|displacement|disp|drift|deformation|fehler|"
     r"abweichung|verlagerung|d[xyz]|delta[\s_-]?[xyz])(?=$|[^a-z])"
-    r"|^\s*(?:[^\W\d_]{1,8}\s)?[^\W\d_]{0,8}?(?:误差|誤差|位移|变形|変形|变位|変位|偏移|漂移|伸长|伸び|오차|변위|변형)",
+    r"|^\s*(?:[^\W\d_]{1,14}\s)?[^\W\d_]{0,8}?(?:误差|誤差|位移|变形|変形|变位|変位|偏移|漂移|伸长|伸び|"
+    r"오차|변위|변형|смещени|погрешност|деформаци|перемещени|дрейф)",
     re.IGNORECASE,
 )
 TEMPERATURE_NAME = re.compile(
-    r"°[CF]|℃|℉|温度|気温|온도|기온|deg[\s_]?[CF]\b|[\[(（][CFK][\])）]|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d",
+    r"°[CF]|℃|℉|温度|気温|온도|기온|температур|deg[\s_]?[CF]\b|[\[(（][CFK][\])）]|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d",
     re.IGNORECASE,
 )
 """A name that marks a temperature column (in °C, °F or K)."""
 MICROMETRES_PER_UNIT = {
-    **dict.fromkeys(("mm", "毫米"), 1000.0),
-    **dict.fromkeys(("um", "µm", "μm", "micron", "microns", "微米"), 1.0),
+    **dict.fromkeys(("mm", "毫米", "мм"), 1000.0),
+    **dict.fromkeys(("um", "µm", "μm", "micron", "microns", "微米", "мкм"), 1.0),
     **dict.fromkeys(("nm", "纳米"), 1e-3),
 }
 """Length units a column's name may end in (``error_mm``, ``dZ [µm]``, ``drift (nm)``), in µm."""
-LENGTH_UNIT = re.compile(r"(?:^|[\s_\[(/（［])(mm|um|µm|μm|microns?|nm|微米|毫米|纳米)\s*[\])）］]?\s*$", re.IGNORECASE)
+LENGTH_UNIT = re.compile(
+    r"(?:^|[\s_\[(/（［])(mm|um|µm|μm|microns?|nm|微米|毫米|纳米|мкм|мм)\s*[\])）］]?\s*$", re.IGNORECASE
+)
 
 
 SCALED_NAME = re.compile(r"^(?P<column>.*\S)\s*\*\s*(?P<factor>[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*$")

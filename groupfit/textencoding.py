@@ -7,6 +7,9 @@ Tried in this order:
 * Korean (CP949, the EUC-KR that Excel and loggers write on a Korean
   Windows: ``시간(초),온도1(℃)``), when the bytes outside ASCII read as
   Hangul words and no Chinese character (:func:`korean`);
+* Windows-1251, when the bytes outside ASCII form words of Cyrillic letters
+  (:func:`cyrillic`), as a Russian or Ukrainian Windows writes them
+  (``Время,Температура``);
 * a Chinese or Japanese code page, when the bytes outside ASCII read as one
   (:func:`east_asian`): GBK/GB 18030, which Excel and most data-acquisition
   programs on a Chinese Windows write (``时间,温度1(℃)``), Shift-JIS (CP932),
@@ -19,6 +22,22 @@ must read without a fault in the code page, and hold a word of two Chinese or
 Japanese characters or more (``时间``, ``温度``: four bytes outside ASCII in a
 row) or a full-width unit sign (``℃``, ``μ``, ``（）``). The accented letters of
 a Western file stand alone (``Température``) or in pairs (``Größe``).
+
+Chinese bytes read as Korean give Hangul too (``传感器`` reads ``눈먁포``): every
+pair of bytes from 0xB0 to 0xC8 is a Hangul syllable in EUC-KR and a Chinese
+character in GB 2312. They are told apart by what the syllables are: those of
+a Korean text are mostly among the few hundred syllables that make up most
+Korean words (:data:`COMMON_HANGUL`), while bytes of Chinese land on any of
+EUC-KR's 2350, one in seven of them common.
+
+A Cyrillic word in Windows-1251 is a run of letters from 0xC0 to 0xFF
+(``Время``: five in a row), and the text holds few bytes from 0x80 to 0xBF
+(``Ё``, ``°``, ``№``): :data:`CYRILLIC_RUN`, :data:`CYRILLIC_SHARE`. A
+Western file's accented letters stand alone or in pairs. A Chinese, Japanese
+or Korean text comes in pairs of bytes, so its runs of bytes outside ASCII
+are of even length: a text with a word of odd length is read as Cyrillic
+before the East Asian code pages are tried, one whose words are all of even
+length only after none of them reads it.
 """
 
 from __future__ import annotations
@@ -71,6 +90,18 @@ COMMON_HANGUL = frozenset(
 ``변위``, ``주축``, ``냉각수``, ``센서``): about 400 of EUC-KR's 2350."""
 COMMON_SHARE = 0.8
 """The least share of a text's Hangul syllables that are common for it to read as Korean."""
+CYRILLIC = "cp1251"
+CYRILLIC_RUN = re.compile(rb"[\xc0-\xff]{3,}")
+"""Three letters or more in a row from Windows-1251's Cyrillic block: a Cyrillic word, not accented Latin ones."""
+CYRILLIC_SHARE = 0.6
+"""The least share of the bytes outside ASCII that stand in such runs for the text to read as Cyrillic; at most
+:data:`CYRILLIC_OTHER` of them may fall from 0x80 to 0xBF."""
+CYRILLIC_OTHER = 0.2
+LOW_HIGH_BYTE = re.compile(rb"[\x80-\xbf]")
+HIGH_RUN = re.compile(rb"[\x80-\xff]+")
+RARE_GB_LEAD = 0xD8
+"""GB 2312's second level (first byte from 0xD8): rare characters, seldom in a Chinese header."""
+RARE_GB_SHARE = 0.4
 MISREAD = re.compile(r"[\uff61-\uff9f\ue000-\uf8ff]")
 """Half-width katakana, what a Chinese text read as Shift-JIS turns into, and characters of private use, what
 Big5 read as GB 18030 turns into: never what a header is written in."""
@@ -102,7 +133,7 @@ def decode(content: bytes) -> str:
         return content.decode("utf-8")
     except UnicodeDecodeError:
         pass
-    for guess in (korean, east_asian):
+    for guess in (korean, cyrillic_odd, east_asian, cyrillic):
         text = guess(content)
         if text is not None:
             return text
@@ -129,6 +160,32 @@ def korean(content: bytes) -> str | None:
     return text if common >= COMMON_SHARE * len(syllables) else None
 
 
+def cyrillic(content: bytes) -> str | None:
+    """The text read as Windows-1251, None when its bytes outside ASCII do not form Cyrillic words (module
+    docstring)."""
+    high = len(HIGH_BYTE.findall(content))
+    if not high or len(LOW_HIGH_BYTE.findall(content)) > CYRILLIC_OTHER * high:
+        return None
+    if sum(len(run) for run in CYRILLIC_RUN.findall(content)) < CYRILLIC_SHARE * high:
+        return None
+    try:
+        return content.decode(CYRILLIC)
+    except UnicodeDecodeError:
+        return None
+
+
+def cyrillic_odd(content: bytes) -> str | None:
+    """:func:`cyrillic` for a text no East Asian code page wrote: a run of bytes outside ASCII of odd length, or
+    pairs of bytes most of which would be GB 2312's rare characters (first byte from 0xD8: Cyrillic small
+    letters); None for any other."""
+    runs = HIGH_RUN.findall(content)
+    if not any(len(run) % 2 for run in runs):
+        leads = [byte for run in runs for byte in run[::2]]
+        if not leads or sum(byte >= RARE_GB_LEAD for byte in leads) < RARE_GB_SHARE * len(leads):
+            return None
+    return cyrillic(content)
+
+
 def east_asian(content: bytes) -> str | None:
     """The text read in a Chinese or Japanese code page (:data:`EAST_ASIAN`), None when it does not read as
     one (module docstring)."""
@@ -146,4 +203,4 @@ def east_asian(content: bytes) -> str | None:
     return None
 
 
-__all__ = ["BYTE_ORDER_MARKS", "decode", "east_asian", "korean", "looks_binary"]
+__all__ = ["BYTE_ORDER_MARKS", "cyrillic", "decode", "east_asian", "korean", "looks_binary"]

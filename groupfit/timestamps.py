@@ -63,16 +63,17 @@ FORMATS = tuple(f"{d}{j}{t}" for d in DATE_FORMATS for j in DATE_TIME_JOINERS fo
 """Every form tried after ISO 8601, in order; the time-of-day forms last."""
 EXAMPLES = "2026-03-02 08:00:00, 2026-03-02T08:00:00+01:00, 02.03.2026 08:00:00, 03/02/2026 8:00:00 AM, 08:00:00"
 UNIT_SECONDS = {
-    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds", "millisekunden", "毫秒", "ミリ秒"), 1e-3),
-    **dict.fromkeys(("s", "sec", "secs", "second", "seconds", "sek", "sekunden", "秒", "초"), 1.0),
-    **dict.fromkeys(("min", "mins", "minute", "minutes", "minuten", "分", "分钟", "분"), 60.0),
-    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours", "std", "stunde", "stunden", "小时"), 3600.0),
+    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds", "millisekunden", "毫秒", "ミリ秒", "мс"), 1e-3),
+    **dict.fromkeys(("s", "sec", "secs", "second", "seconds", "sek", "sekunden", "秒", "초", "с", "сек"), 1.0),
+    **dict.fromkeys(("min", "mins", "minute", "minutes", "minuten", "分", "分钟", "분", "мин"), 60.0),
+    **dict.fromkeys(("h", "hr", "hrs", "hour", "hours", "std", "stunde", "stunden", "小时", "ч"), 3600.0),
     **dict.fromkeys(("d", "day", "days", "tag", "tage", "天"), 86400.0),
 }
 """Units a time column's name may end in (``time_ms``, ``Zeit [min]``, ``Zeit [Std]``, ``hours``), and their
 seconds; an abbreviation may end in a dot (``Zeit [Min.]``)."""
 NAMED_UNIT = re.compile(
-    r"(?:^|[_\s\[(/（［])\s*([a-z]+|毫秒|ミリ秒|秒|分钟|分|小时|天|초|분)\.?\s*[\])）］]?\s*$", re.IGNORECASE
+    r"(?:^|[_\s\[(/（［])\s*([a-z]+|毫秒|ミリ秒|秒|分钟|分|小时|天|초|분|мс|сек|мин|с|ч)\.?\s*[\])）］]?\s*$",
+    re.IGNORECASE,
 )
 BRACKETED_UNIT = re.compile(r"[\[(（［]\s*([a-z]{1,12})\.?\s*[\])）］]\s*$", re.IGNORECASE)
 """A unit in brackets at the end of a name (``Zeit [xyz]``): a time column's must be one of :data:`UNIT_SECONDS`."""
@@ -84,13 +85,14 @@ TIME_NAME = re.compile(
     r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
     r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|ts|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
     r"[\u3040-\u30ff\u4e00-\u9fff]{0,8}?(?:时间|時間|时刻|時刻|日时|日時|日期|日付)|"
-    r"(?:[\uac00-\ud7a3]{1,8}\s)?[\uac00-\ud7a3]{0,8}?(?:시간|시각|일시|날짜))"
+    r"(?:[\uac00-\ud7a3]{1,8}\s)?[\uac00-\ud7a3]{0,8}?(?:시간|시각|일시|날짜)|"
+    r"(?:[\u0400-\u04ff]{1,12}\s)?(?:время|дата))"
     r"(?=$|[^a-z0-9])",
     re.IGNORECASE,
 )
 """Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``,
 ``Relative Time``, ``Laufzeit [s]``, ``Seconds``, LabVIEW's ``X_Value``, a JSON log's ``ts``, ``时间``,
-``経過時間``, ``日時``, ``경과시간``, ``일시``)."""
+``経過時間``, ``日時``, ``경과시간``, ``일시``, ``Время``, ``Дата и время``)."""
 OF_DAY = re.compile(r"\bof[\s_-]+day\s*$", re.IGNORECASE)
 """A time of day (``Time of day``): its last word is no unit."""
 BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")\s*[\])]?)?\s*$", re.IGNORECASE)
