@@ -1,22 +1,15 @@
-"""Logs written on a Russian or Ukrainian Windows: Windows-1251 bytes, names in Cyrillic."""
+"""Logs written on a Russian or Ukrainian Windows: Windows-1251 bytes, names in Cyrillic (the log read on the columns
+its names mark: ``test_east_asian_logs.py``)."""
 
 import numpy as np
 import pandas as pd
 import pytest
-from support import same_run
 
 from groupfit.columns import is_ambient_name
 from groupfit.data import load_run
 from groupfit.textencoding import decode
 
 TEMPS = ["T1", "T2", "T3", "T4"]
-RUSSIAN = {
-    "time_s": "Время (с)",
-    "T1": "Температура шпинделя 1 (°C)",
-    "T2": "Температура шпинделя 2 (°C)",
-    "T3": "Температура станины",
-    "T4": "Температура колонны",
-}
 
 
 def header(names) -> str:
@@ -42,36 +35,6 @@ def header(names) -> str:
 def test_a_log_is_read_in_the_encoding_that_wrote_it(names, encoding):
     text = header(names)
     assert decode(text.encode(encoding)) == text
-
-
-def test_a_russian_log_in_windows_1251_is_read_on_the_columns_its_names_mark_and_gives_the_plain_run(
-    tmp_path, synthetic
-):
-    frame, plain = synthetic
-    path = tmp_path / "log.csv"
-    frame.rename(columns={**RUSSIAN, "error_um": "Тепловое смещение Z (мкм)"}).to_csv(
-        path, index=False, encoding="cp1251"
-    )
-    run = load_run(path, time_is_default=True, error_is_default=True)
-    assert run.temp_names == tuple(RUSSIAN[t] for t in TEMPS)
-    assert (run.time_name, run.error_name) == ("Время (с)", "Тепловое смещение Z (мкм)")
-    same_run(run, plain)
-
-
-@pytest.mark.parametrize(
-    "error_name, per_um, time_name, per_second",
-    [("Смещение (мм)", 1e-3, "Время, мин", 1 / 60), ("Погрешность, мкм", 1.0, "Время (ч)", 1 / 3600)],
-)
-def test_units_named_in_russian_are_read(tmp_path, synthetic, error_name, per_um, time_name, per_second):
-    frame, plain = synthetic
-    path = tmp_path / "log.csv"
-    frame.assign(error_um=frame["error_um"] * per_um, time_s=frame["time_s"] * per_second).rename(
-        columns={"error_um": error_name, "time_s": time_name}
-    ).to_csv(path, index=False, encoding="cp1251")
-    run = load_run(path, temps=TEMPS, time_is_default=True, error_is_default=True)
-    assert (run.time_name, run.error_name) == (time_name, error_name)
-    np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
-    np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
 
 
 def test_a_russian_date_column_is_the_time(tmp_path, synthetic):

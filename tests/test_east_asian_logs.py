@@ -1,4 +1,5 @@
-"""Logs written on a Chinese, Japanese or Korean system: GBK, Shift-JIS or CP949 bytes, names in their language."""
+"""Logs written on a Chinese, Japanese, Korean or Russian system: GBK, Shift-JIS, CP949 or Windows-1251 bytes, names
+in their language."""
 
 from __future__ import annotations
 
@@ -49,15 +50,33 @@ def test_a_log_is_read_in_the_encoding_that_wrote_it(names, encoding):
     assert decode(text.encode(encoding)) == text
 
 
-@pytest.mark.parametrize("encoding", ["gbk", "utf-8-sig"])
-def test_a_chinese_log_is_read_on_the_columns_its_names_mark_and_gives_the_plain_run(tmp_path, synthetic, encoding):
+RUSSIAN = {
+    "time_s": "Время (с)",
+    "T1": "Температура шпинделя 1 (°C)",
+    "T2": "Температура шпинделя 2 (°C)",
+    "T3": "Температура станины",
+    "T4": "Температура колонны",
+}
+
+
+@pytest.mark.parametrize(
+    "names, error_name, encoding",
+    [
+        (CHINESE, "Z向热误差(μm)", "gbk"),
+        (CHINESE, "Z向热误差(μm)", "utf-8-sig"),
+        (KOREAN, "Z축 열변위(μm)", "cp949"),
+        (RUSSIAN, "Тепловое смещение Z (мкм)", "cp1251"),
+    ],
+)
+def test_a_log_is_read_on_the_columns_its_names_mark_and_gives_the_plain_run(
+    tmp_path, synthetic, names, error_name, encoding
+):
     frame, plain = synthetic
     path = tmp_path / "log.csv"
-    names = {**CHINESE, "error_um": "Z向热误差(μm)"}
-    frame.rename(columns=names).to_csv(path, index=False, encoding=encoding)
+    frame.rename(columns={**names, "error_um": error_name}).to_csv(path, index=False, encoding=encoding)
     run = load_run(path, time_is_default=True, error_is_default=True)
-    assert run.temp_names == tuple(CHINESE[t] for t in TEMPS)
-    assert (run.time_name, run.error_name) == ("时间(s)", "Z向热误差(μm)")
+    assert run.temp_names == tuple(names[t] for t in TEMPS)
+    assert (run.time_name, run.error_name) == (names["time_s"], error_name)
     same_run(run, plain)
 
 
@@ -77,22 +96,24 @@ def test_a_japanese_log_in_shift_jis_with_its_stamps_gives_the_plain_run(tmp_pat
 
 
 @pytest.mark.parametrize(
-    "error_name, per_um, time_name, per_second",
+    "error_name, per_um, time_name, per_second, encoding",
     [
-        ("位移(mm)", 1e-3, "时间(分钟)", 1 / 60),
-        ("位移（毫米）", 1e-3, "时间（秒）", 1.0),
-        ("热漂移（nm）", 1e3, "采样时间(小时)", 1 / 3600),
-        ("変位[μm]", 1.0, "時間(分)", 1 / 60),
+        ("位移(mm)", 1e-3, "时间(分钟)", 1 / 60, "gbk"),
+        ("位移（毫米）", 1e-3, "时间（秒）", 1.0, "gbk"),
+        ("热漂移（nm）", 1e3, "采样时间(小时)", 1 / 3600, "gbk"),
+        ("変位[μm]", 1.0, "時間(分)", 1 / 60, "cp932"),
+        ("Смещение (мм)", 1e-3, "Время, мин", 1 / 60, "cp1251"),
+        ("Погрешность, мкм", 1.0, "Время (ч)", 1 / 3600, "cp1251"),
     ],
 )
-def test_units_named_in_chinese_or_in_full_width_brackets_are_read(
-    tmp_path, synthetic, error_name, per_um, time_name, per_second
+def test_units_named_in_chinese_japanese_russian_or_in_full_width_brackets_are_read(
+    tmp_path, synthetic, error_name, per_um, time_name, per_second, encoding
 ):
     frame, plain = synthetic
     path = tmp_path / "log.csv"
     frame.assign(error_um=frame["error_um"] * per_um, time_s=frame["time_s"] * per_second).rename(
         columns={"error_um": error_name, "time_s": time_name}
-    ).to_csv(path, index=False, encoding="gbk" if "変" not in error_name else "cp932")
+    ).to_csv(path, index=False, encoding=encoding)
     run = load_run(path, temps=TEMPS, time_is_default=True, error_is_default=True)
     assert (run.time_name, run.error_name) == (time_name, error_name)
     np.testing.assert_allclose(run.error, plain.error, rtol=1e-12, atol=1e-9)
@@ -139,17 +160,6 @@ def test_a_taiwanese_log_in_big5_named_as_its_program_names_it_gives_the_plain_r
     named.to_csv(path, index=False, encoding="cp950")
     run = load_run(path, error="ch3(um)", time_is_default=True)
     assert run.time_name == "時間(s)" and run.temp_names == ("t1(°C)", "t2(°C)", "t3(°C)", "t4(°C)")
-    same_run(run, plain)
-
-
-def test_a_korean_log_in_cp949_is_read_on_the_columns_its_names_mark_and_gives_the_plain_run(tmp_path, synthetic):
-    frame, plain = synthetic
-    path = tmp_path / "log.csv"
-    names = {**KOREAN, "error_um": "Z축 열변위(μm)"}
-    frame.rename(columns=names).to_csv(path, index=False, encoding="cp949")
-    run = load_run(path, time_is_default=True, error_is_default=True)
-    assert run.temp_names == tuple(KOREAN[t] for t in TEMPS)
-    assert (run.time_name, run.error_name) == ("경과시간(초)", "Z축 열변위(μm)")
     same_run(run, plain)
 
 
