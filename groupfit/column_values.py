@@ -393,6 +393,25 @@ def _without_readings(frame: pd.DataFrame, column: str) -> bool:
     return not np.isfinite(cells.values.to_numpy(dtype=float)).any() and not cells.words.any()
 
 
+FAR_FIRST_SHARE = 0.9
+"""An error read from its first reading (``COLUMN-start``) with this share of its readings beyond the plausible
+range from it was taken from a marker or a glitch."""
+
+
+def _from_first_reading(values: np.ndarray, error: str, label: str, limit: float | None) -> np.ndarray:
+    """``values`` less their first reading; refused when most of them lie beyond ``limit`` from it."""
+    zeroed = from_start(values)
+    finite = np.flatnonzero(np.isfinite(zeroed))
+    if limit is not None and finite.size > 1 and np.mean(np.abs(zeroed[finite]) > limit) >= FAR_FIRST_SHARE:
+        row = int(finite[0])
+        raise InputError(
+            f"{label}: column '{error}': the error is read from its first reading (row {row + 1}: {values[row]:g} "
+            f"µm as logged), and most of the others lie more than {limit:g} µm from it: that reading is a marker "
+            "or a glitch; repair or drop that row"
+        )
+    return zeroed
+
+
 def error_values(frame: pd.DataFrame, error: str | None, label: str, options: LoadOptions) -> np.ndarray | None:
     """The error column as numbers (None when not asked for and absent), refused when it cannot be modelled."""
     require_error, missing_error = options.require_error, options.missing_error
@@ -413,7 +432,7 @@ def error_values(frame: pd.DataFrame, error: str | None, label: str, options: Lo
             raise InputError(f"{label}: error column '{error}' is empty on every row; a model needs it")
     error_values = error_values * length_unit(error)[1]
     if is_from_start(error):
-        error_values = from_start(error_values)
+        error_values = _from_first_reading(error_values, error, label, options.error_limit)
     measured = error_values[np.isfinite(error_values)]
     if require_error and measured.size > 1 and np.ptp(measured) == 0.0:
         raise InputError(

@@ -149,3 +149,13 @@ def test_a_model_files_recorded_zero_that_is_not_a_number_is_refused(tmp_path):
     model.write_text(json.dumps(document))
     with pytest.raises(InputError, match=r"training.recordings\[0\].error_zero_um must be"):
         ModelFile.load(model)
+
+
+def test_a_first_reading_that_is_a_marker_is_refused_naming_its_row(tmp_path, capsys):
+    frame = as_positions(pd.read_csv(DATASETS / "paper_cycle.csv"), -89869.0)
+    frame.loc[:2, "mcu_pos_z"] = -999.0  # a logger's "no reading" on the first rows
+    path = write(frame, tmp_path / "marker.csv")
+    code = main(["fit", "--data", str(path), "--temps", "T1,T2", "--error", SPEC, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
+    assert "read from its first reading (row 1: -2497.5 µm as logged)" in err and "repair or drop that row" in err
