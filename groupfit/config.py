@@ -14,6 +14,7 @@ A configuration has up to four tables; every key is optional::
     resample_s = 60            # average the readings of every 60 s (a gap splits the log)
     ambient = "T15"            # the ambient sensor, whatever its name
     keep_glitches = false      # true: keep error and temperature readings that leave their neighbours and come back
+    encoding = "cp1250"        # the text's encoding (default: told from the bytes)
 
     [model]
     p = "auto"                 # or a whole number; "auto": choose p by p_rule over 0…pmax
@@ -65,6 +66,8 @@ import math
 from pathlib import Path
 from typing import Any, Callable
 
+from groupfit.data_options import encoding_name
+from groupfit.errors import InputError
 from groupfit.settings import RunSettings
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
@@ -91,6 +94,14 @@ def _positive(table: Table, key: str) -> float:
 def _number(table: Table, key: str) -> int | float:
     table.number(key)
     return table.data[key]
+
+
+def _encoding(table: Table, key: str) -> str:
+    value = table.string(key)
+    try:
+        return encoding_name(value)
+    except InputError:
+        raise table.fail(key, f"expected a text encoding (cp1250, utf-8 …), got {value!r}") from None
 
 
 def _whole_or_auto(table: Table, key: str) -> int | str:
@@ -139,6 +150,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "resample_s": lambda table, key: table.number(key, positive=True),
         "ambient": Table.string,
         "keep_glitches": Table.boolean,
+        "encoding": _encoding,
     },
     "model": {
         "p": _whole_or_auto,

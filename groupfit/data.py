@@ -152,6 +152,7 @@ def load_run(
     error_is_default: bool = False,
     drop_glitches: bool | None = None,
     check_ranges: bool | None = None,
+    encoding: str | None = None,
 ) -> Run:
     """Read and validate a run.
 
@@ -212,6 +213,8 @@ def load_run(
         ``resample``: take them as missed) even with ``allow_nonfinite``, for a
         run whose residual is fitted rather than replayed (``diagnose``).
         Default: unless ``allow_nonfinite``.
+    encoding : str, optional
+        The text's encoding (``--encoding``); by default it is told from the bytes (:mod:`groupfit.textencoding`).
 
     Raises
     ------
@@ -220,7 +223,7 @@ def load_run(
     """
     options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
     options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
-    options.update(drop_glitches=drop_glitches, check_ranges=check_ranges)
+    options.update(drop_glitches=drop_glitches, check_ranges=check_ranges, encoding=encoding)
     runs = load_runs(
         source,
         name=name,
@@ -254,7 +257,7 @@ def load_runs(
     A log without the default time or error column (``time_s``, ``error_um``) is read on the one its name
     marks for the role (:mod:`groupfit.default_columns`), with a note.
     """
-    frame, run_name, label = read_table(source, name)
+    frame, run_name, label = read_table(source, name, options.pop("encoding", None))
     frame, stray_notes, left_out = without_stray_rows(frame, label)
     time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     lengths, units_notes = read_in_row_units(frame, time, label)

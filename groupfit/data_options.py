@@ -1,8 +1,10 @@
 """The command-line forms of the loader's options: ``--error`` (its help), ``--temps``, ``--range-temp``,
-``--range-error``, ``--period-tolerance`` (and the same keys of a configuration's ``[data]`` table)."""
+``--range-error``, ``--period-tolerance``, ``--encoding`` (and the same keys of a configuration's ``[data]`` table)."""
 
 from __future__ import annotations
 
+import argparse
+import codecs
 import csv
 
 import numpy as np
@@ -80,8 +82,34 @@ def split_names(text: str | None) -> list[str] | None:
     return names
 
 
+def encoding_name(text: str) -> str:
+    """``--encoding NAME`` (``[data] encoding``): a text encoding Python knows, refused in one line otherwise."""
+    try:
+        codecs.lookup(text)
+    except (LookupError, TypeError):
+        raise InputError(
+            f"--encoding {text!r}: not a text encoding (e.g. cp1250 for Central Europe, cp1254 for Turkey, "
+            "iso-8859-7 for Greece, utf-8)"
+        ) from None
+    return text
+
+
+ENCODING_HELP = (
+    "the encoding the log's text was written in (cp1250, cp1254, iso-8859-7 …); by default it is told from the "
+    "bytes: UTF-8/16/32, GBK, Big5, Shift-JIS, CP949, Windows-1251, Windows-1252"
+)
+
+
+def add_encoding_option(parser: argparse.ArgumentParser) -> None:
+    """``--encoding NAME``: the encoding a text log was written in, when detection is not to decide."""
+    parser.add_argument("--encoding", metavar="NAME", help=ENCODING_HELP)
+
+
 __all__ = [
+    "ENCODING_HELP",
     "ERROR_HELP",
+    "add_encoding_option",
+    "encoding_name",
     "parse_error_limit",
     "positive_number",
     "parse_period_tolerance",

@@ -28,7 +28,7 @@ SELF_NAMES = ("id", "name", "sensor", "channel", "label")
 """Keys by which an object in a list names itself (``{"id": "C", "temp": 26.6}``): its values are named by it."""
 
 
-def read_json_log(content: bytes, label: str) -> pd.DataFrame:
+def read_json_log(content: bytes, label: str, encoding: str | None = None) -> pd.DataFrame:
     """The table of a JSON log's records (module docstring).
 
     Raises
@@ -36,7 +36,7 @@ def read_json_log(content: bytes, label: str) -> pd.DataFrame:
     InputError
         Not JSON (the line and what is wrong named), or JSON that holds no records.
     """
-    text = decode(content).lstrip("\ufeff")
+    text = decode(content, encoding).lstrip("\ufeff")
     if not text.strip():
         raise InputError(f"{label}: the file is empty; one JSON record per sample is needed")
     try:

@@ -65,14 +65,17 @@ COMPRESSED = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decomp
 """A text table compressed by a logger or for mail (``log.csv.gz``, a zip of one table), by suffix."""
 
 
-def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tuple[pd.DataFrame, str, str]:
+def read_table(
+    source: str | Path | pd.DataFrame, name: str | None = None, encoding: str | None = None
+) -> tuple[pd.DataFrame, str, str]:
     """Read a run's table (CSV, Excel, Parquet, MATLAB, TDMS or JSON, by suffix) or take a DataFrame: ``(frame, name,
     label)``.
 
     ``label`` names the source in error messages. An Excel workbook is read
     from its sheet with the largest table of numbers (a cover sheet is passed
     over, and the label names the sheet), its header found as in a text table
-    (a title or a preamble above it is passed over).
+    (a title or a preamble above it is passed over). ``encoding``: a text table's or JSON log's, when
+    detection is not to decide (``--encoding``).
     """
     if isinstance(source, pd.DataFrame):
         label = name or "DataFrame"
@@ -89,15 +92,15 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     header = None
     try:
         if kind in ("Excel", "OpenDocument") and not _begins_as_workbook(path):
-            frame, header = _text_under_a_workbooks_name(path, kind, label)
+            frame, header = _text_under_a_workbooks_name(path, kind, label, encoding)
         elif kind == "CSV":
-            frame, header = read_text_table(_text_content(path, label, compressed=compressed))
+            frame, header = read_text_table(_text_content(path, label, compressed=compressed), encoding)
         elif kind == "MATLAB":
             frame = read_mat(path, label)
         elif kind == "TDMS":
             frame = read_tdms(path, label)
         elif kind == "JSON":
-            frame = read_json_log(_text_content(path, label, compressed=compressed), label)
+            frame = read_json_log(_text_content(path, label, compressed=compressed), label, encoding)
         elif kind in ("Excel", "OpenDocument"):
             sheet, frame, first, header = _data_sheet(path)
             label = label if first else f"{label} (sheet '{sheet}')"
@@ -115,6 +118,7 @@ def read_table(source: str | Path | pd.DataFrame, name: str | None = None) -> tu
     except (
         pd.errors.ParserError,
         UnicodeDecodeError,
+        LookupError,
         ValueError,
         OSError,
         EOFError,
@@ -141,7 +145,9 @@ def _refuse_unreadable(path: Path, label: str) -> None:
         raise InputError(f"{label}: data file not found; check the path given to --data")
 
 
-def _text_under_a_workbooks_name(path: Path, kind: str, label: str) -> tuple[pd.DataFrame, list[str]]:
+def _text_under_a_workbooks_name(
+    path: Path, kind: str, label: str, encoding: str | None = None
+) -> tuple[pd.DataFrame, list[str]]:
     """A file named as a workbook whose bytes are not one, read as the text table a program saved under that
     name (a web export's tab-separated "Excel" file); refused as no readable workbook when it holds no table
     of numbers."""
@@ -150,7 +156,7 @@ def _text_under_a_workbooks_name(path: Path, kind: str, label: str) -> tuple[pd.
         "of numbers either); open it in the program that wrote it and save it as .xlsx or CSV"
     )
     try:
-        frame, header = read_text_table(path.read_bytes())
+        frame, header = read_text_table(path.read_bytes(), encoding)
     except (InputError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError):
         raise refusal from None
     numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().to_numpy()

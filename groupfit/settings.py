@@ -34,6 +34,7 @@ class DataSettings:
     resample_s: float | None = None
     ambient: str | None = None
     keep_glitches: bool = False
+    encoding: str | None = None
 
     @property
     def paths(self) -> tuple[str, ...]:

@@ -121,8 +121,12 @@ def looks_binary(content: bytes) -> bool:
     return bool(sample) and len(CONTROL_BYTES.findall(sample)) > BINARY_SHARE * len(sample)
 
 
-def decode(content: bytes) -> str:
-    """The text of a file in the encoding that wrote it (module docstring)."""
+def decode(content: bytes, encoding: str | None = None) -> str:
+    """The text of a file in the encoding that wrote it (module docstring), or in ``encoding`` when it is given
+    (``--encoding``: a byte-order mark is read past; bytes that are no text in it raise ``UnicodeDecodeError``)."""
+    if encoding is not None:
+        text = content.decode(encoding)
+        return text[1:] if text.startswith("\ufeff") else text
     for mark, encoding in BYTE_ORDER_MARKS:
         if content.startswith(mark):
             try:

@@ -269,9 +269,10 @@ def _comma_number(field: str) -> bool:
     return COMMA_NUMBER.fullmatch(field.strip().strip('"')) is not None
 
 
-def read_text_table(content: bytes) -> tuple[pd.DataFrame, list[str]]:
-    """A text table's frame and its header as written (pandas renames a repeated name on reading)."""
-    text = with_newlines(decode(content))
+def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.DataFrame, list[str]]:
+    """A text table's frame and its header as written (pandas renames a repeated name on reading); ``encoding``:
+    the one that wrote it, when detection is not to decide (:func:`groupfit.textencoding.decode`)."""
+    text = with_newlines(decode(content, encoding))
     layout = layout_of(text)
     body = _without_comment_mark(_without_footer(_from_line(text, layout.header_line), layout), layout.sep)
     header_text = body.split("\n", 1)[0]

@@ -10,6 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from groupfit.commands.option_values import resample_seconds
 from groupfit.config import default_config_path, read_config
 from groupfit.data import (
     ERROR_LIMIT_UM,
@@ -21,12 +22,19 @@ from groupfit.data import (
     load_runs,
     loading_notes,
 )
-from groupfit.data_options import ERROR_HELP, parse_error_limit, parse_period_tolerance, parse_temp_range, split_names
+from groupfit.data_options import (
+    ERROR_HELP,
+    add_encoding_option,
+    encoding_name,
+    parse_error_limit,
+    parse_period_tolerance,
+    parse_temp_range,
+    split_names,
+)
 from groupfit.errors import InputError
 from groupfit.export import write
 from groupfit.io import atomic_write_text, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
-from groupfit.model_checks import MAX_RIDGE_ALPHA
 from groupfit.outputs import commit_outputs as commit_outputs  # the verbs import it from here
 from groupfit.outputs import current_plan
 from groupfit.resample import GAP_PERIODS
@@ -47,6 +55,7 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--error", metavar="COLUMN", help=ERROR_HELP)
     add_range_options(parser)
     add_clock_options(parser)
+    add_encoding_option(parser)
     add_glitch_option(parser)
 
 
@@ -106,16 +115,6 @@ def add_clock_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def resample_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: give the period in seconds, e.g. 60") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text!r}: the period must be a number of seconds > 0")
-    return value
-
-
 def clock_options(args: argparse.Namespace, data: DataSettings | None = None) -> dict[str, Any]:
     """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run`: the flags, else ``[data]``."""
     options = configured_clock(data or DataSettings())
@@ -124,13 +123,16 @@ def clock_options(args: argparse.Namespace, data: DataSettings | None = None) ->
         options["period_tolerance"] = tolerance
     if getattr(args, "resample", None) is not None:
         options["resample"] = args.resample
+    if getattr(args, "encoding", None) is not None:
+        options["encoding"] = encoding_name(args.encoding)
     return options
 
 
 def configured_clock(data: DataSettings) -> dict[str, Any]:
     """``period_tolerance`` and ``resample`` for :func:`groupfit.data.load_run` from the configuration's ``[data]``."""
     tolerance = parse_period_tolerance(data.period_tolerance)
-    return {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": data.resample_s}
+    clock = {"period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance, "resample": data.resample_s}
+    return clock if data.encoding is None else {**clock, "encoding": data.encoding}
 
 
 def print_notes(runs, stream=None) -> None:
@@ -273,6 +275,7 @@ def settings_with_data_options(args: argparse.Namespace) -> tuple[str | Path | N
         "resample_s": getattr(args, "resample", None),
         "ambient": getattr(args, "ambient", None),
         "keep_glitches": getattr(args, "keep_glitches", None),
+        "encoding": encoding_name(args.encoding) if getattr(args, "encoding", None) else None,
     }
     return config_path, settings.given(data=data)
 
@@ -473,27 +476,3 @@ class StageProgress:
         for bar in self.bars.values():
             bar.close()
         self.bars.clear()
-
-
-def seed_value(text: str) -> int:
-    """--seed: a whole number ≥ 0 (what numpy's generators take)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid seed: {text!r} (a whole number >= 0)") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"invalid seed: {text!r} (a whole number >= 0)")
-    return value
-
-
-def ridge_value(text: str) -> float | str:
-    """--ridge: a penalty >= 0 or 'auto'."""
-    if text == "auto":
-        return text
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number >= 0 or 'auto')") from None
-    if not (0 <= value <= MAX_RIDGE_ALPHA):
-        raise argparse.ArgumentTypeError(f"invalid penalty: {text!r} (a number in [0, {MAX_RIDGE_ALPHA:g}] or 'auto')")
-    return value

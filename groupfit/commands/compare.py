@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from groupfit.commands import common, reference_options
+from groupfit.commands import common, option_values, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of
@@ -35,7 +35,7 @@ def add_parser(verbs) -> None:
     common.add_run_options(compare)
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
-    compare.add_argument("--seed", type=common.seed_value, help="seed of the genetic algorithm")
+    compare.add_argument("--seed", type=option_values.seed_value, help="seed of the genetic algorithm")
     compare.add_argument(
         "--heat",
         metavar="COLUMN|none",

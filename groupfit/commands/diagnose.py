@@ -11,10 +11,11 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands import common
+from groupfit.commands import common, option_values
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.commands.replay_readings import with_end_states
 from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes
+from groupfit.data_options import add_encoding_option
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
 from groupfit.diagnose.loop import MIN_EFFECT_RMS_UM, MIN_FURTHER_EFFECT_RMS_UM, MIN_SCORE
@@ -43,6 +44,7 @@ def add_parser(verbs) -> None:
     common.add_json_option(parser)
     common.add_range_options(parser)
     common.add_clock_options(parser)
+    add_encoding_option(parser)
     common.add_glitch_option(parser)
     common.add_out_option(parser, "folder for figures and the new model", default="groupfit-out")
     parser.add_argument(
@@ -88,7 +90,7 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument(
         "--ridge",
-        type=common.ridge_value,
+        type=option_values.ridge_value,
         metavar="ALPHA|auto",
         help="first refit the global model (p = 0) with a ridge penalty (auto: chosen on held-out conditions), "
         "for many collinear inputs; effects are then scored and added with the same penalty",

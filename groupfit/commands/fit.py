@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import common, fit_mlr, reference_options, replay_readings
+from groupfit.commands import common, fit_mlr, option_values, reference_options, replay_readings
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
@@ -61,7 +61,7 @@ def add_parser(verbs) -> None:
     fit.add_argument("--objective", choices=("sae", "sse"), help="residual sum to minimise")
     fit.add_argument("--no-intercept", action="store_true", help="fit groups without a constant term")
     fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
-    fit.add_argument("--seed", type=common.seed_value, help="seed of the genetic algorithm")
+    fit.add_argument("--seed", type=option_values.seed_value, help="seed of the genetic algorithm")
     fit.add_argument(
         "--certify",
         choices=("auto", "yes", "no"),
@@ -77,7 +77,7 @@ def add_parser(verbs) -> None:
     fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
     fit.add_argument(
         "--ridge",
-        type=common.ridge_value,
+        type=option_values.ridge_value,
         metavar="ALPHA|auto",
         help="shrink the coefficients of a global model (p = 0) on many collinear inputs by a ridge penalty; "
         "auto: the penalty with the least error on held-out conditions or runs (the default when fit chooses "

@@ -23,6 +23,7 @@ from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import picked_up, started_running_notes, with_histories, zero_of
 from groupfit.data import Run
+from groupfit.data_options import add_encoding_option
 from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
@@ -62,6 +63,7 @@ def add_parser(verbs) -> None:
         "(training.recordings; by default that file is replayed first, as --continues does)",
     )
     common.add_clock_options(replay)
+    add_encoding_option(replay)
     replay.add_argument(
         "--keep-glitches",
         action="store_true",

@@ -78,6 +78,7 @@ def load_screw_run(
     name=None,
     period_tolerance: float = PERIOD_TOLERANCE,
     resample: float | None = None,
+    encoding: str | None = None,
 ) -> ScrewRun:
     """Load and check a screw run.
 
@@ -97,7 +98,7 @@ def load_screw_run(
     InputError
         No ``T<mm>mm`` columns, two sensors at one position, a bad value.
     """
-    frame, run_name, label = read_table(source, name)
+    frame, run_name, label = read_table(source, name, encoding)
     positions = sensor_positions(frame.columns)
     if not positions:
         raise InputError(
