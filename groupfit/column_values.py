@@ -26,6 +26,7 @@ from groupfit.default_columns import (
 from groupfit.error_start import from_start, is_from_start
 from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS
+from groupfit.textencoding import misread
 
 TEMP_RANGE_C = (-50.0, 500.0)
 """Plausible temperature readings (°C) of the sensors of a machine; anything outside is refused.
@@ -136,6 +137,9 @@ def numeric_column(
         cut = [str(c) for c in frame.columns if "," in str(c) and str(c).startswith(f"{column},")]
         if cut and not hint:
             hint = f" (a name with a comma in it is quoted in a list: --temps '\"{cut[0]}\",…')"
+        wrong = misread(str(column), frame.columns) if not hint else None
+        if wrong:
+            hint = f" (the names read wrongly: '{wrong[0]}' is '{column}' in {wrong[1]}: give --encoding {wrong[1]})"
         if missing and not hint:
             hint = f" ({missing})"
         raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")

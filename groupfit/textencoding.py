@@ -149,6 +149,39 @@ def decode(content: bytes, encoding: str | None = None) -> str:
     raise AssertionError("latin-1 decodes every byte")
 
 
+READ_AS = ("cp1252", "latin-1", KOREAN, CYRILLIC, "gb18030", "cp932", "cp950")
+"""The encodings :func:`decode` may have read a file in."""
+WRITTEN_IN = (
+    "utf-8", "cp1250", "cp1251", "cp1252", "cp1253", "cp1254", "cp1257", "iso-8859-2", "koi8-r",
+    "gbk", "cp949", "cp932", "cp950",
+)  # fmt: skip
+"""The encodings a file misread in one of :data:`READ_AS` may have been written in."""
+
+
+def misread(name: str, names) -> tuple[str, str] | None:
+    """``(read, encoding)``: the name among ``names`` that is ``name`` misread, and the encoding the file was
+    written in (``Èas (s)`` is ``Čas (s)`` written in cp1250); None when none is."""
+    if name.isascii():
+        return None
+    for read in (str(n) for n in names if str(n) != name):
+        for read_as in READ_AS:
+            try:
+                raw = read.encode(read_as)
+            except UnicodeEncodeError:
+                continue
+            for written_in in WRITTEN_IN:
+                if written_in != read_as and _decoded(raw, written_in) == name:
+                    return read, written_in
+    return None
+
+
+def _decoded(raw: bytes, encoding: str) -> str | None:
+    try:
+        return raw.decode(encoding)
+    except UnicodeDecodeError:
+        return None
+
+
 def korean(content: bytes) -> str | None:
     """The text read as Korean (:data:`KOREAN`), None when it does not read as Korean (module docstring)."""
     if not HIGH_BYTE.search(content):
@@ -207,4 +240,4 @@ def east_asian(content: bytes) -> str | None:
     return None
 
 
-__all__ = ["BYTE_ORDER_MARKS", "cyrillic", "decode", "east_asian", "korean", "looks_binary"]
+__all__ = ["BYTE_ORDER_MARKS", "cyrillic", "decode", "east_asian", "korean", "looks_binary", "misread"]

@@ -9,7 +9,7 @@ import pytest
 
 from groupfit.cli import main
 from groupfit.model import ModelFile
-from groupfit.textencoding import decode
+from groupfit.textencoding import decode, misread
 
 DATASETS = Path(__file__).resolve().parents[1] / "datasets"
 CZECH = {"time_s": "Čas (s)", "error_um": "Posunutí Z (µm)", "T1": "Teplota vřetena", "T2": "Teplota lože"}
@@ -33,7 +33,8 @@ def test_a_windows_1250_log_is_read_with_its_encoding_as_the_same_log_in_utf8(tm
     log = czech_log(tmp_path, "cp1250")
     code = main(["fit", "--data", str(log), *COLUMNS, "--p", "0", "--out", str(tmp_path / "guessed")])
     err = capsys.readouterr().err.strip()  # Windows-1252 is the guess: Č reads È, ř reads ø
-    assert code == 2 and "column 'Čas (s)' not found" in err and "Èas (s)" in err
+    assert code == 2 and len(err.splitlines()) == 1 and "column 'Čas (s)' not found" in err
+    assert "'Èas (s)' is 'Čas (s)' in cp1250: give --encoding cp1250" in err
     model = fitted(tmp_path, log, "--encoding", "cp1250")
     truth = fitted(tmp_path, czech_log(tmp_path, "utf-8"))
     assert model.temps == truth.temps and model.error == truth.error == CZECH["error_um"]
@@ -77,3 +78,14 @@ def test_an_unknown_encoding_or_bytes_outside_it_are_refused_in_one_line(tmp_pat
 def test_a_byte_order_mark_is_read_past_in_the_encoding_given():
     assert decode("\ufefftime_s,T1\n".encode("utf-8"), "utf-8") == "time_s,T1\n"
     assert decode("Čas,Teplota\n".encode("cp1250"), "cp1250") == "Čas,Teplota\n"
+
+
+@pytest.mark.parametrize(
+    "asked, written_in",
+    [("Čas (s)", "cp1250"), ("Sıcaklık", "cp1254"), ("Время", "koi8-r"), ("Θερμοκρασία", "cp1253")],
+)
+def test_a_name_misread_by_the_detection_is_found_with_the_encoding_it_was_written_in(asked, written_in):
+    read = decode(asked.encode(written_in))  # Windows-1252 or Windows-1251: what the bytes look like
+    assert read != asked
+    assert misread(asked, ["T1", read, "error_um"]) == (read, written_in)
+    assert misread(asked, ["T1", asked + "x", "error_um"]) is None and misread("T1", [read]) is None
