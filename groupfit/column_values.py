@@ -240,14 +240,8 @@ def check_range(
     outside = np.flatnonzero((values < low) | (values > high))
     if outside.size:
         row = int(outside[0])
-        finite = values[np.isfinite(values)]
-        position = outside.size == finite.size and 0.0 < np.ptp(finite) < high - low
-        if option == "--range-error MAX" and position and np.max(np.abs(finite)) <= POSITION_LIMIT_UM:
-            raise InputError(
-                f"{label}: column '{column}': every reading is beyond the plausible range {low:g}…{high:g} {unit} "
-                f"(row {row + 1}: {values[row]:g} {unit}), while they span only {np.ptp(finite):.4g} {unit}: "
-                f"{_from_zero(column)}"
-            )
+        if option == "--range-error MAX":
+            _refuse_positions(values, column, label, high)
         raise InputError(
             f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "
             f"{low:g}…{high:g} {unit} ({outside.size} such value(s)); repair the data, widen the range with {option}, "
@@ -289,29 +283,35 @@ def implausible_as_missed(frame: pd.DataFrame, label: str, options: LoadOptions)
     return frame, f"{label}: readings outside the plausible range taken as missed ({listed})"
 
 
-def _from_zero(column: str) -> str:
-    """What an error column of positions logged from the machine's zero is, and what to do."""
-    return (
-        "a position logged from the machine's zero, not a thermal error; read each reading less the run's first "
-        f"(the drift since the start) with --error '{column}-start', or widen the range with --range-error MAX"
-    )
-
-
 POSITION_LIMIT_UM = 1e8
 """The largest position (µm, 100 m) a machine's axis logs; beyond it a reading is a marker (``3e38``), not one."""
+
+
+def _refuse_positions(values: np.ndarray, column: str, label: str, limit: float) -> None:
+    """Refuse an error column (µm) every reading of which is beyond ±``limit`` while they span a plausible drift,
+    none a marker beyond :data:`POSITION_LIMIT_UM`: positions logged from the machine's zero. Nothing otherwise."""
+    rows = np.flatnonzero(np.isfinite(values))
+    finite, row = values[rows], int(rows[0]) if rows.size else 0
+    if not finite.size or not np.all(np.abs(finite) > limit) or np.max(np.abs(finite)) > POSITION_LIMIT_UM:
+        return
+    spread = float(np.ptp(finite))
+    if 0.0 < spread < limit:  # drift plausible, level not
+        raise InputError(
+            f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
+            f"{values[row]:g} µm), while they span only {spread:.4g} µm: a position logged from the machine's zero, "
+            "not a thermal error; read each reading less the run's first (the drift since the start) with "
+            f"--error '{column}-start', or widen the range with --range-error MAX"
+        )
 
 
 def _refuse_error_outside(values: np.ndarray, column: str, label: str, options: LoadOptions) -> None:
     """Refuse an error column none of whose readings (µm) is plausible: nothing would be left to take as missed."""
     limit = options.error_limit
-    rows = np.flatnonzero(np.isfinite(values))
-    finite, row = values[rows], int(rows[0])
-    beyond = f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
-    spread = float(np.ptp(finite))
-    if 0.0 < spread < limit and np.max(np.abs(finite)) <= POSITION_LIMIT_UM:  # drift plausible, level not
-        raise InputError(f"{beyond}{values[row]:g} µm), while they span only {spread:.4g} µm: {_from_zero(column)}")
+    _refuse_positions(values, column, label, limit)
+    row = int(np.flatnonzero(np.isfinite(values))[0])
     raise InputError(
-        f"{beyond}{values[row]:g} µm); widen the range with --range-error MAX, or name the thermal error's column"
+        f"{label}: column '{column}': every reading is beyond the plausible ±{limit:g} µm (row {row + 1}: "
+        f"{values[row]:g} µm); widen the range with --range-error MAX, or name the thermal error's column"
     )
 
 

@@ -133,7 +133,8 @@ def test_positions_logged_from_the_machines_zero_are_refused_with_the_spec_that_
     )
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
-    assert "every reading is beyond the plausible range" in err and "a position logged from the machine's zero" in err
+    assert "every reading is beyond the plausible ±100000 µm (row 1: " in err
+    assert "a position logged from the machine's zero" in err
     assert f"--error '{SPEC}'" in err
 
 
