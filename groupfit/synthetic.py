@@ -14,31 +14,13 @@ a quick run is enough: unit tests, the GA benchmark, examples.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pandas as pd
 
-from groupfit.errors import InputError
+from groupfit.column_values import ERROR_LIMIT_UM, TEMP_RANGE_C
+from groupfit.fe.tables import fail
+from groupfit.synthetic_config import Lag, LumpedScenario, parse_lumped
 
-PAPER_SCHEDULE = ((3000.0, 1.0), (1000.0, 0.0), (4000.0, 1.0), (1000.0, 0.0), (21000.0, 1.0))
-"""(duration s, relative heat) steps of the paper's cycle, the last held to 30 000 s."""
-
-
-@dataclass(frozen=True)
-class Lag:
-    """A first-order thermal capacity: time constant (s), gain (K per unit heat)."""
-
-    tau_s: float
-    gain: float
-
-
-DEFAULT_SENSORS = {
-    "T1": Lag(500.0, 9.0),
-    "T2": Lag(1400.0, 7.0),
-    "T3": Lag(3200.0, 5.0),
-    "T4": Lag(7000.0, 3.5),
-}
 DEFAULT_PARTS = (
     (Lag(350.0, 1.0), 6.0),
     (Lag(2500.0, 1.0), 9.0),
@@ -70,35 +52,77 @@ def lag_response(lag: Lag, heat: np.ndarray, dt: float) -> np.ndarray:
 def simulate_lumped(config: dict) -> pd.DataFrame:
     """Run the lumped model described by a ``kind = "lumped"`` configuration.
 
-    Keys (all optional): ``period_s`` (100), ``n_samples`` (300),
-    ``ambient_c`` (20), ``noise_c`` (0.02, sensor noise σ in °C), ``seed`` (0),
-    ``schedule`` (list of ``[duration_s, relative_heat]``, default the paper's
-    cycle), ``sensors`` (table name → ``[tau_s, gain]``).
-    """
-    known = {"kind", "period_s", "n_samples", "ambient_c", "noise_c", "seed", "schedule", "sensors", "substeps"}
-    unknown = sorted(set(config) - known)
-    if unknown:
-        raise InputError(f"lumped config: unknown key '{unknown[0]}'; known keys: {', '.join(sorted(known))}")
-    period = float(config.get("period_s", 100.0))
-    n_samples = int(config.get("n_samples", 300))
-    substeps = int(config.get("substeps", 10))
-    if period <= 0 or n_samples < 2 or substeps < 1:
-        raise InputError("lumped config: period_s must be > 0, n_samples ≥ 2 and substeps ≥ 1")
-    schedule = [tuple(map(float, step)) for step in config.get("schedule", PAPER_SCHEDULE)]
-    if any(d <= 0 for d, _ in schedule):
-        raise InputError("lumped config: every schedule step needs a positive duration")
-    sensors = {name: Lag(*map(float, value)) for name, value in config.get("sensors", {}).items()} or DEFAULT_SENSORS
-    ambient = float(config.get("ambient_c", 20.0))
-    rng = np.random.default_rng(int(config.get("seed", 0)))
-    noise = float(config.get("noise_c", 0.02))
+    Parameters
+    ----------
+    config : dict
+        The scenario; every key is optional: ``period_s`` (100), ``n_samples``
+        (300), ``substeps`` (10), ``ambient_c`` (20), ``noise_c`` (0.02,
+        sensor noise σ in °C), ``seed`` (0), ``schedule`` (list of
+        ``[duration_s, relative_heat]``, default the paper's cycle),
+        ``sensors`` (table name → ``[tau_s, gain]``). The bounds are
+        :func:`groupfit.synthetic_config.parse_lumped`'s.
 
-    dt = period / substeps
-    heat = heat_series(schedule, period, n_samples, substeps)
+    Returns
+    -------
+    pandas.DataFrame
+        ``time_s`` (from ``period_s``), the sensors (°C), ``error_um`` and ``spindle_on``.
+
+    Raises
+    ------
+    InputError
+        On an unknown key, a wrong type or a value the model cannot run.
+    """
+    scenario = parse_lumped(config)
+    _refuse_implausible_levels(scenario)
+    n_samples, substeps = scenario.n_samples, scenario.substeps
+    rng = np.random.default_rng(scenario.seed)
+    dt = scenario.period_s / substeps
+    heat = heat_series(scenario.schedule, scenario.period_s, n_samples, substeps)
     sample = slice(substeps - 1, None, substeps)
-    table = {"time_s": np.arange(1, n_samples + 1) * period}
-    for name, lag in sensors.items():
-        table[name] = ambient + lag_response(lag, heat, dt)[sample] + noise * rng.standard_normal(n_samples)
+    table = {"time_s": np.arange(1, n_samples + 1) * scenario.period_s}
+    for name, lag in scenario.sensors.items():
+        noise = scenario.noise_c * rng.standard_normal(n_samples)
+        table[name] = scenario.ambient_c + lag_response(lag, heat, dt)[sample] + noise
     error = sum(weight * lag_response(lag, heat, dt)[sample] for lag, weight in DEFAULT_PARTS)
     table["error_um"] = error + 0.05 * rng.standard_normal(n_samples)
     table["spindle_on"] = (heat[sample] > 0).astype(int)
+    _refuse_implausible_noise(table, scenario)
     return pd.DataFrame(table)
+
+
+def _refuse_implausible_levels(scenario: LumpedScenario) -> None:
+    """Refuse a sensor or an error whose steady level under the schedule's peak heat groupfit would not read back.
+
+    A lag starting at 0 never passes its steady level ``gain × heat``, so the
+    peak heat bounds every sample before any is computed.
+    """
+    peak_heat = max(heat for _, heat in scenario.schedule)
+    high = TEMP_RANGE_C[1]
+    for name, lag in scenario.sensors.items():
+        peak = scenario.ambient_c + lag.gain * peak_heat
+        if peak > high:
+            raise fail(
+                f"sensors.{name}",
+                f"gain {lag.gain!r} × the schedule's peak heat {peak_heat!r} over ambient_c {scenario.ambient_c!r} "
+                f"reaches {peak:g} °C, above the plausible {high:g} °C; lower the gain or the heat",
+            )
+    peak_error = sum(weight for _, weight in DEFAULT_PARTS) * peak_heat
+    if peak_error > ERROR_LIMIT_UM:
+        raise fail(
+            "schedule",
+            f"relative heat {peak_heat!r} drives the error to {peak_error:g} µm, beyond the plausible "
+            f"{ERROR_LIMIT_UM:g} µm; keep the heat of the order of 1",
+        )
+
+
+def _refuse_implausible_noise(table: dict[str, np.ndarray], scenario: LumpedScenario) -> None:
+    """Refuse a reading the noise took outside the plausible temperatures (the levels are checked before)."""
+    low, high = TEMP_RANGE_C
+    for name in scenario.sensors:
+        outside = np.flatnonzero((table[name] < low) | (table[name] > high))
+        if outside.size:
+            raise fail(
+                "noise_c",
+                f"noise of {scenario.noise_c!r} °C takes {name} to {table[name][outside[0]]:g} °C, outside the "
+                f"plausible {low:g}…{high:g} °C; lower noise_c or move ambient_c away from that bound",
+            )

@@ -15,13 +15,26 @@ from groupfit.screw.plots import plot_screw_dataset
 from groupfit.synthetic import simulate_lumped
 from groupfit.tomlconfig import read_toml
 
+SCENARIO_KINDS = ("headstock", "rod", "ballscrew", "lumped")
+"""The models ``simulate`` runs, named by the config's ``kind`` (``"headstock"`` when a non-empty file omits it)."""
+KINDS_TEXT = ", ".join(f'"{kind}"' for kind in SCENARIO_KINDS[:-1]) + f' or "{SCENARIO_KINDS[-1]}"'
+
 
 def read_scenario(path: str | Path) -> dict:
-    return read_toml(path, "scenario configuration")
+    """The parsed scenario file; an empty one is refused, its model being a default neither README nor SPEC states."""
+    config = read_toml(path, "scenario configuration")
+    if not config:
+        raise InputError(
+            f"{path}: the scenario configuration is empty; set kind = {KINDS_TEXT} and its keys (see configs/)"
+        )
+    return config
 
 
 def simulate_scenario(config: dict, *, progress: bool):
+    """The data set of a parsed scenario: the lumped network or a finite-element model."""
     kind = config.get("kind", "headstock")
+    if kind not in SCENARIO_KINDS:
+        raise InputError(f"config key 'kind': must be {KINDS_TEXT}, got {kind!r}")
     if kind == "lumped":
         return simulate_lumped(config)
     return fe.simulate_config(config, progress=progress)
