@@ -24,24 +24,61 @@ The runs are read as a long table: one row per approach, with the target
 position (mm), the direction (``+``/``-``, ``up``/``down``, ``1``/``-1``) and
 the deviation (µm). Every target must be approached equally often in each
 direction (at least twice); the standard cycle's five times is reported when
-it is not met, not refused.
+it is not met, not refused. A target position must be finite and within
+±:data:`TARGET_LIMIT_MM`, a deviation within ±:data:`ERROR_LIMIT_UM` (the
+limit every verb puts on an error): anything else is refused with its row
+(rows counted from 1, the header not a row), never evaluated.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
 
+from groupfit.column_values import ERROR_LIMIT_UM, POSITION_LIMIT_UM
 from groupfit.data import numeric_column, read_table
 from groupfit.errors import InputError
+from groupfit.readtable import COMPRESSED, TABLE_SUFFIXES
+from groupfit.textencoding import decode
+from groupfit.textlayout import fields_of, header_delimiter, with_newlines
 
 STANDARD_REPEATS = 5
 """Approaches per target and direction in ISO 230-2's standard test cycle."""
 UP_WORDS = ("+", "up", "1", "+1", "pos", "positive", "forward", "↑")
 DOWN_WORDS = ("-", "down", "-1", "neg", "negative", "backward", "↓")
+TARGET_LIMIT_MM = POSITION_LIMIT_UM / 1000.0
+"""Largest plausible target position (mm): 100 m, the largest position a machine's axis logs. A deviation is
+plausible within ±:data:`groupfit.column_values.ERROR_LIMIT_UM` (µm), as every verb reads an error."""
+
+
+@dataclass(frozen=True)
+class PlausibleValues:
+    """What a column of the runs holds: its unit, the largest plausible magnitude and what to do about a cell that
+    is missing or beyond it."""
+
+    unit: str
+    limit: float
+    when_missing: str
+    when_beyond: str
+
+
+TARGET_VALUES = PlausibleValues(
+    "mm",
+    TARGET_LIMIT_MM,
+    "fill in the target position (mm) of that approach",
+    "check the column's unit: target positions are read in mm (one logged in µm reads 1000× too large)",
+)
+DEVIATION_VALUES = PlausibleValues(
+    "µm",
+    ERROR_LIMIT_UM,
+    "fill in the deviation measured there (µm), or leave that target out of every run",
+    "check the column's unit: deviations are read in µm, actual minus target (one logged in nm reads 1000× too "
+    "large, an actual position instead of the deviation far too large)",
+)
 
 
 @dataclass(frozen=True)
@@ -146,15 +183,44 @@ class Iso230Result:
 
 
 def evaluate(up: np.ndarray, down: np.ndarray, targets_mm: Sequence[float]) -> Iso230Result:
-    """The ISO 230-2 result of deviations ``up``, ``down`` (n runs × m targets, µm)."""
+    """The ISO 230-2 result of deviations ``up``, ``down`` (n runs × m targets, µm).
+
+    Raises
+    ------
+    InputError
+        Shapes that do not match, fewer than 2 runs, a target position that is not finite or beyond
+        ±:data:`TARGET_LIMIT_MM`, a deviation that is not finite or beyond ±:data:`ERROR_LIMIT_UM`.
+    """
     up, down = np.asarray(up, dtype=float), np.asarray(down, dtype=float)
     targets = np.asarray(targets_mm, dtype=float)
     if up.shape != down.shape or up.ndim != 2 or up.shape[1] != len(targets):
         raise InputError(f"deviations of shape {up.shape} and {down.shape} for {len(targets)} targets")
     if up.shape[0] < 2:
-        raise InputError(f"{up.shape[0]} run(s) per direction: the repeatability needs at least 2 (ISO 230-2: 5)")
+        raise InputError(
+            f"{up.shape[0]} run(s) per direction: the repeatability needs at least 2 (ISO 230-2: 5); approach "
+            "every target at least twice from each side"
+        )
+    _refuse_implausible(up, down, targets)
     order = np.argsort(targets, kind="stable")
     return Iso230Result(targets_mm=targets[order], up=up[:, order], down=down[:, order])
+
+
+def _refuse_implausible(up: np.ndarray, down: np.ndarray, targets: np.ndarray) -> None:
+    """Refuse the first target position or deviation that is not finite or beyond its plausible limit."""
+    outside = ~(np.abs(targets) <= TARGET_LIMIT_MM)  # NaN too
+    if outside.any():
+        raise InputError(
+            f"target position {targets[outside][0]:g} mm: not a position within the plausible "
+            f"±{TARGET_LIMIT_MM:g} mm of an axis"
+        )
+    for runs, arrow in ((up, "↑"), (down, "↓")):
+        outside = ~(np.abs(runs) <= ERROR_LIMIT_UM)
+        if outside.any():
+            run, at = np.argwhere(outside)[0]
+            raise InputError(
+                f"run {run + 1} {arrow} at {targets[at]:g} mm: deviation {runs[run, at]:g} µm is not within the "
+                f"plausible ±{ERROR_LIMIT_UM:g} µm; check that it is in µm, actual minus target"
+            )
 
 
 def direction_sign(value: Any) -> int:
@@ -169,33 +235,153 @@ def direction_sign(value: Any) -> int:
     return 0
 
 
+def _cell_text(value: Any) -> str:
+    """A cell as the file wrote it, quoted (``'0'``, ``'cw'``, not ``np.int64(0)``), or ``empty``.
+
+    Parameters
+    ----------
+    value
+        The cell as the table holds it: text, a number (a whole float written as an integer) or NaN.
+
+    Returns
+    -------
+    str
+    """
+    if pd.isna(value) or str(value).strip() == "":
+        return "empty"
+    if isinstance(value, (float, np.floating)):
+        number = float(value)
+        return repr(str(int(number)) if number.is_integer() and abs(number) < 1e15 else repr(number))
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        return repr(str(int(value)))
+    return repr(str(value))
+
+
 def load_runs(
     source, *, target: str = "target_mm", direction: str = "direction", deviation: str = "deviation_um"
 ) -> Iso230Result:
     """Read bidirectional positioning runs (a long table, module docstring) and evaluate them.
 
     Each target's approaches in one direction are taken in the order of the
-    rows (run 1 first). Refused with the file, column and row: a missing
-    column, a non-numeric target or deviation, a direction that is neither,
-    a target approached in one direction only or unequally often.
+    rows (run 1 first). Refused with the file, column and row (rows counted
+    from 1, the header not a row): a missing column, a non-numeric, empty or
+    implausible target (beyond ±:data:`TARGET_LIMIT_MM`) or deviation (beyond
+    ±:data:`ERROR_LIMIT_UM`), a direction that is neither, a single target, a
+    target approached in one direction only or unequally often, fewer than two
+    runs each way.
     """
+    if isinstance(source, (str, Path)):
+        _refuse_no_file(Path(source))
     frame, _, label = read_table(source)
     for name in (target, direction, deviation):
         if name not in frame.columns:
             raise InputError(
-                f"{label}: column '{name}' not found (target position mm, direction +/-, deviation um); "
+                _header_read_below(source, frame, label, (target, direction, deviation))
+                or f"{label}: column '{name}' not found (target position mm, direction +/-, deviation um); "
                 f"the columns are: {', '.join(map(str, frame.columns))}"
             )
-    targets = numeric_column(frame, target, label, allow_nonfinite=False)
-    deviations = numeric_column(frame, deviation, label, allow_nonfinite=False)
-    signs = np.array([direction_sign(v) for v in frame[direction]])
+    table = pd.DataFrame(
+        {
+            "target": _plausible_column(frame, target, label, TARGET_VALUES),
+            "sign": _direction_signs(frame, direction, label),
+            "deviation": _plausible_column(frame, deviation, label, DEVIATION_VALUES),
+        }
+    )
+    positions = _evenly_approached(table, label, target)
+    up, down = (
+        np.column_stack([table.deviation[(table.target == p) & (table.sign == sign)].to_numpy() for p in positions])
+        for sign in (1, -1)
+    )
+    try:
+        return evaluate(up, down, positions)
+    except InputError as exc:
+        raise InputError(f"{label}: {exc}") from None
+
+
+def _header_read_below(source, frame: pd.DataFrame, label: str, names: Sequence[str]) -> str:
+    """The refusal of a text table whose first line names the columns ``names`` but which was read with a row
+    below it as its header; "" for any other table.
+
+    A row with a word where a number belongs (``-,20,abc``) is mostly text in this table, whose directions are
+    text: :func:`groupfit.data.read_table` takes it for the header, the rows above it for a preamble.
+    """
+    path = Path(source) if isinstance(source, (str, Path)) else None
+    if path is None or path.suffix.lower() in COMPRESSED or TABLE_SUFFIXES.get(path.suffix.lower(), "CSV") != "CSV":
+        return ""
+    lines = [line for line in with_newlines(decode(path.read_bytes())).split("\n") if line.strip()]
+    separator = header_delimiter(lines[0])
+    cells = [[field.strip().strip('"').strip() for field in fields_of(line, separator)] for line in lines]
+    read_header = [str(name) for name in frame.columns]
+    if not set(names) <= set(cells[0]) or read_header not in cells[1:]:
+        return ""
+    row = cells.index(read_header, 1)
+    return (
+        f"{label}: row {row}, {lines[row].strip()!r}: text where a number belongs (a target position, a deviation) "
+        "made it read as the header, the rows above it as a preamble; write the number, or leave that target out "
+        "of every run"
+    )
+
+
+def _refuse_no_file(path: Path) -> None:
+    """One line for a path that is no file of runs (read_table's own names an option iso230 lacks)."""
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give the file of the runs (CSV, Excel, Parquet, MATLAB, TDMS or JSON)")
+    if not path.exists():
+        raise InputError(f"{path}: file not found; check the path of the runs")
+    if not path.is_file():
+        raise InputError(f"{path}: not a regular file (a device or a pipe); give the file of the runs")
+
+
+def _plausible_column(frame: pd.DataFrame, column: str, label: str, plausible: PlausibleValues) -> np.ndarray:
+    """The column as numbers, refusing the first cell that is empty, not finite or beyond ``plausible.limit``.
+
+    Parameters
+    ----------
+    frame, column, label
+        The table, the column read and how messages name the table.
+    plausible
+        The column's unit, its limit and what to do about a bad cell.
+
+    Returns
+    -------
+    ndarray
+    """
+    values = numeric_column(frame, column, label, allow_nonfinite=True)
+    bad = ~(np.abs(values) <= plausible.limit)  # NaN and ±inf too
+    if not bad.any():
+        return values
+    row = int(np.flatnonzero(bad)[0])
+    if np.isfinite(values[row]):
+        unit = plausible.unit
+        what = f": {values[row]:g} {unit} is beyond the plausible ±{plausible.limit:g} {unit}"
+        todo = plausible.when_beyond
+    else:
+        what, todo = _cell_phrase(frame[column].iloc[row], "not a finite number"), plausible.when_missing
+    raise InputError(f"{label}: row {row + 1}, column '{column}'{what} ({int(bad.sum())} such row(s)); {todo}")
+
+
+def _cell_phrase(value: Any, fault: str) -> str:
+    """What follows ``row N, column 'C'`` in a refusal: `` is empty``, or ``: 'cw' is {fault}`` (the cell as
+    :func:`_cell_text` quotes it)."""
+    cell = _cell_text(value)
+    return " is empty" if cell == "empty" else f": {cell} is {fault}"
+
+
+def _direction_signs(frame: pd.DataFrame, column: str, label: str) -> np.ndarray:
+    """+1 or −1 per row, refusing the first cell that is no direction (:func:`direction_sign`)."""
+    signs = np.array([direction_sign(v) for v in frame[column]])
     if np.any(signs == 0):
         row = int(np.flatnonzero(signs == 0)[0])
         raise InputError(
-            f"{label}: row {row + 2}, column '{direction}': {frame[direction].iloc[row]!r} is no direction; "
+            f"{label}: row {row + 1}, column '{column}'{_cell_phrase(frame[column].iloc[row], 'no direction')}; "
             "write + or - (up/down, 1/-1)"
         )
-    table = pd.DataFrame({"target": targets, "sign": signs, "deviation": deviations})
+    return signs
+
+
+def _evenly_approached(table: pd.DataFrame, label: str, target: str) -> np.ndarray:
+    """The target positions (ascending) of ``table`` (target, sign, deviation), refusing a single target and one
+    approached from one side only or less often than another."""
     counts = table.groupby(["target", "sign"]).size().unstack(fill_value=0)
     for sign, word in ((1, "positive"), (-1, "negative")):
         if sign not in counts.columns or (counts[sign] == 0).any():
@@ -211,17 +397,12 @@ def load_runs(
             f"{label}: target {at:g} mm is approached {repeats} time(s) in the {'+' if sign > 0 else '-'} "
             f"direction, up to {most} elsewhere: give every target the same number of runs each way"
         )
-    positions = counts.index.to_numpy(dtype=float)
-    up, down = (
-        np.column_stack([table.deviation[(table.target == p) & (table.sign == sign)].to_numpy() for p in positions])
-        for sign in (1, -1)
-    )
-    if len(positions) < 2:
-        raise InputError(f"{label}: one target position only; ISO 230-2 evaluates an axis at several")
-    try:
-        return evaluate(up, down, positions)
-    except InputError as exc:
-        raise InputError(f"{label}: {exc}") from None
+    if len(counts.index) < 2:
+        raise InputError(
+            f"{label}: column '{target}' holds one target position only ({counts.index[0]:g} mm); ISO 230-2 "
+            "evaluates an axis at several: measure at least 2"
+        )
+    return counts.index.to_numpy(dtype=float)
 
 
 def simulate_runs(
@@ -263,4 +444,12 @@ def simulate_runs(
     return pd.DataFrame(rows, columns=["run", "direction", "target_mm", "deviation_um"])
 
 
-__all__ = ["Iso230Result", "STANDARD_REPEATS", "direction_sign", "evaluate", "load_runs", "simulate_runs"]
+__all__ = [
+    "Iso230Result",
+    "STANDARD_REPEATS",
+    "TARGET_LIMIT_MM",
+    "direction_sign",
+    "evaluate",
+    "load_runs",
+    "simulate_runs",
+]

@@ -120,7 +120,7 @@ def test_the_verb_prints_writes_json_and_a_figure(tmp_path, capsys):
 @pytest.mark.parametrize(
     "change, message",
     [
-        (lambda f: f.assign(direction=f.direction.where(f.index != 3, "sideways")), "row 5, column 'direction'"),
+        (lambda f: f.assign(direction=f.direction.where(f.index != 3, "sideways")), "row 4, column 'direction'"),
         (lambda f: f.drop(index=[2]), "target 10 mm is approached 1 time(s) in the - direction, up to 2 elsewhere"),
         (lambda f: f[f.direction.isin(["+", "up"])], "never approached in the negative direction"),
         (lambda f: f.drop(columns="deviation_um"), "column 'deviation_um' not found"),
