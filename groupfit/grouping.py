@@ -23,6 +23,8 @@ DEFAULT_SOFT_OFFSET = 3
 """n: samples by which a soft group reaches back into the hard group before it (the paper's n)."""
 DEFAULT_SPACING = 3.0
 """c: every hard group holds more than c·M samples, M the coefficients per group."""
+MAX_SPACING = 1.0e6
+"""The largest c: a group of more than a million samples per coefficient is a slip, not a spacing."""
 
 
 def min_group_size(c: float, n_coef: int, n: int = 0) -> int:
@@ -34,8 +36,8 @@ def min_group_size(c: float, n_coef: int, n: int = 0) -> int:
     than the soft offset ``n``, or the next soft group would reach back past
     its start.
     """
-    if not math.isfinite(c) or c < 0:
-        raise InputError(f"spacing coefficient c = {c:g} must be a finite number ≥ 0")
+    if not (math.isfinite(c) and 0 <= c <= MAX_SPACING):
+        raise InputError(f"spacing coefficient c = {c:g} must be a number from 0 to {MAX_SPACING:g}")
     return max(int(math.floor(c * n_coef + 1e-12)) + 1, n_coef + 1, n + 1)
 
 

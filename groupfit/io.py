@@ -257,3 +257,14 @@ def file_sha256(path: str | Path) -> str:
         for block in iter(lambda: stream.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+def refuse_repeated(paths, what: str) -> None:
+    """Refuse a file named twice among ``paths`` (``what``: how the message names the role it was given in)."""
+    seen = set()
+    for path in paths:
+        if isinstance(path, (str, Path)) and Path(path).is_file():
+            key = Path(path).resolve()
+            if key in seen:
+                raise InputError(f"{path}: given twice {what}; name each run once")
+            seen.add(key)

@@ -13,7 +13,7 @@ from typing import Any, Mapping, Sequence
 
 from groupfit.error_scale import factor_problem
 from groupfit.errors import InputError
-from groupfit.grouping import hard_groups, soft_groups
+from groupfit.grouping import MAX_SPACING, hard_groups, soft_groups
 from groupfit.model_recalibration import recalibration_problem
 from groupfit.model_sections import section_shape_problem
 from groupfit.reference import reference_problem
@@ -24,7 +24,13 @@ from groupfit.switching_checks import (
     parse_derived,
     rule_section_problem,
 )
-from groupfit.training_checks import data_notes_problem, expectation_problem, recordings_problem, stage_problem
+from groupfit.training_checks import (
+    data_notes_problem,
+    expectation_problem,
+    recordings_problem,
+    span_problem,
+    stage_problem,
+)
 from groupfit.training_checks import is_number as _is_number
 
 FORMAT = "groupfit-model/1"
@@ -121,8 +127,8 @@ def _scalar_problem(model: Mapping[str, Any]) -> str | None:
         return f"p = {model['p']!r}: must be a whole number ≥ 0"
     if not is_whole(model["n"]) or model["n"] < 0:
         return f"n = {model['n']!r}: must be a whole number ≥ 0"
-    if not _is_number(model["c"]) or model["c"] < 0:
-        return f"c = {model['c']!r}: must be a finite number ≥ 0"
+    if not _is_number(model["c"]) or not 0 <= model["c"] <= MAX_SPACING:
+        return f"c = {model['c']!r}: must be a number from 0 to {MAX_SPACING:g}"
     if not _is_number(model["objective_value"]) or model["objective_value"] < 0:
         return f"objective_value = {model['objective_value']!r}: must be a finite number ≥ 0"
     n_samples = model.get("n_samples")
@@ -139,6 +145,7 @@ def _training_problem(model: Mapping[str, Any]) -> str | None:
         expectation_problem(training or {})
         or recordings_problem(training or {})
         or data_notes_problem(training or {})
+        or span_problem(training or {})
         or stage_problem(training or {}, model["temps"], len(model["coefficients"]))
     )
 

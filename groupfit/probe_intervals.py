@@ -24,6 +24,8 @@ from groupfit.errors import InputError
 from groupfit.io import save_figure
 
 UNITS_S = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
+MAX_CHECK_S = 1.0e9
+"""The longest check interval or first check (s, some 30 years): beyond it a number is a slip, not a schedule."""
 
 
 def parse_intervals(text: str) -> list[float]:
@@ -36,6 +38,11 @@ def parse_intervals(text: str) -> list[float]:
         seconds = float(match.group(1)) * UNITS_S[match.group(2) or ""]
         if not (math.isfinite(seconds) and seconds > 0):
             raise InputError(f"--probe-every: {item.strip()!r} must be longer than 0")
+        if seconds > MAX_CHECK_S:
+            raise InputError(
+                f"--probe-every: {item.strip()!r} is longer than {MAX_CHECK_S:g} s: write the interval in s, m or h "
+                "(e.g. 30m)"
+            )
         intervals.append(seconds)
     return intervals
 
@@ -46,8 +53,8 @@ def check_probe_first(first_s: float | None, intervals) -> None:
         return
     if not intervals:
         raise InputError("--probe-first needs --probe-every: give the interval of the checks too")
-    if not (math.isfinite(first_s) and first_s >= 0):
-        raise InputError(f"--probe-first {first_s:g}: must be a number of seconds >= 0")
+    if not (math.isfinite(first_s) and 0 <= first_s <= MAX_CHECK_S):
+        raise InputError(f"--probe-first {first_s:g}: must be a number of seconds from 0 to {MAX_CHECK_S:g}")
 
 
 def check_rows(n_samples: int, every: int, first: int | None = None) -> np.ndarray:

@@ -116,6 +116,12 @@ def with_reference(run, reference: str | None):
             f"{run.source}: the reference column '{reference}' is also an input; "
             "take it out of --temps or choose another reference"
         )
+    role = column_role(run, reference)
+    if role:
+        raise InputError(
+            f"{run.source}: the reference column '{reference}' is the run's {role}, not a temperature; name a "
+            "temperature sensor (the air's, e.g. T_amb) with --reference or --ambient, or --reference none"
+        )
     if is_column_reference(reference):
         if reference not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))
@@ -123,6 +129,16 @@ def with_reference(run, reference: str | None):
         numeric_column(run.frame, reference, run.source, allow_nonfinite=bool(np.isnan(run.temps).any()))
     temps = referenced(run.temps, reference, run.frame, run.source)
     return dataclasses.replace(run, temps=temps, reference=reference)
+
+
+def column_role(run, column: str) -> str | None:
+    """``"error"`` or ``"time"`` when ``column`` is the run's error or time column, else None: a column no
+    temperature can be taken relative to (or be read as)."""
+    if column == run.error_name:
+        return "error"
+    if column == run.time_name:
+        return "time"
+    return None
 
 
 def default_reference(frame, config_value: Any = None, inputs: Sequence[str] = ()) -> str | None:
@@ -149,6 +165,7 @@ def describe(reference: str | None) -> str:
 
 
 __all__ = [
+    "column_role",
     "AMBIENT_COLUMN",
     "START",
     "default_reference",

@@ -38,6 +38,8 @@ from groupfit.timestamps import clock_restart, refuse_clock_change, restart_refu
 
 GAP_PERIODS = 3
 """More empty periods in a row than this split the log into runs; fewer are interpolated."""
+MAX_RESAMPLED_ROWS = 5_000_000
+"""The most rows a resampled run may have (a period far below the log's would fill the memory with empty rows)."""
 
 
 @dataclass(frozen=True)
@@ -134,6 +136,7 @@ def resample_frame(
         values = pd.to_numeric(frame[column], errors="coerce")
         if values.notna().any() or empty_cells(frame[column]).all():
             numeric[column] = values.to_numpy(dtype=float)
+    _refuse_too_many_rows(stamps, period_s, label)
     start = stamps[0] - np.mod(stamps[0] - bin_phase(stamps, period_s), period_s)
     index = np.floor((stamps - start) / period_s + 1e-9).astype(np.int64)
     refuse_interleaved(frame, [stamp_groups(stamps), index], time=time, label=label)
@@ -163,6 +166,19 @@ def resample_frame(
             gaps.append((float(stamps[index == stop - 1][-1]), float(stamps[index == following][0])))
             first = following
     return Resampled(pieces=pieces, combined=int(len(stamps)), empty=empty, gaps=gaps, missed=unread, trimmed=trimmed)
+
+
+def _refuse_too_many_rows(stamps: np.ndarray, period_s: float, label: str) -> None:
+    """Refuse a period that would cut the run into more than :data:`MAX_RESAMPLED_ROWS` rows."""
+    rows = (stamps[-1] - stamps[0]) / period_s + 1.0
+    if rows > MAX_RESAMPLED_ROWS:
+        steps = np.diff(stamps)
+        steps = steps[steps > 0]
+        typical = f"; the log's own period is about {float(np.median(steps)):.3g} s" if steps.size else ""
+        raise InputError(
+            f"{label}: --resample {period_s:g} s cuts the run's {stamps[-1] - stamps[0]:g} s into {rows:.3g} rows "
+            f"(at most {MAX_RESAMPLED_ROWS:.0e}){typical}: give a longer period"
+        )
 
 
 def _without_ragged_ends(piece: pd.DataFrame, exempt: tuple[str, ...]) -> tuple[pd.DataFrame, int]:

@@ -8,6 +8,7 @@ from typing import Any, Mapping, Sequence
 
 from groupfit.error_start import ZERO_KEY
 from groupfit.features import Feature
+from groupfit.heldout.span import SPAN_KEY
 
 
 def is_number(value: Any) -> bool:
@@ -147,6 +148,24 @@ def data_notes_problem(training: Mapping[str, Any]) -> str | None:
     if notes is None or (isinstance(notes, list) and all(isinstance(n, str) and n for n in notes)):
         return None
     return "training.data_notes must be a list of lines (what loading did to the modelling logs)"
+
+
+def span_problem(training: Mapping[str, Any]) -> str | None:
+    """What is wrong with ``training.input_span`` (None: absent, or ``{input: [lowest, highest]}``)."""
+    span = training.get(SPAN_KEY)
+    if span is None:
+        return None
+    if not isinstance(span, Mapping):
+        return f"training.{SPAN_KEY} must be an object: each input's [lowest, highest] on the modelling run"
+    for name, bounds in span.items():
+        if (
+            not isinstance(bounds, list)
+            or len(bounds) != 2
+            or not all(is_number(b) for b in bounds)
+            or bounds[0] > bounds[1]
+        ):
+            return f"training.{SPAN_KEY}.{name} = {bounds!r}: must be [lowest, highest], two numbers"
+    return None
 
 
 def expectation_problem(training: Mapping[str, Any]) -> str | None:

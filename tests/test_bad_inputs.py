@@ -96,6 +96,57 @@ NEW_CASES = [
     Case("data", "position of 1e300", position_fit("position_huge.csv"), "row 31, column 'P_mm'"),
     Case("data", "--position an input", position_fit("position.csv", "--position", "T1"), "also a temperature input"),
     Case("data", "wide column without a position", position_fit("wide_abc.csv"), "err_Pabc"),
+    # a column in a role it cannot play: the error as the reference or the heat, the clock as a temperature
+    Case("data", "--reference the error", data_fit("good.csv", "--reference", "error_um"), "is the run's error"),
+    Case("data", "--reference the time", data_fit("good.csv", "--reference", "time_s"), "is the run's time"),
+    Case("data", "--ambient the error", data_fit("good.csv", "--ambient", "error_um"), "--ambient column 'error_um'"),
+    Case("data", "diagnose --ambient the error", diagnose("--ambient", "error_um"), "is the run's error"),
+    Case(
+        "data",
+        "compare --heat the error",
+        (
+            "compare",
+            "--quiet",
+            "--data",
+            "{in}/good.csv",
+            "--temps",
+            "T1,T2",
+            "--pmax",
+            "1",
+            "--heat",
+            "error_um",
+            "--out",
+            "{out}/r",
+        ),
+        "heat column 'error_um' is the run's error",
+    ),  # fmt: skip
+    Case(
+        "data",
+        "a heat level below 0 in a validation run",
+        (
+            "compare",
+            "--quiet",
+            "--data",
+            "{in}/good.csv",
+            "--validate",
+            "{in}/reversed.csv",
+            "--temps",
+            "T1,T2",
+            "--pmax",
+            "1",
+            "--heat",
+            "spindle_on",
+            "--out",
+            "{out}/r",
+        ),
+        "column 'spindle_on' = -1",
+    ),  # fmt: skip
+    Case(
+        "data",
+        "--dead-band-ref the error",
+        position_fit("position.csv", "--dead-band", "1", "--dead-band-ref", "error_um"),
+        "the run's error",
+    ),
     Case("data", "two wide columns at one position", position_fit("wide_twin.csv"), "both at 100 mm"),
     # parameters that mean nothing
     Case("parameters", "--seed -1", data_fit("good.csv", "--seed", "-1"), "invalid seed"),
@@ -292,6 +343,53 @@ CASES = [
         "--position-ref",
     ),
     Case("parameters", "--dead-band negative", position_fit("position.csv", "--dead-band", "-1"), "--dead-band -1"),
+    Case("parameters", "--resample 1e-300", data_fit("good.csv", "--resample", "1e-300"), "at most 5e+06"),
+    Case("parameters", "--c 1e308", data_fit("good.csv", "--c", "1e308"), "from 0 to 1e+06"),
+    Case(
+        "parameters",
+        "--probe-first 1e300",
+        ("replay", "{in}/model.json", "--data", "{in}/good.csv", "--probe-every", "600", "--probe-first", "1e300"),
+        "--probe-first 1e+300",
+    ),
+    Case(
+        "parameters",
+        "compare --probe-every 1e300",
+        (
+            "compare",
+            "--quiet",
+            "--data",
+            "{in}/good.csv",
+            "--temps",
+            "T1,T2",
+            "--probe-every",
+            "1e300",
+            "--out",
+            "{out}/r",
+        ),
+        "longer than 1e+09 s",
+    ),  # fmt: skip
+    Case(
+        "parameters",
+        "--resolution-um 1e-300",
+        ("export", "{in}/model.json", "--target", "sheet", "--resolution-um", "1e-300", "--out", "{out}/e"),
+        "integer resolution 1e-300",
+    ),
+    Case(
+        "parameters",
+        "--counts-limit beyond 32 bits",
+        (
+            "export",
+            "{in}/model.json",
+            "--target",
+            "sheet",
+            "--counts-limit",
+            "99999999999999999999",
+            "--out",
+            "{out}/e",
+        ),
+        "a 32-bit register",
+    ),
+    Case("parameters", "--dead-band without --position", data_fit("good.csv", "--dead-band", "1"), "needs --position"),
     Case(
         "parameters",
         "--dead-band without its reference",
@@ -328,6 +426,8 @@ CASES = [
             ("position travel reversed", "position_travel.json", "position.travel_mm"),
             ("position column an input", "position_input.json", "also a model input"),
             ("dead band of 0 °C", "dead_band_zero.json", "dead_band.threshold_c"),
+            ("input span a number", "span_number.json", "training.input_span.T1"),
+            ("spacing coefficient 1e308", "c_huge.json", "c = 1e+308"),
         ]
         for verb, argv in [
             ("replay", ("replay", f"{{in}}/{name}", "--data", "{in}/good.csv", "--json", "{out}/r.json")),
@@ -554,6 +654,7 @@ def _write_inputs(folder: Path) -> None:
     changed("huge_error.csv", "error_um", 20, 1e300)
     changed("nan.csv", "T3", 5, float("nan"))
     changed("backwards.csv", "time_s", 30, 100.0)
+    good.assign(spindle_on=-good["spindle_on"]).to_csv(folder / "reversed.csv", index=False)
     good.assign(T4=21.0).to_csv(folder / "constant.csv", index=False)
     good.assign(error_um=0.0).to_csv(folder / "constant_error.csv", index=False)
     good.assign(time_s=good["time_s"] * 0.6).to_csv(folder / "fast.csv", index=False)
@@ -610,6 +711,8 @@ def _write_inputs(folder: Path) -> None:
         "position_travel": lambda m: m.update(position={**with_position(m), "travel_mm": [100.0, 0.0]}),
         "position_input": lambda m: m.update(position={**with_position(m), "column": "T1"}),
         "dead_band_zero": lambda m: m.update(dead_band={"reference": "T_amb", "threshold_c": 0.0}),
+        "span_number": lambda m: m.update(training={**m.get("training", {}), "input_span": {"T1": 5.0}}),
+        "c_huge": lambda m: m.update(c=1e308),
     }
     for name, mutate in mutations.items():
         mutated = copy.deepcopy(model)

@@ -111,7 +111,10 @@ def test_logged_checks_in_their_own_column(tmp_path, model_path):
         (["--probe-every", "0"], "--probe-every 0: must be a number of seconds > 0"),
         (["--probe-every", "nan"], "must be a number of seconds > 0"),
         (["--probe-column", "nope"], "column 'nope' not found"),
-        (["--probe-every", "1000", "--probe-first", "-1"], "--probe-first -1: must be a number of seconds >= 0"),
+        (
+            ["--probe-every", "1000", "--probe-first", "-1"],
+            "--probe-first -1: must be a number of seconds from 0 to 1e+09",
+        ),
         (["--probe-first", "0"], "--probe-first needs --probe-every"),
         (["--probe-every", "1000", "--probe-first", "1e9"], "--probe-first 1e+09: after the run's last sample"),
     ],
@@ -186,7 +189,10 @@ def test_compare_places_its_first_check_as_replay_does(tmp_path, capsys):
     "args, message",
     [
         (["--probe-first", "0"], "--probe-first needs --probe-every"),
-        (["--probe-every", "30m", "--probe-first", "-5"], "--probe-first -5: must be a number of seconds >= 0"),
+        (
+            ["--probe-every", "30m", "--probe-first", "-5"],
+            "--probe-first -5: must be a number of seconds from 0 to 1e+09",
+        ),
     ],
 )
 def test_compare_refuses_a_bad_first_check_with_one_line(tmp_path, capsys, args, message):

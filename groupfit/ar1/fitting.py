@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from groupfit.ar1.inputs import check_heat
 from groupfit.ar1.modelfile import HEAT_MARGIN, AR1File
 from groupfit.ar1.rule import AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step  # noqa: F401 - re-exported for the fit
@@ -38,17 +39,6 @@ def closed_form_from_toml(path: str | Path) -> dict[str, float]:
         return {key: float(rod[key]) for key in ROD_KEYS}
     except (TypeError, ValueError):
         raise InputError(f"{path}: [rod] values must be numbers") from None
-
-
-def check_heat(heat: np.ndarray, *, source: str, name: str) -> None:
-    """Refuse a heat reading that is not finite or below 0, naming its row (1-based) and column."""
-    heat = np.asarray(heat, dtype=float)
-    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0))
-    if bad.size:
-        raise InputError(
-            f"{source}: row {int(bad[0]) + 1}, column '{name}' = {float(heat[bad[0]]):g}: "
-            "the heat reading must be a finite number >= 0"
-        )
 
 
 @dataclass
@@ -148,4 +138,4 @@ def fit_ar1_file(
     return AR1Fit(model, estimator, np.arange(len(error)) * period_s, error, prediction, scores)
 
 
-__all__ = ["AR1Fit", "ROD_KEYS", "check_heat", "closed_form_from_toml", "decimate", "decimation_step", "fit_ar1_file"]
+__all__ = ["AR1Fit", "ROD_KEYS", "closed_form_from_toml", "decimate", "decimation_step", "fit_ar1_file"]

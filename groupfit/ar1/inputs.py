@@ -7,16 +7,37 @@ import numpy as np
 
 from groupfit.data import Run, numeric_column
 from groupfit.errors import InputError
+from groupfit.reference import column_role
 from groupfit.resample import GAP_PERIODS
 
 
+def check_heat(heat: np.ndarray, *, source: str, name: str) -> None:
+    """Refuse a heat reading that is not finite or below 0, naming its row (1-based) and column."""
+    heat = np.asarray(heat, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0))
+    if bad.size:
+        raise InputError(
+            f"{source}: row {int(bad[0]) + 1}, column '{name}' = {float(heat[bad[0]]):g}: "
+            "the heat reading must be a finite number >= 0 (a speed logged with its sense of rotation: log its size)"
+        )
+
+
 def heat_column(run: Run, heat: str) -> np.ndarray:
+    """The heat level of the AR(1) model (a speed, a power, a heat flux): read on every row, ≥ 0."""
     if heat not in run.frame.columns:
         raise InputError(
             f"{run.source}: heat column '{heat}' for the AR(1) model not found; name it with --heat COLUMN "
             "(or [compare] heat), or leave the AR(1) model out with --heat none"
         )
-    return read_on_every_row(run, heat)
+    role = column_role(run, heat)
+    if role:
+        raise InputError(
+            f"{run.source}: heat column '{heat}' is the run's {role}; name the heat level (a speed, a power) with "
+            "--heat COLUMN, or leave the AR(1) model out with --heat none"
+        )
+    values = read_on_every_row(run, heat)
+    check_heat(values, source=str(run.source), name=heat)
+    return values
 
 
 def read_on_every_row(run: Run, column: str) -> np.ndarray:

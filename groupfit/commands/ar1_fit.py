@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from groupfit.ar1.fitting import check_heat, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
+from groupfit.ar1.fitting import closed_form_from_toml, decimate, decimation_step, fit_ar1_file
+from groupfit.ar1.inputs import check_heat
 from groupfit.ar1.modelfile import STARTS
 from groupfit.commands import common
 from groupfit.data import load_run, numeric_column

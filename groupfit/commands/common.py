@@ -33,7 +33,7 @@ from groupfit.data_options import (
 )
 from groupfit.errors import InputError
 from groupfit.export import write
-from groupfit.io import atomic_write_text, to_json
+from groupfit.io import atomic_write_text, refuse_repeated, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 from groupfit.outputs import commit_outputs as commit_outputs  # the verbs import it from here
 from groupfit.outputs import current_plan
@@ -294,6 +294,7 @@ def load_configured_runs(data: DataSettings, path: str | None = None, **options)
     paths = (path,) if path else data.paths
     if not paths:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
+    refuse_repeated(paths, "as data")
     options = _load_options(data, options)
     return [run for p in paths for run in load_runs(p, **options)]
 

@@ -20,7 +20,6 @@ from groupfit.probe_intervals import (
     interval_plan,
     interval_summary,
     interval_table,
-    parse_intervals,
     parse_tolerance,
     plan_summary,
     plot_intervals,
@@ -56,7 +55,7 @@ def add_parser(verbs) -> None:
     add_interval_options(compare)
     compare.add_argument(
         "--probe-every",
-        type=parse_intervals,
+        type=option_values.check_intervals,
         metavar="T,T,…",
         help="also the error against a probe check every T (e.g. 5m,15m,30m,60m,120m; s, m, h or seconds) for "
         "every model on the validation runs, through the offset hold: printed, plotted and in --json",

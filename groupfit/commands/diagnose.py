@@ -25,6 +25,7 @@ from groupfit.errors import InputError
 from groupfit.fast_response import stage_of, without_stage
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
+from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
 from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.runtime import replay_groups
@@ -221,6 +222,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     time = args.time or time_column(model)
     clock = {**common.clock_options(args), **common.range_options(args), "time_is_default": args.time is None}
     glitches = {"drop_glitches": not args.keep_glitches}
+    refuse_repeated([*args.data, *(args.validate or [])], "as data (--data, --validate)")
     data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
     validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     refuse_too_short(data, model)

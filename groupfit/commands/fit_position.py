@@ -9,6 +9,7 @@ from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C
 from groupfit.errors import InputError
 from groupfit.model import DeadBand
 from groupfit.position import choose_p0, cross_validate_order, load_position_run, residual_by_order, with_position
+from groupfit.reference import column_role
 from groupfit.settings import DataSettings
 
 
@@ -18,6 +19,11 @@ def check_position_options(args: argparse.Namespace) -> None:
         for name in ("position_order", "position_ref"):
             if getattr(args, name) is not None:
                 raise InputError(f"--{name.replace('_', '-')} needs --position COLUMN")
+    if args.dead_band is not None and not args.position:
+        raise InputError(
+            "--dead-band needs --position COLUMN: the dead band holds a position model's compensation "
+            "(docs/position.md)"
+        )
     if args.dead_band_ref is not None and args.dead_band is None:
         raise InputError("--dead-band-ref needs --dead-band C")
     if args.dead_band is not None and not (0 < args.dead_band <= 50):
@@ -56,6 +62,9 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
             raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
         if reference not in position_run.run.frame.columns:
             raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
+        role = column_role(position_run.run, reference)
+        if role:
+            raise InputError(f"--dead-band-ref '{reference}': the run's {role}; name a temperature sensor (the air's)")
         dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
     fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
     orders = residual_by_order(model, position_run, p0)

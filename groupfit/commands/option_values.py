@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 
+from groupfit.errors import InputError
 from groupfit.model_checks import MAX_RIDGE_ALPHA
+from groupfit.probe_intervals import parse_intervals
 
 
 def resample_seconds(text: str) -> float:
@@ -42,4 +44,12 @@ def ridge_value(text: str) -> float | str:
     return value
 
 
-__all__ = ["resample_seconds", "ridge_value", "seed_value"]
+def check_intervals(text: str) -> list[float]:
+    """--probe-every T,T,…: intervals with a unit (s, m, h; a bare number: seconds), each > 0."""
+    try:
+        return parse_intervals(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--probe-every: ")) from None
+
+
+__all__ = ["check_intervals", "resample_seconds", "ridge_value", "seed_value"]

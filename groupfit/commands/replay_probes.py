@@ -21,7 +21,7 @@ from groupfit.data import length_unit, numeric_column
 from groupfit.error_scale import scaled_values
 from groupfit.error_start import from_start, is_from_start, logged_spec
 from groupfit.errors import InputError
-from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows
+from groupfit.probe_intervals import MAX_CHECK_S, check_probe_first, check_rows, on_measured_rows
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
 
@@ -62,8 +62,10 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
     check_probe_first(args.probe_first, args.probe_every)
     if args.probe_every is None and args.probe_column is None:
         return None
-    if args.probe_every is not None and not (math.isfinite(args.probe_every) and args.probe_every > 0):
-        raise InputError(f"--probe-every {args.probe_every:g}: must be a number of seconds > 0")
+    if args.probe_every is not None and not (math.isfinite(args.probe_every) and 0 < args.probe_every <= MAX_CHECK_S):
+        raise InputError(
+            f"--probe-every {args.probe_every:g}: must be a number of seconds > 0, at most {MAX_CHECK_S:g}"
+        )
     first = args.probe_first
     if args.probe_column is not None:
         column, factor = scaled_values(run.frame, args.probe_column, run.source)

@@ -22,6 +22,7 @@ from groupfit.continuation import same_recording
 from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
 from groupfit.error_start import ZERO_KEY
 from groupfit.errors import InputError
+from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
 from groupfit.recordings import continued_recording
 from groupfit.runtime import RuleTables, SwitchingRule
@@ -84,6 +85,7 @@ def earlier_recordings(
     rule's saved state at that file's end when the file is not at hand (module docstring)."""
     if args.continues and args.fresh:
         raise InputError("--fresh and --continues: give one of them (--fresh starts the rule afresh)")
+    refuse_repeated([*(args.continues or []), args.data], "to replay (--data, --continues)")
     if args.continues or args.fresh:
         return list(args.continues or []), [load(path) for path in args.continues or []], None, None
     found, note, entry = continued_recording(model.training, run, args.model)

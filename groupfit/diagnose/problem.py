@@ -31,6 +31,7 @@ from groupfit.heldout.design import group_index, group_sample_floor, stacked_des
 from groupfit.heldout.folds import Folds, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
+from groupfit.reference import column_role
 from groupfit.resample import GAP_PERIODS
 
 Model = ModelFile
@@ -182,6 +183,12 @@ def check_arguments(model: Model, data_runs: list[Run], *, ambient: Sequence[str
             raise InputError(
                 f"{missing[0].source}: --ambient column '{column}' not found; columns: "
                 f"{', '.join(map(str, missing[0].frame.columns))}"
+            )
+        role = column_role(data_runs[0], column)
+        if role:
+            raise InputError(
+                f"{data_runs[0].source}: --ambient column '{column}' is the run's {role}, not a temperature; "
+                "name the air's temperature sensor"
             )
         if column in model.temps:
             raise InputError(

@@ -52,6 +52,13 @@ def sinumerik_total_um(k0_mm: float, slope: float, position_mm: float, ref_posit
     return (k0_mm + slope * (position_mm - ref_position_mm)) * UM_PER_MM
 
 
+MIN_RESOLUTION_UM = 1e-6
+MAX_RESOLUTION_UM = 1e5
+"""The µm one count of an integer register may stand for: a picometre to the largest plausible error."""
+MAX_COUNTS = 2**31 - 1
+"""The largest magnitude of an integer register (a signed 32-bit word)."""
+
+
 @dataclass(frozen=True)
 class IntegerForm:
     """A fixed-point compensation register: ``counts = C / resolution``, saturating.
@@ -68,10 +75,16 @@ class IntegerForm:
     limit: int = 30000
 
     def __post_init__(self):
-        if not (math.isfinite(self.resolution_um) and self.resolution_um > 0):
-            raise InputError(f"integer resolution {self.resolution_um!r} µm must be a positive number")
-        if int(self.limit) != self.limit or self.limit < 1:
-            raise InputError(f"integer limit {self.limit!r} must be a whole number ≥ 1")
+        if not (math.isfinite(self.resolution_um) and MIN_RESOLUTION_UM <= self.resolution_um <= MAX_RESOLUTION_UM):
+            raise InputError(
+                f"integer resolution {self.resolution_um!r} µm: give the µm one count stands for, "
+                f"{MIN_RESOLUTION_UM:g} to {MAX_RESOLUTION_UM:g}"
+            )
+        if int(self.limit) != self.limit or not 1 <= self.limit <= MAX_COUNTS:
+            raise InputError(
+                f"integer limit {self.limit!r}: the register's largest magnitude in counts, a whole number 1 to "
+                f"{MAX_COUNTS} (a 32-bit register)"
+            )
 
     def counts(self, compensation_um: float) -> int:
         """Counts for ``compensation_um``: nearest count, halves away from zero, saturated at ±limit.

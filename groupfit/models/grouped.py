@@ -13,6 +13,7 @@ from groupfit.errors import InputError
 from groupfit.grouping import (
     DEFAULT_SOFT_OFFSET,
     DEFAULT_SPACING,
+    MAX_SPACING,
     Constraints,
     hard_groups,
     serving_group_index,
@@ -429,8 +430,8 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             raise InputError(f"p = {self.p!r}: the number of breaks must be a whole number ≥ 0")
         if int(self.n) != self.n or self.n < 0:
             raise InputError(f"n = {self.n!r}: the soft offset must be a whole number ≥ 0")
-        if not np.isfinite(self.c) or self.c < 0:
-            raise InputError(f"c = {self.c!r}: the spacing coefficient must be a finite number ≥ 0")
+        if not (np.isfinite(self.c) and 0 <= self.c <= MAX_SPACING):
+            raise InputError(f"c = {self.c!r}: the spacing coefficient must be a number from 0 to {MAX_SPACING:g}")
         if check_ridge_alpha(self.ridge_alpha) > 0 and (self.p != 0 or self.fixed_breaks):
             raise InputError(
                 f"ridge alpha {self.ridge_alpha:g} with p = {self.p}: the ridge penalty is for one global model "
