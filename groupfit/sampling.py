@@ -10,6 +10,10 @@ from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS
 from groupfit.timestamps import clock_restart, refuse_clock_change, restart_refusal, stamp_resolution
 
+MIN_PERIOD_S = 1e-4
+"""The shortest sampling period a run may have (s): a thermal log is never sampled at more than 10 kHz, and a
+clock read in another unit than seconds (ns counted as s) would be."""
+
 
 def clock_of(time: np.ndarray, label: str, column: str, *, tolerance: float) -> tuple[np.ndarray, float, str | None]:
     """The run's times, its period and a note: as stamped when they pass :func:`check_time`, else spread within
@@ -42,6 +46,11 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float) -
             "readings of each period with --resample SECONDS"
         )
     period = float(np.median(step))
+    if period < MIN_PERIOD_S:
+        raise InputError(
+            f"{label}: column '{column}' steps {period:g} s from row to row, faster than any thermal log (at least "
+            f"{MIN_PERIOD_S:g} s); give the time in seconds, or name its unit in the column (time_ms, time [ms])"
+        )
     deviation = np.abs(step - period)
     irregular = deviation > max(tolerance * period, stamp_resolution(time, period) * (1 + 1e-9))
     if np.any(irregular):

@@ -93,6 +93,7 @@ NEW_CASES = [
     Case("data", "/dev/null as --data", fit("--data", "/dev/null", "--temps", "T1"), "not a regular file"),
     Case("data", "Parquet column named twice", data_fit("duplicate.parquet"), "appears twice (columns 2 and 4)"),
     Case("data", "time of 1e300", data_fit("time_huge.csv"), "row 41, column 'time_s'"),
+    Case("data", "time in ns read as s", data_fit("time_ns.csv"), "steps 1e-07 s from row to row"),
     Case("data", "position of 1e300", position_fit("position_huge.csv"), "row 31, column 'P_mm'"),
     Case("data", "--position an input", position_fit("position.csv", "--position", "T1"), "also a temperature input"),
     Case("data", "wide column without a position", position_fit("wide_abc.csv"), "err_Pabc"),
@@ -655,6 +656,7 @@ def _write_inputs(folder: Path) -> None:
     changed("nan.csv", "T3", 5, float("nan"))
     changed("backwards.csv", "time_s", 30, 100.0)
     good.assign(spindle_on=-good["spindle_on"]).to_csv(folder / "reversed.csv", index=False)
+    good.assign(time_s=good["time_s"] * 1e-9).to_csv(folder / "time_ns.csv", index=False)
     good.assign(T4=21.0).to_csv(folder / "constant.csv", index=False)
     good.assign(error_um=0.0).to_csv(folder / "constant_error.csv", index=False)
     good.assign(time_s=good["time_s"] * 0.6).to_csv(folder / "fast.csv", index=False)

@@ -149,3 +149,10 @@ def test_a_delay_rescales_to_whole_samples_and_is_refused_otherwise():
     assert np.allclose(np.array(seen)[later], 20.0 + 0.001 * (t[later] - 300.0), rtol=0, atol=1e-12)
     with pytest.raises(InputError, match=r"delays its source by 3 sample\(s\) \(300 s\), which is no whole number"):
         at_period(delayed, 200.0)
+
+
+@pytest.mark.parametrize("period", [1e-9, 0.0, -10.0, 1e300, math.nan])
+def test_a_period_no_controller_samples_at_is_refused_naming_the_range(period):
+    model, _ = augmented_model("lowpass p=0")
+    with pytest.raises(InputError, match=r"a sampling period must be a number of seconds from 0\.0001 to 1e\+11"):
+        at_period(model, period)

@@ -88,6 +88,7 @@ def test_predict_uses_a_stored_source_and_gives_the_field_anywhere(model_file, t
     args = ["screw", "predict", str(model_file), "--data", str(DATA / "screw_A.csv"), "--at", "0.16,0.25"]
     status, out, _ = run_cli([*args, "--json", str(tmp_path / "p.json")], capsys)
     assert status == 0 and "from the model" in out
+    assert str(tmp_path / "p.json") in out.splitlines()[-1]  # the wrote line names the file written
     result = json.loads((tmp_path / "p.json").read_text())
     field = result["field"]
     assert field["x_m"] == [0.16, 0.25]
@@ -188,3 +189,11 @@ def test_a_moving_nut_run_is_refused(tmp_path, capsys):
     out = tmp_path / "out"
     line = _expect_input_error(["screw", "identify", str(DATA / "screw_nut.csv"), "--out", str(out)], capsys, out)
     assert "nut_x_m" in line
+
+
+def test_predict_on_a_run_without_the_probe_says_so_instead_of_a_nan(model_file, tmp_path, capsys):
+    run = pd.read_csv(DATA / "screw_A.csv").drop(columns="probe_x_m")
+    run.to_csv(tmp_path / "no_probe.csv", index=False)
+    status, out, err = run_cli(["screw", "predict", str(model_file), "--data", str(tmp_path / "no_probe.csv")], capsys)
+    assert status == 0, err
+    assert "no error at the probe (the run has no 'probe_x_m' column)" in out and "nan" not in out

@@ -352,7 +352,7 @@ def residual_line(result: dict[str, Any]) -> str:
     if result["rms_um"] is None and result.get("measured_samples"):
         return "residual none: no sample scored (every measured sample in sensor fault: the rule's safe output)"
     if result["rms_um"] is None:
-        return "residual none (the run has no error column)"
+        return "residual none (the run has no measured error: no error column, or no reading within its range)"
     return (
         f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm "
         f"over {result['scored_samples']} sample(s)"

@@ -27,7 +27,7 @@ from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
 from groupfit.screw.modelfile import load_model, model_to_dict, save_model
 from groupfit.screw.plots import plot_error, plot_rises
-from groupfit.screw.runs import load_screw_run
+from groupfit.screw.runs import PROBE_COLUMN, load_screw_run
 
 DEFAULT_OUT = "groupfit-out"
 
@@ -267,7 +267,7 @@ def run_predict(args: argparse.Namespace) -> int:
             "rise_K": model.predict(run.time, at, tau0, source).tolist(),
             "error_um": np.column_stack([model.predict_error(run.time, x, tau0, source) for x in at]).tolist(),
         }
-    common.write_json(args.json, _finite(result))
+    written.append(common.write_json(args.json, _finite(result)))
     common.commit_outputs()
     print(predict_report(score, source, reidentified, model, written), file=common.report_stream(args))
     return 0
@@ -289,8 +289,8 @@ def predict_report(score, source, reidentified, model, written) -> str:
     entry = model.sources_[source]
     how = f"re-identified from the first {model.identification_time_s:g} s" if reidentified else "from the model"
     lines = [f"source {source}: C1 = {entry['C1']:.3f}, C2 = {entry['C2']:.3f} ({how})", _score_line(score)]
-    if written:
-        lines.append("wrote   " + ", ".join(str(p) for p in written))
+    if any(written):
+        lines.append("wrote   " + common.wrote_line(written))
     return "\n".join(lines)
 
 
@@ -298,7 +298,12 @@ def _score_line(score) -> str:
     paper = score.paper
     text = (
         f"max temperature error (0/4/8/12 cm) {score.max_temp_K:.2f} K (after t_r {score.max_temp_after_tr_K:.2f} K, "
-        f"all sensors {score.max_temp_all_K:.2f} K); max error at the probe {score.max_um:.2f} µm"
+        f"all sensors {score.max_temp_all_K:.2f} K); "
+        + (
+            f"max error at the probe {score.max_um:.2f} µm"
+            if np.isfinite(score.max_um)
+            else f"no error at the probe (the run has no '{PROBE_COLUMN}' column)"
+        )
     )
     if paper:
         text += (

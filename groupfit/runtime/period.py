@@ -28,9 +28,11 @@ import dataclasses
 import math
 from typing import Any, Mapping
 
+from groupfit.data import MAX_TIME_S
 from groupfit.errors import InputError
 from groupfit.model import MAX_DELAY_SAMPLES, ModelFile
 from groupfit.runtime.rule import complete_rule_section
+from groupfit.sampling import MIN_PERIOD_S
 
 WHOLE_TOLERANCE = 1e-9
 """How close a rescaled sample count must be to a whole number to be taken as one."""
@@ -58,8 +60,10 @@ def at_period(model: ModelFile | Mapping[str, Any], period_s: float) -> ModelFil
         return model
     old = float(model.sampling_period_s)
     head = f"sampling period {period_s:g} s differs from the model's {old:g} s"
-    if not (math.isfinite(period_s) and period_s > 0):
-        raise InputError(f"{head}: a sampling period must be a positive number of seconds")
+    if not (math.isfinite(period_s) and MIN_PERIOD_S <= period_s <= MAX_TIME_S):
+        raise InputError(
+            f"{head}: a sampling period must be a number of seconds from {MIN_PERIOD_S:g} to {MAX_TIME_S:g}"
+        )
     if model.breaks:
         raise InputError(
             f"{head}: the model switches groups by sample count (p = {len(model.breaks)}, breaks at samples "
