@@ -69,6 +69,8 @@ SEPARATORS = (*DELIMITERS, WHITESPACE)
 SNIFF_LINES = 200
 """Lines looked at for the body, the header and, below it, the decimal mark."""
 AGREEING_LINES = 3
+STRAY_ROWS = 2
+"""Rows of numbers of another width than the body's (a value more or less) that do not end it."""
 """Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
 WORDS = re.compile(r"[^\W\d_]")
 DIGIT = re.compile(r"\d")
@@ -222,6 +224,8 @@ def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> in
     row) but a repeat of a line above them (a header written again after a logger's restart)."""
     width = len(rows[first].fields)
     for start, end in reversed([run for run in runs if run[1] <= first]):
+        if len(rows[start].fields) != width and end - start <= STRAY_ROWS:
+            continue  # a row with a value more or less (a note typed into the log): the body goes on above it
         seen_above = {tuple(row.fields) for row in rows[:start] if row.is_text}
         between = [
             row for row in rows[end:first] if row.is_text and not row.message and tuple(row.fields) not in seen_above
@@ -238,6 +242,11 @@ def _header_above(rows: list[_Row], first: int) -> int:
     top = first
     while top > 0 and rows[top - 1].blank:  # a ruler or a blank row between the header and the body
         top -= 1
+    strays = top
+    while strays > 0 and top - strays < STRAY_ROWS and rows[strays - 1].numeric:
+        strays -= 1  # rows of numbers of another width right under the header: strays of the body
+    if strays < top and strays > 0 and rows[strays - 1].is_text:
+        top = strays
     position = top
     while position > 0 and rows[position - 1].is_text and abs(len(rows[position - 1].fields) - width) <= 1:
         position -= 1
@@ -263,6 +272,18 @@ def _first_agreeing_header(lines: list[str]) -> int:
         if all(len(fields_of(lines[j], sep)) == fields for j in following):
             return k
     return filled[0] if filled else 0
+
+
+def _longer_row(body: str, header: list[str], sep: str) -> str | None:
+    """Which row of the body holds more values than the header names columns (None: none does)."""
+    for row, line in enumerate(body.split("\n")[1:], start=1):
+        values = _split(line, sep)
+        if len(values) > len(header):
+            return (
+                f"row {row} has {len(values)} values but the header names {len(header)} columns "
+                f"({line.strip()[:60]!r}); remove the extra values or name every column"
+            )
+    return None
 
 
 def _comma_number(field: str) -> bool:
@@ -291,8 +312,11 @@ def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.Dat
                 index_col=False,
                 low_memory=False,  # a column read whole: one type, not a type per chunk, and no warning
             )
-        except pd.errors.ParserWarning:
-            raise ValueError("a row has more values than the header has names; name every column") from None
+        except (pd.errors.ParserWarning, pd.errors.ParserError) as exc:
+            longer = _longer_row(body, header, layout.sep)
+            if longer is None and isinstance(exc, pd.errors.ParserError):
+                raise
+            raise ValueError(longer or "a row has more values than the header has names; name every column") from None
     header = [str(name) for name in header]
     frame, header = _without_empty_unnamed_columns(frame, header)
     frame = without_thousands_separators(without_units_row(frame, decimal=layout.decimal), layout.decimal)

@@ -104,7 +104,23 @@ def test_a_separator_closing_every_data_row_does_not_shift_the_columns(tmp_path,
 def test_a_row_with_more_values_than_names_is_refused(tmp_path):
     path = tmp_path / "extra.csv"
     path.write_text("time_s,T1,error_um\n0,20,1,9\n1,20,1\n")
-    with pytest.raises(InputError, match=r"extra.csv: not a readable CSV table \(a row has more values"):
+    with pytest.raises(InputError, match=r"extra.csv: not a readable CSV table \(row 1 has 4 values but the header"):
+        read_table(path)
+
+
+@pytest.mark.parametrize("row", [1, 2, 52, 199])
+@pytest.mark.parametrize("extra", [",door opened", ",1,2"])
+def test_a_note_typed_into_one_row_is_refused_naming_that_row_not_read_as_the_header(tmp_path, row, extra):
+    lines = ["time_s,T1,T2,error_um"] + [
+        f"{60 * k},{20 + 0.01 * k:.2f},{21 + 0.02 * k:.2f},{0.1 * k:.1f}" for k in range(200)
+    ]
+    lines[row] += extra
+    path = tmp_path / "note.csv"
+    path.write_text("\n".join(lines) + "\n")
+    width = 4 + extra.count(",")
+    with pytest.raises(
+        InputError, match=rf"note.csv: not a readable CSV table \(row {row} has {width} values but the header names 4"
+    ):
         read_table(path)
 
 
