@@ -142,7 +142,7 @@ def _refuse_unreadable(path: Path, label: str) -> None:
     if path.exists() and not path.is_file():
         raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
     if not path.is_file():
-        raise InputError(f"{label}: data file not found; check the path given to --data")
+        raise InputError(f"{label}: data file not found; check its path")
 
 
 def _text_under_a_workbooks_name(
