@@ -1,10 +1,8 @@
 """Load and validate a run: a time column, temperature columns and the thermal error.
 
-A *run* is one recording of a machine (or one simulation) sampled at a uniform
-period. :func:`load_run` reads it from a CSV file or a pandas DataFrame, checks
-it once, and converts the columns the model uses into numpy arrays. Every
-problem a user can cause is raised as :class:`~groupfit.errors.InputError` with
-a message that names the file, the column and the row.
+A *run* is one recording of a machine (or one simulation) sampled at a uniform period. :func:`load_run` reads
+it from a CSV file or a pandas DataFrame, checks it once and converts the model's columns into numpy arrays. Every
+problem a user can cause is an :class:`~groupfit.errors.InputError` naming the file, the column and the row.
 """
 
 from __future__ import annotations
@@ -439,8 +437,10 @@ def loading_notes(runs: Sequence[Run]) -> list[str]:
 
 
 def measured_rows(run: Run) -> Run:
-    """The run restricted to the rows with a measured error (the run itself when every row has one)."""
+    """The run restricted to the rows with a measured error (the run itself when every row has one), at least two."""
     rows = np.isfinite(run.error)
+    if rows.sum() < 2:
+        raise InputError(f"{run.source}: {int(rows.sum())} row(s) with a measured error; a model needs two or more")
     if rows.all():
         return run
     frame = run.frame.loc[rows].reset_index(drop=True)

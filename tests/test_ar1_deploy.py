@@ -185,6 +185,22 @@ def test_replay_of_a_finer_run_takes_every_step(model, tmp_path):
     np.testing.assert_array_equal(out["prediction_um"], AR1Rule(model).replay(heat).prediction_um)
 
 
+@pytest.mark.parametrize(
+    "option", [["--probe-every", "600"], ["--fresh"], ["--resolution-um", "0.1"], ["--continues", "other.csv"]]
+)
+def test_replay_refuses_what_the_ar1_routine_does_not_do(model, tmp_path, capsys, option):
+    heat, observed, _ = simulated_process(n=300)
+    run = write_run(tmp_path / "run.csv", heat, observed)
+    write_run(tmp_path / "other.csv", heat, observed)
+    path = tmp_path / "m.json"
+    model.save(path)
+    capsys.readouterr()
+    assert main(["replay", str(path), "--data", str(run), *option, "--json", str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"{option[0]}: an AR(1) model file is replayed without it" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "r.json").exists()
+
+
 # ------------------------------------------------------------------ C, ST and JSON routines
 
 DRIVER = r"""#include <stdio.h>

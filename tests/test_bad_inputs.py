@@ -94,6 +94,12 @@ NEW_CASES = [
     Case("data", "Parquet column named twice", data_fit("duplicate.parquet"), "appears twice (columns 2 and 4)"),
     Case("data", "time of 1e300", data_fit("time_huge.csv"), "row 41, column 'time_s'"),
     Case("data", "time in ns read as s", data_fit("time_ns.csv"), "steps 1e-07 s from row to row"),
+    Case(
+        "data",
+        "one measured error",
+        fit("--data", "{in}/one_error.csv", "--temps", "T1,T2,T3,T4", "--p", "0"),
+        "1 row(s) with a measured error",
+    ),
     Case("data", "position of 1e300", position_fit("position_huge.csv"), "row 31, column 'P_mm'"),
     Case("data", "--position an input", position_fit("position.csv", "--position", "T1"), "also a temperature input"),
     Case("data", "wide column without a position", position_fit("wide_abc.csv"), "err_Pabc"),
@@ -657,6 +663,9 @@ def _write_inputs(folder: Path) -> None:
     changed("backwards.csv", "time_s", 30, 100.0)
     good.assign(spindle_on=-good["spindle_on"]).to_csv(folder / "reversed.csv", index=False)
     good.assign(time_s=good["time_s"] * 1e-9).to_csv(folder / "time_ns.csv", index=False)
+    good.assign(error_um=np.where(np.arange(len(good)) == 50, 1.0, np.nan)).to_csv(
+        folder / "one_error.csv", index=False
+    )
     good.assign(T4=21.0).to_csv(folder / "constant.csv", index=False)
     good.assign(error_um=0.0).to_csv(folder / "constant_error.csv", index=False)
     good.assign(time_s=good["time_s"] * 0.6).to_csv(folder / "fast.csv", index=False)

@@ -105,6 +105,16 @@ def test_logged_checks_in_their_own_column(tmp_path, model_path):
     ]
 
 
+def test_an_infinite_logged_check_is_no_check(tmp_path, model_path):
+    frame = pd.read_csv(SYNTHETIC)
+    frame["probe_um"] = np.nan
+    frame.loc[[49, 99, 149], "probe_um"] = frame.loc[[49, 99, 149], "error_um"] + np.array([0.5, np.inf, 0.5])
+    data = tmp_path / "infinite.csv"
+    frame.to_csv(data, index=False)
+    result = replay_json(tmp_path, model_path, "--data", data, "--probe-column", "probe_um")
+    assert [(c["i"], c["result"]) for c in result["probes"]["checks"]] == [(50, "applied"), (150, "applied")]
+
+
 @pytest.mark.parametrize(
     "args, message",
     [

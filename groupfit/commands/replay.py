@@ -88,11 +88,34 @@ def add_parser(verbs) -> None:
     replay.set_defaults(handler=run_replay)
 
 
+GROUPED_RULE_OPTIONS = {
+    "continues": "--continues",
+    "fresh": "--fresh",
+    "probe_every": "--probe-every",
+    "probe_first": "--probe-first",
+    "probe_column": "--probe-column",
+    "resolution_um": "--resolution-um",
+}
+"""Options only the grouped model's run-time rule carries out (a history, probe checks, integer counts)."""
+
+
+def refuse_options_of_the_grouped_rule(args: argparse.Namespace, kind: str) -> None:
+    """Refuse an option the replay of ``kind`` would not carry out, rather than report a result without it."""
+    for name, option in GROUPED_RULE_OPTIONS.items():
+        if getattr(args, name, None) not in (None, False):
+            raise InputError(
+                f"{option}: {kind} is replayed without it (a history, probe checks and integer counts are the "
+                "grouped model's run-time rule's); leave it out"
+            )
+
+
 def run_replay(args: argparse.Namespace) -> int:
     out_dir = common.plan_outputs(args, args.model, args.data, args.continues, folder=args.out, files=("replay.png",))
     if is_screw_file(args.model):
+        refuse_options_of_the_grouped_rule(args, "a ball-screw model file")
         return run_screw_replay(args)
     if is_ar1_file(args.model):
+        refuse_options_of_the_grouped_rule(args, "an AR(1) model file")
         return ar1_commands.run_replay(args)
     model = ModelFile.load(args.model)
     counts = None

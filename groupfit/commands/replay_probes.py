@@ -99,6 +99,7 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
             )
         rows = on_measured_rows(rows, np.isfinite(reading))
     probes[rows] = reading[rows]
+    probes[~np.isfinite(probes)] = np.nan  # an infinite reading is no reading: no check there
     return probes
 
 
