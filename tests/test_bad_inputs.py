@@ -6,8 +6,8 @@ traceback), and no file written or changed. The cases are grouped by kind:
 data, parameters, model files, outputs, configs, sweep
 (``test_the_table_covers_every_kind`` prints the counts).
 
-The processes run two at a time (``WORKERS``); the table takes about a
-minute and a half on two cores, so it is marked ``slow``. The fast lane runs
+The processes run two at a time (``WORKERS``); the table takes about three
+minutes on two cores, so it is marked ``slow``. The fast lane runs
 the same table in process (``groupfit.cli.main``), which checks the same
 status, line and files without the interpreter start-up.
 """
@@ -83,6 +83,10 @@ def swept(name):
     return ("sweep", f"{{in}}/{name}", "--db", "{out}/s.sqlite", "--quiet")
 
 
+def compared(*args):
+    return ("compare", "--quiet", "--data", "{in}/good.csv", "--temps", "T1,T2", *args, "--out", "{out}/r")
+
+
 def diagnose(*args):
     return ("diagnose", "{in}/model.json", "--data", "{in}/good.csv", "--out", "{out}/d", *args)
 
@@ -111,43 +115,15 @@ NEW_CASES = [
     Case(
         "data",
         "compare --heat the error",
-        (
-            "compare",
-            "--quiet",
-            "--data",
-            "{in}/good.csv",
-            "--temps",
-            "T1,T2",
-            "--pmax",
-            "1",
-            "--heat",
-            "error_um",
-            "--out",
-            "{out}/r",
-        ),
+        compared("--pmax", "1", "--heat", "error_um"),
         "heat column 'error_um' is the run's error",
-    ),  # fmt: skip
+    ),
     Case(
         "data",
         "a heat level below 0 in a validation run",
-        (
-            "compare",
-            "--quiet",
-            "--data",
-            "{in}/good.csv",
-            "--validate",
-            "{in}/reversed.csv",
-            "--temps",
-            "T1,T2",
-            "--pmax",
-            "1",
-            "--heat",
-            "spindle_on",
-            "--out",
-            "{out}/r",
-        ),
+        compared("--validate", "{in}/reversed.csv", "--pmax", "1", "--heat", "spindle_on"),
         "column 'spindle_on' = -1",
-    ),  # fmt: skip
+    ),
     Case(
         "data",
         "--dead-band-ref the error",
@@ -311,7 +287,7 @@ CASES = [
     Case(
         "parameters",
         "compare --pmax -1",
-        ("compare", "--quiet", "--data", "{in}/good.csv", "--temps", "T1,T2", "--pmax", "-1", "--out", "{out}/r"),
+        compared("--pmax", "-1"),
         "--pmax -1",
     ),
     Case("parameters", "--p -1", data_fit("good.csv", "--p", "-1"), "p = -1"),
@@ -361,20 +337,9 @@ CASES = [
     Case(
         "parameters",
         "compare --probe-every 1e300",
-        (
-            "compare",
-            "--quiet",
-            "--data",
-            "{in}/good.csv",
-            "--temps",
-            "T1,T2",
-            "--probe-every",
-            "1e300",
-            "--out",
-            "{out}/r",
-        ),
+        compared("--probe-every", "1e300"),
         "longer than 1e+09 s",
-    ),  # fmt: skip
+    ),
     Case(
         "parameters",
         "--resolution-um 1e-300",
