@@ -116,12 +116,12 @@ def with_reference(run, reference: str | None):
             f"{run.source}: the reference column '{reference}' is also an input; "
             "take it out of --temps or choose another reference"
         )
-    role = column_role(run, reference)
-    if role:
-        raise InputError(
-            f"{run.source}: the reference column '{reference}' is the run's {role}, not a temperature; name a "
-            "temperature sensor (the air's, e.g. T_amb) with --reference or --ambient, or --reference none"
-        )
+    refuse_as_temperature(
+        run,
+        reference,
+        "the reference column",
+        "name a temperature sensor (the air's, e.g. T_amb) with --reference or --ambient, or --reference none",
+    )
     if is_column_reference(reference):
         if reference not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))
@@ -139,6 +139,14 @@ def column_role(run, column: str) -> str | None:
     if column == run.time_name:
         return "time"
     return None
+
+
+def refuse_as_temperature(run, column: str, what: str, todo: str = "name the air's temperature sensor") -> None:
+    """Refuse the run's error or time column (:func:`column_role`) where a temperature is asked for: ``what``
+    names the option or role it was given as, ``todo`` what to give instead."""
+    role = column_role(run, column)
+    if role:
+        raise InputError(f"{run.source}: {what} '{column}' is the run's {role}, not a temperature; {todo}")
 
 
 def default_reference(frame, config_value: Any = None, inputs: Sequence[str] = ()) -> str | None:
@@ -166,6 +174,7 @@ def describe(reference: str | None) -> str:
 
 __all__ = [
     "column_role",
+    "refuse_as_temperature",
     "AMBIENT_COLUMN",
     "START",
     "default_reference",

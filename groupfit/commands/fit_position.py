@@ -9,7 +9,7 @@ from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C
 from groupfit.errors import InputError
 from groupfit.model import DeadBand
 from groupfit.position import choose_p0, cross_validate_order, load_position_run, residual_by_order, with_position
-from groupfit.reference import column_role
+from groupfit.reference import refuse_as_temperature
 from groupfit.settings import DataSettings
 
 
@@ -62,9 +62,7 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
             raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
         if reference not in position_run.run.frame.columns:
             raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
-        role = column_role(position_run.run, reference)
-        if role:
-            raise InputError(f"--dead-band-ref '{reference}': the run's {role}; name a temperature sensor (the air's)")
+        refuse_as_temperature(position_run.run, reference, "--dead-band-ref", "name a temperature sensor (the air's)")
         dead_band = DeadBand(reference=reference, threshold_c=float(args.dead_band))
     fitted = with_position(model, position_run, order, p0, dead_band=dead_band)
     orders = residual_by_order(model, position_run, p0)

@@ -8,7 +8,7 @@ from groupfit.commands.common import report_stream
 from groupfit.data import Run
 from groupfit.default_columns import ambient_columns
 from groupfit.errors import InputError
-from groupfit.reference import AMBIENT_COLUMN, column_role, default_reference
+from groupfit.reference import AMBIENT_COLUMN, default_reference, refuse_as_temperature
 from groupfit.settings import RunSettings
 
 
@@ -45,12 +45,7 @@ def configured_reference(args: argparse.Namespace, settings: RunSettings, run: R
         if ambient not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))
             raise InputError(f"{run.source}: --ambient column '{ambient}' not found; the columns are: {available}")
-        role = column_role(run, ambient)
-        if role:
-            raise InputError(
-                f"{run.source}: --ambient column '{ambient}' is the run's {role}, not a temperature; "
-                "name the air's temperature sensor"
-            )
+        refuse_as_temperature(run, ambient, "--ambient column")
         value = ambient
     reference = default_reference(run.frame, value, run.temp_names)
     if value is None and AMBIENT_COLUMN not in run.frame.columns:

@@ -31,7 +31,7 @@ from groupfit.heldout.design import group_index, group_sample_floor, stacked_des
 from groupfit.heldout.folds import Folds, make_folds, operating_columns
 from groupfit.heldout.scorer import HeldOutScorer
 from groupfit.model import ModelFile
-from groupfit.reference import column_role
+from groupfit.reference import refuse_as_temperature
 from groupfit.resample import GAP_PERIODS
 
 Model = ModelFile
@@ -184,12 +184,7 @@ def check_arguments(model: Model, data_runs: list[Run], *, ambient: Sequence[str
                 f"{missing[0].source}: --ambient column '{column}' not found; columns: "
                 f"{', '.join(map(str, missing[0].frame.columns))}"
             )
-        role = column_role(data_runs[0], column)
-        if role:
-            raise InputError(
-                f"{data_runs[0].source}: --ambient column '{column}' is the run's {role}, not a temperature; "
-                "name the air's temperature sensor"
-            )
+        refuse_as_temperature(data_runs[0], column, "--ambient column")
         if column in model.temps:
             raise InputError(
                 f"--ambient {column}: the model reads '{column}' as an input; name a column it does not read "
