@@ -46,15 +46,19 @@ def st_integer_type(largest: int, what: str) -> str:
     raise InputError(f"{what} = {largest}: more than a DINT holds ({DINT_MAX}); no controller counter can keep it")
 
 
-IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
-"""A Structured Text name: letters, digits and '_', a letter or '_' first, at most 64 characters."""
+IDENTIFIER = re.compile(r"^(?!.*__)(?!.*_$)[A-Za-z_][A-Za-z0-9_]{0,63}$")
+"""A Structured Text name (IEC 61131-3): letters, digits and single '_', a letter or '_' first, no '_' last, at
+most 64 characters."""
 
 
 def check_st_name(name: str, *, used: frozenset[str] = frozenset()) -> None:
     """Refuse a Structured Text name that is not an identifier, a reserved word or one of the block's own
     names (``used``)."""
     if not IDENTIFIER.match(name):
-        raise InputError(f"block name {name!r}: use letters, digits and '_' (a letter or '_' first, at most 64)")
+        raise InputError(
+            f"block name {name!r}: use letters, digits and single '_' (a letter or '_' first, no '_' last, at most "
+            "64 characters: an IEC 61131-3 name); choose another --name"
+        )
     if name.upper() in ST_RESERVED:
         raise InputError(f"block name {name!r}: a reserved word of Structured Text; choose another --name")
     if name.upper() in {u.upper() for u in used}:

@@ -17,6 +17,7 @@ from groupfit.ar1.fitting import fit_ar1_file
 from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import AR1Rule
 from groupfit.cli import main
+from groupfit.errors import InputError
 from groupfit.export import write
 from groupfit.export.harness import STRICT_FLAGS
 from groupfit.models.ar1 import AR1Model
@@ -185,6 +186,34 @@ def test_replay_of_a_finer_run_takes_every_step(model, tmp_path):
     np.testing.assert_array_equal(out["prediction_um"], AR1Rule(model).replay(heat).prediction_um)
 
 
+def test_replay_scores_only_the_errors_within_range_error(model, tmp_path, capsys):
+    """An overflowed error reading is left out of the score (as the grouped replay does), --range-error widens
+    what counts, and a run with no plausible reading is scored not at all rather than as NaN."""
+    heat, observed, _ = simulated_process(n=300)
+    overflow = observed.copy()
+    overflow[[40, 41, 200]] = 3e38
+    run = write_run(tmp_path / "run.csv", heat, overflow)
+    path = tmp_path / "m.json"
+    model.save(path)
+    assert main(["replay", str(path), "--data", str(run), "--json", str(tmp_path / "r.json")]) == 0
+    scores = json.loads((tmp_path / "r.json").read_text())["scores"]
+    kept = np.ones(len(heat), bool)
+    kept[[40, 41, 200]] = False
+    residual = observed[kept] - AR1Rule(model).replay(heat).prediction_um[kept]
+    assert scores["scored_samples"] == kept.sum()
+    assert scores["rms_um"] == pytest.approx(float(np.sqrt(np.mean(residual**2))), rel=1e-12)
+    assert "3 reading(s) of the error beyond ±100000 µm (row 41, 42, 201" in capsys.readouterr().out
+    wide = ["--range-error", "1e39", "--json", str(tmp_path / "w.json")]
+    assert main(["replay", str(path), "--data", str(run), *wide]) == 0
+    assert json.loads((tmp_path / "w.json").read_text())["scores"]["scored_samples"] == len(heat)
+    gone = write_run(tmp_path / "gone.csv", heat, np.full(len(heat), 3e38))
+    assert main(["replay", str(path), "--data", str(gone), "--json", str(tmp_path / "g.json")]) == 0
+    assert "scores" not in json.loads((tmp_path / "g.json").read_text())
+    assert "error   none (the run has no measured error" in capsys.readouterr().out
+    assert main(["replay", str(path), "--data", str(run), "--range-temp=-10,90"]) == 2
+    assert "an AR(1) model reads no temperature; leave it out" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "option", [["--probe-every", "600"], ["--fresh"], ["--resolution-um", "0.1"], ["--continues", "other.csv"]]
 )
@@ -274,6 +303,13 @@ def test_sanitized_c_build_takes_hostile_readings_as_replay_does(model, tmp_path
     replay = AR1Rule(model, precision=precision).replay(heat, initial_um=0.25)
     np.testing.assert_array_equal(fault, replay.fault)
     assert prediction.tobytes() == replay.prediction_um.tobytes()
+
+
+@pytest.mark.parametrize("name", ["FB__Ar1", "FB_", "Ärger", "END_VAR", "Heat", "c2", "1st"])
+def test_a_block_name_that_is_no_structured_text_name_is_refused(model, name):
+    with pytest.raises(InputError, match="block name"):
+        render(model, "st", name=name)
+    assert list(render(model, "st", name="FB_Ar1_Comp")) == ["FB_Ar1_Comp.st"]
 
 
 def st_block(model: AR1File, real: str):

@@ -111,7 +111,9 @@ def test_a_hold_no_32_bit_counter_keeps_is_refused_naming_the_limit():
     assert all(abs(v) <= ST_RANGES[k] for _, k, v in st_integers(st))
 
 
-@pytest.mark.parametrize("name", ["END_FUNCTION_BLOCK", "end_var", "INT", "HOLD_SAMPLES", "Temps", "1st", "a-b"])
+@pytest.mark.parametrize(
+    "name", ["END_FUNCTION_BLOCK", "end_var", "INT", "HOLD_SAMPLES", "Temps", "1st", "a-b", "FB__Comp", "FB_", "_"]
+)
 def test_a_reserved_or_taken_name_is_refused_as_the_block_name(name):
     model, _ = synthetic_model()
     with pytest.raises(InputError, match="block name"):

@@ -197,3 +197,28 @@ def test_predict_on_a_run_without_the_probe_says_so_instead_of_a_nan(model_file,
     status, out, err = run_cli(["screw", "predict", str(model_file), "--data", str(tmp_path / "no_probe.csv")], capsys)
     assert status == 0, err
     assert "no error at the probe (the run has no 'probe_x_m' column)" in out and "nan" not in out
+
+
+def test_the_plausible_ranges_are_the_screw_verbs_options(model_file, tmp_path, capsys):
+    """A reading beyond the default plausible range is refused naming an option the screw verb has, and that
+    option widens the range (the prediction then the same as on the run without the outlier's row)."""
+    run = pd.read_csv(DATA / "screw_A.csv")
+    run.loc[10, "T20mm"] = 600.0
+    run.to_csv(tmp_path / "hot.csv", index=False)
+    line = _expect_input_error(
+        ["screw", "predict", str(model_file), "--data", str(tmp_path / "hot.csv"), "--out", str(tmp_path / "a")],
+        capsys,
+        tmp_path / "a",
+    )
+    assert "row 11, column 'T20mm': 600 °C is outside the plausible range -50…500 °C" in line
+    assert "--range-temp=LOW,HIGH" in line
+    wide = ["--data", str(tmp_path / "hot.csv"), "--range-temp=-50,700", "--json", str(tmp_path / "p.json")]
+    status, out, err = run_cli(["screw", "predict", str(model_file), *wide], capsys)
+    assert status == 0, err
+    run.loc[10, "error_um"] = 2e5
+    run.loc[10, "T20mm"] = 20.0
+    run.to_csv(tmp_path / "far.csv", index=False)
+    args = ["screw", "identify", str(DATA / "screw_H.csv"), str(tmp_path / "far.csv"), "--out", str(tmp_path / "b")]
+    assert "--range-error MAX" in _expect_input_error(args, capsys, tmp_path / "b")
+    status, out, err = run_cli([*args, "--range-error", "1e6"], capsys)
+    assert status == 0, err

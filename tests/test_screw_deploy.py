@@ -9,6 +9,7 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from groupfit.cli import main
@@ -112,6 +113,27 @@ def test_replay_cli_scores_the_law_on_a_run(model_path, tmp_path, capsys):
     replayed = np.array([s["prediction_um"] for s in result["samples"]])
     assert np.allclose(replayed, offline, rtol=1e-9, atol=0)
     assert result["rms_um"] == pytest.approx(float(np.sqrt(np.mean((run.error - offline) ** 2))), rel=1e-9)
+
+
+def test_replay_leaves_an_overflowed_error_out_of_the_score_and_honours_range_temp(model_path, tmp_path, capsys):
+    """As the grouped replay: an error beyond --range-error is not measured (the RMS over the other samples);
+    a temperature beyond --range-temp is refused, and --range-temp widens it."""
+    frame = pd.read_csv(DATA / "screw_A.csv")
+    frame.loc[[5, 300], "error_um"] = 3e38
+    frame.to_csv(tmp_path / "overflow.csv", index=False)
+    args = ["replay", str(model_path), "--data", str(tmp_path / "overflow.csv"), "--source", "screw_A", "--json", "-"]
+    assert main(args) == 0
+    result = json.loads(capsys.readouterr().out)
+    residual = np.array([s["residual_um"] for s in result["samples"]], dtype=float)
+    assert result["scored_samples"] == len(frame) - 2 and np.isnan(residual[[5, 300]]).all()
+    kept = np.isfinite(residual)
+    assert result["rms_um"] == pytest.approx(float(np.sqrt(np.mean(residual[kept] ** 2))), rel=1e-12)
+    frame.loc[7, "T40mm"] = 800.0
+    frame.to_csv(tmp_path / "hot.csv", index=False)
+    hot = ["replay", str(model_path), "--data", str(tmp_path / "hot.csv"), "--source", "screw_A"]
+    assert main(hot) == 2
+    assert "800 °C is outside the plausible range -50…500 °C" in capsys.readouterr().err
+    assert main([*hot, "--range-temp=-50,900"]) == 0
 
 
 @pytest.mark.parametrize(

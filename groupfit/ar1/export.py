@@ -10,9 +10,11 @@ equals ``groupfit replay`` bit for bit in double precision and, with
 from __future__ import annotations
 
 import json
+import re
 
 from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import FAULT_HEAT
+from groupfit.controller_limits import check_st_name
 from groupfit.errors import InputError
 from groupfit.export.literals import c_comment_text, double_literal, shortest_literal, st_comment_text
 
@@ -140,8 +142,6 @@ def render_st(model: AR1File, *, real: str = "LREAL", name: str = "FB_GroupfitAR
     """
     if real not in ("REAL", "LREAL"):
         raise InputError(f"real type {real!r}: REAL or LREAL")
-    if not name.isidentifier():
-        raise InputError(f"function block name {name!r}: letters, digits and underscores")
     single = real == "REAL"
     narrow = (lambda text: f"TO_REAL({text})") if single else (lambda text: text)
     widen = (lambda text: f"TO_LREAL({text})") if single else (lambda text: text)
@@ -222,6 +222,7 @@ ErrorUm := state;
 CompUm := -state;
 END_FUNCTION_BLOCK
 """
+    check_st_name(name, used=frozenset(re.findall(r"^\s*([A-Za-z_]\w*)\s*:", text, flags=re.M)))
     return {f"{name}.st": text}
 
 

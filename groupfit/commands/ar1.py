@@ -15,7 +15,7 @@ from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands import common
-from groupfit.data import load_run, numeric_column
+from groupfit.data import load_run, numeric_column, without_implausible_errors
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.plots import plot_fit
@@ -27,7 +27,10 @@ def run_replay(args: argparse.Namespace) -> int:
     model = AR1File.load(args.model)
     error = args.error or model.error or "error_um"
     time = args.time or (model.training or {}).get("time") or "time_s"
-    run = load_run(args.data, temps=[], time=time, error=error, require_error=False, **common.clock_options(args))
+    run = load_run(
+        args.data, temps=[], time=time, error=error, require_error=False, error_limit=None, **common.clock_options(args)
+    )
+    run = without_implausible_errors(run, common.range_options(args)["error_limit"])
     common.print_notes([run], common.report_stream(args))
     try:
         step = decimation_step(run.period, model.sampling_period_s, what="the model's step")
@@ -35,6 +38,8 @@ def run_replay(args: argparse.Namespace) -> int:
         raise InputError(f"{run.source}: {exc}") from None
     heat = decimate(numeric_column(run.frame, model.heat, run.source, allow_nonfinite=True), step)
     measured = decimate(run.error, step) if run.error is not None else None
+    if measured is not None and not np.isfinite(measured).any():
+        measured = None
     if model.start == "measured":
         if measured is None or not np.isfinite(measured[0]):
             raise InputError(
@@ -62,13 +67,16 @@ def run_replay(args: argparse.Namespace) -> int:
         f"faults  {int(np.sum(result.fault == FAULT_HEAT))} held heat reading(s)",
     ]
     if measured is not None:
-        residual = measured - result.prediction_um
-        scores = {**error_metrics(residual), "accuracy_percent": prediction_accuracy(measured, residual)}
-        out["scores"] = scores
+        scored = np.isfinite(measured)
+        residual = measured[scored] - result.prediction_um[scored]
+        scores = {**error_metrics(residual), "accuracy_percent": prediction_accuracy(measured[scored], residual)}
+        out["scores"] = {**scores, "scored_samples": int(scored.sum())}
         lines.append(
             f"error   RMS {scores['rms_um']:.4g} µm, max {scores['max_um']:.4g} µm, prediction accuracy "
-            f"{scores['accuracy_percent']:.1f} %"
+            f"{scores['accuracy_percent']:.1f} % over {int(scored.sum())} measured step(s)"
         )
+    else:
+        lines.append("error   none (the run has no measured error: no error column, or no reading within its range)")
     figures = []
     if out_dir is not None and measured is not None:
         figure = out_dir / "replay.png"

@@ -59,16 +59,17 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     add_glitch_option(parser)
 
 
-def add_range_options(parser: argparse.ArgumentParser, *, temp: bool = True, refused: str = "refused") -> None:
-    """``--range-temp LOW,HIGH`` (with ``temp``) and ``--range-error MAX``: the plausible readings of a run; a
-    reading beyond them is ``refused``."""
-    if temp:
-        parser.add_argument(
-            "--range-temp",
-            metavar="LOW,HIGH",
-            help=f"plausible temperature readings in °C (default {TEMP_RANGE_C[0]:g},{TEMP_RANGE_C[1]:g}; "
-            "write --range-temp=-60,250 for a negative LOW); a reading outside is refused",
-        )
+def add_range_options(
+    parser: argparse.ArgumentParser, *, temp: str = "a reading outside is refused", refused: str = "refused"
+) -> None:
+    """``--range-temp LOW,HIGH`` and ``--range-error MAX``: the plausible readings of a run; what becomes of a
+    temperature outside is ``temp``, an error beyond is ``refused``."""
+    parser.add_argument(
+        "--range-temp",
+        metavar="LOW,HIGH",
+        help=f"plausible temperature readings in °C (default {TEMP_RANGE_C[0]:g},{TEMP_RANGE_C[1]:g}; "
+        f"write --range-temp=-60,250 for a negative LOW); {temp}",
+    )
     parser.add_argument(
         "--range-error",
         metavar="MAX",

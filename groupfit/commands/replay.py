@@ -82,7 +82,11 @@ def add_parser(verbs) -> None:
     )
     common.add_source_option(replay)
     add_probe_options(replay)
-    common.add_range_options(replay, temp=False, refused="left out of the score as not measured")
+    common.add_range_options(
+        replay,
+        temp="a ball-screw run's reading outside is refused; a grouped model's rule takes one as a sensor fault",
+        refused="left out of the score as not measured",
+    )
     common.add_json_option(replay, "the per-sample result")
     common.add_out_option(replay, "folder for replay.png (switch points against the offline breaks)")
     replay.set_defaults(handler=run_replay)
@@ -109,11 +113,27 @@ def refuse_options_of_the_grouped_rule(args: argparse.Namespace, kind: str) -> N
             )
 
 
+def refuse_range_temp(args: argparse.Namespace) -> None:
+    """``--range-temp`` is a ball-screw run's: a grouped model file holds its rule's own plausible temperatures
+    (a reading outside is a sensor fault), an AR(1) model reads none."""
+    if args.range_temp is None:
+        return
+    holds = (
+        "an AR(1) model reads no temperature"
+        if is_ar1_file(args.model)
+        else "a grouped model file holds its own, and its rule takes a reading outside as a sensor fault"
+    )
+    raise InputError(
+        f"--range-temp {args.range_temp}: the plausible temperatures of a ball-screw run; {holds}; leave it out"
+    )
+
+
 def run_replay(args: argparse.Namespace) -> int:
     out_dir = common.plan_outputs(args, args.model, args.data, args.continues, folder=args.out, files=("replay.png",))
     if is_screw_file(args.model):
         refuse_options_of_the_grouped_rule(args, "a ball-screw model file")
         return run_screw_replay(args)
+    refuse_range_temp(args)
     if is_ar1_file(args.model):
         refuse_options_of_the_grouped_rule(args, "an AR(1) model file")
         return ar1_commands.run_replay(args)

@@ -76,6 +76,7 @@ def _output_options(parser, json_help: str, out_help: str) -> None:
     parser.add_argument("--out", metavar="DIR", help=out_help)
     common.add_force_option(parser)
     common.add_clock_options(parser)
+    common.add_range_options(parser)
 
 
 def _model_options(parser) -> None:
@@ -142,7 +143,7 @@ def identify_runs(model, runs):
 
 def _load_runs(args: argparse.Namespace, paths, **options):
     """The screw runs ``paths``, read with the clock options of ``args``; what loading did printed as notes."""
-    runs = [load_screw_run(p, **common.clock_options(args), **options) for p in paths]
+    runs = [load_screw_run(p, **common.clock_options(args), **common.range_options(args), **options) for p in paths]
     common.print_notes([run.run for run in runs], common.report_stream(args))
     for run in runs:
         refuse_moving_source(run)

@@ -28,7 +28,7 @@ def run_screw_replay(args: argparse.Namespace) -> int:
         raise InputError(f"--precision {args.precision}: the ball-screw law is deployed in double precision only")
     out_dir = common.plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     law = screw_law(args)
-    run = load_screw_run(args.data, **common.clock_options(args))
+    run = load_screw_run(args.data, **common.clock_options(args), **common.range_options(args), scored_only=True)
     common.print_notes([run.run], common.report_stream(args))
     if run.probe_x is None:
         raise InputError(
@@ -64,7 +64,7 @@ def screw_replay_result(law: ScrewLaw, run, codes, prediction, model_path: str) 
             "prediction_um": None if codes[k] else float(prediction[k]),
         }
         if residual is not None:
-            sample["residual_um"] = None if codes[k] else float(residual[k])
+            sample["residual_um"] = None if codes[k] or not np.isfinite(residual[k]) else float(residual[k])
         samples.append(sample)
     return {
         "model": model_path,

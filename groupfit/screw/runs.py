@@ -17,7 +17,16 @@ from pathlib import Path
 
 import numpy as np
 
-from groupfit.data import PERIOD_TOLERANCE, Run, load_run, numeric_column, read_table
+from groupfit.data import (
+    ERROR_LIMIT_UM,
+    PERIOD_TOLERANCE,
+    TEMP_RANGE_C,
+    Run,
+    load_run,
+    numeric_column,
+    read_table,
+    without_implausible_errors,
+)
 from groupfit.errors import InputError
 
 SENSOR_NAME = re.compile(r"^T(\d+(?:\.\d+)?)mm$")
@@ -79,6 +88,9 @@ def load_screw_run(
     period_tolerance: float = PERIOD_TOLERANCE,
     resample: float | None = None,
     encoding: str | None = None,
+    temp_range: tuple[float, float] = TEMP_RANGE_C,
+    error_limit: float = ERROR_LIMIT_UM,
+    scored_only: bool = False,
 ) -> ScrewRun:
     """Load and check a screw run.
 
@@ -92,6 +104,10 @@ def load_screw_run(
     period_tolerance, resample
         How the run's clock is read, as by :func:`groupfit.data.load_run`
         (a resampled run's ambient and probe position are its periods' means).
+    temp_range, error_limit
+        The plausible readings (°C; |µm|): one outside is refused.
+    scored_only : bool
+        Take an error beyond ``error_limit`` as not measured (a replay's score), with a note, instead.
 
     Raises
     ------
@@ -116,7 +132,11 @@ def load_screw_run(
         name=run_name,
         period_tolerance=period_tolerance,
         resample=resample,
+        temp_range=temp_range,
+        error_limit=None if scored_only else error_limit,
     )
+    if scored_only:
+        run = without_implausible_errors(run, error_limit)
     run = Run(**{**run.__dict__, "source": label})
     frame = run.frame
     ambient = float(frame["T_amb"].iloc[0]) if "T_amb" in frame.columns else float(np.mean(run.temps[0]))
