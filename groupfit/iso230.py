@@ -41,6 +41,7 @@ import pandas as pd
 
 from groupfit.column_values import ERROR_LIMIT_UM, POSITION_LIMIT_UM
 from groupfit.data import numeric_column, read_table
+from groupfit.default_columns import MICROMETRES_PER_UNIT, named_length_unit
 from groupfit.errors import InputError
 from groupfit.readtable import COMPRESSED, TABLE_SUFFIXES
 from groupfit.textencoding import decode
@@ -70,14 +71,14 @@ TARGET_VALUES = PlausibleValues(
     "mm",
     TARGET_LIMIT_MM,
     "fill in the target position (mm) of that approach",
-    "check the column's unit: target positions are read in mm (one logged in µm reads 1000× too large)",
+    "check the column's unit: target positions are read in mm unless the column's name ends in its unit (target_um)",
 )
 DEVIATION_VALUES = PlausibleValues(
     "µm",
     ERROR_LIMIT_UM,
     "fill in the deviation measured there (µm), or leave that target out of every run",
-    "check the column's unit: deviations are read in µm, actual minus target (one logged in nm reads 1000× too "
-    "large, an actual position instead of the deviation far too large)",
+    "check the column's unit: deviations are read in µm, actual minus target, unless the column's name ends in "
+    "its unit (deviation_nm); an actual position instead of the deviation reads far too large",
 )
 
 
@@ -332,28 +333,40 @@ def _refuse_no_file(path: Path) -> None:
         raise InputError(f"{path}: not a regular file (a device or a pipe); give the file of the runs")
 
 
+def read_in(column: str, plausible: PlausibleValues) -> tuple[str, float]:
+    """The length unit ``column``'s name ends in (``deviation_nm``, ``target [µm]``) and the factor that takes
+    it to ``plausible.unit``; ``plausible.unit`` and 1 when the name has none."""
+    unit = named_length_unit(column)
+    if unit is None:
+        return plausible.unit, 1.0
+    return unit, MICROMETRES_PER_UNIT[unit] / (1000.0 if plausible.unit == "mm" else 1.0)
+
+
 def _plausible_column(frame: pd.DataFrame, column: str, label: str, plausible: PlausibleValues) -> np.ndarray:
-    """The column as numbers, refusing the first cell that is empty, not finite or beyond ``plausible.limit``.
+    """The column in ``plausible.unit``, refusing the first cell that is empty, not finite or beyond
+    ``plausible.limit``.
 
     Parameters
     ----------
     frame, column, label
         The table, the column read and how messages name the table.
     plausible
-        The column's unit, its limit and what to do about a bad cell.
+        The column's unit, its limit and what to do about a bad cell; a column whose name ends in another length
+        unit is read in it (:func:`read_in`).
 
     Returns
     -------
     ndarray
     """
-    values = numeric_column(frame, column, label, allow_nonfinite=True)
+    unit = read_in(column, plausible)
+    values = numeric_column(frame, column, label, allow_nonfinite=True) * unit[1]
     bad = ~(np.abs(values) <= plausible.limit)  # NaN and ±inf too
     if not bad.any():
         return values
     row = int(np.flatnonzero(bad)[0])
     if np.isfinite(values[row]):
-        unit = plausible.unit
-        what = f": {values[row]:g} {unit} is beyond the plausible ±{plausible.limit:g} {unit}"
+        read, canonical = ("" if unit[1] == 1.0 else f" (read in {unit[0]})"), plausible.unit
+        what = f": {values[row]:g} {canonical}{read} is beyond the plausible ±{plausible.limit:g} {canonical}"
         todo = plausible.when_beyond
     else:
         what, todo = _cell_phrase(frame[column].iloc[row], "not a finite number"), plausible.when_missing

@@ -180,3 +180,30 @@ def test_deviations_at_the_limit_are_evaluated_and_written_as_finite_json(tmp_pa
 def test_evaluate_refuses_what_no_axis_measures(up, targets, message):
     with pytest.raises(InputError, match=message.replace("+", r"\+")):
         evaluate(np.array(up), np.zeros((2, 2)), targets)
+
+
+@pytest.mark.parametrize(
+    "target, deviation, to_mm, to_um, named",
+    [
+        ("target_um", "deviation_nm", 1000.0, 1000.0, {"target_um": "um", "deviation_nm": "nm"}),
+        ("P [mm]", "dev (mm)", 1.0, 1e-3, {"dev (mm)": "mm"}),
+        ("pos", "dx", 1.0, 1.0, {}),
+    ],
+)
+def test_a_unit_in_the_column_name_is_read_as_that_unit(tmp_path, capsys, target, deviation, to_mm, to_um, named):
+    """The same runs logged in other units (named in the columns) give the same evaluation; the report and the
+    JSON say which column was read in a unit other than the one it is given in."""
+    frame = three_target_runs()
+    logged = pd.DataFrame(
+        {"direction": frame.direction, target: frame.target_mm * to_mm, deviation: frame.deviation_um * to_um}
+    )
+    logged.to_csv(tmp_path / "logged.csv", index=False)
+    args = ["iso230", str(tmp_path / "logged.csv"), "--target", target, "--deviation", deviation]
+    assert main([*args, "--json", "-"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["axis_um"] == pytest.approx(load_runs(frame).axis(), rel=1e-12)
+    assert [p["target_mm"] for p in result["positions"]] == pytest.approx([0.0, 10.0, 20.0])
+    assert {c: r["unit"] for c, r in result.get("columns_read_in", {}).items()} == named
+    assert main(args) == 0
+    report = capsys.readouterr().out
+    assert all(f"column   '{c}' read in {u} (by its name)" in report for c, u in named.items())

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from groupfit.commands import common
 from groupfit.io import save_figure
-from groupfit.iso230 import STANDARD_REPEATS, Iso230Result, load_runs
+from groupfit.iso230 import DEVIATION_VALUES, STANDARD_REPEATS, TARGET_VALUES, Iso230Result, load_runs, read_in
 
 
 def add_parser(verbs) -> None:
@@ -37,6 +37,13 @@ def run_iso230(args: argparse.Namespace) -> int:
     out_dir = common.plan_outputs(args, args.run, folder=args.out, files=("iso230.png",))
     result = load_runs(args.run, target=args.target, direction=args.direction, deviation=args.deviation)
     data = {"run": str(args.run), **result.to_json()}
+    converted = {
+        column: {"unit": read_in(column, plausible)[0], "given_in": plausible.unit}
+        for column, plausible in ((args.target, TARGET_VALUES), (args.deviation, DEVIATION_VALUES))
+        if read_in(column, plausible)[1] != 1.0
+    }
+    if converted:
+        data["columns_read_in"] = converted
     written = []
     if out_dir is not None:
         figure = out_dir / "iso230.png"
@@ -55,6 +62,8 @@ def iso230_report(data: dict) -> str:
         f"{'P mm':>10} {'x↑ um':>8} {'x↓ um':>8} {'x um':>8} {'B um':>7} {'s↑':>6} {'s↓':>6} {'R↑':>6} {'R↓':>6} "
         f"{'R':>6}",
     ]
+    for column, read in data.get("columns_read_in", {}).items():
+        lines.insert(1, f"column   '{column}' read in {read['unit']} (by its name), given below in {read['given_in']}")
     for p in data["positions"]:
         lines.append(
             f"{p['target_mm']:10.3f} {p['mean_up_um']:8.3f} {p['mean_down_um']:8.3f} {p['mean_um']:8.3f} "
