@@ -144,6 +144,17 @@ def wide_to_long(frame: pd.DataFrame, position: str, error: str = DEFAULT_ERROR)
     return long
 
 
+def refuse_implausible_errors(values: np.ndarray, column: str, label: str, limit: float | None) -> None:
+    """Refuse the first error reading (µm, rows of the file counted from 1) beyond ±``limit``; none when None."""
+    beyond = np.flatnonzero(np.abs(values) > limit) if limit is not None else []
+    if len(beyond):
+        row = int(beyond[0])
+        raise InputError(
+            f"{label}: row {row + 1}, column '{column}': {values[row]:g} µm is beyond the plausible ±{limit:g} µm "
+            f"({len(beyond)} such value(s)); repair the data, or widen the range with --range-error MAX"
+        )
+
+
 def load_position_run(
     source,
     position: str,
@@ -180,6 +191,9 @@ def load_position_run(
         )
     if position not in frame.columns:
         if wide_columns(frame, label):
+            for column in wide_columns(frame):
+                values = numeric_column(frame, column, label, allow_nonfinite=True)
+                refuse_implausible_errors(values, column, label, error_limit)
             frame = wide_to_long(frame, position, error)
         else:
             raise InputError(
@@ -189,15 +203,16 @@ def load_position_run(
     positions = numeric_column(frame, position, label, allow_nonfinite=False)
     refuse_beyond(positions, MAX_POSITION_MM, position, label, "mm is not a plausible axis position")
     times = numeric_column(frame, time, label, allow_nonfinite=False)
+    error_values = numeric_column(frame, error, label, allow_nonfinite=False)
+    refuse_implausible_errors(error_values, error, label, error_limit)
     order = np.argsort(times, kind="stable")
     frame = frame.iloc[order].reset_index(drop=True)
-    positions, times = positions[order], times[order]
+    positions, times, error_values = positions[order], times[order], error_values[order]
     stamps, check = np.unique(times, return_inverse=True)
     if len(np.unique(positions)) < 2:
         raise InputError(f"{label}: column '{position}' holds one position only; a position model needs several")
     first = np.searchsorted(times, stamps)
     checks = frame.iloc[first].reset_index(drop=True)
-    error_values = numeric_column(frame, error, label, allow_nonfinite=False)
     checks[error] = np.bincount(check, weights=error_values) / np.bincount(check)
     checks = checks.drop(columns=[position])
     run = load_run(
@@ -211,9 +226,6 @@ def load_position_run(
         period_tolerance=period_tolerance,
     )
     run = replace(run, source=f"{label} (check runs)")
-    if error_limit is not None and np.any(np.abs(error_values) > error_limit):
-        row = int(np.flatnonzero(np.abs(error_values) > error_limit)[0])
-        raise InputError(f"{label}: error {error_values[row]:g} µm at row {row + 2} exceeds ±{error_limit:g} µm")
     return PositionRun(run=run, check=check, position=positions, error=error_values, column=position)
 
 

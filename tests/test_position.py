@@ -144,6 +144,25 @@ def test_wide_and_long_tables_are_the_same_run(tmp_path):
     assert list(wide_to_long(wide, "P_mm").columns) == ["time_s", "T1", "T2", "T_amb", "P_mm", "error_um"]
 
 
+def test_an_implausible_error_is_named_by_its_row_and_column_in_the_file(tmp_path):
+    """Rows counted from 1 as in every refusal, in the file's order (not the order by time the run is read in),
+    and in a wide table the err_P<mm> column that holds it."""
+    shuffled = long_table(1).sample(frac=1.0, random_state=3).reset_index(drop=True)
+    shuffled.loc[17, "error_um"] = 2.5e5
+    shuffled.to_csv(tmp_path / "long.csv", index=False)
+    with pytest.raises(InputError, match=r"row 18, column 'error_um': 250000 µm is beyond the plausible ±100000 µm"):
+        load_position_run(tmp_path / "long.csv", "P_mm", temps=["T1", "T2"])
+    assert load_position_run(tmp_path / "long.csv", "P_mm", temps=["T1", "T2"], error_limit=1e6).run.n_samples == 48
+    long = long_table(1)
+    wide = long.pivot(index="time_s", columns="P_mm", values="error_um")
+    wide.columns = [f"err_P{int(p):04d}" for p in wide.columns]
+    wide = long.groupby("time_s")[["T1", "T2", "T_amb"]].first().join(wide).reset_index()
+    wide.loc[5, "err_P0300"] = -3e5
+    wide.to_csv(tmp_path / "wide.csv", index=False)
+    with pytest.raises(InputError, match=r"row 6, column 'err_P0300': -300000 µm is beyond"):
+        load_position_run(tmp_path / "wide.csv", "P_mm", temps=["T1", "T2"])
+
+
 def test_a_long_table_is_checked_for_uniform_sampling_per_check_run_not_per_row():
     long = long_table(1)
     run = load_position_run(long.sample(frac=1.0, random_state=3), "P_mm", temps=["T1", "T2"])
