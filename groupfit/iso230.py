@@ -271,8 +271,6 @@ def load_runs(
     target approached in one direction only or unequally often, fewer than two
     runs each way.
     """
-    if isinstance(source, (str, Path)):
-        _refuse_no_file(Path(source))
     frame, _, label = read_table(source)
     for name in (target, direction, deviation):
         if name not in frame.columns:
@@ -321,16 +319,6 @@ def _header_read_below(source, frame: pd.DataFrame, label: str, names: Sequence[
         "made it read as the header, the rows above it as a preamble; write the number, or leave that target out "
         "of every run"
     )
-
-
-def _refuse_no_file(path: Path) -> None:
-    """One line for a path that is no file of runs (read_table's own names an option iso230 lacks)."""
-    if path.is_dir():
-        raise InputError(f"{path}: is a folder; give the file of the runs (CSV, Excel, Parquet, MATLAB, TDMS or JSON)")
-    if not path.exists():
-        raise InputError(f"{path}: file not found; check the path of the runs")
-    if not path.is_file():
-        raise InputError(f"{path}: not a regular file (a device or a pipe); give the file of the runs")
 
 
 def read_in(column: str, plausible: PlausibleValues) -> tuple[str, float]:

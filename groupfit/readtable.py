@@ -138,9 +138,9 @@ def read_table(
 def _refuse_unreadable(path: Path, label: str) -> None:
     """One line for a path that is no data file groupfit reads: a folder, a device, nothing."""
     if path.is_dir():
-        raise InputError(f"{label}: is a folder; --data needs a data file (CSV, Excel, Parquet, MATLAB, TDMS or JSON)")
+        raise InputError(f"{label}: is a folder; give a data file (CSV, Excel, Parquet, MATLAB, TDMS or JSON)")
     if path.exists() and not path.is_file():
-        raise InputError(f"{label}: not a regular file (a device or a pipe); --data needs a data file")
+        raise InputError(f"{label}: not a regular file (a device or a pipe); give a data file")
     if not path.is_file():
         raise InputError(f"{label}: data file not found; check its path")
 

@@ -140,11 +140,15 @@ def test_a_direction_and_a_deviation_in_one_row_are_named_by_the_same_row_number
     assert rows == ["4", "4"]
 
 
-@pytest.mark.parametrize("path", ["missing.csv", "."], ids=["missing file", "folder"])
-def test_a_run_that_is_no_file_is_refused_without_naming_an_option_iso230_lacks(tmp_path, capsys, path):
+@pytest.mark.parametrize(
+    "path, message",
+    [("missing.csv", "data file not found; check its path"), (".", "is a folder; give a data file")],
+    ids=["missing file", "folder"],
+)
+def test_a_run_that_is_no_file_is_refused_without_naming_an_option_iso230_lacks(tmp_path, capsys, path, message):
     code = main(["iso230", str(tmp_path / path), "--json", str(tmp_path / "r.json")])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and "the runs" in err[0] and "--data" not in err[0]
+    assert code == 2 and len(err) == 1 and message in err[0] and "--" not in err[0]
     assert not (tmp_path / "r.json").exists()
 
 
