@@ -97,6 +97,10 @@ def check_output_file(path: str | Path, option: str) -> Path:
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{path}: is a folder; {option} needs a file name")
+    if path.exists() and not path.is_file():
+        raise InputError(
+            f"{path}: not a regular file (a device or a pipe), which a result would replace; {option} needs a file name"
+        )
     if path.exists() and not os.access(path, os.W_OK):
         raise InputError(f"{path}: the file is read-only; choose another {option}")
     folder = path.parent
@@ -128,6 +132,19 @@ def _check_folder(folder: Path, option: str, *, not_folder: str, not_writable: s
     raise InputError(f"{problem}; choose another {option}")
 
 
+def landing(path: str | Path) -> Path:
+    """Where a file written at ``path`` lands: a symbolic link's target (the link stays a link), else ``path``.
+
+    Refused when something other than a regular file is there (a device or a pipe: renaming a result over it
+    would remove it)."""
+    path = Path(path)
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
+    if path.exists() and not path.is_file() and not path.is_dir():
+        raise InputError(f"{path}: not a regular file (a device or a pipe); it was left as it was")
+    return path
+
+
 def _temporary_for(path: Path) -> Path:
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(handle)
@@ -155,7 +172,7 @@ def atomic_write_files(files: Mapping[str | Path, str]) -> list[Path]:
     staged: list[tuple[Path, Path]] = []
     try:
         for target, text in files.items():
-            target = Path(target)
+            target = landing(target)
             try:
                 _make_folder(target.parent)
                 temporary = _temporary_for(target)
@@ -192,7 +209,7 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
     The temporary name keeps the target's suffix, so writers that choose a
     format by suffix still do.
     """
-    path = Path(path)
+    path = landing(path)
     try:
         _make_folder(path.parent)
         handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}")

@@ -11,6 +11,7 @@ import json
 import os
 import shutil
 import signal
+import stat
 
 import matplotlib
 import pandas as pd
@@ -364,3 +365,33 @@ def test_a_table_in_an_output_folder_is_replaced_only_by_one_with_its_header(tmp
     with plan.active():
         atomic_write_text(folder / "runs.csv", "run_id,p,objective\n1,2,3.4\n")
     assert (folder / "runs.csv").read_text().startswith("run_id")
+
+
+@pytest.mark.parametrize("where", ["--json", "fit.png in --out"])
+def test_a_pipe_as_an_output_is_refused_and_left_a_pipe(inputs, tmp_path, capsys, where):
+    """Renaming a result over a named pipe (or a device: /dev/null as --json) would remove it: refused before any
+    work, the pipe left as it was, nothing written."""
+    pipe = tmp_path / ("o" if where != "--json" else "") / ("fit.png" if where != "--json" else "r.json")
+    pipe.parent.mkdir(exist_ok=True)
+    os.mkfifo(pipe)
+    argv = [a.format(**{"in": inputs, "tmp": tmp_path}) for a in _fit()]
+    if where == "--json":
+        argv += ["--json", str(pipe)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{pipe}: not a regular file (a device or a pipe)" in err[0]
+    assert stat.S_ISFIFO(os.lstat(pipe).st_mode)
+    assert not (tmp_path / "o" / "model.json").exists()
+
+
+def test_a_symbolic_link_as_an_output_is_written_through_and_stays_a_link(inputs, tmp_path, capsys):
+    target = tmp_path / "results" / "r.json"
+    target.parent.mkdir()
+    target.write_text("{}\n")
+    link = tmp_path / "r.json"
+    link.symlink_to(target)
+    argv = [a.format(**{"in": inputs, "tmp": tmp_path}) for a in _fit("--json", str(link))]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert json.loads(target.read_text())["p"] == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o", "r.json", "results"]
