@@ -66,18 +66,19 @@ import math
 from pathlib import Path
 from typing import Any, Callable
 
-from groupfit.data_options import encoding_name
+from groupfit.data_options import MAX_PERIOD_TOLERANCE, encoding_name, parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.settings import RunSettings
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 
-def _whole(table: Table, key: str) -> int:
-    return table.integer(key, minimum=None)
-
-
 def _seed(table: Table, key: str) -> int:
     return table.integer(key, minimum=0)
+
+
+def _at_least(minimum: int) -> Callable[[Table, str], int]:
+    """A whole number of at least ``minimum`` (a population of 2 or more, one generation or more)."""
+    return lambda table, key: table.integer(key, minimum=minimum)
 
 
 def _columns(table: Table, key: str) -> list[str]:
@@ -94,6 +95,30 @@ def _positive(table: Table, key: str) -> float:
 def _number(table: Table, key: str) -> int | float:
     table.number(key)
     return table.data[key]
+
+
+def _period_tolerance(table: Table, key: str) -> int | float:
+    value = _number(table, key)
+    try:
+        parse_period_tolerance(value)
+    except InputError:
+        limit = f"{100 * MAX_PERIOD_TOLERANCE:g}"
+        raise table.fail(key, f"must be a percentage of the period, 0 up to but not {limit}, got {value!r}") from None
+    return value
+
+
+def _path(table: Table, key: str) -> str:
+    value = table.string(key)
+    if not value.strip():
+        raise table.fail(key, "an empty path; name the run's file (relative to the configuration's folder)")
+    return value
+
+
+def _paths(table: Table, key: str) -> list[str]:
+    values = table.strings(key)
+    if any(not value.strip() for value in values):
+        raise table.fail(key, "an empty path among them; name each run's file (relative to the configuration's folder)")
+    return values
 
 
 def _encoding(table: Table, key: str) -> str:
@@ -139,14 +164,14 @@ def _target(table: Table, key: str) -> str | int | float:
 
 SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     "data": {
-        "path": Table.string,
+        "path": _path,
         "time": Table.string,
         "temps": _columns,
         "error": Table.string,
-        "validate": Table.strings,
+        "validate": _paths,
         "temp_range": _temp_range,
         "error_limit": lambda table, key: table.number(key, positive=True),
-        "period_tolerance": _number,
+        "period_tolerance": _period_tolerance,
         "resample_s": lambda table, key: table.number(key, positive=True),
         "ambient": Table.string,
         "keep_glitches": Table.boolean,
@@ -154,10 +179,10 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     },
     "model": {
         "p": _whole_or_auto,
-        "pmax": _whole,
+        "pmax": _at_least(0),
         "p_rule": Table.string,
         "p_target": _target,
-        "n": _whole,
+        "n": _at_least(0),
         "c": _number,
         "objective": Table.string,
         "intercept": Table.boolean,
@@ -167,15 +192,15 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     "search": {
         "method": Table.string,
         "seed": _seed,
-        "population_size": _whole,
-        "max_generations": _whole,
-        "stall_generations": _whole,
+        "population_size": _at_least(2),
+        "max_generations": _at_least(1),
+        "stall_generations": _at_least(1),
         "polish": Table.boolean,
         "certify": _certify,
     },
     "output": {"dir": Table.string},
     "compare": {
-        "pmax": _whole,
+        "pmax": _at_least(0),
         "heat": Table.string,
         "ar1_scaling": Table.string,
         "ar1_start": lambda table, key: table.string(key, choices=("measured", "zero")),

@@ -120,6 +120,8 @@ class OutputPlan:
         """Folders created for staged files (deepest first), removed again when the plan is discarded."""
         self.tables: dict[Path, str] = {}
         """Tables in an output folder that exist (and the option): replaced only by one with their header."""
+        self.folders: dict[Path, str] = {}
+        """Every declared output folder and the option that names it: no output file may be one of them."""
 
     # ------------------------------------------------------------ declaring
     def read(self, *paths) -> OutputPlan:
@@ -171,6 +173,7 @@ class OutputPlan:
         if path is None:
             return None
         folder = check_output_dir(self._target(path, option), option)
+        self._claim_folder(folder, option)
         for name in files:
             target = folder / name
             self._check_input(target, option)
@@ -186,10 +189,22 @@ class OutputPlan:
         return Path(path)
 
     def _claim(self, target: Path, option: str) -> None:
-        """Refuse a file two outputs would both write (``--json DIR/model.json`` beside ``--out DIR``)."""
-        other = self.outputs.setdefault(resolved_path(target), option)
+        """Refuse a file two outputs would both write (``--json DIR/model.json`` beside ``--out DIR``), or one
+        that is (or would hold) an output folder (``--db X --out X``)."""
+        resolved = resolved_path(target)
+        other = self.outputs.setdefault(resolved, option)
         if other != option:
             raise InputError(f"{target}: {option} names a file {other} writes too; choose another {option}")
+        for folder, named_by in self.folders.items():
+            if folder == resolved or folder.is_relative_to(resolved):
+                raise InputError(f"{target}: {option} names the folder {named_by} writes into; choose another {option}")
+
+    def _claim_folder(self, folder: Path, option: str) -> None:
+        resolved = resolved_path(folder)
+        for output, named_by in self.outputs.items():
+            if output == resolved or resolved.is_relative_to(output):
+                raise InputError(f"{folder}: {option} names the file {named_by} writes; choose another {option}")
+        self.folders.setdefault(resolved, option)
 
     def _check_input(self, target: Path, option: str) -> None:
         resolved = resolved_path(target)

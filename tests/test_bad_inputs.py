@@ -230,6 +230,11 @@ NEW_CASES = [
     Case("configs", "seed -1 in the config", configured("fit", "seed_negative.toml"), "seed"),
     Case("configs", "temps = [] in the config", configured("fit", "temps_empty.toml"), "temps"),
     Case("configs", "heat_exponent = -5 in the config", configured("compare", "heat_negative.toml"), "heat_exponent"),
+    Case("configs", "a population of none", configured("fit", "population_0.toml"), "'search.population_size'"),
+    Case("configs", "generations -5", configured("fit", "generations_negative.toml"), "'search.max_generations'"),
+    Case("configs", "pmax -2 in the config", configured("fit", "model_pmax_negative.toml"), "'model.pmax'"),
+    Case("configs", "tolerance -5 in the config", configured("fit", "tolerance_negative.toml"), "'data.period_tol"),
+    Case("configs", "an empty data path", configured("fit", "path_empty.toml"), "'data.path': an empty path"),
     # sweep
     Case("sweep", "a million runs", swept("sweep_million.toml"), "100000"),
     Case("sweep", "mostly infeasible", swept("sweep_mostly_infeasible.toml"), "cannot fit their breaks"),
@@ -560,7 +565,7 @@ CASES = [
         "configs",
         "negative pmax in the config",
         ("compare", "{in}/pmax_negative.toml", "--quiet", "--out", "{out}/r"),
-        "--pmax -1",
+        "config key 'compare.pmax': must be at least 0, got -1",
     ),
     Case(
         "configs",
@@ -720,6 +725,11 @@ def _write_inputs(folder: Path) -> None:
         "seed_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[search]\nseed = -1\n',
         "temps_empty.toml": f"[data]\n{data}\ntemps = []\n",
         "heat_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\nheat_exponent = -5\n',
+        "population_0.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[search]\npopulation_size = 0\n',
+        "generations_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[search]\nmax_generations = -5\n',
+        "model_pmax_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\npmax = -2\n',
+        "tolerance_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\nperiod_tolerance = -5\n',
+        "path_empty.toml": '[data]\npath = ""\n',
     }
     for name, text in configs.items():
         (folder / name).write_text(text)

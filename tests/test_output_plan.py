@@ -201,12 +201,23 @@ def test_an_existing_model_file_is_replaced_only_with_force(inputs, tmp_path, ca
     [
         (_fit("--json", "{tmp}/o/model.json"), "--json writes too"),
         (("simulate", "{in}/lumped.toml", "--out", "{tmp}/run.png"), "--out writes too"),
+        (
+            ("sweep", "{in}/sweep.toml", "--quiet", "--db", "{tmp}/s.sqlite", "--out", "{tmp}/s.sqlite"),
+            "--db names the folder --out writes into",
+        ),
+        (
+            ("sweep", "{in}/sweep.toml", "--quiet", "--db", "{tmp}/s", "--out", "{tmp}/s/report"),
+            "--db names the folder --out writes into",
+        ),
+        (_fit("--json", "{tmp}/o"), "--out names the file --json writes"),
     ],
-    ids=["fit --json over the model", "simulate --out over its figure"],
+    ids=["fit --json over the model", "simulate --out over its figure", "sweep --db is --out", "--out in --db", "fit"],
 )
 def test_two_outputs_may_not_name_one_file(inputs, tmp_path, capsys, argv, words):
+    """Refused before any work: nothing is written (a sweep's study is not run, its database not made)."""
     status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
     assert status == 2 and len(err) == 1 and words in err[0] and unchanged, err
+    assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize(
