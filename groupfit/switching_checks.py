@@ -111,8 +111,14 @@ def _value_problem(model: Mapping[str, Any], section: Mapping[str, Any]) -> str 
             return f"switching.{key} = {section[key]!r}: must lie between 0 and {MAX_MARGIN_C:g} °C"
     if "rate_limit_um" in section and section["rate_limit_um"] <= 0:
         return "switching.rate_limit_um must be positive"
-    if "comp_min_um" in section and "comp_max_um" in section and section["comp_min_um"] > section["comp_max_um"]:
-        return "switching.comp_min_um must not exceed comp_max_um"
+    if "comp_min_um" in section and "comp_max_um" in section and section["comp_min_um"] >= section["comp_max_um"]:
+        return "switching.comp_min_um must be less than comp_max_um (a clamp with no width serves one value)"
+    for key, sign, word in (("comp_min_um", 1, "above"), ("comp_max_um", -1, "below")):
+        if key in section and sign * section[key] > 0:
+            return (
+                f"switching.{key} = {section[key]!r}: {word} 0, the clamp never lets the compensation be 0 (a model "
+                "that predicts no error would still move the axis); fit writes ±twice the largest prediction"
+            )
     if "hold_samples" in section and not (is_whole(section["hold_samples"]) and 0 <= section["hold_samples"] <= HOLD):
         return f"switching.hold_samples must be a whole number in 0…{HOLD} (a controller's 32-bit counter)"
     if "period_tolerance" in section and not 0 < section["period_tolerance"] < 1:

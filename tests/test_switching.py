@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from support import write_model
 from test_switching_models import noisy, shifted, synthetic_model
 
+from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.grouping import hard_groups, serving_group_index, soft_groups
 from groupfit.model import ModelFile
@@ -324,6 +325,28 @@ def test_broken_rule_keys_are_refused_on_loading(tmp_path, key, value, message):
     write_model(model, tmp_path / "bad.json")
     with pytest.raises(InputError, match=message):
         ModelFile.load(tmp_path / "bad.json").to_dict()
+
+
+@pytest.mark.parametrize(
+    "low, high, message",
+    [
+        (30.0, 30.0, "comp_min_um must be less than comp_max_um"),
+        (10.0, 48.0, "switching.comp_min_um = 10.0: above 0, the clamp never lets the compensation be 0"),
+        (-48.0, -5.0, "switching.comp_max_um = -5.0: below 0"),
+    ],
+)
+def test_a_clamp_that_serves_no_zero_is_refused_by_replay_and_export(tmp_path, capsys, low, high, message):
+    """A hand-edited clamp with no width, or one that excludes 0, would move the axis whatever the model says."""
+    model, _ = synthetic_model()
+    model["switching"].update(comp_min_um=low, comp_max_um=high)
+    write_model(model, tmp_path / "bad.json")
+    assert main(["export", str(tmp_path / "bad.json"), "--target", "c", "--out", str(tmp_path / "c")]) == 2
+    assert message in capsys.readouterr().err and not (tmp_path / "c").exists()
+    with pytest.raises(InputError, match=message.replace("(", r"\(")):
+        ModelFile.load(tmp_path / "bad.json").to_dict()
+    model["switching"].update(comp_min_um=0.0, comp_max_um=high if high > 0 else 5.0)
+    write_model(model, tmp_path / "one_sided.json")
+    assert ModelFile.load(tmp_path / "one_sided.json").switching.comp_min_um == 0.0
 
 
 def test_noise_estimate_recovers_white_noise_on_a_smooth_curve():
