@@ -121,6 +121,9 @@ def test_an_infinite_logged_check_is_no_check(tmp_path, model_path):
         (["--probe-every", "0"], "--probe-every 0: must be a number of seconds > 0"),
         (["--probe-every", "nan"], "must be a number of seconds > 0"),
         (["--probe-column", "nope"], "column 'nope' not found"),
+        (["--probe-every", "1000", "--probe-column", "time_s"], "--probe-column 'time_s' is the run's time"),
+        (["--probe-column", "T1"], "--probe-column 'T1' is a reading the model takes as an input"),
+        (["--probe-every", "1000", "--probe-column", "T9"], "--probe-column 'T9' is named as a temperature sensor"),
         (
             ["--probe-every", "1000", "--probe-first", "-1"],
             "--probe-first -1: must be a number of seconds from 0 to 1e+09",

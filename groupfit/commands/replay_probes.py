@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from groupfit.data import length_unit, numeric_column
+from groupfit.default_columns import default_temperature_columns
 from groupfit.error_scale import scaled_values
 from groupfit.error_start import from_start, is_from_start, logged_spec
 from groupfit.errors import InputError
@@ -53,6 +54,24 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
     )
 
 
+def refuse_probe_column(run, column: str, given: str) -> None:
+    """Refuse the run's time, an input the model reads or a column named as a temperature sensor as the probe's
+    readings: checks of seconds or °C."""
+    sensors = default_temperature_columns([column])
+    if column == run.time_name or column in run.temp_names or sensors:
+        what = (
+            "the run's time"
+            if column == run.time_name
+            else "a reading the model takes as an input"
+            if column in run.temp_names
+            else "named as a temperature sensor"
+        )
+        raise InputError(
+            f"{run.source}: --probe-column '{given}' is {what}, not a measured error; name the column of the probe's "
+            "readings (µm), or leave the option out to check against the run's error column"
+        )
+
+
 def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) -> np.ndarray | None:
     """Per sample the probe reading (µm), NaN where there is no check; None without probe options.
 
@@ -69,6 +88,7 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
     first = args.probe_first
     if args.probe_column is not None:
         column, factor = scaled_values(run.frame, args.probe_column, run.source)
+        refuse_probe_column(run, column, args.probe_column)
         reading = numeric_column(run.frame, column, run.source, allow_nonfinite=True)
         reading = reading * factor * length_unit(column)[1]  # ``probe*2.5``, ``probe_mm``: read in µm
         if is_from_start(args.probe_column):
