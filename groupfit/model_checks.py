@@ -11,7 +11,9 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
+from groupfit.default_columns import scaled_name
 from groupfit.error_scale import factor_problem
+from groupfit.error_start import logged_spec
 from groupfit.errors import InputError
 from groupfit.grouping import MAX_SPACING, hard_groups, soft_groups
 from groupfit.model_recalibration import recalibration_problem
@@ -96,6 +98,7 @@ def model_problem(model: Any, required: Sequence[str]) -> str | None:
         _training_problem,
         rule_section_problem,
         _reference_check,
+        _error_column_problem,
         position_problem,
         dead_band_problem,
         ridge_problem,
@@ -326,3 +329,32 @@ def _reference_check(model: Mapping[str, Any]) -> str | None:
     except InputError:
         derived = set()
     return reference_problem(model.get("reference"), [name for name in model["temps"] if name not in derived])
+
+
+def _error_column_problem(model: Mapping[str, Any]) -> str | None:
+    """The ``error`` key's problem: its column (less a factor or ``-start``) must be none the rule reads as a
+    temperature or position, nor the run's time."""
+    error = model["error"]
+    if error is None:
+        return None
+    column = logged_spec(error) or error
+    column = (scaled_name(column) or (column, 1.0))[0]
+    derived = model.get("derived_inputs") or []
+    sources = {d.get("column"): d.get("name") for d in derived if isinstance(d, Mapping)}
+    names = {d.get("name") for d in derived if isinstance(d, Mapping)}
+    read = {source: f"the source of derived input {name}" for source, name in sources.items()}
+    read.update({name: "a model input" for name in model["temps"] if name not in names})
+    for key, what in (("reference", "the reference"), ("dead_band", "the dead band's reference")):
+        value = model.get(key)
+        value = value.get("reference") if isinstance(value, Mapping) else value
+        if isinstance(value, str):
+            read[value] = what
+    position = model.get("position")
+    if isinstance(position, Mapping) and isinstance(position.get("column"), str):
+        read[position["column"]] = "the axis position"
+    training = model.get("training")
+    if isinstance(training, Mapping) and isinstance(training.get("time"), str):
+        read[training["time"]] = "the run's time"
+    if column in read:
+        return f"error = {error!r}: column '{column}' is {read[column]}, not the thermal error"
+    return None

@@ -58,6 +58,8 @@ def reference_problem(reference: Any, measured_inputs: Sequence[str]) -> str | N
         return None
     if not isinstance(reference, str) or not reference.strip():
         return "'reference' must be a column name or 'start'"
+    if reference.strip().lower() == "none":
+        return "'reference' = 'none': write null for a model on absolute readings, or name the reference column"
     if reference in measured_inputs:
         return f"'reference' names the model input '{reference}'; the reference must be another column"
     return None

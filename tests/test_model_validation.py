@@ -231,6 +231,13 @@ CASES = {
     "threshold disagrees": lambda m: m["switching"]["thresholds_c"].__setitem__(0, 99.0),
     "direction disagrees": lambda m: m["switching"]["directions"].__setitem__(0, -1),
     "criterion name disagrees": lambda m: m["switching"].update(criterion="T2"),
+    "error is an input": lambda m: m.update(error="T1"),
+    "error is an input, scaled": lambda m: m.update(error="T2*1000"),
+    "error is the run's time": lambda m: m.update(
+        error="time_s-start", training={**m.get("training", {}), "time": "time_s"}
+    ),
+    "error is the reference": lambda m: m.update(error="T_amb", reference="T_amb"),
+    "reference 'none'": lambda m: m.update(reference="none"),
     "hard group not over-determined": lambda m: m.update(
         breaks=[3, *m["breaks"][1:]],
         n=0,

@@ -543,7 +543,10 @@ def test_replay_reads_the_position_column(tmp_path, capsys):
     frame.drop(columns=["P_mm"]).to_csv(tmp_path / "blind.csv", index=False)
     code = main(["replay", str(tmp_path / "model.json"), "--data", str(tmp_path / "blind.csv")])
     assert code != 0
-    assert "column 'P_mm' not found; the model reads it as the axis position" in capsys.readouterr().err
+    assert (
+        "column 'P_mm' not found; the model reads it (axis position (mm) of the position terms)"
+        in capsys.readouterr().err
+    )
 
 
 def test_the_position_is_the_last_reading_and_an_order_above_the_positions_is_refused():

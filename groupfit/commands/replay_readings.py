@@ -52,15 +52,11 @@ def load_readings(
     columns = []
     for r, name in enumerate(tables.raw_names[tables.n_measured :], start=tables.n_measured):
         if name not in run.frame.columns:
-            fed = ", ".join(d.name for d in tables.derived if d.reading == r)
             available = ", ".join(map(str, run.frame.columns))
-            uses = (
-                f"the model computes its input(s) {fed} from it"
-                if fed
-                else "the model reads it as the "
-                + ("axis position (mm)" if r == tables.position_reading else "reference of its dead band")
+            uses = " and ".join(tables.uses_of(r))
+            raise InputError(
+                f"{run.source}: column '{name}' not found; the model reads it ({uses}). The columns are: {available}"
             )
-            raise InputError(f"{run.source}: column '{name}' not found; {uses}. The columns are: {available}")
         columns.append(numeric_column(run.frame, name, run.source, allow_nonfinite=True))
     readings = np.column_stack([run.temps, *columns])
     return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
