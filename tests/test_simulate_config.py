@@ -118,3 +118,13 @@ def test_a_valid_lumped_scenario_still_simulates_at_its_period_from_its_ambient(
     idle = frame["time_s"] <= 1000.0  # the first step is off: nothing has heated the sensors yet
     assert (frame.loc[idle, ["T1", "T2", "T3", "T4"]] == 23.5).all().all()
     assert frame["T1"].iloc[-1] > 23.5 + 5.0
+
+
+@pytest.mark.parametrize("name", ["run.parquet", "run.xlsx", "run.json", "run.mat"])
+def test_a_data_set_named_as_another_format_is_refused_before_simulating(tmp_path, capsys, name):
+    """simulate writes CSV text: under a .parquet (…) name no reader of that format could open the file."""
+    (tmp_path / "scenario.toml").write_text(SHIPPED)
+    assert main(["simulate", str(tmp_path / "scenario.toml"), "--out", str(tmp_path / name), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "as CSV text" in err[0] and "name a .csv file" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scenario.toml"]

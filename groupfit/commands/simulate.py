@@ -40,6 +40,10 @@ def simulate_scenario(config: dict, *, progress: bool):
     return fe.simulate_config(config, progress=progress)
 
 
+CSV_SUFFIXES = (".csv", ".txt", "")
+"""Names simulate writes its CSV text under: any other suffix names a format it does not write."""
+
+
 def add_parser(verbs) -> None:
     simulate = verbs.add_parser("simulate")
     simulate.add_argument("config", metavar="CONFIG", help="TOML scenario configuration")
@@ -54,6 +58,11 @@ def run_simulate(args: argparse.Namespace) -> int:
     plan = current_plan(force=args.force).read(args.config)
     output = plan.file(args.out, "--out", data=True)
     figure = plan.file(output.with_suffix(".png"), "--out (its figure)")
+    if output.suffix.lower() not in CSV_SUFFIXES:
+        raise InputError(
+            f"--out {args.out}: simulate writes the data set as CSV text, which a {output.suffix} name "
+            "would misname (no reader of that format could open it); name a .csv file"
+        )
     config = read_scenario(args.config)
     try:
         frame = simulate_scenario(config, progress=not args.quiet)
