@@ -222,3 +222,14 @@ def test_the_plausible_ranges_are_the_screw_verbs_options(model_file, tmp_path, 
     assert "--range-error MAX" in _expect_input_error(args, capsys, tmp_path / "b")
     status, out, err = run_cli([*args, "--range-error", "1e6"], capsys)
     assert status == 0, err
+
+
+def test_a_field_position_off_the_screw_is_refused_as_a_probe_position_is(model_file, tmp_path, capsys):
+    """--at beyond twice the furthest sensor gave overflow warnings and a field of nulls; now one line."""
+    args = ["screw", "predict", str(model_file), "--data", str(DATA / "screw_A.csv"), "--out", str(tmp_path / "o")]
+    line = _expect_input_error([*args, "--at", "0.1,5"], capsys, tmp_path / "o")
+    assert "--at '0.1,5': 5 m is off the screw (x from the source, 0…0.28 m" in line
+    status, out, err = run_cli([*args, "--at", "0.1,0.28", "--json", str(tmp_path / "p.json")], capsys)
+    assert status == 0 and "Warning" not in err, err
+    field = json.loads((tmp_path / "p.json").read_text())["field"]
+    assert field["x_m"] == [0.1, 0.28] and all(v is not None for row in field["error_um"] for v in row)

@@ -239,7 +239,7 @@ def run_predict(args: argparse.Namespace) -> int:
         if source not in model.sources_:
             model.fit_source(run.rises, run.time, run.positions, source=source, label=run.source)
             reidentified = True
-    at = _positions(args.at)
+    at = _positions(args.at, reach=2.0 * float(np.max(run.positions)))
     score, rises, error = score_screw(model, run, source)
     written = []
     if out_dir is not None:
@@ -274,7 +274,8 @@ def run_predict(args: argparse.Namespace) -> int:
     return 0
 
 
-def _positions(text: str | None):
+def _positions(text: str | None, *, reach: float):
+    """``--at X,Y,…`` (m from the source), each on the screw: 0 up to ``reach``, as a probe position must be."""
     if text is None:
         return None
     try:
@@ -283,6 +284,11 @@ def _positions(text: str | None):
         raise InputError(f"--at {text!r}: give positions in metres, comma separated") from None
     if not values.size or np.any(values < 0) or not np.all(np.isfinite(values)):
         raise InputError(f"--at {text!r}: give non-negative positions in metres, comma separated")
+    if np.any(values > reach):
+        raise InputError(
+            f"--at {text!r}: {values[values > reach][0]:g} m is off the screw (x from the source, 0…{reach:g} m: "
+            "twice the furthest sensor, as for a probe)"
+        )
     return values
 
 
