@@ -14,6 +14,7 @@ from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
 from groupfit.heldout.reference_choice import default_reference_choice
 from groupfit.inference.cli import add_interval_options, check_block, interval_settings
+from groupfit.io import refuse_repeated
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import (
     check_probe_first,
@@ -118,7 +119,8 @@ def run_compare(args: argparse.Namespace) -> int:
         raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
     check_probe_first(args.probe_first, args.probe_every)
     tolerance = parse_tolerance(args.tolerance, args.probe_every)
-    runs = [p for p in [data.path, *data.validate] if isinstance(p, (str, Path))]
+    runs = [p for p in [*data.paths, *data.validate] if isinstance(p, (str, Path))]
+    refuse_repeated(runs, "as data (--data, --validate)")
     common.plan_outputs(
         args,
         config_path,

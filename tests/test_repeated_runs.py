@@ -1,0 +1,51 @@
+"""A run given twice (the same path, a link to it, or a copy of its bytes) is refused in one line by every verb
+that reads several runs: held out against itself, a run scores nothing."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from groupfit.cli import main
+
+DATA = Path(__file__).resolve().parents[1] / "datasets"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("repeated")
+    shutil.copy(DATA / "diag_none_model.csv", folder / "a.csv")
+    shutil.copy(DATA / "diag_none_validate.csv", folder / "b.csv")
+    shutil.copy(folder / "a.csv", folder / "copy.csv")
+    os.symlink(folder / "a.csv", folder / "link.csv")
+    assert main(["fit", "--data", str(folder / "a.csv"), "--p", "0", "--quiet", "--out", str(folder / "m")]) == 0
+    return folder
+
+
+CASES = {
+    "fit, the same path": (["fit", "--data", "a.csv", "a.csv", "--p", "0"], "a.csv: given twice as data"),
+    "fit, a copy": (["fit", "--data", "a.csv", "copy.csv", "--p", "0"], "copy.csv: holds the same bytes as"),
+    "compare, a link": (["compare", "--data", "a.csv", "--validate", "link.csv"], "link.csv: given twice as data"),
+    "compare, a copy": (["compare", "--data", "a.csv", "--validate", "b.csv", "copy.csv"], "copy.csv: holds the same"),
+    "diagnose, a copy": (["diagnose", "m/model.json", "--data", "a.csv", "--validate", "copy.csv"], "copy.csv: holds"),
+    "replay, continues": (["replay", "m/model.json", "--data", "copy.csv", "--continues", "a.csv"], "copy.csv: holds"),
+}
+
+
+@pytest.mark.parametrize("label", list(CASES))
+def test_a_run_given_twice_is_refused_and_nothing_written(runs, tmp_path, capsys, label):
+    argv, message = CASES[label]
+    argv = [str(runs / a) if a.endswith((".csv", ".json")) else a for a in argv]
+    capsys.readouterr()
+    assert main([*argv, "--out", str(tmp_path / "o"), "--json", str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "o").exists() and not (tmp_path / "r.json").exists()
+
+
+def test_two_different_runs_are_read(runs, tmp_path, capsys):
+    argv = ["compare", "--data", str(runs / "a.csv"), "--validate", str(runs / "b.csv"), "--pmax", "0", "--quiet"]
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 0, capsys.readouterr().err
