@@ -215,6 +215,25 @@ def test_replay_scores_only_the_errors_within_range_error(model, tmp_path, capsy
 
 
 @pytest.mark.parametrize(
+    "option, message",
+    [
+        (["--heat", "speed_rpm"], "--heat is an option of --model ar1, not of the grouped model"),
+        (["--start", "zero"], "--start is an option of --model ar1"),
+        (["--heat-exponent", "1"], "--heat-exponent is an option of --model ar1"),
+        (["--closed-form", "rod.toml"], "--closed-form is an option of --model ar1"),
+        (["--p", "1", "--choose", "bic"], "--choose: p is given (--p 1), so nothing is chosen"),
+        (["--p", "0", "--p-target", "5"], "--p-target: p is given (--p 0)"),
+    ],
+)
+def test_the_grouped_fit_refuses_what_it_would_ignore(tmp_path, capsys, option, message):
+    heat, observed, _ = simulated_process(n=300)
+    run = write_run(tmp_path / "run.csv", heat, observed)
+    assert main(["fit", "--data", str(run), *option, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
     "option", [["--probe-every", "600"], ["--fresh"], ["--resolution-um", "0.1"], ["--continues", "other.csv"]]
 )
 def test_replay_refuses_what_the_ar1_routine_does_not_do(model, tmp_path, capsys, option):

@@ -15,6 +15,19 @@ from groupfit.plots import plot_fit
 
 AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
 GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion")
+DEFAULT_HEAT_EXPONENT = 5 / 3
+"""C2 of an unseen heat level by (q/level)^X: bearing heat against speed."""
+AR1_ONLY = ("heat", "period", "start", "ar1_fit", "heat_exponent", "closed_form")
+
+
+def refuse_ar1_options(args: argparse.Namespace) -> None:
+    """Refuse an option of ``--model ar1`` given to the grouped model's fit, which would ignore it."""
+    given = [name for name in AR1_ONLY if getattr(args, name, None) is not None]
+    if given:
+        raise InputError(
+            f"--{given[0].replace('_', '-')} is an option of --model ar1, not of the grouped model; add --model ar1 "
+            "or leave it out"
+        )
 
 
 def add_fit_options(parser: argparse.ArgumentParser) -> None:
@@ -35,19 +48,16 @@ def add_fit_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--start",
         choices=STARTS,
-        default="zero",
         help="ar1: the free run starts from 0 (the paper's ΔL(0) = 0, default) or from the measured error",
     )
     parser.add_argument(
         "--ar1-fit",
         choices=tuple(AR1_FITS),
-        default="one-step",
         help="ar1: least squares on the one-step equations (default) or on the free-run error",
     )
     parser.add_argument(
         "--heat-exponent",
         type=float,
-        default=5 / 3,
         metavar="X",
         help="ar1: C2 of an unseen heat level by (q/level)^X (default 5/3, bearing heat against speed; 1 for a flux)",
     )
@@ -66,6 +76,9 @@ def run_fit(args: argparse.Namespace) -> int:
         raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
     if not args.heat:
         raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
+    args.start = args.start or "zero"
+    args.ar1_fit = args.ar1_fit or "one-step"
+    args.heat_exponent = DEFAULT_HEAT_EXPONENT if args.heat_exponent is None else args.heat_exponent
     config_path, settings = common.settings_with_data_options(args)
     data = settings.data
     out_dir = common.plan_outputs(

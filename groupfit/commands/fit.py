@@ -8,20 +8,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import common, fit_mlr, option_values, reference_options, replay_readings
+from groupfit.commands import common, fit_mlr, reference_options, replay_readings
+from groupfit.commands.fit_options import NEXT_RUN, add_fit_arguments, refuse_unused_options
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
-from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
+from groupfit.commands.recalibrate_option import recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
 from groupfit.errors import InputError
 from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
-from groupfit.heldout.choice import RMS_TOLERANCE
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
-from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.heldout.span import SPAN_KEY, input_span
-from groupfit.inference.cli import add_interval_options, check_block, intervals_from_args
+from groupfit.inference.cli import check_block, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.outputs import GROUPED_MODELS
@@ -33,99 +32,10 @@ from groupfit.reference import START, with_reference
 from groupfit.settings import ModelSettings, RunSettings
 from groupfit.training_checks import DATA_NOTES_KEY
 
-NEXT_RUN = "next-run"
-P_RULES = (NEXT_RUN, "bic", "target")
-
 
 def add_parser(verbs) -> None:
     fit = verbs.add_parser("fit")
-    common.add_run_options(fit)
-    fit.add_argument(
-        "--p",
-        type=whole_or_auto("p"),
-        help="number of hard break points; default (or 'auto'): chosen by --choose over 0…pmax",
-    )
-    fit.add_argument("--pmax", type=int, help="largest p tried when p is chosen (default 3)")
-    fit.add_argument(
-        "--choose",
-        "--p-rule",
-        dest="p_rule",
-        choices=P_RULES,
-        help="how p is chosen: next-run (default: the fewest breaks whose expected next-run error is within one "
-        f"standard error, or a factor of {RMS_TOLERANCE:g}, of the least), bic (in sample), target (fewest breaks "
-        "with R <= --p-target)",
-    )
-    fit.add_argument("--p-target", metavar="R", help="target R for --p-rule target: µm, or a percentage like 20%%")
-    fit.add_argument("--n", type=int, help="soft offset: samples shared by neighbouring groups")
-    fit.add_argument("--c", type=float, help="spacing coefficient: groups hold more than c·M samples")
-    fit.add_argument("--objective", choices=("sae", "sse"), help="residual sum to minimise")
-    fit.add_argument("--no-intercept", action="store_true", help="fit groups without a constant term")
-    fit.add_argument("--search", choices=("ga", "exact"), help="genetic algorithm or exact dynamic programming")
-    fit.add_argument("--seed", type=option_values.seed_value, help="seed of the genetic algorithm")
-    fit.add_argument(
-        "--certify",
-        choices=("auto", "yes", "no"),
-        help="GA: also run the exact search and print the gap (auto: when cheap; the default)",
-    )
-    fit.add_argument("--criterion", metavar="COLUMN", help="switching criterion sensor (default: the most active)")
-    reference_options.add_reference_option(fit)
-    fit.add_argument(
-        "--select",
-        choices=SELECTION_METHODS,
-        help="choose the inputs among --temps on held-out conditions (forward, lasso or cluster)",
-    )
-    fit.add_argument("--sensors", type=int, metavar="K", help="with --select: how many inputs (default: chosen)")
-    fit.add_argument(
-        "--ridge",
-        type=option_values.ridge_value,
-        metavar="ALPHA|auto",
-        help="shrink the coefficients of a global model (p = 0) on many collinear inputs by a ridge penalty; "
-        "auto: the penalty with the least error on held-out conditions or runs (the default when fit chooses "
-        "p and chooses p = 0; 0: least squares)",
-    )
-    fit.add_argument(
-        "--backward",
-        type=float,
-        metavar="ALPHA",
-        help="with --p 0: drop inputs whose t-test p-value exceeds ALPHA, the least significant first, "
-        "refitting after each (backward elimination, e.g. 0.05)",
-    )
-    fit.add_argument(
-        "--position",
-        metavar="COLUMN",
-        help="axis position column (mm) of a run measured at several positions (long table; a wide one has "
-        "err_P<mm> columns): fit E(P, T) = K0(T) + c1(T)(P - P0) + ...",
-    )
-    fit.add_argument(
-        "--position-order",
-        type=whole_or_auto("order"),
-        metavar="N|auto",
-        help="with --position: polynomial order in P (default 1: K0 + tanb (P - P0)); auto: chosen by "
-        "cross-validation over held-out positions",
-    )
-    fit.add_argument(
-        "--position-ref",
-        metavar="MM|middle|min|max",
-        help="with --position: the reference position P0 (default: the middle of the measured travel)",
-    )
-    fit.add_argument(
-        "--dead-band",
-        type=float,
-        metavar="C",
-        help="no update of the compensation while every input is within C degC of --dead-band-ref",
-    )
-    fit.add_argument(
-        "--dead-band-ref",
-        metavar="COLUMN",
-        help="reference sensor of --dead-band (default: the --reference column)",
-    )
-    common.add_json_option(fit)
-    common.add_out_option(fit, "folder for model.json and fit.png")
-    common.add_quiet_option(fit)
-    common.add_budget_option(fit)
-    add_interval_options(fit)
-    add_recalibrate_option(fit)
-    ar1_commands.add_fit_options(fit)
+    add_fit_arguments(fit)
     fit.set_defaults(handler=run_fit)
 
 
@@ -152,6 +62,7 @@ class FitData:
 def run_fit(args: argparse.Namespace) -> int:
     if args.model == "ar1":
         return ar1_commands.run_fit(args)
+    refuse_unused_options(args)
     config_path, settings = fit_settings(args)
     common.plan_outputs(
         args, config_path, settings.data.path, folder=settings.output_dir, files=FIT_FILES, json_model=GROUPED_MODELS
@@ -426,20 +337,6 @@ def with_inputs(run: Run, names) -> Run:
     """The run restricted to the inputs ``names``."""
     keep = [run.temp_names.index(name) for name in names]
     return replace(run, temps=run.temps[:, keep], temp_names=tuple(names))
-
-
-def whole_or_auto(what: str):
-    """The argparse type of an option taking a whole number or 'auto' (``what`` names it in the message)."""
-
-    def value(text: str) -> int | str:
-        if text == "auto":
-            return text
-        try:
-            return int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"invalid {what}: {text!r} (a whole number or 'auto')") from None
-
-    return value
 
 
 def check_measured(run: Run, p) -> None:
