@@ -15,6 +15,7 @@ from groupfit.ar1.modelfile import AR1File
 from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands import common
+from groupfit.commands.export_options import AR1_TARGET_OPTIONS, target_options
 from groupfit.data import load_run, numeric_column, without_implausible_errors
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics, prediction_accuracy
@@ -98,9 +99,10 @@ def run_export(args: argparse.Namespace) -> int:
         )
     common.plan_outputs(args, args.model, folder=args.out)
     targets = ("c", "st", "json", "sheet") if args.target == "all" else (args.target,)
+    options = target_options(args, targets, AR1_TARGET_OPTIONS)
     files: dict[str, str] = {}
     for target in targets:
-        files.update(render(model, target, real=args.real, name=args.name))
+        files.update(render(model, target, **options))
     common.write_exports(args, files)
     return 0
 

@@ -241,7 +241,6 @@ def add_register_options(
     parser.add_argument(
         "--counts-limit",
         type=int,
-        default=30000,
         metavar="N",
         help=f"{target}largest magnitude of the integer compensation register in counts (default 30000)",
     )

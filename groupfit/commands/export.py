@@ -7,6 +7,7 @@ import argparse
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
+from groupfit.commands.export_options import target_options
 from groupfit.commands.screw_deploy import run_screw_export
 from groupfit.errors import InputError
 from groupfit.export import TARGETS, render
@@ -14,8 +15,6 @@ from groupfit.export.cec import DEFAULT_MAX_POINTS
 from groupfit.model import ModelFile
 from groupfit.runtime.period import at_period
 from groupfit.screw.modelfile import is_screw_file
-
-CEC_KEYS = ("state", "table_index", "input_axis", "output_axis", "step_mm", "max_points")
 
 
 def add_parser(verbs) -> None:
@@ -31,14 +30,15 @@ def add_parser(verbs) -> None:
         "thermal state (--state); all: every target (with table for a position model)",
     )
     common.add_out_option(export, "folder for the exported files (required)", required=True)
-    export.add_argument("--real", choices=("REAL", "LREAL"), default="LREAL", help="st: real type (default LREAL)")
-    export.add_argument("--name", default="FB_GroupfitComp", help="st: function block name (default FB_GroupfitComp)")
+    export.add_argument("--real", choices=("REAL", "LREAL"), help="st, table: real type (default LREAL)")
+    export.add_argument(
+        "--name", help="st, table: function block name (default FB_GroupfitComp; AR(1): FB_GroupfitAR1)"
+    )
     resolution = "µm per count of an integer compensation register (default 0.1)"
-    common.add_register_options(export, resolution, resolution_default=0.1, target="sheet: ")
+    common.add_register_options(export, resolution, target="sheet: ")
     export.add_argument(
         "--tolerance-um",
         type=float,
-        default=0.5,
         metavar="UM",
         help="table, cec: largest interpolation error of the position table (default 0.5 um)",
     )
@@ -61,8 +61,8 @@ def add_cec_options(export) -> None:
         metavar="NAME=VALUE,...",
         help="cec: the thermal state of the table, every model input (rises over the reference when it has one)",
     )
-    cec.add_argument("--table", dest="table_index", type=int, default=0, metavar="T", help="cec: table index (0)")
-    cec.add_argument("--base-axis", dest="input_axis", default="AX1", metavar="AXIS", help="cec: the base axis (AX1)")
+    cec.add_argument("--table", dest="table_index", type=int, metavar="T", help="cec: table index (0)")
+    cec.add_argument("--base-axis", dest="input_axis", metavar="AXIS", help="cec: the base axis (AX1)")
     cec.add_argument(
         "--comp-axis", dest="output_axis", metavar="AXIS", help="cec: the compensated axis (default: the base axis)"
     )
@@ -72,7 +72,6 @@ def add_cec_options(export) -> None:
     cec.add_argument(
         "--max-points",
         type=int,
-        default=DEFAULT_MAX_POINTS,
         metavar="N",
         help=f"cec: most points of a table, MD18342 (default {DEFAULT_MAX_POINTS})",
     )
@@ -93,20 +92,10 @@ def run_export(args: argparse.Namespace) -> int:
     targets = TARGETS if args.target == "all" else (args.target,)
     if args.target == "all" and model.position is not None:
         targets = (*TARGETS, "table")
+    options = target_options(args, targets)
     files: dict[str, str] = {}
     for target in targets:
-        files.update(
-            render(
-                model,
-                target,
-                real=args.real,
-                name=args.name,
-                resolution_um=args.resolution_um,
-                counts_limit=args.counts_limit,
-                tolerance_um=args.tolerance_um,
-                **{key: getattr(args, key) for key in CEC_KEYS},
-            )
-        )
+        files.update(render(model, target, **options))
     common.write_exports(args, files)
     return 0
 

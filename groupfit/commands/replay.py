@@ -113,9 +113,22 @@ def refuse_options_of_the_grouped_rule(args: argparse.Namespace, kind: str) -> N
             )
 
 
-def refuse_range_temp(args: argparse.Namespace) -> None:
-    """``--range-temp`` is a ball-screw run's: a grouped model file holds its rule's own plausible temperatures
-    (a reading outside is a sensor fault), an AR(1) model reads none."""
+def integer_form(args: argparse.Namespace) -> IntegerForm | None:
+    """The integer register ``--resolution-um`` (and ``--counts-limit``) asks for; None without it."""
+    if args.resolution_um is None:
+        if args.counts_limit is not None:
+            raise InputError(
+                "--counts-limit: the size of an integer register, which --resolution-um asks for; give both"
+            )
+        return None
+    return IntegerForm(args.resolution_um, **({} if args.counts_limit is None else {"limit": args.counts_limit}))
+
+
+def refuse_ball_screw_options(args: argparse.Namespace) -> None:
+    """``--source`` and ``--range-temp`` are a ball-screw model's and run's: a grouped model file holds its
+    rule's own plausible temperatures (a reading outside is a sensor fault), an AR(1) model reads none."""
+    if args.source is not None:
+        raise InputError(f"--source {args.source}: a ball-screw model's heat source; this model file has none")
     if args.range_temp is None:
         return
     holds = (
@@ -133,14 +146,12 @@ def run_replay(args: argparse.Namespace) -> int:
     if is_screw_file(args.model):
         refuse_options_of_the_grouped_rule(args, "a ball-screw model file")
         return run_screw_replay(args)
-    refuse_range_temp(args)
+    refuse_ball_screw_options(args)
     if is_ar1_file(args.model):
         refuse_options_of_the_grouped_rule(args, "an AR(1) model file")
         return ar1_commands.run_replay(args)
     model = ModelFile.load(args.model)
-    counts = None
-    if args.resolution_um is not None:
-        counts = IntegerForm(args.resolution_um, args.counts_limit)
+    counts = integer_form(args)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from groupfit.commands import common
+from groupfit.commands.export_options import target_options
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics
 from groupfit.screw.deploy import ScrewLaw, choose_source
@@ -97,6 +98,7 @@ def run_screw_export(args: argparse.Namespace) -> int:
     targets = SCREW_TARGETS if args.target == "all" else (args.target,)
     for target in targets:
         check_screw_target(target)
+    target_options(args, targets, {})
     law = screw_law(args)
     files: dict[str, str] = {}
     for target in targets:
