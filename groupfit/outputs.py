@@ -172,6 +172,8 @@ class OutputPlan:
         """Check that ``path`` (an output folder) may hold ``files``; None passes (no such output)."""
         if path is None:
             return None
+        if str(path) == "-":
+            raise InputError(f"{option} -: names a folder of files, which cannot go to stdout; name a folder")
         folder = check_output_dir(self._target(path, option), option)
         self._claim_folder(folder, option)
         for name in files:

@@ -235,6 +235,24 @@ def test_an_empty_output_path_is_refused(inputs, tmp_path, capsys, argv):
     assert status == 2 and len(err) == 1 and "empty path" in err[0] and unchanged
 
 
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (_fit("--out", "-"), "--out -: names a folder of files, which cannot go to stdout"),
+        (("export", "{in}/model.json", "--target", "c", "--out", "-"), "--out -: names a folder of files"),
+        (("sweep", "{in}/sweep.toml", "--quiet", "--db", "-"), "--db -: the study's database is a file"),
+    ],
+    ids=["fit --out", "export --out", "sweep --db"],
+)
+def test_stdout_for_a_folder_or_a_database_is_refused_not_made_a_file_named_dash(
+    inputs, tmp_path, capsys, monkeypatch, argv, words
+):
+    monkeypatch.chdir(tmp_path)
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and words in err[0] and unchanged, err
+    assert not (tmp_path / "-").exists()
+
+
 @pytest.mark.parametrize("verb", ["fit", "compare"])
 def test_an_output_folder_from_the_configuration_is_named_as_such(inputs, tmp_path, capsys, verb):
     (tmp_path / "taken").write_text("a file where the folder would be\n")

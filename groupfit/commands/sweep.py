@@ -53,6 +53,8 @@ def run_sweep(args: argparse.Namespace) -> int:
     feasible, infeasible = check_feasible(study, args.config)
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers}: give 1 or more worker processes")
+    if args.db == "-":
+        raise InputError("--db -: the study's database is a file the sweep reads back and resumes; name one")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
     report_dir = common.plan_outputs(
         args,
