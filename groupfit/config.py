@@ -68,7 +68,7 @@ from typing import Any, Callable
 
 from groupfit.data_options import MAX_PERIOD_TOLERANCE, encoding_name, parse_period_tolerance
 from groupfit.errors import InputError
-from groupfit.settings import RunSettings
+from groupfit.settings import P_RULES, RunSettings
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 
@@ -180,7 +180,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     "model": {
         "p": _whole_or_auto,
         "pmax": _at_least(0),
-        "p_rule": Table.string,
+        "p_rule": lambda table, key: table.string(key, choices=P_RULES),
         "p_target": _target,
         "n": _at_least(0),
         "c": _number,

@@ -250,6 +250,10 @@ def read_input_text(path: str | Path, what: str) -> str:
     A UnicodeDecodeError is left to the caller, which says what the file should have been.
     """
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give the {what} itself")
+    if path.exists() and not path.is_file():
+        raise InputError(f"{path}: not a regular file (a device or a pipe); give the {what}")
     if not path.is_file():
         raise InputError(f"{path}: {what} not found")
     note_read(path)

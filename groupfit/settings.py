@@ -44,13 +44,18 @@ class DataSettings:
         return tuple(self.path) if isinstance(self.path, (list, tuple)) else (self.path,)
 
 
+NEXT_RUN = "next-run"
+P_RULES = (NEXT_RUN, "bic", "target")
+"""How p is chosen: the expected next-run error (one-standard-error rule), BIC (in sample), or a target R."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class ModelSettings:
     """``[model]``: the grouped model and how p is chosen."""
 
     p: int | str = "auto"
     pmax: int = 3
-    p_rule: str = "next-run"
+    p_rule: str = NEXT_RUN
     p_target: str | int | float | None = None
     n: int = DEFAULT_SOFT_OFFSET
     c: float = DEFAULT_SPACING

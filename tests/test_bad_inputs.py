@@ -235,6 +235,9 @@ NEW_CASES = [
     Case("configs", "pmax -2 in the config", configured("fit", "model_pmax_negative.toml"), "'model.pmax'"),
     Case("configs", "tolerance -5 in the config", configured("fit", "tolerance_negative.toml"), "'data.period_tol"),
     Case("configs", "an empty data path", configured("fit", "path_empty.toml"), "'data.path': an empty path"),
+    Case("configs", "p_rule misspelt", configured("fit", "p_rule_misspelt.toml"), "must be one of next-run, bic"),
+    Case("sweep", "the error as a sensor", swept("sweep_error_sensor.toml"), "'error_um' is no input column"),
+    Case("models", "a folder as the model", ("replay", "{in}", "--data", "{in}/good.csv"), "is a folder; give the"),
     # sweep
     Case("sweep", "a million runs", swept("sweep_million.toml"), "100000"),
     Case("sweep", "mostly infeasible", swept("sweep_mostly_infeasible.toml"), "cannot fit their breaks"),
@@ -730,6 +733,8 @@ def _write_inputs(folder: Path) -> None:
         "model_pmax_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\npmax = -2\n',
         "tolerance_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\nperiod_tolerance = -5\n',
         "path_empty.toml": '[data]\npath = ""\n',
+        "p_rule_misspelt.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\np_rule = "nextrun"\n',
+        "sweep_error_sensor.toml": f'[data]\n{data}\n[grid]\np = [1]\nsensors = [["error_um"]]\n',
     }
     for name, text in configs.items():
         (folder / name).write_text(text)

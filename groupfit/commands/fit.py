@@ -9,7 +9,7 @@ import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
 from groupfit.commands import common, fit_mlr, reference_options, replay_readings
-from groupfit.commands.fit_options import NEXT_RUN, add_fit_arguments, refuse_unused_options
+from groupfit.commands.fit_options import add_fit_arguments, refuse_unused_options
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
@@ -29,7 +29,7 @@ from groupfit.position import PositionRun
 from groupfit.position_plot import plot_position
 from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.reference import START, with_reference
-from groupfit.settings import ModelSettings, RunSettings
+from groupfit.settings import NEXT_RUN, ModelSettings, RunSettings
 from groupfit.training_checks import DATA_NOTES_KEY
 
 

@@ -11,9 +11,7 @@ from groupfit.errors import InputError
 from groupfit.heldout.choice import RMS_TOLERANCE
 from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.inference.cli import add_interval_options
-
-NEXT_RUN = "next-run"
-P_RULES = (NEXT_RUN, "bic", "target")
+from groupfit.settings import P_RULES
 
 
 def add_fit_arguments(fit: argparse.ArgumentParser) -> None:

@@ -192,7 +192,10 @@ def sensor_option(option, dataset: Dataset, label: str) -> dict:
             raise InputError(f"{where}: {option!r} names a column twice")
         for name in option:
             if name not in dataset.columns:
-                raise InputError(f"{where}: column '{name}' is not in {dataset.path.name}")
+                raise InputError(
+                    f"{where}: column '{name}' is no input column of {dataset.path.name} (neither the time nor the "
+                    f"error is one; the others are {', '.join(dataset.columns)})"
+                )
         return {"names": list(option)}
     if isinstance(option, dict):
         return _selection_option(option, dataset, where)
