@@ -65,6 +65,11 @@ class Feature:
             raise InputError(f"low-pass of '{self.column}' needs a time constant tau_s > 0")
         if self.transform == "delay" and self.delay_samples < 1:
             raise InputError(f"delay of '{self.column}' needs delay_samples >= 1")
+        if self.transform != "delay" and self.delay_samples != 0:
+            raise InputError(
+                f"{self.transform} of '{self.column}': delay_samples = {self.delay_samples} belongs to a delay; "
+                "leave it 0"
+            )
         if self.transform == "ontime" and self.start != "rest":
             raise InputError(f"on-time of '{self.column}': it starts from rest (start 'rest')")
         if self.exponent is not None:

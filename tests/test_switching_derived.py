@@ -405,6 +405,10 @@ def break_delay(model):
     model["temps"][6] = "speed_rpm~delay40000"
 
 
+def delay_a_lowpass(model):
+    model["derived_inputs"][0]["delay_samples"] = -3
+
+
 def break_criterion(model):
     model["switching"]["criterion_index"] = 4
 
@@ -420,6 +424,7 @@ def break_ranges(model):
         (break_transform, "transform 'median'"),
         (break_tau, "tau_s > 0"),
         (break_delay, "at most 32767"),
+        (delay_a_lowpass, "delay_samples = -3 belongs to a delay; leave it 0"),
         (break_criterion, "must be a measured input"),
         (break_ranges, "source_ranges\\['T_amb'\\]"),
     ],
