@@ -12,6 +12,7 @@ The diagnosis draws its candidates from these columns and the held-out folds
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from typing import Sequence
 
@@ -109,3 +110,16 @@ def input_order(expected: Sequence[str], given: Sequence[str], label: str) -> li
         f"{label}: temperature columns differ from the modelling run's ({'; '.join(parts)}); name the same inputs "
         "in both runs (--temps A,B,C)"
     )
+
+
+def aligned_inputs(runs: Sequence) -> list:
+    """Runs to be joined, every one's inputs in the first's order (the same columns in another order are the
+    same inputs); a run with other inputs is refused, naming what it lacks and what it adds."""
+    first, *others = runs
+    aligned = [first]
+    for run in others:
+        if run.temp_names != first.temp_names:
+            order = input_order(first.temp_names, run.temp_names, run.source)
+            run = dataclasses.replace(run, temps=run.temps[:, order], temp_names=first.temp_names)
+        aligned.append(run)
+    return aligned

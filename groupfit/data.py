@@ -29,6 +29,7 @@ from groupfit.column_values import LoadOptions as LoadOptions
 from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import numeric_column as numeric_column
+from groupfit.columns import aligned_inputs
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
@@ -459,13 +460,9 @@ def join_runs(runs: Sequence[Run]) -> Run:
     runs = list(runs)
     if len(runs) == 1:
         return runs[0]
+    runs = aligned_inputs(runs)
     first = runs[0]
     for run in runs[1:]:
-        if run.temp_names != first.temp_names:
-            raise InputError(
-                f"{run.source}: inputs {', '.join(run.temp_names)} differ from {first.source}'s "
-                f"({', '.join(first.temp_names)}); name the inputs every run has with --temps A,B,C"
-            )
         if abs(run.period - first.period) > 0.01 * first.period:
             raise InputError(
                 f"{run.source}: sampled every {run.period:g} s but {first.source} every {first.period:g} s; "

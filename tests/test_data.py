@@ -1,3 +1,5 @@
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -174,6 +176,23 @@ def test_runs_with_other_default_inputs_are_refused_with_the_option_that_aligns_
     out = tmp_path / "out"
     assert main(["fit", "--data", str(first), str(second), "--p", "0", "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "b.csv: inputs T1, T2 differ from" in err[0] and "a.csv's (T1, T2, T3)" in err[0]
+    assert len(err) == 1 and "b.csv: temperature columns differ from the modelling run's (missing T3)" in err[0]
     assert "--temps" in err[0]
     assert main(["fit", "--data", str(first), str(second), "--temps", "T1,T2", "--p", "0", "--out", str(out)]) == 0
+
+
+def test_runs_whose_inputs_come_in_another_column_order_are_joined_by_name(tmp_path, capsys):
+    """The same sensors logged in another column order are the same inputs: the global model fitted on both is
+    the one fitted with the columns in the first run's order."""
+    frame = good_frame()
+    first = write_run(tmp_path, frame, "a.csv")
+    second = write_run(tmp_path, frame.assign(T1=frame.T1 + 0.3 * np.sin(np.arange(len(frame)))), "b.csv")
+    swapped = pd.read_csv(second)
+    write_run(tmp_path, swapped[list(swapped.columns[::-1])], "reversed.csv")
+    models = []
+    for name in ("b.csv", "reversed.csv"):
+        out = tmp_path / name.replace(".csv", "")
+        assert main(["fit", "--data", str(first), str(tmp_path / name), "--p", "0", "--out", str(out), "--quiet"]) == 0
+        models.append(json.loads((out / "model.json").read_text()))
+    assert models[0]["temps"] == models[1]["temps"]
+    np.testing.assert_allclose(models[0]["coefficients"], models[1]["coefficients"], rtol=1e-12)
