@@ -124,6 +124,9 @@ def column_list(text: str) -> tuple[str, ...]:
     columns = tuple(c.strip() for c in text.split(",") if c.strip())
     if not columns:
         raise argparse.ArgumentTypeError(f"{text!r}: give one or more column names, separated by commas")
+    twice = [c for k, c in enumerate(columns) if c in columns[:k]]
+    if twice:
+        raise argparse.ArgumentTypeError(f"{text!r}: names '{twice[0]}' twice; name each column once")
     return columns
 
 
