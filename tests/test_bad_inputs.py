@@ -237,7 +237,9 @@ NEW_CASES = [
     Case("configs", "an empty data path", configured("fit", "path_empty.toml"), "'data.path': an empty path"),
     Case("configs", "p_rule misspelt", configured("fit", "p_rule_misspelt.toml"), "must be one of next-run, bic"),
     Case("sweep", "the error as a sensor", swept("sweep_error_sensor.toml"), "'error_um' is no input column"),
-    Case("models", "a folder as the model", ("replay", "{in}", "--data", "{in}/good.csv"), "is a folder; give the"),
+    Case(
+        "model files", "a folder as the model", ("replay", "{in}", "--data", "{in}/good.csv"), "is a folder; give the"
+    ),
     # sweep
     Case("sweep", "a million runs", swept("sweep_million.toml"), "100000"),
     Case("sweep", "mostly infeasible", swept("sweep_mostly_infeasible.toml"), "cannot fit their breaks"),
