@@ -94,6 +94,11 @@ def test_a_given_step_table_number_and_axes_are_written(tmp_path, model_file):
         ([], "give it with --state T1=VALUE,T2=VALUE"),
         (["--state", "T1=25"], "no value for the model input(s) T2"),
         (["--state", "T1=25,T2=23", "--base-axis", "x 1"], "--base-axis 'x 1'"),
+        (["--state", "T1=25,T2=23", "--step", "1e-6"], "needs 1000000001 points, the controller takes at most"),
+        (["--state", "T1=25,T2=23", "--step", "1e9"], "longer than the travel 0 .. 1000 mm"),
+        (["--state", "T1=25,T2=23,T1=24"], "--state: names 'T1' twice"),
+        (["--state", "T1=1e308,T2=23"], "a thermal state's inputs lie within ±1e+06"),
+        (["--state", "T1=nan,T2=23"], "a thermal state's inputs lie within"),
     ],
 )
 def test_bad_requests_are_refused_with_one_line_and_nothing_written(tmp_path, model_file, capsys, options, message):

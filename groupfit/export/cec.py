@@ -47,6 +47,9 @@ STEP_MANTISSAS = (5.0, 2.5, 2.0, 1.0)
 SMALLEST_STEP_MM = 0.001
 AXIS_NAME = re.compile(r"^[A-Z][A-Z0-9_]{0,15}$")
 SAMPLES_PER_INTERVAL = 64
+STATE_LIMIT = 1.0e6
+"""The largest magnitude of a thermal state's input: a temperature or rise (°C, K) or a derived input in its own
+unit (a speed's low-pass in r/min)."""
 
 
 def decimal_text(value: float, decimals: int = VALUE_DECIMALS) -> str:
@@ -69,12 +72,17 @@ def parse_state(text: str | None, names) -> np.ndarray:
         name = name.strip()
         if name not in names:
             raise InputError(f"--state {part.strip()!r}: '{name}' is not a model input ({', '.join(names)})")
+        if name in values:
+            raise InputError(f"--state: names '{name}' twice; give each model input once")
         try:
             values[name] = float(number)
         except ValueError:
             raise InputError(f"--state {part.strip()!r}: '{number.strip()}' is not a number") from None
-        if not math.isfinite(values[name]):
-            raise InputError(f"--state {part.strip()!r}: the value must be finite")
+        if not abs(values[name]) <= STATE_LIMIT:
+            raise InputError(
+                f"--state {part.strip()!r}: a thermal state's inputs lie within ±{STATE_LIMIT:g} (temperatures, "
+                "rises, a speed's low-pass)"
+            )
     missing = [n for n in names if n not in values]
     if missing:
         raise InputError(f"--state: no value for the model input(s) {', '.join(missing)}")
@@ -135,13 +143,19 @@ def cec_table(
     if step_mm is not None:
         if not (math.isfinite(step_mm) and step_mm > 0):
             raise InputError(f"--step {step_mm!r}: a distance between interpolation points > 0 mm")
-        table = CecTable(model, state, step_mm)
-        if table.points > max_points:
+        if step_mm > travel:
             raise InputError(
-                f"--step {step_mm:g} mm: the travel {low:g} .. {high:g} mm needs {table.points} points, the "
+                f"--step {step_mm:g} mm: longer than the travel {low:g} .. {high:g} mm, so the table's last point "
+                f"lies beyond it; take a step of at most {travel:g} mm"
+            )
+        points = math.ceil(travel / step_mm - 1e-9) + 1  # counted before the nodes are made: 1e-6 mm is 5e8
+        if points > max_points:
+            raise InputError(
+                f"--step {step_mm:g} mm: the travel {low:g} .. {high:g} mm needs {points} points, the "
                 f"controller takes at most {max_points} per table (MD18342 $MN_MM_CEC_MAX_POINTS); take a "
                 f"step of at least {travel / (max_points - 1):.6g} mm"
             )
+        table = CecTable(model, state, step_mm)
         return table, table.interpolation_error_um()
     for step in candidate_steps(travel):
         if math.ceil(travel / step - 1e-9) + 1 > max_points:
