@@ -3,7 +3,6 @@ modelling run's duty cycle."""
 
 from __future__ import annotations
 
-import re
 from typing import Sequence
 
 import numpy as np
@@ -11,15 +10,13 @@ import pandas as pd
 
 from groupfit.columns import usable_columns
 from groupfit.data import Run
+from groupfit.default_columns import SPEED_NAME as SPEED_NAME
 from groupfit.errors import InputError
 from groupfit.heldout.folds import operating_columns
 from groupfit.setting_levels import setting_levels
 
 LEVEL_TOLERANCE = 0.01
 """Two runs hold the same level of a condition column when their levels differ by at most this share."""
-
-SPEED_NAME = re.compile(r"rpm|speed|drehzahl|[ru]/min|1/min|min-1|min\^-1|转速|回転数|回転速度", re.IGNORECASE)
-"""A name that marks a speed column (``spindle_rpm``, ``S1 speed``, ``Drehzahl [1/min]``)."""
 
 
 def run_operating_columns(runs: Sequence[Run]) -> list[str]:

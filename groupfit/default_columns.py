@@ -46,6 +46,9 @@ ERROR_NAME = re.compile(
     r"오차|변위|변형|смещени|погрешност|деформаци|перемещени|дрейф)",
     re.IGNORECASE,
 )
+SPEED_NAME = re.compile(r"rpm|speed|drehzahl|[ru]/min|1/min|min-1|min\^-1|转速|回転数|回転速度", re.IGNORECASE)
+"""A name that marks a speed column (``spindle_rpm``, ``S1 speed``, ``Drehzahl [1/min]``)."""
+
 TEMPERATURE_NAME = re.compile(
     r"°[CF]|℃|℉|温度|気温|온도|기온|температур|deg[\s_]?[CF]\b|[\[(（][CFK][\])）]|_C$|(?:^|[^a-z])temp(?:$|[^a-z]|erat)|^\s*TC[\s_]?\d",
     re.IGNORECASE,

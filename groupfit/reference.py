@@ -27,7 +27,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from groupfit.data import numeric_column
-from groupfit.default_columns import ambient_columns
+from groupfit.default_columns import SPEED_NAME, ambient_columns
 from groupfit.errors import InputError
 
 START = "start"
@@ -146,6 +146,8 @@ def column_role(run, column: str) -> str | None:
 def refuse_as_temperature(run, column: str, what: str, todo: str = "name the air's temperature sensor") -> None:
     """Refuse the run's error or time column (:func:`column_role`) where a temperature is asked for: ``what``
     names the option or role it was given as, ``todo`` what to give instead."""
+    if SPEED_NAME.search(str(column)):
+        raise InputError(f"{run.source}: {what} '{column}' is named as a speed, not a temperature; {todo}")
     role = column_role(run, column)
     if role:
         raise InputError(f"{run.source}: {what} '{column}' is the run's {role}, not a temperature; {todo}")

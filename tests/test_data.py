@@ -196,3 +196,15 @@ def test_runs_whose_inputs_come_in_another_column_order_are_joined_by_name(tmp_p
         models.append(json.loads((out / "model.json").read_text()))
     assert models[0]["temps"] == models[1]["temps"]
     np.testing.assert_allclose(models[0]["coefficients"], models[1]["coefficients"], rtol=1e-12)
+
+
+@pytest.mark.parametrize("option", ["--reference", "--ambient"])
+def test_a_column_named_as_a_speed_is_refused_as_the_reference(tmp_path, capsys, option):
+    """Temperatures less r/min fitted without a word (a group constant of 5709); a speed is no temperature."""
+    frame = good_frame().assign(spindle_rpm=np.repeat([0.0, 3000.0], 40))
+    run = write_run(tmp_path, frame)
+    args = ["fit", "--data", str(run), "--temps", "T1,T2", "--p", "0", option, "spindle_rpm"]
+    assert main([*args, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'spindle_rpm' is named as a speed, not a temperature" in err[0]
+    assert not (tmp_path / "o").exists()
