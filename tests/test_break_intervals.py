@@ -157,8 +157,11 @@ def test_fit_prints_and_writes_bai_intervals(tmp_path, capsys):
 def test_fit_bootstrap_option(tmp_path, capsys):
     data = ROOT / "datasets" / "synthetic_cycle.csv"
     args = ["fit", "--data", str(data), "--temps", "T1,T2", "--p", "1", "--search", "exact", "--quiet"]
-    args += ["--intervals", "bootstrap", "--bootstrap", "20", "--out", str(tmp_path / "o"), "--json", "-"]
-    assert main(args) == 0
+    args += ["--intervals", "bootstrap", "--level", "0.9", "--bootstrap", "20", "--out", str(tmp_path / "o")]
+    assert main([*args[:-1], str(tmp_path / "few"), "--level", "0.95"]) == 2  # tails of 2.5 % need 40 refits
+    assert "--bootstrap 20: a 95 % interval needs at least 40 refits" in capsys.readouterr().err
+    assert not (tmp_path / "few").exists()
+    assert main([*args, "--json", "-"]) == 0
     printed = capsys.readouterr().out
     result = json.loads(printed[: printed.rindex("}") + 1])
     (interval,) = result["break_intervals"]

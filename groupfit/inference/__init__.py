@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -148,6 +149,12 @@ def break_intervals(
         variant = "heteroskedastic regressors and errors" if het else "common Q and sigma"
         return BreakIntervalReport([_clip(i, n_samples) for i in raw], "bai", f"Bai (1997), {variant}", level)
 
+    fewest = math.ceil(2.0 / (1.0 - level) - 1e-9)  # each tail of the percentile interval holds a refit
+    if n_boot < fewest:
+        raise InputError(
+            f"--bootstrap {n_boot}: a {100 * level:g} % interval needs at least {fewest} refits (each tail, "
+            f"{50 * (1 - level):g} %, at least one); give --bootstrap {fewest} or more"
+        )
     search_s = float((getattr(estimator, "search_", None) or {}).get("seconds") or 0.0)
     by_ga = not exact_is_cheap(n_samples, estimator.objective)  # the refits search as the fit did
     if method == "auto" and budget_s is not None and by_ga and search_s * n_boot > budget_s:
