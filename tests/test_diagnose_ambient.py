@@ -78,3 +78,13 @@ def test_a_wrong_ambient_column_is_one_line_and_exit_2(tmp_path, capsys, column,
     error = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(error) == 1 and words in error[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize("value", ["1e300", "200", "0", "-1", "nan"])
+def test_a_heat_law_exponent_out_of_range_is_refused_as_the_option_is_read(capsys, value):
+    """1e300 overflowed at every speed and silently turned a found heat law into 'T3 as measured'."""
+    with pytest.raises(SystemExit) as stop:
+        main(["diagnose", "model.json", "--data", "run.csv", "--heat-exponent", value])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert stop.value.code == 2 and "--heat-exponent" in err[-1] and value in err[-1]
+    assert "must be > 0 and at most 10" in err[-1] or "give a number" in err[-1]

@@ -151,6 +151,10 @@ rms_value = _bounded(0.0, math.inf, "an RMS in µm, a finite number ≥ 0")
 """--min-effect, --min-further-effect: an RMS in µm, ≥ 0."""
 
 
+MAX_HEAT_EXPONENT = 10.0
+"""The largest heat-law exponent --heat-exponent takes: (x/1000)^10 is 1e7 at 5000 r/min already."""
+
+
 def heat_exponent(text: str) -> float | str:
     if text == "fit":
         return text
@@ -158,8 +162,11 @@ def heat_exponent(text: str) -> float | str:
         value = float(Fraction(text))
     except (ValueError, ZeroDivisionError):
         raise argparse.ArgumentTypeError(f"{text!r}: give a number such as 5/3 or 1.67, or 'fit'") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: the exponent must be > 0")
+    if not 0 < value <= MAX_HEAT_EXPONENT:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: the exponent must be > 0 and at most {MAX_HEAT_EXPONENT:g} (bearing heat against speed is "
+            "about 5/3; a larger power overflows at the speeds of a run)"
+        )
     return value
 
 
