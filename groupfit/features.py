@@ -186,11 +186,14 @@ def lowpass(x: np.ndarray, tau_s: float, period_s: float, before: float | None =
     return y
 
 
-def derived_matrix(features: list[Feature], frame, period_s: float) -> np.ndarray:
-    """Columns of derived inputs from a table (DataFrame-like, by column name)."""
+def derived_matrix(features: list[Feature], frame, period_s: float, source: str = "the run") -> np.ndarray:
+    """Columns of derived inputs from a table (DataFrame-like, by column name; ``source`` names it)."""
     columns = []
     for feature in features:
         if feature.column not in frame.columns:
-            raise InputError(f"the model needs column '{feature.column}' for its input {feature.name}; it is missing")
+            raise InputError(
+                f"{source}: column '{feature.column}' not found; the model computes its input {feature.name} from it. "
+                f"The columns are: {', '.join(map(str, frame.columns))}"
+            )
         columns.append(feature.compute(frame[feature.column].to_numpy(dtype=float), period_s))
     return np.column_stack(columns) if columns else np.empty((len(frame), 0))

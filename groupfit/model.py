@@ -350,7 +350,7 @@ class ModelFile:
         columns = []
         for name in self.temps:
             if name in derived:
-                columns.append(derived_matrix([derived[name]], frame, self.sampling_period_s)[:, 0])
+                columns.append(derived_matrix([derived[name]], frame, self.sampling_period_s, source)[:, 0])
             elif name in frame.columns:
                 columns.append(frame[name].to_numpy(dtype=float))
             else:

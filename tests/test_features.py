@@ -38,10 +38,11 @@ def test_names_round_trip_and_validation():
         Feature("T_amb", "smooth")
 
 
-def test_derived_matrix_names_a_missing_column():
+def test_derived_matrix_names_the_run_the_missing_column_and_the_columns_it_has():
     frame = pd.DataFrame({"a": [1.0, 2.0]})
-    with pytest.raises(InputError, match="column 'b'"):
-        derived_matrix([Feature("b")], frame, 100.0)
+    message = r"^val\.csv: column 'b' not found; the model computes its input b~lp60s from it\. The columns are: a$"
+    with pytest.raises(InputError, match=message):
+        derived_matrix([Feature("b", "lowpass", tau_s=60.0)], frame, 100.0, "val.csv")
 
 
 def test_on_time_is_the_value_times_the_hours_on_without_a_break():

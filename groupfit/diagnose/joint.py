@@ -239,5 +239,7 @@ def joint_model(problem: Problem, model: Model, inputs: list[np.ndarray], chosen
     features = [effect.feature for effect in chosen.effects]
     period = model.sampling_period_s
     runs = problem.data
-    columns = [np.column_stack([x[:, keep], derived_matrix(features, r.frame, period)]) for x, r in zip(inputs, runs)]
+    columns = [
+        np.column_stack([x[:, keep], derived_matrix(features, r.frame, period, r.source)]) for x, r in zip(inputs, runs)
+    ]
     return refit_model(model, runs, columns, [*chosen.inputs, *(f.name for f in features)], features)
