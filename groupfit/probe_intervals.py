@@ -43,8 +43,30 @@ def parse_intervals(text: str) -> list[float]:
                 f"--probe-every: {item.strip()!r} is longer than {MAX_CHECK_S:g} s: write the interval in s, m or h "
                 "(e.g. 30m)"
             )
+        if seconds in intervals:
+            raise InputError(f"--probe-every: {item.strip()!r} repeats an interval given before ({seconds:g} s)")
         intervals.append(seconds)
     return intervals
+
+
+def check_intervals_fit(intervals_s: Sequence[float], first_s: float | None, runs: Sequence) -> None:
+    """Refuse an interval shorter than a run's sample or one after which no check falls in some run (the
+    checked RMS would be the unchecked one, reported as a result), and a first check after a run's end."""
+    for run in runs:
+        length_s = (run.n_samples - 1) * run.period
+        if first_s is not None and first_s > length_s:
+            raise InputError(f"--probe-first {first_s:g}: after the end of {run.source} ({length_s:g} s)")
+        for interval in intervals_s:
+            if interval < run.period:
+                raise InputError(
+                    f"--probe-every: {_label(interval)} is shorter than the sampling period of {run.source} "
+                    f"({run.period:g} s); a check can come at most once a sample"
+                )
+            if first_s is None and interval > length_s:
+                raise InputError(
+                    f"--probe-every: {_label(interval)} is longer than {run.source} ({length_s:g} s): no check "
+                    "would fall in it; give shorter intervals or --probe-first 0"
+                )
 
 
 def check_probe_first(first_s: float | None, intervals) -> None:
@@ -162,7 +184,9 @@ def _rms(values: np.ndarray) -> float:
 
 
 def _label(seconds: float) -> str:
-    return f"{seconds / 3600:g} h" if seconds >= 3600 and seconds % 3600 == 0 else f"{seconds / 60:g} min"
+    if seconds >= 3600 and seconds % 3600 == 0:
+        return f"{seconds / 3600:g} h"
+    return f"{seconds / 60:g} min" if seconds % 60 == 0 else f"{seconds:g} s"
 
 
 def interval_summary(table: Mapping[str, Any]) -> str:

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from groupfit.cli import main
-from groupfit.probe_intervals import interval_plan, interval_table
+from groupfit.errors import InputError
+from groupfit.probe_intervals import interval_plan, interval_table, parse_intervals
 
 PERIOD_S = 60.0
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
@@ -96,11 +97,21 @@ def brute_force_from_table(table: dict, tolerance: float) -> dict:
         (["--probe-every", "30m", "--tolerance", "0"], "--tolerance '0': must be a finite number > 0"),
         (["--probe-every", "30m", "--tolerance=-1"], "--tolerance '-1': must be a finite number > 0"),
         (["--probe-every", "30m", "--tolerance", "two"], "--tolerance 'two': give the largest acceptable RMS error"),
+        (["--probe-every", "30s,30m"], "--probe-every: 30 s is shorter than the sampling period of"),
+        (["--probe-every", "30m,1e8"], "--probe-every: 1e+08 s is longer than"),
+        (["--probe-every", "30m", "--probe-first", "1e8"], "--probe-first 1e+08: after the end of"),
     ],
 )
-def test_a_bad_tolerance_is_refused_with_one_line(tmp_path, capsys, args, message):
+def test_a_bad_tolerance_or_interval_is_refused_with_one_line(tmp_path, capsys, args, message):
     out = tmp_path / "cmp"
     assert main(["compare", "--pmax", "0", *args, "--out", str(out), "--json", str(tmp_path / "c.json")]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not out.exists() and not (tmp_path / "c.json").exists()
+
+
+def test_an_interval_given_twice_is_refused_in_any_unit():
+    assert parse_intervals("5m,30m,2h") == [300.0, 1800.0, 7200.0]
+    for text in ("30m,30m", "1800,30m", "0.5h,1800s"):
+        with pytest.raises(InputError, match="repeats an interval given before \\(1800 s\\)"):
+            parse_intervals(text)

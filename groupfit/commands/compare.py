@@ -17,6 +17,7 @@ from groupfit.inference.cli import add_interval_options, check_block, interval_s
 from groupfit.io import refuse_repeated
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import (
+    check_intervals_fit,
     check_probe_first,
     interval_plan,
     interval_summary,
@@ -142,6 +143,8 @@ def run_compare(args: argparse.Namespace) -> int:
         )
     modelling = common.load_configured_run(data, missing_error=True)
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
+    if args.probe_every:
+        check_intervals_fit(args.probe_every, args.probe_first, validation or [modelling])
     heat_note = settle_heat_and_conditions(args, settings, [modelling, *validation])
     common.print_notes([modelling, *validation], common.report_stream(args))
     if heat_note:
