@@ -148,6 +148,23 @@ def test_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys):
     assert not (tmp_path / "s.sqlite").exists()
 
 
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--scheduler", ""], "--scheduler '': an empty address"),
+        (["--scheduler", "tcp://127.0.0.1:9", "--connect-timeout", "-1"], "--connect-timeout -1: give the seconds"),
+        (["--scheduler", "tcp://127.0.0.1:9", "--connect-timeout", "nan"], "--connect-timeout nan: give the seconds"),
+    ],
+)
+def test_an_empty_scheduler_or_a_bad_wait_is_refused_before_any_run(tmp_path, capsys, args, message):
+    """An empty address ran the study locally; a negative wait reached Dask as the string '1-1.0'."""
+    config = write_study(tmp_path, "p = [1]")
+    assert main(["sweep", str(config), "--db", str(tmp_path / "s.sqlite"), "--quiet", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+    assert not (tmp_path / "s.sqlite").exists()
+
+
 def test_store_replaces_a_failed_row_when_the_run_is_done(tmp_path):
     config = write_study(tmp_path, "p = [1]")
     run = read_study(config).runs[0]

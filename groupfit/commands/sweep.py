@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
@@ -44,6 +45,10 @@ def add_parser(verbs) -> None:
     sweep.set_defaults(handler=run_sweep)
 
 
+MAX_CONNECT_TIMEOUT_S = 3600.0
+"""The longest wait for a Dask scheduler --connect-timeout takes (an hour)."""
+
+
 def run_sweep(args: argparse.Namespace) -> int:
     given = {"period_tolerance": args.period_tolerance, "resample_s": args.resample}
     given["keep_glitches"] = args.keep_glitches
@@ -53,6 +58,13 @@ def run_sweep(args: argparse.Namespace) -> int:
     feasible, infeasible = check_feasible(study, args.config)
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers}: give 1 or more worker processes")
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise InputError("--scheduler '': an empty address; name the Dask scheduler (tcp://host:8786) or leave it out")
+    if not (math.isfinite(args.connect_timeout) and 0 < args.connect_timeout <= MAX_CONNECT_TIMEOUT_S):
+        raise InputError(
+            f"--connect-timeout {args.connect_timeout:g}: give the seconds to wait for the scheduler, > 0 and at "
+            f"most {MAX_CONNECT_TIMEOUT_S:g}"
+        )
     if args.db == "-":
         raise InputError("--db -: the study's database is a file the sweep reads back and resumes; name one")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
