@@ -49,3 +49,20 @@ def test_a_run_given_twice_is_refused_and_nothing_written(runs, tmp_path, capsys
 def test_two_different_runs_are_read(runs, tmp_path, capsys):
     argv = ["compare", "--data", str(runs / "a.csv"), "--validate", str(runs / "b.csv"), "--pmax", "0", "--quiet"]
     assert main([*argv, "--out", str(tmp_path / "o")]) == 0, capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["compare", "--data", "a.csv", "--continues", "--pmax", "0"],
+        ["diagnose", "m/model.json", "--data", "a.csv", "--continues"],
+    ],
+    ids=["compare", "diagnose"],
+)
+def test_continues_without_a_validation_run_is_refused_not_ignored(runs, tmp_path, capsys, argv):
+    argv = [str(runs / a) if a.endswith((".csv", ".json")) else a for a in argv]
+    capsys.readouterr()
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--continues: says each --validate" in err[0] and "give --validate RUN" in err[0]
+    assert not (tmp_path / "o").exists()

@@ -120,6 +120,8 @@ def run_compare(args: argparse.Namespace) -> int:
         raise InputError(f"--pmax {run_settings.compare.pmax}: the largest p compared must be 0 or more")
     check_probe_first(args.probe_first, args.probe_every)
     tolerance = parse_tolerance(args.tolerance, args.probe_every)
+    if args.continues and not data.validate:
+        raise InputError("--continues: says each --validate run continues the one before it; give --validate RUN")
     runs = [p for p in [*data.paths, *data.validate] if isinstance(p, (str, Path))]
     refuse_repeated(runs, "as data (--data, --validate)")
     common.plan_outputs(

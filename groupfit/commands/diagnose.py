@@ -233,6 +233,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     clock = {**common.clock_options(args), **common.range_options(args), "time_is_default": args.time is None}
     glitches = {"drop_glitches": not args.keep_glitches}
     refuse_repeated([*args.data, *(args.validate or [])], "as data (--data, --validate)")
+    if args.continues and not args.validate:
+        raise InputError("--continues: says each --validate file continues the one before it; give --validate RUN")
     data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
     validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     refuse_too_short(data, model)
