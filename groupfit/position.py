@@ -184,6 +184,11 @@ def load_position_run(
             "positions; a position run is one check run per time stamp: leave --resample out"
         )
     inputs = temps if temps is not None else default_temperature_columns(frame.columns, exclude=(time, error))
+    if position in (time, error):
+        role = "time" if position == time else "thermal error"
+        raise InputError(
+            f"{label}: --position '{position}' is the run's {role}; the axis position needs a column of its own"
+        )
     if position in inputs:
         raise InputError(
             f"{label}: --position '{position}' is also a temperature input; the axis position needs a column of "

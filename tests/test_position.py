@@ -637,3 +637,23 @@ def test_the_position_block_and_the_table_parse_as_structured_text(real):
     for text in texts:
         assert not tree_sitter_errors(text) and blark_accepts(text)
         assert text.isascii()
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--position", "error_um"], "--position 'error_um' is the run's thermal error"),
+        (["--position", "time_s"], "--position 'time_s' is the run's time"),
+        (
+            ["--position", "P_mm", "--dead-band", "0.5", "--dead-band-ref", "P_mm"],
+            "the axis position, not a temperature",
+        ),
+    ],
+)
+def test_the_position_column_is_no_other_role_of_the_run(tmp_path, capsys, options, message):
+    """Before: 'column error_um not found' (it was there) and '--dead-band-ref P_mm: no such column'."""
+    long_table(1).to_csv(tmp_path / "run.csv", index=False)
+    args = ["fit", "--data", str(tmp_path / "run.csv"), "--temps", "T1,T2", "--p", "0", *options]
+    assert main([*args, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and not (tmp_path / "o").exists()

@@ -60,6 +60,8 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
         reference = args.dead_band_ref or (model.reference if model.reference not in (None, "start") else None)
         if reference is None:
             raise InputError("--dead-band needs its reference sensor: --dead-band-ref COLUMN (or --reference COLUMN)")
+        if reference == position_run.column:
+            raise InputError(f"--dead-band-ref '{reference}': the axis position, not a temperature; name the air's")
         if reference not in position_run.run.frame.columns:
             raise InputError(f"--dead-band-ref '{reference}': no such column in the run")
         refuse_as_temperature(position_run.run, reference, "--dead-band-ref", "name a temperature sensor (the air's)")
