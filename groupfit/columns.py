@@ -57,6 +57,10 @@ def is_displacement(column: str) -> bool:
     return lowered.endswith(DISPLACEMENT_SUFFIXES) or lowered.startswith(("disp", "error"))
 
 
+MARKER_MAGNITUDE = 1.0e12
+"""A value beyond this magnitude is a logger's marker (3e38, 1e308), no temperature, speed or power."""
+
+
 def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], list[str]]:
     """Columns that can explain a residual, and a note for each one left out."""
     usable, notes = [], []
@@ -72,6 +76,12 @@ def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], l
             notes.append(f"column '{column}' left out: not numeric or empty")
         elif bad:
             notes.append(f"column '{column}' left out: {bad} non-finite value(s) (a failing sensor?)")
+        elif np.max(np.abs(values)) > MARKER_MAGNITUDE:
+            row = int(np.argmax(np.abs(values) > MARKER_MAGNITUDE))
+            notes.append(
+                f"column '{column}' left out: {values[row]:g} at row {row + 1} is no reading (a logger's overflow "
+                "marker?)"
+            )
         elif np.ptp(values) == 0.0 and values[0] == 0.0:
             notes.append(f"column '{column}' left out: constant 0 (a dead sensor, or a source never on?)")
         elif np.ptp(values) == 0.0 and is_temperature_name(column):

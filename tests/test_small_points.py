@@ -60,9 +60,11 @@ def test_a_heater_on_from_the_start_is_kept_and_a_sample_index_left_out():
             "sample": np.arange(n) + 1.0,
             "clock_s": 5.0 + 30.0 * np.arange(n),
             "speed": np.where(np.arange(n) < 25, 0.0, 3000.0),
+            "T_overflow": np.where(np.arange(n) == 7, 1e308, 20.0 + 0.1 * np.arange(n)),  # a logger's marker
         }
     )
     usable, notes = usable_columns(frame, set())
+    assert any("'T_overflow' left out: 1e+308 at row 8 is no reading" in note for note in notes)
     assert usable == ["bed_target", "speed"]
     assert any("'bed_target' kept though constant (60)" in note for note in notes)
     assert any("'sample' left out: a sample index" in note for note in notes)
