@@ -1,5 +1,6 @@
 """A run given twice (the same path, a link to it, or a copy of its bytes) is refused in one line by every verb
-that reads several runs: held out against itself, a run scores nothing."""
+that reads several runs: held out against itself, a run scores nothing. So are the options about the runs that
+would be ignored: --continues without a run to continue, --keep-reference without a reference."""
 
 from __future__ import annotations
 
@@ -66,3 +67,12 @@ def test_continues_without_a_validation_run_is_refused_not_ignored(runs, tmp_pat
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--continues: says each --validate" in err[0] and "give --validate RUN" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_keep_reference_on_a_model_without_one_is_refused(runs, tmp_path, capsys):
+    argv = ["fit", "--data", str(runs / "a.csv"), "--p", "0", "--reference", "none", "--out", str(tmp_path / "m")]
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    args = ["diagnose", str(tmp_path / "m" / "model.json"), "--data", str(runs / "a.csv"), "--keep-reference"]
+    assert main([*args, "--out", str(tmp_path / "d")]) == 2
+    assert "--keep-reference: " in capsys.readouterr().err and not (tmp_path / "d").exists()

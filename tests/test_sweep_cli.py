@@ -1,4 +1,5 @@
 import json
+import os
 import sqlite3
 from pathlib import Path
 
@@ -163,6 +164,13 @@ def test_an_empty_scheduler_or_a_bad_wait_is_refused_before_any_run(tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]
     assert not (tmp_path / "s.sqlite").exists()
+
+
+def test_more_workers_than_cores_is_said(tmp_path, capsys):
+    config = write_study(tmp_path, "p = [1]")
+    workers = (os.cpu_count() or 1) + 1
+    assert main(["sweep", str(config), "--db", str(tmp_path / "s.sqlite"), "--workers", str(workers)]) == 0
+    assert f"note    --workers {workers} on {workers - 1} core(s)" in capsys.readouterr().out
 
 
 def test_store_replaces_a_failed_row_when_the_run_is_done(tmp_path):

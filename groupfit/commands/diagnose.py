@@ -235,6 +235,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
     refuse_repeated([*args.data, *(args.validate or [])], "as data (--data, --validate)")
     if args.continues and not args.validate:
         raise InputError("--continues: says each --validate file continues the one before it; give --validate RUN")
+    if args.keep_reference and model.get("reference") in (None, "start"):
+        raise InputError(
+            f"--keep-reference: {args.model} has no reference sensor to keep (absolute readings or 'start')"
+        )
     data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
     validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     refuse_too_short(data, model)

@@ -49,13 +49,8 @@ MAX_CONNECT_TIMEOUT_S = 3600.0
 """The longest wait for a Dask scheduler --connect-timeout takes (an hour)."""
 
 
-def run_sweep(args: argparse.Namespace) -> int:
-    given = {"period_tolerance": args.period_tolerance, "resample_s": args.resample}
-    given["keep_glitches"] = args.keep_glitches
-    study = read_study(args.config, given)
-    if not study.runs:
-        raise InputError(f"{args.config}: the study has no runs")
-    feasible, infeasible = check_feasible(study, args.config)
+def check_executor_options(args: argparse.Namespace) -> None:
+    """Refuse before any work --workers below 1, an empty --scheduler and a --connect-timeout out of range."""
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers}: give 1 or more worker processes")
     if args.scheduler is not None and not args.scheduler.strip():
@@ -65,6 +60,30 @@ def run_sweep(args: argparse.Namespace) -> int:
             f"--connect-timeout {args.connect_timeout:g}: give the seconds to wait for the scheduler, > 0 and at "
             f"most {MAX_CONNECT_TIMEOUT_S:g}"
         )
+
+
+def make_executor(args: argparse.Namespace, out):
+    """The Dask cluster --scheduler names, else local processes (a note when more are asked than cores)."""
+    if args.scheduler:
+        return DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
+    cores = os.cpu_count() or 1
+    if args.workers is not None and args.workers > cores:
+        print(
+            f"note    --workers {args.workers} on {cores} core(s): the processes share them, so runs take longer "
+            "each and the sweep no less time",
+            file=out,
+        )
+    return LocalExecutor(args.workers)
+
+
+def run_sweep(args: argparse.Namespace) -> int:
+    given = {"period_tolerance": args.period_tolerance, "resample_s": args.resample}
+    given["keep_glitches"] = args.keep_glitches
+    study = read_study(args.config, given)
+    if not study.runs:
+        raise InputError(f"{args.config}: the study has no runs")
+    feasible, infeasible = check_feasible(study, args.config)
+    check_executor_options(args)
     if args.db == "-":
         raise InputError("--db -: the study's database is a file the sweep reads back and resumes; name one")
     db = Path(args.db) if args.db else (study.db or Path.cwd() / f"{Path(args.config).stem}.sqlite")
@@ -79,11 +98,8 @@ def run_sweep(args: argparse.Namespace) -> int:
     if not args.scheduler:  # a cluster's size is known only once connected
         budget = None if args.no_budget else common.EXACT_BUDGET_SECONDS
         check_exact_time(study, feasible, args.config, budget_s=budget, workers=args.workers or os.cpu_count() or 1)
-    if args.scheduler:
-        executor = DaskExecutor(args.scheduler, connect_timeout=args.connect_timeout)
-    else:
-        executor = LocalExecutor(args.workers)
     out = common.report_stream(args)
+    executor = make_executor(args, out)
     try:
         with StudyStore(db) as store:
             print(
