@@ -233,3 +233,23 @@ def test_auto_leaves_the_bootstrap_out_before_a_refit_when_the_fits_own_search_s
     small.search_["seconds"] = 0.1
     with pytest.raises(AssertionError, match="no refit"):
         break_intervals(small, small_X, small_y, n_boot=200, budget_s=5.0)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--intervals", "none", "--bootstrap", "50"], "--bootstrap: --intervals none computes no interval"),
+        (["--intervals", "none", "--level", "0.9"], "--level: --intervals none computes no interval"),
+        (
+            ["--intervals", "bai", "--objective", "sse", "--n", "0", "--block", "3"],
+            "--block: an option of the bootstrap",
+        ),
+        (["--intervals", "bootstrap", "--homoskedastic"], "--homoskedastic: an option of Bai's interval"),
+    ],
+)
+def test_an_interval_option_the_method_does_not_read_is_refused(tmp_path, capsys, options, message):
+    data = ROOT / "datasets" / "synthetic_cycle.csv"
+    args = ["fit", "--data", str(data), "--temps", "T1,T2", "--p", "1", "--search", "exact", *options]
+    assert main([*args, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and not (tmp_path / "o").exists()

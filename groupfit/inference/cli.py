@@ -10,6 +10,10 @@ from groupfit.search.base import DEFAULT_SEED
 
 AUTO_BUDGET_S = 5.0
 """``--intervals auto`` skips a bootstrap projected to take longer than this."""
+DEFAULT_LEVEL = 0.95
+DEFAULT_REFITS = 200
+BOOTSTRAP_ONLY = {"bootstrap": "--bootstrap", "block": "--block"}
+"""The options only the bootstrap reads."""
 
 
 def add_interval_options(parser: argparse.ArgumentParser) -> None:
@@ -21,8 +25,8 @@ def add_interval_options(parser: argparse.ArgumentParser) -> None:
         help="break confidence intervals: Bai (sse, n = 0), residual block bootstrap, or none "
         f"(default auto: Bai where it applies, else the bootstrap when it takes under {AUTO_BUDGET_S:.0f} s)",
     )
-    parser.add_argument("--level", type=float, default=0.95, help="confidence level of the intervals (default 0.95)")
-    parser.add_argument("--bootstrap", type=int, default=200, metavar="B", help="bootstrap refits (default 200)")
+    parser.add_argument("--level", type=float, help=f"confidence level of the intervals (default {DEFAULT_LEVEL:g})")
+    parser.add_argument("--bootstrap", type=int, metavar="B", help=f"bootstrap refits (default {DEFAULT_REFITS})")
     parser.add_argument("--block", type=int, metavar="L", help="bootstrap block length in samples (default N^(1/3))")
     parser.add_argument(
         "--homoskedastic",
@@ -32,12 +36,29 @@ def add_interval_options(parser: argparse.ArgumentParser) -> None:
 
 
 def check_block(args: argparse.Namespace, n_samples: int) -> None:
-    """Refuse before any work a ``--block`` no shorter than the run (every replicate would be the run itself)."""
+    """Refuse before any work an interval option the method would not read, and a ``--block`` no shorter than the
+    run (every replicate would be the run itself)."""
+    refuse_unused_interval_options(args)
     if getattr(args, "block", None) is not None and not 1 <= args.block < n_samples:
         raise InputError(
             f"--block {args.block}: the bootstrap block must be 1 to {n_samples - 1} samples (the run has "
             f"N = {n_samples}); with L ≥ N every replicate is the run itself and the intervals have width zero"
         )
+
+
+def refuse_unused_interval_options(args: argparse.Namespace) -> None:
+    """Refuse an interval option the method asked for would not read (``--intervals none --bootstrap 50``)."""
+    if args.intervals == "none":
+        given = [o for k, o in {**BOOTSTRAP_ONLY, "level": "--level"}.items() if getattr(args, k) is not None]
+        if given or args.homoskedastic:
+            option = given[0] if given else "--homoskedastic"
+            raise InputError(f"{option}: --intervals none computes no interval; leave {option} out")
+    if args.intervals == "bai":
+        given = [o for k, o in BOOTSTRAP_ONLY.items() if getattr(args, k) is not None]
+        if given:
+            raise InputError(f"{given[0]}: an option of the bootstrap, and --intervals bai is not one; leave it out")
+    if args.intervals == "bootstrap" and args.homoskedastic:
+        raise InputError("--homoskedastic: an option of Bai's interval, not of the bootstrap; leave it out")
 
 
 def intervals_from_args(args: argparse.Namespace, estimator, X, y, seed, progress=None) -> BreakIntervalReport:
@@ -47,9 +68,9 @@ def intervals_from_args(args: argparse.Namespace, estimator, X, y, seed, progres
         X,
         y,
         method=args.intervals,
-        level=args.level,
+        level=DEFAULT_LEVEL if args.level is None else args.level,
         het=not args.homoskedastic,
-        n_boot=args.bootstrap,
+        n_boot=DEFAULT_REFITS if args.bootstrap is None else args.bootstrap,
         block=args.block,
         seed=DEFAULT_SEED if seed is None else int(seed),
         budget_s=AUTO_BUDGET_S,
@@ -61,9 +82,9 @@ def interval_settings(args: argparse.Namespace) -> dict:
     """The options as :func:`groupfit.inference.break_intervals` keywords (``compare``)."""
     return {
         "method": args.intervals,
-        "level": args.level,
+        "level": DEFAULT_LEVEL if args.level is None else args.level,
         "het": not args.homoskedastic,
-        "n_boot": args.bootstrap,
+        "n_boot": DEFAULT_REFITS if args.bootstrap is None else args.bootstrap,
         "block": args.block,
     }
 
