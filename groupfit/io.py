@@ -283,18 +283,18 @@ def file_sha256(path: str | Path) -> str:
 def refuse_repeated(paths, what: str) -> None:
     """Refuse a file named twice among ``paths``, through a link or as a copy of the same bytes (``what``: how
     the message names the role it was given in): a run held out against itself scores nothing."""
+    files = [path for path in paths if isinstance(path, (str, Path)) and Path(path).is_file()]
     seen: dict[Path, str] = {}
     contents: dict[str, str] = {}
-    for path in paths:
-        if isinstance(path, (str, Path)) and Path(path).is_file():
-            key = Path(path).resolve()
-            if key in seen:
-                raise InputError(f"{path}: given twice {what}; name each run once")
-            digest = file_sha256(path)
-            if digest in contents:
-                raise InputError(
-                    f"{path}: holds the same bytes as {contents[digest]}, given {what} too: one run twice; name "
-                    "each run once"
-                )
-            seen[key] = str(path)
-            contents[digest] = str(path)
+    for path in files if len(files) > 1 else ():  # one file is no repeat: not read for it
+        key = Path(path).resolve()
+        if key in seen:
+            raise InputError(f"{path}: given twice {what}; name each run once")
+        digest = file_sha256(path)
+        if digest in contents:
+            raise InputError(
+                f"{path}: holds the same bytes as {contents[digest]}, given {what} too: one run twice; name "
+                "each run once"
+            )
+        seen[key] = str(path)
+        contents[digest] = str(path)

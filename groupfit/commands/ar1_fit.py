@@ -20,13 +20,18 @@ DEFAULT_HEAT_EXPONENT = 5 / 3
 AR1_ONLY = ("heat", "period", "start", "ar1_fit", "heat_exponent", "closed_form")
 
 
+def first_given(args: argparse.Namespace, names) -> str | None:
+    """The option (``--heat-exponent``) of the first of ``names`` given on the command line; None when none is."""
+    given = [name for name in names if getattr(args, name, None) not in (None, False)]
+    return f"--{given[0].replace('_', '-')}" if given else None
+
+
 def refuse_ar1_options(args: argparse.Namespace) -> None:
     """Refuse an option of ``--model ar1`` given to the grouped model's fit, which would ignore it."""
-    given = [name for name in AR1_ONLY if getattr(args, name, None) is not None]
-    if given:
+    option = first_given(args, AR1_ONLY)
+    if option:
         raise InputError(
-            f"--{given[0].replace('_', '-')} is an option of --model ar1, not of the grouped model; add --model ar1 "
-            "or leave it out"
+            f"{option} is an option of --model ar1, not of the grouped model; add --model ar1 or leave it out"
         )
 
 
@@ -71,9 +76,9 @@ def add_fit_options(parser: argparse.ArgumentParser) -> None:
 
 def run_fit(args: argparse.Namespace) -> int:
     """``groupfit fit --model ar1``: fit, write model.json and fit.png, print the summary."""
-    given = [name for name in GROUPED_ONLY if getattr(args, name, None) not in (None, False)]
-    if given:
-        raise InputError(f"--{given[0].replace('_', '-')} is an option of the grouped model, not of --model ar1")
+    option = first_given(args, GROUPED_ONLY)
+    if option:
+        raise InputError(f"{option} is an option of the grouped model, not of --model ar1")
     if not args.heat:
         raise InputError("--model ar1 needs --heat COLUMN: the heat input (spindle speed, power or heat flux)")
     args.start = args.start or "zero"

@@ -23,20 +23,20 @@ TARGET_OPTIONS = {
 """The options of one export target or two: the option and the targets that use it."""
 
 
-AR1_TARGET_OPTIONS = {"real": ("--real", ("st",)), "name": ("--name", ("st",))}
+AR1_TARGET_OPTIONS = {"real": ("st",), "name": ("st",)}
 """What the AR(1) model's targets take: its sheet has no integer register, it has no position table."""
 
 
-def target_options(args: argparse.Namespace, targets, uses: dict = TARGET_OPTIONS) -> dict:
+def target_options(args: argparse.Namespace, targets, uses: dict | None = None) -> dict:
     """The target options given (the targets' own defaults stand for the rest), refusing one that none of
-    ``targets`` takes (``uses``: the options of this kind of model file and their targets) rather than ignoring
-    it."""
+    ``targets`` takes rather than ignoring it. ``uses``: the targets of each option for this kind of model file
+    (an option it lacks takes none), by default the grouped model's (:data:`TARGET_OPTIONS`)."""
     given = {}
-    for key, (option, _) in TARGET_OPTIONS.items():
+    for key, (option, grouped_users) in TARGET_OPTIONS.items():
         value = getattr(args, key, None)
         if value is None:
             continue
-        users = uses.get(key, (option, ()))[1]
+        users = grouped_users if uses is None else uses.get(key, ())
         if not set(users) & set(targets):
             if not users:
                 raise InputError(f"{option}: no target of this kind of model file takes it; leave it out")

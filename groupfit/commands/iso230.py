@@ -37,11 +37,11 @@ def run_iso230(args: argparse.Namespace) -> int:
     out_dir = common.plan_outputs(args, args.run, folder=args.out, files=("iso230.png",))
     result = load_runs(args.run, target=args.target, direction=args.direction, deviation=args.deviation)
     data = {"run": str(args.run), **result.to_json()}
-    converted = {
-        column: {"unit": read_in(column, plausible)[0], "given_in": plausible.unit}
-        for column, plausible in ((args.target, TARGET_VALUES), (args.deviation, DEVIATION_VALUES))
-        if read_in(column, plausible)[1] != 1.0
-    }
+    converted = {}
+    for column, plausible in ((args.target, TARGET_VALUES), (args.deviation, DEVIATION_VALUES)):
+        unit, factor = read_in(column, plausible)
+        if factor != 1.0:
+            converted[column] = {"unit": unit, "given_in": plausible.unit}
     if converted:
         data["columns_read_in"] = converted
     written = []

@@ -57,19 +57,18 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
 def refuse_probe_column(run, column: str, given: str) -> None:
     """Refuse the run's time, an input the model reads or a column named as a temperature sensor as the probe's
     readings: checks of seconds or °C."""
-    sensors = default_temperature_columns([column])
-    if column == run.time_name or column in run.temp_names or sensors:
-        what = (
-            "the run's time"
-            if column == run.time_name
-            else "a reading the model takes as an input"
-            if column in run.temp_names
-            else "named as a temperature sensor"
-        )
-        raise InputError(
-            f"{run.source}: --probe-column '{given}' is {what}, not a measured error; name the column of the probe's "
-            "readings (µm), or leave the option out to check against the run's error column"
-        )
+    if column == run.time_name:
+        what = "the run's time"
+    elif column in run.temp_names:
+        what = "a reading the model takes as an input"
+    elif default_temperature_columns([column]):
+        what = "named as a temperature sensor"
+    else:
+        return
+    raise InputError(
+        f"{run.source}: --probe-column '{given}' is {what}, not a measured error; name the column of the probe's "
+        "readings (µm), or leave the option out to check against the run's error column"
+    )
 
 
 def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) -> np.ndarray | None:

@@ -27,7 +27,7 @@ from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
 from groupfit.screw.modelfile import load_model, model_to_dict, save_model
 from groupfit.screw.plots import plot_error, plot_rises
-from groupfit.screw.runs import PROBE_COLUMN, load_screw_run
+from groupfit.screw.runs import PROBE_COLUMN, load_screw_run, probe_reach_m
 
 DEFAULT_OUT = "groupfit-out"
 
@@ -239,7 +239,7 @@ def run_predict(args: argparse.Namespace) -> int:
         if source not in model.sources_:
             model.fit_source(run.rises, run.time, run.positions, source=source, label=run.source)
             reidentified = True
-    at = _positions(args.at, reach=2.0 * float(np.max(run.positions)))
+    at = _positions(args.at, reach=probe_reach_m(run.positions))
     score, rises, error = score_screw(model, run, source)
     written = []
     if out_dir is not None:

@@ -99,13 +99,18 @@ def candidate_steps(travel_mm: float) -> list[float]:
     return sorted(set(steps), reverse=True)
 
 
+def point_count(travel_mm: float, step_mm: float) -> int:
+    """The points of a table over ``travel_mm`` at ``step_mm`` (the last one at or past the travel's end)."""
+    return int(math.ceil(travel_mm / step_mm - 1e-9)) + 1
+
+
 class CecTable:
     """The table of one model at one thermal state: nodes, values (mm) and the interpolation error (µm)."""
 
     def __init__(self, model: ModelFile, state: np.ndarray, step_mm: float):
         self.model, self.state, self.step_mm = model, np.asarray(state, dtype=float), float(step_mm)
         low, high = model.position.travel_mm
-        self.points = int(math.ceil((high - low) / self.step_mm - 1e-9)) + 1
+        self.points = point_count(high - low, self.step_mm)
         self.min_mm = round(float(low), VALUE_DECIMALS)
         self.max_mm = round(self.min_mm + (self.points - 1) * self.step_mm, VALUE_DECIMALS)
         self.nodes_mm = self.min_mm + self.step_mm * np.arange(self.points)
@@ -148,7 +153,7 @@ def cec_table(
                 f"--step {step_mm:g} mm: longer than the travel {low:g} .. {high:g} mm, so the table's last point "
                 f"lies beyond it; take a step of at most {travel:g} mm"
             )
-        points = math.ceil(travel / step_mm - 1e-9) + 1  # counted before the nodes are made: 1e-6 mm is 5e8
+        points = point_count(travel, step_mm)  # counted before the nodes are made: 1e-6 mm is 5e8
         if points > max_points:
             raise InputError(
                 f"--step {step_mm:g} mm: the travel {low:g} .. {high:g} mm needs {points} points, the "
@@ -158,7 +163,7 @@ def cec_table(
         table = CecTable(model, state, step_mm)
         return table, table.interpolation_error_um()
     for step in candidate_steps(travel):
-        if math.ceil(travel / step - 1e-9) + 1 > max_points:
+        if point_count(travel, step) > max_points:
             break
         table = CecTable(model, state, step)
         error = table.interpolation_error_um()

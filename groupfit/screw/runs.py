@@ -146,7 +146,7 @@ def load_screw_run(
         probe = np.full(run.n_samples, float(probe_x))
     else:
         probe = None
-    reach = 2.0 * float(xs[-1])
+    reach = probe_reach_m(xs)
     for where, values in (("--probe-x", None if probe_x is None else np.array([probe_x])), (PROBE_COLUMN, probe)):
         outside = np.array([]) if values is None else np.flatnonzero(~((values >= 0) & (values <= reach)))
         if outside.size:
@@ -167,6 +167,11 @@ def load_screw_run(
         probe_x=probe,
         run=run,
     )
+
+
+def probe_reach_m(positions) -> float:
+    """The farthest a probe may be from the source (m): twice the furthest sensor."""
+    return 2.0 * float(np.max(positions))
 
 
 def run_label(path) -> str:
