@@ -308,7 +308,7 @@ def test_compare_reads_a_validation_run_whose_columns_come_in_another_order(tmp_
     for name, frame in (("plain", plain), ("shuffled", shuffled)):
         path, report = tmp_path / f"{name}.csv", tmp_path / f"{name}.json"
         frame.to_csv(path, index=False)
-        options = ["--validate", path, "--quiet", "--json", report, "--out", tmp_path / name]
+        options = ["--validate", path, "--pmax", "1", "--quiet", "--json", report, "--out", tmp_path / name]
         assert cli("compare", "--data", DATASETS / "paper_cycle.csv", *options) == 0
         rows.append([{**r, "run": None} for r in json.loads(report.read_text())["rows"] if r["run"] == name])
     assert len(rows[0]) >= 3 and rows[0] == rows[1]
