@@ -18,6 +18,7 @@ from groupfit.default_columns import (
     DEFAULT_TIME,
     ambient_columns,
     default_temperature_columns,
+    factored_length_unit,
     length_unit,
     named_length_unit,
     scaled_name,
@@ -62,6 +63,8 @@ def unit_note(name: str | None, label: str, values: np.ndarray | None = None) ->
     also of one whose name gives no unit and whose span over the run is too small or too large for µm
     (:data:`SMALLEST_ERROR_SPAN_UM`, :data:`LARGEST_ERROR_SPAN_UM`)."""
     unit, scale = length_unit(name)
+    if factored_length_unit(name) is not None:
+        return f"{label}: column '{name}' is in {unit} by its name: read ×{scale:g} as µm"
     signal = SIGNAL_UNIT.search(str(name)) if name is not None else None
     if scale == 1.0 and signal:
         return (

@@ -36,6 +36,7 @@ from groupfit.errors import InputError
 from groupfit.readtable import datetimes_to_seconds
 from groupfit.setting_levels import is_setting
 from groupfit.timestamps import time_like_columns
+from groupfit.unit_factors import factored_unit
 
 DEFAULT_TIME = "time_s"
 DEFAULT_ERROR = "error_um"
@@ -85,12 +86,29 @@ def length_unit(name: str | None) -> tuple[str, float]:
     scaled = scaled_name(name)
     if scaled is not None:
         return f"×{scaled[1]:g}", scaled[1]
+    factored = factored_length_unit(name)
+    if factored is not None:
+        return factored
     unit = named_length_unit(name)
     scale = MICROMETRES_PER_UNIT[unit] if unit else 1.0
     return (unit if scale != 1.0 else "µm"), scale
 
 
+def factored_length_unit(name: str | None) -> tuple[str, float] | None:
+    """``(shown, µm)`` of a name that gives a unit of length with a factor (``dZ [1/1000 mm]``: 1 µm, ``dZ [0.1
+    µm]``: 0.1 µm; :mod:`groupfit.unit_factors`); None otherwise."""
+    factored = factored_unit(name)
+    unit = factored.unit.lower() if factored is not None else None
+    if unit not in MICROMETRES_PER_UNIT:
+        return None
+    return factored.shown, factored.factor * MICROMETRES_PER_UNIT[unit]
+
+
 def named_length_unit(name: str | None) -> str | None:
+    """The unit of length a name ends in (a key of :data:`MICROMETRES_PER_UNIT`); None when it gives none, or
+    gives one with a factor (:func:`factored_length_unit`)."""
+    if factored_length_unit(name) is not None:
+        return None
     match = LENGTH_UNIT.search(str(name)) if name is not None else None
     return match.group(1).lower() if match else None
 
@@ -253,6 +271,7 @@ __all__ = [
     "error_like_columns",
     "found_error_column",
     "found_time_column",
+    "factored_length_unit",
     "length_unit",
     "named_length_unit",
     "scaled_name",

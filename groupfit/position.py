@@ -41,7 +41,12 @@ from groupfit.data import (
     read_table,
     refuse_beyond,
 )
-from groupfit.default_columns import default_temperature_columns
+from groupfit.default_columns import (
+    default_temperature_columns,
+    factored_length_unit,
+    length_unit,
+    named_length_unit,
+)
 from groupfit.errors import InputError
 from groupfit.export.table import position_coefficients
 from groupfit.model import MAX_POSITION_ORDER, DeadBand, ModelFile, Position
@@ -155,6 +160,28 @@ def refuse_implausible_errors(values: np.ndarray, column: str, label: str, limit
         )
 
 
+METRES = re.compile(r"(?:^|[\s_\[(/（［])m\s*[\])）］]?\s*$")
+"""A name that ends in metres (``probe_x_m``, ``X [m]``)."""
+
+
+def millimetres_per_unit(column: str) -> float:
+    """The millimetres of one unit of a position column by its name: metres (``probe_x_m``, ``X [m]``) ×1000, a
+    unit of length (``X [µm]``, ``X [1/100 mm]``) by :func:`groupfit.default_columns.length_unit`, else mm."""
+    if METRES.search(str(column)):
+        return 1000.0
+    if named_length_unit(column) is None and factored_length_unit(column) is None:
+        return 1.0
+    return length_unit(column)[1] / 1000.0
+
+
+def position_unit_notes(column: str, label: str) -> tuple[str, ...]:
+    """The note of a position column read in another unit than mm (none for one in mm)."""
+    scale = millimetres_per_unit(column)
+    if scale == 1.0:
+        return ()
+    return (f"{label}: position column '{column}' is in another unit than mm by its name: read ×{scale:g} as mm",)
+
+
 def load_position_run(
     source,
     position: str,
@@ -194,6 +221,7 @@ def load_position_run(
             f"{label}: --position '{position}' is also a temperature input; the axis position needs a column of "
             "its own (name the inputs with --temps)"
         )
+    scale = millimetres_per_unit(position) if position in frame.columns else 1.0  # wide: err_P<mm> gives mm
     if position not in frame.columns:
         if wide_columns(frame, label):
             for column in wide_columns(frame):
@@ -205,7 +233,7 @@ def load_position_run(
                 f"{label}: position column '{position}' not found, and no wide error columns "
                 f"({WIDE_PREFIX}<mm>). The columns are: {', '.join(map(str, frame.columns))}"
             )
-    positions = numeric_column(frame, position, label, allow_nonfinite=False)
+    positions = numeric_column(frame, position, label, allow_nonfinite=False) * scale
     refuse_beyond(positions, MAX_POSITION_MM, position, label, "mm is not a plausible axis position")
     times = numeric_column(frame, time, label, allow_nonfinite=False)
     error_values = numeric_column(frame, error, label, allow_nonfinite=False)
@@ -230,7 +258,8 @@ def load_position_run(
         error_limit=error_limit,
         period_tolerance=period_tolerance,
     )
-    run = replace(run, source=f"{label} (check runs)")
+    in_mm = position_unit_notes(position, label) if scale != 1.0 else ()
+    run = replace(run, source=f"{label} (check runs)", notes=run.notes + in_mm)
     return PositionRun(run=run, check=check, position=positions, error=error_values, column=position)
 
 

@@ -22,24 +22,27 @@ import pandas as pd
 from groupfit.default_columns import MICROMETRES_PER_UNIT, named_length_unit
 from groupfit.errors import InputError
 from groupfit.timestamps import UNIT_SECONDS, named_time_unit
+from groupfit.unit_factors import FactoredUnit, factored_unit
 
+FAHRENHEIT = ("°f", "ºf", "degf", "deg f", "deg.f", "deg. f", "℉", "fahrenheit", "f")
 CELSIUS_BY_UNIT = {
-    **dict.fromkeys(("°c", "degc", "deg c", "℃", "celsius", "c"), (1.0, 0.0)),
-    **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
-    **dict.fromkeys(("°f", "degf", "deg f", "℉", "fahrenheit"), (5.0 / 9.0, -32.0 * 5.0 / 9.0)),
+    **dict.fromkeys(("°c", "ºc", "degc", "deg c", "deg.c", "deg. c", "℃", "celsius", "c"), (1.0, 0.0)),
+    **dict.fromkeys(("k", "°k", "ºk", "kelvin"), (1.0, -273.15)),
+    **dict.fromkeys(FAHRENHEIT, (5.0 / 9.0, -32.0 * 5.0 / 9.0)),
 }
 """Units of temperature a units row may give, and their (scale, offset) to °C."""
 SHOWN = {
-    **dict.fromkeys(("°f", "degf", "deg f", "℉", "fahrenheit"), "°F"),
-    **dict.fromkeys(("k", "kelvin"), "K"),
+    **dict.fromkeys(FAHRENHEIT, "°F"),
+    **dict.fromkeys(("k", "°k", "ºk", "kelvin"), "K"),
 }
 """How a unit of temperature is named in a note."""
 BRACKETS = re.compile(r"^[\[(（［]\s*(.*?)\s*[\])）］]$")
 NAMED_TEMPERATURE_UNIT = re.compile(
-    r"(°\s*[CF](?![a-z])|(?<![a-z])deg\s*[CF](?![a-z])|℃|℉|fahrenheit|kelvin|[\[(（［]\s*°?[CFK]\s*[\])）］])",
+    r"([°º]\s*[CFK](?![a-z])|(?<![a-z])deg\.?\s*[CF](?![a-z])|℃|℉|fahrenheit|kelvin|[\[(（［]\s*[°º]?[CFK]\s*[\])）］])",
     re.IGNORECASE,
 )
-"""A unit of temperature in a column's name (``T1 [°F]``, ``Temp, °F (LGR S/N: 2001)``, ``bed_degF``, ``T1 (K)``)."""
+"""A unit of temperature in a column's name (``T1 [°F]``, ``Temp, °F (LGR S/N: 2001)``, ``bed_degF``, ``T1 (K)``,
+``T1 (F)``, ``T1 (deg. F)``, ``T1 [ºF]`` with the ordinal sign many keyboards give for the degree)."""
 
 
 def unit_of(cell: str) -> tuple[str, str] | None:
@@ -73,6 +76,13 @@ def named_temperature_unit(name: str) -> str | None:
     return unit[1] if unit and unit[0] == "temperature" else None
 
 
+def temperature_factor(name: object) -> FactoredUnit | None:
+    """The factor of a unit of temperature a name gives with one (``T1 [0.1°C]``, ``T1 [°C/10]``), else None."""
+    factored = factored_unit(name)
+    unit = unit_of(factored.unit.replace(" ", "")) if factored is not None else None
+    return factored if unit is not None and unit[0] == "temperature" else None
+
+
 def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[str], tuple[str, ...]]:
     """Convert, in place, the columns the units row gives in other units (see the module docstring).
 
@@ -89,6 +99,10 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
     units = row_units(frame)
     lengths, converted = [], []
     for column in frame.columns:
+        factored = temperature_factor(column)
+        if factored is not None and pd.api.types.is_numeric_dtype(frame[column]):
+            frame[column] = frame[column].to_numpy(dtype=float) * factored.factor
+            converted.append(f"'{column}' ×{factored.factor:g} (in {factored.shown})")
         named = named_temperature_unit(str(column))
         kind, unit = units.get(str(column), ("temperature", named) if named else (None, None))
         if kind is None or not pd.api.types.is_numeric_dtype(frame[column]):
@@ -152,4 +166,4 @@ def _to_base(column, kind: str, unit: str, time: str, label: str) -> tuple[float
     return 1.0, 0.0  # the name's unit is read where the column is
 
 
-__all__ = ["read_in_row_units", "row_units", "unit_of"]
+__all__ = ["read_in_row_units", "row_units", "temperature_factor", "unit_of"]

@@ -24,6 +24,7 @@ from groupfit.error_start import ZERO_KEY
 from groupfit.errors import InputError
 from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
+from groupfit.position import millimetres_per_unit
 from groupfit.recordings import continued_recording
 from groupfit.runtime import RuleTables, SwitchingRule
 from groupfit.runtime.state import capture, restore
@@ -57,7 +58,8 @@ def load_readings(
             raise InputError(
                 f"{run.source}: column '{name}' not found; the model reads it ({uses}). The columns are: {available}"
             )
-        columns.append(numeric_column(run.frame, name, run.source, allow_nonfinite=True))
+        values = numeric_column(run.frame, name, run.source, allow_nonfinite=True)
+        columns.append(values * millimetres_per_unit(name) if name == tables.position_name else values)
     readings = np.column_stack([run.temps, *columns])
     return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
 
