@@ -15,7 +15,9 @@ A reading is a glitch when it stands out from the running median of its
 running median): so up to ``WINDOW // 2`` glitches in a row are found, a
 step of the error is not one (the median follows it within half a window)
 and neither is the noise of a quiet run. The first and last ``WINDOW // 2``
-readings are never glitches: their neighbours are on one side only. Only
+readings, whose neighbours lie on one side only, are glitches when they lie
+beyond the span of the :data:`WINDOW` readings after (before) them by the same
+threshold: a sensor's power-on reading (a DS18B20's 85 °C) comes first. Only
 finite readings count; a log whose error is measured on fewer than
 :data:`MIN_MEASURED_SHARE` of its rows (a probe cycle every few minutes) is
 not tested: its readings lie too far apart to tell a glitch from a change
@@ -64,8 +66,11 @@ def error_glitches(error: np.ndarray, *, range_share: float = RANGE_SHARE) -> np
     threshold = max(SIGMAS * spread, range_share * float(high - low))
     if not threshold > 0:
         return np.array([], dtype=int)
+    n = len(values)
+    for i in [*range(half), *range(n - half, n)]:
+        beyond = values[i + 1 : i + 1 + WINDOW] if i < half else values[max(0, i - WINDOW) : i]
+        departure[i] = values[i] - float(np.clip(values[i], beyond.min(), beyond.max()))
     flagged = np.abs(departure) > threshold
-    flagged[:half] = flagged[len(flagged) - half :] = False
     return rows[flagged]
 
 

@@ -90,6 +90,7 @@ def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: 
                 f"column '{name}' holds '{odd}', a decimal point in a table of decimal commas, where a dot "
                 "can only separate thousands (1.370); write that column with decimal commas"
             )
+        _refuse_either_reading(cells, dotted, name)
         if thousands_only and not dotted and not respelled:
             return None
         rewritten = {cell: cell.replace(".", "") if cell in dotted else cell for cell in cells}
@@ -98,6 +99,25 @@ def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: 
     if not commas or not all(COMMA_THOUSANDS.fullmatch(cell) for cell in commas):
         return None if thousands_only and not respelled else text
     return text.str.replace(",", "", regex=False)
+
+
+ONE_DOT_GROUP = re.compile(r"[+-]?[1-9]\d{0,2}\.(\d{3})")
+"""A number with one dot followed by three digits (``10.330``): thousands or three decimals alike."""
+
+
+def _refuse_either_reading(cells: list[str], dotted: list[str], name: str) -> None:
+    """Refuse a column of a table of decimal commas whose every cell is ``d.ddd`` to ``ddd.ddd`` with other
+    digits than ``000`` after the dot: a gauge's three decimals (``10.330`` µm) read as thousands would be
+    1000 times too large, and nothing in the column tells the two apart."""
+    if not cells or len(dotted) != len(cells):
+        return
+    groups = [ONE_DOT_GROUP.fullmatch(cell) for cell in cells]
+    if all(groups) and any(group.group(1) != "000" for group in groups):
+        raise ValueError(
+            f"column '{name}' holds only numbers like '{cells[0]}' in a table of decimal commas, whose dot may "
+            "separate thousands or three decimals; write that column with decimal commas (or its thousands "
+            "without dots)"
+        )
 
 
 COMMA_GROUPS = re.compile(r"[+-]?[1-9]\d{0,2}(?:,\d{3})+")

@@ -77,14 +77,17 @@ def test_glitches_are_found_where_they_were_put_whatever_their_sign(length):
     np.testing.assert_array_equal(error_glitches(glitched), rows)
 
 
-def test_a_step_of_the_error_and_the_readings_at_the_ends_are_not_glitches():
+def test_a_step_of_the_error_is_not_a_glitch_and_a_reading_beyond_its_one_sided_neighbours_at_an_end_is():
     error = pd.read_csv(DATASETS / "paper_cycle.csv")["error_um"].to_numpy(dtype=float)
     stepped = error + np.where(np.arange(len(error)) >= 200, 0.5 * np.ptp(error), 0.0)
     assert error_glitches(stepped).size == 0
     ends = error.copy()
     ends[0] += 300.0
     ends[-1] -= 300.0
-    assert error_glitches(ends).size == 0
+    assert error_glitches(ends).tolist() == [0, len(error) - 1]
+    started = error.copy()
+    started[:2] = started[2] - 0.3 * np.ptp(error)  # a start off the rest, but by less than half the range
+    assert error_glitches(started).size == 0
 
 
 def test_a_quiet_run_of_repeated_readings_has_no_glitch():
@@ -294,6 +297,18 @@ def spiked(tmp_path_factory):
     frame.loc[250, "T4"] = 85.0
     frame.to_csv(tmp / "spiked.csv", index=False)
     return tmp, frame
+
+
+@pytest.mark.parametrize("row", [0, -1], ids=["first row", "last row"])
+def test_a_power_on_reading_in_the_first_or_last_row_is_held_at_its_one_neighbour(tmp_path, row):
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    clean = load_run(frame, temps=TEMPS.split(","))
+    frame.loc[frame.index[row], "T4"] = 85.0
+    run = load_run(frame, temps=TEMPS.split(","), drop_glitches=True)
+    expected = clean.temps.copy()
+    expected[row, 3] = clean.temps[1 if row == 0 else -2, 3]
+    np.testing.assert_allclose(run.temps, expected, rtol=0, atol=1e-12)
+    assert any(f"('T4' row {len(frame) if row else 1}: 85 °C)" in note for note in run.notes)
 
 
 def test_a_temperature_glitch_is_interpolated_from_its_neighbours_and_named(spiked):

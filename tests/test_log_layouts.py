@@ -111,6 +111,20 @@ def test_a_decimal_point_in_a_decimal_comma_table_is_refused_naming_column_and_c
     assert "mixed.csv" in line
 
 
+def test_a_column_of_three_decimals_after_a_dot_in_a_decimal_comma_table_is_refused(tmp_path, cells, capsys):
+    """``10.330`` (a gauge's three decimals pasted into a German sheet) would read as 10330 µm by thousands:
+    refused naming the column; a column of thousands whose digits after the dot are all 000 is read."""
+    error = (pd.read_csv(PAPER)["error_um"] + 10.0).map(lambda v: f"{v:.3f}")
+    gauge = cells.assign(error_um=error).drop(columns="error_nm")
+    path = write(tmp_path / "gauge.csv", lines_of(gauge, ";", lambda c, v: v if c == "error_um" else decimal_comma(v)))
+    line = refusal(path, tmp_path, capsys)
+    assert "column 'error_um' holds only numbers like" in line and "decimal commas" in line
+    steady = cells.assign(speed_rpm="2000").drop(columns="error_nm")
+    lines = lines_of(steady, ";", lambda c, v: decimal_comma(v, thousands=c == "speed_rpm"))
+    assert ";2.000" in lines[1]
+    same_frame(read(write(tmp_path / "steady.csv", lines)), plain_truth(tmp_path, steady))
+
+
 @pytest.mark.parametrize("columns", [["speed_rpm"], ["time_s", "T1", "error_nm"]])
 def test_quoted_comma_thousands_in_a_decimal_point_table_are_read_as_numbers(tmp_path, cells, columns):
     def written(column, cell):
