@@ -38,8 +38,14 @@ its firmware), and narrower than the overflow values a broken logger writes
 (1e300, 9999, 3276.7, a missing sensor read as −273 or 850 °C).
 ``--range-temp=LOW,HIGH`` (or ``[data] temp_range``) sets another.
 """
-NO_READING = re.compile(r"[-*?]+|n\.?a\.?|none|null|ovl|over(?:flow)?|err(?:or)?|fault", re.IGNORECASE)
-"""Cells a logger writes for a reading it did not take (``---``, ``n.a.``, ``OVL``, ``Err``): read as empty."""
+NO_READING = re.compile(
+    r"[-*?]+|n\.?a\.?|none|null|ovl|[-+]?ol|over(?:flow)?|err(?:or)?\.?|fault"
+    r"|#[a-z]+(?:/[a-z0-9]+)?[!?]?|[-+]?1\.#(?:inf|qnan|snan|ind)0*",
+    re.IGNORECASE,
+)
+"""Cells a logger writes for a reading it did not take (``---``, ``n.a.``, ``OVL``, ``Err``, a multimeter's
+``OL``), a spreadsheet's error values (``#N/A``, ``#NV``, ``#VALUE!``, ``#DIV/0!``) and an old C library's
+``1.#INF`` and ``1.#QNAN``: read as empty."""
 ERROR_LIMIT_UM = 1.0e5
 """Largest plausible thermal error (µm): 0.1 m. ``--range-error MAX`` (or ``[data] error_limit``) widens it."""
 

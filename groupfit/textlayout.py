@@ -79,7 +79,8 @@ RULER = re.compile(r"[-=_~*+|\s]+")
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 STATISTIC = re.compile(
     r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
-    r"count|median|range|mittelwert|mittel|summe|anzahl)\.?\s*:?",
+    r"count|median|range|mittelwert|mittel|summe|anzahl|std\.?\s*abw|standardabweichung|spanne|streuung|varianz|"
+    r"variance|moyenne|écart[-\s]type|promedio|media|desv(?:\.|iación)?(?:\s*est)?)\.?\s*:?",
     re.IGNORECASE,
 )
 """The label of a row of statistics a logger writes under its readings (``Max``, ``Min``, ``Avg``, ``P-P``)."""

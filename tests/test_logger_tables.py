@@ -244,7 +244,10 @@ def test_resampling_takes_a_broken_sensors_readings_as_missed_and_interpolates_t
     np.testing.assert_array_equal(run.frame["spindle_on"], frame["spindle_on"])  # not an input: left as it is
 
 
-@pytest.mark.parametrize("mark", ["---", "-", "n.a.", "OVL", "Err", "*"])
+@pytest.mark.parametrize(
+    "mark",
+    ["---", "-", "n.a.", "OVL", "Err", "*", "Err.", "OL", "#N/A", "#NV", "#VALUE!", "#DIV/0!", "1.#INF", "1.#QNAN"],
+)
 def test_a_cell_marking_a_reading_not_taken_is_an_empty_cell(tmp_path, frame, plain, mark):
     path = tmp_path / "marked.csv"
     marked = frame.astype(object)
@@ -257,7 +260,8 @@ def test_a_cell_marking_a_reading_not_taken_is_an_empty_cell(tmp_path, frame, pl
     marked.loc[:, "error_um"] = frame["error_um"]
     marked.loc[30, "T2"] = mark
     marked.to_csv(path, index=False)
-    with pytest.raises(InputError, match=rf"row 31, column 'T2' is {re.escape(repr(mark))} \(no reading\)"):
+    said = "empty" if mark in ("#N/A", "1.#QNAN") else f"{re.escape(repr(mark))} \\(no reading\\)"  # pandas' NaN
+    with pytest.raises(InputError, match=rf"row 31, column 'T2' is {said}"):
         load_run(path, temps=TEMPS)
     np.testing.assert_allclose(load_run(path, temps=TEMPS, resample=100.0).temps[30, 1], plain.temps[29:32:2, 1].mean())
 
@@ -519,7 +523,9 @@ def test_a_footer_after_the_last_row_of_data_is_not_read(tmp_path, frame, plain,
 
 
 @pytest.mark.parametrize("sep, decimal", [(",", "."), (";", ",")])
-@pytest.mark.parametrize("labels", [("Max", "Min", "Avg"), ("Maximum:", "Minimum:", "Mittelwert:", "P-P")])
+@pytest.mark.parametrize(
+    "labels", [("Max", "Min", "Avg"), ("Maximum:", "Minimum:", "Mittelwert:", "P-P"), ("Std.Abw.", "Spanne", "Varianz")]
+)
 def test_rows_of_statistics_under_the_readings_are_a_footer_and_not_read(tmp_path, frame, plain, sep, decimal, labels):
     readings = frame.drop(columns="time_s")
     statistics = pd.DataFrame(
