@@ -4,8 +4,8 @@ A probe's trigger position logged as it is (a 3-D printer's ``mcu_pos_z`` after
 a re-homing), a displacement sensor re-mounted between two days: the error of
 the next run then differs from the modelling run's by a constant far larger
 than any thermal drift, and the compensation's residual is that constant. The
-RMS a replay reports stays what the log says (a probe check does not mend it:
-its innovation gate rejects so large a correction as a bad reading);
+RMS a replay reports without checks stays what the log says (probe checks may
+take the constant up, or their gate may reject it as a bad reading);
 :func:`zero_offset` adds a note that names the constant and what to do: read
 each run's error from its first reading, ``--error 'COLUMN-start'``
 (:mod:`groupfit.error_start`).
@@ -37,7 +37,7 @@ def zero_offset(residual: np.ndarray | None, expected_rms_um: float | None) -> t
         f"the residual is nearly a constant {mean:.4g} µm (its spread {spread:.3g} µm), {times:.0f}× the expected "
         "next-run RMS: this run's error seems measured from another zero than the modelling run's (a probe's "
         "position after re-homing, a sensor re-mounted); read both runs' error from their first readings "
-        "(fit with --error 'COLUMN-start') and refit; a probe check rejects so large a correction as a bad reading"
+        "(fit with --error 'COLUMN-start') and refit"
     )
     return {"constant_offset_um": mean}, [note]
 

@@ -69,6 +69,21 @@ def check_intervals_fit(intervals_s: Sequence[float], first_s: float | None, run
                 )
 
 
+def rounded_interval_notes(intervals_s: Sequence[float], runs: Sequence) -> list[str]:
+    """A note per run and interval that is not a whole number of the run's samples: its checks fall at the
+    nearest whole number of samples."""
+    notes = []
+    for run in runs:
+        for interval in intervals_s:
+            used = max(1, int(round(interval / run.period))) * run.period
+            if not math.isclose(used, interval, rel_tol=1e-9):
+                notes.append(
+                    f"--probe-every {_label(interval)}: {run.source} is sampled every {run.period:g} s, so its "
+                    f"checks fall every {used:g} s (whole samples)"
+                )
+    return notes
+
+
 def check_probe_first(first_s: float | None, intervals) -> None:
     """``--probe-first SECONDS``: with ``--probe-every``, a number of seconds >= 0 (InputError otherwise)."""
     if first_s is None:
@@ -226,6 +241,7 @@ def plot_intervals(table: Mapping[str, Any], path: Path, tolerance_um: float | N
 
 
 __all__ = [
+    "rounded_interval_notes",
     "check_probe_first",
     "check_rows",
     "hold_residual",

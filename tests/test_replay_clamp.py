@@ -66,3 +66,30 @@ def test_probe_checks_carry_the_compensation_beyond_the_models_clamp_by_the_offs
     assert np.max(np.abs([s["compensation_um"] for s in unchecked["samples"]])) <= limit
     assert limit < np.max(compensation) <= limit + bound  # beyond the model's clamp, within the checks' bound
     assert checked["rms_um"] < 0.5 * unchecked["rms_um"]
+
+
+def test_an_integer_register_that_saturates_is_counted_and_scored_beside_the_rule(model, tmp_path, capsys):
+    error = pd.read_csv(DATASETS / "repeat_warm.csv")["error_um"].to_numpy()
+    free, _ = replayed(model, tmp_path, capsys, "--resolution-um", "0.1")
+    prediction = np.array([s["prediction_um"] for s in free["samples"]])
+    assert free["register"]["saturated_samples"] == 0
+    assert abs(free["register"]["rms_um"] - free["rms_um"]) <= 0.05  # rounding to 0.1 µm counts at most half
+    limit_counts = int(0.5 * np.max(np.abs(prediction)) / 0.1)
+    tight, report = replayed(model, tmp_path, capsys, "--resolution-um", "0.1", "--counts-limit", str(limit_counts))
+    held = limit_counts * 0.1
+    beyond = np.abs(prediction) > held
+    assert tight["register"]["saturated_samples"] == int(beyond.sum()) > 0
+    left = error - np.clip(np.round(prediction / 0.1) * 0.1, -held, held)
+    assert tight["register"]["rms_um"] == pytest.approx(float(np.sqrt(np.mean(left**2))), abs=1e-9)
+    assert tight["rms_um"] == free["rms_um"]  # the rule's own score is the compensation it asks for
+    assert f"saturates at ±{limit_counts} counts" in report and f"on {int(beyond.sum())} of" in report
+
+
+def test_a_check_interval_that_is_not_whole_samples_is_said_to_be_rounded(model, tmp_path, capsys):
+    data, report = replayed(model, tmp_path, capsys, "--probe-every", "250")  # a 100 s run
+    assert data["probes"]["every_s"] == 200.0 and data["probes"]["asked_every_s"] == 250.0
+    times = [s["time_s"] for s in data["samples"] if "probe" in s]
+    assert set(np.diff(times)) == {200.0}
+    assert "every 200 s (250 s asked, rounded to whole samples)" in report
+    exact, report = replayed(model, tmp_path, capsys, "--probe-every", "300")
+    assert exact["probes"]["every_s"] == 300.0 and "asked" not in report

@@ -25,6 +25,7 @@ from groupfit.probe_intervals import (
     parse_tolerance,
     plan_summary,
     plot_intervals,
+    rounded_interval_notes,
 )
 from groupfit.reference import with_reference
 from groupfit.runtime import replay_groups
@@ -66,8 +67,8 @@ def add_parser(verbs) -> None:
         "--probe-first",
         type=float,
         metavar="SECONDS",
-        help="with --probe-every: the first check SECONDS after each run's first sample (default: one interval; "
-        "0: at the first sample), as replay --probe-first",
+        help="with --probe-every: the first check SECONDS after each run's first sample (default: after the first "
+        "interval's samples; 0: at the first sample), as replay --probe-first",
     )
     compare.add_argument(
         "--tolerance",
@@ -149,8 +150,9 @@ def run_compare(args: argparse.Namespace) -> int:
         check_intervals_fit(args.probe_every, args.probe_first, validation or [modelling])
     heat_note = settle_heat_and_conditions(args, settings, [modelling, *validation])
     common.print_notes([modelling, *validation], common.report_stream(args))
-    if heat_note:
-        print(f"note    {heat_note}", file=common.report_stream(args))
+    rounded = rounded_interval_notes(args.probe_every or (), validation or [modelling])
+    for note in rounded + ([heat_note] if heat_note else []):
+        print(f"note    {note}", file=common.report_stream(args))
     reference = reference_options.configured_reference(args, run_settings, modelling)
     choice = None
     if reference_options.reference_is_default(args, run_settings):

@@ -20,6 +20,7 @@ from groupfit.commands.replay_probes import (
     sample_probe,
 )
 from groupfit.commands.replay_readings import earlier_recordings, load_readings
+from groupfit.commands.replay_register import register_check
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import picked_up, started_running_notes, with_histories, zero_of
 from groupfit.data import Run
@@ -203,16 +204,16 @@ def run_replay(args: argparse.Namespace) -> int:
     if probes is not None:
         scored = without[np.isfinite(without)] if without is not None else np.empty(0)
         rms_without = float(np.sqrt(np.mean(scored**2))) if scored.size else None
-        data["probes"] = probe_summary(args, replay, probes, rms_without)
+        data["probes"] = probe_summary(args, replay, probes, rms_without, run.period)
     data.update(expectation_check(model, data, args.data))
     span = range_check(model, run, replay)
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residual)
     offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"))
-    notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
-    result = ReplayResult(
-        {**data, **span, **glitches, **offset, "clamped_samples": clamped, **({"notes": notes} if notes else {})}
-    )
+    register, register_notes = register_check(counts, run.error, replay)
+    notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes + register_notes
+    extra = {**span, **glitches, **offset, **register, "clamped_samples": clamped}
+    result = ReplayResult({**data, **extra, **({"notes": notes} if notes else {})})
     written = []
     if out_dir is not None:
         figure = out_dir / "replay.png"

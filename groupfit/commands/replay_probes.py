@@ -1,7 +1,8 @@
 """``groupfit replay --probe-every SECONDS [--probe-column COLUMN]``: a replay with probe checks.
 
-The checks fall every ``SECONDS`` (rounded to whole samples; the first after
-that many samples, or ``--probe-first`` seconds after the first sample: 0 is a
+The checks fall every ``SECONDS`` (rounded to whole samples, and said so; the
+first follows the interval's last sample, one period before ``SECONDS`` after
+the first sample, or ``--probe-first`` seconds after the first sample: 0 is a
 check at the first sample, a probe cycle at the start of a job), reading the
 run's error column, or ``--probe-column``
 (a logged check with its own error; alone, every row where that column holds
@@ -42,8 +43,9 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
         "--probe-first",
         type=float,
         metavar="SECONDS",
-        help="with --probe-every: the first check SECONDS after the run's first sample (default: one interval); "
-        "0 checks at the first sample, as a probe cycle at the start of a job does",
+        help="with --probe-every: the first check SECONDS after the run's first sample (default: after the first "
+        "interval's samples, with the sample one period before the interval's end); 0 checks at the first sample, "
+        "as a probe cycle at the start of a job does",
     )
     replay.add_argument(
         "--probe-column",
@@ -106,7 +108,7 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
     if args.probe_every is None:
         rows = np.arange(run.n_samples)
     else:
-        every = max(1, int(round(args.probe_every / run.period)))
+        every = whole_samples(args.probe_every, run.period)
         rows = check_rows(run.n_samples, every, None if first is None else int(round(first / run.period)))
         if not rows.size:
             last = (run.n_samples - 1) * run.period
@@ -122,15 +124,24 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
     return probes
 
 
-def probe_summary(args: argparse.Namespace, replay: Replay, probes: np.ndarray, rms_without: float | None) -> dict:
-    """The ``probes`` object of ``replay --json``: the schedule, the counts and every check's outcome."""
+def whole_samples(seconds: float, period: float) -> int:
+    """The samples of an interval of checks: ``seconds`` rounded to whole sampling periods, at least one."""
+    return max(1, int(round(seconds / period)))
+
+
+def probe_summary(
+    args: argparse.Namespace, replay: Replay, probes: np.ndarray, rms_without: float | None, period: float
+) -> dict:
+    """The ``probes`` object of ``replay --json``: the schedule (``every_s`` the interval the checks fell at,
+    whole samples; ``asked_every_s`` the one asked for), the counts and every check's outcome."""
     counts = replay.probe_counts()
     checks = []
     for i in np.flatnonzero(replay.probe):
         code = int(replay.probe[i]) - PROBE_CODE_OFFSET
         checks.append({"i": int(i) + 1, "reading_um": float(probes[i]), "result": PROBE_NAMES[code]})
     return {
-        "every_s": args.probe_every,
+        "every_s": None if args.probe_every is None else whole_samples(args.probe_every, period) * period,
+        "asked_every_s": args.probe_every,
         "first_s": args.probe_first,
         "column": args.probe_column,
         **counts,
@@ -150,6 +161,8 @@ def probe_report(result: dict[str, Any]) -> str:
     """The summary line of the checks."""
     p = result["probes"]
     schedule = f"every {p['every_s']:g} s" if p["every_s"] is not None else f"logged in '{p['column']}'"
+    if p["every_s"] is not None and not math.isclose(p["every_s"], p["asked_every_s"], rel_tol=1e-9):
+        schedule += f" ({p['asked_every_s']:g} s asked, rounded to whole samples)"
     line = (
         f"probes   {len(p['checks'])} check(s) {schedule}: {p['applied']} applied, {p['rejected']} rejected "
         f"by the gate (flagged, not applied), {p['ignored']} ignored (sensor fault or no reading)"
