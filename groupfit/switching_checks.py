@@ -31,6 +31,19 @@ exact enough and far inside single precision, which the exported routines may co
 """
 
 
+DIRECTION_TIE = 1e-9
+"""Relative closeness of a criterion's change to the margin that counts as the margin: a change of 3 × 0.05 °C
+computed from readings in °C or °F must give the same direction."""
+
+
+def switch_direction(change: float, margin: float) -> int:
+    """A switching window's direction: 0 when the criterion's change over it is within the margin (a tie to
+    :data:`DIRECTION_TIE` included), else its sign."""
+    if abs(change) <= margin or math.isclose(abs(change), margin, rel_tol=DIRECTION_TIE, abs_tol=1e-12):
+        return 0
+    return 1 if change > 0 else -1
+
+
 def is_whole(value) -> bool:
     """An int that is not a bool."""
     return isinstance(value, int) and not isinstance(value, bool)
@@ -202,8 +215,9 @@ def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> s
         if "directions" in section and "margin_c" in section:
             for k, (first, last) in enumerate(windows):
                 change = float(series[min(last, len(series)) - 1] - series[max(first - 2, 0)])
-                expected = 0 if abs(change) <= section["margin_c"] else (1 if change > 0 else -1)
-                if section["directions"][k] != expected:
+                expected = switch_direction(change, section["margin_c"])
+                at_margin = math.isclose(abs(change), section["margin_c"], rel_tol=DIRECTION_TIE, abs_tol=1e-12)
+                if section["directions"][k] != expected and not at_margin:  # written before ties were rounded
                     return (
                         f"switching.directions[{k}] = {section['directions'][k]!r} does not match the criterion "
                         f"series over window {k + 1} (expected {expected})"

@@ -16,6 +16,7 @@ from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
 from groupfit.default_columns import length_unit, named_length_unit
+from groupfit.switching_checks import switch_direction
 from groupfit.unit_factors import factored_unit
 from groupfit.units_row import named_temperature_unit
 
@@ -61,8 +62,8 @@ def test_spellings_of_fahrenheit_and_kelvin_are_units(name, unit):
 def _fit(tmp_path, frame: pd.DataFrame, stem: str, *options) -> dict:
     path, report = tmp_path / f"{stem}.csv", tmp_path / f"{stem}.json"
     frame.to_csv(path, index=False)
-    argv = ["fit", "--data", str(path), "--p", "0", "--quiet", "--json", str(report), "--out", str(tmp_path / stem)]
-    assert main([*argv, *options]) == 0
+    argv = ["fit", "--data", str(path), "--quiet", "--json", str(report), "--out", str(tmp_path / stem)]
+    assert main([*argv, *(options if "--p" in options else ("--p", "0", *options))]) == 0
     return json.loads(report.read_text())
 
 
@@ -127,3 +128,20 @@ def test_a_position_column_in_metres_is_read_in_mm_by_fit_and_replay(tmp_path, c
     assert np.allclose(np.asarray(fits[0]["coefficients"], float), np.asarray(fits[1]["coefficients"], float))
     assert replays[0] == pytest.approx(replays[1], rel=1e-12) and replays[0] < 0.2
     assert "position column 'probe_x_m' is in another unit than mm by its name: read ×1000" in capsys.readouterr().out
+
+
+def test_a_change_at_the_margin_gives_one_direction_whatever_the_rounding():
+    margin = 3 * 0.05
+    assert switch_direction(0.14999999999999858, margin) == switch_direction(0.15000000000000568, margin) == 0
+    assert switch_direction(0.1501, margin) == 1 and switch_direction(-0.1501, margin) == -1
+
+
+def test_a_run_logged_in_fahrenheit_gives_the_rule_of_the_run_in_celsius(tmp_path, plain):
+    """Readings of 0.01 °C make changes of exactly 3 × 0.05 °C common; in °F they differ in the last bits."""
+    fahrenheit = plain.assign(**{c: (plain[c] * 9.0 / 5.0 + 32.0).round(3) for c in ("T1", "T2", "T_amb")})
+    fahrenheit = fahrenheit.rename(columns={c: f"{c} [°F]" for c in ("T1", "T2", "T_amb")})
+    options = ("--p", "2", "--search", "exact", "--recalibrate", "none")
+    celsius = _fit(tmp_path, plain, "celsius", "--temps", "T1,T2", *options)
+    converted = _fit(tmp_path, fahrenheit, "fahrenheit", "--temps", "T1 [°F],T2 [°F]", *options)
+    assert converted["breaks"] == celsius["breaks"]
+    assert converted["switching"]["directions"] == celsius["switching"]["directions"]

@@ -18,7 +18,7 @@ import numpy as np
 from groupfit.errors import InputError
 from groupfit.grouping import serving_group_index
 from groupfit.model import RULE_KEYS, ModelFile, Switching
-from groupfit.switching_checks import RULE_LIMIT
+from groupfit.switching_checks import RULE_LIMIT, switch_direction
 
 RULE_FORMAT = "groupfit-switch/1"
 COUNT_MAX = 2_000_000_000
@@ -172,7 +172,7 @@ def rule_parameters(
         thresholds.append(float(criterion[first - 1]))
         before = criterion[max(first - 2, 0)]
         change = float(criterion[min(last, len(criterion)) - 1] - before)
-        directions.append(0 if abs(change) <= margin else (1 if change > 0 else -1))
+        directions.append(switch_direction(change, margin))
 
     period = float(model.sampling_period_s)
     hold = max(1, int(math.floor(settings.hold_s / period + 1e-9)))
