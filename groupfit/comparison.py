@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.ar1.inputs import ar1_inputs
+from groupfit.clamped_scores import clamped, clamps_of
 from groupfit.columns import input_order
 from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
@@ -267,6 +268,10 @@ def compare_models(
     bands: dict[str, dict[str, tuple]] = {}
 
     changes = condition_changes(modelling, settings.conditions)
+    clamps = clamps_of(
+        {"mlr": mlr.predict(modelling.temps)} | {f"grouped{p}": m.predict(modelling.temps) for p, m in grouped.items()}
+    )
+    clamp_notes: list[str] = []
     rows: list[dict[str, Any]] = []
     predictions: dict[str, dict[str, np.ndarray]] = {}
     for run in runs:
@@ -296,6 +301,9 @@ def compare_models(
                 preds[f"grouped{p}"] = model_files[p].predict(whole, groups, transfer=True)[len(history) :]
                 groups = groups[len(history) :]
             bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
+        if not is_modelling:
+            preds, held = clamped(preds, clamps, run.name)
+            clamp_notes += held
         predictions[run.name] = preds
         scored = np.isfinite(run.error)
         for key, prediction in preds.items():
@@ -365,7 +373,7 @@ def compare_models(
         expectation=expectation,
         fit_choice=fit_choice,
         fit_penalty=penalised_expectation(measured, fit_intercept=settings.fit_intercept) if fit_choice == 0 else None,
-        notes=notes,
+        notes=notes + clamp_notes,
     )
 
 

@@ -93,3 +93,27 @@ def test_a_check_interval_that_is_not_whole_samples_is_said_to_be_rounded(model,
     assert "every 200 s (250 s asked, rounded to whole samples)" in report
     exact, report = replayed(model, tmp_path, capsys, "--probe-every", "300")
     assert exact["probes"]["every_s"] == 300.0 and "asked" not in report
+
+
+def test_compare_scores_a_run_beyond_the_clamp_as_replay_does(tmp_path, capsys):
+    """A next run 2.5 times as hot as the modelling run: MLR's prediction passes its clamp on most samples."""
+    hot = pd.read_csv(DATASETS / "validation_timing.csv")
+    for column in ("T1", "T2"):
+        hot[column] = (hot["T_amb"] + (hot[column] - hot["T_amb"]) * 2.5).round(2)
+    hot["error_um"] = (hot["error_um"] * 2.5).round(2)
+    path = tmp_path / "hot.csv"
+    hot.to_csv(path, index=False)
+    paper = str(DATASETS / "paper_cycle.csv")
+    fit = ["fit", "--data", paper, "--temps", "T1,T2", "--p", "0", "--ridge", "0", "--recalibrate", "none"]
+    assert main([*fit, "--out", str(tmp_path / "m"), "--quiet"]) == 0
+    replay = ["replay", str(tmp_path / "m" / "model.json"), "--data", str(path)]
+    assert main([*replay, "--json", str(tmp_path / "r.json")]) == 0
+    replayed = json.loads((tmp_path / "r.json").read_text())
+    assert replayed["clamped_samples"] > 0
+    capsys.readouterr()
+    compare = ["compare", "--data", paper, "--temps", "T1,T2", "--pmax", "1", "--validate", str(path)]
+    assert main([*compare, "--json", str(tmp_path / "c.json"), "--out", str(tmp_path / "c"), "--quiet"]) == 0
+    rows = json.loads((tmp_path / "c.json").read_text())["rows"]
+    mlr = next(r for r in rows if r["model"] == "mlr" and r["run"] == "hot")
+    assert mlr["rms_um"] == pytest.approx(replayed["rms_um"], rel=1e-12)
+    assert "hot: the predictions of MLR (±" in capsys.readouterr().out

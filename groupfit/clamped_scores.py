@@ -1,0 +1,44 @@
+"""A next run scored as the controller corrects it: a prediction beyond the compensation's clamp counts only up
+to it, in ``compare`` as in ``replay`` (:func:`groupfit.runtime.rule.compensation_clamp`: twice the largest
+prediction on the modelling run)."""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from groupfit.runtime.rule import compensation_clamp
+
+LABELS = {"mlr": "MLR"}
+
+
+def clamps_of(modelling_predictions: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """Per model key, the clamp (µm) its model file gets from its predictions on the modelling run."""
+    return {key: float(compensation_clamp(prediction)) for key, prediction in modelling_predictions.items()}
+
+
+def clamped(
+    predictions: Mapping[str, np.ndarray], clamps: Mapping[str, float], run: str
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """``predictions`` of the models with a clamp, each held within it, and a note per model the clamp binds on."""
+    held, bound = dict(predictions), []
+    for key, limit in clamps.items():
+        if key not in predictions:
+            continue
+        prediction = np.asarray(predictions[key], dtype=float)
+        beyond = int(np.sum(np.abs(prediction) > limit))
+        if beyond:
+            held[key] = np.clip(prediction, -limit, limit)
+            bound.append(
+                f"{LABELS.get(key, key.replace('grouped', 'grouped p = '))} (±{limit:g} µm, {beyond} sample(s))"
+            )
+    if not bound:
+        return held, []
+    return held, [
+        f"{run}: the predictions of {', '.join(bound)} pass the compensation's clamp (twice the largest on the "
+        "modelling run); scored as the controller corrects them, up to the clamp, as replay scores them"
+    ]
+
+
+__all__ = ["clamped", "clamps_of"]
