@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from groupfit.fast_response import describe, stage_of
+import numpy as np
+
+from groupfit.fast_response import describe, stage_of, without_stage
 from groupfit.fast_response_choice import choose_stage
 from groupfit.model import ModelFile
 from groupfit.recalibration_tuning import METHODS
@@ -36,7 +38,9 @@ def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFi
         line = (
             f"\nfast    {describe(stage_of(model))}: held-out RMS with a check every {minutes} min "
             f"{_per_interval(without.rms_chosen_um)} → {_per_interval(tuning.rms_chosen_um)} µm, "
-            f"without checks {without.rms_none_um:.3g} → {tuning.rms_none_um:.3g}"
+            f"without checks {without.rms_none_um:.3g} → {tuning.rms_none_um:.3g}; in sample RMS "
+            f"{in_sample_rms(without_stage(model), runs):.4g} → {in_sample_rms(model, runs):.4g} µm (the model file "
+            "holds the stage; the figures and coefficients above are of the model without it)"
         )
     line += f"\nrecal   {section.description}"
     if tuning.rms_hold_um:
@@ -51,6 +55,12 @@ def recalibrated(model: ModelFile, runs: Sequence, method: str) -> tuple[ModelFi
     else:
         line += f" ({section.chosen.get('reason', 'default')})"
     return model.replace(recalibration=section), line
+
+
+def in_sample_rms(model: ModelFile, runs: Sequence) -> float:
+    """The model's RMS over its modelling runs ((frame, error) pairs), the samples where the error is measured."""
+    residual = np.concatenate([np.asarray(error, float) - model.predict(model.inputs(frame)) for frame, error in runs])
+    return float(np.sqrt(np.mean(residual[np.isfinite(residual)] ** 2)))
 
 
 def _per_interval(values: Sequence[float]) -> str:
