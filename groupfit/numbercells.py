@@ -8,7 +8,9 @@ reads it as written:
   ``12.345,6`` is read without the dots; any other dotted number there (``20.5``) is refused, naming the column
   and the cell. In a table of decimal points, a column whose cells with a comma all read as ``2,000`` or
   ``12,345.6`` is read without the commas; spaces (French, ISO 31-0: ``12 500,5``) and apostrophes (Swiss:
-  ``12'500.5``) between the thousands are read in either;
+  ``12'500.5``) between the thousands are read in either; a column of a table of decimal points whose cells
+  with a comma hold numbers that cannot all separate thousands (``"20,15"``, quoted where commas separate the
+  fields) and no decimal point is read with decimal commas;
 * the minus sign a typesetting program writes (``−0.5``, U+2212);
 * a unit after the number in every cell of a column (``20.5 °C``, ``1.25µm``): read as the column's unit
   (:mod:`groupfit.units_row`).
@@ -25,6 +27,8 @@ DOT_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d+)?")
 decimal commas holds."""
 COMMA_THOUSANDS = re.compile(r"[+-]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d+)?")
 """A number with commas between its thousands (``2,000``, ``12,345.6``) in a table of decimal points."""
+COMMA_DECIMAL = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
+"""A number written with a decimal comma (``20,15``), quoted in a table whose fields a comma separates."""
 GROUP_MARK = re.compile("[ \u00a0\u202f'\u2019]")
 SPACED_THOUSANDS = re.compile(r"[+\-\u2212]?[1-9]\d{0,2}(?:[ \u00a0\u202f'\u2019]\d{3})+(?:[.,]\d+)?")
 """A number with spaces (French, ISO 31-0) or apostrophes (Swiss) between its thousands: ``2 000``,
@@ -96,6 +100,9 @@ def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: 
         rewritten = {cell: cell.replace(".", "") if cell in dotted else cell for cell in cells}
         return text.map(lambda cell: rewritten.get(cell, cell)).str.replace(",", ".", regex=False)
     commas = [cell for cell in cells if "," in cell]
+    if commas and not any("." in cell for cell in cells) and all(COMMA_DECIMAL.fullmatch(c) for c in commas):
+        if not all(COMMA_THOUSANDS.fullmatch(cell) for cell in commas):  # "20,15" holds no thousands
+            return text.str.replace(",", ".", regex=False)
     if not commas or not all(COMMA_THOUSANDS.fullmatch(cell) for cell in commas):
         return None if thousands_only and not respelled else text
     return text.str.replace(",", "", regex=False)

@@ -56,7 +56,14 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from groupfit.numbercells import as_numbers, is_number, without_cell_units, without_thousands_separators
+from groupfit.numbercells import (
+    COMMA_THOUSANDS,
+    DOT_THOUSANDS,
+    as_numbers,
+    is_number,
+    without_cell_units,
+    without_thousands_separators,
+)
 from groupfit.textencoding import decode
 
 DELIMITERS = (",", ";", "\t")
@@ -76,6 +83,7 @@ WORDS = re.compile(r"[^\W\d_]")
 DIGIT = re.compile(r"\d")
 RULER = re.compile(r"[-=_~*+|\s]+")
 """A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
+DECIMAL_POINT = re.compile(r"[+-]?\d*\.\d+(?:[eE][+-]?\d+)?")
 COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 STATISTIC = re.compile(
     r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
@@ -160,8 +168,22 @@ def layout_of(text: str) -> TextLayout:
     else:
         sep, header = found
     below = [line for line in lines[header + 1 :] if line.strip()]
-    decimal = "," if sep != "," and any(_comma_number(f) for line in below for f in fields_of(line, sep)) else "."
-    return TextLayout(sep=sep, header_line=header, decimal=decimal)
+    return TextLayout(sep=sep, header_line=header, decimal=_decimal_mark(below, sep))
+
+
+def _decimal_mark(below: list[str], sep: str) -> str:
+    """A comma when the separator is not one and a data cell is a number written with a comma, unless every
+    such cell separates thousands (``1,000``) and another is written with a decimal point (``20.15``): a US
+    table that groups its thousands."""
+    if sep == ",":
+        return "."
+    fields = [field.strip().strip('"') for line in below for field in fields_of(line, sep)]
+    commas = [field for field in fields if _comma_number(field)]
+    if not commas:
+        return "."
+    grouped = all(COMMA_THOUSANDS.fullmatch(field) for field in commas)
+    pointed = any(DECIMAL_POINT.fullmatch(field) and not DOT_THOUSANDS.fullmatch(field) for field in fields)
+    return "." if grouped and pointed else ","
 
 
 def _rows(lines: list[str], sep: str) -> list[_Row]:

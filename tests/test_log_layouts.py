@@ -276,3 +276,19 @@ def test_a_line_of_one_field_inside_the_first_rows_does_not_move_the_header(tmp_
     path = write(tmp_path / "paused.csv", lines)
     assert layout_of(path.read_text()).header_line == 0
     assert "row 11, column 'time_s': 'Logging paused at 8:15' is not a number" in refusal(path, tmp_path, capsys)
+
+
+def test_a_tab_separated_table_of_decimal_points_with_grouped_thousands_is_read(tmp_path, cells):
+    """A US spreadsheet's text export: ``1,000`` in the integer columns, ``20.15`` in the others."""
+    grouped = ("time_s", "speed_rpm")
+    lines = lines_of(cells, "\t", lambda column, cell: comma_thousands(cell) if column in grouped else cell)
+    assert any("1,000\t" in line for line in lines) and any(re.search(r"\t\d+\.\d+", line) for line in lines)
+    same_frame(read(write(tmp_path / "us.txt", lines)), plain_truth(tmp_path, cells))
+
+
+def test_quoted_decimal_commas_in_a_comma_separated_table_are_read(tmp_path, cells):
+    """What pandas' ``to_csv(sep=",", decimal=",")`` and LibreOffice write: ``0,"20,15",…``."""
+    path = tmp_path / "quoted.csv"
+    plain_truth(tmp_path, cells).to_csv(path, index=False, sep=",", decimal=",")
+    assert '"' in path.read_text().splitlines()[1]
+    same_frame(read(path), plain_truth(tmp_path, cells))
