@@ -60,9 +60,16 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float) -
             if abs(step[i - 1] - period) < MAX_PERIOD_TOLERANCE * period
             else ""
         )
+        summer = abs(step[i - 1] - (period + 3600.0)) <= 0.02 * period + 1e-9 and period < 1800.0
+        hour = (
+            "; an hour more than the period: if daylight saving time began there, write the time stamps with "
+            "their UTC offset (2026-03-29T03:00:00+02:00) or in UTC. Otherwise"
+            if summer
+            else ";"
+        )
         raise InputError(
             f"{label}: sampling is not uniform: rows {i} to {i + 1} of column '{column}' are "
-            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %); "
+            f"{step[i - 1]:g} s apart but the period is {period:g} s (tolerance {100 * tolerance:g} %){hour} "
             f"average the readings of each period with --resample SECONDS (up to {GAP_PERIODS} missed periods in a "
             f"row are interpolated, a longer gap splits the run), {widen}or split the run at the gap"
         )

@@ -348,3 +348,18 @@ def test_a_local_clock_going_back_an_hour_is_named_as_daylight_saving_and_offset
     report = tmp_path / "offset.json"
     assert cli("fit", "--data", offset, *QUICK, *resample, "--json", report, "--out", tmp_path / "b") == 0
     assert json.loads(report.read_text())["n_samples"] == len(log)
+
+
+def test_a_local_clock_jumping_ahead_an_hour_is_named_as_daylight_saving_and_offsets_read(tmp_path, capsys):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv").iloc[:120]
+    utc = pd.Timestamp("2026-03-29 00:00:00", tz="UTC") + pd.to_timedelta(log["time_s"], unit="s")
+    local = utc.dt.tz_convert("Europe/Berlin")  # summer time begins at 01:00 UTC, 02:00 forward to 03:00 local
+    wall, offset = tmp_path / "wall.csv", tmp_path / "offset.csv"
+    for path, stamps in ((wall, local.dt.strftime("%Y-%m-%d %H:%M:%S")), (offset, local.map(lambda t: t.isoformat()))):
+        log.assign(time_s=stamps).rename(columns={"time_s": "Timestamp"}).to_csv(path, index=False)
+    assert cli("fit", "--data", wall, *QUICK, "--out", tmp_path / "a") == 2
+    message = capsys.readouterr().err
+    assert "3700 s apart" in message and "daylight saving time began" in message and "UTC offset" in message
+    report = tmp_path / "offset.json"
+    assert cli("fit", "--data", offset, *QUICK, "--json", report, "--out", tmp_path / "b") == 0
+    assert json.loads(report.read_text())["n_samples"] == len(log)
