@@ -59,10 +59,14 @@ MICROMETRES_PER_UNIT = {
     **dict.fromkeys(("mm", "毫米", "мм"), 1000.0),
     **dict.fromkeys(("um", "µm", "μm", "micron", "microns", "微米", "мкм"), 1.0),
     **dict.fromkeys(("nm", "纳米"), 1e-3),
+    **dict.fromkeys(("in", "inch", "inches"), 25400.0),
+    **dict.fromkeys(("mil", "mils", "thou"), 25.4),
 }
-"""Length units a column's name may end in (``error_mm``, ``dZ [µm]``, ``drift (nm)``), in µm."""
+"""Length units a column's name may end in (``error_mm``, ``dZ [µm]``, ``drift (nm)``, ``dZ [in]``, ``dZ [mils]``),
+in µm."""
 LENGTH_UNIT = re.compile(
-    r"(?:^|[\s_\[(/（［])(mm|um|µm|μm|microns?|nm|微米|毫米|纳米|мкм|мм)\s*[\])）］]?\s*$", re.IGNORECASE
+    r"(?:^|[\s_\[(/（［])(mm|um|µm|μm|microns?|nm|inch(?:es)?|in|mils?|thou|微米|毫米|纳米|мкм|мм)\s*[\])）］]?\s*$",
+    re.IGNORECASE,
 )
 
 

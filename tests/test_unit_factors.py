@@ -79,6 +79,10 @@ def plain():
         ("dZ [0.1 µm]", lambda e: e * 10.0),
         ("dZ [µm/10]", lambda e: e * 10.0),
         ("dZ [10 nm]", lambda e: e * 100.0),
+        ("dZ [in]", lambda e: e / 25400.0),
+        ("dZ [mils]", lambda e: e / 25.4),
+        ("dZ_thou", lambda e: e / 25.4),
+        ("dZ [0.0001 in]", lambda e: e / 2.54),
     ],
 )
 def test_an_error_in_a_factored_unit_gives_the_plain_model(tmp_path, plain, capsys, column, logged):
