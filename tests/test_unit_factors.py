@@ -149,3 +149,15 @@ def test_a_run_logged_in_fahrenheit_gives_the_rule_of_the_run_in_celsius(tmp_pat
     converted = _fit(tmp_path, fahrenheit, "fahrenheit", "--temps", "T1 [°F],T2 [°F]", *options)
     assert converted["breaks"] == celsius["breaks"]
     assert converted["switching"]["directions"] == celsius["switching"]["directions"]
+
+
+def test_the_export_of_a_model_of_a_fahrenheit_log_says_to_pass_degrees_celsius(tmp_path, plain):
+    fahrenheit = plain.assign(**{c: plain[c] * 9.0 / 5.0 + 32.0 for c in ("T1", "T2", "T_amb")})
+    fahrenheit = fahrenheit.rename(columns={c: f"{c} (F)" for c in ("T1", "T2", "T_amb")})
+    _fit(tmp_path, fahrenheit, "fahrenheit", "--temps", "T1 (F),T2 (F)", "--recalibrate", "none")
+    out = tmp_path / "export"
+    assert main(["export", str(tmp_path / "fahrenheit" / "model.json"), "--target", "all", "--out", str(out)]) == 0
+    sheet = (out / "groupfit_sheet.txt").read_text()
+    assert sheet.count("logged in degF: pass it in degC") == 3  # both inputs and the reference
+    assert "T_amb (F)" in sheet and "valid 9 .. 31 degC" in sheet
+    assert (out / "groupfit_model.h").read_text().count("logged in degF: pass it in degC") == 3

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from groupfit.export.reading_units import TEMPERATURE_UNIT, conversion_note, is_temperature_reading
+
 
 def double_literal(value: float) -> str:
     """A C / Structured Text literal of a double, exact on reading back."""
@@ -75,8 +77,11 @@ def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]
     """What each reading is, for generated comments: ``(name, valid range, unit, note)`` in order."""
     notes_per_reading = []
     for r, name in enumerate(tables.raw_names):
-        unit = " degC" if tables.valid_origin[r] == "temperature" else ""
+        temperature = is_temperature_reading(tables, r)
+        unit = f" {TEMPERATURE_UNIT}" if temperature else ""
         notes = [criterion_word] if r == tables.criterion_reading else []
+        if temperature and conversion_note(name):
+            notes.append(conversion_note(name))
         fed = [d.name for d in tables.derived if d.reading == r]
         if fed:
             notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))

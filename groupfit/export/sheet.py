@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 
 from groupfit.errors import InputError
+from groupfit.export.reading_units import TEMPERATURE_UNIT, conversion_note, is_temperature_reading
 from groupfit.export.sheet_probe import probe_lines, with_probe
 from groupfit.io import to_json
 from groupfit.runtime import FAULT_POSITION, RuleTables
@@ -116,12 +117,13 @@ def reading_list(tables: RuleTables) -> list[dict]:
     """Every reading the controller passes per sample, in order: name, unit, valid range, what it feeds."""
     readings = []
     for r, name in enumerate(tables.raw_names):
-        temperature = tables.valid_origin[r] == "temperature"
+        temperature = is_temperature_reading(tables, r)
         readings.append(
             {
                 "index": r + 1,
                 "name": name,
-                "unit": "degC" if temperature else f"as column '{name}' of the modelling data",
+                "unit": TEMPERATURE_UNIT if temperature else f"as column '{name}' of the modelling data",
+                **({"convert": conversion_note(name)} if temperature and conversion_note(name) else {}),
                 "valid_min": tables.valid_min[r],
                 "valid_max": tables.valid_max[r],
                 "range_rule": {
@@ -214,6 +216,7 @@ def sheet_text(sheet: dict) -> str:
     for reading in sheet["readings"]:
         unit = " degC" if reading["unit"] == "degC" else ""
         notes = (["switching criterion"] if reading["criterion"] else []) + reading["feeds"]
+        notes += [reading["convert"]] if "convert" in reading else []
         lines.append(
             f"  {reading['index']:>2}. {reading['name']:<16} valid {reading['valid_min']:g} .. "
             f"{reading['valid_max']:g}{unit}   ({'; '.join(notes)})"

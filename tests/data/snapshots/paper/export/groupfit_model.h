@@ -13,7 +13,7 @@
  *   temps[1] = T2  [5, 45] degC  (also the source of T2~lp300s)
  *   temps[2] = T3  [4, 43] degC  (also the source of T3~lp300s)
  *   temps[3] = T4  [4, 45] degC  (also the source of T4~lp300s)
- *   temps[4] = T_amb  [9, 31]  (source of T_amb~lp300s; reference: subtracted from every measured input)
+ *   temps[4] = T_amb  [9, 31] degC  (source of T_amb~lp300s; reference: subtracted from every measured input)
  *   (temperatures in degC; a source in the unit of its column in the modelling data)
  *
  * Model inputs x[GF_N_INPUTS], one coefficient each, in this order:
