@@ -202,6 +202,12 @@ def test_replay_scores_only_the_errors_within_range_error(model, tmp_path, capsy
     residual = observed[kept] - AR1Rule(model).replay(heat).prediction_um[kept]
     assert scores["scored_samples"] == kept.sum()
     assert scores["rms_um"] == pytest.approx(float(np.sqrt(np.mean(residual**2))), rel=1e-12)
+    replayed = json.loads((tmp_path / "r.json").read_text())  # the samples and rms_um every replay gives
+    assert replayed["rms_um"] == scores["rms_um"] and len(replayed["samples"]) == len(heat)
+    assert [s["i"] for s in replayed["samples"]] == list(range(1, len(heat) + 1))
+    assert {s["group"] for s in replayed["samples"]} == {1} and all(s["fault"] == 0 for s in replayed["samples"])
+    given = np.array([np.nan if s["residual_um"] is None else s["residual_um"] for s in replayed["samples"]])
+    assert np.isnan(given[~kept]).all() and np.allclose(given[kept], residual, rtol=0, atol=1e-12)
     assert "3 reading(s) of the error beyond ±100000 µm (row 41, 42, 201" in capsys.readouterr().out
     wide = ["--range-error", "1e39", "--json", str(tmp_path / "w.json")]
     assert main(["replay", str(path), "--data", str(run), *wide]) == 0

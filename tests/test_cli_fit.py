@@ -45,7 +45,7 @@ def test_fit_writes_model_figure_and_json(tmp_path, capsys):
     assert status == 0
     assert (out / "fit.png").stat().st_size > 10_000
     result = json.loads((tmp_path / "fit.json").read_text())
-    assert SPEC_KEYS <= set(result) and result["search"]["method"] == "exact"
+    assert SPEC_KEYS <= set(result) and result["search"]["method"] == "exact" and result["search"]["seed"] is None
     model = without_stage(ModelFile.load(out / "model.json")).to_dict()  # the fitted groups, as training records them
     assert model["format"] == "groupfit-model/1" and model["p"] == 2 and len(model["coefficients"]) == 3
     assert model["breaks"] == result["breaks"]

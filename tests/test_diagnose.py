@@ -130,7 +130,8 @@ def test_nothing_missing_leaves_the_model_unchanged(tmp_path, capsys):
     captured = capsys.readouterr()
     result = json.loads(captured.out)
     assert result["added"] == [] and result["model"] == str(model_path)
-    assert result["after"] == result["before"]
+    assert result["after"] == result["before"] and result["before"]["validate"] is None  # no --validate
+    assert result["improved"] is None
     assert "nothing missing" in captured.err
     assert not (out / "model_augmented.json").exists()
 

@@ -113,6 +113,9 @@ def test_replay_cli_scores_the_law_on_a_run(model_path, tmp_path, capsys):
     replayed = np.array([s["prediction_um"] for s in result["samples"]])
     assert np.allclose(replayed, offline, rtol=1e-9, atol=0)
     assert result["rms_um"] == pytest.approx(float(np.sqrt(np.mean((run.error - offline) ** 2))), rel=1e-9)
+    assert all(s["group"] == 1 and s["fault"] == s["code"] == 0 for s in result["samples"])  # the keys of a replay
+    residual = np.array([s["residual_um"] for s in result["samples"]])
+    assert np.allclose(residual, run.error - replayed, rtol=0, atol=1e-9)
 
 
 def test_replay_leaves_an_overflowed_error_out_of_the_score_and_honours_range_temp(model_path, tmp_path, capsys):

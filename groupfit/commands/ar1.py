@@ -67,11 +67,14 @@ def run_replay(args: argparse.Namespace) -> int:
         f"start {model.start} (E0 = {initial:g} µm), {args.precision} precision",
         f"faults  {int(np.sum(result.fault == FAULT_HEAT))} held heat reading(s)",
     ]
+    out["samples"] = ar1_samples(out["time_s"], result, measured)
+    out["rms_um"] = None
     if measured is not None:
         scored = np.isfinite(measured)
         residual = measured[scored] - result.prediction_um[scored]
         scores = {**error_metrics(residual), "accuracy_percent": prediction_accuracy(measured[scored], residual)}
         out["scores"] = {**scores, "scored_samples": int(scored.sum())}
+        out["rms_um"] = scores["rms_um"]
         lines.append(
             f"error   RMS {scores['rms_um']:.4g} µm, max {scores['max_um']:.4g} µm, prediction accuracy "
             f"{scores['accuracy_percent']:.1f} % over {int(scored.sum())} measured step(s)"
@@ -87,6 +90,24 @@ def run_replay(args: argparse.Namespace) -> int:
         figures.append(figure)
     common.finish_outputs(args, "\n".join(lines), out, figures)
     return 0
+
+
+def ar1_samples(time_s: list, result, measured: np.ndarray | None) -> list[dict]:
+    """The routine's steps as ``replay --json`` gives a grouped model's samples (one group)."""
+    samples = []
+    for k, prediction in enumerate(result.prediction_um):
+        residual = None if measured is None else measured[k] - prediction
+        samples.append(
+            {
+                "i": k + 1,
+                "time_s": float(time_s[k]),
+                "group": 1,
+                "prediction_um": float(prediction),
+                "fault": int(result.fault[k]),
+                "residual_um": float(residual) if residual is not None and np.isfinite(residual) else None,
+            }
+        )
+    return samples
 
 
 def run_export(args: argparse.Namespace) -> int:

@@ -357,8 +357,7 @@ def replay_result(
         }
         if counts is not None:
             sample["compensation_counts"] = counts.counts(replay.compensation_um[k])
-        if residual is not None:
-            sample["residual_um"] = None if np.isnan(residual[k]) else float(residual[k])
+        sample["residual_um"] = None if residual is None or np.isnan(residual[k]) else float(residual[k])
         if replay.probe is not None and replay.probe[k]:
             sample["probe"] = sample_probe(replay, k)
         samples.append(sample)

@@ -62,10 +62,13 @@ def screw_replay_result(law: ScrewLaw, run, codes, prediction, model_path: str) 
             "time_s": float(run.time[k]),
             "x_m": float(run.probe_x[k]),
             "code": int(codes[k]),
+            "group": 1,
+            "fault": int(codes[k]),
             "prediction_um": None if codes[k] else float(prediction[k]),
+            "residual_um": None,
         }
-        if residual is not None:
-            sample["residual_um"] = None if codes[k] or not np.isfinite(residual[k]) else float(residual[k])
+        if residual is not None and not codes[k] and np.isfinite(residual[k]):
+            sample["residual_um"] = float(residual[k])
         samples.append(sample)
     return {
         "model": model_path,

@@ -103,10 +103,9 @@ class SearchResult:
         return {}
 
     def info(self) -> dict[str, Any]:
-        """``method``, ``seed`` (GA), ``evaluations``, the method's details, ``seconds``."""
-        head: dict[str, Any] = {"method": self.method}
-        if self.method == "ga":
-            head["seed"] = self.seed
+        """``method``, ``seed`` (GA; null for a search that draws nothing), ``evaluations``, the method's
+        details, ``seconds``."""
+        head: dict[str, Any] = {"method": self.method, "seed": self.seed if self.method == "ga" else None}
         return {**head, "evaluations": self.evaluations, **self.details(), "seconds": self.seconds}
 
 
