@@ -101,7 +101,11 @@ def at_period(model: ModelFile | Mapping[str, Any], period_s: float) -> ModelFil
 def _what_to_do(model_period_s: float, period_s: float) -> str:
     """The advice of a refusal: average the run to the model's period when it is sampled faster, else refit."""
     if period_s < model_period_s:
-        return f"average the run to the model's period with --resample {model_period_s:g}, or fit a model at its own"
+        return (
+            f"average the readings over each {model_period_s:g} s (a run: --resample {model_period_s:g}; on the "
+            "controller: export at the model's period and call it every period with the averages), or fit a model "
+            "at its own"
+        )
     return "fit a model at this period (a run sampled more slowly than the model cannot be resampled to it)"
 
 
