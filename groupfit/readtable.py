@@ -251,7 +251,8 @@ def _numbers_again(frame: pd.DataFrame, decimal: str, label: str) -> pd.DataFram
 
 def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame, str | None]:
     """The table without rows identical in every cell, time stamp included, to the row before (a logger that
-    wrote a row twice), and a note naming them (None: there were none)."""
+    wrote a row twice), and a note naming them (None: there were none). In a log whose stamps are coarser than
+    its readings (:func:`_coarse_stamps`), such a row is a reading that did not change: kept."""
     if len(frame) < 2:
         return frame, None
     same = np.ones(len(frame) - 1, dtype=bool)
@@ -261,7 +262,32 @@ def without_repeated_rows(frame: pd.DataFrame, label: str) -> tuple[pd.DataFrame
         same &= (now == before) | (pd.isna(now) & pd.isna(before))
         if not same.any():
             return frame, None
+    if _coarse_stamps(frame, same):
+        return frame, None
     return _left_out(frame, np.r_[False, same], label, "identical to the row before", "a row written twice")
+
+
+COARSE_SHARE = 0.1
+"""Share of a log's rows that differ from the row before yet share its stamp, from which its stamps are coarser
+than its readings (whole minutes on a 15 s logger) and a row identical to the one before is a reading."""
+
+
+def _coarse_stamps(frame: pd.DataFrame, same: np.ndarray) -> bool:
+    """Whether the log's stamps (its non-decreasing column of the most distinct values) are shared by rows that
+    differ in another cell, on at least :data:`COARSE_SHARE` of its rows."""
+    stamps, most = None, 2
+    for column in frame.columns:
+        values = frame[column]
+        try:
+            rising = bool(values.notna().all() and values.is_monotonic_increasing)
+        except TypeError:
+            continue
+        if rising and values.nunique() > most:
+            stamps, most = values.to_numpy(), values.nunique()
+    if stamps is None:
+        return False
+    shared = (stamps[1:] == stamps[:-1]) & ~same
+    return bool(shared.sum() >= COARSE_SHARE * len(same))
 
 
 def empty_cells(cells: pd.Series) -> np.ndarray:

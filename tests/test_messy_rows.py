@@ -363,3 +363,21 @@ def test_a_local_clock_jumping_ahead_an_hour_is_named_as_daylight_saving_and_off
     report = tmp_path / "offset.json"
     assert cli("fit", "--data", offset, *QUICK, "--json", report, "--out", tmp_path / "b") == 0
     assert json.loads(report.read_text())["n_samples"] == len(log)
+
+
+def test_a_reading_that_repeats_under_a_stamp_coarser_than_the_clock_is_kept(tmp_path):
+    """A 15 s logger stamping whole minutes at display resolution: rows equal to the one before, stamp and all,
+    are readings that did not change, not rows written twice."""
+    log = pd.read_csv(DATASETS / "paper_cycle.csv").iloc[:240]
+    log = log.round({c: 1 for c in log.columns if c.startswith("T")} | {"error_um": 0})
+    log["time_s"] = 15.0 * np.arange(len(log))
+    minutes = pd.Timestamp("2026-03-02 08:00") + pd.to_timedelta(log["time_s"], unit="s")
+    stamped = log.drop(columns="time_s")
+    stamped.insert(0, "Date/Time", minutes.dt.strftime("%Y/%m/%d %H:%M"))
+    repeated = stamped.eq(stamped.shift()).all(axis=1)
+    assert repeated.sum() >= 5
+    path, clean = tmp_path / "stamped.csv", tmp_path / "clean.csv"
+    stamped.to_csv(path, index=False)
+    log.to_csv(clean, index=False)
+    kept, plain = fitted_coefficients(tmp_path, path, clean)
+    assert np.allclose(kept, plain, rtol=1e-9, atol=1e-9)
