@@ -440,9 +440,15 @@ def unit_notes(label: str, column: str, time: np.ndarray, period_s: float, *, un
     notes = []
     span = float(time[-1] - time[0])
     if not unit_named and span < SHORTEST_RUN_S:
+        days = (
+            "; if it holds fractions of a day (a spreadsheet's time of day saved as a number), name it so "
+            f"({column} [d])"
+            if 0.0 <= float(np.min(time)) and float(np.max(time)) < 1.0
+            else ""
+        )
         notes.append(
             f"{label}: the run lasts {span:g} s by column '{column}', read in seconds as its name gives no unit: a "
-            "thermal run lasts hours; if the column counts minutes or hours, name it so (time_min, Zeit [h])"
+            f"thermal run lasts hours; if the column counts minutes or hours, name it so (time_min, Zeit [h]){days}"
         )
     if period_s > SLOWEST_PERIOD_S:
         notes.append(

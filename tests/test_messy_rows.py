@@ -381,3 +381,20 @@ def test_a_reading_that_repeats_under_a_stamp_coarser_than_the_clock_is_kept(tmp
     log.to_csv(clean, index=False)
     kept, plain = fitted_coefficients(tmp_path, path, clean)
     assert np.allclose(kept, plain, rtol=1e-9, atol=1e-9)
+
+
+def test_a_time_of_day_saved_as_a_fraction_of_a_day_is_named_and_read_in_days(tmp_path, capsys):
+    log = pd.read_csv(DATASETS / "paper_cycle.csv")
+    fraction = log.assign(time_s=(8 * 3600 + log["time_s"]) / 86400).rename(columns={"time_s": "Uhrzeit"})
+    path = tmp_path / "fraction.csv"
+    fraction.to_csv(path, index=False, float_format="%.10f")
+    assert cli("fit", "--data", path, "--time", "Uhrzeit", *QUICK, "--out", tmp_path / "a") == 0
+    assert (
+        "if it holds fractions of a day (a spreadsheet's time of day saved as a number), name it so (Uhrzeit [d])"
+        in (capsys.readouterr().out)
+    )
+    named, clean = tmp_path / "named.csv", tmp_path / "clean.csv"
+    fraction.rename(columns={"Uhrzeit": "Uhrzeit [d]"}).to_csv(named, index=False, float_format="%.10f")
+    log.to_csv(clean, index=False)
+    days = fitted_coefficients(tmp_path, named, options=[*QUICK, "--time", "Uhrzeit [d]"])
+    assert np.allclose(days, fitted_coefficients(tmp_path, clean), rtol=1e-6, atol=1e-6)
