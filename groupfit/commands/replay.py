@@ -417,7 +417,8 @@ def replay_report(result: dict[str, Any]) -> str:
             )
             or "none"
         ),
-        f"offline  switches at samples {result['offline_switch_samples']} (breaks {result['offline_breaks']}); "
+        f"offline  switches at samples {result['offline_switch_samples']} (breaks {result['offline_breaks']}"
+        f"{'; samples of the whole recording' if result.get('history_samples') else ''}); "
         f"{result['samples_off_offline_group']} sample(s) served by another group than offline",
         f"faults   {result['faults']['held_samples']} sample(s) on held readings, "
         f"{result['faults']['sensor_fault_samples']} in sensor fault (safe output)"
