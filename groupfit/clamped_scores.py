@@ -1,6 +1,6 @@
 """A next run scored as the controller corrects it: a prediction beyond the compensation's clamp counts only up
-to it, in ``compare`` as in ``replay`` (:func:`groupfit.runtime.rule.compensation_clamp`: twice the largest
-prediction on the modelling run)."""
+to it, in ``compare`` as in ``replay`` (the clamp a model file's switching rule holds, twice the largest
+prediction on the modelling run: :func:`groupfit.runtime.rule.compensation_clamp`)."""
 
 from __future__ import annotations
 
@@ -8,14 +8,7 @@ from typing import Mapping
 
 import numpy as np
 
-from groupfit.runtime.rule import compensation_clamp
-
 LABELS = {"mlr": "MLR"}
-
-
-def clamps_of(modelling_predictions: Mapping[str, np.ndarray]) -> dict[str, float]:
-    """Per model key, the clamp (µm) its model file gets from its predictions on the modelling run."""
-    return {key: float(compensation_clamp(prediction)) for key, prediction in modelling_predictions.items()}
 
 
 def clamped(
@@ -41,4 +34,4 @@ def clamped(
     ]
 
 
-__all__ = ["clamped", "clamps_of"]
+__all__ = ["clamped"]

@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.ar1.inputs import ar1_inputs
-from groupfit.clamped_scores import clamped, clamps_of
+from groupfit.clamped_scores import clamped
 from groupfit.columns import input_order
 from groupfit.comparison_path import grouped_path
 from groupfit.conditions import condition_changes, run_condition
@@ -45,6 +45,7 @@ from groupfit.model import ModelFile
 from groupfit.models.ar1 import AR1Model, early_rise
 from groupfit.models.mlr import MLR
 from groupfit.models.select_p import choose_p
+from groupfit.runtime.rule import compensation_clamp
 from groupfit.search.base import SearchSettings
 from groupfit.settings import CompareSettings, ModelSettings, RunSettings
 
@@ -268,9 +269,8 @@ def compare_models(
     bands: dict[str, dict[str, tuple]] = {}
 
     changes = condition_changes(modelling, settings.conditions)
-    clamps = clamps_of(
-        {"mlr": mlr.predict(modelling.temps)} | {f"grouped{p}": m.predict(modelling.temps) for p, m in grouped.items()}
-    )
+    clamps = {"mlr": float(compensation_clamp(mlr.predict(modelling.temps)))}  # what its model file would hold
+    clamps |= {f"grouped{p}": float(model.switching.comp_max_um) for p, model in model_files.items()}
     clamp_notes: list[str] = []
     rows: list[dict[str, Any]] = []
     predictions: dict[str, dict[str, np.ndarray]] = {}
