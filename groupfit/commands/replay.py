@@ -210,7 +210,7 @@ def run_replay(args: argparse.Namespace) -> int:
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residual)
     offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"))
-    register, register_notes = register_check(counts, run.error, replay)
+    register, register_notes = register_check(counts, residual, replay)
     notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes + register_notes
     extra = {**span, **glitches, **offset, **register, "clamped_samples": clamped}
     result = ReplayResult({**data, **extra, **({"notes": notes} if notes else {})})

@@ -12,22 +12,21 @@ from typing import Any
 import numpy as np
 
 from groupfit.export.sheet import IntegerForm
-from groupfit.runtime import FAULT_SENSOR, Replay
+from groupfit.runtime import Replay
 
 
-def register_check(counts: IntegerForm | None, error: np.ndarray | None, replay: Replay) -> tuple[dict, list[str]]:
+def register_check(counts: IntegerForm | None, residual: np.ndarray | None, replay: Replay) -> tuple[dict, list[str]]:
     """``{"register": {...}}`` (resolution, limit, saturated samples, RMS of the register's compensation) and a
-    note when it saturates; nothing without a register."""
+    note when it saturates; nothing without a register. ``residual``: what the rule's compensation leaves, as
+    the replay scores it (None without an error column)."""
     if counts is None:
         return {}, []
     target = np.asarray(replay.target_um, dtype=float)
     applied = np.array([counts.um(counts.counts(c)) if np.isfinite(c) else np.nan for c in target])
     saturated = int(np.sum(np.isfinite(target) & (np.abs(target) > counts.range_um)))
     rms = None
-    if error is not None:
-        residual = np.asarray(error, dtype=float) + applied  # scored as the replay scores the rule's target
-        residual[(np.asarray(replay.fault) & FAULT_SENSOR) != 0] = np.nan
-        scored = residual[np.isfinite(residual)]
+    if residual is not None:
+        scored = (residual - target + applied)[np.isfinite(residual)]  # the register's value in the target's place
         rms = float(np.sqrt(np.mean(scored**2))) if scored.size else None
     section: dict[str, Any] = {
         "resolution_um": counts.resolution_um,
