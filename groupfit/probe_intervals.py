@@ -69,13 +69,18 @@ def check_intervals_fit(intervals_s: Sequence[float], first_s: float | None, run
                 )
 
 
+def whole_samples(seconds: float, period: float) -> int:
+    """The samples of an interval of checks: ``seconds`` rounded to whole sampling periods, at least one."""
+    return max(1, int(round(seconds / period)))
+
+
 def rounded_interval_notes(intervals_s: Sequence[float], runs: Sequence) -> list[str]:
     """A note per run and interval that is not a whole number of the run's samples: its checks fall at the
     nearest whole number of samples."""
     notes = []
     for run in runs:
         for interval in intervals_s:
-            used = max(1, int(round(interval / run.period))) * run.period
+            used = whole_samples(interval, run.period) * run.period
             if not math.isclose(used, interval, rel_tol=1e-9):
                 notes.append(
                     f"--probe-every {_label(interval)}: {run.source} is sampled every {run.period:g} s, so its "
@@ -140,7 +145,7 @@ def interval_table(
         first = None if first_s is None else int(round(first_s / periods[run]))
         for model, prediction in predictions[run].items():
             residual = np.asarray(error, dtype=float) - np.asarray(prediction, dtype=float)
-            rms = [_rms(hold_residual(residual, max(1, int(round(t / periods[run]))), first)) for t in intervals_s]
+            rms = [_rms(hold_residual(residual, whole_samples(t, periods[run]), first)) for t in intervals_s]
             rows.append({"model": model, "run": run, "rms_none_um": _rms(residual), "rms_um": rms})
     return {"method": "offset hold", "intervals_s": [float(t) for t in intervals_s], "first_s": first_s, "rows": rows}
 
@@ -242,6 +247,7 @@ def plot_intervals(table: Mapping[str, Any], path: Path, tolerance_um: float | N
 
 __all__ = [
     "rounded_interval_notes",
+    "whole_samples",
     "check_probe_first",
     "check_rows",
     "hold_residual",

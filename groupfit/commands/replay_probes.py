@@ -23,7 +23,7 @@ from groupfit.default_columns import default_temperature_columns
 from groupfit.error_scale import scaled_values
 from groupfit.error_start import from_start, is_from_start, logged_spec
 from groupfit.errors import InputError
-from groupfit.probe_intervals import MAX_CHECK_S, check_probe_first, check_rows, on_measured_rows
+from groupfit.probe_intervals import MAX_CHECK_S, check_probe_first, check_rows, on_measured_rows, whole_samples
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
 
@@ -122,11 +122,6 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
     probes[rows] = reading[rows]
     probes[~np.isfinite(probes)] = np.nan  # an infinite reading is no reading: no check there
     return probes
-
-
-def whole_samples(seconds: float, period: float) -> int:
-    """The samples of an interval of checks: ``seconds`` rounded to whole sampling periods, at least one."""
-    return max(1, int(round(seconds / period)))
 
 
 def probe_summary(
