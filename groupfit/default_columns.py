@@ -108,6 +108,13 @@ def factored_length_unit(name: str | None) -> tuple[str, float] | None:
     return factored.shown, factored.factor * MICROMETRES_PER_UNIT[unit]
 
 
+def length_unit_named(name: str | None) -> str | None:
+    """The unit of length a name gives, as written, with its factor if any (``mm``, ``1/1000 mm``); None when it
+    gives none."""
+    factored = factored_length_unit(name)
+    return factored[0] if factored is not None else named_length_unit(name)
+
+
 def named_length_unit(name: str | None) -> str | None:
     """The unit of length a name ends in (a key of :data:`MICROMETRES_PER_UNIT`); None when it gives none, or
     gives one with a factor (:func:`factored_length_unit`)."""
@@ -277,6 +284,7 @@ __all__ = [
     "found_time_column",
     "factored_length_unit",
     "length_unit",
+    "length_unit_named",
     "named_length_unit",
     "scaled_name",
     "temperature_like_columns",

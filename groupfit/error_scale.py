@@ -20,7 +20,7 @@ from typing import Sequence
 
 import pandas as pd
 
-from groupfit.default_columns import factored_length_unit, named_length_unit, scaled_name
+from groupfit.default_columns import length_unit_named, scaled_name
 from groupfit.error_start import logged_spec
 from groupfit.errors import InputError
 
@@ -55,7 +55,7 @@ def with_scaled_error(
             return frame
         available = ", ".join(map(str, frame.columns))
         raise InputError(f"{label}: --error '{error}': column '{column}' not found; the columns are: {available}")
-    named = named_length_unit(column) or (factored_length_unit(column) or (None,))[0]
+    named = length_unit_named(column)
     if factor and (named is not None or column in lengths):
         how = "given a unit of length by the row of units" if column in lengths else f"in {named} by its name"
         raise InputError(

@@ -41,12 +41,7 @@ from groupfit.data import (
     read_table,
     refuse_beyond,
 )
-from groupfit.default_columns import (
-    default_temperature_columns,
-    factored_length_unit,
-    length_unit,
-    named_length_unit,
-)
+from groupfit.default_columns import default_temperature_columns, length_unit, length_unit_named
 from groupfit.errors import InputError
 from groupfit.export.table import position_coefficients
 from groupfit.model import MAX_POSITION_ORDER, DeadBand, ModelFile, Position
@@ -169,7 +164,7 @@ def millimetres_per_unit(column: str) -> float:
     unit of length (``X [µm]``, ``X [1/100 mm]``) by :func:`groupfit.default_columns.length_unit`, else mm."""
     if METRES.search(str(column)):
         return 1000.0
-    if named_length_unit(column) is None and factored_length_unit(column) is None:
+    if length_unit_named(column) is None:
         return 1.0
     return length_unit(column)[1] / 1000.0
 

@@ -36,10 +36,15 @@ DIRECTION_TIE = 1e-9
 computed from readings in °C or °F must give the same direction."""
 
 
+def at_margin(change: float, margin: float) -> bool:
+    """Whether a criterion's change is the margin itself, to :data:`DIRECTION_TIE`."""
+    return math.isclose(abs(change), margin, rel_tol=DIRECTION_TIE, abs_tol=1e-12)
+
+
 def switch_direction(change: float, margin: float) -> int:
-    """A switching window's direction: 0 when the criterion's change over it is within the margin (a tie to
-    :data:`DIRECTION_TIE` included), else its sign."""
-    if abs(change) <= margin or math.isclose(abs(change), margin, rel_tol=DIRECTION_TIE, abs_tol=1e-12):
+    """A switching window's direction: 0 when the criterion's change over it is within the margin (a tie,
+    :func:`at_margin`, included), else its sign."""
+    if abs(change) <= margin or at_margin(change, margin):
         return 0
     return 1 if change > 0 else -1
 
@@ -216,8 +221,8 @@ def _switching_agrees(model: Mapping[str, Any], section: Mapping[str, Any]) -> s
             for k, (first, last) in enumerate(windows):
                 change = float(series[min(last, len(series)) - 1] - series[max(first - 2, 0)])
                 expected = switch_direction(change, section["margin_c"])
-                at_margin = math.isclose(abs(change), section["margin_c"], rel_tol=DIRECTION_TIE, abs_tol=1e-12)
-                if section["directions"][k] != expected and not at_margin:  # written before ties were rounded
+                tie = at_margin(change, section["margin_c"])  # a file written before ties counted as the margin
+                if section["directions"][k] != expected and not tie:
                     return (
                         f"switching.directions[{k}] = {section['directions'][k]!r} does not match the criterion "
                         f"series over window {k + 1} (expected {expected})"

@@ -25,15 +25,16 @@ from groupfit.timestamps import UNIT_SECONDS, named_time_unit
 from groupfit.unit_factors import FactoredUnit, factored_unit
 
 FAHRENHEIT = ("°f", "ºf", "degf", "deg f", "deg.f", "deg. f", "℉", "fahrenheit", "f")
+KELVIN = ("k", "°k", "ºk", "kelvin")
 CELSIUS_BY_UNIT = {
     **dict.fromkeys(("°c", "ºc", "degc", "deg c", "deg.c", "deg. c", "℃", "celsius", "c"), (1.0, 0.0)),
-    **dict.fromkeys(("k", "°k", "ºk", "kelvin"), (1.0, -273.15)),
+    **dict.fromkeys(KELVIN, (1.0, -273.15)),
     **dict.fromkeys(FAHRENHEIT, (5.0 / 9.0, -32.0 * 5.0 / 9.0)),
 }
 """Units of temperature a units row may give, and their (scale, offset) to °C."""
 SHOWN = {
     **dict.fromkeys(FAHRENHEIT, "°F"),
-    **dict.fromkeys(("k", "°k", "ºk", "kelvin"), "K"),
+    **dict.fromkeys(KELVIN, "K"),
 }
 """How a unit of temperature is named in a note."""
 BRACKETS = re.compile(r"^[\[(（［]\s*(.*?)\s*[\])）］]$")
@@ -110,7 +111,7 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
         if kind == "length":
             lengths.append(str(column))
         scale, offset = _to_base(column, kind, unit, time, label)
-        if unit in ("k", "kelvin") and not _absolute_kelvin(frame[column]):
+        if unit in KELVIN and not _absolute_kelvin(frame[column]):
             continue  # readings of a few kelvin: a temperature difference (over a reference), kept as logged
         if (scale, offset) != (1.0, 0.0):
             frame[column] = frame[column].to_numpy(dtype=float) * scale + offset
