@@ -8,7 +8,7 @@ from groupfit.cut_stamps import spread_within_stamps
 from groupfit.data_options import MAX_PERIOD_TOLERANCE
 from groupfit.errors import InputError
 from groupfit.resample import GAP_PERIODS
-from groupfit.timestamps import clock_restart, refuse_clock_change, restart_refusal, stamp_resolution
+from groupfit.timestamps import clock_restart, hour_off, refuse_clock_change, restart_refusal, stamp_resolution
 
 MIN_PERIOD_S = 1e-4
 """The shortest sampling period a run may have (s): a thermal log is never sampled at more than 10 kHz, and a
@@ -60,11 +60,10 @@ def check_time(time: np.ndarray, label: str, column: str, *, tolerance: float) -
             if abs(step[i - 1] - period) < MAX_PERIOD_TOLERANCE * period
             else ""
         )
-        summer = abs(step[i - 1] - (period + 3600.0)) <= 0.02 * period + 1e-9 and period < 1800.0
         hour = (
             "; an hour more than the period: if daylight saving time began there, write the time stamps with "
             "their UTC offset (2026-03-29T03:00:00+02:00) or in UTC. Otherwise"
-            if summer
+            if hour_off(step[i - 1], period, 1)
             else ";"
         )
         raise InputError(

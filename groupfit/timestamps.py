@@ -213,6 +213,14 @@ RESTART_PERIODS = 10
 restarted), not a sample out of order or a bad cell."""
 
 
+def hour_off(step, period: float, sign: int):
+    """Where a step is the period an hour longer (``sign`` 1: summer time began) or shorter (−1: it ended), to 2 %
+    of the period, on a clock sampled more often than every half hour."""
+    return (np.abs(np.asarray(step, dtype=float) - (period + sign * 3600.0)) <= 0.02 * period + 1e-9) & (
+        period < 1800.0
+    )
+
+
 def refuse_clock_change(time: np.ndarray, label: str, column: str) -> None:
     """Refuse a clock of local time that goes back by an hour less one period (daylight saving time ended),
     naming the row: a UTC offset on the stamps places the repeated hour. (A clock that jumps ahead by an hour
@@ -222,8 +230,8 @@ def refuse_clock_change(time: np.ndarray, label: str, column: str) -> None:
     if not forward.size:
         return
     period = float(np.median(forward))
-    back = np.flatnonzero(np.abs(step - (period - 3600.0)) <= 0.02 * period + 1e-9)
-    if back.size and period < 1800.0:
+    back = np.flatnonzero(hour_off(step, period, -1))
+    if back.size:
         i = int(back[0]) + 1
         raise InputError(
             f"{label}: the clock in column '{column}' goes back one hour at row {i + 1} ({time[i - 1]:g} s to "
@@ -459,6 +467,7 @@ def unit_notes(label: str, column: str, time: np.ndarray, period_s: float, *, un
 
 
 __all__ = [
+    "hour_off",
     "RESOLUTION_SHARE",
     "STAMP_RESOLUTIONS_S",
     "DATE_FORMATS",
