@@ -282,8 +282,9 @@ def _coarse_stamps(frame: pd.DataFrame, same: np.ndarray) -> bool:
             rising = bool(values.notna().all() and values.is_monotonic_increasing)
         except TypeError:
             continue
-        if rising and values.nunique() > most:
-            stamps, most = values.to_numpy(), values.nunique()
+        distinct = values.nunique() if rising else 0
+        if distinct > most:
+            stamps, most = values.to_numpy(), distinct
     if stamps is None:
         return False
     shared = (stamps[1:] == stamps[:-1]) & ~same

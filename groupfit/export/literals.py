@@ -80,8 +80,8 @@ def reading_notes(tables, criterion_word: str) -> list[tuple[str, str, str, str]
         temperature = is_temperature_reading(tables, r)
         unit = f" {TEMPERATURE_UNIT}" if temperature else ""
         notes = [criterion_word] if r == tables.criterion_reading else []
-        if temperature and conversion_note(name):
-            notes.append(conversion_note(name))
+        convert = conversion_note(name) if temperature else None
+        notes += [convert] if convert else []
         fed = [d.name for d in tables.derived if d.reading == r]
         if fed:
             notes.append(("source of " if r >= tables.n_measured else "also the source of ") + ", ".join(fed))

@@ -118,12 +118,13 @@ def reading_list(tables: RuleTables) -> list[dict]:
     readings = []
     for r, name in enumerate(tables.raw_names):
         temperature = is_temperature_reading(tables, r)
+        convert = conversion_note(name) if temperature else None
         readings.append(
             {
                 "index": r + 1,
                 "name": name,
                 "unit": TEMPERATURE_UNIT if temperature else f"as column '{name}' of the modelling data",
-                **({"convert": conversion_note(name)} if temperature and conversion_note(name) else {}),
+                **({"convert": convert} if convert else {}),
                 "valid_min": tables.valid_min[r],
                 "valid_max": tables.valid_max[r],
                 "range_rule": {
@@ -214,7 +215,7 @@ def sheet_text(sheet: dict) -> str:
         "Readings the controller passes every sample, in this order",
     ]
     for reading in sheet["readings"]:
-        unit = " degC" if reading["unit"] == "degC" else ""
+        unit = f" {TEMPERATURE_UNIT}" if reading["unit"] == TEMPERATURE_UNIT else ""
         notes = (["switching criterion"] if reading["criterion"] else []) + reading["feeds"]
         notes += [reading["convert"]] if "convert" in reading else []
         lines.append(
