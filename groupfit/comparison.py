@@ -23,7 +23,7 @@ measured rows.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -32,13 +32,14 @@ from groupfit.ar1.inputs import ar1_inputs
 from groupfit.clamped_scores import clamped
 from groupfit.columns import input_order
 from groupfit.comparison_path import grouped_path
+from groupfit.comparison_text import comparison_summary
 from groupfit.conditions import condition_changes, run_condition
-from groupfit.data import Run, measured_rows
+from groupfit.data import Run, join_runs, measured_rows
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
-from groupfit.heldout.penalty import penalised_expectation, penalty_lines
+from groupfit.heldout.penalty import penalised_expectation
 from groupfit.inference import break_intervals
-from groupfit.inference.cli import AUTO_BUDGET_S, interval_notes
+from groupfit.inference.cli import AUTO_BUDGET_S
 from groupfit.inference.prediction import band_for
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.model import ModelFile
@@ -48,8 +49,6 @@ from groupfit.models.select_p import choose_p
 from groupfit.runtime.rule import compensation_clamp
 from groupfit.search.base import SearchSettings
 from groupfit.settings import CompareSettings, ModelSettings, RunSettings
-
-MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
 
 
 @dataclass
@@ -140,7 +139,9 @@ class ComparisonResult:
     fit_penalty: dict[str, Any] | None = None
     """The ridge penalty fit gives its choice of p = 0 (:func:`groupfit.heldout.penalty.penalised_expectation`)."""
     notes: list[str] = field(default_factory=list)
-    """What was left out and why (a modelling run whose error is not measured on every row)."""
+    """What was left out and why (a modelling run whose error is not measured on every row, several runs)."""
+    ar1_left_out: str | None = None
+    """Why the AR(1) model was left out, when not for want of a heat-level column."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -209,7 +210,7 @@ def in_modelling_order(modelling: Run, run: Run) -> Run:
 
 
 def compare_models(
-    modelling: Run,
+    modelling: Run | Sequence[Run],
     validation: list[Run],
     settings: ComparisonSettings,
     live_rule: Callable[[ModelFile, np.ndarray], np.ndarray] | None = None,
@@ -221,6 +222,10 @@ def compare_models(
 
     Parameters
     ----------
+    modelling : Run or sequence of Run
+        The modelling run; several runs are joined (:func:`groupfit.data.join_runs`)
+        and get the global models only, their next-run expectation leaving one
+        run out (:func:`joined_run_notes`).
     live_rule : callable, optional
         ``live_rule(model, inputs) -> group index per sample (0-based)``;
         when given, grouped models serve validation runs through it.
@@ -230,6 +235,10 @@ def compare_models(
         (:mod:`groupfit.continuation`), so its state carries into the run.
     """
     histories = histories or {}
+    parts = [modelling] if isinstance(modelling, Run) else list(modelling)
+    modelling = join_runs(parts)
+    if len(parts) > 1:
+        settings = replace(settings, pmax=0, fit_pmax=0)
     validation = [in_modelling_order(modelling, run) for run in validation]
     for run in validation:
         if abs(run.period - modelling.period) > 0.01 * modelling.period:
@@ -242,11 +251,12 @@ def compare_models(
         raise InputError(f"two runs share the name '{[n for n in names if names.count(n) > 1][0]}'; rename a file")
 
     measured = measured_rows(modelling)
-    notes = sparse_error_notes(modelling, measured)
+    notes = sparse_error_notes(modelling, measured) + joined_run_notes(parts)
     X, y = measured.temps, measured.error
     named = pd.DataFrame(X, columns=list(modelling.temp_names))
     mlr = MLR(objective=settings.objective, fit_intercept=settings.fit_intercept).fit(named, y)
-    ar1 = fit_ar1(modelling, settings) if settings.heat is not None and not notes else None
+    ar1_left_out = ar1_left_out_reason(modelling, measured, parts)
+    ar1 = fit_ar1(modelling, settings) if settings.heat is not None and ar1_left_out is None else None
 
     path, grouped = grouped_path(
         X,
@@ -332,8 +342,9 @@ def compare_models(
     }
     fit_pmax = path_pmax(modelling, settings.fit_pmax)
     candidates = range(max(pmax, fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
+    scored_runs = [measured_rows(part) for part in parts] if len(parts) > 1 else [measured]
     expectation = expect_next_run(
-        [measured], candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+        scored_runs, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
     )
     fit_choice = expectation.choice_among(fit_pmax + 1)
     ar1_summary = None
@@ -372,8 +383,11 @@ def compare_models(
         reference=modelling.reference,
         expectation=expectation,
         fit_choice=fit_choice,
-        fit_penalty=penalised_expectation(measured, fit_intercept=settings.fit_intercept) if fit_choice == 0 else None,
+        fit_penalty=penalised_expectation(measured, fit_intercept=settings.fit_intercept, parts=scored_runs)
+        if fit_choice == 0
+        else None,
         notes=notes + clamp_notes,
+        ar1_left_out=ar1_left_out if settings.heat is not None else None,
     )
 
 
@@ -395,6 +409,27 @@ def sparse_error_notes(modelling: Run, measured: Run) -> list[str]:
     ]
 
 
+def ar1_left_out_reason(modelling: Run, measured: Run, parts: Sequence[Run]) -> str | None:
+    """Why the AR(1) model cannot be fitted on the modelling run(s); None when it can."""
+    if measured is not modelling:
+        return "the error is not measured on every row"
+    if len(parts) > 1:
+        return "its free run would run on from one modelling run into the next"
+    return None
+
+
+def joined_run_notes(parts: Sequence[Run]) -> list[str]:
+    """What several modelling runs, joined, leave out of the comparison."""
+    if len(parts) < 2:
+        return []
+    return [
+        f"{len(parts)} modelling runs joined ({', '.join(part.name for part in parts)}): compared are the global "
+        "models fitted on all of them; grouped models (p >= 1) are fitted on one run (their breaks are row indices "
+        "of one run: give one --data and the others as --validate), the AR(1) model on one run; the next-run "
+        "figure leaves each run out in turn"
+    ]
+
+
 def first_measured(error: np.ndarray) -> float:
     """The first measured value of an error series (where an AR(1) free run starts); 0 when none is."""
     finite = np.flatnonzero(np.isfinite(error))
@@ -405,92 +440,3 @@ def _column(run: Run, name: str) -> np.ndarray:
     if name not in run.frame.columns:
         raise InputError(f"{run.source}: rise sensor '{name}' not found; set [compare] rise_sensor")
     return run.frame[name].to_numpy(dtype=float)
-
-
-def comparison_summary(result: ComparisonResult) -> str:
-    """The comparison table and its notes, as ``groupfit compare`` prints them."""
-    modelling = result.runs[0]
-    grouped_keys = sorted(
-        {f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:])
-    )
-    keys = ["mlr"] + (["ar1"] if result.ar1 is not None else []) + grouped_keys
-    index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
-    lines = [f"note    {note}" for note in result.notes] + comparison_table(result, keys, index)
-    lines += [
-        "",
-        f"breaks on {modelling} (distance in samples to the nearest change of operating condition at "
-        f"{result.condition_changes}):"
-        if result.condition_changes
-        else f"breaks on {modelling} (no change of operating condition to compare them with):",
-    ]
-    for key in grouped_keys:
-        r = index[(key, modelling)]
-        report = result.break_intervals.get(r["p"])
-        cis = [f" {report.text_for(b)}" if report is not None and report.intervals else "" for b in r["breaks"]]
-        pairs = ", ".join(
-            f"{b}{ci}" + (f" ({d})" if d is not None else "") for b, ci, d in zip(r["breaks"], cis, r["break_distance"])
-        )
-        lines.append(f"  p = {r['p']}: {pairs}")
-    lines += interval_notes(result.break_intervals)
-    stability = ", ".join(f"p {s['from_p']}→{s['to_p']}: {s['max_shift']}" for s in result.break_stability)
-    lines.append(f"break stability (largest move of an existing break when p grows, samples): {stability or '-'}")
-    bic, target = result.selection["bic"], result.selection["target"]
-    lines.append(
-        f"how many breaks: BIC (in sample) chooses p = {bic['p']}; the target rule (R <= {target['target_um']:.4g} µm) "
-        f"chooses p = {target['p'] if target['p'] is not None else 'none up to pmax'}"
-    )
-    lines += result.expectation.candidate_lines(result.runs[0], result.fit_choice) if result.expectation else []
-    lines += penalty_lines(result.fit_penalty)
-    stats = result.mlr_statistics
-    terms = ", ".join(
-        f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"]
-    )
-    f_text = f"F = {stats['f_value']:.4g} (p = {stats['f_p_value']:.2g}), " if stats["f_value"] is not None else ""
-    lines.append(f"MLR: {terms}; {f_text}R² = {stats['r_squared']:.5f}, σ = {stats['sigma_um']:.3g} µm")
-    lines.append(ar1_line(result.ar1, left_out="the error is not measured on every row" if result.notes else None))
-    lines.append(
-        f"grouped models on validation runs: groups chosen by {result.validation_rule}; "
-        "they are fitted to the modelling run's condition and are not retuned."
-    )
-    return "\n".join(lines)
-
-
-def ar1_line(ar1: dict[str, Any] | None, left_out: str | None = None) -> str:
-    """The summary line of the AR(1) model (``left_out``: why it was, if not for want of a heat column)."""
-    if ar1 is None:
-        return f"AR(1): left out ({left_out or 'no heat-level column; --heat COLUMN names one'})"
-    c2 = ", ".join(f"C2({level}) = {value:.4g} µm" for level, value in ar1["C2"].items())
-    lb = ar1["ljung_box"]
-    start = (
-        "free run from each run's first measured error; "
-        if ar1.get("start", "measured") == "measured"
-        else "free run from 0 (ΔL(0) = 0); "
-    )
-    return (
-        f"AR(1) on {ar1['heat']}: C1 = {ar1['C1']:.5f}, {c2}; unseen levels by {ar1['scaling'].replace('_', ' ')}; "
-        + start
-        + ("fitted on the free-run error; " if ar1.get("fit") == "free_run" else "")
-        + f"Ljung–Box Q({lb['lags']}) = {lb['Q']:.1f}, p = {lb['p_value']:.2g}"
-    )
-
-
-def comparison_table(result: ComparisonResult, keys: list[str], index: dict) -> list[str]:
-    """One line per run (its condition, then every model's RMS, R, max |e| and accuracy %), the best model named."""
-    names = [MODEL_LABELS.get(key, f"p = {key[7:]}").replace(" (p = 0)", "").replace(" free run", "") for key in keys]
-    width = max(len(run) for run in result.runs)
-    reference = result.reference or "none (absolute temperatures)"
-    lines = [f"inputs relative to: {reference}"]
-    tables = (("RMS µm", "rms_um", 3), ("R = Σ|e| µm", "R_um", 2), ("max |e| µm", "max_um", 3))
-    tables += (("accuracy %", "accuracy_percent", 1),)  # Du et al.: 100·(1 − max|residual| / max|error|)
-    for title, metric, digits in tables:
-        table = [[index[(key, run)][metric] for key in keys] for run in result.runs]
-        column = max([8, *(len(n) + 2 for n in names), *(len(f"{v:.{digits}f}") + 2 for row in table for v in row)])
-        lines.append("")
-        lines.append(f"{title:<{width}}  {'condition':<15}" + "".join(f"{n:>{column}}" for n in names) + "  best")
-        for run, values in zip(result.runs, table):
-            best = keys[int(np.argmax(values) if metric == "accuracy_percent" else np.argmin(values))]
-            best_name = MODEL_LABELS.get(best, f"grouped p = {best[7:]}")
-            condition = result.run_conditions.get(run, "")
-            cells = "".join(f"{v:>{column}.{digits}f}" for v in values)
-            lines.append(f"{run:<{width}}  {condition:<15}{cells}  {best_name}")
-    return lines

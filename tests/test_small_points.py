@@ -12,7 +12,7 @@ from test_real_logs import cycle_means
 
 from groupfit.cli import main
 from groupfit.columns import usable_columns
-from groupfit.comparison import comparison_table
+from groupfit.comparison_text import comparison_table
 from groupfit.fast_response import without_stage
 from groupfit.heldout.folds import operating_columns
 from groupfit.model import ModelFile

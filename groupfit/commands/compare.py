@@ -10,6 +10,7 @@ from groupfit.commands import common, option_values, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of
+from groupfit.data import join_runs
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting
 from groupfit.heldout.reference_choice import default_reference_choice
@@ -131,20 +132,22 @@ def run_compare(args: argparse.Namespace) -> int:
         data.path,
         list(data.validate),
         folder=run_settings.output_dir,
-        files=["R_against_p.png", "error_against_check_interval.png", *(f"compare_{Path(p).stem}.png" for p in runs)],
+        files=[
+            "R_against_p.png",
+            "error_against_check_interval.png",
+            *(f"compare_{Path(p).stem}.png" for p in runs),
+            *([f"compare_{'+'.join(Path(p).stem for p in data.paths)}.png"] if len(data.paths) > 1 else []),
+        ],
     )
     settings = ComparisonSettings.from_settings(run_settings)
     settings.intervals = interval_settings(args)
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
-    if isinstance(data.path, (list, tuple)):
-        raise InputError(
-            f"{len(data.path)} modelling runs given: compare fits grouped models, whose breaks belong "
-            "to one run; give one --data (and the others as --validate), or fit a global model on several runs "
-            "with fit --p 0"
-        )
-    modelling = common.load_configured_run(data, missing_error=True)
+    parts = common.load_configured_runs(data, missing_error=True)
+    if len(parts) > 1:  # several modelling runs: the global models, fitted on them joined
+        settings.pmax = settings.fit_pmax = 0
+    modelling = join_runs(parts)
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
     if args.probe_every:
         check_intervals_fit(args.probe_every, args.probe_first, validation or [modelling])
@@ -158,12 +161,13 @@ def run_compare(args: argparse.Namespace) -> int:
     if reference_options.reference_is_default(args, run_settings):
         candidates = tuple(range(settings.fit_pmax + 1))  # as fit decides it
         choice = default_reference_choice(
-            [modelling], reference, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+            parts, reference, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
         )
         reference = reference if choice is None else choice.reference
-    modelling = with_reference(modelling, reference)
+    parts = [with_reference(part, reference) for part in parts]  # a reference at the start: each run's own
+    modelling = join_runs(parts)
     validation = [with_reference(run, reference) for run in validation]
-    joined, skipped, notes = with_histories(validation, [modelling], assume_continued=args.continues)
+    joined, skipped, notes = with_histories(validation, parts, assume_continued=args.continues)
     validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
     histories = {run.name: whole.temps[:rows] for run, whole, rows in zip(validation, joined, skipped) if rows}
     for note in notes:
@@ -185,7 +189,7 @@ def run_compare(args: argparse.Namespace) -> int:
     progress = common.StageProgress(enabled=not args.quiet)
     try:
         result = compare_models(
-            modelling,
+            parts,
             validation,
             settings,
             live_rule=replay_groups,

@@ -25,11 +25,16 @@ def run_penalty(run: Run, *, fit_intercept: bool = True, frames: Sequence[pd.Dat
     return ridge_setting("auto", 0, run.temps, run.error, frames, exclude, fit_intercept=fit_intercept, default=True)
 
 
-def penalised_expectation(run: Run, *, fit_intercept: bool = True) -> dict[str, Any]:
-    """The penalty ``fit`` gives the global model it chooses on ``run`` and that model's expected next-run RMS."""
-    ridge = run_penalty(run, fit_intercept=fit_intercept)
+def penalised_expectation(run: Run, *, fit_intercept: bool = True, parts: Sequence[Run] = ()) -> dict[str, Any]:
+    """The penalty ``fit`` gives the global model it chooses on ``run`` and that model's expected next-run RMS.
+
+    ``parts``: the runs ``run`` joins, when it joins several; the penalty and
+    the expectation then hold each of them out in turn.
+    """
+    several = len(parts) > 1
+    ridge = run_penalty(run, fit_intercept=fit_intercept, frames=[part.frame for part in parts] if several else None)
     expected, (low, high) = expect_next_run(
-        [run], (0,), fit_intercept=fit_intercept, ridge_alpha=ridge.alpha
+        list(parts) if several else [run], (0,), fit_intercept=fit_intercept, ridge_alpha=ridge.alpha
     ).expected()
     return {
         "alpha": ridge.alpha,

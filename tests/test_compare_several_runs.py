@@ -1,0 +1,78 @@
+"""``groupfit compare`` with several modelling runs after ``--data``: the global models, fitted on them joined."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+
+DATASETS = Path(__file__).resolve().parents[1] / "datasets"
+TEMPS = ["T1", "T2", "T3", "T4", "T5", "T6"]
+MODELLING = [DATASETS / "paper_cycle.csv", DATASETS / "repeat_timing.csv"]
+NEXT = DATASETS / "validation_speed.csv"
+
+
+def inputs(frame: pd.DataFrame) -> np.ndarray:
+    """An intercept column and the temperatures over the ambient, as ``fit`` takes them by default."""
+    return np.column_stack([np.ones(len(frame)), frame[TEMPS].to_numpy() - frame[["T_amb"]].to_numpy()])
+
+
+@pytest.fixture(scope="module")
+def several(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("several")
+    data = ["--data", *map(str, MODELLING)]
+    compare = ["compare", *data, "--validate", str(NEXT), "--reference", "T_amb", "--pmax", "2"]
+    assert main([*compare, "--json", str(tmp / "compare.json"), "--out", str(tmp / "cmp"), "--quiet"]) == 0
+    plain = ["--p", "0", "--recalibrate", "none", "--reference", "T_amb"]  # least squares, no fast stage
+    assert main(["fit", *data, *plain, "--out", str(tmp / "ls"), "--quiet"]) == 0
+    assert main(["fit", *data, "--reference", "T_amb", "--out", str(tmp / "chosen"), "--quiet"]) == 0
+    replay = ["replay", str(tmp / "ls" / "model.json"), "--data", str(NEXT), "--json", str(tmp / "ls.json")]
+    assert main(replay) == 0
+    return {
+        "compare": json.loads((tmp / "compare.json").read_text()),
+        "ls": json.loads((tmp / "ls" / "model.json").read_text()),
+        "chosen": json.loads((tmp / "chosen" / "model.json").read_text()),
+        "replay_ls": json.loads((tmp / "ls.json").read_text()),
+        "figures": sorted(p.name for p in (tmp / "cmp").iterdir()),
+    }
+
+
+def test_the_runs_are_joined_and_only_the_global_models_are_compared(several):
+    result = several["compare"]
+    assert result["runs"] == ["paper_cycle+repeat_timing", "validation_speed"]
+    assert {row["model"] for row in result["rows"]} == {"mlr"}  # no grouped rows, no AR(1) across the joint
+    assert result["ar1"] is None
+    assert any("2 modelling runs joined" in note for note in result["notes"])
+    assert "compare_paper_cycle+repeat_timing.png" in several["figures"]
+
+
+def test_the_mlr_row_is_the_least_squares_fit_on_both_runs_scored_as_replay_scores_it(several):
+    frames = [pd.read_csv(path) for path in MODELLING]
+    joined = pd.concat(frames)
+    beta = np.linalg.lstsq(inputs(joined), joined["error_um"].to_numpy(), rcond=None)[0]
+    np.testing.assert_allclose(several["ls"]["coefficients"][0], beta, rtol=1e-8, atol=1e-10)
+    row = {(r["model"], r["run"]): r for r in several["compare"]["rows"]}[("mlr", "validation_speed")]
+    assert row["rms_um"] == pytest.approx(several["replay_ls"]["rms_um"], rel=1e-9)
+
+
+def test_the_next_run_figure_leaves_each_run_out_in_turn(several):
+    frames = [pd.read_csv(path) for path in MODELLING]
+    residuals = []
+    for held, kept in ((0, 1), (1, 0)):
+        beta = np.linalg.lstsq(inputs(frames[kept]), frames[kept]["error_um"].to_numpy(), rcond=None)[0]
+        residuals.append(frames[held]["error_um"].to_numpy() - inputs(frames[held]) @ beta)
+    pooled = float(np.sqrt(np.mean(np.concatenate(residuals) ** 2)))
+    expected = several["compare"]["expected_next_run"]
+    assert [c["p"] for c in expected["candidates"]] == [0]
+    assert expected["candidates"][0]["expected_next_run_rms_um"] == pytest.approx(pooled, rel=1e-9)
+    assert several["ls"]["training"]["expected_next_run_rms_um"] == pytest.approx(pooled, rel=1e-9)
+
+
+def test_compare_marks_what_fit_chooses_on_the_same_runs(several):
+    expected, chosen = several["compare"]["expected_next_run"], several["chosen"]
+    assert expected["fit_would_choose_p"] == chosen["p"] == 0
+    ridge = expected["fit_would_choose_ridge"]
+    assert ridge["expected_next_run_rms_um"] == pytest.approx(chosen["training"]["expected_next_run_rms_um"], rel=1e-9)
