@@ -73,6 +73,20 @@ def test_fe_data_sets_replay_identically(drivers):
         assert_same_decisions(c_single, python_replay(model, temps, "single"))
 
 
+def test_the_header_names_the_build_it_is_bit_for_bit_with_and_refuses_fast_math(tmp_path):
+    """An integrator receives the two files alone: they say to build without contraction, and a -ffast-math
+    build (no NaN test, reassociated sums) stops with the reason."""
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc is not installed")
+    model, _ = cases()["synthetic p=3"]
+    write(render(model, "c"), tmp_path)
+    header = (tmp_path / "groupfit_model.h").read_text()
+    assert "-ffp-contract=off" in header and "-std=c99" in header
+    with pytest.raises(subprocess.CalledProcessError) as refused:
+        build_driver(tmp_path, tmp_path / "driver", flags=("-O2", "-ffast-math"))
+    assert "built with -ffast-math" in refused.value.stderr
+
+
 def test_sanitized_build_runs_fault_streams_cleanly(drivers):
     model, streams = cases()["8 temps p=6"]
     executable = drivers("8 temps p=6", model, "sanitized")

@@ -11,6 +11,8 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
+from support.replay import assert_same_decisions as assert_same_replay
+from support.replay import python_replay
 from support.structured_text import (
     FunctionBlock,
     STError,
@@ -134,6 +136,25 @@ def test_real_block_matches_the_single_precision_c_build_bit_for_bit(single_driv
     st_out = run_block(block_source(label, "REAL"), streams, model["sampling_period_s"], "REAL")
     c_out = run_driver(single_driver(label, model), streams)
     assert_same_decisions(st_out, c_out)
+
+
+def test_a_reading_within_half_a_single_step_beyond_its_limit_is_decided_alike_in_single_precision(single_driver):
+    """A REAL block rounds a reading to single before it tests its range (its inputs are REAL): a reading just
+    beyond a limit is then at the limit, valid. The C float build and the Python rule in single round it
+    first too, and decide the same; in double it is beyond the limit: held, then a sensor fault."""
+    model, run = synthetic_model()
+    high, low = model["switching"]["temp_max_c"][0], model["switching"]["temp_min_c"][1]
+    temps = run.temps.astype(float).copy()
+    temps[30:34, 0] = np.nextafter(high, np.inf)  # beyond the limit in double, at it in single
+    temps[50:53, 1] = np.nextafter(low, -np.inf)
+    assert np.float32(temps[30, 0]) == np.float32(high) and np.float32(temps[50, 1]) == np.float32(low)
+    single, double = python_replay(model, temps, "single"), python_replay(model, temps)
+    for rows in (slice(30, 34), slice(50, 53)):
+        assert (single["fault"][rows] == 0).all() and (double["fault"][rows] != 0).all()  # held, then a fault
+    (st_out,) = run_block(block_source("synthetic p=3", "REAL"), [temps], model["sampling_period_s"], "REAL")
+    (c_out,) = run_driver(single_driver("synthetic p=3", model), [temps])
+    assert_same_decisions([st_out], [c_out])
+    assert_same_replay(c_out, single)
 
 
 def test_lreal_block_matches_the_python_rule():

@@ -74,10 +74,19 @@ $input_lines * Switching criterion: temps[GF_CRITERION] ($criterion).
  * s->fault is a bit mask: GF_FAULT_HELD (a last good value stood in for an
  * invalid reading; the output is valid), GF_FAULT_SENSOR (safe output).
  *
- * Define GF_USE_FLOAT for single-precision arithmetic (as a PLC REAL).
+ * Define GF_USE_FLOAT for single-precision arithmetic (as a PLC REAL); a
+ * reading is then rounded to single precision before its range is tested.
+ *
+ * Build: IEEE arithmetic without fused multiply-add contraction, so that every
+ * rounding is groupfit's: gcc and clang in ISO mode (-std=c99) do not contract;
+ * in GNU mode (gcc's default) add -ffp-contract=off. Never -ffast-math.
  */
 #ifndef GROUPFIT_MODEL_H
 #define GROUPFIT_MODEL_H
+
+#if defined(__FAST_MATH__)
+#error "groupfit_model: built with -ffast-math, which breaks the NaN test and the roundings; build without it"
+#endif
 
 #define GF_N_TEMPS $n_temps /* readings per sample */
 #define GF_N_INPUTS $n_inputs /* model inputs: one coefficient each */
@@ -203,9 +212,9 @@ $step_locals$position_locals    int held = 0;
         s->count++;
     }
     for (m = 0; m < GF_N_TEMPS; m++) {
-        double reading = temps[m];
-        if (reading >= gf_temp_min[m] && reading <= gf_temp_max[m]) {
-            s->last[m] = (gf_real)reading;
+        const gf_real reading = (gf_real)temps[m];
+        if (reading >= (gf_real)gf_temp_min[m] && reading <= (gf_real)gf_temp_max[m]) {
+            s->last[m] = reading;
             s->bad[m] = 0;
         } else if (s->bad[m] <= GF_HOLD_SAMPLES) {
             s->bad[m]++;

@@ -98,7 +98,8 @@ STEPS = (
     "count = min(count + 1, count_max); count starts at 0, group at 1, compensation at 0, "
     "and bad[m] at hold_samples + 1 (no good reading yet)",
     "for every reading m in order: if temp_min_c[m] <= x[m] <= temp_max_c[m] (false for NaN and +-inf) "
-    "then last[m] = x[m], bad[m] = 0; else if bad[m] <= hold_samples then bad[m] += 1. "
+    "then last[m] = x[m], bad[m] = 0; else if bad[m] <= hold_samples then bad[m] += 1 (a single-precision "
+    "runtime rounds x[m] and the limits to single before the test). "
     "faulted = some bad[m] > hold_samples; held = some 0 < bad[m] <= hold_samples",
     DERIVED_STEP,
     "if group < number of groups, with window w = group (1-based): if count >= windows[w].last then "

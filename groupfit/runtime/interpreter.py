@@ -144,6 +144,8 @@ class SwitchingRule:
         real = np.float32 if precision == "single" else float
         t = self.tables
         self._real = real
+        with np.errstate(over="ignore"):  # a limit beyond single precision's range is +-inf there
+            self._valid = [(real(low), real(high)) for low, high in zip(t.valid_min, t.valid_max)]
         self._coef = [[real(v) for v in row] for row in t.coefficients]
         self._threshold = [real(v) for v in t.thresholds_c]
         self._margin = real(t.margin_c)
@@ -230,9 +232,11 @@ class SwitchingRule:
         t = self.tables
         held = faulted = False
         for m in range(t.n_temps):
-            reading = float(readings[m])
-            if reading >= t.valid_min[m] and reading <= t.valid_max[m]:
-                self.last[m] = self._real(reading)
+            with np.errstate(over="ignore"):  # single precision: rounded before its range is tested
+                reading = self._real(float(readings[m]))
+            low, high = self._valid[m]
+            if reading >= low and reading <= high:
+                self.last[m] = reading
                 self.bad[m] = 0
             elif self.bad[m] <= t.hold_samples:
                 self.bad[m] += 1

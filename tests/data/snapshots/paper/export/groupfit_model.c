@@ -218,9 +218,9 @@ int gf_step(gf_state *s, const double temps[GF_N_TEMPS], double *error_um)
         s->count++;
     }
     for (m = 0; m < GF_N_TEMPS; m++) {
-        double reading = temps[m];
-        if (reading >= gf_temp_min[m] && reading <= gf_temp_max[m]) {
-            s->last[m] = (gf_real)reading;
+        const gf_real reading = (gf_real)temps[m];
+        if (reading >= (gf_real)gf_temp_min[m] && reading <= (gf_real)gf_temp_max[m]) {
+            s->last[m] = reading;
             s->bad[m] = 0;
         } else if (s->bad[m] <= GF_HOLD_SAMPLES) {
             s->bad[m]++;

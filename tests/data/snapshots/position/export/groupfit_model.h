@@ -29,10 +29,19 @@
  * s->fault is a bit mask: GF_FAULT_HELD (a last good value stood in for an
  * invalid reading; the output is valid), GF_FAULT_SENSOR (safe output).
  *
- * Define GF_USE_FLOAT for single-precision arithmetic (as a PLC REAL).
+ * Define GF_USE_FLOAT for single-precision arithmetic (as a PLC REAL); a
+ * reading is then rounded to single precision before its range is tested.
+ *
+ * Build: IEEE arithmetic without fused multiply-add contraction, so that every
+ * rounding is groupfit's: gcc and clang in ISO mode (-std=c99) do not contract;
+ * in GNU mode (gcc's default) add -ffp-contract=off. Never -ffast-math.
  */
 #ifndef GROUPFIT_MODEL_H
 #define GROUPFIT_MODEL_H
+
+#if defined(__FAST_MATH__)
+#error "groupfit_model: built with -ffast-math, which breaks the NaN test and the roundings; build without it"
+#endif
 
 #define GF_N_TEMPS 3 /* readings per sample */
 #define GF_N_INPUTS 2 /* model inputs: one coefficient each */
