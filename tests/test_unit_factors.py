@@ -8,6 +8,7 @@ log must give the same model as the plain log.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -15,6 +16,7 @@ import pytest
 from test_switching_models import SYNTHETIC
 
 from groupfit.cli import main
+from groupfit.data import load_run
 from groupfit.default_columns import length_unit, named_length_unit
 from groupfit.switching_checks import switch_direction
 from groupfit.unit_factors import factored_unit
@@ -160,4 +162,9 @@ def test_the_export_of_a_model_of_a_fahrenheit_log_says_to_pass_degrees_celsius(
     sheet = (out / "groupfit_sheet.txt").read_text()
     assert sheet.count("logged in degF: pass it in degC") == 3  # both inputs and the reference
     assert "T_amb (F)" in sheet and "valid 9 .. 31 degC" in sheet
-    assert (out / "groupfit_model.h").read_text().count("logged in degF: pass it in degC") == 3
+    header = (out / "groupfit_model.h").read_text()
+    assert header.count("logged in degF: pass it in degC") == 3
+    scale, offset = re.search(r"degC = x \* (\S+) - (\S+), as groupfit converts it", header).groups()
+    readings = fahrenheit["T1 (F)"].to_numpy()  # the note's formula is the reader's, bit for bit
+    loaded = load_run(tmp_path / "fahrenheit.csv", temps=["T1 (F)", "T2 (F)"], error="error_um")
+    assert (readings * float(scale) - float(offset)).tobytes() == loaded.temps[:, 0].tobytes()

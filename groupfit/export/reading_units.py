@@ -34,7 +34,11 @@ def conversion_note(name: str) -> str | None:
     unit = named_temperature_unit(name)
     if unit is None or CELSIUS_BY_UNIT[unit] == (1.0, 0.0):
         return None
-    return f"logged in {_ascii(SHOWN.get(unit, unit))}: pass it in degC"
+    scale, offset = CELSIUS_BY_UNIT[unit]
+    formula = (
+        f"degC = x * {scale!r} {'-' if offset < 0 else '+'} {abs(offset)!r}" if offset else f"degC = x * {scale!r}"
+    )
+    return f"logged in {_ascii(SHOWN.get(unit, unit))}: pass it in degC ({formula}, as groupfit converts it)"
 
 
 def _ascii(unit: str) -> str:
