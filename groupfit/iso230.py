@@ -32,6 +32,7 @@ limit every verb puts on an error): anything else is refused with its row
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -41,7 +42,7 @@ import pandas as pd
 
 from groupfit.column_values import ERROR_LIMIT_UM, POSITION_LIMIT_UM
 from groupfit.data import numeric_column, read_table
-from groupfit.default_columns import MICROMETRES_PER_UNIT, named_length_unit
+from groupfit.default_columns import MICROMETRES_PER_UNIT, factored_length_unit, named_length_unit
 from groupfit.errors import InputError
 from groupfit.readtable import COMPRESSED, TABLE_SUFFIXES
 from groupfit.textencoding import decode
@@ -272,6 +273,10 @@ def load_runs(
     runs each way.
     """
     frame, _, label = read_table(source)
+    roles = {"--target": target, "--direction": direction, "--deviation": deviation}
+    for (role, name), (other, same) in itertools.combinations(roles.items(), 2):
+        if name == same:
+            raise InputError(f"{label}: column '{name}' given as both {role} and {other}; name one column for each")
     for name in (target, direction, deviation):
         if name not in frame.columns:
             raise InputError(
@@ -324,10 +329,14 @@ def _header_read_below(source, frame: pd.DataFrame, label: str, names: Sequence[
 def read_in(column: str, plausible: PlausibleValues) -> tuple[str, float]:
     """The length unit ``column``'s name ends in (``deviation_nm``, ``target [µm]``) and the factor that takes
     it to ``plausible.unit``; ``plausible.unit`` and 1 when the name has none."""
+    per_plausible_unit = 1000.0 if plausible.unit == "mm" else 1.0
+    factored = factored_length_unit(column)  # dev [0.1 µm], P [0.1 mm]
+    if factored is not None:
+        return factored[0], factored[1] / per_plausible_unit
     unit = named_length_unit(column)
     if unit is None:
         return plausible.unit, 1.0
-    return unit, MICROMETRES_PER_UNIT[unit] / (1000.0 if plausible.unit == "mm" else 1.0)
+    return unit, MICROMETRES_PER_UNIT[unit] / per_plausible_unit
 
 
 def _plausible_column(frame: pd.DataFrame, column: str, label: str, plausible: PlausibleValues) -> np.ndarray:

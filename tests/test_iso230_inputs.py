@@ -192,6 +192,9 @@ def test_evaluate_refuses_what_no_axis_measures(up, targets, message):
         ("target_um", "deviation_nm", 1000.0, 1000.0, {"target_um": "um", "deviation_nm": "nm"}),
         ("P [mm]", "dev (mm)", 1.0, 1e-3, {"dev (mm)": "mm"}),
         ("pos", "dx", 1.0, 1.0, {}),
+        ("P [0.1 mm]", "dev [0.1 µm]", 10.0, 10.0, {"P [0.1 mm]": "0.1 mm", "dev [0.1 µm]": "0.1 µm"}),
+        ("pos", "dev [µm/10]", 1.0, 10.0, {"dev [µm/10]": "µm/10"}),
+        ("pos", "dev [10 nm]", 1.0, 100.0, {"dev [10 nm]": "10 nm"}),
     ],
 )
 def test_a_unit_in_the_column_name_is_read_as_that_unit(tmp_path, capsys, target, deviation, to_mm, to_um, named):
@@ -211,3 +214,15 @@ def test_a_unit_in_the_column_name_is_read_as_that_unit(tmp_path, capsys, target
     assert main(args) == 0
     report = capsys.readouterr().out
     assert all(f"column   '{c}' read in {u} (by its name)" in report for c, u in named.items())
+
+
+@pytest.mark.parametrize(
+    "same", [("--target", "--deviation"), ("--direction", "--deviation"), ("--target", "--direction")]
+)
+def test_one_column_named_for_two_roles_is_refused(tmp_path, capsys, same):
+    frame = three_target_runs().rename(columns={"target_mm": "P"})
+    frame.to_csv(tmp_path / "runs.csv", index=False)
+    args = ["iso230", str(tmp_path / "runs.csv"), "--target", "P", *(option for role in same for option in (role, "P"))]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "column 'P' given as both" in err[0] and "runs.csv" in err[0]
