@@ -241,6 +241,10 @@ def markers_emptied(frame: pd.DataFrame) -> pd.DataFrame:
     return frame.assign(**converted) if converted else frame
 
 
+TEMP_RANGE_OPTION = "--range-temp=LOW,HIGH (or [data] temp_range)"
+ERROR_RANGE_OPTION = "--range-error MAX (or [data] error_limit)"
+
+
 def check_range(
     values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
 ) -> None:
@@ -249,7 +253,7 @@ def check_range(
     outside = np.flatnonzero((values < low) | (values > high))
     if outside.size:
         row = int(outside[0])
-        if option == "--range-error MAX":
+        if option == ERROR_RANGE_OPTION:
             _refuse_positions(values, column, label, high)
         raise InputError(
             f"{label}: row {row + 1}, column '{column}': {values[row]:g} {unit} is outside the plausible range "

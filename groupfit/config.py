@@ -68,6 +68,9 @@ from typing import Any, Callable
 
 from groupfit.data_options import MAX_PERIOD_TOLERANCE, encoding_name, parse_period_tolerance
 from groupfit.errors import InputError
+from groupfit.grouping import MAX_SPACING
+from groupfit.objective import OBJECTIVES
+from groupfit.search.base import METHODS
 from groupfit.settings import P_RULES, RunSettings
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
@@ -131,9 +134,38 @@ def _encoding(table: Table, key: str) -> str:
 
 def _whole_or_auto(table: Table, key: str) -> int | str:
     value = table.get(key)
-    if value != "auto" and (isinstance(value, bool) or not isinstance(value, int)):
-        raise table.fail(key, f'expected a whole number or "auto", got {value!r}')
+    if value != "auto" and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+        raise table.fail(key, f'expected a whole number ≥ 0 or "auto", got {value!r}')
     return value
+
+
+def _spacing(table: Table, key: str) -> float:
+    value = table.number(key, nonnegative=True)
+    if value > MAX_SPACING:
+        raise table.fail(key, f"the spacing coefficient must be a number from 0 to {MAX_SPACING:g}, got {value!r}")
+    return table.data[key]
+
+
+STRUCTURAL_GAIN_LIMIT = 1e4
+"""The largest structural gain α·L taken, µm per K (steel over 5 m: about 60)."""
+
+
+def _structural_gain(table: Table, key: str) -> float:
+    value = table.number(key)
+    if abs(value) > STRUCTURAL_GAIN_LIMIT:
+        raise table.fail(key, f"expected α·L in µm per K, at most {STRUCTURAL_GAIN_LIMIT:g} in size, got {value!r}")
+    return value
+
+
+def _check_compare_keys(compare: dict[str, Any], label: str) -> None:
+    """Refuse ``[compare]`` keys that would have no effect with the others given."""
+    fail = Table(compare, "compare", label).fail
+    if "structural_gain_um_per_K" in compare and "structural_sensor" not in compare:
+        raise fail("structural_gain_um_per_K", "has no effect without structural_sensor (the sensor it multiplies)")
+    if compare.get("ar1_scaling", "heat_law") != "rise":
+        for key in ("rise_sensor", "rise_window_s"):
+            if key in compare:
+                raise fail(key, 'applies with ar1_scaling = "rise" only (unseen levels scaled by the early rise)')
 
 
 def _certify(table: Table, key: str) -> bool | str:
@@ -183,14 +215,14 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "p_rule": lambda table, key: table.string(key, choices=P_RULES),
         "p_target": _target,
         "n": _at_least(0),
-        "c": _number,
-        "objective": Table.string,
+        "c": _spacing,
+        "objective": lambda table, key: table.string(key, choices=OBJECTIVES),
         "intercept": Table.boolean,
         "criterion": Table.string,
         "reference": Table.string,
     },
     "search": {
-        "method": Table.string,
+        "method": lambda table, key: table.string(key, choices=METHODS),
         "seed": _seed,
         "population_size": _at_least(2),
         "max_generations": _at_least(1),
@@ -209,7 +241,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "rise_sensor": Table.string,
         "rise_window_s": _number,
         "structural_sensor": Table.string,
-        "structural_gain_um_per_K": _number,
+        "structural_gain_um_per_K": _structural_gain,
         "conditions": Table.strings,
         "p_target": _target,
     },
@@ -269,4 +301,5 @@ def check_config(raw: dict, label: str) -> dict[str, dict[str, Any]]:
         table = Table(values, name, label)
         checked[name] = {key: read(table, key) for key, read in SCHEMA[name].items() if key in table}
         table.finish(f"known keys: {', '.join(SCHEMA[name])}")
+    _check_compare_keys(checked.get("compare", {}), label)
     return checked

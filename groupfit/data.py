@@ -17,7 +17,9 @@ import pandas as pd
 
 from groupfit.column_values import ERROR_LIMIT_UM as ERROR_LIMIT_UM
 from groupfit.column_values import (
+    ERROR_RANGE_OPTION,
     MISSING_TIME,
+    TEMP_RANGE_OPTION,
     implausible_as_missed,
     markers_emptied,
     refuse_bad_cells,
@@ -266,7 +268,7 @@ def load_runs(
     asked = options.get("error", DEFAULT_ERROR)
     frame = with_scaled_error(frame, asked, label, lengths=lengths, required=required and not error_is_default)
     error, error_note = found_error_column(
-        frame, asked, label, required=required, default=error_is_default, lengths=lengths
+        frame, asked, label, required=required, default=error_is_default, lengths=lengths, time=time
     )
     try:
         runs = _read_runs(frame, run_name, label, period_tolerance, resample, {**options, "time": time, "error": error})
@@ -388,9 +390,9 @@ def _validated(
     if options.ranges_checked:
         if temp_range is not None:
             for j, t in enumerate(temps):
-                check_range(temp_array[:, j], t, label, temp_range, "°C", "--range-temp=LOW,HIGH")
+                check_range(temp_array[:, j], t, label, temp_range, "°C", TEMP_RANGE_OPTION)
         if error_limit is not None and error_values is not None:
-            check_range(error_values, error, label, (-error_limit, error_limit), "µm", "--range-error MAX")
+            check_range(error_values, error, label, (-error_limit, error_limit), "µm", ERROR_RANGE_OPTION)
     if options.drop_glitches:  # after the ranges: an implausible reading is refused, not interpolated
         frame, temp_array, glitched = temperatures_without_glitches(frame, temps, temp_array, label, options.ambient)
         notes = notes + ((glitched,) if glitched else ())

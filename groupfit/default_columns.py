@@ -228,6 +228,7 @@ def found_error_column(
     required: bool = True,
     default: bool = False,
     lengths: Sequence[str] = (),
+    time: str | None = None,
 ) -> tuple[str | None, str | None]:
     """The thermal-error column to read, and a note when it is not the one asked for (module docstring).
 
@@ -241,8 +242,11 @@ def found_error_column(
     Raises
     ------
     InputError
-        The default is absent and several columns could be the error.
+        The default is absent and several columns could be the error; the error asked for is ``time``, the
+        run's time column.
     """
+    if error is not None and error == time:
+        raise InputError(f"{label}: column '{time}' is the run's time, not the thermal error; name the error's column")
     if error is None or error in frame.columns or not (default or (required and error == DEFAULT_ERROR)):
         return error, None
     names = error_like_columns(frame.columns) or [str(c) for c in lengths]

@@ -244,6 +244,49 @@ NEW_CASES = [
     Case(
         "model files", "a folder as the model", ("replay", "{in}", "--data", "{in}/good.csv"), "is a folder; give the"
     ),
+    # values a config or an option took without effect or with a traceback
+    Case("data", "--error the time", data_fit("good.csv", "--error", "time_s"), "'time_s' is the run's time"),
+    Case("data", "an empty --reference", data_fit("good.csv", "--reference", ""), "--reference is empty"),
+    Case("configs", "an empty reference", configured("fit", "reference_empty.toml"), "[model] reference is empty"),
+    Case("configs", "c of 1e300", configured("fit", "c_huge.toml"), "'model.c': the spacing coefficient"),
+    Case("configs", "p of -1", configured("fit", "p_negative.toml"), "'model.p': expected a whole number ≥ 0"),
+    Case("configs", "objective in capitals", configured("fit", "objective_upper.toml"), "'model.objective'"),
+    Case("configs", "search method in capitals", configured("fit", "method_upper.toml"), "'search.method'"),
+    Case("configs", "a structural gain of 1e300", configured("compare", "gain_huge.toml"), "'compare.structural_g"),
+    Case("configs", "a gain without its sensor", configured("compare", "gain_alone.toml"), "without structural_se"),
+    Case("configs", "a rise sensor unused", configured("compare", "rise_unused.toml"), "'compare.rise_sensor'"),
+    Case("sweep", "the time as the error", swept("sweep_error_time.toml"), "'time_s' is the run's time"),
+    Case("sweep", "a seed beyond 64 bits", swept("sweep_seed_huge.toml"), "from 0 to 9223372036854775807"),
+    Case("sweep", "a period tolerance of -1", swept("sweep_tolerance.toml"), "'data.period_tolerance'"),
+    Case("sweep", "a grid c of 1e300", swept("sweep_c_huge.toml"), "must be a number from 0 to 1e+06"),
+    Case("sweep", "the error as a named sensor", swept("sweep_error_named.toml"), "is the thermal error"),
+    Case(
+        "parameters",
+        "screw run given twice as a copy",
+        ("screw", "identify", "{in}/screw.csv", "{in}/screw_copy.csv", "--out", "{out}/s"),
+        "screw.csv, given as screw runs too",
+    ),
+    Case(
+        "parameters",
+        "screw diameter inf",
+        ("screw", "identify", "{in}/screw.csv", "--diameter", "inf", "--out", "{out}/s"),
+        "--diameter inf",
+    ),
+    Case(
+        "parameters",
+        "screw expansion nan",
+        ("screw", "identify", "{in}/screw.csv", "--expansion", "nan", "--out", "{out}/s"),
+        "--expansion nan",
+    ),
+    Case(
+        "parameters",
+        "--probe-x beside a probe column",
+        ("screw", "predict", "{in}/screw_model.json", "--data", "{in}/screw_probe.csv", "--probe-x", "0.05"),
+        "leave out one of the two",
+    ),
+    Case(
+        "configs", "a sensor without a name", ("simulate", "{in}/sensor_unnamed.toml", "-o", "{out}/r.csv"), "needs a"
+    ),
     # sweep
     Case("sweep", "a million runs", swept("sweep_million.toml"), "100000"),
     Case("sweep", "mostly infeasible", swept("sweep_mostly_infeasible.toml"), "cannot fit their breaks"),
@@ -741,6 +784,21 @@ def _write_inputs(folder: Path) -> None:
         "path_empty.toml": '[data]\npath = ""\n',
         "p_rule_misspelt.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\np_rule = "nextrun"\n',
         "sweep_error_sensor.toml": f'[data]\n{data}\n[grid]\np = [1]\nsensors = [["error_um"]]\n',
+        "reference_empty.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\nreference = ""\n',
+        "c_huge.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\nc = 1e300\n',
+        "p_negative.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\np = -1\n',
+        "objective_upper.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[model]\nobjective = "SAE"\n',
+        "method_upper.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[search]\nmethod = "Exact"\n',
+        "gain_huge.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\nstructural_sensor = "T1"\n'
+        "structural_gain_um_per_K = 1e300\n",
+        "gain_alone.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\nstructural_gain_um_per_K = 3.2\n',
+        "rise_unused.toml": f'[data]\n{data}\ntemps = ["T1", "T2"]\n[compare]\nrise_sensor = "T2"\n',
+        "sweep_error_time.toml": f'[data]\n{data}\nerror = "time_s"\n[grid]\np = [1]\n',
+        "sweep_seed_huge.toml": f'[data]\n{data}\n[grid]\np = [1]\nsearch = ["ga"]\n[ga]\nseed = [{2**63}]\n',
+        "sweep_tolerance.toml": f"[data]\n{data}\nperiod_tolerance = -1\n[grid]\np = [1]\n",
+        "sweep_c_huge.toml": f"[data]\n{data}\n[grid]\np = [1]\nc = [1e300]\n",
+        "sweep_error_named.toml": f'[data]\n{data}\nerror = "T1"\ntemps = ["T1", "T2"]\n[grid]\np = [1]\n',
+        "sensor_unnamed.toml": 'kind = "lumped"\n[sensors]\n"" = [600.0, 1.0]\n',
     }
     for name, text in configs.items():
         (folder / name).write_text(text)
@@ -750,8 +808,11 @@ def _write_screw_inputs(folder: Path) -> None:
     """A ball-screw run (the shipped run's first 1000 s without its probe column), the model file identified on
     the whole run, and that file broken five ways."""
     frame = pd.read_csv(SCREW_RUN)
-    frame = frame[frame["time_s"] <= 1000].drop(columns="probe_x_m")
+    frame = frame[frame["time_s"] <= 1000]
+    frame.to_csv(folder / "screw_probe.csv", index=False)
+    frame = frame.drop(columns="probe_x_m")
     frame.to_csv(folder / "screw.csv", index=False)
+    frame.to_csv(folder / "screw_copy.csv", index=False)
     model = BallScrewModel()
     run = load_screw_run(SCREW_RUN)
     model.fit(run.rises, run.time, run.positions, source=run.name, label=run.source)

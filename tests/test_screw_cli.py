@@ -177,6 +177,26 @@ def test_a_run_without_position_named_sensors_is_refused(tmp_path, capsys):
     assert "T<mm>mm" in line
 
 
+@pytest.mark.parametrize("renamed", ["T140 mm", "T140mm_x", "t140_mm"])
+def test_a_sensor_named_almost_as_one_is_named_in_a_note(tmp_path, capsys, renamed):
+    """A column that reads as a sensor's position without the T<mm>mm form is not read as a sensor, and the
+    report says so: the identification then runs on the other sensors, as on the run without that column."""
+    frame = pd.read_csv(DATA / "screw_H.csv")
+    frame.rename(columns={"T140mm": renamed}).to_csv(tmp_path / "renamed.csv", index=False)
+    frame.drop(columns="T140mm").to_csv(tmp_path / "dropped.csv", index=False)
+    reports = {}
+    for name in ("renamed", "dropped"):
+        status, out, err = run_cli(
+            ["screw", "identify", str(tmp_path / f"{name}.csv"), "--out", str(tmp_path / name)], capsys
+        )
+        assert status == 0
+        reports[name] = out + err
+    assert f"'{renamed}' read as no sensor: a sensor's column is named T<mm>mm" in reports["renamed"]
+    assert "read as no sensor" not in reports["dropped"]
+    identified = {name: json.loads((tmp_path / name / "screw_model.json").read_text()) for name in reports}
+    assert identified["renamed"]["h_W_m2K"] == identified["dropped"]["h_W_m2K"]
+
+
 def test_predict_refuses_a_grouped_model_file(tmp_path, capsys):
     (tmp_path / "m.json").write_text(json.dumps({"format": "groupfit-model/1"}))
     line = _expect_input_error(

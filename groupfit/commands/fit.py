@@ -262,7 +262,8 @@ def chosen_inputs(args: argparse.Namespace, data: FitData) -> FitData:
     criterion = settings.model.criterion
     if criterion is not None and criterion not in run.temp_names:
         raise InputError(
-            f"switching criterion '{criterion}' is not a model input; choose one of {', '.join(run.temp_names)}"
+            f"switching criterion '{criterion}' (--criterion, [model] criterion) is not a model input; "
+            f"choose one of {', '.join(run.temp_names)}"
         )
     return replace(data, settings=settings, run=run, estimate_runs=estimate_runs, input_selection=input_selection)
 

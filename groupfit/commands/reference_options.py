@@ -38,9 +38,14 @@ def configured_reference(args: argparse.Namespace, settings: RunSettings, run: R
     """The reference of ``--reference``, else ``[model] reference``, else ``--ambient``, else the run's
     ambient (:func:`groupfit.reference.default_reference`); a note says which ambient was found by its name."""
     value = getattr(args, "reference", None)
+    given = "--reference"
     if value is None:
-        value = settings.model.reference
+        value, given = settings.model.reference, "[model] reference"
     ambient = settings.data.ambient
+    if value is not None and not str(value).strip():
+        raise InputError(f"{given} is empty: name a column ('none' reads the inputs as logged, 'start' over the start)")
+    if ambient is not None and not str(ambient).strip():
+        raise InputError("the ambient column is empty (--ambient, [data] ambient): name the air's column")
     if value is None and ambient is not None:
         if ambient not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))

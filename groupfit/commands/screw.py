@@ -22,6 +22,7 @@ import numpy as np
 
 from groupfit.commands import common
 from groupfit.errors import InputError
+from groupfit.io import refuse_repeated
 from groupfit.outputs import SCREW_MODELS, resolved_path
 from groupfit.screw import BallScrewModel
 from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
@@ -106,6 +107,15 @@ def _model_options(parser) -> None:
     parser.add_argument("--tr", type=float, default=400.0, metavar="S", help="t_r for new sources (default 400 s)")
 
 
+PHYSICAL_OPTIONS = (
+    ("--diameter", "diameter", 1.0, "the screw's diameter in m (20 mm is 0.02)"),
+    ("--conductivity", "conductivity", 1000.0, "the thermal conductivity in W/(m·K) (steel 45)"),
+    ("--expansion", "expansion", 1e-3, "the expansion coefficient in 1/K (steel 11.5e-6)"),
+    ("--tr", "tr", 1e7, "t_r in s"),
+)
+"""(option, attribute, largest plausible value, what it is): each must be finite, positive and at most that."""
+
+
 def build_model(args: argparse.Namespace):
     if args.offset == "fit":
         offset: str | float = "fit"
@@ -116,9 +126,10 @@ def build_model(args: argparse.Namespace):
             raise InputError(f"--offset {args.offset!r}: give a distance in metres or 'fit'") from None
         if not 0 <= offset < 1:
             raise InputError(f"--offset {offset:g}: must be between 0 and 1 m")
-    for name, value in (("--diameter", args.diameter), ("--conductivity", args.conductivity), ("--tr", args.tr)):
-        if not value > 0:
-            raise InputError(f"{name} {value:g}: must be positive")
+    for name, value, largest, what in PHYSICAL_OPTIONS:
+        value = getattr(args, value)
+        if not 0 < value <= largest:
+            raise InputError(f"{name} {value:g}: {what} must be positive and at most {largest:g}")
     if not 0 < args.transient_fraction < 1:
         raise InputError(f"--transient-fraction {args.transient_fraction:g}: must be between 0 and 1")
     return BallScrewModel(
@@ -143,6 +154,7 @@ def identify_runs(model, runs):
 
 def _load_runs(args: argparse.Namespace, paths, **options):
     """The screw runs ``paths``, read with the clock options of ``args``; what loading did printed as notes."""
+    refuse_repeated(paths, "as screw runs")
     runs = [load_screw_run(p, **common.clock_options(args), **common.range_options(args), **options) for p in paths]
     common.print_notes([run.run for run in runs], common.report_stream(args))
     for run in runs:

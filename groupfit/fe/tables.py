@@ -129,7 +129,9 @@ def read_sensors(raw, default: dict, *, layout: str, reserved, position) -> dict
         raise fail("sensors", f"must be a table of NAME = {layout}")
     sensors = {}
     for name, value in raw.items():
-        key = f"sensors.{name}"
+        key = f"sensors.{name}" if name.strip() else f"sensors.{name!r}"
+        if not name.strip() or name != name.strip() or "," in name:
+            raise fail(key, "a sensor needs a name, without a comma or spaces around it, to head its column")
         if reserved(name):
             raise fail(key, "this name is reserved for another column; rename the sensor")
         sensors[name] = position(key, value)

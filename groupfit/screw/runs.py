@@ -30,6 +30,8 @@ from groupfit.data import (
 from groupfit.errors import InputError
 
 SENSOR_NAME = re.compile(r"^T(\d+(?:\.\d+)?)mm$")
+LOOSE_SENSOR_NAME = re.compile(r"^T\s*_?\d+(?:[.,]\d+)?\s*_?(?:mm|cm|m)(?![a-z])", re.IGNORECASE)
+"""A name that reads as a sensor's position without being ``T<mm>mm`` (``T140 mm``, ``T0mm_x``): noted, not read."""
 PROBE_COLUMN = "probe_x_m"
 
 
@@ -137,9 +139,19 @@ def load_screw_run(
     )
     if scored_only:
         run = without_implausible_errors(run, error_limit)
-    run = Run(**{**run.__dict__, "source": label})
+    stray = [str(c) for c in frame.columns if c not in positions and LOOSE_SENSOR_NAME.match(str(c))]
+    notes = run.notes
+    if stray:
+        listed = ", ".join(f"'{c}'" for c in stray)
+        notes = (*notes, f"{label}: {listed} read as no sensor: a sensor's column is named T<mm>mm (e.g. T140mm)")
+    run = Run(**{**run.__dict__, "source": label, "notes": notes})
     frame = run.frame
     ambient = float(frame["T_amb"].iloc[0]) if "T_amb" in frame.columns else float(np.mean(run.temps[0]))
+    if PROBE_COLUMN in frame.columns and probe_x is not None:
+        raise InputError(
+            f"{label}: --probe-x {probe_x:g} given, but the run's column {PROBE_COLUMN} places the probe; "
+            "leave out one of the two"
+        )
     if PROBE_COLUMN in frame.columns:
         probe = numeric_column(frame, PROBE_COLUMN, label, allow_nonfinite=False)
     elif probe_x is not None:

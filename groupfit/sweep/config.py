@@ -57,6 +57,7 @@ from typing import Any, Callable
 
 from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME
 from groupfit.errors import InputError
+from groupfit.grouping import MAX_SPACING
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import GASettings
 from groupfit.sweep.datasets import Dataset, non_empty_string, read_datasets, sensor_option
@@ -268,12 +269,16 @@ def _expand_range(raw: dict, what: str, label: str) -> list:
     return [round(start + i * step, 12) for i in range(count)]
 
 
+LARGEST_INTEGER = 2**63 - 1
+"""The largest whole number the study's database (SQLite INTEGER) and a TOML integer hold."""
+
+
 def _integer(minimum: int) -> Callable:
     def check(value, what: str, label: str) -> int:
         if isinstance(value, float) and value.is_integer():
             value = int(value)
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise InputError(f"{label}: {what} must be a whole number ≥ {minimum}")
+        if isinstance(value, bool) or not isinstance(value, int) or not minimum <= value <= LARGEST_INTEGER:
+            raise InputError(f"{label}: {what} must be a whole number from {minimum} to {LARGEST_INTEGER}")
         return value
 
     return check
@@ -283,6 +288,13 @@ def _number(value, what: str, label: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
         raise InputError(f"{label}: {what} must be a finite number ≥ 0")
     return float(value)
+
+
+def _spacing(value, what: str, label: str) -> float:
+    value = _number(value, what, label)
+    if value > MAX_SPACING:
+        raise InputError(f"{label}: {what} must be a number from 0 to {MAX_SPACING:g}")
+    return value
 
 
 def _choice(choices: tuple[str, ...]) -> Callable:
@@ -303,7 +315,7 @@ def _boolean(value, what: str, label: str) -> bool:
 VALUE_CHECKS: dict[str, Callable] = {
     "p": _integer(0),
     "n": _integer(0),
-    "c": _number,
+    "c": _spacing,
     "objective": _choice(OBJECTIVES),
     "intercept": _boolean,
     "search": _choice(SEARCHES),

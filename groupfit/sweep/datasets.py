@@ -103,7 +103,8 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
         usable = tuple(c for c in run.frame.columns if c not in (run.time_name, run.error_name))  # as found
         where = f"{label}: {file.name}"
         constant = frozenset(_constant_columns(run.frame, usable))
-        candidates = candidate_columns(patterns, usable, constant, where)
+        roles = {run.time_name: "the run's time", run.error_name: "the thermal error ([data] error)"}
+        candidates = candidate_columns(patterns, usable, constant, where, roles)
         checked = load_run(file, temps=candidates, time=time_column, error=error_column, **clock)
         left_out = not np.array_equal(checked.error, run.error, equal_nan=True)
         datasets.append(
@@ -131,7 +132,12 @@ def clock_settings(table: dict, label: str) -> dict:
     """``[data] period_tolerance`` (percent), ``resample_s`` (seconds) and ``keep_glitches`` as
     :func:`groupfit.data.load_run` takes them (``groupfit sweep --period-tolerance``, ``--resample`` and
     ``--keep-glitches`` replace them)."""
-    tolerance = parse_period_tolerance(table.get("period_tolerance"))
+    try:
+        tolerance = parse_period_tolerance(table.get("period_tolerance"))
+    except InputError as exc:
+        raise InputError(
+            f"{label}: config key 'data.period_tolerance': {exc}".replace("--period-tolerance ", "")
+        ) from None
     resample = (
         None if table.get("resample_s") is None else Table(table, "data", label).number("resample_s", positive=True)
     )
@@ -153,12 +159,14 @@ def _constant_columns(frame, columns) -> set[str]:
     return constant
 
 
-def candidate_columns(patterns, usable, constant, label) -> list[str]:
+def candidate_columns(patterns, usable, constant, label, roles: dict[str, str] | None = None) -> list[str]:
     """Candidate sensor columns, in file order.
 
     Explicit names must exist; glob patterns (``*``, ``?``, ``[…]``) and the
     default (:func:`groupfit.default_columns.default_temperature_columns`) leave out constant columns.
+    ``roles``: the run's columns that are not sensors and what each is (its time, its error).
     """
+    roles = roles or {}
     if patterns is None:
         found = [c for c in default_temperature_columns(usable) if c not in constant]
         if not found:
@@ -174,6 +182,8 @@ def candidate_columns(patterns, usable, constant, label) -> list[str]:
                 raise InputError(f"{label}: sensor pattern {pattern!r} matches no (non-constant) column")
         elif pattern in usable:
             matches = [pattern]
+        elif pattern in roles:
+            raise InputError(f"{label}: column '{pattern}' is {roles[pattern]}, not a sensor")
         else:
             raise InputError(f"{label}: column '{pattern}' not found; the columns are {', '.join(usable)}")
         chosen.update(matches)
