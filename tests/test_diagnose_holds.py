@@ -298,17 +298,6 @@ def test_diagnose_can_start_from_re_selected_inputs(tmp_path, capsys):
     )
 
 
-def test_compare_takes_one_modelling_run(tmp_path, capsys):
-    paths = []
-    for k in range(2):
-        paths.append(tmp_path / f"day{k}.csv")
-        ambient_run(k, n_samples=200).to_csv(paths[-1], index=False)
-    assert main(["compare", "--data", *map(str, paths), "--temps", "T1,T2", "--out", str(tmp_path / "c")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "compare fits grouped models, whose breaks belong to one run" in err[0]
-    assert not (tmp_path / "c").exists()
-
-
 def test_an_effect_that_doubles_the_error_of_one_held_out_condition_is_refused():
     from groupfit.diagnose.candidates import Candidate
     from groupfit.diagnose.policy import DEFAULT_POLICY, FOLD_WORSENED
