@@ -231,9 +231,11 @@ class SwitchingRule:
         whether one has been invalid for longer than the hold (a sensor fault)."""
         t = self.tables
         held = faulted = False
-        for m in range(t.n_temps):
-            with np.errstate(over="ignore"):  # single precision: rounded before its range is tested
-                reading = self._real(float(readings[m]))
+        values = [float(readings[m]) for m in range(t.n_temps)]
+        if self.precision == "single":  # each reading rounded before its range is tested, as a REAL input is
+            with np.errstate(over="ignore"):
+                values = [self._real(v) for v in values]
+        for m, reading in enumerate(values):
             low, high = self._valid[m]
             if reading >= low and reading <= high:
                 self.last[m] = reading
