@@ -10,6 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from groupfit.columns import aligned_inputs
 from groupfit.commands.option_values import resample_seconds
 from groupfit.config import default_config_path, read_config
 from groupfit.data import (
@@ -290,13 +291,14 @@ def load_configured_run(data: DataSettings, path: str | None = None, **options) 
 
 def load_configured_runs(data: DataSettings, path: str | None = None, **options) -> list[Run]:
     """The runs named by ``path`` (default: the configuration's data path), a log split at its gaps by
-    ``--resample`` giving one run per part."""
+    ``--resample`` giving one run per part; every run's inputs in the first's order (matched by name)."""
     paths = (path,) if path else data.paths
     if not paths:
         raise InputError("no data given: pass --data CSV or set [data] path in the configuration")
     refuse_repeated(paths, "as data")
     options = _load_options(data, options)
-    return [run for p in paths for run in load_runs(p, **options)]
+    runs = [run for p in paths for run in load_runs(p, **options)]
+    return aligned_inputs(runs) if len(runs) > 1 else runs
 
 
 def _load_options(data: DataSettings, options: dict) -> dict:

@@ -30,6 +30,7 @@ from typing import Sequence
 
 import numpy as np
 
+from groupfit.columns import aligned_inputs
 from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
 from groupfit.heldout.choice import pooled_error
@@ -307,8 +308,9 @@ def _blocks(n_samples: int) -> list[int]:
 
 
 def leave_one_run_out(runs: Sequence[Run], *, fit_intercept: bool = True, ridge_alpha: float = 0.0) -> NextRunScores:
-    """The global model (p = 0) fitted on all runs but one and replayed over that one, for every run."""
-    runs = list(runs)
+    """The global model (p = 0) fitted on all runs but one and replayed over that one, for every run (the
+    inputs matched by name)."""
+    runs = aligned_inputs(list(runs))
     sse = np.zeros((1, len(runs)))
     counts = np.zeros(len(runs))
     for k, held_out in enumerate(runs):
