@@ -13,6 +13,7 @@ from groupfit.data import load_run
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import score_candidate, within_one_se
 from groupfit.diagnose.drift_guard import DriftGuard
+from groupfit.diagnose.residual import predict
 from groupfit.features import Feature, lowpass
 from groupfit.heldout.folds import Folds
 from groupfit.heldout.scorer import HeldOutScorer
@@ -100,6 +101,10 @@ def test_the_heat_law_on_the_measured_test_is_not_mistaken_for_a_drift():
 
     assert [c.feature.column for c in result.added] == ["spindle_rpm"]
     before, after = (
+        float(np.sqrt(np.mean((validation.error - predict(m, validation)) ** 2))) for m in (model, result.model)
+    )
+    assert after < 0.6 * before  # the model's own prediction
+    clamped_before, clamped_after = (
         float(np.sqrt(np.mean(r**2))) for r in (result.residuals_before["validate"], result.residuals_after["validate"])
     )
-    assert after < 0.6 * before
+    assert clamped_after < clamped_before and clamped_after > after  # what the controller corrects: the clamp holds

@@ -14,6 +14,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from groupfit.cli import main
@@ -55,3 +56,59 @@ def test_diagnose_before_is_the_replay_rms_on_the_same_run(fitted, capsys, tmp_p
     switched_hard = run.error - model.predict(inputs, replay_groups(model, inputs))
     assert len(set(replay_groups(model, inputs))) == 4
     assert abs(np.sqrt(np.mean(switched_hard**2)) - before) > 1e-6
+
+
+def test_diagnose_scores_a_run_beyond_the_clamp_as_replay_does(tmp_path, capsys):
+    """A next run 2.2 times as hot as the modelling run drives the prediction beyond the compensation's clamp
+    (twice the modelling run's largest): the controller corrects up to the clamp, and the diagnosis's figures
+    on that run are replay's, with a note, not those of the unclamped prediction."""
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    hot = frame.copy()
+    for column in ("T1", "T2"):
+        hot[column] = frame["T_amb"] + 2.2 * (frame[column] - frame["T_amb"])  # within the readings' valid range
+    hot["error_um"] = 2.2 * frame["error_um"]
+    hot.to_csv(tmp_path / "hot.csv", index=False)
+    fit = ["fit", "--data", DATASETS / "paper_cycle.csv", "--temps", TEMPS, "--p", "0", "--recalibrate", "none"]
+    assert main([str(a) for a in [*fit, "--quiet", "--out", tmp_path / "m"]]) == 0
+    model = tmp_path / "m" / "model.json"
+    replayed = json_of(capsys, "replay", model, "--data", tmp_path / "hot.csv", "--json", "-")
+    diagnosed = json_of(
+        capsys,
+        "diagnose",
+        model,
+        "--data",
+        DATASETS / "paper_cycle.csv",
+        "--validate",
+        tmp_path / "hot.csv",
+        "--recalibrate",
+        "none",
+        "--json",
+        "-",
+        "--out",
+        tmp_path / "d",
+    )
+    clamp = ModelFile.load(model).switching.comp_max_um
+    run_error = hot["error_um"].to_numpy()
+    inputs = ModelFile.load(model).inputs(hot, "hot")
+    prediction = ModelFile.load(model).predict(inputs)
+    assert np.sum(np.abs(prediction) > clamp) > 20  # the clamp binds on this run
+    assert replayed["scored_samples"] == len(hot) and replayed["clamped_samples"] > 20  # no reading in fault
+    unclamped = float(np.sqrt(np.mean((run_error - prediction) ** 2)))
+    before = diagnosed["before"]["validate"]["rms_um"]
+    assert before == pytest.approx(replayed["rms_um"], rel=1e-9) and abs(before - unclamped) > 0.1
+    assert any("compensation's clamp" in note for note in diagnosed["notes"])
+
+
+def test_the_augmented_model_keeps_the_span_of_its_inputs_derived_ones_included(tmp_path, capsys):
+    """replay tells a run that leaves the modelling range by the model file's input span: the augmented model
+    holds it for every input it reads, the effect diagnose added included."""
+    fit = ["fit", "--data", DATASETS / "paper_cycle.csv", "--temps", TEMPS, "--p", "0", "--recalibrate", "none"]
+    assert main([str(a) for a in [*fit, "--quiet", "--out", tmp_path / "m"]]) == 0
+    diagnose = ["diagnose", tmp_path / "m" / "model.json", "--data", DATASETS / "paper_cycle.csv"]
+    assert main([str(a) for a in [*diagnose, "--recalibrate", "none", "--out", tmp_path / "d"]]) == 0
+    augmented = ModelFile.load(tmp_path / "d" / "model_augmented.json")
+    assert augmented.derived_inputs  # an effect was added
+    inputs = augmented.inputs(pd.read_csv(DATASETS / "paper_cycle.csv"), "paper_cycle")
+    span = augmented.training["input_span"]
+    assert list(span) == list(augmented.temps)
+    assert np.array(list(span.values())) == pytest.approx(np.column_stack([inputs.min(axis=0), inputs.max(axis=0)]))

@@ -11,6 +11,7 @@ from test_switching_models import SYNTHETIC, synthetic_model
 
 from groupfit.cli import main
 from groupfit.model import ModelFile
+from groupfit.runtime import SwitchingRule
 
 
 def heated_run(seed: int, ambient: float, hours: float = 6.0) -> pd.DataFrame:
@@ -87,3 +88,28 @@ def test_a_model_file_without_an_expectation_gets_no_comparison(tmp_path, capsys
     result = replay_json(tmp_path, path, "--data", SYNTHETIC)
     assert "expected_next_run" not in result
     assert "expected about" not in capsys.readouterr().out
+
+
+def test_a_next_run_logged_in_another_unit_is_not_placed_and_its_readings_are_named(tmp_path, fitted, capsys):
+    """The next run logged in °F, for most of it, under the modelling run's names: the rule holds the readings beyond their valid
+    range and faults, so the few samples scored are not the run; replay names the readings, their range and
+    the values seen, and does not place the run against the expected figure."""
+    model_path, _, next_run = fitted
+    frame = pd.read_csv(next_run)
+    later = frame.index >= 0.3 * len(frame)  # the logger switched to °F after the first 30 % of the run
+    for column in ("T1", "T2"):
+        frame.loc[later, column] = frame.loc[later, column] * 9.0 / 5.0 + 32.0
+    frame.to_csv(tmp_path / "fahrenheit.csv", index=False)
+    result = replay_json(tmp_path, model_path, "--data", tmp_path / "fahrenheit.csv")
+    assert result["scored_samples"] < 0.5 * result["measured_samples"]
+    assert 0 < result["scored_samples"] and result["expected_next_run"]["place"] == "mostly unscored"
+    tables = SwitchingRule(ModelFile.load(model_path)).tables
+    found = {f["reading"]: f for f in result["readings_out_of_range"]}
+    for r, name in enumerate(tables.raw_names):
+        values = frame[name].to_numpy()
+        outside = (values < tables.valid_min[r]) | (values > tables.valid_max[r])
+        assert found[name]["samples"] == int(outside.sum())
+        assert found[name]["seen"] == [values[outside].min(), values[outside].max()]
+    assert any("another unit" in note for note in result["notes"])
+    clean = replay_json(tmp_path, model_path, "--data", next_run)
+    assert "readings_out_of_range" not in clean and clean["expected_next_run"]["place"] != "mostly unscored"

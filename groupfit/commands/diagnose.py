@@ -25,6 +25,7 @@ from groupfit.errors import InputError
 from groupfit.fast_response import stage_of, without_stage
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
+from groupfit.heldout.span import SPAN_KEY, input_span
 from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
 from groupfit.recordings import RECORDINGS_KEY, recording_entries
@@ -283,6 +284,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
     loading = loading_notes(data)  # this run's, not the fit's
     training = {k: v for k, v in (result.model.training or {}).items() if k != DATA_NOTES_KEY}
     training = {**training, **recordings, **({DATA_NOTES_KEY: loading} if loading else {})}
+    if result.changed:  # the span of the augmented model's inputs, derived ones included: replay checks a run on it
+        augmented = ModelFile.coerce(result.model)
+        spans = np.vstack([augmented.inputs(run.frame, run.source) for run in data])
+        training[SPAN_KEY] = input_span(augmented.temps, spans)
     result = replace(result, model=result.model.replace(training=training))
     model_path = Path(args.model)
     written = []

@@ -12,6 +12,7 @@ import numpy as np
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
+from groupfit.commands.replay_faults import fault_readings, mostly_unscored
 from groupfit.commands.replay_probes import (
     add_probe_options,
     probe_report,
@@ -211,8 +212,10 @@ def run_replay(args: argparse.Namespace) -> int:
     glitches, glitch_notes = scored_glitches(run.error, residual)
     offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"))
     register, register_notes = register_check(counts, residual, replay)
-    notes = span.get("notes", []) + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes + register_notes
-    extra = {**span, **glitches, **offset, **register, "clamped_samples": clamped}
+    out_of_range, fault_notes = fault_readings(rule.tables, run.temps, replay.fault)
+    notes = span.get("notes", []) + fault_notes + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
+    notes += register_notes
+    extra = {**span, **out_of_range, **glitches, **offset, **register, "clamped_samples": clamped}
     result = ReplayResult({**data, **extra, **({"notes": notes} if notes else {})})
     written = []
     if out_dir is not None:
@@ -273,11 +276,9 @@ def clamp_check(tables: RuleTables, replay: Replay) -> tuple[int, str | None]:
 
 
 def expectation_check(model: ModelFile, data: dict[str, Any], path) -> dict[str, Any]:
-    """This run's RMS without checks against what the model file expected of a next run (``training``).
-
-    Empty when the run has no measured error or the model file holds no expectation. A file ``path`` the
-    model was fitted on is no next run (``place`` says so).
-    """
+    """This run's RMS without checks against what the model file expected of a next run (``training``); empty
+    without a measured error or an expectation. A file the model was fitted on is no next run, nor a run mostly
+    in sensor fault (``place`` says so)."""
     training = model.training or {}
     expected = training.get("expected_next_run_rms_um")
     rms = data["probes"]["rms_without_checks_um"] if "probes" in data else data.get("rms_um")
@@ -287,6 +288,8 @@ def expectation_check(model: ModelFile, data: dict[str, Any], path) -> dict[str,
     place = "below" if rms < low else "above" if rms > high else "inside"
     if is_modelling_file(training, path):  # read only when there is a figure to place
         place = "modelling run"
+    elif mostly_unscored(data):
+        place = "mostly unscored"
     return {
         "expected_next_run": {
             "rms_um": float(expected),
@@ -304,6 +307,8 @@ def expectation_line(check: dict[str, Any]) -> str:
     where = "inside the range" if check["place"] == "inside" else f"{check['place']} the range"
     if check["place"] == "modelling run":
         where = "but this file is one the model was fitted on, not a next run"
+    elif check["place"] == "mostly unscored":
+        where = "not placed: most of the run was not scored (readings in fault, below)"
     return (
         f"expected about {check['rms_um']:.3g} µm RMS on a next run (range {low:.3g}-{high:.3g} µm, from the model "
         f"file); this run without checks: {check['actual_rms_um']:.3g} µm, {check['actual_over_expected']:.2g}× "

@@ -73,7 +73,7 @@ from groupfit.diagnose.effects import Tried, choose, ranking, tried_features
 from groupfit.diagnose.history import started_running_notes
 from groupfit.diagnose.joint import joint_start
 from groupfit.diagnose.measures import joint_name, metrics_of, metrics_per_run, residual_checks
-from groupfit.diagnose.notes import COLD_START, OVERFIT, Note, notes_of
+from groupfit.diagnose.notes import CLAMP, COLD_START, OVERFIT, Note, notes_of
 from groupfit.diagnose.policy import DEFAULT_POLICY, AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem, check_arguments, diagnosis_problem
 from groupfit.diagnose.reference import droppable_reference
@@ -243,7 +243,21 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     if validate_runs:
         features = [c.feature for c in state.added]
         state.notes += notes_of(COLD_START, started_running_notes(validate_runs, problem.skipped["validate"], features))
+        baseline = model if options.baseline is None else options.baseline
+        state.notes += notes_of(CLAMP, clamp_notes(problem, baseline, state.current.model))
     return result_of(problem, state, before=before, base_check=base_check, ambient=options.ambient)
+
+
+def clamp_notes(problem: Problem, before: Model, after: Model) -> list[str]:
+    """A note per validation run on which the compensation's clamp held the prediction, before or after."""
+    counts = {"before": problem.clamped(before), "after": problem.clamped(after)}
+    return [
+        f"{name}: the compensation's clamp (twice the largest prediction on the modelling run) held the "
+        f"prediction on {counts['before'][name]} sample(s) before and {counts['after'][name]} after; the figures "
+        "count what the controller corrects, up to the clamp, as replay does"
+        for name in counts["before"]
+        if counts["before"][name] or counts["after"][name]
+    ]
 
 
 def effect_loop(problem: Problem, state: State, policy: AcceptancePolicy) -> None:

@@ -20,6 +20,8 @@ SCOPE = "scope"
 """What was not tried (transforms of the model's own inputs)."""
 AMBIENT = "ambient"
 """Which columns were read as the air, and which as machine sensors."""
+CLAMP = "clamp"
+"""The compensation's clamp held the prediction on a validation run (scored as replay scores it)."""
 JOINT = "joint"
 """The joint selection is not expected to carry to a new condition."""
 

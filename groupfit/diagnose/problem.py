@@ -24,7 +24,7 @@ from groupfit.diagnose.augment import feature_on_runs, steady_reference
 from groupfit.diagnose.candidates import EXOGENOUS_R, Candidate, candidate_features, largest_correlation
 from groupfit.diagnose.history import with_histories
 from groupfit.diagnose.notes import COLUMNS, HISTORY, INPUTS, UNSCORED, Note, notes_of
-from groupfit.diagnose.residual import LiveRule, model_inputs, residual
+from groupfit.diagnose.residual import LiveRule, clamped_samples, model_inputs, residual
 from groupfit.errors import InputError
 from groupfit.features import Feature
 from groupfit.heldout.design import group_index, group_sample_floor, stacked_design
@@ -98,6 +98,12 @@ class Problem:
     def residuals(self, model: Model) -> dict[str, np.ndarray]:
         """The model's residuals on the modelling and validation runs, stacked, histories left out."""
         return {key: stacked_residual(model, rs, self.live_rule, self.skipped[key]) for key, rs in self.runs.items()}
+
+    def clamped(self, model: Model) -> dict[str, int]:
+        """Per validation run, on how many of its samples (histories left out) the compensation's clamp holds
+        the model's prediction (replay scores them so, and so does the diagnosis)."""
+        runs = zip(self.runs.get("validate", []), self.skipped.get("validate") or [])
+        return {run.name: clamped_samples(model, run, self.live_rule, skip) for run, skip in runs}
 
     def scorer(self, model: Model, inputs: list[np.ndarray]) -> HeldOutScorer:
         """The held-out scorer of the model's own design, fitted as the model is (least squares or ridge)."""

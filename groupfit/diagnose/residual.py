@@ -34,8 +34,25 @@ def predict(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np
     return model.predict(X, live_rule(model, X), transfer=True)
 
 
+def corrected(model: ModelLike, prediction: np.ndarray) -> np.ndarray:
+    """What the controller corrects of ``prediction``: the compensation's clamp of the model file's switching rule
+    (``comp_min_um`` … ``comp_max_um`` on the compensation, the prediction's negative) holds it, as in replay."""
+    switching = ModelFile.coerce(model).switching
+    low, high = switching.comp_min_um, switching.comp_max_um
+    if low is None or high is None:
+        return prediction
+    return np.clip(prediction, -high, -low)
+
+
+def clamped_samples(model: ModelLike, run: Run, live_rule: LiveRule | None = None, skip: int = 0) -> int:
+    """On how many samples of ``run`` (after its first ``skip``) the compensation's clamp holds the prediction."""
+    prediction = predict(model, run, live_rule)[skip:]
+    finite = np.isfinite(prediction)
+    return int(np.sum(corrected(model, prediction[finite]) != prediction[finite]))
+
+
 def residual(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
     model = ModelFile.coerce(model)
     if run.error is None:
         raise InputError(f"{run.source}: the run has no error column '{model.error}'; diagnose needs it")
-    return run.error - predict(model, run, live_rule)
+    return run.error - corrected(model, predict(model, run, live_rule))
