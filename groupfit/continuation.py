@@ -35,16 +35,28 @@ CONTIGUITY_TOLERANCE = 0.5
 """The gap between the two runs may differ from one sampling period by this share of it."""
 
 
+def recording_difference(previous: Run, run: Run) -> str | None:
+    """What keeps ``run`` from being the rest of ``previous``'s recording — its time column, inputs, columns,
+    error column or period differ — in words that name it; None when nothing does."""
+    if previous.time_name != run.time_name:
+        return f"its time column is '{run.time_name}', not '{previous.time_name}'"
+    if previous.temp_names != run.temp_names:
+        return f"its inputs are {', '.join(run.temp_names)}, not {', '.join(previous.temp_names)}"
+    added = [str(c) for c in run.frame.columns if c not in previous.frame.columns]
+    lost = [str(c) for c in previous.frame.columns if c not in run.frame.columns]
+    if added or lost:
+        parts = [f"adds {', '.join(added)}" if added else "", f"lacks {', '.join(lost)}" if lost else ""]
+        return f"its columns differ (it {' and '.join(p for p in parts if p)}: log both parts alike)"
+    if previous.error_name != run.error_name:
+        return f"its error column is '{run.error_name}', not '{previous.error_name}'"
+    if abs(previous.period - run.period) > PERIOD_TOLERANCE * previous.period:
+        return f"it is sampled every {run.period:g} s, not every {previous.period:g} s"
+    return None
+
+
 def same_recording(previous: Run, run: Run) -> bool:
-    """Whether ``run`` could be the rest of ``previous``'s recording: the same columns, inputs and period."""
-    if previous.time_name != run.time_name or previous.temp_names != run.temp_names:
-        return False
-    if set(previous.frame.columns) != set(run.frame.columns):
-        return False
-    return (
-        previous.error_name == run.error_name
-        and abs(previous.period - run.period) <= PERIOD_TOLERANCE * previous.period
-    )
+    """Whether ``run`` could be the rest of ``previous``'s recording (:func:`recording_difference`)."""
+    return recording_difference(previous, run) is None
 
 
 def clock_runs_on(
@@ -163,10 +175,11 @@ def with_histories(
         history = preceding_run(run, candidates)
         if history is None and assume_continued and candidates:
             history = candidates[-1]
-            if not same_recording(history, run):
+            difference = recording_difference(history, run)
+            if difference is not None:
                 raise InputError(
-                    f"{run.source}: --continues, but it cannot be the rest of {history.name}: its columns, "
-                    "inputs or sampling period differ; leave --continues out for a separate run"
+                    f"{run.source}: --continues, but it cannot be the rest of {history.name}: {difference}; "
+                    "leave --continues out for a separate run"
                 )
             run = picked_up(restamped(run, history), zero_of(history))
             notes.append(

@@ -325,7 +325,11 @@ def test_a_modelling_file_changed_or_gone_since_the_fit_is_not_continued_and_the
         rest.to_csv(tmp_path / "rest.csv", index=False)
     result = replayed(tmp_path, "--data", tmp_path / "rest.csv")
     said = capsys.readouterr().out
-    expected = {"edited": "has changed", "moved": "no longer there", "other columns": "columns, inputs or"}
+    expected = {
+        "edited": "has changed",
+        "moved": "no longer there",
+        "other columns": "its columns differ (it adds spare",
+    }
     assert expected[change] in said
     if state_kept and change != "other columns":  # the rule's state at the file's end stands in for it
         declared = replayed(split_recording, "--data", split_recording / "rest.csv")

@@ -18,7 +18,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from groupfit.continuation import same_recording
+from groupfit.continuation import recording_difference
 from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
 from groupfit.error_start import ZERO_KEY
 from groupfit.errors import InputError
@@ -110,14 +110,13 @@ def earlier_recordings(
             ),
             None,
         )
-    if not same_recording(history, run):
+    difference = recording_difference(history, run)
+    if difference is not None:
         return (
             [],
             [],
-            (
-                f"{run.name} looks like the rest of the modelling recording {found}, but its columns, inputs or "
-                "sampling period differ: the rule starts afresh"
-            ),
+            f"{run.name} looks like the rest of the modelling recording {found}, but {difference}: the rule "
+            "starts afresh",
             None,
         )
     return [found], [history], note, None
