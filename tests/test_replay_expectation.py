@@ -91,9 +91,9 @@ def test_a_model_file_without_an_expectation_gets_no_comparison(tmp_path, capsys
 
 
 def test_a_next_run_logged_in_another_unit_is_not_placed_and_its_readings_are_named(tmp_path, fitted, capsys):
-    """The next run logged in °F, for most of it, under the modelling run's names: the rule holds the readings beyond their valid
-    range and faults, so the few samples scored are not the run; replay names the readings, their range and
-    the values seen, and does not place the run against the expected figure."""
+    """The next run logged in °F, for most of it, under the modelling run's names: the rule holds the readings
+    beyond their valid range and faults, so the few samples scored are not the run; replay names the readings,
+    their range and the values seen, and does not place the run against the expected figure."""
     model_path, _, next_run = fitted
     frame = pd.read_csv(next_run)
     later = frame.index >= 0.3 * len(frame)  # the logger switched to °F after the first 30 % of the run
