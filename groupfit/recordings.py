@@ -79,6 +79,21 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
     return entries
 
 
+def overlap_note(training: Mapping[str, Any] | None, run: Run) -> str | None:
+    """A note when ``run``'s clock starts inside a modelling file's (the same clock origin): the two overlap, and
+    rows the model was fitted on would be scored as a next run's; None otherwise."""
+    for entry in (training or {}).get(RECORDINGS_KEY) or []:
+        if entry.get(CLOCK_ORIGIN) != run.clock_origin_s or "first_time_s" not in entry:
+            continue
+        if entry["first_time_s"] <= float(run.time[0]) < entry["last_time_s"]:
+            return (
+                f"{run.name}'s clock starts at {run.time[0]:g} s, inside the modelling file {Path(entry['path']).name} "
+                f"({entry['first_time_s']:g} to {entry['last_time_s']:g} s): the two overlap, and the rows they share "
+                "were fitted on; drop them from this file to score it as a next run"
+            )
+    return None
+
+
 def _continued_by(entry: Mapping[str, Any], run: Run) -> str | None:
     """How ``run`` continues the recording of ``entry``: "clock", "readings" (its clock starts again and its first
     row picks up where the recording's last left off, :mod:`groupfit.pickup`), or None."""

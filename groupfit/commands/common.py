@@ -38,6 +38,7 @@ from groupfit.io import atomic_write_text, refuse_repeated, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 from groupfit.outputs import commit_outputs as commit_outputs  # the verbs import it from here
 from groupfit.outputs import current_plan
+from groupfit.overlap import refuse_overlapping
 from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
 from groupfit.settings import DataSettings, RunSettings
@@ -298,7 +299,10 @@ def load_configured_runs(data: DataSettings, path: str | None = None, **options)
     refuse_repeated(paths, "as data")
     options = _load_options(data, options)
     runs = [run for p in paths for run in load_runs(p, **options)]
-    return aligned_inputs(runs) if len(runs) > 1 else runs
+    if len(paths) > 1:
+        runs = aligned_inputs(runs)
+        refuse_overlapping(runs)
+    return runs
 
 
 def _load_options(data: DataSettings, options: dict) -> dict:

@@ -16,6 +16,7 @@ from groupfit.fit_budget import projecting
 from groupfit.heldout.reference_choice import default_reference_choice
 from groupfit.inference.cli import add_interval_options, check_block, interval_settings
 from groupfit.io import refuse_repeated
+from groupfit.overlap import refuse_overlapping
 from groupfit.plots import plot_hysteresis, plot_r_against_p, plot_run_comparison
 from groupfit.probe_intervals import (
     check_intervals_fit,
@@ -149,6 +150,7 @@ def run_compare(args: argparse.Namespace) -> int:
         settings.pmax = settings.fit_pmax = 0
     modelling = join_runs(parts)
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
+    refuse_overlapping([*parts, *validation], "as data (--data, --validate)")
     if args.probe_every:
         check_intervals_fit(args.probe_every, args.probe_first, validation or [modelling])
     heat_note = settle_heat_and_conditions(args, settings, [modelling, *validation])

@@ -28,6 +28,7 @@ from groupfit.heldout.selection import SELECTION_METHODS
 from groupfit.heldout.span import SPAN_KEY, input_span
 from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
+from groupfit.overlap import refuse_overlapping
 from groupfit.recordings import RECORDINGS_KEY, recording_entries
 from groupfit.runtime import replay_groups
 from groupfit.training_checks import DATA_NOTES_KEY
@@ -243,6 +244,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
     validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     refuse_too_short(data, model)
+    refuse_overlapping([*data, *validate], "as data (--data, --validate)")
     common.print_notes([*data, *validate], common.report_stream(args))
     out_dir = common.check_output_dir(args.out)
     start = model

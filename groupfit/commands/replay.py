@@ -34,7 +34,7 @@ from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
-from groupfit.recordings import is_modelling_file
+from groupfit.recordings import is_modelling_file, overlap_note
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
 from groupfit.screw.modelfile import is_screw_file
@@ -191,7 +191,8 @@ def run_replay(args: argparse.Namespace) -> int:
         notes = [found_note] if history or saved else [found_note, *notes]  # the one note of what was continued
     elif not history and run.time[0] > 2 * run.period:
         notes.append(
-            f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
+            overlap_note(model.training, run)
+            or f"{run.name}'s clock starts at {run.time[0]:g} s: the rule starts at sample 1 (group 1) here; if the "
             "file is the rest of a recording, give the earlier file(s) with --continues FILE"
         )
     if not history and saved is None:

@@ -1,0 +1,55 @@
+"""Two logs of one machine that overlap: the later one's first rows repeat the earlier one's last rows.
+
+Exporting overlapping windows from a logger gives such files. Joined for a fit, the repeated rows count twice;
+held out as a "next run", the held-out rows were fitted on. Refused, naming the rows, so that one file drops them.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from groupfit.data import Run
+from groupfit.errors import InputError
+
+MIN_REPEATED_ROWS = 2
+"""Fewer repeated rows than this are taken as chance (a steady machine logs the same readings twice)."""
+
+
+def _rows(run: Run) -> np.ndarray:
+    error = run.error if run.error is not None else np.full(run.n_samples, np.nan)
+    return np.column_stack([run.temps, error])
+
+
+def repeated_rows(earlier: Run, later: Run) -> int:
+    """How many of ``later``'s first rows repeat ``earlier``'s last rows, inputs and error alike (0: none)."""
+    before, after = _rows(earlier), _rows(later)
+    if not len(before) or not len(after) or before.shape[1] != after.shape[1]:
+        return 0
+    same_first = np.all((before == after[0]) | (np.isnan(before) & np.isnan(after[0])), axis=1)
+    for start in np.flatnonzero(same_first):  # the earliest start is the longest overlap
+        k = len(before) - int(start)
+        if k > len(after):
+            continue
+        tail, head = before[start:], after[:k]
+        if np.all((tail == head) | (np.isnan(tail) & np.isnan(head))):
+            return k
+    return 0
+
+
+def refuse_overlapping(runs: Sequence[Run], what: str = "as data") -> None:
+    """Refuse runs one of which begins with the last rows of another (each checked against each)."""
+    for earlier in runs:
+        for later in runs:
+            if later is earlier or earlier.temp_names != later.temp_names:
+                continue
+            k = repeated_rows(earlier, later)
+            if k >= MIN_REPEATED_ROWS:
+                raise InputError(
+                    f"{later.source}: its first {k} rows repeat the last {k} rows of {earlier.source}, given {what} "
+                    "too (overlapping exports of one log): drop them from one file, so that no row counts twice"
+                )
+
+
+__all__ = ["MIN_REPEATED_ROWS", "refuse_overlapping", "repeated_rows"]
