@@ -39,13 +39,14 @@ def repeated_rows(earlier: Run, later: Run) -> int:
 
 
 def refuse_overlapping(runs: Sequence[Run], what: str = "as data") -> None:
-    """Refuse runs one of which begins with the last rows of another (each checked against each)."""
+    """Refuse runs one of which begins with the last rows of another, in part (each checked against each; a run
+    whose every row is another's is a copy, :func:`groupfit.io.refuse_repeated`'s to tell by its bytes)."""
     for earlier in runs:
         for later in runs:
             if later is earlier or earlier.temp_names != later.temp_names:
                 continue
             k = repeated_rows(earlier, later)
-            if k >= MIN_REPEATED_ROWS:
+            if MIN_REPEATED_ROWS <= k < min(earlier.n_samples, later.n_samples):  # whole copies: refuse_repeated
                 raise InputError(
                     f"{later.source}: its first {k} rows repeat the last {k} rows of {earlier.source}, given {what} "
                     "too (overlapping exports of one log): drop them from one file, so that no row counts twice"
