@@ -1,14 +1,24 @@
 """A next run scored as the controller corrects it: a prediction beyond the compensation's clamp counts only up
-to it, in ``compare`` as in ``replay`` (the clamp a model file's switching rule holds, twice the largest
+to it, in ``compare``, the next-run estimate and ``diagnose`` as in ``replay`` (the clamp a model file's switching rule holds, twice the largest
 prediction on the modelling run: :func:`groupfit.runtime.rule.compensation_clamp`)."""
 
 from __future__ import annotations
 
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
 LABELS = {"mlr": "MLR"}
+
+
+def within_compensation_clamp(prediction: np.ndarray, switching: Any) -> np.ndarray:
+    """What the controller corrects of ``prediction``: the compensation (the prediction's negative) held within
+    the model file's switching clamp, ``switching.comp_min_um`` … ``comp_max_um``, as replay holds it; the
+    prediction itself when the section sets no clamp."""
+    low, high = switching.comp_min_um, switching.comp_max_um
+    if low is None or high is None:
+        return prediction
+    return -np.clip(-prediction, low, high)
 
 
 def clamped(
@@ -34,4 +44,4 @@ def clamped(
     ]
 
 
-__all__ = ["clamped"]
+__all__ = ["clamped", "within_compensation_clamp"]

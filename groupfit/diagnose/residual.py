@@ -6,6 +6,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from groupfit.clamped_scores import within_compensation_clamp
 from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.features import Feature
@@ -35,13 +36,8 @@ def predict(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np
 
 
 def corrected(model: ModelLike, prediction: np.ndarray) -> np.ndarray:
-    """What the controller corrects of ``prediction``: the compensation's clamp of the model file's switching rule
-    (``comp_min_um`` … ``comp_max_um`` on the compensation, the prediction's negative) holds it, as in replay."""
-    switching = ModelFile.coerce(model).switching
-    low, high = switching.comp_min_um, switching.comp_max_um
-    if low is None or high is None:
-        return prediction
-    return np.clip(prediction, -high, -low)
+    """What the controller corrects of ``prediction``, within the model file's compensation clamp, as in replay."""
+    return within_compensation_clamp(prediction, ModelFile.coerce(model).switching)
 
 
 def clamped_samples(model: ModelLike, run: Run, live_rule: LiveRule | None = None, skip: int = 0) -> int:

@@ -30,6 +30,7 @@ from typing import Sequence
 
 import numpy as np
 
+from groupfit.clamped_scores import within_compensation_clamp
 from groupfit.columns import aligned_inputs
 from groupfit.data import Run, join_runs
 from groupfit.grouping import Constraints
@@ -183,7 +184,7 @@ def rule_prediction(estimator: GroupedRegressor, fitted_on: Run, temps: np.ndarr
         return np.clip(estimator.intercept_[0] + temps @ estimator.coef_[0], -clamp, clamp)
     model = estimator.to_model_file(fitted_on)
     prediction = model.predict(temps, replay_groups(model, temps), transfer=True)  # with the bumpless transfer
-    return -np.clip(-prediction, model.switching.comp_min_um, model.switching.comp_max_um)
+    return within_compensation_clamp(prediction, model.switching)
 
 
 def forward_chaining(
