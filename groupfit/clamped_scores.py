@@ -1,6 +1,7 @@
 """A next run scored as the controller corrects it: a prediction beyond the compensation's clamp counts only up
-to it, in ``compare``, the next-run estimate and ``diagnose`` as in ``replay`` (the clamp a model file's switching rule holds, twice the largest
-prediction on the modelling run: :func:`groupfit.runtime.rule.compensation_clamp`)."""
+to it, in ``compare``, the next-run estimate and ``diagnose`` as in ``replay`` (the clamp a model file's
+switching rule holds, twice the largest prediction on the modelling run:
+:func:`groupfit.runtime.rule.compensation_clamp`)."""
 
 from __future__ import annotations
 

@@ -181,6 +181,8 @@ def test_a_missed_cycle_is_interpolated_and_a_gap_splits_the_log(tmp_path, capsy
     assert cli("fit", "--data", path, "--p", "2", "--resample", "60", "--out", tmp_path) == 2
     assert "--resample split the log at its gaps" in capsys.readouterr().err
     assert cli("fit", "--data", path, "--p", "0", "--resample", "60", "--out", tmp_path) == 0
+    assert cli("compare", "--data", path, "--resample", "60", "--out", tmp_path / "c") == 2  # grouped: one run
+    assert "splits the log into 2 runs at gaps" in capsys.readouterr().err
     # the pieces of one log are one recording to the next-run estimate, not two days to leave out in turn
     report = tmp_path / "gap.json"
     assert cli("fit", "--data", path, "--resample", "60", "--json", report, "--out", tmp_path / "auto") == 0

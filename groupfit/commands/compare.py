@@ -110,6 +110,14 @@ def settle_heat_and_conditions(args: argparse.Namespace, settings: ComparisonSet
     return f"AR(1): left out: the run has no '{absent}' column, its default heat level{found}; --heat COLUMN names one"
 
 
+def modelling_runs(data) -> list:
+    """The modelling runs: each file of several, or the one log (which --resample may not split at its gaps:
+    a grouped model's breaks belong to one run, and the error says so)."""
+    if len(data.paths) > 1:
+        return common.load_configured_runs(data, missing_error=True)
+    return [common.load_configured_run(data, missing_error=True)]
+
+
 def run_compare(args: argparse.Namespace) -> int:
     config_path, run_settings = common.settings_with_data_options(args)
     run_settings = run_settings.given(
@@ -145,7 +153,7 @@ def run_compare(args: argparse.Namespace) -> int:
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
-    parts = common.load_configured_runs(data, missing_error=True)
+    parts = modelling_runs(data)
     if len(parts) > 1:  # several modelling runs: the global models, fitted on them joined
         settings.pmax = settings.fit_pmax = 0
     modelling = join_runs(parts)
