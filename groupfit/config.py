@@ -102,12 +102,19 @@ def _number(table: Table, key: str) -> int | float:
 
 def _period_tolerance(table: Table, key: str) -> int | float:
     value = _number(table, key)
+    parsed_period_tolerance(table, key)
+    return value
+
+
+def parsed_period_tolerance(table: Table, key: str) -> float | None:
+    """The tolerance ``key`` gives (a percentage: 2, or "5%"), as a fraction of the period; refused naming the
+    key."""
+    value = table.get(key)
     try:
-        parse_period_tolerance(value)
+        return parse_period_tolerance(value)
     except InputError:
         limit = f"{100 * MAX_PERIOD_TOLERANCE:g}"
         raise table.fail(key, f"must be a percentage of the period, 0 up to but not {limit}, got {value!r}") from None
-    return value
 
 
 def _path(table: Table, key: str) -> str:

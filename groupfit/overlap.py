@@ -24,16 +24,16 @@ def _rows(run: Run) -> np.ndarray:
 
 def repeated_rows(earlier: Run, later: Run) -> int:
     """How many of ``later``'s first rows repeat ``earlier``'s last rows, inputs and error alike (0: none)."""
-    before, after = _rows(earlier), _rows(later)
+    return _repeated(_rows(earlier), _rows(later))
+
+
+def _repeated(before: np.ndarray, after: np.ndarray) -> int:
     if not len(before) or not len(after) or before.shape[1] != after.shape[1]:
         return 0
     same_first = np.all((before == after[0]) | (np.isnan(before) & np.isnan(after[0])), axis=1)
     for start in np.flatnonzero(same_first):  # the earliest start is the longest overlap
         k = len(before) - int(start)
-        if k > len(after):
-            continue
-        tail, head = before[start:], after[:k]
-        if np.all((tail == head) | (np.isnan(tail) & np.isnan(head))):
+        if k <= len(after) and np.array_equal(before[start:], after[:k], equal_nan=True):
             return k
     return 0
 
@@ -41,11 +41,12 @@ def repeated_rows(earlier: Run, later: Run) -> int:
 def refuse_overlapping(runs: Sequence[Run], what: str = "as data") -> None:
     """Refuse runs one of which begins with the last rows of another, in part (each checked against each; a run
     whose every row is another's is a copy, :func:`groupfit.io.refuse_repeated`'s to tell by its bytes)."""
-    for earlier in runs:
-        for later in runs:
-            if later is earlier or earlier.temp_names != later.temp_names:
+    rows = [_rows(run) for run in runs]
+    for i, earlier in enumerate(runs):
+        for j, later in enumerate(runs):
+            if i == j or earlier.temp_names != later.temp_names:
                 continue
-            k = repeated_rows(earlier, later)
+            k = _repeated(rows[i], rows[j])
             if MIN_REPEATED_ROWS <= k < min(earlier.n_samples, later.n_samples):  # whole copies: refuse_repeated
                 raise InputError(
                     f"{later.source}: its first {k} rows repeat the last {k} rows of {earlier.source}, given {what} "

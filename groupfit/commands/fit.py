@@ -84,7 +84,7 @@ def run_fit(args: argparse.Namespace) -> int:
         search=settings.search,
     )
     run, runs, position_run = data.run, data.runs, data.position_run
-    frames = [r.frame for r in runs] if isinstance(settings.data.path, (list, tuple)) else [run.frame]  # one log
+    frames = [r.frame for r in recordings(settings, runs, run)]
     not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
     if args.ridge is not None or (penalty_by_default and model_settings.p == 0 and position_run is None):
@@ -195,6 +195,12 @@ def fit_settings(args: argparse.Namespace) -> tuple:
     )
 
 
+def recordings(settings: RunSettings, runs: list[Run], run: Run) -> list[Run]:
+    """The recordings the next-run estimate, the ridge folds and the reference choice hold out: each file of
+    several, or the one log as ``run`` joins it (a log --resample split at its gaps is one recording)."""
+    return runs if isinstance(settings.data.path, (list, tuple)) else [run]
+
+
 def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
     """The runs loaded and joined, the reference applied; p = 0 where only a global model can be fitted."""
     position_run = None
@@ -219,9 +225,13 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
     if position_run is None and reference_options.reference_is_default(args, settings):
         model = settings.model
         p_values = tuple(range(model.pmax + 1)) if model.p == "auto" else (model.p,)
-        recordings = runs if isinstance(settings.data.path, (list, tuple)) else [run]  # a log split at gaps: one
         choice = default_reference_choice(
-            recordings, reference, p_values, n=model.n, c=float(model.c), fit_intercept=model.intercept
+            recordings(settings, runs, run),
+            reference,
+            p_values,
+            n=model.n,
+            c=float(model.c),
+            fit_intercept=model.intercept,
         )
         reference = reference if choice is None else choice.reference
     if len(runs) > 1 and reference == START:
@@ -239,8 +249,8 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
             raise InputError("--select is not available with --position; name the inputs with --temps")
         if args.ridge is not None:
             raise InputError("--ridge is not available with --position: the position terms are fitted by least squares")
-    recordings = runs if isinstance(settings.data.path, (list, tuple)) else [run]  # a log split at its gaps: one
-    estimate_runs = [measured_rows(with_reference(r, reference)) for r in recordings] if position_run is None else []
+    estimate = recordings(settings, runs, run) if position_run is None else []
+    estimate_runs = [measured_rows(with_reference(r, reference)) for r in estimate]
     return FitData(settings, runs, run, position_run, estimate_runs, reference_choice=choice)
 
 

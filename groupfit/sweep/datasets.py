@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from groupfit.config import parsed_period_tolerance
 from groupfit.data import PERIOD_TOLERANCE, load_run
-from groupfit.data_options import parse_period_tolerance
 from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
@@ -132,12 +132,7 @@ def clock_settings(table: dict, label: str) -> dict:
     """``[data] period_tolerance`` (percent), ``resample_s`` (seconds) and ``keep_glitches`` as
     :func:`groupfit.data.load_run` takes them (``groupfit sweep --period-tolerance``, ``--resample`` and
     ``--keep-glitches`` replace them)."""
-    try:
-        tolerance = parse_period_tolerance(table.get("period_tolerance"))
-    except InputError as exc:
-        raise InputError(
-            f"{label}: config key 'data.period_tolerance': {exc}".replace("--period-tolerance ", "")
-        ) from None
+    tolerance = parsed_period_tolerance(Table(table, "data", label), "period_tolerance")
     resample = (
         None if table.get("resample_s") is None else Table(table, "data", label).number("resample_s", positive=True)
     )
