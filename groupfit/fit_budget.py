@@ -1,4 +1,5 @@
-"""What the GA fits of p = 1…pmax will take, projected from the first one: said, or refused over a budget."""
+"""What the grouped fits will take: the GA fits of p = 1…pmax projected from the first one, and the memory of a
+grouped model's table of segment sums; said, or refused over a budget."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import time
 from typing import Callable
 
 from groupfit.errors import InputError
+from groupfit.objective import segment_table_bytes
 
 
 def check_projection(first_s: float, *, pmax: int, asked: int, budget_s: float | None, estimate) -> None:
@@ -42,4 +44,20 @@ def projecting(progress: Callable[[str, float], None], *, asked: int, budget_s: 
     return call
 
 
-__all__ = ["check_projection", "projecting"]
+def segment_table_over(n_samples: int, n_coef: int, period: float, budget_bytes: float) -> str | None:
+    """What a grouped model's table of segment sums on ``n_samples`` rows and ``n_coef`` coefficients would take,
+    when over ``budget_bytes``, and how to bring it within: one line; None within the budget."""
+    size = segment_table_bytes(n_samples, n_coef)
+    if size <= budget_bytes:
+        return None
+    step = 2
+    while segment_table_bytes(n_samples // step, n_coef) > budget_bytes:
+        step *= 2
+    return (
+        f"a grouped model (N = {n_samples} samples, M = {n_coef} coefficients) needs a table of segment sums of "
+        f"{size / 1e9:.1f} GB, over the budget of {budget_bytes / 1e9:g} GB: keep one row in {step} "
+        f"(--resample {step * period:g}) or choose fewer inputs (--select)"
+    )
+
+
+__all__ = ["check_projection", "projecting", "segment_table_over"]

@@ -249,6 +249,8 @@ def fit_report(estimator: GroupedRegressor, run: Run, model: ModelFile, interval
 
 
 def search_summary(search: dict, unit: str) -> str:
+    if search["method"] == "exact" and search["evaluations"] == 1:
+        return f"exact (one least-squares fit, no break to search), {search['seconds']:.2f} s"
     if search["method"] == "exact":
         return f"exact (dynamic programming): {search['evaluations']} segment costs, {search['seconds']:.2f} s"
     text = (

@@ -154,6 +154,17 @@ def min_norm_lstsq(A: np.ndarray, y: np.ndarray) -> np.ndarray:
     return coef
 
 
+PREFIX_BLOCK = 64
+"""Products of input pairs summed at a time while building :class:`SegmentCost`'s table."""
+
+
+def segment_table_bytes(n_samples: int, n_coef: int) -> float:
+    """Memory of :class:`SegmentCost`'s table of prefix sums (every product of two design columns or the
+    target, at every sample), with the block of products it is built from."""
+    pairs = (n_coef + 1) * (n_coef + 2) / 2
+    return 8.0 * (pairs * (n_samples + 1) + 2 * min(PREFIX_BLOCK, pairs) * n_samples)
+
+
 class SegmentCost:
     """Cost of one soft group given the hard breaks around it.
 
@@ -189,8 +200,10 @@ class SegmentCost:
         self.n_samples, self.n_coef = self.design.shape
         augmented = np.column_stack([self.design, self.target])
         rows, cols = np.tril_indices(self.n_coef + 1)
-        products = augmented[:, rows] * augmented[:, cols]
-        self._gram_prefix = np.concatenate([np.zeros((len(rows), 1)), np.cumsum(products, axis=0).T], axis=1)
+        self._gram_prefix = np.zeros((len(rows), self.n_samples + 1))
+        for start in range(0, len(rows), PREFIX_BLOCK):  # a block of products at a time: one table in memory
+            block = slice(start, start + PREFIX_BLOCK)
+            self._gram_prefix[block, 1:] = np.cumsum(augmented[:, rows[block]] * augmented[:, cols[block]], axis=0).T
         self.evaluations = 0
 
     def soft_group_first(self, a: np.ndarray) -> np.ndarray:

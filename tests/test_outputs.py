@@ -19,8 +19,8 @@ from groupfit.commands.common import StageProgress
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_files, atomic_write_text, check_output_dir, check_output_file
 from groupfit.model import ModelFile
-from groupfit.models.grouped import _ga_reporter
 from groupfit.search.exact import estimate_exact_cost
+from groupfit.search.progress import ga_reporter
 
 
 @pytest.fixture()
@@ -101,7 +101,7 @@ def test_progress_is_logged_when_stderr_is_not_a_terminal(monkeypatch):
 
 def test_ga_progress_moves_to_the_stagnation_stop_and_never_back():
     shown = []
-    report = _ga_reporter(lambda stage, fraction: shown.append(fraction), max_generations=300, stall_generations=30)
+    report = ga_reporter(lambda stage, fraction: shown.append(fraction), max_generations=300, stall_generations=30)
     for generation in range(1, 61):
         report(generation, 10.0 if generation < 30 else 5.0)  # improves at 30, stops stalled at 60
     assert shown == sorted(shown) and shown[-1] == pytest.approx(1.0)

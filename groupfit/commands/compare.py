@@ -10,9 +10,9 @@ from groupfit.commands import common, option_values, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of
-from groupfit.data import join_runs
+from groupfit.data import Run, join_runs
 from groupfit.errors import InputError
-from groupfit.fit_budget import projecting
+from groupfit.fit_budget import projecting, segment_table_over
 from groupfit.heldout.reference_choice import default_reference_choice
 from groupfit.inference.cli import add_interval_options, check_block, interval_settings
 from groupfit.io import refuse_repeated
@@ -118,6 +118,17 @@ def modelling_runs(data) -> list:
     return [common.load_configured_run(data, missing_error=True)]
 
 
+def global_models_only(args, settings: ComparisonSettings, n_parts: int, modelling: Run, n_coef: int) -> None:
+    """No grouped models with several modelling runs (their breaks belong to one run), nor when a grouped model's
+    table of segment sums would exceed the memory budget (said in a note)."""
+    if n_parts > 1:
+        settings.pmax = settings.fit_pmax = 0
+    table = segment_table_over(modelling.n_samples, n_coef, modelling.period, common.EXACT_BUDGET_BYTES)
+    if table is not None and settings.pmax > 0 and not args.no_budget:
+        settings.pmax = settings.fit_pmax = 0
+        print(f"note    grouped models left out (--no-budget compares them): {table}", file=common.report_stream(args))
+
+
 def run_compare(args: argparse.Namespace) -> int:
     config_path, run_settings = common.settings_with_data_options(args)
     run_settings = run_settings.given(
@@ -154,9 +165,9 @@ def run_compare(args: argparse.Namespace) -> int:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
     parts = modelling_runs(data)
-    if len(parts) > 1:  # several modelling runs: the global models, fitted on them joined
-        settings.pmax = settings.fit_pmax = 0
     modelling = join_runs(parts)
+    n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
+    global_models_only(args, settings, len(parts), modelling, n_coef)
     validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
     refuse_overlapping([*parts, *validation], "as data (--data, --validate)")
     if args.probe_every:
@@ -186,7 +197,6 @@ def run_compare(args: argparse.Namespace) -> int:
             file=common.report_stream(args),
         )
     check_block(args, modelling.n_samples)
-    n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     pmax = path_pmax(modelling, settings.pmax)
     over = common.over_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
     if over is not None:  # the GA's models are compared, the path not certified

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands import common, option_values
+from groupfit.commands import common, option_values, running
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.commands.replay_readings import with_end_states
 from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes
@@ -241,8 +241,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise InputError(
             f"--keep-reference: {args.model} has no reference sensor to keep (absolute readings or 'start')"
         )
-    data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
-    validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
+    with running.stage("loading"):
+        data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
+        validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     refuse_too_short(data, model)
     refuse_overlapping([*data, *validate], "as data (--data, --validate)")
     common.print_notes([*data, *validate], common.report_stream(args))
@@ -257,28 +258,30 @@ def run_diagnose(args: argparse.Namespace) -> int:
     ridge = None
     if args.ridge is not None:
         start, ridge = ridge_base_model(start, data, args.ridge)
-    result = diagnose(
-        start,
-        data,
-        validate or None,
-        live_rule=replay_groups,
-        min_score=args.min_score,
-        min_effect_rms_um=args.min_effect,
-        min_further_effect_rms_um=args.min_further_effect,
-        heat_exponent=args.heat_exponent,
-        own_transforms=args.own_transforms,
-        select_jointly=joint,
-        baseline=model,
-        check_reference=not args.keep_reference,
-        ambient=args.ambient,
-        validation_continues=args.continues,
-    )
+    with running.stage("diagnosis"):
+        result = diagnose(
+            start,
+            data,
+            validate or None,
+            live_rule=replay_groups,
+            min_score=args.min_score,
+            min_effect_rms_um=args.min_effect,
+            min_further_effect_rms_um=args.min_further_effect,
+            heat_exponent=args.heat_exponent,
+            own_transforms=args.own_transforms,
+            select_jointly=joint,
+            baseline=model,
+            check_reference=not args.keep_reference,
+            ambient=args.ambient,
+            validation_continues=args.continues,
+        )
     if selection is not None:
         result = replace(result, selection=selection)
     result = replace(result, ridge=ridge)
 
-    expectations = {"before": expect_for_model(model, data)}
-    expectations["after"] = expect_for_model(result.model, data) if result.changed else expectations["before"]
+    with running.stage("next-run estimate"):
+        expectations = {"before": expect_for_model(model, data)}
+        expectations["after"] = expect_for_model(result.model, data) if result.changed else expectations["before"]
     if result.changed and expectations["after"] is not None:
         training = {**(result.model.training or {}), **expectations["after"].training()}
         result = replace(result, model=result.model.replace(training=training))
@@ -295,9 +298,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
     written = []
     recal_note = ""
     if result.changed or args.recalibrate != "auto":
-        augmented, recal_note = recalibrated(
-            ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate
-        )
+        with running.stage("recalibration"):
+            augmented, recal_note = recalibrated(
+                ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate
+            )
         model_path = out_dir / ("model_augmented.json" if result.changed else "model_recalibrated.json")
         with_end_states(augmented, common.clock_options(args)).save(model_path)  # an invalid model is never written
         written.append(model_path)

@@ -8,12 +8,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import common, fit_mlr, reference_options, replay_readings
+from groupfit.commands import common, fit_mlr, reference_options, replay_readings, running
 from groupfit.commands.fit_options import add_fit_arguments, refuse_unused_options
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
 from groupfit.errors import InputError
+from groupfit.fit_budget import segment_table_over
 from groupfit.fitting import FitResult
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
@@ -88,16 +89,17 @@ def run_fit(args: argparse.Namespace) -> int:
     not_conditions = {run.time_name, run.error_name, *run.temp_names}  # the held-out folds come from the others
     ridge = None
     if args.ridge is not None or (penalty_by_default and model_settings.p == 0 and position_run is None):
-        ridge = ridge_setting(
-            "auto" if args.ridge is None else args.ridge,
-            model_settings.p,
-            run.temps,
-            run.error,
-            frames,
-            not_conditions,
-            fit_intercept=model_settings.intercept,
-            default=args.ridge is None,
-        )
+        with running.stage("ridge penalty", enabled=not args.quiet):
+            ridge = ridge_setting(
+                "auto" if args.ridge is None else args.ridge,
+                model_settings.p,
+                run.temps,
+                run.error,
+                frames,
+                not_conditions,
+                fit_intercept=model_settings.intercept,
+                default=args.ridge is None,
+            )
         estimator.set_params(ridge_alpha=ridge.alpha)
     alpha = ridge.alpha if ridge is not None else 0.0
     out_dir = common.check_output_dir(settings.output_dir)
@@ -113,7 +115,8 @@ def run_fit(args: argparse.Namespace) -> int:
     notes = ""
     if position_run is None and (expectation is None or alpha > 0):
         try:
-            expectation = model_expectation(model_settings, data.estimate_runs, (model_settings.p,), alpha)
+            with running.stage("next-run estimate", enabled=not args.quiet):
+                expectation = model_expectation(model_settings, data.estimate_runs, (model_settings.p,), alpha)
         except InputError as exc:
             notes += f"\nnote    no next-run estimate: {exc}"
     training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
@@ -141,21 +144,25 @@ def run_fit(args: argparse.Namespace) -> int:
     held_out = None
     if position_run is None:
         grouped = model.to_dict() if estimator.p > 0 else None
-        held_out = held_out_check(
-            run.temps,
-            run.error,
-            frames,
-            not_conditions,
-            fit_intercept=model_settings.intercept,
-            ridge_alpha=alpha,
-            grouped=grouped,
-        )
-        model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
+        with running.stage("held-out check", enabled=not args.quiet):
+            held_out = held_out_check(
+                run.temps,
+                run.error,
+                frames,
+                not_conditions,
+                fit_intercept=model_settings.intercept,
+                ridge_alpha=alpha,
+                grouped=grouped,
+            )
+        with running.stage("recalibration", enabled=not args.quiet):
+            model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
         notes = recal_note + notes
+    with running.stage("end states", enabled=not args.quiet):
+        model = replay_readings.with_end_states(model, common.clock_options(args, settings.data))  # after each file
     result = FitResult(
         estimator,
         fit_run,
-        replay_readings.with_end_states(model, common.clock_options(args, settings.data)),  # the rule after each file
+        model,
         selection,
         data.input_selection,
         intervals,
@@ -165,7 +172,8 @@ def run_fit(args: argparse.Namespace) -> int:
         choice=choice,
     )
     if estimator.p == 0 and alpha == 0 and position_run is None:
-        result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
+        with running.stage("statistics", enabled=not args.quiet):
+            result.statistics = fit_mlr.statistics(fit_run, fit_intercept=model_settings.intercept)
     written = write_fit_outputs(args, out_dir, result, intervals, position_run)
     print(result.summary() + notes + "\nwrote   " + written, file=common.report_stream(args))
     return 0
@@ -209,7 +217,8 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
         position_run = load_position_data(settings.data, args.position)
         runs = [position_run.run]
     else:
-        runs = common.load_configured_runs(settings.data, missing_error=True)
+        with running.stage("loading", enabled=not args.quiet):
+            runs = common.load_configured_runs(settings.data, missing_error=True)
     common.print_notes(runs, common.report_stream(args))
     if settings.model.p == "auto" and (len(runs) > 1 or position_run is not None):
         settings = with_p(settings, 0)  # several runs, or check runs at positions: a global model
@@ -225,14 +234,15 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
     if position_run is None and reference_options.reference_is_default(args, settings):
         model = settings.model
         p_values = tuple(range(model.pmax + 1)) if model.p == "auto" else (model.p,)
-        choice = default_reference_choice(
-            recordings(settings, runs, run),
-            reference,
-            p_values,
-            n=model.n,
-            c=float(model.c),
-            fit_intercept=model.intercept,
-        )
+        with running.stage("reference choice", enabled=not args.quiet):
+            choice = default_reference_choice(
+                recordings(settings, runs, run),
+                reference,
+                p_values,
+                n=model.n,
+                c=float(model.c),
+                fit_intercept=model.intercept,
+            )
         reference = reference if choice is None else choice.reference
     if len(runs) > 1 and reference == START:
         runs = [with_reference(r, START) for r in runs]  # each run's own start
@@ -259,7 +269,8 @@ def chosen_inputs(args: argparse.Namespace, data: FitData) -> FitData:
     settings, run, estimate_runs, input_selection = data.settings, data.run, data.estimate_runs, None
     if args.select:
         frames = [r.frame for r in data.runs]
-        run, input_selection = select_run_inputs(run, frames, args.select, args.sensors, estimate_runs)
+        with running.stage("input selection", enabled=not args.quiet):
+            run, input_selection = select_run_inputs(run, frames, args.select, args.sensors, estimate_runs)
         estimate_runs = [with_inputs(r, run.temp_names) for r in estimate_runs]
     elif args.sensors is not None:
         raise InputError("--sensors K needs --select forward|lasso|cluster")
@@ -292,12 +303,19 @@ def decided_p(args: argparse.Namespace, data: FitData) -> tuple:
     selection = expectation = None
     if model.p == "auto" and model.pmax < 0:
         raise InputError(f"--pmax {model.pmax}: the largest p tried must be 0 or more")
+    table = None if args.no_budget else segment_table_over(run.n_samples, n_coef, run.period, common.EXACT_BUDGET_BYTES)
+    if table is not None and isinstance(model.p, int) and model.p > 0:
+        raise InputError(f"{run.source}: {table}, or fit a global model (--p 0); --no-budget runs it anyway")
     if model.p == "auto" and model.p_rule == NEXT_RUN:
-        p_values = (0,) if args.ridge is not None else tuple(range(model.pmax + 1))
-        expectation = model_expectation(model, data.estimate_runs, p_values)
+        p_values = (0,) if args.ridge is not None or table is not None else tuple(range(model.pmax + 1))
+        with running.stage("next-run estimate", enabled=not args.quiet):
+            expectation = model_expectation(model, data.estimate_runs, p_values)
+        if table is not None:
+            print(f"note    only p = 0 was tried: {table}", file=common.report_stream(args))
         settings = with_p(settings, expectation.candidates[expectation.chosen])
     elif model.p == "auto":
-        selection = select_breaks(model, run)
+        with running.stage("exact path", enabled=not args.quiet):
+            selection = select_breaks(model, run)
         settings = with_p(settings, selection["p"])
     elif not isinstance(model.p, int):
         raise InputError(f"p = {model.p!r}: give a whole number or 'auto'")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import math
+import time
 from typing import Any, Callable, Mapping
 
 import numpy as np
@@ -30,6 +30,7 @@ from groupfit.runtime.rule import rule_parameters, source_ranges
 from groupfit.search.base import GA_DEFAULTS, METHODS, GASettings, SearchSettings
 from groupfit.search.exact import CERTIFY_PAIR_LIMIT, exact_is_cheap, solve_exact
 from groupfit.search.factory import make_search
+from groupfit.search.progress import ga_reporter, stage_reporter
 
 SEARCHES = METHODS
 DEFAULT_SEARCH = SearchSettings()
@@ -242,15 +243,18 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             return self._fit_fixed(X, y)
         constraints = Constraints.for_model(n_samples, self.n, self.c, self.n_coef)
         constraints.require(self.p, self.c, self.n_coef)
+        if self.p == 0:  # one least-squares fit: no breaks to search, no table of segment sums
+            started = time.perf_counter()
+            self._fit_groups(X, y, [], {"method": "exact", "seed": None, "evaluations": 1})
+            self.search_.update(seconds=time.perf_counter() - started, search_objective=self.objective_value_)
+            return self
 
         cost = SegmentCost(X, y, n=self.n, objective=self.objective, fit_intercept=self.fit_intercept)
         settings = self.search_settings
         if settings.method == "exact":
-            reporter = _stage(progress, "exact")
+            reporter = stage_reporter(progress, "exact")
         else:
-            reporter = (
-                None if progress is None else _ga_reporter(progress, self.max_generations, self.stall_generations)
-            )
+            reporter = None if progress is None else ga_reporter(progress, self.max_generations, self.stall_generations)
         result = make_search(settings).run(cost, constraints, self.p, progress=reporter)
         if settings.method == "ga" and progress is not None:
             progress("ga", 1.0)
@@ -261,7 +265,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
                     cost,
                     constraints,
                     self.p,
-                    progress=_stage(progress, "exact"),
+                    progress=stage_reporter(progress, "exact"),
                     incumbents={self.p: breaks},
                     every_p=False,
                 )
@@ -470,29 +474,3 @@ def default_criterion(run) -> str:
     """The input that moves most over the run: the clearest record of the thermal state."""
     spans = np.ptp(run.temps, axis=0)
     return run.temp_names[int(np.argmax(spans))]
-
-
-def _ga_reporter(progress, max_generations: int, stall_generations: int):
-    """``progress("ga", fraction)`` per generation, the fraction of the run's likely length.
-
-    The GA stops after ``stall_generations`` without improvement, usually long
-    before ``max_generations``: the fraction is measured against the earlier
-    of the two stops, so the bar keeps moving instead of waiting at
-    generation / max_generations (and never goes back).
-    """
-    state = {"best": math.inf, "improved": 0, "shown": 0.0}
-
-    def report(generation: int, best: float) -> None:
-        if best < state["best"]:
-            state["best"], state["improved"] = best, generation
-        end = min(max_generations, state["improved"] + stall_generations)
-        state["shown"] = max(state["shown"], min(1.0, generation / max(end, 1)))
-        progress("ga", state["shown"])
-
-    return report
-
-
-def _stage(progress, stage: str):
-    if progress is None:
-        return None
-    return lambda fraction: progress(stage, fraction)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 from groupfit.grouping import Constraints
-from groupfit.objective import SegmentCost
+from groupfit.objective import SegmentCost, segment_table_bytes
 from groupfit.search.bounded import solve_bounded
 from groupfit.search.dynprog import GRAM_FLOATS_PER_BATCH, ExactResult, solve_all_pairs
 
@@ -95,6 +95,7 @@ def estimate_exact_cost(n_samples: int, n_coef: int, objective: str, pmax: int, 
     pairs = span * span / 2.0
     seconds = SSE_SECONDS_PER_PAIR * pairs * (n_coef / 9.0) ** 2 + 1e-7 * pairs * (pmax + 1)
     memory = BASE_BYTES + 16.0 * (pmax + 2) * (n_samples + 1) + 8.0 * GRAM_FLOATS_PER_BATCH * 4
+    memory += segment_table_bytes(n_samples, n_coef)
     if objective == "sae":
         seconds += SAE_SECONDS_PER_ROW * span**3 / 6.0 * n_coef
         memory += SAE_BYTES_PER_PAIR * span * span
