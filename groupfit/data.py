@@ -44,11 +44,11 @@ from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
-from groupfit.readtable import TABLE_SUFFIXES as TABLE_SUFFIXES
 from groupfit.record_kinds import record_kinds_cycle
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.sampling import clock_of, described_burst_cycle
 from groupfit.split_stamps import with_milliseconds
+from groupfit.stuck_sensors import stuck_sensor_notes
 from groupfit.timestamps import (
     epoch_to_seconds,
     names_a_unit,
@@ -399,6 +399,7 @@ def _validated(
     if options.drop_glitches and error_values is not None:
         error_values, _, glitched = without_glitches(error_values, error, label)
         notes = notes + ((glitched,) if glitched else ())
+    notes = notes + stuck_sensor_notes(temp_array, temps, time_values, label)
 
     return Run(
         name=run_name,
