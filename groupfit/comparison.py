@@ -22,8 +22,9 @@ measured rows.
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, ContextManager, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -217,6 +218,7 @@ def compare_models(
     progress: Callable[[str, float], None] | None = None,
     *,
     histories: Mapping[str, np.ndarray] | None = None,
+    stage: Callable[[str], ContextManager] = lambda name: nullcontext(),
 ) -> ComparisonResult:
     """Fit every model on ``modelling`` and score it on every run.
 
@@ -233,6 +235,9 @@ def compare_models(
         Per validation run (by name) that continues a recording, the inputs of
         what came before it: the live rule runs through them first
         (:mod:`groupfit.continuation`), so its state carries into the run.
+    stage : callable, optional
+        ``stage(name)``: a context each stage without progress of its own runs in
+        (:func:`groupfit.commands.running.stage` says when it runs long).
     """
     histories = histories or {}
     parts = [modelling] if isinstance(modelling, Run) else list(modelling)
@@ -272,10 +277,11 @@ def compare_models(
     )
     pmax = len(path["breaks"]) - 1
     model_files = {p: model.to_model_file(modelling) for p, model in grouped.items()}
-    intervals = {
-        p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)
-        for p, model in grouped.items()
-    }
+    with stage("break intervals"):
+        intervals = {
+            p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)
+            for p, model in grouped.items()
+        }
     bands: dict[str, dict[str, tuple]] = {}
 
     changes = condition_changes(modelling, settings.conditions)
@@ -343,10 +349,16 @@ def compare_models(
     fit_pmax = path_pmax(modelling, settings.fit_pmax)
     candidates = range(max(pmax, fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
     scored_runs = [measured_rows(part) for part in parts] if len(parts) > 1 else [measured]
-    expectation = expect_next_run(
-        scored_runs, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
-    )
-    fit_choice = expectation.choice_among(fit_pmax + 1)
+    with stage("next-run estimate"):
+        expectation = expect_next_run(
+            scored_runs, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+        )
+        fit_choice = expectation.choice_among(fit_pmax + 1)
+        fit_penalty = (
+            penalised_expectation(measured, fit_intercept=settings.fit_intercept, parts=scored_runs)
+            if fit_choice == 0
+            else None
+        )
     ar1_summary = None
     if ar1 is not None:
         ar1_summary = {
@@ -383,9 +395,7 @@ def compare_models(
         reference=modelling.reference,
         expectation=expectation,
         fit_choice=fit_choice,
-        fit_penalty=penalised_expectation(measured, fit_intercept=settings.fit_intercept, parts=scored_runs)
-        if fit_choice == 0
-        else None,
+        fit_penalty=fit_penalty,
         notes=notes + clamp_notes,
         ar1_left_out=ar1_left_out if settings.heat is not None else None,
     )

@@ -1,12 +1,17 @@
 """A stage without progress of its own says it is still running, so a long log is never silent for minutes."""
 
+import contextlib
 import io
 import re
 import time
+from pathlib import Path
 
 import pytest
 
+from groupfit.cli import main
 from groupfit.commands import running
+
+DATASETS = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets"
 
 
 def lines_of(stream: io.StringIO) -> list[str]:
@@ -40,3 +45,25 @@ def test_a_failing_stage_raises_its_error_and_stops_telling():
     said = len(lines_of(stream))
     time.sleep(0.1)
     assert len(lines_of(stream)) == said and lines_of(stream)[-1].startswith("progress loading: done after")
+
+
+@pytest.fixture
+def entered(monkeypatch):
+    names = []
+
+    @contextlib.contextmanager
+    def recorded(name, **kwargs):
+        names.append(name)
+        yield
+
+    monkeypatch.setattr(running, "stage", recorded)
+    return names
+
+
+def test_fit_and_compare_run_their_long_stages_as_stages(tmp_path, entered):
+    data = str(DATASETS / "paper_cycle.csv")
+    assert main(["fit", "--data", data, "--quiet", "--out", str(tmp_path / "f")]) == 0
+    assert {"loading", "reference choice", "next-run estimate", "held-out check", "recalibration"} <= set(entered)
+    entered.clear()
+    assert main(["compare", "--data", data, "--pmax", "1", "--quiet", "--out", str(tmp_path / "c")]) == 0
+    assert {"loading", "break intervals", "next-run estimate"} <= set(entered)

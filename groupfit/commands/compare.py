@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from groupfit.commands import common, option_values, reference_options
+from groupfit.commands import common, option_values, reference_options, running
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of
@@ -164,7 +164,8 @@ def run_compare(args: argparse.Namespace) -> int:
     if settings.structural_sensor and settings.structural_gain_um_per_K is None:
         raise InputError("[compare] structural_sensor needs structural_gain_um_per_K (µm per K, e.g. α·L)")
 
-    parts = modelling_runs(data)
+    with running.stage("loading", enabled=not args.quiet):
+        parts = modelling_runs(data)
     modelling = join_runs(parts)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     global_models_only(args, settings, len(parts), modelling, n_coef)
@@ -181,9 +182,10 @@ def run_compare(args: argparse.Namespace) -> int:
     choice = None
     if reference_options.reference_is_default(args, run_settings):
         candidates = tuple(range(settings.fit_pmax + 1))  # as fit decides it
-        choice = default_reference_choice(
-            parts, reference, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
-        )
+        with running.stage("reference choice", enabled=not args.quiet):
+            choice = default_reference_choice(
+                parts, reference, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+            )
         reference = reference if choice is None else choice.reference
     parts = [with_reference(part, reference) for part in parts]  # a reference at the start: each run's own
     modelling = join_runs(parts)
@@ -220,6 +222,7 @@ def run_compare(args: argparse.Namespace) -> int:
                 estimate=lambda line: print(f"estimate {line}", file=sys.stderr, flush=True),
             ),
             histories=histories,
+            stage=lambda name: running.stage(name, enabled=not args.quiet),
         )
     finally:
         progress.close()
