@@ -237,7 +237,7 @@ def compare_models(
         (:mod:`groupfit.continuation`), so its state carries into the run.
     stage : callable, optional
         ``stage(name)``: a context each stage without progress of its own runs in
-        (:func:`groupfit.commands.running.stage` says when it runs long).
+        (:func:`groupfit.running.stage` says when it runs long).
     """
     histories = histories or {}
     parts = [modelling] if isinstance(modelling, Run) else list(modelling)

@@ -46,8 +46,11 @@ def grouped_path(
         pmax = len(path["breaks"]) - 1
     search = search.replace(method="ga", certify=False)
     grouped: dict[int, GroupedRegressor] = {}
+    if progress is not None:
+        progress("grouped", 0.0)  # the stage's clock starts with its first fit
     for p in range(1, pmax + 1):
-        grouped[p] = GroupedRegressor.from_settings(p=p, **settings, search=search).fit(X, y)
+        estimator = GroupedRegressor.from_settings(p=p, **settings, search=search)
+        grouped[p] = estimator.fit(X, y, progress=None if progress is None else _per_fit(progress, p))
         info = grouped[p].search_
         if certified:
             exact_value = path["objective"][p]
@@ -63,6 +66,11 @@ def grouped_path(
             progress("grouped", p / pmax)
     path["certified"] = certified
     return path, grouped
+
+
+def _per_fit(progress: Callable[[str, float], None], p: int) -> Callable[[str, float], None]:
+    """The search's own progress within the fit of ``p`` breaks, as a stage of its own (``ga p = 2``)."""
+    return lambda stage, fraction: progress(f"{stage} p = {p}", fraction)
 
 
 __all__ = ["grouped_path"]

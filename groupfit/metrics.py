@@ -16,20 +16,25 @@ def error_metrics(residuals: np.ndarray) -> dict[str, float]:
 
 
 def ljung_box(residual: np.ndarray, lags: int = 10) -> dict[str, float]:
-    """Ljung–Box Q of the residual's autocorrelations up to ``lags`` (statsmodels); white when p is large.
+    """Ljung–Box Q of the residual's autocorrelations up to ``lags``; white when p is large.
 
-    A series of no more than ``lags`` samples is tested up to half its length (``lags`` says how far); one of fewer than
-    four samples has no test (NaN).
+    ``Q = n(n+2)·Σ r_k²/(n−k)`` over k = 1…lags, as statsmodels' ``acorr_ljungbox`` has it, with the
+    autocorrelations ``r_k`` from statsmodels' ``acf`` by FFT (``acorr_ljungbox`` correlates every lag
+    directly, O(N²): 45 s of CPU at 500 000 samples). A series of no more than ``lags`` samples is tested
+    up to half its length (``lags`` says how far); one of fewer than four samples has no test (NaN).
     """
-    from statsmodels.stats.diagnostic import acorr_ljungbox
+    from scipy.stats import chi2
+    from statsmodels.tsa.stattools import acf
 
     residual = np.asarray(residual, dtype=float)
     if len(residual) <= lags:
         lags = len(residual) // 2
     if lags < 2:
         return {"lags": lags, "Q": float("nan"), "p_value": float("nan")}
-    table = acorr_ljungbox(residual, lags=[lags])
-    return {"lags": lags, "Q": float(table["lb_stat"].iloc[0]), "p_value": float(table["lb_pvalue"].iloc[0])}
+    n = len(residual)
+    r = acf(residual, nlags=lags, fft=True)[1:]
+    q = float(n * (n + 2) * np.sum(r**2 / (n - np.arange(1, lags + 1))))
+    return {"lags": lags, "Q": q, "p_value": float(chi2.sf(q, lags))}
 
 
 def prediction_accuracy(error: np.ndarray, residuals: np.ndarray) -> float:

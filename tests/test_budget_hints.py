@@ -4,12 +4,15 @@ models on a path marked not certified."""
 import argparse
 import json
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from groupfit.cli import build_parser, main
+from groupfit.commands import common
+from groupfit.search.exact import estimate_exact_cost
 
 
 @pytest.fixture(scope="module")
@@ -53,3 +56,14 @@ def test_compare_over_the_budget_compares_the_gas_models_on_a_path_it_marks_unce
     assert path["R"][1:] == pytest.approx([grouped[1]["R_um"], grouped[2]["R_um"]], rel=1e-9)
     mlr = next(r for r in result["rows"] if r["model"] == "mlr")
     assert path["R"][0] == pytest.approx(mlr["R_um"], rel=1e-6)  # p = 0: the least-squares fit, exact
+
+
+@pytest.mark.parametrize("n_samples", [3000, 9000, 20000, 60000])
+def test_the_sse_objective_is_advised_only_when_it_is_within_the_budget(n_samples):
+    args = argparse.Namespace(objective=None, search=None, no_budget=False)
+    run = SimpleNamespace(n_samples=n_samples, period=1.0, source="run.csv")
+    over = common.over_budget(args, run, 17, "sae", 3, "the exact search")
+    sse = estimate_exact_cost(n_samples, 17, "sse", 3)
+    sse_within = sse.seconds <= common.EXACT_BUDGET_SECONDS and sse.bytes <= common.EXACT_BUDGET_BYTES
+    if over is not None:
+        assert any("--objective sse" in hint for hint in over[1]) == sse_within

@@ -6,10 +6,13 @@ import re
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from groupfit import running
 from groupfit.cli import main
-from groupfit.commands import running
+from groupfit.comparison_path import grouped_path
+from groupfit.search.base import GASettings, SearchSettings
 
 DATASETS = Path(__file__).resolve().parents[1] / "groupfit" / "_data" / "datasets"
 
@@ -67,3 +70,22 @@ def test_fit_and_compare_run_their_long_stages_as_stages(tmp_path, entered):
     entered.clear()
     assert main(["compare", "--data", data, "--pmax", "1", "--quiet", "--out", str(tmp_path / "c")]) == 0
     assert {"loading", "break intervals", "next-run estimate"} <= set(entered)
+
+
+def test_compares_grouped_fits_report_their_search_per_p_and_the_stage_from_its_start():
+    rng = np.random.default_rng(2)
+    X = np.cumsum(rng.normal(0, 0.1, (240, 2)), axis=0)
+    y = X @ [1.0, -2.0] + np.where(np.arange(240) < 120, 0.0, 2.0) + rng.normal(0, 0.05, 240)
+    calls = []
+    search = SearchSettings(
+        method="ga", seed=1, ga=GASettings(population_size=20, max_generations=15, stall_generations=5)
+    )
+    grouped_path(
+        X, y, 2, n=3, c=3.0, objective="sse", fit_intercept=True, search=search, certified=False,
+        progress=lambda stage, fraction: calls.append((stage, fraction)),
+    )  # fmt: skip
+    assert calls[0] == ("grouped", 0.0)
+    assert [f for stage, f in calls if stage == "grouped"] == [0.0, 0.5, 1.0]  # the projection's contract
+    for p in (1, 2):
+        fractions = [f for stage, f in calls if stage == f"ga p = {p}"]
+        assert len(fractions) > 1 and fractions[-1] == 1.0 and fractions == sorted(fractions)

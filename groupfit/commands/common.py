@@ -403,8 +403,8 @@ def over_budget(
     if _within_budget(cost):
         return None
     hints = []
-    if objective == "sae":
-        sse = estimate_exact_cost(run.n_samples, n_coef, "sse", pmax)
+    sse = estimate_exact_cost(run.n_samples, n_coef, "sse", pmax)
+    if objective == "sae" and _within_budget(sse):
         setting = "--objective sse" if hasattr(args, "objective") else 'objective = "sse" in a configuration\'s [model]'
         hints.append(f"{setting} ({sse.describe()})")
     if hasattr(args, "search"):

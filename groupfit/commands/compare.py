@@ -6,7 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from groupfit.commands import common, option_values, reference_options, running
+from groupfit import running
+from groupfit.commands import common, option_values, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of

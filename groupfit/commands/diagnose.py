@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from groupfit.commands import common, option_values, running
+from groupfit import running
+from groupfit.commands import common, option_values
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.commands.replay_readings import with_end_states
 from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes

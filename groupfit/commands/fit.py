@@ -7,8 +7,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from groupfit import running
 from groupfit.commands import ar1_fit as ar1_commands
-from groupfit.commands import common, fit_mlr, reference_options, replay_readings, running
+from groupfit.commands import common, fit_mlr, reference_options, replay_readings
 from groupfit.commands.fit_options import add_fit_arguments, refuse_unused_options
 from groupfit.commands.fit_position import check_position_options, load_position_data, position_model
 from groupfit.commands.recalibrate_option import recalibrated

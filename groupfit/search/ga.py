@@ -37,6 +37,7 @@ from typing import Callable, Iterator
 import numpy as np
 from deap import base, tools
 
+from groupfit import running
 from groupfit.grouping import Constraints
 from groupfit.objective import SegmentCost
 from groupfit.search.base import GA_DEFAULTS, GASettings, SearchResult
@@ -355,7 +356,8 @@ class GeneticSearch:
 
         breaks = encoding.to_breaks(best)
         if self.polish:
-            breaks, best_value = polish_breaks(breaks, best_value, objective, constraints)
+            with running.stage("ga polish", enabled=progress is not None):
+                breaks, best_value = polish_breaks(breaks, best_value, objective, constraints)
         return GAResult(
             breaks=breaks,
             objective=best_value,
