@@ -42,6 +42,14 @@ def resolution(values: np.ndarray) -> float:
     return float(steps.min()) if steps.size else 0.0
 
 
+def spans(readings: np.ndarray) -> np.ndarray:
+    """Each column's range over its finite readings (0 for a column without any)."""
+    finite = np.isfinite(readings)
+    high = np.where(finite, readings, -np.inf).max(axis=0)
+    low = np.where(finite, readings, np.inf).min(axis=0)
+    return np.where(finite.any(axis=0), high - low, 0.0)
+
+
 def stuck_stretches(readings: np.ndarray, names: Sequence[str]) -> list[tuple[str, int, int, float]]:
     """The inputs that read one value over a long stretch while the others move: ``(name, first, last, share)``
     with rows 0-based and ``share`` the others' median move during it (share of their range)."""
@@ -49,7 +57,7 @@ def stuck_stretches(readings: np.ndarray, names: Sequence[str]) -> list[tuple[st
     n_rows, n_inputs = readings.shape
     if n_inputs < 2 or n_rows < MIN_ROWS:
         return []
-    ranges = np.nanmax(readings, axis=0) - np.nanmin(readings, axis=0)
+    ranges = spans(readings)
     found = []
     for j, name in enumerate(names):
         first, last = longest_unchanged(readings[:, j])
@@ -61,7 +69,7 @@ def stuck_stretches(readings: np.ndarray, names: Sequence[str]) -> list[tuple[st
         if not others:
             continue
         stretch = readings[first : last + 1][:, others]
-        moved = (np.nanmax(stretch, axis=0) - np.nanmin(stretch, axis=0)) / ranges[others]
+        moved = spans(stretch) / ranges[others]
         share = float(np.median(moved))
         if share >= OTHERS_MOVE:
             found.append((name, first, last, share))
@@ -84,4 +92,4 @@ def stuck_sensor_notes(readings: np.ndarray, names: Sequence[str], time_s: np.nd
     return tuple(notes)
 
 
-__all__ = ["longest_unchanged", "resolution", "stuck_sensor_notes", "stuck_stretches"]
+__all__ = ["longest_unchanged", "resolution", "spans", "stuck_sensor_notes", "stuck_stretches"]

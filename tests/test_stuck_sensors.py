@@ -2,6 +2,7 @@
 step, a quiet machine and a short flat stretch are not."""
 
 import itertools
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -86,3 +87,12 @@ def test_the_measured_spindle_test_has_no_stuck_sensor():
     assert stuck_stretches(frame[names].to_numpy(float), names) == []
     frame.loc[1000:1999, "t7_C"] = frame.loc[1000, "t7_C"]  # 4.2 h of the test held
     assert [found[:3] for found in stuck_stretches(frame[names].to_numpy(float), names)] == [("t7_C", 1000, 1999)]
+
+
+def test_a_dead_sensor_and_gaps_are_not_stuck_and_raise_no_warning():
+    temps = machine()
+    temps[:, 1] = np.nan  # a dead input
+    temps[500:900, 3] = np.nan  # a gap
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert stuck_stretches(temps, ["A", "B", "C", "D"]) == []
