@@ -44,15 +44,22 @@ def projecting(progress: Callable[[str, float], None], *, asked: int, budget_s: 
     return call
 
 
+def smallest_thinning(within: Callable[[int], bool], *, most: int) -> int:
+    """The smallest power of two k >= 2 for which ``within(k)`` holds (one row in k kept), or the first one not
+    below ``most`` when none before it does."""
+    step = 2
+    while step < most and not within(step):
+        step *= 2
+    return step
+
+
 def segment_table_over(n_samples: int, n_coef: int, period: float, budget_bytes: float) -> str | None:
     """What a grouped model's table of segment sums on ``n_samples`` rows and ``n_coef`` coefficients would take,
     when over ``budget_bytes``, and how to bring it within: one line; None within the budget."""
     size = segment_table_bytes(n_samples, n_coef)
     if size <= budget_bytes:
         return None
-    step = 2
-    while segment_table_bytes(n_samples // step, n_coef) > budget_bytes:
-        step *= 2
+    step = smallest_thinning(lambda k: segment_table_bytes(n_samples // k, n_coef) <= budget_bytes, most=n_samples)
     return (
         f"a grouped model (N = {n_samples} samples, M = {n_coef} coefficients) needs a table of segment sums of "
         f"{size / 1e9:.1f} GB, over the budget of {budget_bytes / 1e9:g} GB: keep one row in {step} "
@@ -60,4 +67,4 @@ def segment_table_over(n_samples: int, n_coef: int, period: float, budget_bytes:
     )
 
 
-__all__ = ["check_projection", "projecting", "segment_table_over"]
+__all__ = ["check_projection", "projecting", "segment_table_over", "smallest_thinning"]

@@ -11,6 +11,7 @@ import pytest
 
 from groupfit.cli import main
 from groupfit.commands import common
+from groupfit.fit_budget import smallest_thinning
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.objective import SegmentCost, segment_table_bytes
 
@@ -104,3 +105,10 @@ def test_compare_leaves_grouped_models_out_over_the_budget(tmp_path, capsys, run
     assert "grouped models left out (--no-budget compares them)" in capsys.readouterr().out
     rows = json.loads(report.read_text())["rows"]
     assert not [r for r in rows if r["model"] == "grouped" and r["p"] > 0]
+
+
+@pytest.mark.parametrize("needed", [1, 2, 3, 5, 64, 100, 10**6])
+def test_the_smallest_thinning_is_the_first_power_of_two_within_and_ends_at_its_bound(needed):
+    step = smallest_thinning(lambda k: k >= needed, most=64)
+    expected = next((k for k in (2, 4, 8, 16, 32) if k >= needed), 64)
+    assert step == expected

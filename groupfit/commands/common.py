@@ -34,6 +34,7 @@ from groupfit.data_options import (
 )
 from groupfit.errors import InputError
 from groupfit.export import write
+from groupfit.fit_budget import smallest_thinning
 from groupfit.io import atomic_write_text, refuse_repeated, to_json
 from groupfit.io import check_output_dir as check_output_dir  # the verbs import it from here
 from groupfit.outputs import commit_outputs as commit_outputs  # the verbs import it from here
@@ -415,9 +416,9 @@ def over_budget(
             if _within_budget(smaller):
                 hints.append(f"--pmax {p} ({smaller.describe()})")
                 break
-    step = 2
-    while step < 64 and not _within_budget(estimate_exact_cost(run.n_samples // step, n_coef, objective, pmax)):
-        step *= 2
+    step = smallest_thinning(
+        lambda k: _within_budget(estimate_exact_cost(run.n_samples // k, n_coef, objective, pmax)), most=64
+    )
     hints.append(f"or keep one row in {step} of the run (--resample {step * run.period:g}: the mean of {step} rows)")
     return (
         f"{what} ({objective}, N = {run.n_samples} samples, M = {n_coef} coefficients) would take "

@@ -156,18 +156,6 @@ def time_series_folds(n_samples: int, folds: int):
     return list(TimeSeriesSplit(n_splits=folds).split(np.arange(n_samples)))
 
 
-def cv_error(X: np.ndarray, y: np.ndarray, splits) -> float:
-    """Mean squared error of a linear model with intercept over held-out test folds (index arrays)."""
-    A = np.column_stack([np.ones(len(X)), X])
-    squared, count = 0.0, 0
-    for train, test in splits:
-        coef, *_ = np.linalg.lstsq(A[train], y[train], rcond=None)
-        residual = y[test] - A[test] @ coef
-        squared += float(residual @ residual)
-        count += len(test)
-    return squared / count
-
-
 def auto_cluster_selection(X: np.ndarray, y: np.ndarray, splits) -> list[int]:
     """Cluster selection with the smallest k whose held-out error is within MIN_GAIN of the best k's."""
     options = [cluster_selection(X, y, k) for k in range(1, X.shape[1] + 1)]
@@ -176,9 +164,10 @@ def auto_cluster_selection(X: np.ndarray, y: np.ndarray, splits) -> list[int]:
 
 
 class HeldOutErrors:
-    """Mean squared held-out error of the least-squares fit (with intercept) of any subset of the columns of X,
-    as :func:`cv_error` computes it, from each fold's Gram matrices built once: a subset costs solves of its
-    own size, not passes over the samples (a forward path over 64 inputs: seconds, not minutes)."""
+    """Mean squared held-out error, over the test folds of ``splits`` (index arrays), of the least-squares fit
+    (with intercept) of any subset of the columns of X, from each fold's Gram matrices built once: a subset
+    costs solves of its own size, not passes over the samples (a forward path over 64 inputs: seconds, not
+    minutes)."""
 
     def __init__(self, X: np.ndarray, y: np.ndarray, splits):
         spread = X.std(axis=0)
