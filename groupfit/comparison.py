@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.ar1.inputs import ar1_inputs
+from groupfit.ar1.nextrun import estimator_predictor, expect_ar1
 from groupfit.clamped_scores import clamped
 from groupfit.columns import input_order
 from groupfit.comparison_path import grouped_path
@@ -143,6 +144,8 @@ class ComparisonResult:
     """What was left out and why (a modelling run whose error is not measured on every row, several runs)."""
     ar1_left_out: str | None = None
     """Why the AR(1) model was left out, when not for want of a heat-level column."""
+    ar1_expectation: NextRunExpectation | None = None
+    """The AR(1) model's expected next-run error (:func:`expect_compared_ar1`)."""
 
     def to_json(self) -> dict[str, Any]:
         """The machine-readable result (``compare --json``)."""
@@ -168,6 +171,8 @@ class ComparisonResult:
                 **self.expectation.to_json(),
                 "fit_would_choose_p": self.fit_choice,
                 "fit_would_choose_ridge": self.fit_penalty,
+                "ar1": self.ar1_expectation
+                and {**self.ar1_expectation.training(), "notes": list(self.ar1_expectation.notes)},
             },
         }
 
@@ -193,15 +198,30 @@ def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
     return rows
 
 
-def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
-    """The physics AR(1) model of a run, as ``compare`` fits it."""
+def ar1_estimator(settings: ComparisonSettings) -> AR1Model:
+    """The physics AR(1) model as ``compare`` fits it, not yet fitted."""
     return AR1Model(
         structural_gain=settings.structural_gain_um_per_K if settings.structural_sensor else None,
         scaling=settings.ar1_scaling,
         heat_exponent=settings.heat_exponent,
         start=settings.ar1_start,
         fit_method=settings.ar1_fit,
-    ).fit(ar1_inputs(run, settings.heat, settings.structural_sensor), run.error)
+    )
+
+
+def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
+    """The physics AR(1) model of a run, as ``compare`` fits it."""
+    return ar1_estimator(settings).fit(ar1_inputs(run, settings.heat, settings.structural_sensor), run.error)
+
+
+def expect_compared_ar1(run: Run, settings: ComparisonSettings) -> NextRunExpectation | None:
+    """The AR(1) model's expected next-run RMS from the modelling run alone (:mod:`groupfit.ar1.nextrun`); None
+    when its unseen levels are scaled by the early rise, which a segment of the same run cannot show."""
+    if settings.ar1_scaling != "heat_law":
+        return None
+    inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
+    predict = estimator_predictor(inputs, run.error, lambda: ar1_estimator(settings), settings.ar1_start)
+    return expect_ar1(inputs[:, 0], run.error, predict, heat_name=settings.heat)
 
 
 def in_modelling_order(modelling: Run, run: Run) -> Run:
@@ -294,12 +314,7 @@ def compare_models(
         is_modelling = run is modelling
         preds: dict[str, np.ndarray] = {}
         preds["mlr"] = mlr.predict(run.temps)
-        rise_ratio = None
-        if ar1 is not None and settings.ar1_scaling == "rise":
-            sensor = settings.rise_sensor or modelling.temp_names[0]
-            rise_ratio = early_rise(_column(run, sensor), run.period, settings.rise_window_s) / early_rise(
-                _column(modelling, sensor), modelling.period, settings.rise_window_s
-            )
+        rise_ratio = early_rise_ratio(run, modelling, settings) if ar1 is not None else None
         if ar1 is not None:
             initial = first_measured(run.error) if settings.ar1_start == "measured" else 0.0
             preds["ar1"] = ar1.predict(
@@ -359,6 +374,7 @@ def compare_models(
             if fit_choice == 0
             else None
         )
+        ar1_expectation = expect_compared_ar1(modelling, settings) if ar1 is not None else None
     ar1_summary = None
     if ar1 is not None:
         ar1_summary = {
@@ -394,6 +410,7 @@ def compare_models(
         },
         reference=modelling.reference,
         expectation=expectation,
+        ar1_expectation=ar1_expectation,
         fit_choice=fit_choice,
         fit_penalty=fit_penalty,
         notes=notes + clamp_notes,
@@ -444,6 +461,21 @@ def first_measured(error: np.ndarray) -> float:
     """The first measured value of an error series (where an AR(1) free run starts); 0 when none is."""
     finite = np.flatnonzero(np.isfinite(error))
     return float(error[finite[0]]) if finite.size else 0.0
+
+
+def early_rise_ratio(run: Run, modelling: Run, settings: ComparisonSettings) -> float | None:
+    """The run's early temperature rise over the modelling run's (``ar1_scaling = "rise"``); None otherwise."""
+    if settings.ar1_scaling != "rise":
+        return None
+    sensor = settings.rise_sensor or modelling.temp_names[0]
+    base = early_rise(_column(modelling, sensor), modelling.period, settings.rise_window_s)
+    if not (np.isfinite(base) and base != 0.0):
+        raise InputError(
+            f"{modelling.source}: rise sensor '{sensor}' rises by {base:g} over the first "
+            f"{settings.rise_window_s:g} s, so the early-rise ratio of another run cannot be taken against it; "
+            'choose a sensor that rises then, a longer [compare] rise_window_s, or ar1_scaling = "heat_law"'
+        )
+    return early_rise(_column(run, sensor), run.period, settings.rise_window_s) / base
 
 
 def _column(run: Run, name: str) -> np.ndarray:

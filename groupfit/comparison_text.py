@@ -59,12 +59,26 @@ def comparison_summary(result: Any) -> str:
     f_text = f"F = {stats['f_value']:.4g} (p = {stats['f_p_value']:.2g}), " if stats["f_value"] is not None else ""
     lines.append(f"MLR: {terms}; {f_text}R² = {stats['r_squared']:.5f}, σ = {stats['sigma_um']:.3g} µm")
     lines.append(ar1_line(result.ar1, left_out=result.ar1_left_out))
+    lines += ar1_expectation_lines(result)
     if grouped_keys:
         lines.append(
             f"grouped models on validation runs: groups chosen by {result.validation_rule}; "
             "they are fitted to the modelling run's condition and are not retuned."
         )
     return "\n".join(lines)
+
+
+def ar1_expectation_lines(result) -> list[str]:
+    """The AR(1) model's expected next-run RMS, its range and notes (none when it was not estimated)."""
+    expectation = result.ar1_expectation
+    if expectation is None:
+        return []
+    value, (low, high) = expectation.expected()
+    return [
+        f"AR(1) expected next-run RMS from {result.runs[0]} alone: {value:.3g} µm (range {low:.3g}-{high:.3g} µm; "
+        f"{expectation.scores.method()})",
+        *(f"note: {note}" for note in expectation.notes),
+    ]
 
 
 def ar1_line(ar1: dict[str, Any] | None, left_out: str | None = None) -> str:

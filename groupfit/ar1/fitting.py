@@ -51,9 +51,12 @@ class AR1Fit:
     error: np.ndarray
     prediction: np.ndarray
     scores: dict[str, Any]
+    expectation: Any = None
+    """The expected next-run error (:func:`groupfit.ar1.nextrun.expect_ar1`); None when not estimated."""
 
     def to_json(self) -> dict[str, Any]:
-        return {**self.model.to_dict(), "scores": self.scores}
+        expected = self.expectation.training() if self.expectation is not None else {}
+        return {**self.model.to_dict(), **expected, "scores": self.scores}
 
     def summary(self) -> str:
         m, s = self.model, self.scores
@@ -71,6 +74,10 @@ class AR1Fit:
             fitted = s["closed_form"]["least_squares"]
             c2_fit = ", ".join(f"C2({k}) = {v:.5g}" for k, v in fitted["C2"].items())
             lines.append(f"physics closed form (eq. 13-14) used; least squares gives C1 = {fitted['C1']:.6f}, {c2_fit}")
+        if self.expectation is not None:
+            lines.append(self.expectation.line())
+        elif "expected_next_run_note" in s:
+            lines.append(f"expect  no next-run estimate: {s['expected_next_run_note']}")
         return "\n".join(lines)
 
 

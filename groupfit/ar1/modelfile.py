@@ -28,6 +28,7 @@ from groupfit.io import atomic_write_text, read_json_file, to_json
 from groupfit.model import _fields_from_dict, _fields_to_dict
 from groupfit.model_checks import COEFFICIENT_LIMIT, FORMAT
 from groupfit.switching_checks import RULE_LIMIT
+from groupfit.training_checks import expectation_problem
 
 KIND = "ar1"
 STARTS = ("zero", "measured")
@@ -142,7 +143,10 @@ def ar1_problem(data: Any) -> str | None:
         return f"start = {data['start']!r}: one of {', '.join(STARTS)}"
     if data["fit"] not in FITS:
         return f"fit = {data['fit']!r}: one of {', '.join(FITS)}"
-    return None
+    training = data.get("training")
+    if training is not None and not isinstance(training, Mapping):
+        return "training: a JSON object"
+    return expectation_problem(training or {})
 
 
 def _coefficients_problem(data: Mapping[str, Any]) -> str | None:

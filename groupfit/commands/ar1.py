@@ -16,6 +16,7 @@ from groupfit.ar1.rule import FAULT_HEAT, AR1Rule
 from groupfit.ar1.sampling import decimate, decimation_step
 from groupfit.commands import common
 from groupfit.commands.export_options import AR1_TARGET_OPTIONS, target_options
+from groupfit.commands.replay_expectation import expectation_check, expectation_line
 from groupfit.data import load_run, numeric_column, without_implausible_errors
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics, prediction_accuracy
@@ -81,6 +82,9 @@ def run_replay(args: argparse.Namespace) -> int:
         )
     else:
         lines.append("error   none (the run has no measured error: no error column, or no reading within its range)")
+    out.update(expectation_check(model.training, out, args.data))
+    if "expected_next_run" in out:
+        lines.append(expectation_line(out["expected_next_run"]))
     figures = []
     if out_dir is not None and measured is not None:
         figure = out_dir / "replay.png"

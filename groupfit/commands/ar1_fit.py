@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from groupfit.ar1.fitting import closed_form_from_toml, decimate, decimation_step, fit_ar1_file
+from groupfit import running
+from groupfit.ar1.fitting import AR1Fit, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
 from groupfit.ar1.inputs import check_heat
 from groupfit.ar1.modelfile import STARTS
+from groupfit.ar1.nextrun import expect_ar1, file_predictor
 from groupfit.commands import common
 from groupfit.data import load_run, numeric_column
 from groupfit.errors import InputError
+from groupfit.heldout.expect import NextRunExpectation
+from groupfit.io import file_sha256
 from groupfit.outputs import GROUPED_MODELS
 from groupfit.plots import plot_fit
 
@@ -74,6 +79,26 @@ def add_fit_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+NO_ESTIMATE = (
+    "no segment after the first 40 % of the run could be scored (the run before each has no heat level above "
+    "0, or its fit would not settle); record a run with more changes of the heat column"
+)
+
+
+def with_expectation(result: AR1Fit, expectation: NextRunExpectation | None, path) -> None:
+    """Record the expected next-run error in ``result``'s model file (``training``) and its scores, and the
+    modelling file's SHA-256, so that ``replay`` of that file does not take it for a next run."""
+    training = dict(result.model.training or {})
+    training["recordings"] = [{"path": str(Path(path).resolve()), "sha256": file_sha256(path)}]
+    if expectation is None:
+        result.scores["expected_next_run_note"] = NO_ESTIMATE
+    else:
+        training.update(expectation.training())
+        result.scores["expected_next_run_notes"] = list(expectation.notes)
+    result.model = result.model.replace(training=training).checked()
+    result.expectation = expectation
+
+
 def run_fit(args: argparse.Namespace) -> int:
     """``groupfit fit --model ar1``: fit, write model.json and fit.png, print the summary."""
     option = first_given(args, GROUPED_ONLY)
@@ -106,9 +131,7 @@ def run_fit(args: argparse.Namespace) -> int:
     check_heat(heat, source=str(run.source), name=args.heat)
     step = decimation_step(run.period, args.period)
     rod = closed_form_from_toml(args.closed_form) if args.closed_form else None
-    result = fit_ar1_file(
-        decimate(heat, step),
-        decimate(run.error, step),
+    options = dict(
         period_s=run.period * step,
         heat_name=args.heat,
         error_name=run.error_name,
@@ -119,7 +142,13 @@ def run_fit(args: argparse.Namespace) -> int:
         heat_exponent=args.heat_exponent,
         rod=rod,
     )
+    heat, error = decimate(heat, step), decimate(run.error, step)
+    result = fit_ar1_file(heat, error, **options)
     result.scores["decimation"] = step
+    with running.stage("next-run estimate", enabled=not args.quiet):
+        predict = file_predictor(heat, error, lambda q, e: fit_ar1_file(q, e, **options).model)
+        expectation = expect_ar1(heat, error, predict, heat_name=args.heat)
+    with_expectation(result, expectation, data.paths[0])
     model_path, figure_path = out_dir / "model.json", out_dir / "fit.png"
     result.model.save(model_path)
     plot_fit(

@@ -12,7 +12,8 @@ import numpy as np
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
-from groupfit.commands.replay_faults import fault_readings, mostly_unscored
+from groupfit.commands.replay_expectation import expectation_check, expectation_line
+from groupfit.commands.replay_faults import fault_readings
 from groupfit.commands.replay_probes import (
     add_probe_options,
     probe_report,
@@ -34,7 +35,7 @@ from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
-from groupfit.recordings import is_modelling_file, overlap_note
+from groupfit.recordings import overlap_note
 from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
 from groupfit.screw.modelfile import is_screw_file
@@ -207,7 +208,7 @@ def run_replay(args: argparse.Namespace) -> int:
         scored = without[np.isfinite(without)] if without is not None else np.empty(0)
         rms_without = float(np.sqrt(np.mean(scored**2))) if scored.size else None
         data["probes"] = probe_summary(args, replay, probes, rms_without, run.period)
-    data.update(expectation_check(model, data, args.data))
+    data.update(expectation_check(model.training, data, args.data))
     span = range_check(model, run, replay)
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residual)
@@ -273,47 +274,6 @@ def clamp_check(tables: RuleTables, replay: Replay) -> tuple[int, str | None]:
         f"{tables.comp_max_um:g}] µm on {clamped} sample(s); the residual counts the error the clamp left (probe "
         f"checks may carry the output on to [{tables.output_min_um:g}, {tables.output_max_um:g}] µm). If the "
         "machine allows a larger correction, widen switching.comp_min_um / comp_max_um in the model file"
-    )
-
-
-def expectation_check(model: ModelFile, data: dict[str, Any], path) -> dict[str, Any]:
-    """This run's RMS without checks against what the model file expected of a next run (``training``); empty
-    without a measured error or an expectation. A file the model was fitted on is no next run, nor a run mostly
-    in sensor fault (``place`` says so)."""
-    training = model.training or {}
-    expected = training.get("expected_next_run_rms_um")
-    rms = data["probes"]["rms_without_checks_um"] if "probes" in data else data.get("rms_um")
-    if rms is None or not isinstance(expected, (int, float)) or not expected > 0:
-        return {}
-    low, high = training.get("expected_next_run_range_um") or (expected, expected)
-    place = "below" if rms < low else "above" if rms > high else "inside"
-    if is_modelling_file(training, path):  # read only when there is a figure to place
-        place = "modelling run"
-    elif mostly_unscored(data):
-        place = "mostly unscored"
-    return {
-        "expected_next_run": {
-            "rms_um": float(expected),
-            "range_um": [float(low), float(high)],
-            "actual_rms_um": float(rms),
-            "actual_over_expected": float(rms / expected),
-            "place": place,
-        }
-    }
-
-
-def expectation_line(check: dict[str, Any]) -> str:
-    """The report line of :func:`expectation_check`."""
-    low, high = check["range_um"]
-    where = "inside the range" if check["place"] == "inside" else f"{check['place']} the range"
-    if check["place"] == "modelling run":
-        where = "but this file is one the model was fitted on, not a next run"
-    elif check["place"] == "mostly unscored":
-        where = "not placed: most of the run was not scored (readings in fault, below)"
-    return (
-        f"expected about {check['rms_um']:.3g} µm RMS on a next run (range {low:.3g}-{high:.3g} µm, from the model "
-        f"file); this run without checks: {check['actual_rms_um']:.3g} µm, {check['actual_over_expected']:.2g}× "
-        f"that, {where}"
     )
 
 
