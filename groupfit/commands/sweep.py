@@ -15,7 +15,7 @@ from groupfit.errors import InputError
 from groupfit.outputs import current_plan
 from groupfit.sweep.config import read_study
 from groupfit.sweep.executors import DaskExecutor, LocalExecutor
-from groupfit.sweep.feasibility import check_exact_time, check_feasible
+from groupfit.sweep.feasibility import check_exact_time, check_feasible, check_table_memory
 from groupfit.sweep.report import write_report
 from groupfit.sweep.store import StudyStore
 from groupfit.sweep.study import run_study
@@ -98,6 +98,9 @@ def run_sweep(args: argparse.Namespace) -> int:
     if not args.scheduler:  # a cluster's size is known only once connected
         budget = None if args.no_budget else common.EXACT_BUDGET_SECONDS
         check_exact_time(study, feasible, args.config, budget_s=budget, workers=args.workers or os.cpu_count() or 1)
+    if not args.no_budget:  # on a cluster, what one worker holds
+        workers = 1 if args.scheduler else args.workers or os.cpu_count() or 1
+        check_table_memory(study, feasible, args.config, budget_bytes=common.EXACT_BUDGET_BYTES, workers=workers)
     out = common.report_stream(args)
     executor = make_executor(args, out)
     try:

@@ -4,15 +4,21 @@ from __future__ import annotations
 
 from groupfit.errors import InputError
 from groupfit.grouping import Constraints
+from groupfit.objective import segment_table_bytes
 from groupfit.search.exact import estimate_exact_cost, format_seconds
 from groupfit.sweep.config import RunSpec, Study
 
 
+def n_coefficients(run: RunSpec) -> int:
+    """The coefficients of one group of a run's model: its inputs and the intercept."""
+    model, sensors = run.spec["model"], run.spec["sensors"]
+    return (len(sensors["names"]) if "names" in sensors else int(sensors["k"])) + int(model["intercept"])
+
+
 def infeasible_reason(run: RunSpec, n_samples: int) -> str | None:
     """Why a run cannot fit its p breaks (the constraints of its n, c and inputs), or None when it can."""
-    model, sensors = run.spec["model"], run.spec["sensors"]
-    n_inputs = len(sensors["names"]) if "names" in sensors else int(sensors["k"])
-    n_coef = n_inputs + int(model["intercept"])
+    model = run.spec["model"]
+    n_coef = n_coefficients(run)
     constraints = Constraints.for_model(n_samples, model["n"], model["c"], n_coef)
     largest = constraints.max_breaks()
     if model["p"] <= largest:
@@ -62,11 +68,10 @@ def check_exact_time(study: Study, runs: list[RunSpec], label: str, *, budget_s:
     sizes = {str(d.path): d.n_samples for d in study.datasets}
     seconds = 0.0
     for run in runs:
-        model, sensors = run.spec["model"], run.spec["sensors"]
+        model = run.spec["model"]
         if run.spec["search"]["method"] != "exact":
             continue
-        n_coef = (len(sensors["names"]) if "names" in sensors else int(sensors["k"])) + int(model["intercept"])
-        seconds += estimate_exact_cost(sizes[run.path], n_coef, model["objective"], model["p"]).seconds
+        seconds += estimate_exact_cost(sizes[run.path], n_coefficients(run), model["objective"], model["p"]).seconds
     wall = seconds / max(workers, 1)
     if budget_s is not None and wall > budget_s:
         raise InputError(
@@ -76,4 +81,34 @@ def check_exact_time(study: Study, runs: list[RunSpec], label: str, *, budget_s:
     return wall
 
 
-__all__ = ["check_exact_time", "check_feasible", "feasibility", "infeasible_reason"]
+def check_table_memory(study: Study, runs: list[RunSpec], label: str, *, budget_bytes: float, workers: int) -> float:
+    """The memory of the tables of segment sums the study's grouped runs (p ≥ 1) hold at once, ``workers`` at a
+    time (the largest ones together); refused over ``budget_bytes``. A global run (p = 0) builds none."""
+    sizes = {str(d.path): d.n_samples for d in study.datasets}
+    tables = sorted(
+        ((segment_table_bytes(sizes[run.path], n_coefficients(run)), run) for run in runs if run.spec["model"]["p"]),
+        key=lambda item: item[0],
+        reverse=True,
+    )
+    together = tables[: max(workers, 1)]
+    peak = sum(size for size, _ in together)
+    if peak > budget_bytes:
+        size, run = together[0]
+        at_once = f"{len(together)} at once on {workers} worker(s)" if len(together) > 1 else "one"
+        raise InputError(
+            f"{label}: the grouped runs' tables of segment sums would take about {peak / 1e9:.1f} GB ({at_once}; "
+            f"the largest {size / 1e9:.1f} GB: {run.dataset}, N = {sizes[run.path]}, M = {n_coefficients(run)} "
+            f"coefficients), over the budget of {budget_bytes / 1e9:g} GB: lower --workers, use fewer sensors or "
+            "a thinned dataset, or --no-budget"
+        )
+    return peak
+
+
+__all__ = [
+    "check_exact_time",
+    "check_feasible",
+    "check_table_memory",
+    "feasibility",
+    "infeasible_reason",
+    "n_coefficients",
+]
