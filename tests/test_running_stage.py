@@ -63,13 +63,20 @@ def entered(monkeypatch):
     return names
 
 
-def test_fit_and_compare_run_their_long_stages_as_stages(tmp_path, entered):
+def test_fit_compare_and_replay_run_their_long_stages_as_stages(tmp_path, entered):
     data = str(DATASETS / "paper_cycle.csv")
     assert main(["fit", "--data", data, "--quiet", "--out", str(tmp_path / "f")]) == 0
     assert {"loading", "reference choice", "next-run estimate", "held-out check", "recalibration"} <= set(entered)
     entered.clear()
     assert main(["compare", "--data", data, "--pmax", "1", "--quiet", "--out", str(tmp_path / "c")]) == 0
     assert {"loading", "break intervals", "next-run estimate"} <= set(entered)
+    entered.clear()
+    model = str(tmp_path / "f" / "model.json")
+    assert main(["replay", model, "--data", data, "--probe-every", "600", "--out", str(tmp_path / "r")]) == 0
+    assert entered == ["loading", "replay", "writing the outputs"]
+    entered.clear()
+    assert main(["fit", "--model", "ar1", "--data", data, "--heat", "speed_rpm", "--out", str(tmp_path / "a")]) == 0
+    assert entered == ["next-run estimate"]
 
 
 def test_compares_grouped_fits_report_their_search_per_p_and_the_stage_from_its_start():

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from groupfit import running
 from groupfit.ar1.modelfile import is_ar1_file
 from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
@@ -160,10 +161,11 @@ def run_replay(args: argparse.Namespace) -> int:
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
     options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
     options.update(common.clock_options(args), **({"drop_glitches": False} if args.keep_glitches else {}))
-    run = load_readings(args.data, tables, **options)
-    continued, history, found_note, saved = earlier_recordings(
-        args, model, run, lambda path: load_readings(path, tables, **options)
-    )
+    with running.stage("loading"):
+        run = load_readings(args.data, tables, **options)
+        continued, history, found_note, saved = earlier_recordings(
+            args, model, run, lambda path: load_readings(path, tables, **options)
+        )
     try:
         rule = SwitchingRule(model, precision=args.precision, period_s=run.period)
     except InputError as exc:
@@ -177,16 +179,17 @@ def run_replay(args: argparse.Namespace) -> int:
         temps = joined[-1].temps
         run = picked_up(run, zero_of(joined[-1]))  # an error read from the start: from the recording's
     probes = probe_schedule(args, run, continued=bool(history) or saved is not None)
-    if history:
-        checks = None if probes is None else np.r_[np.full(rows, np.nan), probes]  # checks on this file only
-        replay = rule.replay(temps, checks).tail(rows)
-        unchecked = rule.replay(temps).tail(rows) if probes is not None else None
-    else:
-        state = None if saved is None else saved.state
-        replay = rule.replay(run.temps, probes, state)
-        unchecked = rule.replay(run.temps, state=state) if probes is not None else None
-        if saved is not None:
-            rows, continued = saved.samples, [saved.path]
+    with running.stage("replay"):
+        if history:
+            checks = None if probes is None else np.r_[np.full(rows, np.nan), probes]  # checks on this file only
+            replay = rule.replay(temps, checks).tail(rows)
+            unchecked = rule.replay(temps).tail(rows) if probes is not None else None
+        else:
+            state = None if saved is None else saved.state
+            replay = rule.replay(run.temps, probes, state)
+            unchecked = rule.replay(run.temps, state=state) if probes is not None else None
+            if saved is not None:
+                rows, continued = saved.samples, [saved.path]
     common.print_notes([run, *history], common.report_stream(args))
     if found_note is not None:
         notes = [found_note] if history or saved else [found_note, *notes]  # the one note of what was continued
@@ -219,12 +222,13 @@ def run_replay(args: argparse.Namespace) -> int:
     notes += register_notes
     extra = {**span, **out_of_range, **glitches, **offset, **register, "clamped_samples": clamped}
     result = ReplayResult({**data, **extra, **({"notes": notes} if notes else {})})
-    written = []
-    if out_dir is not None:
-        figure = out_dir / "replay.png"
-        plot_replay(run, rule.tables, replay, model, figure)
-        written.append(figure)
-    common.finish_outputs(args, result.summary(), result.to_json(), written)
+    with running.stage("writing the outputs"):
+        written = []
+        if out_dir is not None:
+            figure = out_dir / "replay.png"
+            plot_replay(run, rule.tables, replay, model, figure)
+            written.append(figure)
+        common.finish_outputs(args, result.summary(), result.to_json(), written)
     return 0
 
 
