@@ -30,9 +30,16 @@ import numpy as np
 import pandas as pd
 
 from groupfit.ar1.inputs import ar1_inputs
-from groupfit.ar1.nextrun import estimator_predictor, expect_ar1
 from groupfit.clamped_scores import clamped
 from groupfit.columns import input_order
+from groupfit.comparison_ar1 import (
+    ar1_left_out_reason,
+    early_rise_ratio,
+    expect_compared_ar1,
+    first_measured,
+    fit_ar1,
+    rise_notes,
+)
 from groupfit.comparison_path import grouped_path
 from groupfit.comparison_text import comparison_summary
 from groupfit.conditions import condition_changes, run_condition
@@ -45,7 +52,6 @@ from groupfit.inference.cli import AUTO_BUDGET_S
 from groupfit.inference.prediction import band_for
 from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.model import ModelFile
-from groupfit.models.ar1 import AR1Model, early_rise
 from groupfit.models.mlr import MLR
 from groupfit.models.select_p import choose_p
 from groupfit.runtime.rule import compensation_clamp
@@ -198,32 +204,6 @@ def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
     return rows
 
 
-def ar1_estimator(settings: ComparisonSettings) -> AR1Model:
-    """The physics AR(1) model as ``compare`` fits it, not yet fitted."""
-    return AR1Model(
-        structural_gain=settings.structural_gain_um_per_K if settings.structural_sensor else None,
-        scaling=settings.ar1_scaling,
-        heat_exponent=settings.heat_exponent,
-        start=settings.ar1_start,
-        fit_method=settings.ar1_fit,
-    )
-
-
-def fit_ar1(run: Run, settings: ComparisonSettings) -> AR1Model:
-    """The physics AR(1) model of a run, as ``compare`` fits it."""
-    return ar1_estimator(settings).fit(ar1_inputs(run, settings.heat, settings.structural_sensor), run.error)
-
-
-def expect_compared_ar1(run: Run, settings: ComparisonSettings) -> NextRunExpectation | None:
-    """The AR(1) model's expected next-run RMS from the modelling run alone (:mod:`groupfit.ar1.nextrun`); None
-    when its unseen levels are scaled by the early rise, which a segment of the same run cannot show."""
-    if settings.ar1_scaling != "heat_law":
-        return None
-    inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
-    predict = estimator_predictor(inputs, run.error, lambda: ar1_estimator(settings), settings.ar1_start)
-    return expect_ar1(inputs[:, 0], run.error, predict, heat_name=settings.heat)
-
-
 def in_modelling_order(modelling: Run, run: Run) -> Run:
     """``run`` with its inputs in the modelling run's order (a log may write its columns in another)."""
     order = input_order(modelling.temp_names, run.temp_names, run.source)
@@ -276,11 +256,11 @@ def compare_models(
         raise InputError(f"two runs share the name '{[n for n in names if names.count(n) > 1][0]}'; rename a file")
 
     measured = measured_rows(modelling)
-    notes = sparse_error_notes(modelling, measured) + joined_run_notes(parts)
+    notes = sparse_error_notes(modelling, measured) + joined_run_notes(parts) + rise_notes(modelling, settings)
     X, y = measured.temps, measured.error
     named = pd.DataFrame(X, columns=list(modelling.temp_names))
     mlr = MLR(objective=settings.objective, fit_intercept=settings.fit_intercept).fit(named, y)
-    ar1_left_out = ar1_left_out_reason(modelling, measured, parts)
+    ar1_left_out = ar1_left_out_reason(modelling, measured, parts, settings.heat)
     ar1 = fit_ar1(modelling, settings) if settings.heat is not None and ar1_left_out is None else None
 
     path, grouped = grouped_path(
@@ -436,15 +416,6 @@ def sparse_error_notes(modelling: Run, measured: Run) -> list[str]:
     ]
 
 
-def ar1_left_out_reason(modelling: Run, measured: Run, parts: Sequence[Run]) -> str | None:
-    """Why the AR(1) model cannot be fitted on the modelling run(s); None when it can."""
-    if measured is not modelling:
-        return "the error is not measured on every row"
-    if len(parts) > 1:
-        return "its free run would run on from one modelling run into the next"
-    return None
-
-
 def joined_run_notes(parts: Sequence[Run]) -> list[str]:
     """What several modelling runs, joined, leave out of the comparison."""
     if len(parts) < 2:
@@ -455,30 +426,3 @@ def joined_run_notes(parts: Sequence[Run]) -> list[str]:
         "of one run: give one --data and the others as --validate), the AR(1) model on one run; the next-run "
         "figure leaves each run out in turn"
     ]
-
-
-def first_measured(error: np.ndarray) -> float:
-    """The first measured value of an error series (where an AR(1) free run starts); 0 when none is."""
-    finite = np.flatnonzero(np.isfinite(error))
-    return float(error[finite[0]]) if finite.size else 0.0
-
-
-def early_rise_ratio(run: Run, modelling: Run, settings: ComparisonSettings) -> float | None:
-    """The run's early temperature rise over the modelling run's (``ar1_scaling = "rise"``); None otherwise."""
-    if settings.ar1_scaling != "rise":
-        return None
-    sensor = settings.rise_sensor or modelling.temp_names[0]
-    base = early_rise(_column(modelling, sensor), modelling.period, settings.rise_window_s)
-    if not (np.isfinite(base) and base != 0.0):
-        raise InputError(
-            f"{modelling.source}: rise sensor '{sensor}' rises by {base:g} over the first "
-            f"{settings.rise_window_s:g} s, so the early-rise ratio of another run cannot be taken against it; "
-            'choose a sensor that rises then, a longer [compare] rise_window_s, or ar1_scaling = "heat_law"'
-        )
-    return early_rise(_column(run, sensor), run.period, settings.rise_window_s) / base
-
-
-def _column(run: Run, name: str) -> np.ndarray:
-    if name not in run.frame.columns:
-        raise InputError(f"{run.source}: rise sensor '{name}' not found; set [compare] rise_sensor")
-    return run.frame[name].to_numpy(dtype=float)

@@ -66,6 +66,7 @@ import math
 from pathlib import Path
 from typing import Any, Callable
 
+from groupfit.ar1.modelfile import MAX_HEAT_EXPONENT
 from groupfit.data_options import MAX_PERIOD_TOLERANCE, encoding_name, parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.grouping import MAX_SPACING
@@ -93,6 +94,14 @@ def _columns(table: Table, key: str) -> list[str]:
 
 def _positive(table: Table, key: str) -> float:
     return table.number(key, positive=True)
+
+
+def _heat_exponent(table: Table, key: str) -> float:
+    """The heat law's exponent, in (0, 4] as a deployable AR(1) model holds it."""
+    value = table.number(key, positive=True)
+    if value > MAX_HEAT_EXPONENT:
+        raise table.fail(key, f"expected a number in (0, {MAX_HEAT_EXPONENT:g}], got {value!r}")
+    return value
 
 
 def _number(table: Table, key: str) -> int | float:
@@ -182,7 +191,8 @@ def _certify(table: Table, key: str) -> bool | str:
     return value
 
 
-def _temp_range(table: Table, key: str) -> tuple[float, float]:
+def parsed_temp_range(table: Table, key: str) -> tuple[float, float]:
+    """A ``[LOW, HIGH]`` range of plausible temperatures (°C) under ``key``, refused naming the key."""
     value = table.get(key)
     if (
         not isinstance(value, list)
@@ -208,7 +218,7 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
         "temps": _columns,
         "error": Table.string,
         "validate": _paths,
-        "temp_range": _temp_range,
+        "temp_range": parsed_temp_range,
         "error_limit": lambda table, key: table.number(key, positive=True),
         "period_tolerance": _period_tolerance,
         "resample_s": lambda table, key: table.number(key, positive=True),
@@ -241,12 +251,12 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     "compare": {
         "pmax": _at_least(0),
         "heat": Table.string,
-        "ar1_scaling": Table.string,
+        "ar1_scaling": lambda table, key: table.string(key, choices=("heat_law", "rise")),
         "ar1_start": lambda table, key: table.string(key, choices=("measured", "zero")),
-        "ar1_fit": Table.string,
-        "heat_exponent": _positive,
+        "ar1_fit": lambda table, key: table.string(key, choices=("one_step", "free_run")),
+        "heat_exponent": _heat_exponent,
         "rise_sensor": Table.string,
-        "rise_window_s": _number,
+        "rise_window_s": _positive,
         "structural_sensor": Table.string,
         "structural_gain_um_per_K": _structural_gain,
         "conditions": Table.strings,

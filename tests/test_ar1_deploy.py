@@ -163,6 +163,8 @@ def test_model_file_round_trips_and_bad_files_fail_with_the_file_and_key(model, 
         ("levels", [2000.0, 1000.0], "strictly increasing"),
         ("start", "warm", "start = 'warm'"),
         ("heat_max", 10.0, "heat_max = 10.0: at least the largest level"),
+        ("c2_um", [True, *data["c2_um"][1:]], "c2_um[0] = True: a finite number"),
+        ("training", {**(data.get("training") or {}), "recordings": "x"}, "training.recordings = 'x': a list of"),
     ):
         broken = tmp_path / f"{key}.json"
         broken.write_text(json.dumps({**data, key: value}))
@@ -184,6 +186,21 @@ def test_replay_of_a_finer_run_takes_every_step(model, tmp_path):
     out = json.loads((tmp_path / "r.json").read_text())
     assert out["decimation"] == 2 and out["start"] == "zero"
     np.testing.assert_array_equal(out["prediction_um"], AR1Rule(model).replay(heat).prediction_um)
+
+
+def test_replay_scores_the_measured_steps_of_a_run_with_missed_error_readings(model, tmp_path):
+    heat, observed, _ = simulated_process(n=300)
+    missed = observed.copy()
+    missed[[50, 51, 200]] = np.nan
+    path = tmp_path / "m.json"
+    model.save(path)
+    run = write_run(tmp_path / "run.csv", heat, missed)
+    assert main(["replay", str(path), "--data", str(run), "--json", str(tmp_path / "r.json")]) == 0
+    out = json.loads((tmp_path / "r.json").read_text())
+    scored = np.isfinite(missed)
+    residual = missed[scored] - AR1Rule(model).replay(heat).prediction_um[scored]
+    assert out["scores"]["scored_samples"] == 297
+    assert out["rms_um"] == pytest.approx(float(np.sqrt(np.mean(residual**2))), rel=1e-12)
 
 
 def test_replay_scores_only_the_errors_within_range_error(model, tmp_path, capsys):
@@ -390,15 +407,27 @@ def test_bad_ar1_fit_inputs_fail_with_one_line_and_write_nothing(tmp_path, capsy
     heat, observed, _ = simulated_process(n=300)
     csv = write_run(tmp_path / "run.csv", heat, observed)
     negative = write_run(tmp_path / "negative.csv", np.where(np.arange(300) == 40, -5.0, heat), observed)
+    resting = write_run(tmp_path / "resting.csv", np.zeros(300), observed)
+    huge = write_run(tmp_path / "huge.csv", np.where(np.arange(300) == 6, 1e300, heat), observed)
+    measured = tmp_path / "measured.csv"  # a power that moves every sample: one C2 per reading would be fitted
+    power = np.round(heat / 1000 + 0.05 * np.random.default_rng(1).standard_normal(300), 3).clip(0)
+    pd.read_csv(csv).assign(power_kW=power).to_csv(measured, index=False)
     out = ["--out", str(tmp_path / "out")]
     cases = (
         (["--data", str(csv)], "--model ar1 needs --heat COLUMN"),
         (["--data", str(csv), "--heat", "nope"], "'nope'"),
         (
             ["--data", str(negative), "--heat", "speed_rpm"],
-            "row 41, column 'speed_rpm' = -5: the heat reading must be a finite number >= 0",
+            "row 41, column 'speed_rpm' = -5: the heat reading must be a finite number from 0 to 1e+09",
         ),
         (["--data", str(csv), "--heat", "speed_rpm", "--p", "2"], "--p is an option of the grouped model"),
+        (["--data", str(csv), "--heat", "error_um"], "heat column 'error_um' is the run's error"),
+        (["--data", str(measured), "--heat", "power_kW"], "heat column 'power_kW' moves like a measurement"),
+        (["--data", str(resting), "--heat", "speed_rpm"], "heat column 'speed_rpm' is 0 on every row"),
+        (["--data", str(huge), "--heat", "speed_rpm"], "row 7, column 'speed_rpm' = 1e+300"),
+        (["--data", str(csv), "--heat", "speed_rpm", "--period", "3000"], "leaves 2 step(s) of the run's 300 rows"),
+        (["--data", str(csv), "--heat", "speed_rpm", "--heat-exponent", "nan"], "--heat-exponent nan: give a number"),
+        (["--data", str(csv), "--heat", "speed_rpm", "--heat-exponent", "5"], "--heat-exponent 5: give a number"),
     )
     for options, message in cases:
         assert main(["fit", "--model", "ar1", *options, *out]) == 2

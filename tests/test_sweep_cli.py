@@ -3,6 +3,7 @@ import os
 import sqlite3
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from groupfit.cli import main
@@ -206,3 +207,23 @@ def test_a_report_replaces_its_own_tables_but_not_a_users_table_of_that_name(tmp
     assert {p.name: p.read_bytes() for p in report.iterdir()} == before
     assert sweep(config, tmp_path / "s.sqlite", "--workers", "1", "--report", str(report), "--force") == 0
     assert (report / "runs.csv").read_bytes().splitlines()[0] == first.splitlines()[0]
+
+
+def test_a_hot_sensor_is_taken_with_the_range_the_refusal_advises(tmp_path, capsys):
+    frame = pd.read_csv(DATA)
+    frame["T1"] = frame["T1"] + 500.0  # a furnace wall: above the default plausible 500 °C
+    hot = tmp_path / "hot.csv"
+    frame.to_csv(hot, index=False)
+    config = tmp_path / "hot.toml"
+    grid = '[grid]\np = [0]\nsearch = ["exact"]\n'
+    config.write_text(f'[data]\npath = "{hot.as_posix()}"\n{grid}', encoding="utf-8")
+    assert sweep(config, tmp_path / "a.sqlite") == 2
+    err = capsys.readouterr().err
+    assert "--range-temp=LOW,HIGH (or [data] temp_range)" in err and not (tmp_path / "a.sqlite").exists()
+    assert sweep(config, tmp_path / "b.sqlite", "--range-temp=-50,1000", "--out", str(tmp_path / "b")) == 0
+    wide = tmp_path / "wide.toml"
+    wide.write_text(f'[data]\npath = "{hot.as_posix()}"\ntemp_range = [-50, 1000]\n{grid}', encoding="utf-8")
+    assert sweep(wide, tmp_path / "c.sqlite", "--out", str(tmp_path / "c")) == 0
+    wide.write_text(f'[data]\npath = "{hot.as_posix()}"\ntemp_range = [1000, -50]\n{grid}', encoding="utf-8")
+    assert sweep(wide, tmp_path / "d.sqlite") == 2
+    assert "temp_range" in capsys.readouterr().err

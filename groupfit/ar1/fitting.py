@@ -115,7 +115,12 @@ def fit_ar1_file(
         c1 = next(iter(pairs.values()))[0]
         c2 = {level: pair[1] for level, pair in pairs.items()}
         fit = "closed_form"
-    if not 0.0 < c1 < 1.0:
+    if not c1 > 0.0:
+        raise InputError(
+            f"{source}: the {fit.replace('_', '-')} fit gives C1 = {c1:.6f}, not above 0: the step is long against "
+            "the run's time constant, or the run too short for it; fit at a shorter step (--period) or on a longer run"
+        )
+    if not c1 < 1.0:
         raise InputError(
             f"{source}: the {fit.replace('_', '-')} fit gives C1 = {c1:.6f}, not below 1: its free run would not "
             "settle; fit at a longer step (--period) or on the free-run error (--ar1-fit free-run)"

@@ -9,32 +9,60 @@ from groupfit.data import Run, numeric_column
 from groupfit.errors import InputError
 from groupfit.reference import column_role
 from groupfit.resample import GAP_PERIODS
+from groupfit.setting_levels import is_setting
+from groupfit.switching_checks import RULE_LIMIT
+
+COMPARE_TODO = "or leave the AR(1) model out with --heat none"
 
 
 def check_heat(heat: np.ndarray, *, source: str, name: str) -> None:
-    """Refuse a heat reading that is not finite or below 0, naming its row (1-based) and column."""
+    """Refuse a heat reading that is not finite, below 0 or beyond :data:`RULE_LIMIT`, naming its row (1-based)
+    and column."""
     heat = np.asarray(heat, dtype=float)
-    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0))
+    bad = np.flatnonzero(~np.isfinite(heat) | (heat < 0) | (heat > RULE_LIMIT))
     if bad.size:
         raise InputError(
-            f"{source}: row {int(bad[0]) + 1}, column '{name}' = {float(heat[bad[0]]):g}: "
-            "the heat reading must be a finite number >= 0 (a speed logged with its sense of rotation: log its size)"
+            f"{source}: row {int(bad[0]) + 1}, column '{name}' = {float(heat[bad[0]]):g}: the heat reading must be "
+            f"a finite number from 0 to {RULE_LIMIT:g} (a speed logged with its sense of rotation: log its size)"
         )
 
 
-def heat_column(run: Run, heat: str) -> np.ndarray:
-    """The heat level of the AR(1) model (a speed, a power, a heat flux): read on every row, ≥ 0."""
-    if heat not in run.frame.columns:
+def check_heat_setting(heat: np.ndarray, *, source: str, name: str, todo: str) -> None:
+    """Refuse a heat column the AR(1) model cannot take: one that is 0 throughout (no heat to fit), or one that
+    moves like a measurement rather than a setting held at a few levels (it would get one C2 per reading).
+    ``todo``: what else to do, after binning the column."""
+    heat = np.asarray(heat, dtype=float)
+    if not np.any(heat > 0):
         raise InputError(
-            f"{run.source}: heat column '{heat}' for the AR(1) model not found; name it with --heat COLUMN "
-            "(or [compare] heat), or leave the AR(1) model out with --heat none"
+            f"{source}: heat column '{name}' is 0 on every row: the AR(1) model has no heat input to fit; name the "
+            f"heat input (a speed, a power) with --heat COLUMN, {todo}"
         )
+    if not is_setting(heat):
+        raise InputError(
+            f"{source}: heat column '{name}' moves like a measurement, not a setting ({len(np.unique(heat))} "
+            "distinct readings): the AR(1) model fits one C2 per heat level, so its heat input must be held at a "
+            f"few set levels (a speed or power set-point); bin the column to its set levels, {todo}"
+        )
+
+
+def refuse_heat_role(run: Run, heat: str, todo: str) -> None:
+    """Refuse the run's error or time column as the heat input."""
     role = column_role(run, heat)
     if role:
         raise InputError(
             f"{run.source}: heat column '{heat}' is the run's {role}; name the heat level (a speed, a power) with "
-            "--heat COLUMN, or leave the AR(1) model out with --heat none"
+            f"--heat COLUMN, {todo}"
         )
+
+
+def heat_column(run: Run, heat: str) -> np.ndarray:
+    """The heat level of ``compare``'s AR(1) model (a speed, a power, a heat flux): read on every row, ≥ 0."""
+    if heat not in run.frame.columns:
+        raise InputError(
+            f"{run.source}: heat column '{heat}' for the AR(1) model not found; name it with --heat COLUMN "
+            f"(or [compare] heat), {COMPARE_TODO}"
+        )
+    refuse_heat_role(run, heat, COMPARE_TODO)
     values = read_on_every_row(run, heat)
     check_heat(values, source=str(run.source), name=heat)
     return values

@@ -146,7 +146,17 @@ def ar1_problem(data: Any) -> str | None:
     training = data.get("training")
     if training is not None and not isinstance(training, Mapping):
         return "training: a JSON object"
-    return expectation_problem(training or {})
+    return expectation_problem(training or {}) or _recordings_problem(training or {})
+
+
+def _recordings_problem(training: Mapping[str, Any]) -> str | None:
+    """``training.recordings``: a list of objects, each with the file's SHA-256 as a string."""
+    entries = training.get("recordings", [])
+    if not isinstance(entries, list) or not all(
+        isinstance(entry, Mapping) and isinstance(entry.get("sha256"), str) for entry in entries
+    ):
+        return f"training.recordings = {entries!r}: a list of {{path, sha256}} objects (the modelling files)"
+    return None
 
 
 def _coefficients_problem(data: Mapping[str, Any]) -> str | None:
@@ -162,7 +172,12 @@ def _coefficients_problem(data: Mapping[str, Any]) -> str | None:
     if not isinstance(c2, list) or len(c2) != len(levels):
         return f"c2_um: one value per level ({len(levels)})"
     for i, value in enumerate(c2):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and abs(value) <= COEFFICIENT_LIMIT):
+        if not (
+            isinstance(value, (int, float))
+            and not isinstance(value, bool)
+            and math.isfinite(value)
+            and abs(value) <= COEFFICIENT_LIMIT
+        ):
             return f"c2_um[{i}] = {value!r}: a finite number of at most {COEFFICIENT_LIMIT:g} µm"
     return None
 

@@ -30,7 +30,14 @@ def run_replay(args: argparse.Namespace) -> int:
     error = args.error or model.error or "error_um"
     time = args.time or (model.training or {}).get("time") or "time_s"
     run = load_run(
-        args.data, temps=[], time=time, error=error, require_error=False, error_limit=None, **common.clock_options(args)
+        args.data,
+        temps=[],
+        time=time,
+        error=error,
+        require_error=False,
+        allow_nonfinite=True,
+        error_limit=None,
+        **common.clock_options(args),
     )
     run = without_implausible_errors(run, common.range_options(args)["error_limit"])
     common.print_notes([run], common.report_stream(args))

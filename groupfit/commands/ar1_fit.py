@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from groupfit import running
 from groupfit.ar1.fitting import AR1Fit, closed_form_from_toml, decimate, decimation_step, fit_ar1_file
-from groupfit.ar1.inputs import check_heat
-from groupfit.ar1.modelfile import STARTS
+from groupfit.ar1.inputs import check_heat, check_heat_setting, refuse_heat_role
+from groupfit.ar1.modelfile import MAX_HEAT_EXPONENT, STARTS
 from groupfit.ar1.nextrun import expect_ar1, file_predictor
 from groupfit.commands import common
 from groupfit.data import load_run, numeric_column
@@ -22,6 +23,9 @@ AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
 GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion")
 DEFAULT_HEAT_EXPONENT = 5 / 3
 """C2 of an unseen heat level by (q/level)^X: bearing heat against speed."""
+MIN_STEPS = 10
+"""The fewest steps (rows at the model's step) ``fit --model ar1`` fits."""
+FIT_TODO = "or model the run with the grouped model (leave out --model ar1)"
 AR1_ONLY = ("heat", "period", "start", "ar1_fit", "heat_exponent", "closed_form")
 
 
@@ -109,6 +113,8 @@ def run_fit(args: argparse.Namespace) -> int:
     args.start = args.start or "zero"
     args.ar1_fit = args.ar1_fit or "one-step"
     args.heat_exponent = DEFAULT_HEAT_EXPONENT if args.heat_exponent is None else args.heat_exponent
+    if not (math.isfinite(args.heat_exponent) and 0.0 < args.heat_exponent <= MAX_HEAT_EXPONENT):
+        raise InputError(f"--heat-exponent {args.heat_exponent:g}: give a number in (0, {MAX_HEAT_EXPONENT:g}]")
     config_path, settings = common.settings_with_data_options(args)
     data = settings.data
     out_dir = common.plan_outputs(
@@ -127,9 +133,17 @@ def run_fit(args: argparse.Namespace) -> int:
     clock = common.clock_options(args, data)
     run = load_run(data.paths[0], temps=[], time=data.time, error=data.error, error_limit=data.error_limit, **clock)
     common.print_notes([run], common.report_stream(args))
+    refuse_heat_role(run, args.heat, FIT_TODO)
     heat = numeric_column(run.frame, args.heat, run.source, allow_nonfinite=False)
     check_heat(heat, source=str(run.source), name=args.heat)
+    check_heat_setting(heat, source=str(run.source), name=args.heat, todo=FIT_TODO)
     step = decimation_step(run.period, args.period)
+    steps = len(decimate(heat, step))
+    if steps < MIN_STEPS:
+        raise InputError(
+            f"{run.source}: --period {args.period:g} s leaves {steps} step(s) of the run's {len(heat)} rows; the "
+            f"AR(1) model needs at least {MIN_STEPS}: choose a shorter step"
+        )
     rod = closed_form_from_toml(args.closed_form) if args.closed_form else None
     options = dict(
         period_s=run.period * step,

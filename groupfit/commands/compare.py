@@ -8,7 +8,7 @@ from pathlib import Path
 
 from groupfit import running
 from groupfit.commands import common, option_values, reference_options
-from groupfit.comparison import ComparisonSettings, compare_models, path_pmax
+from groupfit.comparison import ComparisonSettings, compare_models, in_modelling_order, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of
 from groupfit.data import Run, join_runs
@@ -190,13 +190,14 @@ def run_compare(args: argparse.Namespace) -> int:
         reference = reference if choice is None else choice.reference
     parts = [with_reference(part, reference) for part in parts]  # a reference at the start: each run's own
     modelling = join_runs(parts)
-    validation = [with_reference(run, reference) for run in validation]
+    validation = [in_modelling_order(modelling, with_reference(run, reference)) for run in validation]
     joined, skipped, notes = with_histories(validation, parts, assume_continued=args.continues)
     validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
     histories = {run.name: whole.temps[:rows] for run, whole, rows in zip(validation, joined, skipped) if rows}
     for note in notes:
         print(
-            f"note    {note.replace('derived inputs and run-time state', 'run-time switching')}",
+            "note    "
+            + note.replace("derived inputs and run-time state carry their", "run-time switching carries its"),
             file=common.report_stream(args),
         )
     check_block(args, modelling.n_samples)

@@ -11,6 +11,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from groupfit.commands import common
+from groupfit.data_options import parse_temp_range
 from groupfit.errors import InputError
 from groupfit.outputs import current_plan
 from groupfit.sweep.config import read_study
@@ -42,6 +43,12 @@ def add_parser(verbs) -> None:
     common.add_budget_option(sweep)
     common.add_clock_options(sweep)  # in place of the study's [data] period_tolerance and resample_s
     common.add_glitch_option(sweep)  # in place of [data] keep_glitches
+    sweep.add_argument(
+        "--range-temp",
+        metavar="LOW,HIGH",
+        help="plausible temperature readings in °C, in place of [data] temp_range (default -50,500; write "
+        "--range-temp=-60,250 for a negative LOW); a reading outside is refused",
+    )
     sweep.set_defaults(handler=run_sweep)
 
 
@@ -79,6 +86,8 @@ def make_executor(args: argparse.Namespace, out):
 def run_sweep(args: argparse.Namespace) -> int:
     given = {"period_tolerance": args.period_tolerance, "resample_s": args.resample}
     given["keep_glitches"] = args.keep_glitches
+    temp_range = parse_temp_range(args.range_temp)
+    given["temp_range"] = None if temp_range is None else list(temp_range)
     study = read_study(args.config, given)
     if not study.runs:
         raise InputError(f"{args.config}: the study has no runs")

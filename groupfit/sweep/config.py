@@ -18,6 +18,7 @@ A study file has up to four tables::
     period_tolerance = 2             # % an interval may deviate from the period (a jittering clock)
     resample_s = 60                  # average the readings of every 60 s (optional)
     keep_glitches = false            # true: fit on the error's and temperatures' glitches too
+    temp_range = [-50, 500]          # plausible temperatures (°C); a reading outside is refused
 
     [grid]                        # one run per combination of these
     p = {start = 0, stop = 4}     # a range (stop included, optional step) …
@@ -66,7 +67,17 @@ from groupfit.tomlconfig import Table, check_tables, read_toml
 SEARCHES = ("exact", "ga")
 TABLES = ("study", "data", "grid", "ga")
 STUDY_KEYS = ("name", "db", "certify")
-DATA_KEYS = ("path", "paths", "time", "error", "temps", "period_tolerance", "resample_s", "keep_glitches")
+DATA_KEYS = (
+    "path",
+    "paths",
+    "time",
+    "error",
+    "temps",
+    "period_tolerance",
+    "resample_s",
+    "keep_glitches",
+    "temp_range",
+)
 GRID_DEFAULTS: dict[str, list[Any]] = {
     "p": [3],
     "n": [3],

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from groupfit.config import parsed_period_tolerance
-from groupfit.data import PERIOD_TOLERANCE, load_run
+from groupfit.config import parsed_period_tolerance, parsed_temp_range
+from groupfit.data import PERIOD_TOLERANCE, TEMP_RANGE_C, load_run
 from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, default_temperature_columns
 from groupfit.errors import InputError
 from groupfit.heldout.selection import SELECTION_DEFAULTS, SELECTION_METHODS
@@ -38,7 +38,8 @@ class Dataset:
     constant : frozenset of str
         Columns with a single value (never picked by a pattern).
     clock : dict
-        ``period_tolerance``, ``resample`` and ``drop_glitches`` as :func:`groupfit.data.load_run` takes them.
+        ``period_tolerance``, ``resample``, ``drop_glitches`` and ``temp_range`` as :func:`groupfit.data.load_run`
+        takes them.
     glitches_left_out : bool
         The error has measuring glitches (:mod:`groupfit.glitches`) and they are left out as not measured.
     notes : tuple of str
@@ -70,7 +71,12 @@ class Dataset:
         return spec
 
 
-DEFAULT_CLOCK = {"period_tolerance": PERIOD_TOLERANCE, "resample": None, "drop_glitches": True}
+DEFAULT_CLOCK = {
+    "period_tolerance": PERIOD_TOLERANCE,
+    "resample": None,
+    "drop_glitches": True,
+    "temp_range": TEMP_RANGE_C,
+}
 
 
 def non_empty_string(value, what: str, label: str) -> str:
@@ -129,18 +135,22 @@ def read_datasets(table: dict, base: Path, label: str) -> list[Dataset]:
 
 
 def clock_settings(table: dict, label: str) -> dict:
-    """``[data] period_tolerance`` (percent), ``resample_s`` (seconds) and ``keep_glitches`` as
-    :func:`groupfit.data.load_run` takes them (``groupfit sweep --period-tolerance``, ``--resample`` and
-    ``--keep-glitches`` replace them)."""
+    """``[data] period_tolerance`` (percent), ``resample_s`` (seconds), ``keep_glitches`` and ``temp_range``
+    (°C) as :func:`groupfit.data.load_run` takes them (``groupfit sweep --period-tolerance``, ``--resample``,
+    ``--keep-glitches`` and ``--range-temp`` replace them)."""
     tolerance = parsed_period_tolerance(Table(table, "data", label), "period_tolerance")
     resample = (
         None if table.get("resample_s") is None else Table(table, "data", label).number("resample_s", positive=True)
     )
     keep = Table(table, "data", label).boolean("keep_glitches", False)
+    temp_range = (
+        None if table.get("temp_range") is None else parsed_temp_range(Table(table, "data", label), "temp_range")
+    )
     return {
         "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
         "resample": resample,
         "drop_glitches": not keep,
+        "temp_range": TEMP_RANGE_C if temp_range is None else temp_range,
     }
 
 

@@ -1,0 +1,123 @@
+"""``compare``'s physics AR(1) model: fitted as the comparison's settings say, when it is left out, its early-rise
+scaling and its expected next-run error (the settings are a :class:`groupfit.comparison.ComparisonSettings`)."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from groupfit.ar1.inputs import ar1_inputs
+from groupfit.ar1.nextrun import estimator_predictor, expect_ar1
+from groupfit.data import Run
+from groupfit.errors import InputError
+from groupfit.heldout.expect import NextRunExpectation
+from groupfit.models.ar1 import AR1Model, early_rise
+from groupfit.reference import column_role, refuse_as_temperature
+from groupfit.setting_levels import is_setting
+
+
+def ar1_estimator(settings) -> AR1Model:
+    """The physics AR(1) model as ``compare`` fits it, not yet fitted."""
+    return AR1Model(
+        structural_gain=settings.structural_gain_um_per_K if settings.structural_sensor else None,
+        scaling=settings.ar1_scaling,
+        heat_exponent=settings.heat_exponent,
+        start=settings.ar1_start,
+        fit_method=settings.ar1_fit,
+    )
+
+
+def fit_ar1(run: Run, settings) -> AR1Model:
+    """The physics AR(1) model of a run, as ``compare`` fits it."""
+    return ar1_estimator(settings).fit(ar1_inputs(run, settings.heat, settings.structural_sensor), run.error)
+
+
+def expect_compared_ar1(run: Run, settings) -> NextRunExpectation | None:
+    """The AR(1) model's expected next-run RMS from the modelling run alone (:mod:`groupfit.ar1.nextrun`); None
+    when its unseen levels are scaled by the early rise, which a segment of the same run cannot show."""
+    if settings.ar1_scaling != "heat_law":
+        return None
+    inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
+    predict = estimator_predictor(inputs, run.error, lambda: ar1_estimator(settings), settings.ar1_start)
+    return expect_ar1(inputs[:, 0], run.error, predict, heat_name=settings.heat)
+
+
+def ar1_left_out_reason(modelling: Run, measured: Run, parts: Sequence[Run], heat: str | None = None) -> str | None:
+    """Why the AR(1) model cannot be fitted on the modelling run(s); None when it can (a heat column that is
+    missing or unreadable is refused when it is read)."""
+    if measured is not modelling:
+        return "the error is not measured on every row"
+    if len(parts) > 1:
+        return "its free run would run on from one modelling run into the next"
+    if heat is not None and heat in modelling.frame.columns and not column_role(modelling, heat):
+        values = pd.to_numeric(modelling.frame[heat], errors="coerce").to_numpy(dtype=float)
+        if np.isfinite(values).all() and np.all(values >= 0) and not is_setting(values):
+            return (
+                f"its heat column '{heat}' moves like a measurement, not a setting ({len(np.unique(values))} "
+                "distinct readings), and the AR(1) model fits one C2 per heat level"
+            )
+    return None
+
+
+def first_measured(error: np.ndarray) -> float:
+    """The first measured value of an error series (where an AR(1) free run starts); 0 when none is."""
+    finite = np.flatnonzero(np.isfinite(error))
+    return float(error[finite[0]]) if finite.size else 0.0
+
+
+def early_rise_ratio(run: Run, modelling: Run, settings) -> float | None:
+    """The run's early temperature rise over the modelling run's (``ar1_scaling = "rise"``); None otherwise."""
+    if settings.ar1_scaling != "rise":
+        return None
+    sensor = rise_sensor(modelling, settings)
+    base = early_rise(_column(modelling, sensor), modelling.period, settings.rise_window_s)
+    if not (np.isfinite(base) and base != 0.0):
+        raise InputError(
+            f"{modelling.source}: rise sensor '{sensor}' rises by {base:g} over the first "
+            f"{settings.rise_window_s:g} s, so the early-rise ratio of another run cannot be taken against it; "
+            'choose a sensor that rises then, a longer [compare] rise_window_s, or ar1_scaling = "heat_law"'
+        )
+    return early_rise(_column(run, sensor), run.period, settings.rise_window_s) / base
+
+
+def rise_sensor(modelling: Run, settings) -> str:
+    """The temperature whose early rise scales C2 (``[compare] rise_sensor``, else the first input), refused when
+    it is the run's time, error or a speed."""
+    sensor = settings.rise_sensor or modelling.temp_names[0]
+    refuse_as_temperature(modelling, sensor, "rise sensor", "name a temperature with [compare] rise_sensor")
+    if sensor == settings.heat:
+        raise InputError(
+            f"{modelling.source}: rise sensor '{sensor}' is the AR(1) model's heat column, not a temperature; name a "
+            "temperature with [compare] rise_sensor"
+        )
+    return sensor
+
+
+def rise_notes(modelling: Run, settings) -> list[str]:
+    """The note that names the rise sensor when ``[compare] rise_sensor`` does not."""
+    if settings.heat is None or settings.ar1_scaling != "rise" or settings.rise_sensor:
+        return []
+    return [
+        f"the AR(1) model scales unseen heat levels by the early rise of {rise_sensor(modelling, settings)}, the "
+        "first input; [compare] rise_sensor names another"
+    ]
+
+
+def _column(run: Run, name: str) -> np.ndarray:
+    if name not in run.frame.columns:
+        raise InputError(f"{run.source}: rise sensor '{name}' not found; set [compare] rise_sensor")
+    return run.frame[name].to_numpy(dtype=float)
+
+
+__all__ = [
+    "ar1_estimator",
+    "ar1_left_out_reason",
+    "early_rise_ratio",
+    "expect_compared_ar1",
+    "first_measured",
+    "fit_ar1",
+    "rise_notes",
+    "rise_sensor",
+]
