@@ -467,3 +467,15 @@ def test_free_run_fit_also_fits_the_structural_gain():
     assert free.structural_gain_ == pytest.approx(3.0, abs=0.05) and fixed.structural_gain_ == 2.0
     assert free.c1_ == pytest.approx(0.98, abs=2e-3)
     assert np.sqrt(np.mean(free.residuals_**2)) < 0.5 * np.sqrt(np.mean(fixed.residuals_**2))
+
+
+def test_a_rest_read_as_a_few_tenths_is_rest_not_a_level_of_its_own():
+    """A tachometer reading 0…1 r/min at standstill: the fit is that of exact zeros (C2(0) = 0); the free run
+    differs by the heat law's C2 of those readings alone (below 0.1 nm here)."""
+    heat, observed, _ = simulated_process(noise=0.01, n=900)
+    noisy = np.where(heat == 0, np.abs(np.random.default_rng(3).normal(0, 0.5, len(heat))), heat)
+    exact = AR1Model().fit(heat[:, None], observed)
+    rest = AR1Model().fit(noisy[:, None], observed)
+    assert sorted(rest.c2_) == sorted(exact.c2_) == [1000.0, 2000.0]
+    assert rest.c1_ == pytest.approx(exact.c1_, rel=1e-12)
+    assert rest.predict(noisy[:, None]) == pytest.approx(exact.predict(heat[:, None]), abs=1e-4)

@@ -39,6 +39,10 @@ from groupfit.setting_levels import setting_levels
 SCALINGS = ("heat_law", "rise")
 FIT_METHODS = ("one_step", "free_run")
 STARTS = ("measured", "zero")
+REST_FRACTION = 0.01
+"""A heat level below this share of the run's largest is rest (C2 = 0), not a level of its own: a tachometer that
+reads a few tenths of an r/min at standstill. By the heat law such a level carries at most 1 % of the largest
+level's heat (0.05 % with the exponent 5/3), and a C2 fitted to it would carry the noise of the rest instead."""
 
 
 def closed_form_coefficients(
@@ -171,6 +175,7 @@ class AR1Model(RegressorMixin, BaseEstimator):
         gain = 0.0 if self.structural_gain is None else float(self.structural_gain)
         remainder = y - gain * rise
         set_heat = setting_levels(heat)  # a speed read back with noise: the levels it was set to
+        set_heat = np.where(set_heat < REST_FRACTION * np.max(set_heat, initial=0.0), 0.0, set_heat)
         levels = np.unique(set_heat[1:][set_heat[1:] != 0])
         if levels.size == 0:
             raise InputError("the modelling run has no heat input (all heat levels are 0): AR(1) cannot be fitted")
