@@ -88,6 +88,8 @@ def model_problem(model: Any, required: Sequence[str]) -> str | None:
     if model.get("kind") == "ar1":
         return "an AR(1) model file (kind 'ar1'): replay and export read it; this needs a grouped model (groupfit fit)"
     missing = [key for key in required if key not in model]
+    if missing and "kind" not in model and {"c1", "levels", "c2_um"} <= set(model):
+        return 'model file lacks key \'kind\': its c1, levels and c2_um are an AR(1) model\'s; add "kind": "ar1"'
     if missing:
         return f"model file lacks key '{missing[0]}'"
     checks = (

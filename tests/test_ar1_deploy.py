@@ -173,6 +173,10 @@ def test_model_file_round_trips_and_bad_files_fail_with_the_file_and_key(model, 
         assert str(broken) in err and message in err
         assert main(["export", str(broken), "--target", "c", "--out", str(tmp_path / key)]) == 2
         assert not (tmp_path / key).exists() or not any((tmp_path / key).iterdir())
+    no_kind = tmp_path / "no_kind.json"
+    no_kind.write_text(json.dumps({key: value for key, value in data.items() if key != "kind"}))
+    assert main(["replay", str(no_kind), "--data", str(run)]) == 2
+    assert "lacks key 'kind': its c1, levels and c2_um are an AR(1) model's" in capsys.readouterr().err
 
 
 def test_replay_of_a_finer_run_takes_every_step(model, tmp_path):
