@@ -483,3 +483,20 @@ def test_a_rest_read_as_a_few_tenths_is_rest_not_a_level_of_its_own():
     assert sorted(rest.c2_) == sorted(exact.c2_) == [1000.0, 2000.0]
     assert rest.c1_ == pytest.approx(exact.c1_, rel=1e-12)
     assert rest.predict(noisy[:, None]) == pytest.approx(exact.predict(heat[:, None]), abs=1e-4)
+
+
+def test_a_level_held_for_a_few_steps_is_read_by_the_heat_law_not_fitted_from_them():
+    """A step at 3000 r/min on one row of a run held at 1000 and 2000: its C2 follows the heat law from 2000 (as
+    for a level the run never saw), and the noise-free fit recovers C1 and the held levels' C2 exactly."""
+    heat, _, _ = simulated_process(n=900)
+    heat[500] = 3000.0
+    c2 = {0.0: 0.0, 1000.0: 0.05, 2000.0: 0.16, 3000.0: 0.16 * 1.5 ** (5 / 3)}
+    error = np.zeros(len(heat))
+    for k in range(1, len(heat)):
+        error[k] = 0.98 * error[k - 1] + c2[heat[k]]
+    estimator = AR1Model().fit(heat[:, None], error)
+    assert sorted(estimator.c2_) == [1000.0, 2000.0]
+    assert estimator.c1_ == pytest.approx(0.98, rel=1e-12)
+    assert estimator.c2_ == pytest.approx({1000.0: 0.05, 2000.0: 0.16}, rel=1e-10)
+    assert estimator.c2_for(3000.0) == pytest.approx(c2[3000.0], rel=1e-10)
+    assert np.max(np.abs(estimator.residuals_)) < 1e-9

@@ -39,6 +39,8 @@ from groupfit.setting_levels import setting_levels
 SCALINGS = ("heat_law", "rise")
 FIT_METHODS = ("one_step", "free_run")
 STARTS = ("measured", "zero")
+MIN_LEVEL_STEPS = 10
+"""A heat level held for fewer steps of the modelling run gets no C2 of its own (:func:`level_columns`)."""
 REST_FRACTION = 0.01
 """A heat level below this share of the run's largest is rest (C2 = 0), not a level of its own: a tachometer that
 reads a few tenths of an r/min at standstill. By the heat law such a level carries at most 1 % of the largest
@@ -89,6 +91,26 @@ def early_rise(temperature: np.ndarray, period_s: float, window_s: float = 6000.
     if steps < 1 or steps >= len(temperature):
         raise InputError(f"early-rise window {window_s:g} s does not fit a run of {len(temperature)} samples")
     return float(temperature[steps] - temperature[0])
+
+
+def level_columns(heat: np.ndarray, exponent: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The fitted heat levels and the one-step design's heat columns over the steps' set heat ``heat``.
+
+    One column per level held for at least :data:`MIN_LEVEL_STEPS` steps, 1 where the step's heat is that
+    level. A level held for fewer steps gets no C2 of its own (it would be fitted from those few equations, their
+    noise with it): its steps read the nearest such level's C2 by the heat law, ``(q/level)^exponent`` in that
+    level's column, as the model reads a level it never saw. Without an ``exponent`` (the early-rise scaling), or
+    when no level is held that long, every level gets a column.
+    """
+    levels, counts = np.unique(heat[heat != 0], return_counts=True)
+    held = levels[counts >= MIN_LEVEL_STEPS]
+    if exponent is None or held.size in (0, levels.size):
+        return levels, np.column_stack([(heat == level).astype(float) for level in levels])
+    columns = np.zeros((len(heat), held.size))
+    for level in levels:
+        nearest = int(np.argmin(np.abs(held - level)))
+        columns[heat == level, nearest] = 1.0 if held[nearest] == level else math.pow(level / held[nearest], exponent)
+    return held, columns
 
 
 class AR1Model(RegressorMixin, BaseEstimator):
@@ -176,10 +198,11 @@ class AR1Model(RegressorMixin, BaseEstimator):
         remainder = y - gain * rise
         set_heat = setting_levels(heat)  # a speed read back with noise: the levels it was set to
         set_heat = np.where(set_heat < REST_FRACTION * np.max(set_heat, initial=0.0), 0.0, set_heat)
-        levels = np.unique(set_heat[1:][set_heat[1:] != 0])
-        if levels.size == 0:
+        if not np.any(set_heat[1:] != 0):
             raise InputError("the modelling run has no heat input (all heat levels are 0): AR(1) cannot be fitted")
-        design = np.column_stack([remainder[:-1]] + [(set_heat[1:] == level).astype(float) for level in levels])
+        exponent = self.heat_exponent if self.scaling == "heat_law" else None
+        levels, columns = level_columns(set_heat[1:], exponent)
+        design = np.column_stack([remainder[:-1], columns])
         coef, *_ = np.linalg.lstsq(design, remainder[1:], rcond=None)
         initial = remainder[0] if self.start == "measured" else 0.0
         if self.fit_method == "free_run":
