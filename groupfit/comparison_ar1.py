@@ -3,13 +3,13 @@ scaling and its expected next-run error (the settings are a :class:`groupfit.com
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
 
 from groupfit.ar1.inputs import ar1_inputs
-from groupfit.ar1.nextrun import estimator_predictor, expect_ar1
+from groupfit.ar1.nextrun import expect_ar1
 from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation
@@ -40,8 +40,19 @@ def expect_compared_ar1(run: Run, settings) -> NextRunExpectation | None:
     if settings.ar1_scaling != "heat_law":
         return None
     inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
-    predict = estimator_predictor(inputs, run.error, lambda: ar1_estimator(settings), settings.ar1_start)
-    return expect_ar1(inputs[:, 0], run.error, predict, heat_name=settings.heat)
+    return expect_ar1(inputs[:, 0], run.error, prefix_predictor(inputs, run.error, settings), heat_name=settings.heat)
+
+
+def prefix_predictor(inputs: np.ndarray, error: np.ndarray, settings) -> Callable[[int, int], np.ndarray]:
+    """``predict(a, b)`` of the forward chaining (:func:`groupfit.ar1.nextrun.ar1_forward_chaining`): the model
+    fitted on the first ``a`` samples as ``compare`` fits it, its free run over the first ``b`` from where
+    ``compare`` starts one (the run's first measured error, or 0)."""
+    initial = first_measured(error) if settings.ar1_start == "measured" else 0.0
+
+    def predict(a: int, b: int) -> np.ndarray:
+        return ar1_estimator(settings).fit(inputs[:a], error[:a]).predict(inputs[:b], initial_error=initial)
+
+    return predict
 
 
 def ar1_left_out_reason(modelling: Run, measured: Run, parts: Sequence[Run], heat: str | None = None) -> str | None:
@@ -118,6 +129,7 @@ __all__ = [
     "expect_compared_ar1",
     "first_measured",
     "fit_ar1",
+    "prefix_predictor",
     "rise_notes",
     "rise_sensor",
 ]

@@ -70,6 +70,9 @@ from groupfit.ar1.modelfile import MAX_HEAT_EXPONENT
 from groupfit.data_options import MAX_PERIOD_TOLERANCE, encoding_name, parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.grouping import MAX_SPACING
+from groupfit.models.ar1 import FIT_METHODS as AR1_FIT_METHODS
+from groupfit.models.ar1 import SCALINGS as AR1_SCALINGS
+from groupfit.models.ar1 import STARTS as AR1_STARTS
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import METHODS
 from groupfit.settings import P_RULES, RunSettings
@@ -251,9 +254,9 @@ SCHEMA: dict[str, dict[str, Callable[[Table, str], Any]]] = {
     "compare": {
         "pmax": _at_least(0),
         "heat": Table.string,
-        "ar1_scaling": lambda table, key: table.string(key, choices=("heat_law", "rise")),
-        "ar1_start": lambda table, key: table.string(key, choices=("measured", "zero")),
-        "ar1_fit": lambda table, key: table.string(key, choices=("one_step", "free_run")),
+        "ar1_scaling": lambda table, key: table.string(key, choices=AR1_SCALINGS),
+        "ar1_start": lambda table, key: table.string(key, choices=AR1_STARTS),
+        "ar1_fit": lambda table, key: table.string(key, choices=AR1_FIT_METHODS),
         "heat_exponent": _heat_exponent,
         "rise_sensor": Table.string,
         "rise_window_s": _positive,

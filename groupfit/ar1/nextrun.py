@@ -17,7 +17,7 @@ that would not settle) scores no segment.
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -27,21 +27,29 @@ from groupfit.ar1.rule import AR1Rule
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation, trust_notes
 from groupfit.heldout.folds import condition_segments, setting_values
-from groupfit.heldout.nextrun import FORWARD, MIN_TRAIN_FRACTION, NO_OPERATING_COLUMN, NextRunScores
+from groupfit.heldout.nextrun import (
+    FORWARD,
+    MIN_TRAIN_FRACTION,
+    NO_OPERATING_COLUMN,
+    NextRunScores,
+    leaves_one_condition,
+)
 
 CANDIDATE = "AR(1)"
 
 
-def heat_segments(heat: np.ndarray, heat_name: str) -> tuple[list[int], str, int]:
-    """First sample of every segment of the run, how they were cut and how many stretches of one heat level
-    the run holds (1: the heat never changes, and the segments are blocks of time)."""
+def heat_segments(heat: np.ndarray, heat_name: str) -> tuple[list[int], str, int, np.ndarray | None]:
+    """First sample of every segment of the run, how they were cut, how many stretches of one heat level the run
+    holds, and each sample's level as a code (1 stretch and no codes: the heat never changes, and the segments are
+    blocks of time)."""
     frame = pd.DataFrame({heat_name: heat})
     labels = condition_segments(frame, [heat_name])
     starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
-    conditions = 1 + int(np.count_nonzero(np.diff(setting_values(frame, heat_name)) != 0))
+    levels = setting_values(frame, heat_name)
+    conditions = 1 + int(np.count_nonzero(np.diff(levels) != 0))
     if conditions == 1:
-        return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1
-    return starts, f"changes of {heat_name}", conditions
+        return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, None
+    return starts, f"changes of {heat_name}", conditions, np.unique(levels, return_inverse=True)[1]
 
 
 def ar1_forward_chaining(
@@ -61,7 +69,7 @@ def ar1_forward_chaining(
     """
     heat, error = np.asarray(heat, dtype=float), np.asarray(error, dtype=float)
     n = len(error)
-    starts, how, conditions = heat_segments(heat, heat_name)
+    starts, how, conditions, codes = heat_segments(heat, heat_name)
     edges = [*starts, n]
     folds = [(a, b) for a, b in zip(edges[:-1], edges[1:]) if a >= min_train * n and b > a]
     sse, counts = [], []
@@ -77,8 +85,6 @@ def ar1_forward_chaining(
             counts.append(int(scored.sum()))
     if not sse:
         return None
-    codes = np.unique(setting_values(pd.DataFrame({heat_name: heat}), heat_name), return_inverse=True)[1]
-    leaves = conditions > 1 and any(codes[a] not in codes[:a] and len(np.unique(codes[:a])) == 1 for a, _ in folds)
     return NextRunScores(
         candidates=(CANDIDATE,),
         sse=np.array([sse]),
@@ -88,7 +94,7 @@ def ar1_forward_chaining(
         n_samples=n,
         n_conditions=conditions,
         blocks_of_time=conditions == 1,
-        leaves_one_condition=leaves,
+        leaves_one_condition=leaves_one_condition(folds, codes),
     )
 
 
@@ -106,22 +112,6 @@ def file_predictor(
     return predict
 
 
-def estimator_predictor(
-    inputs: np.ndarray, error: np.ndarray, make_estimator: Callable[[], Any], start: str
-) -> Callable[[int, int], np.ndarray]:
-    """``predict(a, b)`` of an :class:`~groupfit.models.ar1.AR1Model` as ``compare`` fits it: a fresh estimator
-    from ``make_estimator()`` fitted on the prefix, its free run from the run's first measured error
-    (``start = "measured"``) or from 0."""
-    finite = np.flatnonzero(np.isfinite(error))
-    initial = float(error[finite[0]]) if start == "measured" and finite.size else 0.0
-
-    def predict(a: int, b: int) -> np.ndarray:
-        estimator = make_estimator().fit(inputs[:a], error[:a])
-        return estimator.predict(inputs[:b], initial_error=initial)
-
-    return predict
-
-
 def expect_ar1(
     heat: np.ndarray, error: np.ndarray, predict: Callable[[int, int], np.ndarray], *, heat_name: str
 ) -> NextRunExpectation | None:
@@ -131,4 +121,4 @@ def expect_ar1(
     return None if scores is None else NextRunExpectation(scores, 0, trust_notes(scores))
 
 
-__all__ = ["CANDIDATE", "ar1_forward_chaining", "estimator_predictor", "expect_ar1", "file_predictor", "heat_segments"]
+__all__ = ["CANDIDATE", "ar1_forward_chaining", "expect_ar1", "file_predictor", "heat_segments"]

@@ -138,11 +138,11 @@ def run_fit(args: argparse.Namespace) -> int:
     check_heat(heat, source=str(run.source), name=args.heat)
     check_heat_setting(heat, source=str(run.source), name=args.heat, todo=FIT_TODO)
     step = decimation_step(run.period, args.period)
-    steps = len(decimate(heat, step))
-    if steps < MIN_STEPS:
+    heat, error = decimate(heat, step), decimate(run.error, step)
+    if len(heat) < MIN_STEPS:
         raise InputError(
-            f"{run.source}: --period {args.period:g} s leaves {steps} step(s) of the run's {len(heat)} rows; the "
-            f"AR(1) model needs at least {MIN_STEPS}: choose a shorter step"
+            f"{run.source}: --period {args.period:g} s leaves {len(heat)} step(s) of the run's {run.n_samples} rows; "
+            f"the AR(1) model needs at least {MIN_STEPS}: choose a shorter step"
         )
     rod = closed_form_from_toml(args.closed_form) if args.closed_form else None
     options = dict(
@@ -156,7 +156,6 @@ def run_fit(args: argparse.Namespace) -> int:
         heat_exponent=args.heat_exponent,
         rod=rod,
     )
-    heat, error = decimate(heat, step), decimate(run.error, step)
     result = fit_ar1_file(heat, error, **options)
     result.scores["decimation"] = step
     with running.stage("next-run estimate", enabled=not args.quiet):

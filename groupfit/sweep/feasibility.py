@@ -9,6 +9,11 @@ from groupfit.search.exact import estimate_exact_cost, format_seconds
 from groupfit.sweep.config import RunSpec, Study
 
 
+def dataset_sizes(study: Study) -> dict[str, int]:
+    """The samples of each of the study's datasets, by the path its runs name."""
+    return {str(d.path): d.n_samples for d in study.datasets}
+
+
 def n_coefficients(run: RunSpec) -> int:
     """The coefficients of one group of a run's model: its inputs and the intercept."""
     model, sensors = run.spec["model"], run.spec["sensors"]
@@ -31,7 +36,7 @@ def infeasible_reason(run: RunSpec, n_samples: int) -> str | None:
 
 def feasibility(study: Study) -> tuple[list[RunSpec], list[tuple[RunSpec, str]]]:
     """The study's runs that can fit their breaks, and those that cannot with the reason."""
-    sizes = {str(d.path): d.n_samples for d in study.datasets}
+    sizes = dataset_sizes(study)
     feasible, infeasible = [], []
     for run in study.runs:
         reason = infeasible_reason(run, sizes[run.path])
@@ -65,7 +70,7 @@ def check_exact_time(study: Study, runs: list[RunSpec], label: str, *, budget_s:
     Each exact run costs what :func:`groupfit.search.exact.estimate_exact_cost` says of its N, M, objective
     and p (GA runs are not estimated). None: no budget (``--no-budget``).
     """
-    sizes = {str(d.path): d.n_samples for d in study.datasets}
+    sizes = dataset_sizes(study)
     seconds = 0.0
     for run in runs:
         model = run.spec["model"]
@@ -84,7 +89,7 @@ def check_exact_time(study: Study, runs: list[RunSpec], label: str, *, budget_s:
 def check_table_memory(study: Study, runs: list[RunSpec], label: str, *, budget_bytes: float, workers: int) -> float:
     """The memory of the tables of segment sums the study's grouped runs (p ≥ 1) hold at once, ``workers`` at a
     time (the largest ones together); refused over ``budget_bytes``. A global run (p = 0) builds none."""
-    sizes = {str(d.path): d.n_samples for d in study.datasets}
+    sizes = dataset_sizes(study)
     tables = sorted(
         ((segment_table_bytes(sizes[run.path], n_coefficients(run)), run) for run in runs if run.spec["model"]["p"]),
         key=lambda item: item[0],
@@ -108,6 +113,7 @@ __all__ = [
     "check_exact_time",
     "check_feasible",
     "check_table_memory",
+    "dataset_sizes",
     "feasibility",
     "infeasible_reason",
     "n_coefficients",
