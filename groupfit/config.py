@@ -70,12 +70,9 @@ from groupfit.ar1.modelfile import MAX_HEAT_EXPONENT
 from groupfit.data_options import MAX_PERIOD_TOLERANCE, encoding_name, parse_period_tolerance
 from groupfit.errors import InputError
 from groupfit.grouping import MAX_SPACING
-from groupfit.models.ar1 import FIT_METHODS as AR1_FIT_METHODS
-from groupfit.models.ar1 import SCALINGS as AR1_SCALINGS
-from groupfit.models.ar1 import STARTS as AR1_STARTS
 from groupfit.objective import OBJECTIVES
 from groupfit.search.base import METHODS
-from groupfit.settings import P_RULES, RunSettings
+from groupfit.settings import AR1_FIT_METHODS, AR1_SCALINGS, AR1_STARTS, P_RULES, RunSettings
 from groupfit.tomlconfig import Table, check_tables, read_toml
 
 

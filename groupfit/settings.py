@@ -65,6 +65,12 @@ class ModelSettings:
     reference: str | None = None
 
 
+AR1_SCALINGS = ("heat_law", "rise")
+"""How the AR(1) model (:class:`groupfit.models.ar1.AR1Model`) gets C2 of a level its modelling run did not have."""
+AR1_FIT_METHODS = ("one_step", "free_run")
+AR1_STARTS = ("measured", "zero")
+
+
 @dataclass(frozen=True, kw_only=True)
 class CompareSettings:
     """``[compare]``: what ``groupfit compare`` sets beside the grouped models."""

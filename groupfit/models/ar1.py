@@ -35,10 +35,8 @@ from sklearn.utils.validation import check_array, check_is_fitted
 from groupfit.errors import InputError
 from groupfit.metrics import ljung_box
 from groupfit.setting_levels import setting_levels
+from groupfit.settings import AR1_FIT_METHODS, AR1_SCALINGS, AR1_STARTS
 
-SCALINGS = ("heat_law", "rise")
-FIT_METHODS = ("one_step", "free_run")
-STARTS = ("measured", "zero")
 MIN_LEVEL_STEPS = 10
 """A heat level held for fewer steps of the modelling run gets no C2 of its own (:func:`level_columns`)."""
 REST_FRACTION = 0.01
@@ -186,9 +184,9 @@ class AR1Model(RegressorMixin, BaseEstimator):
             Thermal error in µm.
         """
         for name, value, allowed in (
-            ("scaling", self.scaling, SCALINGS),
-            ("fit method", self.fit_method, FIT_METHODS),
-            ("start", self.start, STARTS),
+            ("scaling", self.scaling, AR1_SCALINGS),
+            ("fit method", self.fit_method, AR1_FIT_METHODS),
+            ("start", self.start, AR1_STARTS),
         ):
             if value not in allowed:
                 raise InputError(f"AR(1) {name} {value!r}: choose one of {', '.join(allowed)}")
