@@ -47,7 +47,7 @@ A configuration has up to four tables; every key is optional::
     ar1_scaling = "heat_law"   # or "rise": C2 of unseen levels by early temperature rise
     ar1_start = "measured"     # or "zero": each free run starts from 0 (the paper's ΔL(0) = 0)
     ar1_fit = "one_step"       # or "free_run": C1, C2 (and the structural gain) on the free-run error
-    heat_exponent = 1.6667     # heat law C2 ∝ level^exponent
+    heat_exponent = 1.6667     # heat law C2 ∝ level^exponent (default 5/3 exactly)
     rise_sensor = "T2"         # with ar1_scaling = "rise"
     rise_window_s = 6000.0
     structural_sensor = "T5"   # optional structural term g·ΔT (g in µm/K)

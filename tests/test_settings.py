@@ -32,7 +32,8 @@ def test_a_configuration_is_read_into_the_settings_with_the_defaults_elsewhere()
     assert settings.search.ga == GA_DEFAULTS
     assert settings.output_dir == tables["output"]["dir"]
     assert settings.compare.conditions == tuple(tables["compare"]["conditions"])
-    assert settings.compare.heat_exponent == tables["compare"]["heat_exponent"]
+    assert "heat_exponent" not in tables["compare"]
+    assert settings.compare.heat_exponent == 5 / 3  # exactly as fit --model ar1 takes it
     assert settings.compare.ar1_start == CompareSettings().ar1_start
 
 
