@@ -25,21 +25,33 @@ def check_projection(first_s: float, *, pmax: int, asked: int, budget_s: float |
 
 
 def projecting(progress: Callable[[str, float], None], *, asked: int, budget_s: float | None, estimate):
-    """A progress callback that passes every call on and checks the projection of the GA fits once the second
-    one is done: the ``grouped`` stage steps by 1/pmax after each fit, and fit p takes about p times the first."""
-    first: dict[str, float] = {}
+    """A progress callback that passes every call on and projects the GA fits: the ``grouped`` stage calls it at
+    0 when its clock starts and steps by 1/pmax after each fit, and fit p takes about p times the first. The
+    projection from the first fit (timed from the stage's start) refuses a run over the budget without waiting
+    for the second; the one from the second fit alone (the first may carry one-time work) checks it again and
+    is said."""
+    state = {"start": None, "fits": 0, "last": None}
 
     def call(stage: str, fraction: float) -> None:
         progress(stage, fraction)
-        if stage != "grouped" or fraction <= 0:
+        if stage != "grouped" or state["fits"] >= 2:
             return
-        if not first:
-            first.update(t=time.perf_counter(), fraction=fraction)
-        elif "done" not in first:
-            first["done"] = 1.0
-            pmax = round(1 / first["fraction"])
-            one_fit = (time.perf_counter() - first["t"]) / round(fraction * pmax)  # fit p = 2 takes twice p = 1
-            check_projection(one_fit, pmax=pmax, asked=asked, budget_s=budget_s, estimate=estimate)
+        now = time.perf_counter()
+        if fraction <= 0:
+            state["start"] = now
+            return
+        state["fits"] += 1
+        pmax = round(state["fits"] / fraction)
+        since = state["start"] if state["fits"] == 1 else state["last"]
+        state["last"] = now
+        if since is not None:
+            check_projection(
+                (now - since) / state["fits"],
+                pmax=pmax,
+                asked=asked,
+                budget_s=budget_s,
+                estimate=estimate if state["fits"] == 2 else None,
+            )
 
     return call
 

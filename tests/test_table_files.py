@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 from test_switching_models import SYNTHETIC
 
+from groupfit import fit_budget
 from groupfit.data import load_run
 from groupfit.errors import InputError
 from groupfit.fit_budget import check_projection, projecting
@@ -60,7 +61,7 @@ def test_a_missing_date_time_is_named_with_its_row(tmp_path):
         load_run(tmp_path / "run.parquet", temps=TEMPS)
 
 
-def test_the_projection_of_the_ga_fits():
+def test_the_projection_of_the_ga_fits(monkeypatch):
     lines = []
     # 2 s for p = 1, 23 feasible breaks: 2 · 23 · 24 / 2 = 552 s, under 900 s: said, not refused
     check_projection(2.0, pmax=23, asked=50, budget_s=900.0, estimate=lines.append)
@@ -79,3 +80,19 @@ def test_the_projection_of_the_ga_fits():
         call("grouped", 2 / 23)
     call("grouped", 3 / 23)  # projected once only
     assert seen == [("exact path", 1.0), ("grouped", 1 / 23), ("grouped", 2 / 23), ("grouped", 3 / 23)]
+    # with the stage's start (its call at 0) the first fit alone refuses a run over the budget
+    call = projecting(lambda *a: None, asked=23, budget_s=1e-9, estimate=lines.append)
+    call("grouped", 0.0)
+    with pytest.raises(InputError, match="p = 1…23 by the GA"):
+        call("grouped", 1 / 23)
+    # within the budget: checked after the first fit, said once, after the second (timed alone)
+    clock = iter([0.0, 100.0, 400.0])  # fit 1 takes 100 s, fit 2 300 s: 150 s a fit, 4 fits 10 × 150 s
+    monkeypatch.setattr(fit_budget.time, "perf_counter", lambda: next(clock))
+    call = projecting(lambda *a: None, asked=4, budget_s=1e9, estimate=lines.append)
+    said = len(lines)
+    call("grouped", 0.0)
+    call("grouped", 1 / 4)
+    assert len(lines) == said
+    call("grouped", 2 / 4)
+    call("grouped", 3 / 4)
+    assert lines[said:] == ["grouped models p = 1…4 by the GA: about 25 min"]
