@@ -120,6 +120,8 @@ class LoadOptions:
     check_ranges: bool | None = None
     """Check ``temp_range`` and ``error_limit``; None: unless ``allow_nonfinite`` (a replay, whose run-time
     rule meets an implausible reading as a sensor fault)."""
+    sparse: tuple[str, ...] = ()
+    """Columns read on some rows only (probe readings): resampled as the error is, never made up nor trimmed."""
 
     @property
     def ranges_checked(self) -> bool:

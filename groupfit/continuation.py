@@ -35,15 +35,16 @@ CONTIGUITY_TOLERANCE = 0.5
 """The gap between the two runs may differ from one sampling period by this share of it."""
 
 
-def recording_difference(previous: Run, run: Run) -> str | None:
+def recording_difference(previous: Run, run: Run, *, ignore: Sequence[str] = ()) -> str | None:
     """What keeps ``run`` from being the rest of ``previous``'s recording — its time column, inputs, columns,
-    error column or period differ — in words that name it; None when nothing does."""
+    error column or period differ — in words that name it; None when nothing does. ``ignore``: columns either
+    part may log alone (a probe's readings)."""
     if previous.time_name != run.time_name:
         return f"its time column is '{run.time_name}', not '{previous.time_name}'"
     if previous.temp_names != run.temp_names:
         return f"its inputs are {', '.join(run.temp_names)}, not {', '.join(previous.temp_names)}"
-    added = [str(c) for c in run.frame.columns if c not in previous.frame.columns]
-    lost = [str(c) for c in previous.frame.columns if c not in run.frame.columns]
+    added = [str(c) for c in run.frame.columns if c not in previous.frame.columns and c not in ignore]
+    lost = [str(c) for c in previous.frame.columns if c not in run.frame.columns and c not in ignore]
     if added or lost:
         parts = [f"adds {', '.join(added)}" if added else "", f"lacks {', '.join(lost)}" if lost else ""]
         return f"its columns differ (it {' and '.join(p for p in parts if p)}: log both parts alike)"
@@ -54,9 +55,9 @@ def recording_difference(previous: Run, run: Run) -> str | None:
     return None
 
 
-def same_recording(previous: Run, run: Run) -> bool:
+def same_recording(previous: Run, run: Run, *, ignore: Sequence[str] = ()) -> bool:
     """Whether ``run`` could be the rest of ``previous``'s recording (:func:`recording_difference`)."""
-    return recording_difference(previous, run) is None
+    return recording_difference(previous, run, ignore=ignore) is None
 
 
 def clock_runs_on(
@@ -91,11 +92,13 @@ def clock_continues(previous: Run, run: Run) -> bool:
     )
 
 
-def continues(previous: Run, run: Run) -> bool:
+def continues(previous: Run, run: Run, *, ignore: Sequence[str] = ()) -> bool:
     """Whether ``run`` is the rest of ``previous``'s recording: the same columns and period, and either its clock
     goes on one sampling period after ``previous`` ends or, on a clock started again, its first row picks up
-    where ``previous``'s last left off (:mod:`groupfit.pickup`)."""
-    return same_recording(previous, run) and (clock_continues(previous, run) or run_picks_up(previous, run))
+    where ``previous``'s last left off (:mod:`groupfit.pickup`). ``ignore``: as :func:`recording_difference`."""
+    if not same_recording(previous, run, ignore=ignore):
+        return False
+    return clock_continues(previous, run) or run_picks_up(previous, run)
 
 
 def restamped(run: Run, previous: Run) -> Run:
@@ -133,9 +136,9 @@ def picked_up(run: Run, zero: float | None) -> Run:
     return replace(run, error=run.error + (own - zero))
 
 
-def preceding_run(run: Run, candidates: Sequence[Run]) -> Run | None:
+def preceding_run(run: Run, candidates: Sequence[Run], *, ignore: Sequence[str] = ()) -> Run | None:
     """The run among ``candidates`` that ``run`` continues, if any."""
-    return next((previous for previous in candidates if continues(previous, run)), None)
+    return next((previous for previous in candidates if continues(previous, run, ignore=ignore)), None)
 
 
 def with_history(run: Run, history: Run | None) -> tuple[Run, int]:
@@ -157,7 +160,7 @@ def with_history(run: Run, history: Run | None) -> tuple[Run, int]:
 
 
 def with_histories(
-    runs: Sequence[Run], earlier: Sequence[Run], *, assume_continued: bool = False
+    runs: Sequence[Run], earlier: Sequence[Run], *, assume_continued: bool = False, ignore: Sequence[str] = ()
 ) -> tuple[list[Run], list[int], list[str]]:
     """Each of ``runs`` with what it continues in front; the rows put in front of each; a note for each.
 
@@ -166,16 +169,16 @@ def with_histories(
     is taken to continue the one before it (the first, the last of
     ``earlier``) whatever its time stamps (a file whose clock starts again),
     when the two share columns, inputs and period; its time stamps are then
-    taken to go on from that run's.
+    taken to go on from that run's. ``ignore``: columns either part may log alone (a probe's readings).
     """
     joined_of = {id(run): run for run in earlier}  # each run, with its history in front
     candidates = list(earlier)
     joined, skipped, notes = [], [], []
     for run in runs:
-        history = preceding_run(run, candidates)
+        history = preceding_run(run, candidates, ignore=ignore)
         if history is None and assume_continued and candidates:
             history = candidates[-1]
-            difference = recording_difference(history, run)
+            difference = recording_difference(history, run, ignore=ignore)
             if difference is not None:
                 raise InputError(
                     f"{run.source}: --continues, but it cannot be the rest of {history.name}: {difference}; "

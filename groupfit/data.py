@@ -154,6 +154,7 @@ def load_run(
     drop_glitches: bool | None = None,
     check_ranges: bool | None = None,
     encoding: str | None = None,
+    sparse: tuple[str, ...] = (),
 ) -> Run:
     """Read and validate a run.
 
@@ -216,6 +217,8 @@ def load_run(
         Default: unless ``allow_nonfinite``.
     encoding : str, optional
         The text's encoding (``--encoding``); by default it is told from the bytes (:mod:`groupfit.textencoding`).
+    sparse : tuple of str
+        Columns read on some rows only (a probe's readings): ``resample`` fills no period of theirs.
 
     Raises
     ------
@@ -224,16 +227,9 @@ def load_run(
     """
     options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
     options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
-    options.update(drop_glitches=drop_glitches, check_ranges=check_ranges, encoding=encoding)
-    runs = load_runs(
-        source,
-        name=name,
-        period_tolerance=period_tolerance,
-        resample=resample,
-        time_is_default=time_is_default,
-        error_is_default=error_is_default,
-        **options,
-    )
+    options.update(drop_glitches=drop_glitches, check_ranges=check_ranges, encoding=encoding, sparse=tuple(sparse))
+    defaults = dict(time_is_default=time_is_default, error_is_default=error_is_default)
+    runs = load_runs(source, name=name, period_tolerance=period_tolerance, resample=resample, **defaults, **options)
     if len(runs) > 1:
         raise InputError(
             f"{runs[0].source.split(' (part')[0]}: {f'--resample {resample:g}' if resample else 'the clock'} splits "
@@ -299,7 +295,8 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     refuse_bad_cells(frame, label, skip=(time,))
     frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
     frame, glitched = _glitches_as_missed(frame, label, LoadOptions(**options))
-    binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=(error,) if error else ())
+    measured = (*((error,) if error else ()), *options.get("sparse", ()))
+    binned = resample_frame(frame, time=time, period_s=float(resample), label=label, measured=measured)
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
     if bursts is not None:
         note = f"{label}: {bursts[0]} (as --resample {bursts[1]:g} does); " + note.removeprefix(f"{label}: ")

@@ -25,6 +25,9 @@ from typing import Any, Iterator, Mapping
 
 from groupfit.errors import InputError
 
+MAX_INTEGER_DIGITS = 300
+"""A JSON integer of more digits is read as a float: beyond 308 it overflows ``math.isfinite``, beyond 4300 ``int``."""
+
 STAGE: contextvars.ContextVar = contextvars.ContextVar("groupfit_output_stage", default=None)
 """The active output plan (:class:`groupfit.outputs.OutputPlan`), or None: while one is active, the writers
 below leave each file as a complete temporary file beside its target and hand it to the plan (``stage``), which
@@ -264,11 +267,17 @@ def read_json_file(path: str | Path, what: str = "model file") -> Any:
     """The JSON value in ``path``; one line naming the file when it is missing or not JSON."""
     path = Path(path)
     try:
-        return json.loads(read_input_text(path, what))
+        return json.loads(read_input_text(path, what), parse_int=json_integer)
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not a JSON {what} ({exc})") from None
     except RecursionError:
         raise InputError(f"{path}: not a {what} (its JSON is nested too deeply to read)") from None
+
+
+def json_integer(text: str) -> int | float:
+    """A JSON integer; one of more digits than a float can hold is read as a float (infinite beyond its range),
+    which the checks then refuse by its key, as they refuse ``1e400``."""
+    return int(text) if len(text.lstrip("-")) <= MAX_INTEGER_DIGITS else float(text)
 
 
 def file_sha256(path: str | Path) -> str:

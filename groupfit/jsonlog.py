@@ -22,6 +22,7 @@ from typing import Any
 import pandas as pd
 
 from groupfit.errors import InputError
+from groupfit.io import json_integer
 from groupfit.textencoding import decode
 
 SELF_NAMES = ("id", "name", "sensor", "channel", "label")
@@ -40,7 +41,7 @@ def read_json_log(content: bytes, label: str, encoding: str | None = None) -> pd
     if not text.strip():
         raise InputError(f"{label}: the file is empty; one JSON record per sample is needed")
     try:
-        document = json.loads(text)
+        document = json.loads(text, parse_int=json_integer)
     except json.JSONDecodeError as exc:
         if exc.msg != "Extra data":
             raise InputError(f"{label}: line {exc.lineno}: not JSON ({exc.msg}); fix or remove that line") from None
@@ -54,7 +55,7 @@ def _json_lines(text: str, label: str) -> list[dict]:
         if not line.strip():
             continue
         try:
-            record = json.loads(line)
+            record = json.loads(line, parse_int=json_integer)
         except json.JSONDecodeError as exc:
             raise InputError(
                 f"{label}: line {number}: not a JSON record ({exc.msg}); fix or remove that line"

@@ -208,10 +208,15 @@ class OutputPlan:
                 raise InputError(f"{folder}: {option} names the file {named_by} writes; choose another {option}")
         self.folders.setdefault(resolved, option)
 
-    def _check_input(self, target: Path, option: str) -> None:
+    def _check_input(self, target: Path, option: str | None) -> None:
         resolved = resolved_path(target)
         for source, given in self.inputs.items():
             if resolved == source or _same_file(resolved, source):
+                if option is None:  # a file the plan did not claim: the verb's own name for it
+                    raise InputError(
+                        f"{target}: the output would replace a file this command reads ({given}); nothing was "
+                        "written: write the output elsewhere"
+                    )
                 raise InputError(
                     f"{target}: {option} names a file this command reads ({given}); choose another {option}"
                 )
@@ -237,7 +242,7 @@ class OutputPlan:
     def commit(self) -> list[Path]:
         """Check every staged target against every input, then rename them all; return the files written."""
         for _, target in self.staged:
-            self._check_input(target, self.outputs.get(resolved_path(target), "the output path"))
+            self._check_input(target, self.outputs.get(resolved_path(target)))
             if target.is_dir():
                 raise InputError(f"{target}: is a folder; nothing was written (choose another output)")
         for temporary, target in self.staged:

@@ -49,6 +49,15 @@ def parse_intervals(text: str) -> list[float]:
     return intervals
 
 
+def parse_interval(text: str | float | None) -> float | None:
+    """One ``--probe-every`` interval (``1800``, ``30m``, ``0.5h``) in seconds; None stays None."""
+    if text is None or isinstance(text, (int, float)):
+        return text
+    if "," in text:
+        raise InputError(f"--probe-every {text}: replay takes one interval (compare --probe-every takes several)")
+    return parse_intervals(text)[0]
+
+
 def check_intervals_fit(intervals_s: Sequence[float], first_s: float | None, runs: Sequence) -> None:
     """Refuse an interval shorter than a run's sample or one after which no check falls in some run (the
     checked RMS would be the unchecked one, reported as a result), and a first check after a run's end."""

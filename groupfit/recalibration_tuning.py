@@ -50,6 +50,7 @@ import numpy as np
 
 from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
+from groupfit.model_recalibration import RECALIBRATION_LIMIT
 from groupfit.models.ridge import input_spreads, penalty_diagonal, ridge_solve
 from groupfit.runtime.recalibration import DEFAULT_SECTION, default_section, expected_range_high
 
@@ -313,7 +314,8 @@ def choose_recalibration(
         return Tuning(None, intervals, math.nan, (), ())
     section = model.switching
     offset_max = float(max(-section.comp_min_um, section.comp_max_um)) if section.comp_max_um else 1000.0
-    rate = float(section.rate_limit_um) if section.rate_limit_um else offset_max
+    offset_max = min(offset_max, RECALIBRATION_LIMIT)  # a clamp wider than any thermal error (--range-error)
+    rate = min(float(section.rate_limit_um), offset_max) if section.rate_limit_um else offset_max
     period = float(model.sampling_period_s)
     series = held_out_series(model, runs, cuts=cuts)
     if not series:
@@ -448,7 +450,7 @@ def _hold_sigma(series: Sequence[HeldOut], everies: Sequence[int], period_s: flo
                 changes = changes[np.isfinite(changes)]  # between measured samples only
                 if changes.size:
                     worst = max(worst, float(changes.max()) / math.sqrt(hours))
-    return max(1.0, GATE_SPARE * worst / GATE_SIGMAS)
+    return min(max(1.0, GATE_SPARE * worst / GATE_SIGMAS), RECALIBRATION_LIMIT)
 
 
 def _default(offset_max: float, rate: float, intervals, *, reason: str, initial_offset: float) -> Tuning:

@@ -228,7 +228,8 @@ def _interpolate_empty(
 ) -> tuple[int, int]:
     """Fill the empty bins of one stretch linearly from its occupied ones, and in every column the runs of at
     most :data:`GAP_PERIODS` bins without a reading of it (a missed reading of one sensor); longer runs stay
-    empty; the ``measured`` columns get the empty bins filled (a missed cycle) but never a missed reading.
+    empty; the ``measured`` columns get the empty bins filled (a missed cycle) only between two readings of
+    theirs in the bins on either side, and never a missed reading (a sparse probe column is not made up).
     Returns the empty bins and the missed readings filled."""
     missing = np.flatnonzero(~occupied)
     t = piece[time].to_numpy()
@@ -239,13 +240,25 @@ def _interpolate_empty(
         values = piece[column].to_numpy(dtype=float).copy()
         known = occupied & np.isfinite(values)
         if known.sum() >= 2:
-            values[missing] = np.interp(t[missing], t[known], values[known])
+            fill = _between_readings(missing, known) if column in measured else missing
+            values[fill] = np.interp(t[fill], t[known], values[known])
             if column not in measured:
                 unread = _short_runs(occupied & ~np.isfinite(values))
                 values[unread] = np.interp(t[unread], t[known], values[known])
                 missed += int(unread.size)
         piece[column] = values
     return int(missing.size), missed
+
+
+def _between_readings(missing: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """The ``missing`` bins whose run of missing bins has a ``known`` reading in the bin just before it and in
+    the bin just after it."""
+    gap = np.zeros(len(known), dtype=bool)
+    gap[missing] = True
+    edges = np.diff(np.concatenate([[0], gap.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    inner = [(a, b) for a, b in zip(starts, ends) if a > 0 and b < len(known) and known[a - 1] and known[b]]
+    return np.concatenate([np.arange(a, b) for a, b in inner]) if inner else np.zeros(0, dtype=int)
 
 
 def _short_runs(flags: np.ndarray) -> np.ndarray:

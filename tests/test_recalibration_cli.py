@@ -118,8 +118,9 @@ def test_an_infinite_logged_check_is_no_check(tmp_path, model_path):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["--probe-every", "0"], "--probe-every 0: must be a number of seconds > 0"),
-        (["--probe-every", "nan"], "must be a number of seconds > 0"),
+        (["--probe-every", "0"], "--probe-every: '0' must be longer than 0"),
+        (["--probe-every", "nan"], "--probe-every: 'nan' is not an interval"),
+        (["--probe-every", "1000,2000"], "replay takes one interval"),
         (["--probe-column", "nope"], "column 'nope' not found"),
         (["--probe-every", "1000", "--probe-column", "time_s"], "--probe-column 'time_s' is the run's time"),
         (["--probe-column", "T1"], "--probe-column 'T1' is a reading the model takes as an input"),

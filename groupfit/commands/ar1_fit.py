@@ -20,7 +20,7 @@ from groupfit.outputs import GROUPED_MODELS
 from groupfit.plots import plot_fit
 
 AR1_FITS = {"one-step": "one_step", "free-run": "free_run"}
-GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion")
+GROUPED_ONLY = ("p", "select", "ridge", "position", "dead_band", "search", "criterion", "recalibrate")
 DEFAULT_HEAT_EXPONENT = 5 / 3
 """C2 of an unseen heat level by (q/level)^X: bearing heat against speed."""
 MIN_STEPS = 10

@@ -222,7 +222,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         args.data,
         args.validate,
         folder=args.out,
-        files=("model_augmented.json", "diagnose.png"),
+        files=("model_augmented.json", "model_recalibrated.json", "diagnose.png"),
     )
     given = ModelFile.load(args.model)
     model = without_stage(given).to_dict()  # effects are sought on the model itself
@@ -298,10 +298,10 @@ def run_diagnose(args: argparse.Namespace) -> int:
     model_path = Path(args.model)
     written = []
     recal_note = ""
-    if result.changed or args.recalibrate != "auto":
+    if result.changed or args.recalibrate not in (None, "auto"):
         with running.stage("recalibration"):
             augmented, recal_note = recalibrated(
-                ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate
+                ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate or "auto"
             )
         model_path = out_dir / ("model_augmented.json" if result.changed else "model_recalibrated.json")
         with_end_states(augmented, common.clock_options(args)).save(model_path)  # an invalid model is never written

@@ -156,7 +156,7 @@ def run_fit(args: argparse.Namespace) -> int:
                 grouped=grouped,
             )
         with running.stage("recalibration", enabled=not args.quiet):
-            model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate)
+            model, recal_note = recalibrated(model, [(r.frame, r.error) for r in runs], args.recalibrate or "auto")
         notes = recal_note + notes
     with running.stage("end states", enabled=not args.quiet):
         model = replay_readings.with_end_states(model, common.clock_options(args, settings.data))  # after each file

@@ -24,6 +24,11 @@ def check_position_options(args: argparse.Namespace) -> None:
             "--dead-band needs --position COLUMN: the dead band holds a position model's compensation "
             "(docs/position.md)"
         )
+    if args.position and getattr(args, "recalibrate", None) is not None:
+        raise InputError(
+            f"--recalibrate {args.recalibrate}: fit chooses no recalibration section for a position model; leave "
+            "the option out"
+        )
     if args.dead_band_ref is not None and args.dead_band is None:
         raise InputError("--dead-band-ref needs --dead-band C")
     if args.dead_band is not None and not (0 < args.dead_band <= 50):

@@ -17,7 +17,7 @@ def add_recalibrate_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--recalibrate",
         choices=METHODS,
-        default="auto",
+        default=None,
         help="how probe checks correct the compensation at run time (the model file's recalibration section): "
         "auto (default: the offset hold or a Kalman filter, whichever serves better on held-out stretches of the "
         "modelling runs with simulated checks every 15 min … 2 h), hold, kalman, or none; with a filter, a "

@@ -17,6 +17,7 @@ from groupfit.commands.replay_expectation import expectation_check, expectation_
 from groupfit.commands.replay_faults import fault_readings
 from groupfit.commands.replay_probes import (
     add_probe_options,
+    probe_columns,
     probe_report,
     probe_schedule,
     probe_summary,
@@ -160,6 +161,7 @@ def run_replay(args: argparse.Namespace) -> int:
     error = args.error or model.error or "error_um"
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
     options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
+    options.update(sparse=probe_columns(args.probe_column))
     options.update(common.clock_options(args), **({"drop_glitches": False} if args.keep_glitches else {}))
     with running.stage("loading"):
         run = load_readings(args.data, tables, **options)
@@ -174,7 +176,9 @@ def run_replay(args: argparse.Namespace) -> int:
         run = picked_up(run, saved.error_zero_um)
     rows, notes = 0, []
     if history:
-        joined, skipped, notes = with_histories([*history[1:], run], history[:1], assume_continued=True)
+        joined, skipped, notes = with_histories(
+            [*history[1:], run], history[:1], assume_continued=True, ignore=probe_columns(args.probe_column)
+        )
         rows = skipped[-1]
         temps = joined[-1].temps
         run = picked_up(run, zero_of(joined[-1]))  # an error read from the start: from the recording's

@@ -19,13 +19,13 @@ from typing import Any
 import numpy as np
 
 from groupfit.data import length_unit, numeric_column
-from groupfit.default_columns import default_temperature_columns
+from groupfit.default_columns import default_temperature_columns, length_unit_named, scaled_name
 from groupfit.error_scale import scaled_values
 from groupfit.error_start import from_start, is_from_start, logged_spec
 from groupfit.errors import InputError
-from groupfit.probe_intervals import MAX_CHECK_S, check_probe_first, check_rows, on_measured_rows, whole_samples
+from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows, parse_interval, whole_samples
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
-from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_REJECTED
+from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_LIMIT_UM, PROBE_REJECTED
 
 PROBE_NAMES = {PROBE_APPLIED: "applied", PROBE_REJECTED: "rejected", PROBE_IGNORED: "ignored"}
 
@@ -34,9 +34,9 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
     """``--probe-every``, ``--probe-first`` and ``--probe-column``."""
     replay.add_argument(
         "--probe-every",
-        type=float,
         metavar="SECONDS",
-        help="replay a probe check every SECONDS (the error column, or --probe-column, at those samples), "
+        help="replay a probe check every SECONDS (1800, or 30m, 0.5h; the error column, or --probe-column, at those "
+        "samples), "
         "folded into the compensation by the model's recalibration section",
     )
     replay.add_argument(
@@ -51,9 +51,19 @@ def add_probe_options(replay: argparse.ArgumentParser) -> None:
         "--probe-column",
         metavar="COLUMN",
         help="the probe's reading in µm, or in mm, nm by the column's name (probe_mm), or COLUMN*K (×K µm per "
-        "unit as logged), COLUMN-start less the run's first check; default: the run's error column; "
-        "without --probe-every every row where it holds a number is a check",
+        "unit as logged), COLUMN-start less the column's first reading (the run's start, as --error reads it); "
+        "default: the run's error column; without --probe-every every row where it holds a number is a check",
     )
+
+
+def probe_columns(spec: str | None) -> tuple[str, ...]:
+    """The names ``--probe-column`` may read (as given, less ``-start``, less ``*K``): columns read on some rows
+    only, which loading leaves unfilled (``sparse``)."""
+    if spec is None:
+        return ()
+    logged = logged_spec(spec) or spec
+    scaled = scaled_name(logged)
+    return tuple(dict.fromkeys((spec, logged, *((scaled[0],) if scaled else ()))))
 
 
 def refuse_probe_column(run, column: str, given: str) -> None:
@@ -77,26 +87,29 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
     """Per sample the probe reading (µm), NaN where there is no check; None without probe options.
 
     ``--probe-column COLUMN-start`` reads the checks less the run's first one; not on a run replayed as the rest
-    of a recording (``continued``), whose first check is not the recording's start.
+    of a recording (``continued``), whose first reading is not the recording's start.
     """
+    args.probe_every = parse_interval(args.probe_every)
     check_probe_first(args.probe_first, args.probe_every)
     if args.probe_every is None and args.probe_column is None:
         return None
-    if args.probe_every is not None and not (math.isfinite(args.probe_every) and 0 < args.probe_every <= MAX_CHECK_S):
-        raise InputError(
-            f"--probe-every {args.probe_every:g}: must be a number of seconds > 0, at most {MAX_CHECK_S:g}"
-        )
     first = args.probe_first
     if args.probe_column is not None:
         column, factor = scaled_values(run.frame, args.probe_column, run.source)
         refuse_probe_column(run, column, args.probe_column)
         reading = numeric_column(run.frame, column, run.source, allow_nonfinite=True)
+        named = length_unit_named(column)
+        if named is not None and column not in (args.probe_column, logged_spec(args.probe_column)):
+            raise InputError(
+                f"{run.source}: --probe-column '{args.probe_column}': column '{column}' is in {named} by its name and "
+                f"read as µm without a factor; give --probe-column '{column}'"
+            )
         reading = reading * factor * length_unit(column)[1]  # ``probe*2.5``, ``probe_mm``: read in µm
         if is_from_start(args.probe_column):
             if continued:
                 raise InputError(
                     f"--probe-column '{args.probe_column}': {run.name} is replayed as the rest of a recording, and "
-                    "its first check is not the recording's start; give the checks from the recording's start "
+                    "its first reading is not the recording's start; give the checks from the recording's start "
                     f"(--probe-column '{logged_spec(args.probe_column)}')"
                 )
             reading = from_start(reading)
@@ -158,9 +171,16 @@ def probe_report(result: dict[str, Any]) -> str:
     schedule = f"every {p['every_s']:g} s" if p["every_s"] is not None else f"logged in '{p['column']}'"
     if p["every_s"] is not None and not math.isclose(p["every_s"], p["asked_every_s"], rel_tol=1e-9):
         schedule += f" ({p['asked_every_s']:g} s asked, rounded to whole samples)"
+    why = "sensor fault or no reading"
+    beyond = sum(abs(c["reading_um"]) > PROBE_LIMIT_UM for c in p["checks"])
+    if beyond:
+        why += (
+            f"; {beyond} of them read beyond ±{PROBE_LIMIT_UM:g} µm, which no routine takes for a reading: a "
+            "probe column in another unit? --probe-column 'COLUMN*K' reads it ×K µm"
+        )
     line = (
         f"probes   {len(p['checks'])} check(s) {schedule}: {p['applied']} applied, {p['rejected']} rejected "
-        f"by the gate (flagged, not applied), {p['ignored']} ignored (sensor fault or no reading)"
+        f"by the gate (flagged, not applied), {p['ignored']} ignored ({why})"
     )
     if p["rms_without_checks_um"] is not None and result["rms_um"] is not None:
         line += f"; RMS {result['rms_um']:.4g} µm with them, {p['rms_without_checks_um']:.4g} µm without"

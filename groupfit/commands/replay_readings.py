@@ -18,6 +18,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from groupfit.commands.replay_probes import probe_columns
 from groupfit.continuation import recording_difference
 from groupfit.data import ERROR_LIMIT_UM, Run, load_run, numeric_column, without_implausible_errors
 from groupfit.error_start import ZERO_KEY
@@ -110,7 +111,7 @@ def earlier_recordings(
             ),
             None,
         )
-    difference = recording_difference(history, run)
+    difference = recording_difference(history, run, ignore=probe_columns(args.probe_column))
     if difference is not None:
         return (
             [],

@@ -254,6 +254,14 @@ def sheet_text(sheet: dict) -> str:
         f"= +-{integer['range_um']:g} um)",
         f"  counts = {integer['counts']}",
         f"  clamp in counts: [{integer['clamp_counts'][0]}, {integer['clamp_counts'][1]}]",
+        *(
+            [
+                f"  output in counts (probe checks may carry it past the clamp): [{integer['output_counts'][0]}, "
+                f"{integer['output_counts'][1]}]"
+            ]
+            if integer["output_counts"] != integer["clamp_counts"]
+            else []
+        ),
         f"  rate limit: {integer['rate_limit_counts_per_sample']} counts per sample",
     ]
     if integer["clamp_exceeds_register"]:
