@@ -133,3 +133,25 @@ def aligned_inputs(runs: Sequence) -> list:
             run = dataclasses.replace(run, temps=run.temps[:, order], temp_names=first.temp_names)
         aligned.append(run)
     return aligned
+
+
+def shared_default_inputs(runs: Sequence) -> list:
+    """Runs whose default inputs differ only because loading left a column out of some of them (stuck, dead)
+    restricted to the inputs every run kept, each with a note naming what was left out and where; runs that
+    differ otherwise are returned as they are (:func:`aligned_inputs` then names the difference)."""
+    kept = [name for name in runs[0].temp_names if all(name in run.temp_names for run in runs)]
+    dropped = sorted({name for run in runs for name in run.temp_names if name not in kept})
+    if not dropped or not kept or any(name not in run.frame.columns for run in runs for name in dropped):
+        return list(runs)
+    where = [run.source for run in runs if any(name not in run.temp_names for name in dropped)]
+    note = (
+        f"{', '.join(dropped)} left out of the inputs of every run: loading left it out of {', '.join(where)} "
+        "(see the note there), and the runs must share their inputs; --temps names the inputs"
+    )
+    restricted = []
+    for run in runs:
+        order = [list(run.temp_names).index(name) for name in kept]
+        run = dataclasses.replace(run, temps=run.temps[:, order], temp_names=type(run.temp_names)(kept))
+        restricted.append(run)
+    restricted[0] = dataclasses.replace(restricted[0], notes=(*restricted[0].notes, note))
+    return restricted

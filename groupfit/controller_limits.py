@@ -46,6 +46,13 @@ def st_integer_type(largest: int, what: str) -> str:
     raise InputError(f"{what} = {largest}: more than a DINT holds ({DINT_MAX}); no controller counter can keep it")
 
 
+ELEMENTARY_TYPES = (
+    "BOOL BYTE WORD DWORD LWORD SINT INT DINT LINT USINT UINT UDINT ULINT REAL LREAL TIME DATE TOD DT STRING WSTRING"
+).split()
+CONVERSION = re.compile(rf"^(?:(?:{'|'.join(ELEMENTARY_TYPES)}|BCD)_)?TO_(?:{'|'.join(ELEMENTARY_TYPES)}|BCD)$")
+"""IEC 61131-3's type conversions (``TO_REAL``, ``LREAL_TO_REAL``, ``DINT_TO_BCD``): standard functions, which the
+block itself calls."""
+
 IDENTIFIER = re.compile(r"^(?!.*__)(?!.*_$)[A-Za-z_][A-Za-z0-9_]{0,63}$")
 """A Structured Text name (IEC 61131-3): letters, digits and single '_', a letter or '_' first, no '_' last, at
 most 64 characters."""
@@ -59,7 +66,7 @@ def check_st_name(name: str, *, used: frozenset[str] = frozenset()) -> None:
             f"block name {name!r}: use letters, digits and single '_' (a letter or '_' first, no '_' last, at most "
             "64 characters: an IEC 61131-3 name); choose another --name"
         )
-    if name.upper() in ST_RESERVED:
+    if name.upper() in ST_RESERVED or CONVERSION.match(name.upper()):
         raise InputError(f"block name {name!r}: a reserved word of Structured Text; choose another --name")
     if name.upper() in {u.upper() for u in used}:
         raise InputError(f"block name {name!r}: a name the block itself declares; choose another --name")

@@ -148,6 +148,7 @@ def scored_glitches(error: np.ndarray | None, residual: np.ndarray | None) -> tu
     if error is None or residual is None:
         return {}, []
     glitches = error_glitches(error)
+    glitches = glitches[np.isfinite(residual[glitches])]  # on a sample the replay scored (not in sensor fault)
     if not glitches.size:
         return {}, []
     kept = np.ones(len(residual), dtype=bool)

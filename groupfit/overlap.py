@@ -39,13 +39,19 @@ def _repeated(before: np.ndarray, after: np.ndarray) -> int:
 
 
 def refuse_overlapping(runs: Sequence[Run], what: str = "as data") -> None:
-    """Refuse runs one of which begins with the last rows of another, in part (each checked against each; a run
-    whose every row is another's is a copy, :func:`groupfit.io.refuse_repeated`'s to tell by its bytes)."""
+    """Refuse runs one of which begins with the last rows of another, in part (each checked against each), and a
+    run whose every reading is another's: a copy saved again (other line endings, another layout), which
+    :func:`groupfit.io.refuse_repeated` cannot tell by its bytes; held out, it would be scored on itself."""
     rows = [_rows(run) for run in runs]
     for i, earlier in enumerate(runs):
         for j, later in enumerate(runs):
             if i == j or earlier.temp_names != later.temp_names:
                 continue
+            if i < j and rows[i].shape == rows[j].shape and np.array_equal(rows[i], rows[j], equal_nan=True):
+                raise InputError(
+                    f"{later.source}: every reading repeats {earlier.source}, given {what} too (the same run saved "
+                    "again): give each run once"
+                )
             k = _repeated(rows[i], rows[j])
             if MIN_REPEATED_ROWS <= k < min(earlier.n_samples, later.n_samples):  # whole copies: refuse_repeated
                 raise InputError(

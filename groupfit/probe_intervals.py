@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 from groupfit.data_options import positive_number
@@ -25,6 +26,9 @@ from groupfit.io import save_figure
 
 UNITS_S = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
 MAX_CHECK_S = 1.0e9
+RUN_MARKERS = ("o", "s", "^", "D", "v", "P", "X")
+RUN_LINES = ("-", "--", "-.")
+"""A run's marker and line style in the interval plot (its colour is the model's)."""
 """The longest check interval or first check (s, some 30 years): beyond it a number is a slip, not a schedule."""
 
 
@@ -80,7 +84,13 @@ def check_intervals_fit(intervals_s: Sequence[float], first_s: float | None, run
 
 def whole_samples(seconds: float, period: float) -> int:
     """The samples of an interval of checks: ``seconds`` rounded to whole sampling periods, at least one."""
-    return max(1, int(round(seconds / period)))
+    return max(1, nearest_sample(seconds, period))
+
+
+def nearest_sample(seconds: float, period: float) -> int:
+    """``seconds`` as whole sampling periods, a half rounded up (a check is never placed before the time asked
+    for by Python's rounding of halves to even: 250 s at 100 s is 3 periods, not 2)."""
+    return int(math.floor(seconds / period + 0.5))
 
 
 def rounded_interval_notes(intervals_s: Sequence[float], runs: Sequence) -> list[str]:
@@ -151,7 +161,7 @@ def interval_table(
     """
     rows = []
     for run, error in errors.items():
-        first = None if first_s is None else int(round(first_s / periods[run]))
+        first = None if first_s is None else nearest_sample(first_s, periods[run])
         for model, prediction in predictions[run].items():
             residual = np.asarray(error, dtype=float) - np.asarray(prediction, dtype=float)
             rms = [_rms(hold_residual(residual, whole_samples(t, periods[run]), first)) for t in intervals_s]
@@ -234,14 +244,20 @@ def interval_summary(table: Mapping[str, Any]) -> str:
 
 
 def plot_intervals(table: Mapping[str, Any], path: Path, tolerance_um: float | None = None) -> None:
-    """RMS against the check interval, one line per model and run (dotted: without checks; dashed: the
-    tolerance, when given)."""
+    """RMS against the check interval, one line per model and run: a colour per model, a marker and line style
+    per run (dotted: without checks; dashed: the tolerance, when given)."""
     fig = Figure(figsize=(8, 5), layout="constrained")
     ax = fig.subplots()
     minutes = np.asarray(table["intervals_s"]) / 60.0
+    models = list(dict.fromkeys(row["model"] for row in table["rows"]))
+    runs = list(dict.fromkeys(row["run"] for row in table["rows"]))
+    palette = colormaps["tab10" if len(models) <= 10 else "tab20"]
     for row in table["rows"]:
-        line = ax.plot(minutes, row["rms_um"], marker="o", lw=1.2, label=f"{row['model']} on {row['run']}")
-        ax.axhline(row["rms_none_um"], color=line[0].get_color(), lw=0.6, ls=":")
+        color = palette(models.index(row["model"]) % palette.N)
+        k = runs.index(row["run"])
+        style = dict(marker=RUN_MARKERS[k % len(RUN_MARKERS)], ls=RUN_LINES[k // len(RUN_MARKERS) % len(RUN_LINES)])
+        ax.plot(minutes, row["rms_um"], color=color, lw=1.2, label=f"{row['model']} on {row['run']}", **style)
+        ax.axhline(row["rms_none_um"], color=color, lw=0.6, ls=":")
     if tolerance_um is not None:
         ax.axhline(tolerance_um, color="k", lw=1.0, ls="--", label=f"tolerance {tolerance_um:g} µm")
     ax.set_xscale("log")

@@ -211,3 +211,12 @@ def test_diagnose_refuses_to_write_over_its_model_before_it_runs(tmp_path, capsy
     err = capsys.readouterr().err.strip()
     assert "--out names a file this command reads" in err and len(err.splitlines()) == 1
     assert path.read_bytes() == before
+
+
+def test_a_check_between_two_samples_falls_on_the_later_one_and_says_so(tmp_path, model_path, capsys):
+    result = replay_json(tmp_path, model_path, "--data", SYNTHETIC, "--probe-every", 1000, "--probe-first", 250)
+    assert result["probes"]["checks"][0]["i"] == 4  # 2.5 periods after the first sample: the 3rd after it, not the 2nd
+    assert result["probes"]["first_check_s"] == 300.0
+    assert "the first at 300 s (250 s asked, rounded to whole samples)" in capsys.readouterr().out
+    every = replay_json(tmp_path, model_path, "--data", SYNTHETIC, "--probe-every", 250)
+    assert every["probes"]["every_s"] == 300.0  # a half rounded up, as the first check is

@@ -10,7 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from groupfit.columns import aligned_inputs
+from groupfit.columns import aligned_inputs, shared_default_inputs
 from groupfit.commands.option_values import resample_seconds
 from groupfit.config import default_config_path, read_config
 from groupfit.data import (
@@ -301,7 +301,7 @@ def load_configured_runs(data: DataSettings, path: str | None = None, **options)
     options = _load_options(data, options)
     runs = [run for p in paths for run in load_runs(p, **options)]
     if len(paths) > 1:
-        runs = aligned_inputs(runs)
+        runs = aligned_inputs(runs if data.temps is not None else shared_default_inputs(runs))
         refuse_overlapping(runs)
     return runs
 

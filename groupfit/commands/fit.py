@@ -230,7 +230,7 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
             "breaks belong to one run (fit it per run and operating condition)"
         )
     run = join_runs(runs)
-    reference = reference_options.configured_reference(args, settings, run)
+    reference = reference_options.configured_reference(args, settings, run, runs)
     choice = None
     if position_run is None and reference_options.reference_is_default(args, settings):
         model = settings.model

@@ -3,12 +3,19 @@
 from __future__ import annotations
 
 import argparse
+from typing import Sequence
 
 from groupfit.commands.common import report_stream
 from groupfit.data import Run
 from groupfit.default_columns import ambient_columns
 from groupfit.errors import InputError
-from groupfit.reference import AMBIENT_COLUMN, default_reference, refuse_as_temperature
+from groupfit.reference import (
+    AMBIENT_COLUMN,
+    default_reference,
+    is_column_reference,
+    refuse_as_temperature,
+    with_reference,
+)
 from groupfit.settings import RunSettings
 
 
@@ -34,9 +41,19 @@ def reference_is_default(args: argparse.Namespace, settings: RunSettings) -> boo
     return getattr(args, "reference", None) is None and settings.model.reference is None
 
 
-def configured_reference(args: argparse.Namespace, settings: RunSettings, run: Run) -> str | None:
+def configured_reference(
+    args: argparse.Namespace, settings: RunSettings, run: Run, parts: Sequence[Run] = ()
+) -> str | None:
     """The reference of ``--reference``, else ``[model] reference``, else ``--ambient``, else the run's
-    ambient (:func:`groupfit.reference.default_reference`); a note says which ambient was found by its name."""
+    ambient (:func:`groupfit.reference.default_reference`); a note says which ambient was found by its name.
+    ``parts``: the runs ``run`` joins, named when some lack the column (the joined run keeps shared columns)."""
+    lacking = _lacking(parts, getattr(args, "reference", None) or settings.model.reference or settings.data.ambient)
+    if lacking:
+        column, names = lacking
+        raise InputError(
+            f"{names}: no column '{column}', which the other runs have and the inputs are to be taken over; give "
+            "every run the column, or leave those runs out"
+        )
     value = getattr(args, "reference", None)
     given = "--reference"
     if value is None:
@@ -53,11 +70,28 @@ def configured_reference(args: argparse.Namespace, settings: RunSettings, run: R
         refuse_as_temperature(run, ambient, "--ambient column")
         value = ambient
     reference = default_reference(run.frame, value, run.temp_names)
+    if value is None and reference is None and _lacking(parts, AMBIENT_COLUMN):
+        column, names = _lacking(parts, AMBIENT_COLUMN)
+        print(
+            f"note    {names}: no {column} column, which the other runs have: the inputs of every run are read as "
+            f"logged (absolute); give every run its {column} column to take the inputs over it",
+            file=report_stream(args),
+        )
     if value is None and AMBIENT_COLUMN not in run.frame.columns:
         note = _ambient_note(run, reference)
         if note:
             print(f"note    {note}", file=report_stream(args))
+    for part in parts if len(parts) > 1 else ():
+        with_reference(part, reference)  # a gap in one run's reference is named by that run's own row
     return reference
+
+
+def _lacking(parts: Sequence[Run], column) -> tuple[str, str] | None:
+    """``(column, the sources of the parts without it)`` when some of ``parts`` have ``column`` and some do not."""
+    if not isinstance(column, str) or not is_column_reference(column) or len(parts) < 2:
+        return None
+    without = [part.source for part in parts if column not in part.frame.columns]
+    return (column, ", ".join(without)) if without and len(without) < len(parts) else None
 
 
 def _ambient_note(run: Run, reference: str | None) -> str | None:

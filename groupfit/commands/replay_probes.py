@@ -23,7 +23,14 @@ from groupfit.default_columns import default_temperature_columns, length_unit_na
 from groupfit.error_scale import scaled_values
 from groupfit.error_start import from_start, is_from_start, logged_spec
 from groupfit.errors import InputError
-from groupfit.probe_intervals import check_probe_first, check_rows, on_measured_rows, parse_interval, whole_samples
+from groupfit.probe_intervals import (
+    check_probe_first,
+    check_rows,
+    nearest_sample,
+    on_measured_rows,
+    parse_interval,
+    whole_samples,
+)
 from groupfit.runtime import PROBE_CODE_OFFSET, Replay
 from groupfit.runtime.recalibration import PROBE_APPLIED, PROBE_IGNORED, PROBE_LIMIT_UM, PROBE_REJECTED
 
@@ -122,7 +129,7 @@ def probe_schedule(args: argparse.Namespace, run, *, continued: bool = False) ->
         rows = np.arange(run.n_samples)
     else:
         every = whole_samples(args.probe_every, run.period)
-        rows = check_rows(run.n_samples, every, None if first is None else int(round(first / run.period)))
+        rows = check_rows(run.n_samples, every, None if first is None else nearest_sample(first, run.period))
         if not rows.size:
             last = (run.n_samples - 1) * run.period
             raise InputError(
@@ -151,6 +158,7 @@ def probe_summary(
         "every_s": None if args.probe_every is None else whole_samples(args.probe_every, period) * period,
         "asked_every_s": args.probe_every,
         "first_s": args.probe_first,
+        "first_check_s": None if args.probe_first is None else nearest_sample(args.probe_first, period) * period,
         "column": args.probe_column,
         **counts,
         "rms_without_checks_um": rms_without,
@@ -171,6 +179,10 @@ def probe_report(result: dict[str, Any]) -> str:
     schedule = f"every {p['every_s']:g} s" if p["every_s"] is not None else f"logged in '{p['column']}'"
     if p["every_s"] is not None and not math.isclose(p["every_s"], p["asked_every_s"], rel_tol=1e-9):
         schedule += f" ({p['asked_every_s']:g} s asked, rounded to whole samples)"
+    if p["first_s"] is not None:
+        schedule += f", the first at {p['first_check_s']:g} s"
+        if not math.isclose(p["first_check_s"], p["first_s"], rel_tol=1e-9, abs_tol=1e-9):
+            schedule += f" ({p['first_s']:g} s asked, rounded to whole samples)"
     why = "sensor fault or no reading"
     beyond = sum(abs(c["reading_um"]) > PROBE_LIMIT_UM for c in p["checks"])
     if beyond:

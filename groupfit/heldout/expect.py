@@ -12,6 +12,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from groupfit.data import Run
+from groupfit.grouping import min_group_size
 from groupfit.heldout import calibration
 from groupfit.heldout.choice import RMS_TOLERANCE, next_run_choice
 from groupfit.heldout.nextrun import (
@@ -115,7 +116,7 @@ class NextRunExpectation:
                     "expected_next_run_rms_um": expected,
                     "expected_next_run_range_um": [lo, hi],
                     "raw_rms_um": float(raw[i]),
-                    "mse_standard_error_um2": float(se[i]),
+                    "mse_standard_error_um2": float(se[i]) if np.isfinite(se[i]) else None,  # None: one fold
                 }
             )
         return {
@@ -160,7 +161,9 @@ def expect_next_run(
     measured error on every row (:func:`groupfit.data.measured_rows`).
     """
     if len(runs) > 1:
-        scores = leave_one_run_out(runs, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha)
+        n_coef = runs[0].temps.shape[1] + int(fit_intercept)
+        min_train = min_group_size(c, n_coef, n)
+        scores = leave_one_run_out(runs, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha, min_train=min_train)
     else:
         scores = forward_chaining(
             runs[0], list(p_values), n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
@@ -213,9 +216,15 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
     """When the estimate cannot be trusted, and what run to record next."""
     notes = []
     if scores.kind == LEAVE_ONE_RUN_OUT:
+        if scores.unfitted_runs:
+            notes.append(
+                f"{', '.join(scores.unfitted_runs)} not held out: the other runs alone are too short for fit to fit "
+                "the model on, so no next run after them can be scored"
+            )
         if scores.n_folds < MIN_SEGMENTS:
             notes.append(
-                f"only {scores.n_folds} runs to leave out: a rough estimate; record another run "
+                f"only {scores.n_folds} run{'s' if scores.n_folds != 1 else ''} to leave out: a rough estimate; "
+                "record another run "
                 "(another day or programme) and fit on all of them"
             )
         return tuple(notes)

@@ -81,6 +81,8 @@ class NextRunScores:
     leaves_one_condition: bool = False
     """A scored segment starts a condition the run before it has not seen, that run holding one condition alone
     (:func:`leaves_one_condition`)."""
+    unfitted_runs: tuple = ()
+    """Runs left out of the folds: the others, trained on without them, hold fewer samples than ``fit`` takes."""
 
     @property
     def n_folds(self) -> int:
@@ -101,7 +103,8 @@ class NextRunScores:
     def method(self) -> str:
         """One line on how the estimate was made."""
         if self.kind == LEAVE_ONE_RUN_OUT:
-            return f"leave-one-run-out over {self.n_folds} runs, each replayed through the run-time rule"
+            runs = f"{self.n_folds} run{'s' if self.n_folds != 1 else ''}"
+            return f"leave-one-run-out over {runs}, each replayed through the run-time rule"
         phases = len(phase_offsets(self.stride))
         thinned = f", one sample in {self.stride}, {phases} thinnings pooled" if self.stride > 1 else ""
         folds = "blocks of time" if self.blocks_of_time else "operating segments"
@@ -308,22 +311,38 @@ def _blocks(n_samples: int) -> list[int]:
     return list(np.linspace(0, n_samples, 7).astype(int)[:-1])
 
 
-def leave_one_run_out(runs: Sequence[Run], *, fit_intercept: bool = True, ridge_alpha: float = 0.0) -> NextRunScores:
+def leave_one_run_out(
+    runs: Sequence[Run], *, fit_intercept: bool = True, ridge_alpha: float = 0.0, min_train: int = 0
+) -> NextRunScores:
     """The global model (p = 0) fitted on all runs but one and replayed over that one, for every run (the
-    inputs matched by name)."""
+    inputs matched by name). A run whose others hold fewer than ``min_train`` measured samples (what ``fit``
+    takes for the model) is not held out: no user could fit on the others alone (``unfitted_runs``)."""
     runs = aligned_inputs(list(runs))
-    sse = np.zeros((1, len(runs)))
-    counts = np.zeros(len(runs))
+    sse, counts, unfitted = [], [], []
     for k, held_out in enumerate(runs):
         others = join_runs([r for j, r in enumerate(runs) if j != k])
         rows = np.isfinite(others.error)
+        if rows.sum() < min_train:
+            unfitted.append(held_out.name)
+            continue
         scored = np.isfinite(held_out.error)
         estimator = candidate_estimator(0, [], n=0, c=0.0, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha)
         estimator.fit(others.temps[rows], others.error[rows])
         prediction = rule_prediction(estimator, others, held_out.temps)
-        sse[0, k] = float(np.sum((held_out.error[scored] - prediction[scored]) ** 2))
-        counts[k] = int(scored.sum())
-    return NextRunScores((0,), sse, counts, LEAVE_ONE_RUN_OUT, f"{len(runs)} runs", 1, int(counts.sum()))
+        sse.append(float(np.sum((held_out.error[scored] - prediction[scored]) ** 2)))
+        counts.append(int(scored.sum()))
+    if not sse:
+        raise ValueError("no run can be held out: the others are too short to fit on")
+    return NextRunScores(
+        (0,),
+        np.array([sse]),
+        np.array(counts, dtype=float),
+        LEAVE_ONE_RUN_OUT,
+        f"{len(sse)} runs",
+        1,
+        int(sum(counts)),
+        unfitted_runs=tuple(unfitted),
+    )
 
 
 __all__ = [
