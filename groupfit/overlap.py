@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
+import pandas as pd
 
 from groupfit.data import Run
 from groupfit.errors import InputError
@@ -38,6 +39,16 @@ def _repeated(before: np.ndarray, after: np.ndarray) -> int:
     return 0
 
 
+def _same_samples(a: Run, b: Run, rows_a: np.ndarray, rows_b: np.ndarray) -> bool:
+    """Whether two runs hold the same readings in every column (in any column order)."""
+    if not np.array_equal(rows_a, rows_b, equal_nan=True) or set(a.frame.columns) != set(b.frame.columns):
+        return False
+    columns = list(a.frame.columns)
+    first = a.frame[columns].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
+    second = b.frame[columns].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
+    return first.shape == second.shape and bool(np.array_equal(first, second, equal_nan=True))
+
+
 def refuse_overlapping(runs: Sequence[Run], what: str = "as data") -> None:
     """Refuse runs one of which begins with the last rows of another, in part (each checked against each), and a
     run whose every reading is another's: a copy saved again (other line endings, another layout), which
@@ -47,7 +58,7 @@ def refuse_overlapping(runs: Sequence[Run], what: str = "as data") -> None:
         for j, later in enumerate(runs):
             if i == j or earlier.temp_names != later.temp_names:
                 continue
-            if i < j and rows[i].shape == rows[j].shape and np.array_equal(rows[i], rows[j], equal_nan=True):
+            if i < j and rows[i].shape == rows[j].shape and _same_samples(earlier, later, rows[i], rows[j]):
                 raise InputError(
                     f"{later.source}: every reading repeats {earlier.source}, given {what} too (the same run saved "
                     "again): give each run once"

@@ -93,11 +93,17 @@ def nearest_sample(seconds: float, period: float) -> int:
     return int(math.floor(seconds / period + 0.5))
 
 
-def rounded_interval_notes(intervals_s: Sequence[float], runs: Sequence) -> list[str]:
-    """A note per run and interval that is not a whole number of the run's samples: its checks fall at the
-    nearest whole number of samples."""
+def rounded_interval_notes(intervals_s: Sequence[float], runs: Sequence, first_s: float | None = None) -> list[str]:
+    """A note per run and interval (and ``--probe-first``) that is not a whole number of the run's samples: its
+    checks fall at the nearest whole number of samples (a half rounded up)."""
     notes = []
     for run in runs:
+        used_first = None if first_s is None else nearest_sample(first_s, run.period) * run.period
+        if used_first is not None and intervals_s and not math.isclose(used_first, first_s, rel_tol=1e-9):
+            notes.append(
+                f"--probe-first {first_s:g}: {run.source} is sampled every {run.period:g} s, so its first check "
+                f"falls {used_first:g} s after its start (whole samples)"
+            )
         for interval in intervals_s:
             used = whole_samples(interval, run.period) * run.period
             if not math.isclose(used, interval, rel_tol=1e-9):

@@ -52,6 +52,7 @@ from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
 from groupfit.model_recalibration import RECALIBRATION_LIMIT
 from groupfit.models.ridge import input_spreads, penalty_diagonal, ridge_solve
+from groupfit.probe_intervals import on_measured_rows
 from groupfit.runtime.recalibration import DEFAULT_SECTION, default_section, expected_range_high
 
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
@@ -236,6 +237,9 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
     rejected = np.zeros(g)
     total = np.zeros(g)
     scored = 0
+    due = np.arange(every - 1, len(held.residual), every)
+    checked = np.zeros(len(held.residual), dtype=bool)
+    checked[on_measured_rows(due, np.isfinite(held.residual))] = True  # a check due unmeasured: the next reading
     for k, (res, m) in enumerate(zip(held.residual.tolist(), held.prediction.tolist())):
         x[0] = x[0] + x[1]
         x[1] = phi * x[1]
@@ -252,7 +256,7 @@ def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, peri
             total += served * served
             scored += 1
         error = res - target
-        if (k + 1) % every:
+        if not checked[k]:
             continue
         ph = P[:, 0] + P[:, 2] * m
         hp = P[0, :] + P[2, :] * m
@@ -330,7 +334,7 @@ def choose_recalibration(
     measured = residuals[np.isfinite(residuals)]
     rms_none = float(np.sqrt(np.mean(measured**2))) if measured.size else math.nan
     everies = [max(1, int(round(t / period))) for t in intervals]
-    scored = [i for i, every in enumerate(everies) if _scored_samples(series, every) >= every]
+    scored = [i for i, every in enumerate(everies) if _scored_span(series, every) >= every]
     if not scored:
         return _default(
             offset_max,
@@ -392,9 +396,10 @@ def choose_recalibration(
     )
 
 
-def _scored_samples(series: Sequence[HeldOut], every: int) -> int:
-    """The measured samples a replay with a check every ``every`` samples scores (those from the first check on)."""
-    return sum(int(np.isfinite(s.residual[every:]).sum()) for s in series)
+def _scored_span(series: Sequence[HeldOut], every: int) -> int:
+    """The samples a replay with a check every ``every`` samples spans from its first check on, over the stretches
+    with a measured one there (an error measured on some rows only spans the rows between)."""
+    return sum(len(s.residual[every:]) for s in series if np.isfinite(s.residual[every:]).any())
 
 
 def _rms_unchecked(series: Sequence[HeldOut], every: int) -> float:

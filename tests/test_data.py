@@ -169,16 +169,24 @@ def test_a_run_with_no_input_left_or_an_input_with_readings_missed_is_refused(tm
     assert replayed.temp_names == ("T1", "T2", "T3", "T9")  # a replay keeps what it reads
 
 
-def test_runs_with_other_default_inputs_are_refused_with_the_option_that_aligns_them(tmp_path, capsys):
+def test_runs_with_other_default_inputs_share_the_inputs_every_run_kept(tmp_path, capsys):
     frame = good_frame()
     first = write_run(tmp_path, frame, "a.csv")
     second = write_run(tmp_path, frame.assign(T3=20.0), "b.csv")  # T3 never moved that day: left out there
     out = tmp_path / "out"
-    assert main(["fit", "--data", str(first), str(second), "--p", "0", "--out", str(out), "--quiet"]) == 2
+    assert main(["fit", "--data", str(first), str(second), "--p", "0", "--out", str(out), "--quiet"]) == 0
+    report = capsys.readouterr().out
+    assert "T3 left out of the inputs of every run: loading left it out of " in report and "--temps" in report
+    shared = json.loads((out / "model.json").read_text())
+    named = tmp_path / "named"
+    assert main(["fit", "--data", str(first), str(second), "--temps", "T1,T2", "--p", "0", "--out", str(named)]) == 0
+    named_model = json.loads((named / "model.json").read_text())
+    assert shared["temps"] == named_model["temps"]
+    np.testing.assert_allclose(shared["coefficients"], named_model["coefficients"], rtol=1e-9)
+    other = write_run(tmp_path, frame.drop(columns=["T3"]).assign(T4=frame.T3), "c.csv")  # another sensor
+    assert main(["fit", "--data", str(first), str(other), "--p", "0", "--out", str(tmp_path / "o"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "b.csv: temperature columns differ from the modelling run's (missing T3)" in err[0]
-    assert "--temps" in err[0]
-    assert main(["fit", "--data", str(first), str(second), "--temps", "T1,T2", "--p", "0", "--out", str(out)]) == 0
+    assert len(err) == 1 and "c.csv: temperature columns differ from the modelling run's" in err[0]
 
 
 def test_runs_whose_inputs_come_in_another_column_order_are_joined_by_name(tmp_path, capsys):

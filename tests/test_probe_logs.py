@@ -220,3 +220,22 @@ def test_a_check_between_two_samples_falls_on_the_later_one_and_says_so(tmp_path
     assert "the first at 300 s (250 s asked, rounded to whole samples)" in capsys.readouterr().out
     every = replay_json(tmp_path, model_path, "--data", SYNTHETIC, "--probe-every", 250)
     assert every["probes"]["every_s"] == 300.0  # a half rounded up, as the first check is
+
+
+def test_the_filter_is_chosen_with_checks_on_a_run_measured_on_some_rows(tmp_path):
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    frame.loc[np.arange(len(frame)) % 10 != 0, "error_um"] = np.nan  # a probe cycle every 1000 s, 14.75 h
+    frame.to_csv(tmp_path / "sparse.csv", index=False)
+    assert main(["fit", "--data", str(tmp_path / "sparse.csv"), "--out", str(tmp_path / "m"), "--quiet"]) == 0
+    chosen = json.loads((tmp_path / "m" / "model.json").read_text())["recalibration"]["chosen"]
+    assert chosen["intervals_s"] == [900.0, 1800.0, 3600.0, 7200.0]  # held-out stretches of 4.4 h and more
+    # a check due on an unmeasured row falls on the next reading: the hold serves otherwise than no checks
+    assert all(h != n for h, n in zip(chosen["rms_hold_um"], chosen["rms_none_by_interval_um"]))
+
+
+def test_compare_says_where_its_first_check_falls(tmp_path, capsys):
+    args = ["compare", "--data", str(DATASETS / "paper_cycle.csv")]
+    args += ["--validate", str(DATASETS / "validation_speed.csv"), "--pmax", "1", "--probe-every", "30m"]
+    args += ["--probe-first", "250", "--out", str(tmp_path / "c"), "--quiet"]
+    assert main(args) == 0
+    assert "so its first check falls 300 s after its start" in capsys.readouterr().out

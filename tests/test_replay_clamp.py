@@ -87,10 +87,10 @@ def test_an_integer_register_that_saturates_is_counted_and_scored_beside_the_rul
 
 def test_a_check_interval_that_is_not_whole_samples_is_said_to_be_rounded(model, tmp_path, capsys):
     data, report = replayed(model, tmp_path, capsys, "--probe-every", "250")  # a 100 s run
-    assert data["probes"]["every_s"] == 200.0 and data["probes"]["asked_every_s"] == 250.0
+    assert data["probes"]["every_s"] == 300.0 and data["probes"]["asked_every_s"] == 250.0  # a half rounded up
     times = [s["time_s"] for s in data["samples"] if "probe" in s]
-    assert set(np.diff(times)) == {200.0}
-    assert "every 200 s (250 s asked, rounded to whole samples)" in report
+    assert set(np.diff(times)) == {300.0}
+    assert "every 300 s (250 s asked, rounded to whole samples)" in report
     exact, report = replayed(model, tmp_path, capsys, "--probe-every", "300")
     assert exact["probes"]["every_s"] == 300.0 and "asked" not in report
 

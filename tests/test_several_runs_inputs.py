@@ -111,3 +111,11 @@ def test_a_block_named_as_a_type_conversion_is_refused(name):
     with pytest.raises(InputError, match="reserved word"):
         check_st_name(name)
     check_st_name("TOTAL_COMP")
+
+
+def test_compare_names_the_run_without_the_ambient_column(tmp_path, capsys):
+    pd.read_csv(DATASETS / "paper_cycle.csv").to_csv(tmp_path / "paper.csv", index=False)
+    pd.read_csv(DATASETS / "repeat_warm.csv").drop(columns=["T_amb"]).to_csv(tmp_path / "noamb.csv", index=False)
+    args = ["compare", "--data", str(tmp_path / "paper.csv"), str(tmp_path / "noamb.csv"), "--quiet"]
+    assert main([*args, "--out", str(tmp_path / "c")]) == 0
+    assert "noamb.csv: no T_amb column, which the other runs have" in capsys.readouterr().out

@@ -176,10 +176,10 @@ def run_compare(args: argparse.Namespace) -> int:
         check_intervals_fit(args.probe_every, args.probe_first, validation or [modelling])
     heat_note = settle_heat_and_conditions(args, settings, [modelling, *validation])
     common.print_notes([modelling, *validation], common.report_stream(args))
-    rounded = rounded_interval_notes(args.probe_every or (), validation or [modelling])
+    rounded = rounded_interval_notes(args.probe_every or (), validation or [modelling], args.probe_first)
     for note in rounded + ([heat_note] if heat_note else []):
         print(f"note    {note}", file=common.report_stream(args))
-    reference = reference_options.configured_reference(args, run_settings, modelling)
+    reference = reference_options.configured_reference(args, run_settings, modelling, parts)
     choice = None
     if reference_options.reference_is_default(args, run_settings):
         candidates = tuple(range(settings.fit_pmax + 1))  # as fit decides it
