@@ -28,9 +28,10 @@ def projecting(progress: Callable[[str, float], None], *, asked: int, budget_s: 
     """A progress callback that passes every call on and projects the GA fits: the ``grouped`` stage calls it at
     0 when its clock starts and steps by 1/pmax after each fit, and fit p takes about p times the first. The
     projection from the first fit (timed from the stage's start) refuses a run over the budget without waiting
-    for the second; the one from the second fit alone (the first may carry one-time work) checks it again and
-    is said."""
-    state = {"start": None, "fits": 0, "last": None}
+    for the second; the one from the second fit alone (the first may carry one-time work) checks it again, and
+    the larger of the two is said (at 200 000 rows the fits took 73, 85, 253 and 320 s: the first fit
+    projected 730 s, the second alone 425 s)."""
+    state = {"start": None, "fits": 0, "last": None, "one_fit": 0.0}
 
     def call(stage: str, fraction: float) -> None:
         progress(stage, fraction)
@@ -45,8 +46,9 @@ def projecting(progress: Callable[[str, float], None], *, asked: int, budget_s: 
         since = state["start"] if state["fits"] == 1 else state["last"]
         state["last"] = now
         if since is not None:
+            state["one_fit"] = max(state["one_fit"], (now - since) / state["fits"])
             check_projection(
-                (now - since) / state["fits"],
+                state["one_fit"],
                 pmax=pmax,
                 asked=asked,
                 budget_s=budget_s,

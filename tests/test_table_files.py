@@ -96,3 +96,8 @@ def test_the_projection_of_the_ga_fits(monkeypatch):
     call("grouped", 2 / 4)
     call("grouped", 3 / 4)
     assert lines[said:] == ["grouped models p = 1…4 by the GA: about 25 min"]
+    clock = iter([0.0, 200.0, 300.0])  # the second fit faster than twice the first: the first's projection said
+    call = projecting(lambda *a: None, asked=4, budget_s=1e9, estimate=lines.append)
+    for fraction in (0.0, 1 / 4, 2 / 4):
+        call("grouped", fraction)
+    assert lines[-1] == "grouped models p = 1…4 by the GA: about 33 min"
