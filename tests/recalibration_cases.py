@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from test_switching_models import augmented_model, fault_injected, readings, synthetic_model
 
+from groupfit.model import ModelFile
+
 KALMAN = {
     "method": "kalman",
     "terms": ["offset", "drift", "gain"],
@@ -37,6 +39,14 @@ HOLD = {
 
 def with_section(model: dict, section: dict) -> dict:
     return {**model, "recalibration": dict(section)}
+
+
+def kalman_model_file(folder):
+    """The synthetic model with the :data:`KALMAN` section, saved as ``folder/model.json``."""
+    model, _ = synthetic_model()
+    path = folder / "model.json"
+    ModelFile.from_dict(with_section(model, KALMAN)).save(path)
+    return path
 
 
 def probe_schedule(error: np.ndarray, every: int, *, gross_at: int | None = None, seed: int = 0) -> np.ndarray:

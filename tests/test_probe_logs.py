@@ -9,7 +9,8 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from recalibration_cases import KALMAN, with_section
+from recalibration_cases import KALMAN, kalman_model_file, with_section
+from test_recalibration_cli import replay_json
 from test_switching_models import SYNTHETIC, synthetic_model
 
 from groupfit.cli import main
@@ -22,16 +23,7 @@ DATASETS = SYNTHETIC.parent
 
 @pytest.fixture()
 def model_path(tmp_path):
-    model, _ = synthetic_model()
-    path = tmp_path / "model.json"
-    ModelFile.from_dict(with_section(model, KALMAN)).save(path)
-    return path
-
-
-def replay_json(tmp_path, *args) -> dict:
-    out = tmp_path / "r.json"
-    assert main(["replay", *map(str, args), "--json", str(out)]) == 0
-    return json.loads(out.read_text())
+    return kalman_model_file(tmp_path)
 
 
 def with_probe(rows, *, drop=()) -> pd.DataFrame:

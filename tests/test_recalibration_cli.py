@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from recalibration_cases import KALMAN, with_section
+from recalibration_cases import KALMAN, kalman_model_file, with_section
 from test_switching_models import SYNTHETIC, synthetic_model
 
 from groupfit.cli import main
@@ -19,10 +19,7 @@ from groupfit.runtime import PROBE_APPLIED, PROBE_CODE_OFFSET, SwitchingRule
 
 @pytest.fixture()
 def model_path(tmp_path):
-    model, _ = synthetic_model()
-    path = tmp_path / "model.json"
-    ModelFile.from_dict(with_section(model, KALMAN)).save(path)
-    return path
+    return kalman_model_file(tmp_path)
 
 
 def replay_json(tmp_path, *args):
