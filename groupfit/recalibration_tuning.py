@@ -52,7 +52,7 @@ from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
 from groupfit.model_recalibration import RECALIBRATION_LIMIT
 from groupfit.models.ridge import input_spreads, penalty_diagonal, ridge_solve
-from groupfit.probe_intervals import on_measured_rows
+from groupfit.probe_intervals import on_measured_rows, whole_samples
 from groupfit.runtime.recalibration import DEFAULT_SECTION, default_section, expected_range_high
 
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
@@ -333,7 +333,7 @@ def choose_recalibration(
     residuals = np.concatenate([s.residual for s in series])
     measured = residuals[np.isfinite(residuals)]
     rms_none = float(np.sqrt(np.mean(measured**2))) if measured.size else math.nan
-    everies = [max(1, int(round(t / period))) for t in intervals]
+    everies = [whole_samples(t, period) for t in intervals]
     scored = [i for i, every in enumerate(everies) if _scored_span(series, every) >= every]
     if not scored:
         return _default(
