@@ -8,14 +8,14 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.ar1.inputs import ar1_inputs
+from groupfit.ar1.inputs import ar1_inputs, moves_like_measurement
 from groupfit.ar1.nextrun import expect_ar1
 from groupfit.data import Run
+from groupfit.error_start import first_reading
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation
 from groupfit.models.ar1 import AR1Model, early_rise
 from groupfit.reference import column_role, refuse_as_temperature
-from groupfit.setting_levels import is_setting
 
 
 def ar1_estimator(settings) -> AR1Model:
@@ -64,18 +64,16 @@ def ar1_left_out_reason(modelling: Run, measured: Run, parts: Sequence[Run], hea
         return "its free run would run on from one modelling run into the next"
     if heat is not None and heat in modelling.frame.columns and not column_role(modelling, heat):
         values = pd.to_numeric(modelling.frame[heat], errors="coerce").to_numpy(dtype=float)
-        if np.isfinite(values).all() and np.all(values >= 0) and not is_setting(values):
-            return (
-                f"its heat column '{heat}' moves like a measurement, not a setting ({len(np.unique(values))} "
-                "distinct readings), and the AR(1) model fits one C2 per heat level"
-            )
+        moving = moves_like_measurement(values, heat) if np.isfinite(values).all() and np.all(values >= 0) else None
+        if moving:
+            return f"its {moving}, and the AR(1) model fits one C2 per heat level"
     return None
 
 
 def first_measured(error: np.ndarray) -> float:
     """The first measured value of an error series (where an AR(1) free run starts); 0 when none is."""
-    finite = np.flatnonzero(np.isfinite(error))
-    return float(error[finite[0]]) if finite.size else 0.0
+    first = first_reading(np.asarray(error, dtype=float))
+    return 0.0 if first is None else first
 
 
 def early_rise_ratio(run: Run, modelling: Run, settings) -> float | None:

@@ -255,18 +255,21 @@ def _between_readings(missing: np.ndarray, known: np.ndarray) -> np.ndarray:
     the bin just after it."""
     gap = np.zeros(len(known), dtype=bool)
     gap[missing] = True
-    edges = np.diff(np.concatenate([[0], gap.astype(np.int8), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    inner = [(a, b) for a, b in zip(starts, ends) if a > 0 and b < len(known) and known[a - 1] and known[b]]
-    return np.concatenate([np.arange(a, b) for a, b in inner]) if inner else np.zeros(0, dtype=int)
+    return _inner_runs(gap, lambda a, b: bool(known[a - 1] and known[b]))
 
 
 def _short_runs(flags: np.ndarray) -> np.ndarray:
     """Indices of the flagged entries in runs of at most :data:`GAP_PERIODS` that have an entry unflagged on
     both sides (a run at either end is not between two readings)."""
+    return _inner_runs(flags, lambda a, b: b - a <= GAP_PERIODS)
+
+
+def _inner_runs(flags: np.ndarray, keep) -> np.ndarray:
+    """Indices of the flagged entries in the runs of flags that neither end of ``flags`` bounds and that
+    ``keep(a, b)`` accepts (``a`` a run's first index, ``b`` one past its last)."""
     edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    inner = [(a, b) for a, b in zip(starts, ends) if b - a <= GAP_PERIODS and a > 0 and b < len(flags)]
+    inner = [(a, b) for a, b in zip(starts, ends) if a > 0 and b < len(flags) and keep(a, b)]
     return np.concatenate([np.arange(a, b) for a, b in inner]) if inner else np.zeros(0, dtype=int)
 
 

@@ -37,12 +37,21 @@ def check_heat_setting(heat: np.ndarray, *, source: str, name: str, todo: str) -
             f"{source}: heat column '{name}' is 0 on every row: the AR(1) model has no heat input to fit; name the "
             f"heat input (a speed, a power) with --heat COLUMN, {todo}"
         )
-    if not is_setting(heat):
+    moving = moves_like_measurement(heat, name)
+    if moving:
         raise InputError(
-            f"{source}: heat column '{name}' moves like a measurement, not a setting ({len(np.unique(heat))} "
-            "distinct readings): the AR(1) model fits one C2 per heat level, so its heat input must be held at a "
+            f"{source}: {moving}: the AR(1) model fits one C2 per heat level, so its heat input must be held at a "
             f"few set levels (a speed or power set-point); bin the column to its set levels, {todo}"
         )
+
+
+def moves_like_measurement(heat: np.ndarray, name: str) -> str | None:
+    """Words saying that a heat column moves like a measurement rather than a setting held at a few levels
+    (:func:`groupfit.setting_levels.is_setting`); None when it is a setting."""
+    heat = np.asarray(heat, dtype=float)
+    if is_setting(heat):
+        return None
+    return f"heat column '{name}' moves like a measurement, not a setting ({len(np.unique(heat))} distinct readings)"
 
 
 def refuse_heat_role(run: Run, heat: str, todo: str) -> None:

@@ -70,8 +70,9 @@ def configured_reference(
         refuse_as_temperature(run, ambient, "--ambient column")
         value = ambient
     reference = default_reference(run.frame, value, run.temp_names)
-    if value is None and reference is None and _lacking(parts, AMBIENT_COLUMN):
-        column, names = _lacking(parts, AMBIENT_COLUMN)
+    lacking = _lacking(parts, AMBIENT_COLUMN) if value is None and reference is None else None
+    if lacking:
+        column, names = lacking
         print(
             f"note    {names}: no {column} column, which the other runs have: the inputs of every run are read as "
             f"logged (absolute); give every run its {column} column to take the inputs over it",

@@ -138,14 +138,11 @@ def clock_settings(table: dict, label: str) -> dict:
     """``[data] period_tolerance`` (percent), ``resample_s`` (seconds), ``keep_glitches`` and ``temp_range``
     (°C) as :func:`groupfit.data.load_run` takes them (``groupfit sweep --period-tolerance``, ``--resample``,
     ``--keep-glitches`` and ``--range-temp`` replace them)."""
-    tolerance = parsed_period_tolerance(Table(table, "data", label), "period_tolerance")
-    resample = (
-        None if table.get("resample_s") is None else Table(table, "data", label).number("resample_s", positive=True)
-    )
-    keep = Table(table, "data", label).boolean("keep_glitches", False)
-    temp_range = (
-        None if table.get("temp_range") is None else parsed_temp_range(Table(table, "data", label), "temp_range")
-    )
+    data = Table(table, "data", label)
+    tolerance = parsed_period_tolerance(data, "period_tolerance")
+    resample = None if table.get("resample_s") is None else data.number("resample_s", positive=True)
+    keep = data.boolean("keep_glitches", False)
+    temp_range = None if table.get("temp_range") is None else parsed_temp_range(data, "temp_range")
     return {
         "period_tolerance": PERIOD_TOLERANCE if tolerance is None else tolerance,
         "resample": resample,
