@@ -63,18 +63,14 @@ def parse_interval(text: str | float | None) -> float | None:
 
 
 def check_intervals_fit(intervals_s: Sequence[float], first_s: float | None, runs: Sequence) -> None:
-    """Refuse an interval shorter than a run's sample or one after which no check falls in some run (the
-    checked RMS would be the unchecked one, reported as a result), and a first check after a run's end."""
+    """Refuse an interval after which no check falls in some run (the checked RMS would be the unchecked one,
+    reported as a result), and a first check after a run's end. An interval shorter than a sample is taken, as
+    ``replay`` takes it: a check on every sample (:func:`whole_samples`, said by :func:`rounded_interval_notes`)."""
     for run in runs:
         length_s = (run.n_samples - 1) * run.period
         if first_s is not None and first_s > length_s:
             raise InputError(f"--probe-first {first_s:g}: after the end of {run.source} ({length_s:g} s)")
         for interval in intervals_s:
-            if interval < run.period:
-                raise InputError(
-                    f"--probe-every: {_label(interval)} is shorter than the sampling period of {run.source} "
-                    f"({run.period:g} s); a check can come at most once a sample"
-                )
             if first_s is None and interval > length_s:
                 raise InputError(
                     f"--probe-every: {_label(interval)} is longer than {run.source} ({length_s:g} s): no check "

@@ -172,3 +172,13 @@ def test_a_bad_ar1_start_names_its_key(tmp_path, capsys):
     config.write_text(text.replace("[compare]", '[compare]\nar1_start = "warm"'), encoding="utf-8")
     assert main(["compare", str(config), "--quiet", "--out", str(tmp_path / "out")]) == 2
     assert "config key 'compare.ar1_start': must be one of measured, zero, got 'warm'" in capsys.readouterr().err
+
+
+def test_json_carries_what_loading_did_to_each_run(tmp_path, capsys):
+    out = tmp_path / "c.json"
+    assert main(["compare", "--pmax", "0", "--resample", "200", "--out", str(tmp_path / "c"), "--json", str(out)]) == 0
+    printed = [line.split(None, 1)[1] for line in capsys.readouterr().out.splitlines() if line.startswith("note")]
+    notes = json.loads(out.read_text())["data_notes"]
+    resampled = [note for note in notes if ": resampled to 200 s: " in note]
+    assert len(resampled) == 6 and set(resampled) <= set(printed)  # the modelling run and five validation runs
+    assert {Path(note.split(": ")[0]).name for note in resampled} >= {"paper_cycle.csv", "repeat_warm.csv"}

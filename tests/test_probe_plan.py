@@ -97,7 +97,6 @@ def brute_force_from_table(table: dict, tolerance: float) -> dict:
         (["--probe-every", "30m", "--tolerance", "0"], "--tolerance '0': must be a finite number > 0"),
         (["--probe-every", "30m", "--tolerance=-1"], "--tolerance '-1': must be a finite number > 0"),
         (["--probe-every", "30m", "--tolerance", "two"], "--tolerance 'two': give the largest acceptable RMS error"),
-        (["--probe-every", "30s,30m"], "--probe-every: 30 s is shorter than the sampling period of"),
         (["--probe-every", "30m,1e8"], "--probe-every: 1e+08 s is longer than"),
         (["--probe-every", "30m", "--probe-first", "1e8"], "--probe-first 1e+08: after the end of"),
     ],
@@ -115,3 +114,17 @@ def test_an_interval_given_twice_is_refused_in_any_unit():
     for text in ("30m,30m", "1800,30m", "0.5h,1800s"):
         with pytest.raises(InputError, match="repeats an interval given before \\(1800 s\\)"):
             parse_intervals(text)
+
+
+def test_an_interval_shorter_than_a_sample_checks_every_sample_as_replay_does(tmp_path, capsys):
+    out = tmp_path / "c.json"
+    args = ["compare", "--pmax", "0", "--probe-every", "1s,100s", "--out", str(tmp_path / "cmp"), "--json", str(out)]
+    assert main(args) == 0
+    report = capsys.readouterr().out
+    data = json.loads(out.read_text())
+    rows = data["probe_intervals"]["rows"]
+    assert rows and all(row["rms_um"][0] == row["rms_um"][1] != row["rms_none_um"] for row in rows)
+    rounded = [note for note in data["data_notes"] if note.startswith("--probe-every 1 s: ")]
+    assert len(rounded) == len(rows) // 2  # one per validation run; two models (mlr, p = 0) per run
+    assert all(note.endswith("so its checks fall every 100 s (whole samples)") for note in rounded)
+    assert all(f"note    {note}" in report for note in data["data_notes"])

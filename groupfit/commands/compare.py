@@ -11,7 +11,7 @@ from groupfit.commands import common, option_values, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, in_modelling_order, path_pmax
 from groupfit.conditions import SPEED_NAME, heat_level_column, run_operating_columns
 from groupfit.continuation import picked_up, with_histories, zero_of
-from groupfit.data import Run, join_runs
+from groupfit.data import Run, join_runs, loading_notes
 from groupfit.errors import InputError
 from groupfit.fit_budget import projecting, segment_table_over
 from groupfit.heldout.reference_choice import default_reference_choice
@@ -179,6 +179,7 @@ def run_compare(args: argparse.Namespace) -> int:
     rounded = rounded_interval_notes(args.probe_every or (), validation or [modelling], args.probe_first)
     for note in rounded + ([heat_note] if heat_note else []):
         print(f"note    {note}", file=common.report_stream(args))
+    data_notes = loading_notes([modelling, *validation]) + rounded + ([heat_note] if heat_note else [])
     reference = reference_options.configured_reference(args, run_settings, modelling, parts)
     choice = None
     if reference_options.reference_is_default(args, run_settings):
@@ -195,20 +196,19 @@ def run_compare(args: argparse.Namespace) -> int:
     validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
     histories = {run.name: whole.temps[:rows] for run, whole, rows in zip(validation, joined, skipped) if rows}
     for note in notes:
-        print(
-            "note    "
-            + note.replace("derived inputs and run-time state carry their", "run-time switching carries its"),
-            file=common.report_stream(args),
+        data_notes.append(
+            note.replace("derived inputs and run-time state carry their", "run-time switching carries its")
         )
+        print(f"note    {data_notes[-1]}", file=common.report_stream(args))
     check_block(args, modelling.n_samples)
     pmax = path_pmax(modelling, settings.pmax)
     over = common.over_budget(args, modelling, n_coef, settings.objective, pmax, "the exact path p = 0…pmax")
     if over is not None:  # the GA's models are compared, the path not certified
         settings.certify_path = False
-        print(
-            f"note    {over[0]}: the path of R against p is the GA's models, not certified (--no-budget certifies it)",
-            file=common.report_stream(args),
+        data_notes.append(
+            f"{over[0]}: the path of R against p is the GA's models, not certified (--no-budget certifies it)"
         )
+        print(f"note    {data_notes[-1]}", file=common.report_stream(args))
     out_dir = common.check_output_dir(run_settings.output_dir)
     progress = common.StageProgress(enabled=not args.quiet)
     try:
@@ -251,7 +251,7 @@ def run_compare(args: argparse.Namespace) -> int:
     )
     written.append(figure)
 
-    data, summary = result.to_json(), result.summary()
+    data, summary = {**result.to_json(), "data_notes": data_notes}, result.summary()
     if choice is not None:
         data["reference_choice"] = choice.to_json()
         if choice.scored:
