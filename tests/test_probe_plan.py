@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+import groupfit.probe_intervals as probe_intervals
 from groupfit.cli import main
 from groupfit.errors import InputError
 from groupfit.probe_intervals import interval_plan, interval_table, parse_intervals
@@ -128,3 +129,21 @@ def test_an_interval_shorter_than_a_sample_checks_every_sample_as_replay_does(tm
     assert len(rounded) == len(rows) // 2  # one per validation run; two models (mlr, p = 0) per run
     assert all(note.endswith("so its checks fall every 100 s (whole samples)") for note in rounded)
     assert all(f"note    {note}" in report for note in data["data_notes"])
+
+
+def test_the_figure_puts_each_runs_unchecked_rms_at_none_with_its_own_marker(tmp_path, monkeypatch):
+    figures = []
+    monkeypatch.setattr(probe_intervals, "save_figure", lambda fig, path, dpi: figures.append(fig))
+    rows = [
+        {"model": model, "run": run, "rms_none_um": none, "rms_um": [0.5, 0.6]}
+        for model, run, none in (("mlr", "a", 1.0), ("mlr", "b", 2.0), ("grouped1", "a", 3.0))
+    ]
+    probe_intervals.plot_intervals({"intervals_s": [900.0, 3600.0], "method": "offset hold", "rows": rows}, tmp_path)
+    ax = figures[0].axes[0]
+    assert [tick.get_text() for tick in ax.get_xticklabels()] == ["15 min", "1 h", "none"]
+    at_none = ax.get_xticks()[-1]
+    hollow = [line for line in ax.lines if line.get_markerfacecolor() == "none"]
+    assert sorted(float(line.get_ydata()[0]) for line in hollow) == [1.0, 2.0, 3.0]
+    assert all(float(line.get_xdata()[0]) == at_none for line in hollow)
+    by_run = {float(line.get_ydata()[0]): line.get_marker() for line in hollow}
+    assert by_run[1.0] == by_run[3.0] != by_run[2.0]  # one marker per run, whatever the model
