@@ -21,9 +21,13 @@ EXPECTED_RATIO = 10.0
 """… and this many times the model file's expected next-run RMS."""
 
 
-def zero_offset(residual: np.ndarray | None, expected_rms_um: float | None) -> tuple[dict, list[str]]:
+def zero_offset(
+    residual: np.ndarray | None, expected_rms_um: float | None, moved_reference: dict | None = None
+) -> tuple[dict, list[str]]:
     """``{"constant_offset_um": m}`` and a note when the replay's residual (without probe checks) is nearly a
-    constant far beyond what the model expected of a next run; nothing otherwise."""
+    constant far beyond what the model expected of a next run; nothing otherwise. ``moved_reference``: the
+    reference column's entry of ``beyond_modelling_range`` when the run left its span (another cause the note
+    names first: a day warmer or colder than the modelling day, under a model that takes its inputs against it)."""
     if residual is None or not isinstance(expected_rms_um, (int, float)) or not expected_rms_um > 0:
         return {}, []
     scored = residual[np.isfinite(residual)]
@@ -33,12 +37,22 @@ def zero_offset(residual: np.ndarray | None, expected_rms_um: float | None) -> t
     if not (abs(mean) > SPREAD_RATIO * spread and abs(mean) > EXPECTED_RATIO * expected_rms_um):
         return {}, []
     times = abs(mean) / expected_rms_um
-    note = (
-        f"the residual is nearly a constant {mean:.4g} µm (its spread {spread:.3g} µm), {times:.0f}× the expected "
-        "next-run RMS: this run's error seems measured from another zero than the modelling run's (a probe's "
-        "position after re-homing, a sensor re-mounted); read both runs' error from their first readings "
-        "(fit with --error 'COLUMN-start') and refit"
+    head = f"the residual is nearly a constant {mean:.4g} µm (its spread {spread:.3g} µm), {times:.0f}× the expected "
+    zero = (
+        "this run's error seems measured from another zero than the modelling run's (a probe's position after "
+        "re-homing, a sensor re-mounted); read both runs' error from their first readings (fit with --error "
+        "'COLUMN-start') and refit"
     )
+    note = head + "next-run RMS: " + zero
+    if moved_reference is not None:
+        name, (low, high), (first, last) = moved_reference["input"], moved_reference["span"], moved_reference["run"]
+        note = (
+            f"{head}next-run RMS, while the reference {name} the inputs are taken against reads "
+            f"{first:.4g}..{last:.4g} (modelled {low:.4g}..{high:.4g}): if the error follows the parts' own "
+            f"temperatures rather than their difference to {name}, a day at another {name} is off by about the "
+            "whole change; refit with "
+            f"--reference none (or on runs of several {name} levels). Else {zero}"
+        )
     return {"constant_offset_um": mean}, [note]
 
 

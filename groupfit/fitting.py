@@ -41,6 +41,9 @@ class FitResult:
     """The expectation that chose p among several candidates (least squares), when p was chosen by it; the
     model's own figures are in ``expectation`` (they differ when the chosen global model got a penalty)."""
 
+    no_estimate: str = ""
+    """Why the next-run error was not estimated, when it was not (``fit --json`` then carries its keys as null)."""
+
     @property
     def p_choice(self):
         """The expectation p was chosen by: ``choice``, else ``expectation``."""
@@ -61,7 +64,13 @@ class FitResult:
             result["held_out"] = self.held_out.to_json()
         if self.statistics is not None:
             result["statistics"] = self.statistics
-        if self.expectation is not None:
+        if self.expectation is None:
+            result.update(
+                expected_next_run_rms_um=None,
+                expected_next_run_range_um=None,
+                expected_next_run_method=f"not estimated: {self.no_estimate or 'no estimate was asked for'}",
+            )
+        else:
             result.update(self.expectation.training())
             if len(self.p_choice.candidates) > 1:
                 result["p_selection"] = {"rule": "next-run", **self.p_choice.to_json()}
@@ -127,7 +136,7 @@ def choice_summary(expectation) -> str:
     """How p was chosen by the expected next-run error, when it was chosen among several, or why there was
     only one (else nothing)."""
     candidates, not_tried = expectation.candidates, expectation.not_tried
-    untried = _untried(not_tried, expectation.scores.stride) if not_tried else ""
+    untried = expectation.untried()
     if len(candidates) < 2:
         return f"p       {candidates[0]}: {untried}\n" if untried else ""
     table = ", ".join(f"p={p}: {expectation.expected(i)[0]:.3g} µm" for i, p in enumerate(candidates))
@@ -139,18 +148,6 @@ def choice_summary(expectation) -> str:
             "raise --pmax to look further\n"
         )
     return line
-
-
-def _untried(not_tried, stride: int) -> str:
-    """Which p the estimate could not try (their groups do not fit before its first scored segment), and what
-    would let them be tried: on a run read one sample in ``stride``, a longer run is read as sparsely."""
-    listed = ", ".join(str(p) for p in not_tried)
-    said = f"p = {listed} not tried, their groups not fitting in the run before its first scored segment"
-    if stride > 1:
-        return (
-            f"{said} as the estimate reads it (one sample in {stride}); fewer inputs (--select) would let them be tried"
-        )
-    return f"{said}; a longer run or fewer inputs (--select) would let them be tried"
 
 
 def ridge_summary(ridge: RidgeSetting) -> str:
@@ -184,16 +181,18 @@ def held_out_summary(check: OverfitCheck, *, penalised: bool = False) -> str:
     return line
 
 
+def selection_rule(selection: dict) -> str:
+    """The in-sample rule ``--choose bic|target`` chose p by, in words."""
+    if selection["rule"] == "bic":
+        return "smallest BIC (in sample)"
+    return f"fewest breaks with R <= {selection['target_um']:.4g} µm"
+
+
 def selection_summary(selection: dict) -> str:
     table = ", ".join(
         f"p={p}: R {r:.4g} µm, BIC {b:.1f}" for p, (r, b) in enumerate(zip(selection["R_um"], selection["bic"]))
     )
-    rule = (
-        "smallest BIC (in sample)"
-        if selection["rule"] == "bic"
-        else f"fewest breaks with R <= {selection['target_um']:.4g} µm"
-    )
-    line = f"p auto  {rule}: p = {selection['p']}  ({table})"
+    line = f"p auto  {selection_rule(selection)}: p = {selection['p']}  ({table})"
     largest = len(selection["R_um"]) - 1
     if largest > 0 and selection["p"] == largest:
         line += (

@@ -109,6 +109,8 @@ def test_the_augmented_model_keeps_the_span_of_its_inputs_derived_ones_included(
     augmented = ModelFile.load(tmp_path / "d" / "model_augmented.json")
     assert augmented.derived_inputs  # an effect was added
     inputs = augmented.inputs(pd.read_csv(DATASETS / "paper_cycle.csv"), "paper_cycle")
-    span = augmented.training["input_span"]
+    span = dict(augmented.training["input_span"])
+    ambient = pd.read_csv(DATASETS / "paper_cycle.csv")[augmented.reference]  # the reference's own span besides
+    assert span.pop(augmented.reference) == pytest.approx([ambient.min(), ambient.max()])
     assert list(span) == list(augmented.temps)
     assert np.array(list(span.values())) == pytest.approx(np.column_stack([inputs.min(axis=0), inputs.max(axis=0)]))

@@ -203,7 +203,7 @@ def test_an_error_measured_on_every_tenth_row_keeps_the_operating_conditions():
     every_row = forward_chaining(tiny_run(12, segment=100), [0])
     probed = forward_chaining(measured_rows(run), [0])
     assert probed.segments == every_row.segments == "changes of speed_rpm"
-    assert probed.n_conditions == every_row.n_conditions == len(SPEEDS)
+    assert probed.n_conditions == every_row.n_conditions == len(set(SPEEDS))
     assert not any("one operating condition" in note for note in trust_notes(probed))
 
 
@@ -212,7 +212,14 @@ def test_too_few_conditions_are_noted():
     scores = forward_chaining(early, [0])
     assert scores.n_conditions == 2 and not scores.leaves_one_condition
     assert any("only 2 operating conditions" in note for note in trust_notes(scores))
-    assert trust_notes(forward_chaining(tiny_run(9), [0])) == ()  # six conditions
+    assert trust_notes(forward_chaining(tiny_run(9), [0])) == ()  # three conditions, six stretches
+
+
+def test_a_run_that_returns_to_its_two_conditions_is_noted():
+    alternating = tiny_run(10, speeds=(2000, 0, 2000, 0, 2000, 0), segment=30)  # six stretches of two conditions
+    scores = forward_chaining(alternating, [0])
+    assert scores.n_conditions == 2 and scores.n_folds >= 3
+    assert any("only 2 operating conditions" in note for note in trust_notes(scores))
 
 
 @pytest.mark.parametrize(
@@ -384,3 +391,13 @@ def test_the_edge_note_names_the_p_a_short_run_did_not_try():
     thinned = dataclasses.replace(edge, scores=dataclasses.replace(edge.scores, stride=5))
     assert "(one sample in 5); fewer inputs (--select) would let" in choice_summary(thinned)
     assert "longer run" not in choice_summary(thinned)
+
+
+def test_operating_columns_that_never_change_cut_the_run_as_blocks_of_time():
+    frame = tiny_frame(11, speeds=(1000,) * 6, segment=30)
+    constant = forward_chaining(load_run(frame, name="constant", temps=["T1", "T2"]), [0, 1])
+    without = forward_chaining(load_run(frame.drop(columns="speed_rpm"), name="plain", temps=["T1", "T2"]), [0, 1])
+    assert constant.blocks_of_time and constant.n_conditions == 1 and "speed_rpm never changing" in constant.segments
+    assert "blocks of time" in constant.method() and "changes of" not in constant.method()
+    np.testing.assert_allclose(constant.sse, without.sse, rtol=1e-12)
+    assert any("one operating condition" in note for note in trust_notes(constant))

@@ -39,17 +39,17 @@ CANDIDATE = "AR(1)"
 
 
 def heat_segments(heat: np.ndarray, heat_name: str) -> tuple[list[int], str, int, np.ndarray | None]:
-    """First sample of every segment of the run, how they were cut, how many stretches of one heat level the run
-    holds, and each sample's level as a code (1 stretch and no codes: the heat never changes, and the segments are
-    blocks of time)."""
+    """First sample of every segment of the run, how they were cut, how many distinct heat levels the run holds,
+    and each sample's level as a code (1 level and no codes: the heat never changes, and the segments are blocks
+    of time)."""
     frame = pd.DataFrame({heat_name: heat})
     labels = condition_segments(frame, [heat_name])
     starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
     levels = setting_values(frame, heat_name)
-    conditions = 1 + int(np.count_nonzero(np.diff(levels) != 0))
-    if conditions == 1:
+    distinct, codes = np.unique(levels, return_inverse=True)
+    if len(distinct) == 1:
         return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, None
-    return starts, f"changes of {heat_name}", conditions, np.unique(levels, return_inverse=True)[1]
+    return starts, f"changes of {heat_name}", len(distinct), codes
 
 
 def ar1_forward_chaining(

@@ -16,12 +16,12 @@ from groupfit.commands.recalibrate_option import recalibrated
 from groupfit.data import Run, join_runs, loading_notes, measured_rows
 from groupfit.errors import InputError
 from groupfit.fit_budget import segment_table_over
-from groupfit.fitting import FitResult
+from groupfit.fitting import FitResult, selection_rule
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
-from groupfit.heldout.span import SPAN_KEY, input_span
+from groupfit.heldout.span import SPAN_KEY, input_span, reference_span
 from groupfit.inference.cli import check_block, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
@@ -59,6 +59,8 @@ class FitData:
     input_selection: dict | None = None
     reference_choice: ReferenceChoice | None = None
     """How the default reference was decided (an ambient column that moves), None when it was configured."""
+    global_only: str = ""
+    """Why p was not chosen but set to 0 (the error is not measured on every row), else empty."""
 
 
 def run_fit(args: argparse.Namespace) -> int:
@@ -113,14 +115,10 @@ def run_fit(args: argparse.Namespace) -> int:
     finally:
         progress.close()
     model = estimator.to_model_file(run, model_settings.criterion)  # the valid ranges over every row
-    notes = ""
-    if position_run is None and (expectation is None or alpha > 0):
-        try:
-            with running.stage("next-run estimate", enabled=not args.quiet):
-                expectation = model_expectation(model_settings, data.estimate_runs, (model_settings.p,), alpha)
-        except InputError as exc:
-            notes += f"\nnote    no next-run estimate: {exc}"
-    training = {**model.training, SPAN_KEY: input_span(run.temp_names, run.temps)}
+    expectation, no_estimate = fitted_model_expectation(args, replace(data, settings=settings), expectation, alpha)
+    notes = f"\nnote    no next-run estimate: {no_estimate}" if no_estimate else ""
+    span = {**input_span(run.temp_names, run.temps), **reference_span([run.frame], run.reference, run.temp_names)}
+    training = {**model.training, SPAN_KEY: span}
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
     if run.notes:
@@ -129,14 +127,16 @@ def run_fit(args: argparse.Namespace) -> int:
     if alpha > 0 and p_expectation is not None and (len(p_expectation.candidates) > 1 or p_expectation.not_tried):
         choice = p_expectation
     if expectation is not None:
-        training.update(expectation.model_training(model_settings.p, choice))
+        rule = None if selection is None else selection_rule(selection)
+        training.update(expectation.model_training(model_settings.p, choice, rule))
     if data.reference_choice is not None:
         training["reference_choice"] = data.reference_choice.to_json()
         if data.reference_choice.scored:
             notes += "\n" + data.reference_choice.line()
     model = model.replace(training=training)
     if position_run is not None:
-        model, notes = position_model(args, model, position_run)
+        model, position_notes = position_model(args, model, position_run)
+        notes = position_notes + notes
     if fit_run is not run:
         notes += (
             f"\nnote    the error is measured on {fit_run.n_samples} of {run.n_samples} rows: the model is fitted "
@@ -171,6 +171,7 @@ def run_fit(args: argparse.Namespace) -> int:
         held_out,
         expectation=expectation,
         choice=choice,
+        no_estimate=no_estimate,
     )
     if estimator.p == 0 and alpha == 0 and position_run is None:
         with running.stage("statistics", enabled=not args.quiet):
@@ -250,8 +251,14 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
         run = join_runs(runs)
     else:
         run = with_reference(run, reference)
+    global_only = ""
     if settings.model.p == "auto" and np.isnan(run.error).any():
         settings = with_p(settings, 0)  # an error not on every row: a global model on the measured rows
+        global_only = (
+            f"the error is measured on {int(np.isfinite(run.error).sum())} of {run.n_samples} rows, and a grouped "
+            "model's breaks are row indices that need it on every row; fill or drop the rows without it to let "
+            "p >= 1 be tried"
+        )
     check_measured(run, settings.model.p)
     check_block(args, run.n_samples)
     if position_run is not None:
@@ -262,7 +269,7 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
             raise InputError("--ridge is not available with --position: the position terms are fitted by least squares")
     estimate = recordings(settings, runs, run) if position_run is None else []
     estimate_runs = [measured_rows(with_reference(r, reference)) for r in estimate]
-    return FitData(settings, runs, run, position_run, estimate_runs, reference_choice=choice)
+    return FitData(settings, runs, run, position_run, estimate_runs, reference_choice=choice, global_only=global_only)
 
 
 def chosen_inputs(args: argparse.Namespace, data: FitData) -> FitData:
@@ -361,8 +368,45 @@ def model_expectation(model: ModelSettings, runs: list[Run], p_values, ridge_alp
             runs, p_values, n=model.n, c=float(model.c), fit_intercept=model.intercept, ridge_alpha=ridge_alpha
         )
     except ValueError as exc:
-        raise InputError(f"{runs[0].source}: the next-run estimate: {exc}; give --p or record a longer run") from None
+        remedy = "give --p or record a longer run" if len(p_values) > 1 else "a smaller --p or a longer run gives one"
+        raise InputError(f"{runs[0].source}: the next-run estimate: {exc}; {remedy}") from None
     return result
+
+
+def fitted_model_expectation(
+    args: argparse.Namespace, data: FitData, expectation: NextRunExpectation | None, alpha: float
+) -> tuple[NextRunExpectation | None, str]:
+    """The fitted model's next-run expectation (``expectation`` when it is the chosen candidate's and no penalty
+    changed it), and why there is none, when there is none."""
+    model = data.settings.model
+    if data.position_run is not None:
+        return None, position_choices(args, data.settings, data.run)
+    if expectation is None or alpha > 0:
+        try:
+            with running.stage("next-run estimate", enabled=not args.quiet):
+                expectation = model_expectation(model, data.estimate_runs, (model.p,), alpha)
+        except InputError as exc:
+            return None, str(exc)
+    if data.global_only and model.pmax > 0:
+        untried = tuple(range(1, model.pmax + 1))
+        expectation = replace(expectation, not_tried=untried, not_tried_reason=data.global_only)
+    return expectation, ""
+
+
+def position_choices(args: argparse.Namespace, settings: RunSettings, run: Run) -> str:
+    """What a position model's fit leaves to its defaults instead of the next-run estimate, in words."""
+    defaults = []
+    if args.p in (None, "auto"):
+        defaults.append("p = 0 (--p N searches breaks on the check runs)")
+    if reference_options.reference_is_default(args, settings):
+        defaults.append(f"the reference {run.reference or 'none'} (--reference none|start|COLUMN sets another)")
+    told = ""
+    if defaults:
+        told = f"; {' and '.join(defaults)} {'are the defaults' if len(defaults) > 1 else 'is the default'}, not chosen"
+    return (
+        "a position model's check runs are not cut into the operating segments the estimate replays"
+        f"{told}; replay the model on another run of check runs (groupfit replay MODEL --data RUN) to measure it"
+    )
 
 
 def with_inputs(run: Run, names) -> Run:

@@ -219,7 +219,8 @@ def run_replay(args: argparse.Namespace) -> int:
     span = range_check(model, run, replay)
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residual)
-    offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"))
+    moved = next((b for b in span.get("beyond_modelling_range", []) if b.get("reference")), None)
+    offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"), moved)
     register, register_notes = register_check(counts, residual, replay)
     out_of_range, fault_notes = fault_readings(rule.tables, run.temps, replay.fault)
     notes = span.get("notes", []) + fault_notes + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
@@ -259,8 +260,13 @@ def range_check(model: ModelFile, run: Run, replay: Replay) -> dict[str, Any]:
         inputs = np.array(model.inputs(run.frame, run.source), dtype=float)
     except InputError:
         return {}
-    inputs[(replay.fault & (FAULT_SENSOR | FAULT_HELD)) != 0] = np.nan
+    not_the_machine = (replay.fault & (FAULT_SENSOR | FAULT_HELD)) != 0
+    inputs[not_the_machine] = np.nan
     beyond = beyond_span(span, model.temps, inputs)
+    reference = model.reference
+    if reference in span and reference not in model.temps and reference in run.frame.columns:
+        readings = np.where(not_the_machine, np.nan, run.frame[reference].to_numpy(dtype=float))
+        beyond += [{**b, "reference": True} for b in beyond_span(span, [reference], readings[:, None])]
     note = span_note(beyond, run.n_samples)
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 

@@ -39,7 +39,10 @@ class NextRunExpectation:
     """Index into ``scores.candidates``."""
     notes: tuple[str, ...]
     not_tried: tuple = ()
-    """The p asked for that were not tried: their groups do not fit in the run before its first scored segment."""
+    """The p asked for that were not tried: their groups do not fit in the run before its first scored segment,
+    or ``not_tried_reason``."""
+    not_tried_reason: str = ""
+    """Why ``not_tried`` were not tried, when it is not their groups' length (the run rules them out)."""
 
     @property
     def candidates(self) -> tuple:
@@ -86,13 +89,16 @@ class NextRunExpectation:
             "expected_next_run_method": self.method(),
         }
 
-    def model_training(self, p: int, choice: NextRunExpectation | None = None) -> dict[str, Any]:
+    def model_training(
+        self, p: int, choice: NextRunExpectation | None = None, rule: str | None = None
+    ) -> dict[str, Any]:
         """The model file's ``training`` keys: this expectation's figures, and how p was chosen (by ``choice``, the
-        least-squares candidates' expectation, when it is not this one: a chosen global model got a penalty)."""
+        least-squares candidates' expectation, when it is not this one: a chosen global model got a penalty; by
+        ``rule``, in words, when an in-sample rule chose it)."""
         choice = self if choice is None else choice
         data = choice.to_json()
         several = len(choice.candidates) > 1
-        only = "the only p the run allows" if choice.not_tried else "given"
+        only = rule or ("the only p the run allows" if choice.not_tried else "given")
         return {
             **self.training(),
             "model_choice": {
@@ -101,8 +107,26 @@ class NextRunExpectation:
                 "candidates": data["candidates"],
                 "notes": data["notes"],
                 **({"not_tried": list(choice.not_tried)} if choice.not_tried else {}),
+                **({"not_tried_reason": choice.not_tried_reason} if choice.not_tried_reason else {}),
             },
         }
+
+    def untried(self) -> str:
+        """Which p the estimate could not try (their groups do not fit before its first scored segment, or
+        ``not_tried_reason``) and what would let them be tried, in words; empty when every p was tried. On a run
+        read one sample in k, a longer run is read as sparsely: fewer inputs are the remedy."""
+        if not self.not_tried:
+            return ""
+        listed = ", ".join(str(p) for p in self.not_tried)
+        if self.not_tried_reason:
+            return f"p = {listed} not tried: {self.not_tried_reason}"
+        said = f"p = {listed} not tried, their groups not fitting in the run before its first scored segment"
+        if self.scores.stride > 1:
+            return (
+                f"{said} as the estimate reads it (one sample in {self.scores.stride}); fewer inputs (--select) "
+                "would let them be tried"
+            )
+        return f"{said}; a longer run or fewer inputs (--select) would let them be tried"
 
     def to_json(self, label: str = "p") -> dict[str, Any]:
         raw = self.scores.raw_rms()
@@ -124,6 +148,7 @@ class NextRunExpectation:
             "chosen": {label: self.candidates[self.chosen], "rule": CHOICE_RULE},
             "candidates": table,
             "notes": list(self.notes),
+            **({"not_tried": list(self.not_tried), "not_tried_why": self.untried()} if self.not_tried else {}),
         }
 
     def candidate_lines(self, run_name: str, marked=None) -> list[str]:
@@ -137,7 +162,8 @@ class NextRunExpectation:
             f"expected next-run RMS µm from {run_name} alone (range ×{low / value:.2g}-{high / value:.2g}; "
             f"{self.scores.method()}): "
         )
-        return [head + ", ".join(cells), *(f"note: {note}" for note in self.notes)]
+        untried = [f"note: {self.untried()}"] if self.not_tried else []
+        return [head + ", ".join(cells), *untried, *(f"note: {note}" for note in self.notes)]
 
     def line(self) -> str:
         """``expect about X µm RMS on the next run (range a–b; how it was estimated)`` and the notes."""

@@ -75,7 +75,7 @@ class NextRunScores:
     n_samples: int = 0
     """Samples of the (thinned) run the folds were cut from."""
     n_conditions: int = 0
-    """Stretches of one operating condition in the run (1 with no operating column; 0: not counted)."""
+    """Distinct operating conditions in the run (1 with no operating column; 0: not counted)."""
     blocks_of_time: bool = False
     """The scored folds are equal blocks of time, not operating segments."""
     leaves_one_condition: bool = False
@@ -132,10 +132,10 @@ def sliced(run: Run, rows: np.ndarray, *, period: float | None = None) -> Run:
 
 
 def segment_starts(run: Run) -> tuple[list[int], str, int, bool, np.ndarray | None]:
-    """First sample of every operating segment of ``run`` (0-based), how they were found, how many
-    stretches of one operating condition the run holds (a long one is cut into several segments), whether
-    the segments are equal blocks of time (the run has no operating column), and each sample's condition
-    (one code per combination of the operating columns' levels; None for blocks of time)."""
+    """First sample of every operating segment of ``run`` (0-based), how they were found, how many distinct
+    operating conditions the run holds (a condition the run returns to counts once), whether the segments are
+    equal blocks of time (the run has no operating column), and each sample's condition (one code per
+    combination of the operating columns' levels; None for blocks of time)."""
     exclude = {run.time_name, run.error_name, *run.temp_names}
     if run.reference not in (None, "start"):
         exclude.add(run.reference)
@@ -144,9 +144,11 @@ def segment_starts(run: Run) -> tuple[list[int], str, int, bool, np.ndarray | No
     starts = [0, *(np.flatnonzero(np.diff(labels) != 0) + 1).tolist()]
     if folds.kind == "condition":
         values = np.column_stack([setting_values(run.frame, c) for c in folds.columns])
-        conditions = 1 + int(np.count_nonzero(np.any(np.diff(values, axis=0) != 0, axis=1)))
-        codes = np.unique(values, axis=0, return_inverse=True)[1].reshape(-1)
-        return starts, f"changes of {', '.join(folds.columns)}", conditions, False, codes
+        distinct, codes = np.unique(values, axis=0, return_inverse=True)
+        if len(distinct) == 1:  # cut into pieces of time, as a run without the columns is
+            constant = f"the run cut into {len(starts)} blocks, {', '.join(folds.columns)} never changing"
+            return starts, constant, 1, True, None
+        return starts, f"changes of {', '.join(folds.columns)}", len(distinct), False, codes.reshape(-1)
     return starts, f"the run cut into {len(starts)} equal blocks, {NO_OPERATING_COLUMN}", 1, True, None
 
 

@@ -22,6 +22,17 @@ def input_span(names: Sequence[str], inputs: np.ndarray) -> dict[str, list[float
     }
 
 
+def reference_span(frames: Sequence, reference: str | None, inputs: Sequence[str]) -> dict[str, list[float]]:
+    """The span over ``frames`` (the modelling runs' tables) of the reference column the inputs are taken
+    against (``T_amb`` of "minus T_amb"), by its own name: a run on a day warmer or colder than the modelling
+    day leaves it while the referenced inputs may not. Empty for no reference, the start, or a reference that
+    is also an input."""
+    if reference in (None, "start") or reference in inputs:
+        return {}
+    values = [np.asarray(frame[reference], dtype=float) for frame in frames if reference in frame.columns]
+    return input_span([reference], np.concatenate(values)[:, None]) if values else {}
+
+
 def beyond_span(span: Mapping[str, Sequence[float]], names: Sequence[str], inputs: np.ndarray) -> list[dict[str, Any]]:
     """The inputs of a run that leave the modelling span: name, span, the run's range, samples outside."""
     inputs = np.asarray(inputs, dtype=float)
@@ -60,4 +71,4 @@ def span_note(beyond: list[dict[str, Any]], n_samples: int) -> str | None:
     )
 
 
-__all__ = ["SPAN_KEY", "beyond_span", "input_span", "span_note"]
+__all__ = ["SPAN_KEY", "beyond_span", "input_span", "reference_span", "span_note"]
