@@ -15,6 +15,7 @@ from groupfit.commands import ar1 as ar1_commands
 from groupfit.commands import common
 from groupfit.commands.replay_expectation import expectation_check, expectation_line
 from groupfit.commands.replay_faults import fault_readings
+from groupfit.commands.replay_positions import is_check_run_table, replay_check_runs
 from groupfit.commands.replay_probes import (
     add_probe_options,
     probe_columns,
@@ -159,6 +160,9 @@ def run_replay(args: argparse.Namespace) -> int:
     counts = integer_form(args)
     tables = RuleTables.from_model(model)
     error = args.error or model.error or "error_um"
+    clock = common.clock_options(args)
+    if is_check_run_table(args.data, tables, args.time or time_column(model), clock.get("encoding")):
+        return replay_check_runs(args, model, time=args.time or time_column(model), error=error, clock=clock)
     options = dict(time=args.time or time_column(model), time_is_default=args.time is None, error=error)
     options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
     options.update(sparse=probe_columns(args.probe_column))

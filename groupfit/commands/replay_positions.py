@@ -1,0 +1,195 @@
+"""``groupfit replay`` of a position model on a table of check runs: every row scored at its own position.
+
+A long table (several rows per time stamp, one per position) or a wide one
+(``err_P<mm>`` columns) is what ``fit --position`` reads (docs/position.md).
+Averaging a check run's rows, as a log read in bursts is averaged, would
+average its positions and drop every position term. Here the check runs are
+the rule's samples, as in the fit, and the rule is replayed once per measured
+position, as if the axis stood there through the run; every row is scored
+against the replay at its own position and check run. Without breaks, lags
+or a dead band this is the fit's own in-sample evaluation.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from groupfit.commands import common
+from groupfit.commands.replay_readings import load_readings
+from groupfit.data import ERROR_LIMIT_UM, PERIOD_TOLERANCE
+from groupfit.errors import InputError
+from groupfit.metrics import error_metrics
+from groupfit.model import ModelFile
+from groupfit.position import PositionRun, load_position_run, wide_columns
+from groupfit.readtable import read_table
+from groupfit.runtime import FAULT_SENSOR, Replay, RuleTables, SwitchingRule
+from groupfit.runtime.period import period_differs
+
+STREAM_ONLY_OPTIONS = {
+    "continues": "--continues",
+    "fresh": "--fresh",
+    "probe_every": "--probe-every",
+    "probe_first": "--probe-first",
+    "probe_column": "--probe-column",
+    "resolution_um": "--resolution-um",
+    "out": "--out",
+}
+"""Options of a replay over a stream of samples, which a table of check runs scored row by row does not take."""
+
+
+def is_check_run_table(path, tables: RuleTables, time: str, encoding: str | None = None) -> bool:
+    """Whether ``path`` is a position model's table of check runs: a long table (its position column, and rows
+    that share a time stamp) or a wide one (``err_P<mm>`` columns and no position column)."""
+    if not tables.has_position:
+        return False
+    frame, _, label = read_table(path, encoding=encoding)
+    if tables.position_name not in frame.columns:
+        return bool(wide_columns(frame, label))
+    return time in frame.columns and bool(frame[time].dropna().duplicated().any())
+
+
+def refuse_stream_options(args: argparse.Namespace) -> None:
+    """Refuse an option that a replay over a stream carries out and a table of check runs would leave undone."""
+    for name, option in STREAM_ONLY_OPTIONS.items():
+        if getattr(args, name, None) not in (None, False):
+            raise InputError(
+                f"{option}: {args.data} is a table of check runs at several positions, scored row by row without "
+                "it; give a stream of the axis' readings (one row per sample) to replay it with this option, or "
+                "leave it out"
+            )
+
+
+def load_check_runs(args: argparse.Namespace, tables: RuleTables, *, time: str, error: str, clock: dict):
+    """The table's check runs and rows (:func:`groupfit.position.load_position_run`) and the rule's readings of
+    every check run (the position reading still to be set)."""
+    error_limit = common.range_options(args)["error_limit"]
+    prun = load_position_run(
+        args.data,
+        tables.position_name,
+        temps=list(tables.raw_names[: tables.n_measured]),
+        time=time,
+        error=error,
+        temp_range=None,
+        error_limit=ERROR_LIMIT_UM if error_limit is None else error_limit,
+        period_tolerance=clock.get("period_tolerance", PERIOD_TOLERANCE),
+        resample=clock.get("resample"),
+    )
+    frame = prun.run.frame.assign(**{tables.position_name: 0.0})  # set per position below
+    run = load_readings(frame, tables, time=time, error=error, name=prun.run.source, error_limit=np.inf)
+    return prun, run.temps
+
+
+def replay_at_positions(
+    model: ModelFile, prun: PositionRun, readings: np.ndarray, *, precision: str, reading: int
+) -> tuple[Replay, dict[str, np.ndarray]]:
+    """The rule over the check runs with the axis at each measured position in turn: the replay at the first
+    position (its groups and switches; the position changes neither) and, for every row, the target, the
+    fault and the clamp of the replay at its own position and check run."""
+    positions = prun.positions
+    rows = {"target_um": np.empty(prun.error.size), "fault": np.empty(prun.error.size, dtype=int)}
+    rows["clamped"] = np.zeros(prun.error.size, dtype=bool)
+    rows["prediction_um"] = np.empty(prun.error.size)
+    first = None
+    for position in positions:
+        at = readings.copy()
+        at[:, reading] = position
+        replay = SwitchingRule(model, precision=precision, period_s=prun.run.period).replay(at)
+        first = replay if first is None else first
+        here = prun.position == position
+        checks = prun.check[here]
+        for name in rows:
+            rows[name][here] = getattr(replay, name)[checks]
+    return first, rows
+
+
+def replay_check_runs(args: argparse.Namespace, model: ModelFile, *, time: str, error: str, clock: dict) -> int:
+    """``groupfit replay`` of a position model on a table of check runs (module docstring)."""
+    refuse_stream_options(args)
+    tables = RuleTables.from_model(model)
+    prun, readings = load_check_runs(args, tables, time=time, error=error, clock=clock)
+    try:
+        replay, rows = replay_at_positions(
+            model, prun, readings, precision=args.precision, reading=tables.position_reading
+        )
+    except InputError as exc:
+        raise InputError(f"{prun.run.source}: {exc}") from None
+    residual = prun.error + rows["target_um"]
+    residual[(rows["fault"] & FAULT_SENSOR) != 0] = np.nan
+    result = check_run_result(args, model, prun, replay, rows, residual)
+    common.finish_outputs(args, check_run_report(result), result, [])
+    return 0
+
+
+def check_run_result(args, model: ModelFile, prun: PositionRun, replay: Replay, rows, residual) -> dict[str, Any]:
+    """The ``--json`` object of a table of check runs: one entry per row, the residual over the rows."""
+    scored = residual[np.isfinite(residual)]
+    metrics = error_metrics(scored) if scored.size else {"rms_um": None, "max_um": None, "R_um": None}
+    run = prun.run
+    notes = [
+        f"{args.data} holds {prun.positions.size} positions per check run: every row is scored at its own position "
+        "(the rule replayed over the check runs once per position, as if the axis stood there), not averaged "
+        "into one sample",
+        *run.notes,
+    ]
+    clamped = int(np.sum(rows["clamped"]))
+    if clamped:
+        notes.append(f"the model's clamp held the compensation short of its prediction on {clamped} row(s)")
+    samples = [
+        {
+            "i": k + 1,
+            "check_run": int(prun.check[k]) + 1,
+            "time_s": float(run.time[prun.check[k]]),
+            "position_mm": float(prun.position[k]),
+            "group": int(replay.group[prun.check[k]]),
+            "prediction_um": float(rows["prediction_um"][k]),
+            "target_um": float(rows["target_um"][k]),
+            "fault": int(rows["fault"][k]),
+            "residual_um": None if np.isnan(residual[k]) else float(residual[k]),
+        }
+        for k in range(prun.error.size)
+    ]
+    return {
+        "model": str(args.model),
+        "run": run.source,
+        "n_samples": run.n_samples,
+        "check_runs": run.n_samples,
+        "rows": int(prun.error.size),
+        "positions_mm": [float(p) for p in prun.positions],
+        "sampling_period_s": run.period,
+        "model_period_s": float(model.sampling_period_s),
+        "rescaled": period_differs(model, run.period),
+        "samples": samples,
+        **{key: metrics[key] for key in ("rms_um", "max_um", "R_um")},
+        "scored_samples": int(scored.size),
+        "measured_samples": int(prun.error.size),
+        "switches": replay.switch_samples(),
+        "clamped_samples": clamped,
+        "faults": {"sensor_fault_rows": int(np.sum((rows["fault"] & FAULT_SENSOR) != 0))},
+        "notes": notes,
+    }
+
+
+def check_run_report(result: dict[str, Any]) -> str:
+    """The printed summary of a table of check runs replayed row by row."""
+    switches = ", ".join(f"{s['from']}->{s['to']} at check run {s['i']}" for s in result["switches"]) or "none"
+    lines = [
+        f"run      {result['run']}: {result['check_runs']} check runs every {result['sampling_period_s']:g} s at "
+        f"{len(result['positions_mm'])} positions ({result['rows']} rows)",
+        f"switches {switches}",
+        f"faults   {result['faults']['sensor_fault_rows']} row(s) in sensor fault (safe output)",
+    ]
+    if result["rms_um"] is None:
+        lines.append("residual none: no row scored (every row in sensor fault: the rule's safe output)")
+    else:
+        lines.append(
+            f"residual RMS {result['rms_um']:.4g} µm, max |e| {result['max_um']:.4g} µm over "
+            f"{result['scored_samples']} row(s)"
+        )
+    lines += [f"note     {note}" for note in result["notes"]]
+    return "\n".join(lines)
+
+
+__all__ = ["is_check_run_table", "replay_check_runs"]

@@ -1,0 +1,70 @@
+"""A position model replayed and diagnosed on its table of check runs (several rows per time stamp)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from groupfit.cli import main
+
+POSITIONS = np.arange(0.0, 301.0, 50.0)
+
+
+def check_run_table(seed: int = 0, n: int = 40) -> pd.DataFrame:
+    """Check runs every 2 min at 7 positions in a shuffled order: an offset, a slope and a curvature that grow
+    with T1 and T2."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 120.0
+    t1 = 20 + 5 * (1 - np.exp(-t / 3000))
+    t2 = 20 + 3 * (1 - np.exp(-t / 1500)) + np.sin(t / 2000)
+    rows = []
+    for i in range(n):
+        for p in rng.permutation(POSITIONS):
+            d = p - 150
+            r1, r2 = t1[i] - 20, t2[i] - 20
+            error = 2 * r1 + r2 + (0.01 * r1 + 0.005 * r2) * d + 2e-5 * r1 * d * d + 0.1 * rng.standard_normal()
+            rows.append((t[i], p, t1[i], t2[i], 20.0, error))
+    return pd.DataFrame(rows, columns=["time_s", "P_mm", "T1", "T2", "T_amb", "error_um"])
+
+
+@pytest.fixture(scope="module")
+def position_model(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("position_replay")
+    table = check_run_table()
+    table.to_csv(folder / "axis.csv", index=False)
+    stream = table.assign(time_s=np.arange(len(table)) * 10.0)  # the same rows, one per sample
+    stream.to_csv(folder / "stream.csv", index=False)
+    fit = ["fit", "--data", str(folder / "axis.csv"), "--temps", "T1,T2", "--position", "P_mm"]
+    fit += ["--position-order", "2", "--p", "0", "--out", str(folder / "m"), "--quiet"]
+    assert main(fit) == 0
+    return folder
+
+
+def test_replay_scores_every_row_of_a_check_run_table_at_its_own_position(position_model, capsys):
+    folder = position_model
+    model = str(folder / "m" / "model.json")
+    assert main(["replay", model, "--data", str(folder / "axis.csv"), "--json", str(folder / "table.json")]) == 0
+    assert main(["replay", model, "--data", str(folder / "stream.csv"), "--json", str(folder / "stream.json")]) == 0
+    table = json.loads((folder / "table.json").read_text())
+    stream = json.loads((folder / "stream.json").read_text())
+    assert table["rows"] == stream["n_samples"] == 7 * 40
+    assert table["rms_um"] == pytest.approx(stream["rms_um"], rel=1e-12)
+    assert table["max_um"] == pytest.approx(stream["max_um"], rel=1e-12)
+    by_row = [s["residual_um"] for s in table["samples"]]
+    assert by_row == pytest.approx([s["residual_um"] for s in stream["samples"]], rel=1e-9, abs=1e-12)
+    training = json.loads((folder / "m" / "model.json").read_text())["training"]
+    assert table["rms_um"] == pytest.approx(training["position_rms_um"], rel=1e-9)
+    printed = capsys.readouterr().out
+    assert "every row is scored at its own position" in printed
+    assert "bursts" not in printed
+
+
+def test_replay_of_a_check_run_table_refuses_what_only_a_stream_takes(position_model, capsys):
+    folder = position_model
+    args = ["replay", str(folder / "m" / "model.json"), "--data", str(folder / "axis.csv"), "--probe-every", "600"]
+    assert main(args) == 2
+    line = capsys.readouterr().err.strip()
+    assert "--probe-every" in line and "axis.csv" in line and "\n" not in line
