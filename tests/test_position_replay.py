@@ -68,3 +68,13 @@ def test_replay_of_a_check_run_table_refuses_what_only_a_stream_takes(position_m
     assert main(args) == 2
     line = capsys.readouterr().err.strip()
     assert "--probe-every" in line and "axis.csv" in line and "\n" not in line
+
+
+def test_diagnose_refuses_a_position_model_in_one_line_writing_nothing(position_model, capsys):
+    folder = position_model
+    out, report = folder / "dg", folder / "dg.json"
+    args = ["diagnose", str(folder / "m" / "model.json"), "--data", str(folder / "axis.csv")]
+    assert main([*args, "--out", str(out), "--json", str(report)]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "position model" in line and "P_mm" in line and "\n" not in line
+    assert not out.exists() and not report.exists()

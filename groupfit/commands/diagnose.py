@@ -225,6 +225,12 @@ def run_diagnose(args: argparse.Namespace) -> int:
         files=("model_augmented.json", "model_recalibrated.json", "diagnose.png"),
     )
     given = ModelFile.load(args.model)
+    if given.position is not None:
+        raise InputError(
+            f"{args.model}: a position model (column '{given.position.column}'); diagnose searches position-free "
+            "models and would drop its position terms: score it with replay on its table of check runs, and refit "
+            "it with fit --position"
+        )
     model = without_stage(given).to_dict()  # effects are sought on the model itself
     stage_note = (
         "\nnote    the model's fast-response stage is set aside: before and after are the models without it "
