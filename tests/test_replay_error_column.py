@@ -44,3 +44,12 @@ def test_several_candidates_are_named_and_none_is_guessed(tmp_path, model, capsy
     assert "2 could be the error (Drift [um], dZ_um); --error names one" in capsys.readouterr().out
     chosen = replayed(tmp_path, model, frame, "--error", "dZ_um")
     assert chosen["rms_um"] is not None and all(s["residual_um"] is not None for s in chosen["samples"])
+
+
+def test_an_error_column_asked_for_and_not_in_the_run_is_refused_naming_it(tmp_path, model, capsys):
+    pd.read_csv(DATASETS / "repeat_warm.csv").to_csv(tmp_path / "next.csv", index=False)
+    args = ["replay", str(model), "--data", str(tmp_path / "next.csv"), "--error", "nosuchcolumn"]
+    assert main([*args, "--json", str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--error 'nosuchcolumn': no such column" in err[0] and "error_um" in err[0]
+    assert not (tmp_path / "r.json").exists()

@@ -139,6 +139,28 @@ def test_replay_leaves_an_overflowed_error_out_of_the_score_and_honours_range_te
     assert main([*hot, "--range-temp=-50,900"]) == 0
 
 
+def test_replay_reads_the_error_and_time_columns_it_is_given(model_path, tmp_path, capsys):
+    """--error and --time name the columns as for a grouped model: a renamed error column in mm by its name, read
+    ×1000, scores as error_um does; a column asked for and not in the run is refused naming it."""
+    frame = pd.read_csv(DATA / "screw_A.csv")
+    renamed = frame.assign(error_mm=frame["error_um"] / 1000.0, clock=frame["time_s"]).drop(
+        columns=["error_um", "time_s"]
+    )
+    renamed.to_csv(tmp_path / "renamed.csv", index=False)
+    base = ["replay", str(model_path), "--source", "screw_A", "--json", "-"]
+    assert main([*base, "--data", str(DATA / "screw_A.csv")]) == 0
+    reference = json.loads(capsys.readouterr().out)
+    assert main([*base, "--data", str(tmp_path / "renamed.csv"), "--error", "error_mm", "--time", "clock"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["rms_um"] == pytest.approx(reference["rms_um"], rel=1e-12)
+    assert main([*base, "--data", str(DATA / "screw_A.csv"), "--error", "error_um*2"]) == 2
+    assert "--error 'error_um*2'" in capsys.readouterr().err
+    for option, column in (("--error", "nosuchcolumn"), ("--time", "nosuchcolumn")):
+        assert main([*base, "--data", str(DATA / "screw_A.csv"), option, column]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "'nosuchcolumn'" in err[0] and "error_um" in err[0]
+
+
 @pytest.mark.parametrize(
     "args, message",
     [

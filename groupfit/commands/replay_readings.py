@@ -42,13 +42,19 @@ def load_readings(
     The measured inputs load as ``groupfit fit`` loads temperatures; the
     source columns of derived inputs (an ambient temperature, a speed, an
     on/off signal) load as they are, non-finite values kept (the rule treats
-    them as faults), and a missing one is named with the inputs it feeds.
+    them as faults), and a missing one is named with the inputs it feeds. An error column asked for
+    (``error_is_default=False`` in ``clock``) and not in the run is refused.
     """
     measured = list(tables.raw_names[: tables.n_measured])
     run = without_implausible_errors(
         load_run(path, temps=measured, time=time, error=error, require_error=False, allow_nonfinite=True, **clock),
         error_limit,
     )
+    if run.error is None and clock.get("error_is_default") is False:
+        raise InputError(
+            f"{run.source}: --error '{error}': no such column; name the thermal-error column. The columns are: "
+            + ", ".join(map(str, run.frame.columns))
+        )
     if not tables.source_names:
         return run
     columns = []

@@ -29,7 +29,8 @@ def run_screw_replay(args: argparse.Namespace) -> int:
         raise InputError(f"--precision {args.precision}: the ball-screw law is deployed in double precision only")
     out_dir = common.plan_outputs(args, args.model, args.data, folder=args.out, files=("replay.png",))
     law = screw_law(args)
-    run = load_screw_run(args.data, **common.clock_options(args), **common.range_options(args), scored_only=True)
+    columns = {"time": args.time, "error": args.error, "scored_only": True}
+    run = load_screw_run(args.data, **common.clock_options(args), **common.range_options(args), **columns)
     common.print_notes([run.run], common.report_stream(args))
     if run.probe_x is None:
         raise InputError(

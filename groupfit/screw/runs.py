@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from groupfit.data import (
+    DEFAULT_ERROR,
+    DEFAULT_TIME,
     ERROR_LIMIT_UM,
     PERIOD_TOLERANCE,
     TEMP_RANGE_C,
@@ -93,6 +95,8 @@ def load_screw_run(
     temp_range: tuple[float, float] = TEMP_RANGE_C,
     error_limit: float = ERROR_LIMIT_UM,
     scored_only: bool = False,
+    time: str | None = None,
+    error: str | None = None,
 ) -> ScrewRun:
     """Load and check a screw run.
 
@@ -110,6 +114,10 @@ def load_screw_run(
         The plausible readings (°C; |µm|): one outside is refused.
     scored_only : bool
         Take an error beyond ``error_limit`` as not measured (a replay's score), with a note, instead.
+    time, error : str, optional
+        The time (s) and thermal-error columns asked for (``--time``, ``--error COLUMN`` or ``COLUMN*K``; an
+        error in µm, or mm, nm by its name); by default ``time_s`` and ``error_um``. An error column asked for
+        and not in the run is refused.
 
     Raises
     ------
@@ -130,6 +138,8 @@ def load_screw_run(
     run = load_run(
         frame,
         temps=order,
+        time=time or DEFAULT_TIME,
+        error=error or DEFAULT_ERROR,
         require_error=require_error,
         name=run_name,
         period_tolerance=period_tolerance,
@@ -137,6 +147,11 @@ def load_screw_run(
         temp_range=temp_range,
         error_limit=None if scored_only else error_limit,
     )
+    if error is not None and run.error is None:
+        raise InputError(
+            f"{label}: --error '{error}': no such column; name the thermal-error column. The columns are: "
+            + ", ".join(map(str, frame.columns))
+        )
     if scored_only:
         run = without_implausible_errors(run, error_limit)
     stray = [str(c) for c in frame.columns if c not in positions and LOOSE_SENSOR_NAME.match(str(c))]
