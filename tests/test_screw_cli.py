@@ -216,7 +216,7 @@ def test_predict_on_a_run_without_the_probe_says_so_instead_of_a_nan(model_file,
     run.to_csv(tmp_path / "no_probe.csv", index=False)
     status, out, err = run_cli(["screw", "predict", str(model_file), "--data", str(tmp_path / "no_probe.csv")], capsys)
     assert status == 0, err
-    assert "no error at the probe (the run has no 'probe_x_m' column)" in out and "nan" not in out
+    assert "no error at the probe (the run has no 'probe_x_m' column" in out and "nan" not in out
 
 
 def test_the_plausible_ranges_are_the_screw_verbs_options(model_file, tmp_path, capsys):
@@ -253,3 +253,23 @@ def test_a_field_position_off_the_screw_is_refused_as_a_probe_position_is(model_
     assert status == 0 and "Warning" not in err, err
     field = json.loads((tmp_path / "p.json").read_text())["field"]
     assert field["x_m"] == [0.1, 0.28] and all(v is not None for row in field["error_um"] for v in row)
+
+
+def test_predict_names_the_missing_error_column_and_reads_the_one_error_names(model_file, tmp_path, capsys):
+    frame = pd.read_csv(DATA / "screw_A.csv")
+    frame.rename(columns={"error_um": "disp_um"}).to_csv(tmp_path / "disp.csv", index=False)
+    frame.assign(error_mm=frame["error_um"] / 1000).drop(columns="error_um").to_csv(tmp_path / "mm.csv", index=False)
+    predict = ["screw", "predict", str(model_file), "--source", "screw_A", "--json", "-"]
+    status, out, err = run_cli([*predict, "--data", str(DATA / "screw_A.csv")], capsys)
+    reference = json.loads(out)["metrics"]
+    status, out, err = run_cli([*predict, "--data", str(tmp_path / "disp.csv")], capsys)
+    assert status == 0 and "the run has no 'error_um' column; name it with --error" in err
+    assert "probe_x_m" not in err
+    for data, column in (("disp.csv", "disp_um"), ("mm.csv", "error_mm")):
+        status, out, err = run_cli([*predict, "--data", str(tmp_path / data), "--error", column], capsys)
+        assert status == 0, err
+        metrics = json.loads(out)["metrics"]
+        assert metrics["max_um"] == pytest.approx(reference["max_um"], rel=1e-12)
+        assert metrics["rms_um"] == pytest.approx(reference["rms_um"], rel=1e-12)
+    status, out, err = run_cli([*predict, "--data", str(tmp_path / "disp.csv"), "--error", "nope"], capsys)
+    assert status == 2 and "--error 'nope': no such column" in err and len(err.strip().splitlines()) == 1

@@ -56,6 +56,9 @@ def add_parser(verbs) -> None:
     )
     predict.add_argument("--probe-x", type=float, metavar="M", help="probe position when the run has no probe_x_m")
     predict.add_argument(
+        "--error", metavar="COLUMN", help="thermal-error column at the probe in µm, or mm, nm by its name, or COLUMN*K"
+    )
+    predict.add_argument(
         "--at", metavar="X,Y,…", help="also predict the rise and the error at these positions (m from the source)"
     )
     _output_options(predict, "write the prediction as JSON", "folder for the figures")
@@ -241,7 +244,7 @@ def run_predict(args: argparse.Namespace) -> int:
         files=(f"screw_rises_{stem}.png", f"screw_error_{stem}.png"),
     )
     model = load_model(args.model)
-    (run,) = _load_runs(args, [args.data], probe_x=args.probe_x)
+    (run,) = _load_runs(args, [args.data], probe_x=args.probe_x, error=args.error)
     source = args.source
     if source is not None and source not in model.sources_:
         raise InputError(f"--source {source}: not in {args.model}; it has {', '.join(model.sources_)}")
@@ -282,7 +285,7 @@ def run_predict(args: argparse.Namespace) -> int:
         }
     written.append(common.write_json(args.json, _finite(result)))
     common.commit_outputs()
-    print(predict_report(score, source, reidentified, model, written), file=common.report_stream(args))
+    print(predict_report(score, run, source, reidentified, model, written), file=common.report_stream(args))
     return 0
 
 
@@ -304,25 +307,26 @@ def _positions(text: str | None, *, reach: float):
     return values
 
 
-def predict_report(score, source, reidentified, model, written) -> str:
+def predict_report(score, run, source, reidentified, model, written) -> str:
     entry = model.sources_[source]
     how = f"re-identified from the first {model.identification_time_s:g} s" if reidentified else "from the model"
-    lines = [f"source {source}: C1 = {entry['C1']:.3f}, C2 = {entry['C2']:.3f} ({how})", _score_line(score)]
+    lines = [f"source {source}: C1 = {entry['C1']:.3f}, C2 = {entry['C2']:.3f} ({how})", _score_line(score, run)]
     if any(written):
         lines.append("wrote   " + common.wrote_line(written))
     return "\n".join(lines)
 
 
-def _score_line(score) -> str:
+def _score_line(score, run) -> str:
     paper = score.paper
+    if np.isfinite(score.max_um):
+        at_probe = f"max error at the probe {score.max_um:.2f} µm"
+    elif run.probe_x is None:
+        at_probe = f"no error at the probe (the run has no '{PROBE_COLUMN}' column; or give --probe-x M)"
+    else:
+        at_probe = "no measured error at the probe to score (the run has no 'error_um' column; name it with --error)"
     text = (
-        f"max temperature error (0/4/8/12 cm) {score.max_temp_K:.2f} K (after t_r {score.max_temp_after_tr_K:.2f} K, "
-        f"all sensors {score.max_temp_all_K:.2f} K); "
-        + (
-            f"max error at the probe {score.max_um:.2f} µm"
-            if np.isfinite(score.max_um)
-            else f"no error at the probe (the run has no '{PROBE_COLUMN}' column)"
-        )
+        f"max temperature error (0/4/8/12 cm) {score.max_temp_K:.2f} K (after t_r "
+        f"{score.max_temp_after_tr_K:.2f} K, all sensors {score.max_temp_all_K:.2f} K); {at_probe}"
     )
     if paper:
         text += (
