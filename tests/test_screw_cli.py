@@ -273,3 +273,24 @@ def test_predict_names_the_missing_error_column_and_reads_the_one_error_names(mo
         assert metrics["rms_um"] == pytest.approx(reference["rms_um"], rel=1e-12)
     status, out, err = run_cli([*predict, "--data", str(tmp_path / "disp.csv"), "--error", "nope"], capsys)
     assert status == 2 and "--error 'nope': no such column" in err and len(err.strip().splitlines()) == 1
+
+
+def test_predict_without_the_sensor_at_the_source_labels_what_it_used(model_file, tmp_path, capsys):
+    frame = pd.read_csv(DATA / "screw_A.csv").drop(columns="T0mm")
+    frame.to_csv(tmp_path / "no0.csv", index=False)
+    args = ["screw", "predict", str(model_file), "--data", str(tmp_path / "no0.csv"), "--source", "screw_A"]
+    status, out, err = run_cli([*args, "--json", str(tmp_path / "p.json")], capsys)
+    assert status == 0, err
+    result = json.loads((tmp_path / "p.json").read_text())
+    assert "max temperature error (4/8/12 cm)" in out and "0/4/8/12" not in out
+    assert "no sensor at the source" in out and "T20mm" in out
+    assert any("T20mm" in note for note in result["notes"])
+    columns = [result["positions_m"].index(x) for x in (0.04, 0.08, 0.12)]
+    measured = pd.DataFrame(result["measured_rise_K"]).iloc[:, columns]
+    predicted = pd.DataFrame(result["predicted_rise_K"]).iloc[:, columns]
+    assert result["metrics"]["max_temp_K"] == pytest.approx(float((predicted - measured).abs().max().max()))
+    sensors = frame[[f"T{mm}mm" for mm in range(20, 141, 20)]]
+    ambient = sensors.iloc[0].mean()
+    paper = result["metrics"]["paper"]
+    assert paper["rise_sensor"] == "T20mm"
+    assert paper["scale"] == pytest.approx((sensors["T20mm"] - ambient).max() / (12.4 + 0.5), rel=1e-12)

@@ -25,7 +25,7 @@ from groupfit.errors import InputError
 from groupfit.io import refuse_repeated
 from groupfit.outputs import SCREW_MODELS, resolved_path
 from groupfit.screw import BallScrewModel
-from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, score_screw
+from groupfit.screw.compare import compare_screw, paper_bounds, paper_columns, paper_label, paper_notes, score_screw
 from groupfit.screw.modelfile import load_model, model_to_dict, save_model
 from groupfit.screw.plots import plot_error, plot_rises
 from groupfit.screw.runs import PROBE_COLUMN, load_screw_run, probe_reach_m
@@ -275,6 +275,7 @@ def run_predict(args: argparse.Namespace) -> int:
         "probe_x_m": None if run.probe_x is None else run.probe_x.tolist(),
         "measured_error_um": None if run.error is None else run.error.tolist(),
         "predicted_error_um": None if error is None else error.tolist(),
+        "notes": paper_notes(run),
     }
     if at is not None:
         tau0 = model.law_input(run.rises, run.positions, run.source)
@@ -311,6 +312,7 @@ def predict_report(score, run, source, reidentified, model, written) -> str:
     entry = model.sources_[source]
     how = f"re-identified from the first {model.identification_time_s:g} s" if reidentified else "from the model"
     lines = [f"source {source}: C1 = {entry['C1']:.3f}, C2 = {entry['C2']:.3f} ({how})", _score_line(score, run)]
+    lines += [f"note    {note}" for note in paper_notes(run)]
     if any(written):
         lines.append("wrote   " + common.wrote_line(written))
     return "\n".join(lines)
@@ -325,13 +327,13 @@ def _score_line(score, run) -> str:
     else:
         at_probe = "no measured error at the probe to score (the run has no 'error_um' column; name it with --error)"
     text = (
-        f"max temperature error (0/4/8/12 cm) {score.max_temp_K:.2f} K (after t_r "
+        f"max temperature error ({paper_label(run)}) {score.max_temp_K:.2f} K (after t_r "
         f"{score.max_temp_after_tr_K:.2f} K, all sensors {score.max_temp_all_K:.2f} K); {at_probe}"
     )
     if paper:
         text += (
-            f"; paper {paper['max_temp_K']} °C / {paper['max_um']} µm, scaled ×{paper['scale']:.2f}: "
-            f"{paper['max_temp_K_scaled']:.2f} K / {paper['max_um_scaled']:.2f} µm"
+            f"; paper {paper['max_temp_K']} °C / {paper['max_um']} µm, scaled ×{paper['scale']:.2f} "
+            f"(by {paper['rise_sensor']}): {paper['max_temp_K_scaled']:.2f} K / {paper['max_um_scaled']:.2f} µm"
         )
     return text
 

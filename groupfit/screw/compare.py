@@ -65,6 +65,8 @@ def paper_bounds(run: ScrewRun) -> dict[str, Any]:
     return {
         "paper_source": name,
         "scale": float(scale),
+        "rise_sensor": run.names[0],
+        "rise_sensor_m": float(run.positions[0]),
         "max_temp_K": PAPER_MAX_TEMPERATURE_K,
         "max_um": PAPER_MAX_ERROR_UM,
         "max_temp_K_scaled": float(PAPER_MAX_TEMPERATURE_K * scale),
@@ -72,11 +74,41 @@ def paper_bounds(run: ScrewRun) -> dict[str, Any]:
     }
 
 
+def paper_sensors(run: ScrewRun) -> list[int]:
+    """Indices of the run's sensors at the paper's validation positions (those it has; maybe none)."""
+    found = [int(np.argmin(np.abs(run.positions - x))) for x in PAPER_POSITIONS_M]
+    return [j for j, x in zip(found, PAPER_POSITIONS_M) if abs(run.positions[j] - x) < 1e-6]
+
+
 def paper_columns(run: ScrewRun) -> list[int]:
     """Indices of the sensors at the paper's validation positions (all sensors if none match)."""
-    found = [int(np.argmin(np.abs(run.positions - x))) for x in PAPER_POSITIONS_M]
-    found = [j for j, x in zip(found, PAPER_POSITIONS_M) if abs(run.positions[j] - x) < 1e-6]
-    return found or list(range(len(run.positions)))
+    return paper_sensors(run) or list(range(len(run.positions)))
+
+
+def paper_label(run: ScrewRun) -> str:
+    """Where the temperature error is taken, as printed: ``0/4/8/12 cm``, the paper's positions the run has, or
+    ``all sensors`` when it has none of them."""
+    found = paper_sensors(run)
+    if not found:
+        return "all sensors"
+    return "/".join(f"{100 * run.positions[j]:g}" for j in found) + " cm"
+
+
+def paper_notes(run: ScrewRun) -> list[str]:
+    """What a run without some of the paper's sensors changes in its metrics: the positions the temperature error
+    is taken over, and the sensor whose rise scales the paper's figures when none is at the source."""
+    missing = [x for x in PAPER_POSITIONS_M if not np.any(np.abs(run.positions - x) < 1e-6)]
+    if not missing:
+        return []
+    listed = "/".join(f"{100 * x:g}" for x in missing)
+    notes = [f"{run.source}: no sensor at {listed} cm: the temperature error is over {paper_label(run)}"]
+    paper = paper_bounds(run)
+    if paper and paper["rise_sensor_m"] > 0:
+        notes.append(
+            f"{run.source}: no sensor at the source: the paper's figures are scaled by the peak rise of "
+            f"{paper['rise_sensor']}, {1000 * paper['rise_sensor_m']:g} mm from it (below the source's own rise)"
+        )
+    return notes
 
 
 def screw_prediction(model: BallScrewModel, run: ScrewRun, source: str) -> tuple[np.ndarray, np.ndarray | None]:
