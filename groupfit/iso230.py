@@ -391,21 +391,23 @@ def _direction_signs(frame: pd.DataFrame, column: str, label: str) -> np.ndarray
 
 def _evenly_approached(table: pd.DataFrame, label: str, target: str) -> np.ndarray:
     """The target positions (ascending) of ``table`` (target, sign, deviation), refusing a single target and one
-    approached from one side only or less often than another."""
+    approached from one side only or less often than another, with the rows of that target (counted from 1)."""
     counts = table.groupby(["target", "sign"]).size().unstack(fill_value=0)
     for sign, word in ((1, "positive"), (-1, "negative")):
         if sign not in counts.columns or (counts[sign] == 0).any():
-            missing = counts.index[counts.get(sign, pd.Series(0, index=counts.index)) == 0]
+            missing = float(counts.index[counts.get(sign, pd.Series(0, index=counts.index)) == 0][0])
             raise InputError(
-                f"{label}: target {missing[0]:g} mm is never approached in the {word} direction; ISO 230-2 "
-                "approaches every target from both sides"
+                f"{label}: {_rows_of(table, missing)}, column '{target}': target {missing:.15g} mm is never "
+                f"approached in the {word} direction{_near_note(counts.index, missing)}; ISO 230-2 approaches "
+                "every target from both sides"
             )
     repeats, most = int(counts.to_numpy().min()), int(counts.to_numpy().max())
     if most != repeats:
         at, sign = counts.stack().idxmin()
         raise InputError(
-            f"{label}: target {at:g} mm is approached {repeats} time(s) in the {'+' if sign > 0 else '-'} "
-            f"direction, up to {most} elsewhere: give every target the same number of runs each way"
+            f"{label}: {_rows_of(table, float(at), sign)}, column '{target}': target {at:.15g} mm is approached "
+            f"{repeats} time(s) in the {'+' if sign > 0 else '-'} direction, up to {most} elsewhere"
+            f"{_near_note(counts.index, float(at))}: give every target the same number of runs each way"
         )
     if len(counts.index) < 2:
         raise InputError(
@@ -413,6 +415,29 @@ def _evenly_approached(table: pd.DataFrame, label: str, target: str) -> np.ndarr
             "evaluates an axis at several: measure at least 2"
         )
     return counts.index.to_numpy(dtype=float)
+
+
+NEAR_TARGET_MM = 1e-3
+"""Two targets closer than this (1 µm) are one target mistyped, not two the axis was sent to."""
+
+
+def _rows_of(table: pd.DataFrame, at: float, sign: int | None = None) -> str:
+    """``row 4`` or ``rows 3, 9``: the rows (counted from 1) of target ``at`` (in direction ``sign`` when given)."""
+    chosen = (table.target == at) & (True if sign is None else table.sign == sign)
+    rows = [str(k + 1) for k in np.flatnonzero(chosen.to_numpy())]
+    shown = ", ".join(rows[:5]) + (", …" if len(rows) > 5 else "")
+    return f"row{'s' if len(rows) > 1 else ''} {shown}"
+
+
+def _near_note(targets, at: float) -> str:
+    """`` (… mm from target T mm: a mistyped target?)`` when another target lies within :data:`NEAR_TARGET_MM`."""
+    others = np.asarray([t for t in targets if t != at], dtype=float)
+    if not others.size:
+        return ""
+    nearest = float(others[np.argmin(np.abs(others - at))])
+    if abs(nearest - at) >= NEAR_TARGET_MM:
+        return ""
+    return f" ({abs(nearest - at):.3g} mm from target {nearest:.15g} mm: a mistyped target?)"
 
 
 def simulate_runs(

@@ -121,8 +121,19 @@ def test_the_verb_prints_writes_json_and_a_figure(tmp_path, capsys):
     "change, message",
     [
         (lambda f: f.assign(direction=f.direction.where(f.index != 3, "sideways")), "row 4, column 'direction'"),
-        (lambda f: f.drop(index=[2]), "target 10 mm is approached 1 time(s) in the - direction, up to 2 elsewhere"),
-        (lambda f: f[f.direction.isin(["+", "up"])], "never approached in the negative direction"),
+        (
+            lambda f: f.drop(index=[2]),
+            "row 6, column 'target_mm': target 10 mm is approached 1 time(s) in the - direction, up to 2 elsewhere",
+        ),
+        (
+            lambda f: f[f.direction.isin(["+", "up"])],
+            "rows 1, 3, column 'target_mm': target 0 mm is never approached in the negative direction",
+        ),
+        (
+            lambda f: f.assign(target_mm=f.target_mm.where(f.index != 2, 10.0000001)),
+            "row 3, column 'target_mm': target 10.0000001 mm is never approached in the positive direction "
+            "(1e-07 mm from target 10 mm: a mistyped target?)",
+        ),
         (lambda f: f.drop(columns="deviation_um"), "column 'deviation_um' not found"),
         (lambda f: f.assign(target_mm=f.target_mm.astype(object).where(f.index != 1, "x")), "target_mm"),
     ],
