@@ -228,10 +228,10 @@ def load_position_run(
                 f"{label}: position column '{position}' not found, and no wide error columns "
                 f"({WIDE_PREFIX}<mm>). The columns are: {', '.join(map(str, frame.columns))}"
             )
-    positions = numeric_column(frame, position, label, allow_nonfinite=False) * scale
+    positions = finite_column(frame, position, label, "axis position") * scale
     refuse_beyond(positions, MAX_POSITION_MM, position, label, "mm is not a plausible axis position")
     times = numeric_column(frame, time, label, allow_nonfinite=False)
-    error_values = numeric_column(frame, error, label, allow_nonfinite=False)
+    error_values = finite_column(frame, error, label, "thermal error")
     refuse_implausible_errors(error_values, error, label, error_limit)
     order = np.argsort(times, kind="stable")
     frame = frame.iloc[order].reset_index(drop=True)
@@ -256,6 +256,20 @@ def load_position_run(
     in_mm = position_unit_notes(position, label) if scale != 1.0 else ()
     run = replace(run, source=f"{label} (check runs)", notes=run.notes + in_mm)
     return PositionRun(run=run, check=check, position=positions, error=error_values, column=position)
+
+
+def finite_column(frame: pd.DataFrame, column: str, label: str, what: str) -> np.ndarray:
+    """A column of a table of check runs, refusing an empty or non-finite cell with its row: every row is one
+    position's reading of its check run, which nothing fills in (``--resample`` would mix the positions)."""
+    values = numeric_column(frame, column, label, allow_nonfinite=True)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        cell = "empty" if np.isnan(values[bad[0]]) else f"{values[bad[0]]:g}"
+        raise InputError(
+            f"{label}: row {bad[0] + 1}, column '{column}' is {cell} ({bad.size} such row(s)): each row of a check "
+            f"run needs its {what}; repair or drop those rows"
+        )
+    return values
 
 
 # --------------------------------------------------------------------- the fit

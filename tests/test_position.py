@@ -185,6 +185,20 @@ def test_a_missing_or_non_numeric_position_column_is_named():
         load_position_run(one, "P_mm", temps=["T1", "T2"])
 
 
+@pytest.mark.parametrize("column", ["P_mm", "error_um"])
+def test_an_empty_position_or_error_cell_is_named_without_advice_a_position_fit_refuses(column, tmp_path, capsys):
+    long = long_table(1)
+    long.loc[5, column] = np.nan
+    long.to_csv(tmp_path / "holes.csv", index=False)
+    args = ["fit", "--data", str(tmp_path / "holes.csv"), "--temps", "T1,T2", "--position", "P_mm", "--p", "0"]
+    assert main([*args, "--out", str(tmp_path / "m"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"row 6, column '{column}' is empty" in err[0]
+    assert "--resample" not in err[0]
+    assert main([*args, "--resample", "1200", "--out", str(tmp_path / "m"), "--quiet"]) == 2  # refused as advised
+    assert "leave --resample out" in capsys.readouterr().err
+
+
 # --------------------------------------------------------------------- the model file
 
 

@@ -78,3 +78,23 @@ def test_diagnose_refuses_a_position_model_in_one_line_writing_nothing(position_
     line = capsys.readouterr().err.strip()
     assert "position model" in line and "P_mm" in line and "\n" not in line
     assert not out.exists() and not report.exists()
+
+
+def test_replay_of_a_stream_with_the_position_in_metres_notes_the_unit_as_fit_does(position_model, capsys):
+    folder = position_model
+    stream = pd.read_csv(folder / "stream.csv")
+    stream.assign(X_m=stream["P_mm"] / 1000).drop(columns="P_mm").to_csv(folder / "stream_m.csv", index=False)
+    table = pd.read_csv(folder / "axis.csv")
+    table.assign(X_m=table["P_mm"] / 1000).drop(columns="P_mm").to_csv(folder / "axis_m.csv", index=False)
+    fit = ["fit", "--data", str(folder / "axis_m.csv"), "--temps", "T1,T2", "--position", "X_m"]
+    assert main([*fit, "--position-order", "2", "--p", "0", "--out", str(folder / "m_metres")]) == 0
+    fitted = capsys.readouterr().out
+    note = "position column 'X_m' is in another unit than mm by its name: read ×1000 as mm"
+    assert note in fitted
+    model = str(folder / "m_metres" / "model.json")
+    assert main(["replay", model, "--data", str(folder / "stream_m.csv"), "--json", str(folder / "m.json")]) == 0
+    assert f"stream_m.csv: {note}" in capsys.readouterr().out
+    metres = json.loads((folder / "m.json").read_text())
+    assert any(note in line for line in metres["data_notes"])
+    millimetres = json.loads((folder / "stream.json").read_text())  # the model fitted in mm, on the same rows
+    assert metres["rms_um"] == pytest.approx(millimetres["rms_um"], rel=1e-9)

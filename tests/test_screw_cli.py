@@ -294,3 +294,12 @@ def test_predict_without_the_sensor_at_the_source_labels_what_it_used(model_file
     paper = result["metrics"]["paper"]
     assert paper["rise_sensor"] == "T20mm"
     assert paper["scale"] == pytest.approx((sensors["T20mm"] - ambient).max() / (12.4 + 0.5), rel=1e-12)
+
+
+def test_a_transient_too_short_for_the_fraction_points_to_the_option_that_widens_it(tmp_path, capsys):
+    identify = ["screw", "identify", str(DATA / "screw_H.csv"), "--out", str(tmp_path / "s")]
+    status, out, err = run_cli([*identify, "--transient-fraction", "0.01"], capsys)
+    assert status == 2 and "raise --transient-fraction (now 0.01, default 0.8)" in err
+    assert "alpha_step_s" not in err and len(err.strip().splitlines()) == 1
+    status, out, err = run_cli(identify, capsys)
+    assert status == 0, err

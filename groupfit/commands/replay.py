@@ -28,7 +28,7 @@ from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.replay_register import register_check
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import picked_up, started_running_notes, with_histories, zero_of
-from groupfit.data import Run
+from groupfit.data import Run, loading_notes
 from groupfit.data_options import add_encoding_option
 from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
@@ -213,6 +213,7 @@ def run_replay(args: argparse.Namespace) -> int:
         print(f"note     {note}", file=common.report_stream(args))
     data = replay_result(model, rule.tables, run, replay, args.model, counts, history_samples=rows)
     data["continues"] = [str(path) for path in continued]
+    data["data_notes"] = loading_notes([run, *history])
     residual = residuals(run, replay)
     without = residual if unchecked is None else residuals(run, unchecked)  # the residual without probe checks
     if probes is not None:

@@ -25,7 +25,7 @@ from groupfit.error_start import ZERO_KEY
 from groupfit.errors import InputError
 from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
-from groupfit.position import millimetres_per_unit
+from groupfit.position import millimetres_per_unit, position_unit_notes
 from groupfit.recordings import continued_recording
 from groupfit.runtime import RuleTables, SwitchingRule
 from groupfit.runtime.state import capture, restore
@@ -68,7 +68,8 @@ def load_readings(
         values = numeric_column(run.frame, name, run.source, allow_nonfinite=True)
         columns.append(values * millimetres_per_unit(name) if name == tables.position_name else values)
     readings = np.column_stack([run.temps, *columns])
-    return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names)
+    in_mm = position_unit_notes(tables.position_name, run.source) if tables.has_position else ()
+    return dataclasses.replace(run, temps=readings, temp_names=tables.raw_names, notes=run.notes + in_mm)
 
 
 @dataclass(frozen=True)

@@ -132,7 +132,8 @@ def identify_first_source(
     if used.sum() < 2:
         raise InputError(
             f"{label}: fewer than two times with α′ in the transient (t ≥ {alpha_step_s:g} s and the source "
-            f"rise below {100 * transient_fraction:g} % of its steady value); sample faster or lower alpha_step_s"
+            f"rise below {100 * transient_fraction:g} % of its steady value); raise --transient-fraction (now "
+            f"{transient_fraction:g}, default 0.8), or identify on a run that stays in the transient longer"
         )
     alpha, offset, transient_rms = _alpha_table(
         data[times_idx][:, 1:], time[times_idx], positions[1:], c1, c2, lam, source_offset, used
