@@ -98,3 +98,24 @@ def test_replay_of_a_stream_with_the_position_in_metres_notes_the_unit_as_fit_do
     assert any(note in line for line in metres["data_notes"])
     millimetres = json.loads((folder / "stream.json").read_text())  # the model fitted in mm, on the same rows
     assert metres["rms_um"] == pytest.approx(millimetres["rms_um"], rel=1e-9)
+
+
+def test_fit_with_a_dead_band_reports_the_figures_replay_gives_and_says_the_others_are_without_it(
+    position_model, capsys
+):
+    folder = position_model
+    fit = ["fit", "--data", str(folder / "axis.csv"), "--temps", "T1,T2", "--position", "P_mm", "--p", "0"]
+    fit += ["--position-order", "2", "--dead-band", "1", "--dead-band-ref", "T_amb", "--out", str(folder / "band")]
+    assert main([*fit, "--json", str(folder / "band.json")]) == 0
+    printed = capsys.readouterr().out
+    line = next(text for text in printed.splitlines() if text.startswith("dead band 1 degC against T_amb"))
+    assert "in the model" in line and "the figures above are of the model without it" in line
+    training = json.loads((folder / "band.json").read_text())["training"]
+    model = str(folder / "band" / "model.json")
+    replay = ["replay", model, "--data", str(folder / "stream.csv")]
+    assert main([*replay, "--json", str(folder / "band_stream.json")]) == 0
+    stream = json.loads((folder / "band_stream.json").read_text())
+    assert training["dead_band_rms_um"] == pytest.approx(stream["rms_um"], rel=1e-9)
+    assert training["dead_band_max_um"] == pytest.approx(stream["max_um"], rel=1e-9)
+    assert training["dead_band_rms_um"] > 1.5 * training["position_rms_um"]  # the band holds the compensation
+    assert f"RMS {training['dead_band_rms_um']:.3g} um" in line

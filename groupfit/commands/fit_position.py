@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
+
 from groupfit.commands.common import configured_clock
+from groupfit.commands.replay_positions import row_residuals
 from groupfit.data import ERROR_LIMIT_UM, TEMP_RANGE_C
 from groupfit.errors import InputError
 from groupfit.model import DeadBand
@@ -81,7 +84,27 @@ def position_model(args: argparse.Namespace, model, position_run) -> tuple:
         f"check runs; residual RMS {training['position_rms_um']:.3g} um, max {training['position_max_um']:.3g} um"
     )
     lines.append("residual by order (max / mean |e| um): " + order_table_text(orders))
+    if dead_band is not None:
+        fitted, line = with_dead_band_figures(fitted, position_run)
+        lines.append(line)
     return fitted, "\n" + "\n".join(lines)
+
+
+def with_dead_band_figures(model, position_run) -> tuple:
+    """The model with the residual of its rule, dead band included, over the rows of its check runs
+    (``training.dead_band_rms_um``, ``dead_band_max_um``: replay's figures on the same table), and the report's
+    line saying the dead band is in the model and the figures above are without it."""
+    residual = row_residuals(model, position_run)
+    scored = residual[np.isfinite(residual)]
+    rms, largest = float(np.sqrt(np.mean(scored**2))), float(np.max(np.abs(scored)))
+    band = model.dead_band
+    model = model.replace(training={**(model.training or {}), "dead_band_rms_um": rms, "dead_band_max_um": largest})
+    line = (
+        f"dead band {band.threshold_c:g} degC against {band.reference}: in the model (the compensation is held while "
+        f"every input is within it); with it the residual is RMS {rms:.3g} um, max {largest:.3g} um over the rows, "
+        "as replay gives on this table (training.dead_band_rms_um); the figures above are of the model without it"
+    )
+    return model, line
 
 
 def order_table_text(orders: list[dict]) -> str:

@@ -77,9 +77,25 @@ def load_check_runs(args: argparse.Namespace, tables: RuleTables, *, time: str, 
         period_tolerance=clock.get("period_tolerance", PERIOD_TOLERANCE),
         resample=clock.get("resample"),
     )
-    frame = prun.run.frame.assign(**{tables.position_name: 0.0})  # set per position below
-    run = load_readings(frame, tables, time=time, error=error, name=prun.run.source, error_limit=np.inf)
-    return prun, run.temps
+    return prun, check_run_readings(prun, tables, time=time, error=error)
+
+
+def check_run_readings(prun: PositionRun, tables: RuleTables, *, time: str, error: str) -> np.ndarray:
+    """The rule's readings of every check run (measured inputs, then sources), the position reading still to be
+    set (:func:`replay_at_positions` sets it)."""
+    frame = prun.run.frame.assign(**{tables.position_name: 0.0})
+    return load_readings(frame, tables, time=time, error=error, name=prun.run.source, error_limit=np.inf).temps
+
+
+def row_residuals(model: ModelFile, prun: PositionRun, *, precision: str = "double") -> np.ndarray:
+    """Every row's residual (error + the rule's target at its position and check run; NaN in sensor fault) as
+    :func:`replay_check_runs` scores it."""
+    tables = RuleTables.from_model(model)
+    readings = check_run_readings(prun, tables, time=prun.run.time_name, error=prun.run.error_name or "error_um")
+    _, rows = replay_at_positions(model, prun, readings, precision=precision, reading=tables.position_reading)
+    residual = prun.error + rows["target_um"]
+    residual[(rows["fault"] & FAULT_SENSOR) != 0] = np.nan
+    return residual
 
 
 def replay_at_positions(
@@ -192,4 +208,4 @@ def check_run_report(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["is_check_run_table", "replay_check_runs"]
+__all__ = ["check_run_readings", "is_check_run_table", "replay_check_runs", "row_residuals"]
