@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from test_position import fitted
+from test_position import fitted, long_table
 
 from groupfit.cli import main
 
@@ -114,3 +114,45 @@ def test_a_model_with_breaks_is_refused(tmp_path, capsys):
     (tmp_path / "m.json").write_text(json.dumps(model.to_dict()))
     assert export(tmp_path / "m.json", tmp_path / "out", "--state", "T1=25,T2=23") == 2
     assert "a table is one curve over the position" in capsys.readouterr().err
+
+
+def with_training(path, tmp_path, **changes):
+    """The model file of ``path`` with ``changes`` to its training and switching sections, written to tmp_path."""
+    data = json.loads(path.read_text())
+    data["training"] = {**(data.get("training") or {}), **changes.get("training", {})}
+    data["switching"] = {**data["switching"], **changes.get("switching", {})}
+    changed = tmp_path / "changed.json"
+    changed.write_text(json.dumps(data))
+    return changed
+
+
+def test_a_state_far_outside_the_modelling_run_is_refused_and_one_near_it_is_written(tmp_path, model_file, capsys):
+    path, model, prun = model_file
+    frame = long_table(3)  # the modelling run, read here without the loader: its span of T1 and T2
+    span = {name: [float(frame[name].min()), float(frame[name].max())] for name in ("T1", "T2")}
+    changed = with_training(path, tmp_path, training={"input_span": span})
+    (t1_low, t1_high), t2 = span["T1"], float(np.mean(span["T2"]))
+    inside = t1_high + 0.2 * (t1_high - t1_low)
+    assert export(changed, tmp_path / "near", "--state", f"T1={inside!r},T2={t2!r}") == 0
+    outside = t1_high + 0.3 * (t1_high - t1_low)
+    assert export(changed, tmp_path / "far", "--state", f"T1={outside!r},T2={t2!r}") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--state T1={outside:g}" in err[0] and f"spans {t1_low:.4g} .. {t1_high:.4g}" in err[0]
+    assert not (tmp_path / "far").exists()
+
+
+def test_a_table_beyond_the_rules_clamp_is_refused(tmp_path, model_file, capsys):
+    path, model, prun = model_file
+    state = prun.run.temps[30]
+    low, high = model.position.travel_mm
+    nodes = np.linspace(low, high, 1001)
+    error = model.predict_position(np.repeat(state[None, :], 1001, axis=0), nodes, np.zeros(1001, int))
+    largest = float(np.max(np.abs(error)))
+    clamp = {"comp_min_um": -largest / 2, "comp_max_um": largest / 2}
+    changed = with_training(path, tmp_path, switching=clamp)
+    text = f"T1={float(state[0])!r},T2={float(state[1])!r}"
+    assert export(path, tmp_path / "as_fitted", "--state", text) == 0  # within the model's own clamp
+    assert export(changed, tmp_path / "clamped", "--state", text) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"beyond the model's clamp {-largest / 2:g} .. {largest / 2:g} um" in err[0]
+    assert not (tmp_path / "clamped").exists()

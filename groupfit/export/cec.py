@@ -35,6 +35,7 @@ from typing import Mapping
 import numpy as np
 
 from groupfit.errors import InputError
+from groupfit.heldout.span import SPAN_KEY
 from groupfit.model import ModelFile
 
 DEFAULT_MAX_POINTS = 2000
@@ -50,6 +51,8 @@ SAMPLES_PER_INTERVAL = 64
 STATE_LIMIT = 1.0e6
 """The largest magnitude of a thermal state's input: a temperature or rise (°C, K) or a derived input in its own
 unit (a speed's low-pass in r/min)."""
+STATE_MARGIN = 0.25
+"""How far beyond the modelling run's span of an input (as a share of the span's width) a table's state may lie."""
 
 
 def decimal_text(value: float, decimals: int = VALUE_DECIMALS) -> str:
@@ -206,12 +209,51 @@ def render_cec(
         if not AXIS_NAME.match(name):
             raise InputError(f"{option} {name!r}: a machine or channel axis name such as AX1, X1 or Z")
     inputs = parse_state(state, model.temps)
+    refuse_unmodelled_state(model, inputs)
     table, error = cec_table(model, inputs, step_mm=step_mm, tolerance_um=tolerance_um, max_points=max_points)
+    refuse_beyond_clamp(model, table, _state_text(model.temps, inputs))
     return {
         "NC_CEC.INI": cec_text(
             table, error, _state_text(model.temps, inputs), t=table_index, axes=(input_axis, output_axis)
         )
     }
+
+
+def refuse_unmodelled_state(model: ModelFile, inputs: np.ndarray) -> None:
+    """Refuse a state with an input beyond the modelling run's span (``training.input_span``) by more than
+    :data:`STATE_MARGIN` of its width: the model extrapolates there, and a table for the NC holds no fault
+    flag or clamp of its own to catch it."""
+    span = (model.training or {}).get(SPAN_KEY) or {}
+    for name, value in zip(model.temps, inputs):
+        if name not in span:
+            continue
+        low, high = (float(v) for v in span[name])
+        margin = STATE_MARGIN * max(high - low, 1e-9)
+        if not low - margin <= value <= high + margin:
+            raise InputError(
+                f"--state {name}={value:g}: the modelling run's {name} spans {low:.4g} .. {high:.4g}, and the "
+                f"model is not extrapolated beyond it by more than {100 * STATE_MARGIN:g} % of that span into a "
+                f"table for the NC: give a state within {low - margin:.4g} .. {high + margin:.4g}, or refit on a "
+                "run that reaches it"
+            )
+
+
+def refuse_beyond_clamp(model: ModelFile, table: CecTable, state: str) -> None:
+    """Refuse a table holding a compensation the model's run-time rule would never output (beyond its clamp
+    ``switching.comp_min_um`` … ``comp_max_um``)."""
+    low, high = model.switching.comp_min_um, model.switching.comp_max_um
+    if low is None or high is None:
+        return
+    values_um = 1000.0 * table.values_mm
+    beyond = np.flatnonzero((values_um < low - 1e-6) | (values_um > high + 1e-6))
+    if beyond.size:
+        worst = int(beyond[np.argmax(np.abs(values_um[beyond]))])
+        raise InputError(
+            f"--state {state}: the table's compensation reaches {values_um[worst]:.4g} um at "
+            f"{table.nodes_mm[worst]:g} mm, beyond the model's clamp {low:g} .. {high:g} um, which its run-time "
+            "rule never exceeds; give a state within the modelling run (or, if the machine allows a larger "
+            "correction, widen switching.comp_min_um / comp_max_um in the model file)"
+        )
 
 
 def _state_text(names, values) -> str:
