@@ -35,7 +35,7 @@ from groupfit.heldout.folds import operating_columns
 from groupfit.heldout.nextrun import rule_prediction, sliced
 from groupfit.heldout.penalty import run_penalty
 from groupfit.heldout.reference_choice import choose_reference
-from groupfit.heldout.span import beyond_span, input_span
+from groupfit.heldout.span import beyond_span, input_span, reference_span
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.reference import default_reference, is_column_reference, with_reference
@@ -241,6 +241,11 @@ def inputs_beyond_span(model: Run, next_run: Run) -> list[str]:
     (:mod:`groupfit.heldout.span`): where it notes that the expected figure does not cover the run."""
     names = list(model.temp_names)
     beyond = beyond_span(input_span(names, model.temps), names, next_run.temps)
+    reference = reference_span([model.frame], model.reference, names)  # a day at another air level
+    for name in reference:
+        if name in next_run.frame.columns:
+            readings = next_run.frame[name].to_numpy(dtype=float)[:, None]
+            beyond += beyond_span(reference, [name], readings)
     return [entry["input"] for entry in beyond]
 
 
