@@ -35,7 +35,7 @@ from groupfit.heldout.folds import operating_columns
 from groupfit.heldout.nextrun import rule_prediction, sliced
 from groupfit.heldout.penalty import run_penalty
 from groupfit.heldout.reference_choice import choose_reference
-from groupfit.heldout.span import beyond_span, input_span, reference_span
+from groupfit.heldout.span import REFERENCE_TOLERANCE, beyond_span, input_span, reference_span
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
 from groupfit.reference import default_reference, is_column_reference, with_reference
@@ -245,7 +245,7 @@ def inputs_beyond_span(model: Run, next_run: Run) -> list[str]:
     for name in reference:
         if name in next_run.frame.columns:
             readings = next_run.frame[name].to_numpy(dtype=float)[:, None]
-            beyond += beyond_span(reference, [name], readings)
+            beyond += beyond_span(reference, [name], readings, REFERENCE_TOLERANCE)
     return [entry["input"] for entry in beyond]
 
 

@@ -34,7 +34,7 @@ from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
 from groupfit.glitches import scored_glitches
-from groupfit.heldout.span import SPAN_KEY, beyond_span, span_note
+from groupfit.heldout.span import REFERENCE_TOLERANCE, SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
@@ -271,7 +271,8 @@ def range_check(model: ModelFile, run: Run, replay: Replay) -> dict[str, Any]:
     reference = model.reference
     if reference in span and reference not in model.temps and reference in run.frame.columns:
         readings = np.where(not_the_machine, np.nan, run.frame[reference].to_numpy(dtype=float))
-        beyond += [{**b, "reference": True} for b in beyond_span(span, [reference], readings[:, None])]
+        moved = beyond_span(span, [reference], readings[:, None], REFERENCE_TOLERANCE)
+        beyond += [{**b, "reference": True} for b in moved]
     note = span_note(beyond, run.n_samples)
     return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 

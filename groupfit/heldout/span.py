@@ -10,6 +10,10 @@ SPAN_KEY = "input_span"
 """The model file's ``training`` key: ``{input: [lowest, highest]}`` over the modelling run."""
 TOLERANCE = 0.05
 """A reading beyond the span by more than this share of the span's width leaves the modelling range."""
+REFERENCE_TOLERANCE = 1.0
+"""The same for the reference column (the air the inputs are taken against): another day's air is seldom
+inside one day's, and a level beyond it by less than the modelling day's own swing is the variation the
+model has met; beyond by more, a machine whose error follows its parts' own temperatures is off."""
 
 
 def input_span(names: Sequence[str], inputs: np.ndarray) -> dict[str, list[float]]:
@@ -33,15 +37,18 @@ def reference_span(frames: Sequence, reference: str | None, inputs: Sequence[str
     return input_span([reference], np.concatenate(values)[:, None]) if values else {}
 
 
-def beyond_span(span: Mapping[str, Sequence[float]], names: Sequence[str], inputs: np.ndarray) -> list[dict[str, Any]]:
-    """The inputs of a run that leave the modelling span: name, span, the run's range, samples outside."""
+def beyond_span(
+    span: Mapping[str, Sequence[float]], names: Sequence[str], inputs: np.ndarray, tolerance: float = TOLERANCE
+) -> list[dict[str, Any]]:
+    """The inputs of a run that leave the modelling span by more than ``tolerance`` of its width: name, span,
+    the run's range, samples outside."""
     inputs = np.asarray(inputs, dtype=float)
     out = []
     for j, name in enumerate(names):
         if name not in span:
             continue
         low, high = (float(v) for v in span[name])
-        margin = TOLERANCE * max(high - low, 1e-9)
+        margin = tolerance * max(high - low, 1e-9)
         values = inputs[:, j]
         outside = np.isfinite(values) & ((values < low - margin) | (values > high + margin))
         if outside.any():
@@ -71,4 +78,4 @@ def span_note(beyond: list[dict[str, Any]], n_samples: int) -> str | None:
     )
 
 
-__all__ = ["SPAN_KEY", "beyond_span", "input_span", "reference_span", "span_note"]
+__all__ = ["REFERENCE_TOLERANCE", "SPAN_KEY", "beyond_span", "input_span", "reference_span", "span_note"]
