@@ -303,3 +303,22 @@ def test_a_transient_too_short_for_the_fraction_points_to_the_option_that_widens
     assert "alpha_step_s" not in err and len(err.strip().splitlines()) == 1
     status, out, err = run_cli(identify, capsys)
     assert status == 0, err
+
+
+def test_compare_reads_the_error_column_it_is_given(tmp_path, capsys):
+    for name in ("screw_H", "screw_B"):
+        frame = pd.read_csv(DATA / f"{name}.csv")
+        mm = frame.assign(error_mm=frame["error_um"] / 1000).drop(columns="error_um")
+        mm.to_csv(tmp_path / f"{name}.csv", index=False)
+    rows = {}
+    for folder, error in ((DATA, []), (tmp_path, ["--error", "error_mm"])):
+        out = tmp_path / f"out{len(rows)}"
+        args = ["screw", "compare", str(folder / "screw_H.csv"), "--validate", str(folder / "screw_B.csv"), *error]
+        status, _, err = run_cli([*args, "--json", str(out / "c.json"), "--out", str(out)], capsys)
+        assert status == 0, err
+        rows[folder] = {(r["model"], r["run"]): r["rms_um"] for r in json.loads((out / "c.json").read_text())["rows"]}
+    assert rows[tmp_path] == pytest.approx(rows[DATA], rel=1e-12)
+    runs = [str(tmp_path / "screw_H.csv"), "--validate", str(tmp_path / "screw_B.csv")]
+    status, _, err = run_cli(["screw", "compare", *runs, "--error", "nope", "--out", str(tmp_path / "no")], capsys)
+    assert status == 2 and "column 'nope' not found" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "no").exists()

@@ -67,6 +67,9 @@ def add_parser(verbs) -> None:
     compare = sub.add_parser("compare", help="screw model vs MLR on the same sensors, on runs not used to identify")
     compare.add_argument("run", metavar="RUN", help="identification run")
     compare.add_argument("--validate", nargs="+", required=True, metavar="CSV", help="runs of other sources")
+    compare.add_argument(
+        "--error", metavar="COLUMN", help="thermal-error column of every run, in µm, or mm, nm by its name, or COLUMN*K"
+    )
     _model_options(compare)
     _output_options(
         compare, "write the result as JSON", f"folder for the figures and the model (default {DEFAULT_OUT})"
@@ -362,7 +365,7 @@ def run_compare(args: argparse.Namespace) -> int:
     )
     keep_identified_model(out_dir / "screw_model.json", [args.run, *args.validate], force=args.force)
     model = build_model(args)
-    runs = _load_runs(args, [args.run, *args.validate], require_error=True)
+    runs = _load_runs(args, [args.run, *args.validate], require_error=True, error=args.error)
     for run in runs:
         if run.probe_x is None:
             raise InputError(f"{run.source}: no probe_x_m column; the probe position is needed to score the error")
