@@ -15,9 +15,9 @@ held out:
 * ``warm-up``: one warm-up cut into 60 % → 40 % (``bench_warmup_cuts.py``).
 
 Per family: the median of actual / raw, the spread of log(actual / raw), the share within a factor 2 with the
-shipped factor, and the share whose chosen model is within 1.5× of the best p. Then, leave one family out: the
-factor derived (median of actual / raw) on the others and the share within a factor 2 it gives the family left
-out; and the share over all pairs with a few constant factors.
+shipped factor, the share inside the printed range, and the share whose chosen model is within 1.5× of the best
+p. Then, leave one family out: the factor derived (median of actual / raw) on the others and the share within a
+factor 2 it gives the family left out; and the share over all pairs with a few constant factors.
 """
 
 from __future__ import annotations
@@ -60,6 +60,12 @@ def within(rows: list[dict], factor: float) -> float:
     return float(np.mean((ratio >= 0.5) & (ratio <= 2.0)))
 
 
+def covered(rows: list[dict]) -> float:
+    """The share of pairs whose actual RMS lies inside the printed range."""
+    ranges = [calibration.expected(r["raw_um"])[1] for r in rows]
+    return float(np.mean([low <= r["actual_um"] <= high for r, (low, high) in zip(rows, ranges)]))
+
+
 def log_ratio(rows: list[dict]) -> np.ndarray:
     return np.log([r["actual_um"] / r["raw_um"] for r in rows])
 
@@ -70,17 +76,23 @@ def main() -> None:
     args = parser.parse_args()
     rows = {name: [panel.score_pair(pair) for pair in pairs] for name, pairs in families(args.quick).items()}
     factor = calibration.FACTOR
-    print(f"{'family':<10} {'pairs':>5} {'actual/raw':>10} {'sd log':>6} {'in [0.5, 2]':>11} {'chosen ok':>9}")
+    print(
+        f"{'family':<10} {'pairs':>5} {'actual/raw':>10} {'sd log':>6} {'in [0.5, 2]':>11} {'in range':>8} "
+        f"{'chosen ok':>9}"
+    )
     for name, scored in rows.items():
         chosen = np.mean([r["within_chosen"] for r in scored])
         logs = log_ratio(scored)
         print(
             f"{name:<10} {len(scored):>5} {np.exp(np.median(logs)):>10.2f} {logs.std():>6.2f} "
-            f"{100 * within(scored, factor):>10.0f}% {100 * chosen:>8.0f}%"
+            f"{100 * within(scored, factor):>10.0f}% {100 * covered(scored):>7.0f}% {100 * chosen:>8.0f}%"
         )
     every = [r for scored in rows.values() for r in scored]
     share = 100 * within(every, factor)
-    print(f"all {len(every)} pairs with the shipped factor {factor:.3g}: in [0.5, 2] {share:.0f} %")
+    print(
+        f"all {len(every)} pairs with the shipped factor {factor:.3g}: in [0.5, 2] {share:.0f} %, inside the printed "
+        f"range {100 * covered(every):.0f} %"
+    )
     print("\nleave one family out (factor: median of actual / raw over the other families' pairs)")
     for name, scored in rows.items():
         others = np.concatenate([log_ratio(r) for other, r in rows.items() if other != name])
