@@ -24,11 +24,17 @@ def fit_json(folder: Path, data: Path, *options: str) -> tuple[dict, dict]:
     return json.loads((folder / "f.json").read_text()), json.loads((out / "model.json").read_text())
 
 
-def test_an_error_missing_on_one_row_names_the_p_it_rules_out(tmp_path, capsys):
+def run_with_a_gap(folder: Path) -> Path:
+    """paper_cycle with the error of one row (301) empty."""
     frame = pd.read_csv(PAPER)
     frame.loc[300, "error_um"] = np.nan
-    gap = tmp_path / "gap.csv"
+    gap = folder / "gap.csv"
     frame.to_csv(gap, index=False)
+    return gap
+
+
+def test_an_error_missing_on_one_row_names_the_p_it_rules_out(tmp_path, capsys):
+    gap = run_with_a_gap(tmp_path)
     _, model = fit_json(tmp_path, gap, *QUIET)
     printed = capsys.readouterr().out
     choice = model["training"]["model_choice"]
@@ -106,3 +112,15 @@ def test_compare_names_the_p_its_estimate_could_not_try_as_fit_does(tmp_path, ca
     assert {row["p"] for row in expected["candidates"]}.isdisjoint(fit_untried)
     listed = ", ".join(str(p) for p in fit_untried)
     assert f"note: p = {listed} not tried, their groups not fitting" in printed
+
+
+def test_compare_records_the_p_an_unmeasured_row_rules_out_as_fit_does(tmp_path, capsys):
+    gap = run_with_a_gap(tmp_path)
+    _, model = fit_json(tmp_path / "fit", gap, *QUIET)
+    choice = model["training"]["model_choice"]
+    out = tmp_path / "c.json"
+    assert main(["compare", "--data", str(gap), "--out", str(tmp_path / "c"), "--json", str(out), "--quiet"]) == 0
+    expected = json.loads(out.read_text())["expected_next_run"]
+    assert expected["not_tried"] == choice["not_tried"] == [1, 2, 3]
+    assert expected["not_tried_why"] == f"p = 1, 2, 3 not tried: {choice['not_tried_reason']}"
+    assert expected["fit_would_choose_p"] == model["p"] == 0

@@ -18,7 +18,7 @@ from groupfit.errors import InputError
 from groupfit.fit_budget import segment_table_over
 from groupfit.fitting import FitResult, selection_rule
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
-from groupfit.heldout.expect import NextRunExpectation, expect_next_run
+from groupfit.heldout.expect import NextRunExpectation, expect_next_run, unmeasured_rows_reason
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
 from groupfit.heldout.span import SPAN_KEY, input_span, reference_span
@@ -254,11 +254,7 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
     global_only = ""
     if settings.model.p == "auto" and np.isnan(run.error).any():
         settings = with_p(settings, 0)  # an error not on every row: a global model on the measured rows
-        global_only = (
-            f"the error is measured on {int(np.isfinite(run.error).sum())} of {run.n_samples} rows, and a grouped "
-            "model's breaks are row indices that need it on every row; fill or drop the rows without it to let "
-            "p >= 1 be tried"
-        )
+        global_only = unmeasured_rows_reason(int(np.isfinite(run.error).sum()), run.n_samples)
     check_measured(run, settings.model.p)
     check_block(args, run.n_samples)
     if position_run is not None:

@@ -172,6 +172,14 @@ class NextRunExpectation:
         return "\n".join([text, *(f"note    {note}" for note in self.notes)])
 
 
+def unmeasured_rows_reason(measured: int, rows: int) -> str:
+    """Why p >= 1 is not tried on a run whose error is measured on ``measured`` of its ``rows`` rows."""
+    return (
+        f"the error is measured on {measured} of {rows} rows, and a grouped model's breaks are row indices that "
+        "need it on every row; fill or drop the rows without it to let p >= 1 be tried"
+    )
+
+
 def expect_next_run(
     runs: Sequence[Run],
     p_values: Sequence[int] = (0,),
@@ -283,4 +291,11 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
     return tuple(notes)
 
 
-__all__ = ["CHOICE_RULE", "NextRunExpectation", "expect_for_model", "expect_next_run", "trust_notes"]
+__all__ = [
+    "CHOICE_RULE",
+    "NextRunExpectation",
+    "expect_for_model",
+    "expect_next_run",
+    "trust_notes",
+    "unmeasured_rows_reason",
+]
