@@ -119,3 +119,63 @@ def test_fit_with_a_dead_band_reports_the_figures_replay_gives_and_says_the_othe
     assert training["dead_band_max_um"] == pytest.approx(stream["max_um"], rel=1e-9)
     assert training["dead_band_rms_um"] > 1.5 * training["position_rms_um"]  # the band holds the compensation
     assert f"RMS {training['dead_band_rms_um']:.3g} um" in line
+
+
+def wide_table(table: pd.DataFrame, error: str = "error_um") -> pd.DataFrame:
+    """The long table as a wide one: one row per check run, one ``err_P<mm>`` column per position."""
+    errors = table.pivot(index="time_s", columns="P_mm", values=error)
+    errors.columns = [f"err_P{p:04.0f}" for p in errors.columns]
+    return table.groupby("time_s")[["T1", "T2", "T_amb"]].first().join(errors).reset_index()
+
+
+def fitted(folder, data: str, name: str, *extra: str) -> dict:
+    """The model ``fit --position P_mm`` writes for ``data`` (order 2, --p 0)."""
+    fit = ["fit", "--data", str(folder / data), "--temps", "T1,T2", "--position", "P_mm", "--position-order", "2"]
+    assert main([*fit, "--p", "0", *extra, "--out", str(folder / name), "--quiet"]) == 0
+    return json.loads((folder / name / "model.json").read_text())
+
+
+def replayed(folder, model: str, data: str, *extra: str) -> dict:
+    """``replay --json`` of ``model`` (a folder under ``folder``) on ``data``."""
+    report = folder / f"{model}_{data}.json"
+    assert (
+        main(
+            ["replay", str(folder / model / "model.json"), "--data", str(folder / data), *extra, "--json", str(report)]
+        )
+        == 0
+    )
+    return json.loads(report.read_text())
+
+
+def same_model(a: dict, b: dict) -> None:
+    """Two model files with the same coefficients and residual figures, within 1e-9 relative."""
+    assert np.ravel(a["coefficients"]) == pytest.approx(np.ravel(b["coefficients"]), rel=1e-9)
+    position_a, position_b = a["position"]["coefficients"], b["position"]["coefficients"]
+    assert np.ravel(position_a) == pytest.approx(np.ravel(position_b), rel=1e-9)
+    for key in ("position_rms_um", "position_max_um"):
+        assert a["training"][key] == pytest.approx(b["training"][key], rel=1e-9)
+
+
+@pytest.mark.parametrize("shape", ["long", "wide"])
+def test_a_table_with_its_error_in_mm_is_fitted_and_replayed_in_um(position_model, shape):
+    folder = position_model
+    table = check_run_table()
+    in_mm = table.assign(error_mm=table["error_um"] / 1000).drop(columns="error_um")
+    if shape == "wide":
+        wide = wide_table(table)
+        wide.to_csv(folder / "wide_um.csv", index=False)
+        errors = [c for c in wide.columns if c.startswith("err_P")]
+        wide.assign(**{c: wide[c] / 1000 for c in errors}).to_csv(folder / "wide_mm.csv", index=False)
+        um, mm = "wide_um.csv", "wide_mm.csv"
+    else:
+        in_mm.to_csv(folder / "axis_mm.csv", index=False)
+        um, mm = "axis.csv", "axis_mm.csv"
+    truth = fitted(folder, um, f"{shape}_um")
+    model = fitted(folder, mm, f"{shape}_mm", "--error", "error_mm")
+    same_model(model, truth)
+    assert truth["training"]["position_rms_um"] > 0.1  # µm, not mm
+    scored = replayed(folder, f"{shape}_um", mm, "--error", "error_mm")
+    expected = replayed(folder, f"{shape}_um", um)
+    by_row = [s["residual_um"] for s in scored["samples"]]
+    assert by_row == pytest.approx([s["residual_um"] for s in expected["samples"]], rel=1e-9, abs=1e-12)
+    assert scored["rms_um"] == pytest.approx(truth["training"]["position_rms_um"], rel=1e-9)
