@@ -34,6 +34,7 @@ from groupfit.data import (
     refuse_beyond,
 )
 from groupfit.default_columns import default_temperature_columns, length_unit, length_unit_named
+from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 
 WIDE_PREFIX = "err_P"
@@ -189,8 +190,8 @@ def load_position_run(
     share its time stamp already, and averaging over a period would mix the
     positions. An error column in another unit than µm by its name
     (``error_mm``) is read in µm on every row, as :func:`groupfit.data.load_run`
-    reads it; so are a wide table's ``err_P<mm>`` columns, in the unit of
-    ``error``'s name.
+    reads it, and so is ``COLUMN*K`` (column ``COLUMN`` ×K); so are a wide
+    table's ``err_P<mm>`` columns, in the unit (or ×K) of ``error``'s name.
     """
     frame, run_name, label = read_table(source, name)
     if resample is not None:
@@ -209,6 +210,8 @@ def load_position_run(
             f"{label}: --position '{position}' is also a temperature input; the axis position needs a column of "
             "its own (name the inputs with --temps)"
         )
+    if position in frame.columns:  # a long table: --error 'COLUMN*K' reads COLUMN ×K, as on a stream
+        frame = with_scaled_error(frame, error, label)
     scale = millimetres_per_unit(position) if position in frame.columns else 1.0  # wide: err_P<mm> gives mm
     per_um = length_unit(error)[1]  # an error in mm or nm by its name is read in µm, as a stream's is
     if position not in frame.columns:

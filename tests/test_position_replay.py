@@ -179,3 +179,30 @@ def test_a_table_with_its_error_in_mm_is_fitted_and_replayed_in_um(position_mode
     by_row = [s["residual_um"] for s in scored["samples"]]
     assert by_row == pytest.approx([s["residual_um"] for s in expected["samples"]], rel=1e-9, abs=1e-12)
     assert scored["rms_um"] == pytest.approx(truth["training"]["position_rms_um"], rel=1e-9)
+
+
+@pytest.mark.parametrize("shape", ["long", "wide"])
+def test_error_column_times_k_reads_a_table_of_check_runs_as_a_stream(position_model, shape, capsys):
+    folder = position_model
+    table = check_run_table()
+    if shape == "wide":
+        wide = wide_table(table)
+        wide.to_csv(folder / "wide_um.csv", index=False)
+        errors = [c for c in wide.columns if c.startswith("err_P")]
+        wide.assign(**{c: wide[c] / 2 for c in errors}).to_csv(folder / "wide_half.csv", index=False)
+        um, half = "wide_um.csv", "wide_half.csv"
+    else:
+        table.assign(e_half=table["error_um"] / 2).drop(columns="error_um").to_csv(folder / "half.csv", index=False)
+        um, half = "axis.csv", "half.csv"
+    truth = fitted(folder, um, f"{shape}_um")
+    model = fitted(folder, half, f"{shape}_half", "--error", "e_half*2")
+    same_model(model, truth)
+    assert model["error"] == "e_half*2"
+    capsys.readouterr()
+    scored = replayed(folder, f"{shape}_half", half)  # the model's own error, read ×2
+    assert "read ×2 as µm" in capsys.readouterr().out
+    expected = replayed(folder, f"{shape}_um", um)
+    by_row = [s["residual_um"] for s in scored["samples"]]
+    assert by_row == pytest.approx([s["residual_um"] for s in expected["samples"]], rel=1e-9, abs=1e-12)
+    again = replayed(folder, f"{shape}_um", half, "--error", "e_half*2")
+    assert again["rms_um"] == pytest.approx(expected["rms_um"], rel=1e-9)
