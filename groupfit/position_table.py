@@ -15,7 +15,7 @@ switching rule and the break search count) and the rows of every position.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -59,6 +59,9 @@ class PositionRun:
         Thermal error of every row, µm.
     column : str
         Name of the position column.
+    rows : DataFrame or None
+        The table's rows as read (a wide table in the long form), in the order
+        of ``check``: what each row's own readings are taken from.
     """
 
     run: Run
@@ -66,6 +69,7 @@ class PositionRun:
     position: np.ndarray
     error: np.ndarray
     column: str
+    rows: pd.DataFrame | None = field(default=None, repr=False, compare=False)
 
     @property
     def positions(self) -> np.ndarray:
@@ -253,7 +257,7 @@ def load_position_run(
     )
     in_mm = position_unit_notes(position, label) if scale != 1.0 else ()
     run = replace(run, source=f"{label} (check runs)", notes=run.notes + in_mm)
-    return PositionRun(run=run, check=check, position=positions, error=error_values, column=position)
+    return PositionRun(run=run, check=check, position=positions, error=error_values, column=position, rows=frame)
 
 
 def finite_column(frame: pd.DataFrame, column: str, label: str, what: str) -> np.ndarray:

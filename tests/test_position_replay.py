@@ -13,12 +13,12 @@ from groupfit.cli import main
 POSITIONS = np.arange(0.0, 301.0, 50.0)
 
 
-def check_run_table(seed: int = 0, n: int = 40) -> pd.DataFrame:
+def check_run_table(seed: int = 0, n: int = 40, *, t1_rise: float = 5.0, warmer: float = 0.0) -> pd.DataFrame:
     """Check runs every 2 min at 7 positions in a shuffled order: an offset, a slope and a curvature that grow
-    with T1 and T2."""
+    with T1 and T2 (T1 rising by ``t1_rise``; ``warmer``: every temperature, the air's too, that much higher)."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * 120.0
-    t1 = 20 + 5 * (1 - np.exp(-t / 3000))
+    t1 = 20 + t1_rise * (1 - np.exp(-t / 3000))
     t2 = 20 + 3 * (1 - np.exp(-t / 1500)) + np.sin(t / 2000)
     rows = []
     for i in range(n):
@@ -26,7 +26,7 @@ def check_run_table(seed: int = 0, n: int = 40) -> pd.DataFrame:
             d = p - 150
             r1, r2 = t1[i] - 20, t2[i] - 20
             error = 2 * r1 + r2 + (0.01 * r1 + 0.005 * r2) * d + 2e-5 * r1 * d * d + 0.1 * rng.standard_normal()
-            rows.append((t[i], p, t1[i], t2[i], 20.0, error))
+            rows.append((t[i], p, t1[i] + warmer, t2[i] + warmer, 20.0 + warmer, error))
     return pd.DataFrame(rows, columns=["time_s", "P_mm", "T1", "T2", "T_amb", "error_um"])
 
 
@@ -206,3 +206,39 @@ def test_error_column_times_k_reads_a_table_of_check_runs_as_a_stream(position_m
     assert by_row == pytest.approx([s["residual_um"] for s in expected["samples"]], rel=1e-9, abs=1e-12)
     again = replayed(folder, f"{shape}_um", half, "--error", "e_half*2")
     assert again["rms_um"] == pytest.approx(expected["rms_um"], rel=1e-9)
+
+
+def as_stream(table: pd.DataFrame) -> pd.DataFrame:
+    """The same rows, one per sample (10 s apart)."""
+    return table.assign(time_s=np.arange(len(table)) * 10.0)
+
+
+def table_and_stream(folder, capsys, name: str, table: pd.DataFrame) -> tuple[dict, dict, str]:
+    """``replay --json`` of the fixture's model on ``table`` and on the same rows as a stream, and what the
+    table's replay printed."""
+    model = str(folder / "m" / "model.json")
+    reports = []
+    for data in (name, f"{name}_stream"):
+        (table if data == name else as_stream(table)).to_csv(folder / f"{data}.csv", index=False)
+        capsys.readouterr()
+        assert (
+            main(["replay", model, "--data", str(folder / f"{data}.csv"), "--json", str(folder / f"{data}.json")]) == 0
+        )
+        reports.append((json.loads((folder / f"{data}.json").read_text()), capsys.readouterr().out))
+    return reports[0][0], reports[1][0], reports[0][1]
+
+
+@pytest.mark.parametrize(
+    "name, table, moved",
+    [
+        ("hotter", check_run_table(1, n=50, t1_rise=7.0), "T1"),
+        ("warm_day", check_run_table(0, warmer=3.0), "T_amb"),
+    ],
+)
+def test_a_table_beyond_the_modelling_range_is_named_as_on_a_stream(position_model, capsys, name, table, moved):
+    scored, stream, printed = table_and_stream(position_model, capsys, name, table)
+    assert [b["input"] for b in scored["beyond_modelling_range"]] == [moved]
+    assert scored["beyond_modelling_range"] == stream["beyond_modelling_range"]
+    assert (moved == "T_amb") == bool(scored["beyond_modelling_range"][0].get("reference"))
+    note = next(n for n in stream["notes"] if "leaves the modelling range" in n)
+    assert note in scored["notes"] and f"note     {note}" in printed

@@ -26,15 +26,15 @@ from groupfit.commands.replay_probes import (
 )
 from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.replay_register import register_check
+from groupfit.commands.replay_span import range_check
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import picked_up, started_running_notes, with_histories, zero_of
-from groupfit.data import Run, loading_notes
+from groupfit.data import loading_notes
 from groupfit.data_options import add_encoding_option
 from groupfit.error_zero import zero_offset
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
 from groupfit.glitches import scored_glitches
-from groupfit.heldout.span import REFERENCE_TOLERANCE, SPAN_KEY, beyond_span, span_note
 from groupfit.io import save_figure
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile, time_column
@@ -253,28 +253,6 @@ class ReplayResult:
 
     def summary(self) -> str:
         return replay_report(self.data)
-
-
-def range_check(model: ModelFile, run: Run, replay: Replay) -> dict[str, Any]:
-    """The inputs of ``run`` beyond the modelling run's span (kept by ``fit`` in the model file), and a note;
-    samples the run-time rule met as a sensor fault or on held readings are not the machine's state."""
-    span = (model.training or {}).get(SPAN_KEY)
-    if not span:
-        return {}
-    try:
-        inputs = np.array(model.inputs(run.frame, run.source), dtype=float)
-    except InputError:
-        return {}
-    not_the_machine = (replay.fault & (FAULT_SENSOR | FAULT_HELD)) != 0
-    inputs[not_the_machine] = np.nan
-    beyond = beyond_span(span, model.temps, inputs)
-    reference = model.reference
-    if reference in span and reference not in model.temps and reference in run.frame.columns:
-        readings = np.where(not_the_machine, np.nan, run.frame[reference].to_numpy(dtype=float))
-        moved = beyond_span(span, [reference], readings[:, None], REFERENCE_TOLERANCE)
-        beyond += [{**b, "reference": True} for b in moved]
-    note = span_note(beyond, run.n_samples)
-    return {"beyond_modelling_range": beyond, "notes": [note] if note else []}
 
 
 def clamp_check(tables: RuleTables, replay: Replay) -> tuple[int, str | None]:

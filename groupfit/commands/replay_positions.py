@@ -19,7 +19,8 @@ import numpy as np
 
 from groupfit.commands import common
 from groupfit.commands.replay_readings import load_readings
-from groupfit.data import ERROR_LIMIT_UM, PERIOD_TOLERANCE
+from groupfit.commands.replay_span import beyond_modelling_range, modelling_span, span_readings
+from groupfit.data import ERROR_LIMIT_UM, PERIOD_TOLERANCE, Run
 from groupfit.errors import InputError
 from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile
@@ -63,10 +64,9 @@ def refuse_stream_options(args: argparse.Namespace) -> None:
 
 
 def load_check_runs(args: argparse.Namespace, tables: RuleTables, *, time: str, error: str, clock: dict):
-    """The table's check runs and rows (:func:`groupfit.position.load_position_run`) and the rule's readings of
-    every check run (the position reading still to be set)."""
+    """The table's check runs and rows (:func:`groupfit.position.load_position_run`)."""
     error_limit = common.range_options(args)["error_limit"]
-    prun = load_position_run(
+    return load_position_run(
         args.data,
         tables.position_name,
         temps=list(tables.raw_names[: tables.n_measured]),
@@ -77,66 +77,109 @@ def load_check_runs(args: argparse.Namespace, tables: RuleTables, *, time: str, 
         period_tolerance=clock.get("period_tolerance", PERIOD_TOLERANCE),
         resample=clock.get("resample"),
     )
-    return prun, check_run_readings(prun, tables, time=time, error=error)
 
 
-def check_run_readings(prun: PositionRun, tables: RuleTables, *, time: str, error: str) -> np.ndarray:
-    """The rule's readings of every check run (measured inputs, then sources), the position reading still to be
-    set (:func:`replay_at_positions` sets it)."""
-    frame = prun.run.frame.assign(**{tables.position_name: 0.0})
-    return load_readings(frame, tables, time=time, error=error, name=prun.run.source, error_limit=np.inf).temps
+def rows_at(prun: PositionRun, position: float) -> np.ndarray:
+    """Every check run's row at ``position`` (its first row where it has none there), as indices of ``prun.rows``."""
+    index = np.searchsorted(prun.check, np.arange(prun.run.n_samples))
+    here = np.flatnonzero(prun.position == position)[::-1]  # reversed: the first of two rows at one position wins
+    index[prun.check[here]] = here
+    return index
+
+
+def run_at(prun: PositionRun, tables: RuleTables, position: float, *, time: str, error: str) -> Run:
+    """The check runs as the rule reads them with the axis at ``position``: each check run read on its own row
+    there (a reading missing on that row is the rule's fault there only, as on a stream), its ``temps`` the
+    rule's readings (measured inputs, then sources; the position reading set to ``position``)."""
+    frame = prun.run.frame if prun.rows is None else prun.rows.iloc[rows_at(prun, position)].reset_index(drop=True)
+    frame = frame.assign(**{tables.position_name: 0.0})
+    run = load_readings(frame, tables, time=time, error=error, name=prun.run.source, error_limit=np.inf)
+    run.temps[:, tables.position_reading] = position
+    return run
 
 
 def row_residuals(model: ModelFile, prun: PositionRun, *, precision: str = "double") -> np.ndarray:
     """Every row's residual (error + the rule's target at its position and check run; NaN in sensor fault) as
     :func:`replay_check_runs` scores it."""
-    tables = RuleTables.from_model(model)
-    readings = check_run_readings(prun, tables, time=prun.run.time_name, error=prun.run.error_name or "error_um")
-    _, rows = replay_at_positions(model, prun, readings, precision=precision, reading=tables.position_reading)
+    names = {"time": prun.run.time_name, "error": prun.run.error_name or "error_um"}
+    _, rows = replay_at_positions(model, prun, RuleTables.from_model(model), precision=precision, **names)
     residual = prun.error + rows["target_um"]
     residual[(rows["fault"] & FAULT_SENSOR) != 0] = np.nan
     return residual
 
 
+ROW_FIELDS = ("target_um", "fault", "clamped", "prediction_um")
+"""What :func:`replay_at_positions` keeps of the replay at every row's position and check run."""
+
+
 def replay_at_positions(
-    model: ModelFile, prun: PositionRun, readings: np.ndarray, *, precision: str, reading: int
+    model: ModelFile, prun: PositionRun, tables: RuleTables, *, precision: str, time: str, error: str
 ) -> tuple[Replay, dict[str, np.ndarray]]:
     """The rule over the check runs with the axis at each measured position in turn: the replay at the first
     position (its groups and switches; the position changes neither) and, for every row, the target, the
-    fault and the clamp of the replay at its own position and check run."""
-    positions = prun.positions
-    rows = {"target_um": np.empty(prun.error.size), "fault": np.empty(prun.error.size, dtype=int)}
-    rows["clamped"] = np.zeros(prun.error.size, dtype=bool)
-    rows["prediction_um"] = np.empty(prun.error.size)
+    fault and the clamp of the replay at its own position and check run, the rule's readings there, and the
+    model's inputs and reference reading there (``span``: None when they cannot be formed)."""
+    n = prun.error.size
+    rows: dict[str, Any] = {name: np.zeros(n, dtype=int if name == "fault" else float) for name in ROW_FIELDS}
+    rows["clamped"] = rows["clamped"].astype(bool)
+    rows["readings"] = np.empty((n, len(tables.raw_names)))
+    spans: list = []
     first = None
-    for position in positions:
-        at = readings.copy()
-        at[:, reading] = position
-        replay = SwitchingRule(model, precision=precision, period_s=prun.run.period).replay(at)
+    for position in prun.positions:
+        run = run_at(prun, tables, position, time=time, error=error)
+        replay = SwitchingRule(model, precision=precision, period_s=prun.run.period).replay(run.temps)
         first = replay if first is None else first
         here = prun.position == position
         checks = prun.check[here]
-        for name in rows:
+        for name in ROW_FIELDS:
             rows[name][here] = getattr(replay, name)[checks]
+        rows["readings"][here] = run.temps[checks]
+        spans.append((here, checks, span_readings(model, run.frame, run.source)))
+    rows["span"] = rows_span(spans, n)
     return first, rows
+
+
+def rows_span(spans: list, n: int) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """The model's inputs and reference readings of every row, from those of the check runs at each position
+    (``(rows, check runs, span_readings)`` per position); None when some position's cannot be formed."""
+    if any(readings is None for _, _, readings in spans):
+        return None
+    inputs = np.empty((n, spans[0][2][0].shape[1]))
+    reference = None if spans[0][2][1] is None else np.empty(n)
+    for here, checks, (at_inputs, at_reference) in spans:
+        inputs[here] = at_inputs[checks]
+        if reference is not None:
+            reference[here] = at_reference[checks]
+    return inputs, reference
 
 
 def replay_check_runs(args: argparse.Namespace, model: ModelFile, *, time: str, error: str, clock: dict) -> int:
     """``groupfit replay`` of a position model on a table of check runs (module docstring)."""
     refuse_stream_options(args)
     tables = RuleTables.from_model(model)
-    prun, readings = load_check_runs(args, tables, time=time, error=error, clock=clock)
+    prun = load_check_runs(args, tables, time=time, error=error, clock=clock)
     try:
-        replay, rows = replay_at_positions(
-            model, prun, readings, precision=args.precision, reading=tables.position_reading
-        )
+        replay, rows = replay_at_positions(model, prun, tables, precision=args.precision, time=time, error=error)
     except InputError as exc:
         raise InputError(f"{prun.run.source}: {exc}") from None
     residual = prun.error + rows["target_um"]
     residual[(rows["fault"] & FAULT_SENSOR) != 0] = np.nan
     result = check_run_result(args, model, prun, replay, rows, residual)
+    result.update(row_checks(model, tables, rows, result["notes"]))
     common.finish_outputs(args, check_run_report(result), result, [])
     return 0
+
+
+def row_checks(model: ModelFile, tables: RuleTables, rows: dict, notes: list[str]) -> dict[str, Any]:
+    """What a stream's replay says of its samples, of the rows: the inputs (and reference) beyond the modelling
+    span; ``notes`` with the note on them added."""
+    span = {}
+    if modelling_span(model) and rows["span"] is not None:
+        span = beyond_modelling_range(model, *rows["span"], rows["fault"])
+    return {
+        **{key: value for key, value in span.items() if key != "notes"},
+        "notes": [*notes, *span.get("notes", [])],
+    }
 
 
 def check_run_result(args, model: ModelFile, prun: PositionRun, replay: Replay, rows, residual) -> dict[str, Any]:
@@ -208,4 +251,4 @@ def check_run_report(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["check_run_readings", "is_check_run_table", "replay_check_runs", "row_residuals"]
+__all__ = ["is_check_run_table", "replay_check_runs", "row_residuals", "run_at"]
