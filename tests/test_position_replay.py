@@ -242,3 +242,29 @@ def test_a_table_beyond_the_modelling_range_is_named_as_on_a_stream(position_mod
     assert (moved == "T_amb") == bool(scored["beyond_modelling_range"][0].get("reference"))
     note = next(n for n in stream["notes"] if "leaves the modelling range" in n)
     assert note in scored["notes"] and f"note     {note}" in printed
+
+
+def beyond_the_travel() -> pd.DataFrame:
+    table = check_run_table()
+    return table.assign(P_mm=table["P_mm"].replace(300.0, 450.0))
+
+
+def held_air() -> pd.DataFrame:
+    table = check_run_table(1, n=50)
+    table.loc[70, "T_amb"] = np.nan  # the first row of check run 11
+    return table
+
+
+@pytest.mark.parametrize("name, table", [("beyond_travel", beyond_the_travel()), ("held_air", held_air())])
+def test_a_table_counts_the_rows_held_or_clamped_to_the_travel_as_a_stream_counts_its_samples(
+    position_model, capsys, name, table
+):
+    scored, stream, printed = table_and_stream(position_model, capsys, name, table)
+    faults = {key.replace("_rows", ""): n for key, n in scored["faults"].items()}
+    assert faults == {key.replace("_samples", ""): n for key, n in stream["faults"].items()}
+    assert faults["position_clamped"] + faults["held"] > 0
+    assert scored.get("readings_out_of_range") == stream.get("readings_out_of_range")
+    line = next(text for text in printed.splitlines() if text.startswith("faults"))
+    assert f"{faults['held']} row(s) on held readings" in line
+    assert f"{faults['position_clamped']} at a position clamped to the travel" in line
+    assert scored["rms_um"] == pytest.approx(stream["rms_um"], rel=1e-9)

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from groupfit.commands import common
+from groupfit.commands.replay_faults import fault_readings
 from groupfit.commands.replay_readings import load_readings
 from groupfit.commands.replay_span import beyond_modelling_range, modelling_span, span_readings
 from groupfit.data import ERROR_LIMIT_UM, PERIOD_TOLERANCE, Run
@@ -26,7 +27,7 @@ from groupfit.metrics import error_metrics
 from groupfit.model import ModelFile
 from groupfit.position import PositionRun, load_position_run, wide_columns
 from groupfit.readtable import read_table
-from groupfit.runtime import FAULT_SENSOR, Replay, RuleTables, SwitchingRule
+from groupfit.runtime import FAULT_HELD, FAULT_POSITION, FAULT_SENSOR, Replay, RuleTables, SwitchingRule
 from groupfit.runtime.period import period_differs
 
 STREAM_ONLY_OPTIONS = {
@@ -171,14 +172,17 @@ def replay_check_runs(args: argparse.Namespace, model: ModelFile, *, time: str, 
 
 
 def row_checks(model: ModelFile, tables: RuleTables, rows: dict, notes: list[str]) -> dict[str, Any]:
-    """What a stream's replay says of its samples, of the rows: the inputs (and reference) beyond the modelling
-    span; ``notes`` with the note on them added."""
+    """What a stream's replay says of its samples, of the rows: the readings the rule held or met as a sensor
+    fault, and the inputs (and reference) beyond the modelling span; ``notes`` with the notes on them added."""
+    found, fault_notes = fault_readings(tables, rows["readings"], rows["fault"])
     span = {}
     if modelling_span(model) and rows["span"] is not None:
         span = beyond_modelling_range(model, *rows["span"], rows["fault"])
     return {
+        **found,
         **{key: value for key, value in span.items() if key != "notes"},
-        "notes": [*notes, *span.get("notes", [])],
+        "nonfinite_readings": int(np.sum(~np.isfinite(rows["readings"]))),
+        "notes": [*notes, *span.get("notes", []), *fault_notes],
     }
 
 
@@ -226,7 +230,11 @@ def check_run_result(args, model: ModelFile, prun: PositionRun, replay: Replay, 
         "measured_samples": int(prun.error.size),
         "switches": replay.switch_samples(),
         "clamped_samples": clamped,
-        "faults": {"sensor_fault_rows": int(np.sum((rows["fault"] & FAULT_SENSOR) != 0))},
+        "faults": {
+            "held_rows": int(np.sum((rows["fault"] & FAULT_HELD) != 0)),
+            "sensor_fault_rows": int(np.sum((rows["fault"] & FAULT_SENSOR) != 0)),
+            "position_clamped_rows": int(np.sum((rows["fault"] & FAULT_POSITION) != 0)),
+        },
         "notes": notes,
     }
 
@@ -234,11 +242,13 @@ def check_run_result(args, model: ModelFile, prun: PositionRun, replay: Replay, 
 def check_run_report(result: dict[str, Any]) -> str:
     """The printed summary of a table of check runs replayed row by row."""
     switches = ", ".join(f"{s['from']}->{s['to']} at check run {s['i']}" for s in result["switches"]) or "none"
+    faults = result["faults"]
     lines = [
         f"run      {result['run']}: {result['check_runs']} check runs every {result['sampling_period_s']:g} s at "
         f"{len(result['positions_mm'])} positions ({result['rows']} rows)",
         f"switches {switches}",
-        f"faults   {result['faults']['sensor_fault_rows']} row(s) in sensor fault (safe output)",
+        f"faults   {faults['held_rows']} row(s) on held readings, {faults['sensor_fault_rows']} in sensor fault (safe "
+        f"output), {faults['position_clamped_rows']} at a position clamped to the travel",
     ]
     if result["rms_um"] is None:
         lines.append("residual none: no row scored (every row in sensor fault: the rule's safe output)")
