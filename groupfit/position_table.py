@@ -62,6 +62,9 @@ class PositionRun:
     rows : DataFrame or None
         The table's rows as read (a wide table in the long form), in the order
         of ``check``: what each row's own readings are taken from.
+    file_row : ndarray of int or None
+        The row of the file (0-based, the header not counted) each row was read
+        from, to name it in messages.
     """
 
     run: Run
@@ -70,6 +73,7 @@ class PositionRun:
     error: np.ndarray
     column: str
     rows: pd.DataFrame | None = field(default=None, repr=False, compare=False)
+    file_row: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def positions(self) -> np.ndarray:
@@ -218,17 +222,7 @@ def load_position_run(
         frame = with_scaled_error(frame, error, label)
     scale = millimetres_per_unit(position) if position in frame.columns else 1.0  # wide: err_P<mm> gives mm
     per_um = length_unit(error)[1]  # an error in mm or nm by its name is read in µm, as a stream's is
-    if position not in frame.columns:
-        if wide_columns(frame, label):
-            for column in wide_columns(frame):
-                values = numeric_column(frame, column, label, allow_nonfinite=True)
-                refuse_implausible_errors(values * per_um, column, label, error_limit)
-            frame = wide_to_long(frame, position, error)
-        else:
-            raise InputError(
-                f"{label}: position column '{position}' not found, and no wide error columns "
-                f"({WIDE_PREFIX}<mm>). The columns are: {', '.join(map(str, frame.columns))}"
-            )
+    frame, file_row = long_form(frame, position, error, label, error_limit, per_um)
     positions = finite_column(frame, position, label, "axis position") * scale
     refuse_beyond(positions, MAX_POSITION_MM, position, label, "mm is not a plausible axis position")
     times = numeric_column(frame, time, label, allow_nonfinite=False)
@@ -238,6 +232,7 @@ def load_position_run(
     order = np.argsort(times, kind="stable")
     frame = frame.iloc[order].reset_index(drop=True)
     positions, times, error_values, logged = positions[order], times[order], error_values[order], logged[order]
+    file_row = file_row[order]
     stamps, check = np.unique(times, return_inverse=True)
     if len(np.unique(positions)) < 2:
         raise InputError(f"{label}: column '{position}' holds one position only; a position model needs several")
@@ -257,7 +252,29 @@ def load_position_run(
     )
     in_mm = position_unit_notes(position, label) if scale != 1.0 else ()
     run = replace(run, source=f"{label} (check runs)", notes=run.notes + in_mm)
-    return PositionRun(run=run, check=check, position=positions, error=error_values, column=position, rows=frame)
+    return PositionRun(
+        run=run, check=check, position=positions, error=error_values, column=position, rows=frame, file_row=file_row
+    )
+
+
+def long_form(
+    frame: pd.DataFrame, position: str, error: str, label: str, error_limit: float | None, per_um: float
+) -> tuple[pd.DataFrame, np.ndarray]:
+    """The table in the long form (a wide one converted, its ``err_P<mm>`` cells read ×``per_um`` as µm and
+    refused beyond ``error_limit`` with their row), and the row of the file each row was read from (0-based)."""
+    if position in frame.columns:
+        return frame, np.arange(len(frame))
+    columns = wide_columns(frame, label)
+    if not columns:
+        raise InputError(
+            f"{label}: position column '{position}' not found, and no wide error columns "
+            f"({WIDE_PREFIX}<mm>). The columns are: {', '.join(map(str, frame.columns))}"
+        )
+    for column in columns:
+        values = numeric_column(frame, column, label, allow_nonfinite=True)
+        refuse_implausible_errors(values * per_um, column, label, error_limit)
+    read = frame[list(columns)].notna().to_numpy()  # wide_to_long's rows: file row by file row, columns in order
+    return wide_to_long(frame, position, error), np.nonzero(read)[0]
 
 
 def finite_column(frame: pd.DataFrame, column: str, label: str, what: str) -> np.ndarray:

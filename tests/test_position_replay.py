@@ -268,3 +268,25 @@ def test_a_table_counts_the_rows_held_or_clamped_to_the_travel_as_a_stream_count
     assert f"{faults['held']} row(s) on held readings" in line
     assert f"{faults['position_clamped']} at a position clamped to the travel" in line
     assert scored["rms_um"] == pytest.approx(stream["rms_um"], rel=1e-9)
+
+
+def test_range_error_on_a_table_leaves_the_rows_beyond_it_out_of_the_score_as_a_stream(position_model, capsys):
+    folder = position_model
+    table = check_run_table(1, n=50, t1_rise=7.0)
+    table.to_csv(folder / "large.csv", index=False)
+    as_stream(table).to_csv(folder / "large_stream.csv", index=False)
+    model = str(folder / "m" / "model.json")
+    reports = {}
+    for data in ("large", "large_stream"):
+        capsys.readouterr()
+        args = ["replay", model, "--data", str(folder / f"{data}.csv"), "--range-error", "5"]
+        assert main([*args, "--json", str(folder / f"{data}_5.json")]) == 0
+        reports[data] = json.loads((folder / f"{data}_5.json").read_text()), capsys.readouterr().out
+    (scored, printed), (stream, _) = reports["large"], reports["large_stream"]
+    beyond = int(np.sum(np.abs(table["error_um"]) > 5))
+    assert 0 < beyond < len(table)
+    assert scored["scored_samples"] == stream["scored_samples"] == len(table) - beyond
+    assert scored["measured_samples"] == stream["measured_samples"]
+    assert scored["rms_um"] == pytest.approx(stream["rms_um"], rel=1e-9)
+    note = next(n for n in stream["data_notes"] if "beyond ±5 µm" in n).split("large_stream.csv: ")[1]
+    assert f"{folder / 'large.csv'}: {note}" in scored["notes"] and note in printed

@@ -13,6 +13,7 @@ or a dead band this is the fit's own in-sample evaluation.
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -65,19 +66,41 @@ def refuse_stream_options(args: argparse.Namespace) -> None:
 
 
 def load_check_runs(args: argparse.Namespace, tables: RuleTables, *, time: str, error: str, clock: dict):
-    """The table's check runs and rows (:func:`groupfit.position.load_position_run`)."""
+    """The table's check runs and rows (:func:`groupfit.position.load_position_run`), its error beyond
+    ``--range-error`` (default :data:`groupfit.data.ERROR_LIMIT_UM`) left out of the score as not measured, as on
+    a stream, with a note."""
     error_limit = common.range_options(args)["error_limit"]
-    return load_position_run(
+    prun = load_position_run(
         args.data,
         tables.position_name,
         temps=list(tables.raw_names[: tables.n_measured]),
         time=time,
         error=error,
         temp_range=None,
-        error_limit=ERROR_LIMIT_UM if error_limit is None else error_limit,
+        error_limit=None,
         period_tolerance=clock.get("period_tolerance", PERIOD_TOLERANCE),
         resample=clock.get("resample"),
     )
+    return without_implausible_rows(prun, ERROR_LIMIT_UM if error_limit is None else error_limit)
+
+
+def without_implausible_rows(prun: PositionRun, limit: float) -> PositionRun:
+    """``prun`` with its rows' error beyond ±``limit`` µm taken as not measured (NaN), and a note naming the
+    rows of the file (:func:`groupfit.data.without_implausible_errors` on a stream)."""
+    beyond = np.flatnonzero(np.abs(prun.error) > limit)
+    if not beyond.size:
+        return prun
+    file_row = np.arange(prun.error.size) if prun.file_row is None else prun.file_row
+    beyond = beyond[np.argsort(file_row[beyond], kind="stable")]
+    rows = ", ".join(str(i + 1) for i in file_row[beyond[:5]]) + (" …" if beyond.size > 5 else "")
+    label = prun.run.source.removesuffix(" (check runs)")
+    note = (
+        f"{label}: {beyond.size} reading(s) of the error beyond ±{limit:g} µm (row {rows}, "
+        f"{prun.error[beyond[0]]:g} µm first): not a thermal error, left out of the score as not measured"
+    )
+    error = prun.error.copy()
+    error[beyond] = np.nan
+    return replace(prun, error=error, run=replace(prun.run, notes=(*prun.run.notes, note)))
 
 
 def rows_at(prun: PositionRun, position: float) -> np.ndarray:
@@ -227,7 +250,7 @@ def check_run_result(args, model: ModelFile, prun: PositionRun, replay: Replay, 
         "samples": samples,
         **{key: metrics[key] for key in ("rms_um", "max_um", "R_um")},
         "scored_samples": int(scored.size),
-        "measured_samples": int(prun.error.size),
+        "measured_samples": int(np.isfinite(prun.error).sum()),
         "switches": replay.switch_samples(),
         "clamped_samples": clamped,
         "faults": {
