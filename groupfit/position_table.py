@@ -222,6 +222,7 @@ def load_position_run(
         frame = with_scaled_error(frame, error, label)
     scale = millimetres_per_unit(position) if position in frame.columns else 1.0  # wide: err_P<mm> gives mm
     per_um = length_unit(error)[1]  # an error in mm or nm by its name is read in µm, as a stream's is
+    where = f"column '{position}'" if position in frame.columns else "its error columns (err_P<mm>)"
     frame, file_row = long_form(frame, position, error, label, error_limit, per_um)
     positions = finite_column(frame, position, label, "axis position") * scale
     refuse_beyond(positions, MAX_POSITION_MM, position, label, "mm is not a plausible axis position")
@@ -235,11 +236,12 @@ def load_position_run(
     file_row = file_row[order]
     stamps, check = np.unique(times, return_inverse=True)
     if len(np.unique(positions)) < 2:
-        raise InputError(f"{label}: column '{position}' holds one position only; a position model needs several")
+        raise InputError(f"{label}: {where} hold(s) one position only; a position model needs several")
     first = np.searchsorted(times, stamps)
     checks = frame.iloc[first].reset_index(drop=True)
     checks[error] = np.bincount(check, weights=logged) / np.bincount(check)  # as logged: load_run reads its unit
     checks = checks.drop(columns=[position])
+    refuse_unread_inputs(checks, temps, label, file_row[first])
     run = load_run(
         checks,
         temps=temps,
@@ -275,6 +277,21 @@ def long_form(
         refuse_implausible_errors(values * per_um, column, label, error_limit)
     read = frame[list(columns)].notna().to_numpy()  # wide_to_long's rows: file row by file row, columns in order
     return wide_to_long(frame, position, error), np.nonzero(read)[0]
+
+
+def refuse_unread_inputs(checks: pd.DataFrame, temps, label: str, rows: np.ndarray) -> None:
+    """Refuse a check run whose first row, where its inputs are read, lacks one, naming that row of the file
+    (``rows``: each check run's first row, 0-based): nothing fills it in (``--resample`` would mix the positions)."""
+    for column in temps:
+        if column not in checks.columns:
+            continue
+        values = numeric_column(checks, column, label, allow_nonfinite=True)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise InputError(
+                f"{label}: row {int(rows[bad[0]]) + 1}, column '{column}' is empty or no number ({bad.size} check "
+                "run(s) so): a check run's inputs are read on its first row; repair or drop that row"
+            )
 
 
 def finite_column(frame: pd.DataFrame, column: str, label: str, what: str) -> np.ndarray:

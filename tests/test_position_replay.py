@@ -290,3 +290,40 @@ def test_range_error_on_a_table_leaves_the_rows_beyond_it_out_of_the_score_as_a_
     assert scored["rms_um"] == pytest.approx(stream["rms_um"], rel=1e-9)
     note = next(n for n in stream["data_notes"] if "beyond ±5 µm" in n).split("large_stream.csv: ")[1]
     assert f"{folder / 'large.csv'}: {note}" in scored["notes"] and note in printed
+
+
+def test_a_wide_table_of_one_position_is_refused_naming_its_error_columns(position_model, capsys):
+    folder = position_model
+    one = wide_table(check_run_table())[["time_s", "T1", "T2", "T_amb", "err_P0100"]]
+    one.to_csv(folder / "wide_one.csv", index=False)
+    assert main(["replay", str(folder / "m" / "model.json"), "--data", str(folder / "wide_one.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "err_P<mm>" in err and "one position only" in err and "P_mm" not in err and len(err.splitlines()) == 1
+
+
+def test_a_grouped_model_on_a_table_at_another_period_is_refused_without_pointing_to_resample(position_model, capsys):
+    folder = position_model
+    grouped = fitted(folder, "axis.csv", "grouped", "--p", "1")
+    assert grouped["breaks"] and grouped["sampling_period_s"] == 120.0
+    faster = check_run_table().assign(time_s=lambda t: t["time_s"] / 2)  # check runs every 60 s
+    faster.to_csv(folder / "axis_60s.csv", index=False)
+    assert main(["replay", str(folder / "grouped" / "model.json"), "--data", str(folder / "axis_60s.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "check runs every 60 s, the model's period is 120 s" in err and "--resample" not in err
+    assert len(err.splitlines()) == 1
+
+
+def test_an_empty_input_on_a_check_runs_first_row_is_named_by_its_row_in_the_file(position_model, capsys):
+    folder = position_model
+    table = check_run_table()
+    table.loc[70, "T1"] = np.nan  # the first of the eleventh check run's seven rows
+    table.to_csv(folder / "nan_t1.csv", index=False)
+    fit = ["fit", "--data", str(folder / "nan_t1.csv"), "--temps", "T1,T2", "--position", "P_mm"]
+    replay = ["replay", str(folder / "m" / "model.json"), "--data", str(folder / "nan_t1.csv")]
+    for args in ([*fit, "--out", str(folder / "never")], replay):
+        capsys.readouterr()
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert "nan_t1.csv: row 71, column 'T1' is empty" in err and "--resample" not in err
+        assert len(err.splitlines()) == 1
+    assert not (folder / "never").exists()

@@ -143,6 +143,13 @@ def replay_at_positions(
     position (its groups and switches; the position changes neither) and, for every row, the target, the
     fault and the clamp of the replay at its own position and check run, the rule's readings there, and the
     model's inputs and reference reading there (``span``: None when they cannot be formed)."""
+    if model.breaks and period_differs(model, prun.run.period):  # a table cannot be averaged to the model's period
+        raise InputError(
+            f"check runs every {prun.run.period:g} s, the model's period is "
+            f"{float(model.sampling_period_s):g} s: a grouped model (p = {len(model.breaks)}) switches by sample "
+            "count, exact only at its own period, and a table's check runs cannot be averaged without mixing their "
+            "positions; record the check runs at the model's period, or fit a model on this table"
+        )
     n = prun.error.size
     rows: dict[str, Any] = {name: np.zeros(n, dtype=int if name == "fault" else float) for name in ROW_FIELDS}
     rows["clamped"] = rows["clamped"].astype(bool)
