@@ -45,7 +45,7 @@ from groupfit.comparison_text import comparison_summary
 from groupfit.conditions import condition_changes, run_condition
 from groupfit.data import Run, join_runs, measured_rows
 from groupfit.errors import InputError
-from groupfit.heldout.expect import NextRunExpectation, expect_next_run, unmeasured_rows_reason
+from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.penalty import penalised_expectation
 from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S
@@ -349,9 +349,7 @@ def compare_models(
             scored_runs, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
         )
         if fit_pmax < settings.fit_pmax:  # the error not on every row: the global model alone
-            reason = unmeasured_rows_reason(measured.n_samples, modelling.n_samples)
-            untried = tuple(range(fit_pmax + 1, settings.fit_pmax + 1))
-            expectation = replace(expectation, not_tried=untried, not_tried_reason=reason)
+            expectation = expectation.on_measured_rows(measured.n_samples, modelling.n_samples, settings.fit_pmax)
         fit_choice = expectation.choice_among(fit_pmax + 1)
         fit_penalty = (
             penalised_expectation(measured, fit_intercept=settings.fit_intercept, parts=scored_runs)

@@ -26,7 +26,7 @@ from groupfit.errors import InputError
 from groupfit.fast_response import stage_of, without_stage
 from groupfit.heldout.expect import expect_for_model
 from groupfit.heldout.selection import SELECTION_METHODS
-from groupfit.heldout.span import SPAN_KEY, input_span, reference_span
+from groupfit.heldout.span import SPAN_KEY, training_span
 from groupfit.io import refuse_repeated
 from groupfit.model import ModelFile, time_column
 from groupfit.overlap import refuse_overlapping
@@ -299,10 +299,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     if result.changed:  # the span of the augmented model's inputs, derived ones included: replay checks a run on it
         augmented = ModelFile.coerce(result.model)
         spans = np.vstack([augmented.inputs(run.frame, run.source) for run in data])
-        training[SPAN_KEY] = {
-            **input_span(augmented.temps, spans),
-            **reference_span([run.frame for run in data], augmented.reference, augmented.temps),
-        }
+        training[SPAN_KEY] = training_span(augmented.temps, spans, [run.frame for run in data], augmented.reference)
     result = replace(result, model=result.model.replace(training=training))
     model_path = Path(args.model)
     written = []

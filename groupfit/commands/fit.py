@@ -18,10 +18,10 @@ from groupfit.errors import InputError
 from groupfit.fit_budget import segment_table_over
 from groupfit.fitting import FitResult, selection_rule
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
-from groupfit.heldout.expect import NextRunExpectation, expect_next_run, unmeasured_rows_reason
+from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
-from groupfit.heldout.span import SPAN_KEY, input_span, reference_span
+from groupfit.heldout.span import SPAN_KEY, training_span
 from groupfit.inference.cli import check_block, intervals_from_args
 from groupfit.models.grouped import GroupedRegressor
 from groupfit.models.select_p import choose_p, exact_path
@@ -59,8 +59,8 @@ class FitData:
     input_selection: dict | None = None
     reference_choice: ReferenceChoice | None = None
     """How the default reference was decided (an ambient column that moves), None when it was configured."""
-    global_only: str = ""
-    """Why p was not chosen but set to 0 (the error is not measured on every row), else empty."""
+    global_only: bool = False
+    """p was not chosen but set to 0: the error is not measured on every row."""
 
 
 def run_fit(args: argparse.Namespace) -> int:
@@ -117,7 +117,7 @@ def run_fit(args: argparse.Namespace) -> int:
     model = estimator.to_model_file(run, model_settings.criterion)  # the valid ranges over every row
     expectation, no_estimate = fitted_model_expectation(args, replace(data, settings=settings), expectation, alpha)
     notes = f"\nnote    no next-run estimate: {no_estimate}" if no_estimate else ""
-    span = {**input_span(run.temp_names, run.temps), **reference_span([run.frame], run.reference, run.temp_names)}
+    span = training_span(run.temp_names, run.temps, [run.frame], run.reference)
     training = {**model.training, SPAN_KEY: span}
     if position_run is None:
         training[RECORDINGS_KEY] = recording_entries(settings.data.paths, runs, out_dir)
@@ -251,10 +251,9 @@ def prepared_runs(args: argparse.Namespace, settings: RunSettings) -> FitData:
         run = join_runs(runs)
     else:
         run = with_reference(run, reference)
-    global_only = ""
-    if settings.model.p == "auto" and np.isnan(run.error).any():
+    global_only = settings.model.p == "auto" and bool(np.isnan(run.error).any())
+    if global_only:
         settings = with_p(settings, 0)  # an error not on every row: a global model on the measured rows
-        global_only = unmeasured_rows_reason(int(np.isfinite(run.error).sum()), run.n_samples)
     check_measured(run, settings.model.p)
     check_block(args, run.n_samples)
     if position_run is not None:
@@ -383,9 +382,9 @@ def fitted_model_expectation(
                 expectation = model_expectation(model, data.estimate_runs, (model.p,), alpha)
         except InputError as exc:
             return None, str(exc)
-    if data.global_only and model.pmax > 0:
-        untried = tuple(range(1, model.pmax + 1))
-        expectation = replace(expectation, not_tried=untried, not_tried_reason=data.global_only)
+    if data.global_only:
+        measured = int(np.isfinite(data.run.error).sum())
+        expectation = expectation.on_measured_rows(measured, data.run.n_samples, model.pmax)
     return expectation, ""
 
 

@@ -35,7 +35,7 @@ from typing import Mapping
 import numpy as np
 
 from groupfit.errors import InputError
-from groupfit.heldout.span import SPAN_KEY
+from groupfit.heldout.span import SPAN_KEY, beyond_span
 from groupfit.model import ModelFile
 
 DEFAULT_MAX_POINTS = 2000
@@ -224,18 +224,16 @@ def refuse_unmodelled_state(model: ModelFile, inputs: np.ndarray) -> None:
     :data:`STATE_MARGIN` of its width: the model extrapolates there, and a table for the NC holds no fault
     flag or clamp of its own to catch it."""
     span = (model.training or {}).get(SPAN_KEY) or {}
-    for name, value in zip(model.temps, inputs):
-        if name not in span:
-            continue
-        low, high = (float(v) for v in span[name])
+    beyond = beyond_span(span, model.temps, np.asarray(inputs, dtype=float)[None, :], STATE_MARGIN)
+    if beyond:
+        name, (low, high), (value, _) = beyond[0]["input"], beyond[0]["span"], beyond[0]["run"]
         margin = STATE_MARGIN * max(high - low, 1e-9)
-        if not low - margin <= value <= high + margin:
-            raise InputError(
-                f"--state {name}={value:g}: the modelling run's {name} spans {low:.4g} .. {high:.4g}, and the "
-                f"model is not extrapolated beyond it by more than {100 * STATE_MARGIN:g} % of that span into a "
-                f"table for the NC: give a state within {low - margin:.4g} .. {high + margin:.4g}, or refit on a "
-                "run that reaches it"
-            )
+        raise InputError(
+            f"--state {name}={value:g}: the modelling run's {name} spans {low:.4g} .. {high:.4g}, and the "
+            f"model is not extrapolated beyond it by more than {100 * STATE_MARGIN:g} % of that span into a "
+            f"table for the NC: give a state within {low - margin:.4g} .. {high + margin:.4g}, or refit on a "
+            "run that reaches it"
+        )
 
 
 def refuse_beyond_clamp(model: ModelFile, table: CecTable, state: str) -> None:

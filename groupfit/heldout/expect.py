@@ -111,6 +111,17 @@ class NextRunExpectation:
             },
         }
 
+    def on_measured_rows(self, measured: int, rows: int, pmax: int) -> NextRunExpectation:
+        """This expectation of the global model, with p = 1 … ``pmax`` recorded as not tried: the run's error is
+        measured on ``measured`` of its ``rows`` rows, and a grouped model's breaks are row indices."""
+        if pmax < 1:
+            return self
+        reason = (
+            f"the error is measured on {measured} of {rows} rows, and a grouped model's breaks are row indices "
+            "that need it on every row; fill or drop the rows without it to let p >= 1 be tried"
+        )
+        return dataclasses.replace(self, not_tried=tuple(range(1, pmax + 1)), not_tried_reason=reason)
+
     def untried(self) -> str:
         """Which p the estimate could not try (their groups do not fit before its first scored segment, or
         ``not_tried_reason``) and what would let them be tried, in words; empty when every p was tried. On a run
@@ -170,14 +181,6 @@ class NextRunExpectation:
         value, (low, high) = self.expected()
         text = f"expect  about {value:.3g} µm RMS on the next run (range {low:.3g}-{high:.3g} µm; {self.method()})"
         return "\n".join([text, *(f"note    {note}" for note in self.notes)])
-
-
-def unmeasured_rows_reason(measured: int, rows: int) -> str:
-    """Why p >= 1 is not tried on a run whose error is measured on ``measured`` of its ``rows`` rows."""
-    return (
-        f"the error is measured on {measured} of {rows} rows, and a grouped model's breaks are row indices that "
-        "need it on every row; fill or drop the rows without it to let p >= 1 be tried"
-    )
 
 
 def expect_next_run(
@@ -297,5 +300,4 @@ __all__ = [
     "expect_for_model",
     "expect_next_run",
     "trust_notes",
-    "unmeasured_rows_reason",
 ]

@@ -37,6 +37,15 @@ def reference_span(frames: Sequence, reference: str | None, inputs: Sequence[str
     return input_span([reference], np.concatenate(values)[:, None]) if values else {}
 
 
+def training_span(
+    names: Sequence[str], inputs: np.ndarray, frames: Sequence, reference: str | None
+) -> dict[str, list[float]]:
+    """What the model file keeps as ``training.input_span``: the span of every input over the modelling runs
+    (``inputs``, as the model reads them) and that of the reference column they are taken against
+    (:func:`reference_span`, over the runs' tables ``frames``)."""
+    return {**input_span(names, inputs), **reference_span(frames, reference, names)}
+
+
 def beyond_span(
     span: Mapping[str, Sequence[float]], names: Sequence[str], inputs: np.ndarray, tolerance: float = TOLERANCE
 ) -> list[dict[str, Any]]:
@@ -78,4 +87,12 @@ def span_note(beyond: list[dict[str, Any]], n_samples: int) -> str | None:
     )
 
 
-__all__ = ["REFERENCE_TOLERANCE", "SPAN_KEY", "beyond_span", "input_span", "reference_span", "span_note"]
+__all__ = [
+    "REFERENCE_TOLERANCE",
+    "SPAN_KEY",
+    "beyond_span",
+    "input_span",
+    "reference_span",
+    "span_note",
+    "training_span",
+]
