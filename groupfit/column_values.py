@@ -13,6 +13,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.columns import renamed_from
 from groupfit.default_columns import (
     DEFAULT_ERROR,
     DEFAULT_TIME,
@@ -151,6 +152,8 @@ def numeric_column(
         wrong = misread(str(column), frame.columns) if not hint else None
         if wrong:
             hint = f" (the names read wrongly: '{wrong[0]}' is '{column}' in {wrong[1]}: give --encoding {wrong[1]})"
+        renamed = renamed_from(str(column), frame.columns) if not hint else None
+        hint = f" ('{renamed}' may be it under another name: rename it '{column}')" if renamed else hint
         if missing and not hint:
             hint = f" ({missing})"
         raise InputError(f"{label}: column '{column}' not found{hint}; the columns are: {available}")
@@ -182,10 +185,25 @@ def numeric_column(
             raise InputError(
                 f"{label}: row {row + 1}, column '{column}' is {what} "
                 f"({int(nonfinite.sum())} non-finite value(s) in that column); "
-                "a model can only be fitted on finite values: repair or drop those rows, or let --resample "
-                f"SECONDS interpolate up to {GAP_PERIODS} missed readings in a row"
+                f"a model can only be fitted on finite values: {_missing_advice(nonfinite, row, column)}"
             )
     return array
+
+
+def _missing_advice(nonfinite: np.ndarray, row: int, column: str) -> str:
+    """What to do about missed readings from ``row`` on: interpolation covers a short gap, not a long one."""
+    after = np.flatnonzero(~nonfinite[row:])
+    length = int(after[0]) if after.size else int(nonfinite.size - row)
+    if length <= GAP_PERIODS:
+        return (
+            f"repair or drop those rows, or let --resample SECONDS interpolate up to {GAP_PERIODS} missed readings "
+            "in a row"
+        )
+    return (
+        f"rows {row + 1}-{row + length} miss {length} readings in a row, more than --resample SECONDS interpolates "
+        f"({GAP_PERIODS}): leave '{column}' out of the inputs (--temps), or split the run there into two files "
+        "and give both (--data A B)"
+    )
 
 
 class _Cells(NamedTuple):

@@ -99,6 +99,19 @@ def usable_columns(frame: pd.DataFrame, exclude: set[str]) -> tuple[list[str], l
     return usable, notes
 
 
+def renamed_from(column: str, columns: Sequence) -> str | None:
+    """The one column whose name is ``column`` with words added (``T2_spindle``, ``T2 [°C]`` for ``T2``), or
+    the reverse; None when there is none or more than one."""
+    wanted = column.strip().casefold()
+    near = [
+        str(c)
+        for c in columns
+        if (name := str(c).strip().casefold()) != wanted
+        and (re.match(re.escape(wanted) + r"[\W_]", name) or re.match(re.escape(name) + r"[\W_]", wanted))
+    ]
+    return near[0] if len(near) == 1 else None
+
+
 def is_counter(values: np.ndarray) -> bool:
     """Whether a column grows by the same step on every row (a sample index, a second clock): not a cause."""
     if len(values) < 3:

@@ -24,7 +24,6 @@ from groupfit.column_values import (
     markers_emptied,
     refuse_bad_cells,
     temperature_inputs,
-    unit_note,
 )
 from groupfit.column_values import TEMP_RANGE_C as TEMP_RANGE_C
 from groupfit.column_values import LoadOptions as LoadOptions
@@ -39,6 +38,7 @@ from groupfit.default_columns import (
     found_time_column,
 )
 from groupfit.default_columns import length_unit as length_unit
+from groupfit.error_level import error_unit_note, refuse_position_level
 from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
@@ -382,7 +382,7 @@ def _validated(
     notes = notes + ((dropped,) if dropped else ())
 
     error_values = read_error_values(frame, error, label, options)
-    in_other_unit = unit_note(error, label, error_values) if error_values is not None else None
+    in_other_unit = error_unit_note(error, label, error_values, temp_array) if error_values is not None else None
     notes = notes + ((in_other_unit,) if in_other_unit else ())
     if options.ranges_checked:
         if temp_range is not None:
@@ -390,6 +390,8 @@ def _validated(
                 check_range(temp_array[:, j], t, label, temp_range, "°C", TEMP_RANGE_OPTION)
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", ERROR_RANGE_OPTION)
+        if error_values is not None and options.require_error and error_limit == ERROR_LIMIT_UM:
+            refuse_position_level(error_values, error, label)
     if options.drop_glitches:  # after the ranges: an implausible reading is refused, not interpolated
         frame, temp_array, glitched = temperatures_without_glitches(frame, temps, temp_array, label, options.ambient)
         notes = notes + ((glitched,) if glitched else ())

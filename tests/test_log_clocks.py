@@ -12,7 +12,7 @@ from test_messy_rows import fitted_coefficients
 from groupfit.cli import main
 from groupfit.data import load_run
 from groupfit.errors import InputError
-from groupfit.timestamps import text_seconds
+from groupfit.timestamps import TIME_NAME, text_seconds
 
 TEMPS = ["T1", "T2", "T3", "T4"]
 
@@ -236,6 +236,10 @@ def test_a_graphtec_log_at_half_a_second_fits_the_model_of_the_plain_run(tmp_pat
         ("Sekunden", 1.0),
         ("Hours", 1 / 3600),
         ("Time of day", 1.0),
+        ("Temps (s)", 1.0),
+        ("Temps écoulé [min]", 1 / 60),
+        ("Horodatage", 1.0),
+        ("Tiempo [s]", 1.0),
     ],
 )
 def test_a_time_column_named_in_other_words_is_found_and_read_in_its_unit(tmp_path, synthetic, name, per_second):
@@ -245,6 +249,11 @@ def test_a_time_column_named_in_other_words_is_found_and_read_in_its_unit(tmp_pa
     run = load_run(path, temps=TEMPS, time_is_default=True)
     np.testing.assert_allclose(run.time, plain.time, rtol=1e-12)
     assert any(f"time from column '{name}'" in note for note in run.notes)
+
+
+@pytest.mark.parametrize("name", ["temps_C", "Temps [°C]", "temps_degC"])
+def test_temperatures_named_temps_are_not_taken_for_the_time(name):
+    assert TIME_NAME.match(name) is None
 
 
 def test_a_log_without_a_time_or_an_error_column_named_as_one_says_which_option_names_it(tmp_path, synthetic):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -10,8 +11,9 @@ import pytest
 from test_switching_models import SYNTHETIC, synthetic_model
 
 from groupfit.cli import main
+from groupfit.commands.replay_faults import fault_readings
 from groupfit.model import ModelFile
-from groupfit.runtime import SwitchingRule
+from groupfit.runtime import FAULT_HELD, SwitchingRule
 
 
 def heated_run(seed: int, ambient: float, hours: float = 6.0) -> pd.DataFrame:
@@ -113,3 +115,17 @@ def test_a_next_run_logged_in_another_unit_is_not_placed_and_its_readings_are_na
     assert any("another unit" in note for note in result["notes"])
     clean = replay_json(tmp_path, model_path, "--data", next_run)
     assert "readings_out_of_range" not in clean and clean["expected_next_run"]["place"] != "mostly unscored"
+
+
+def test_a_reading_both_missing_and_out_of_range_is_named_with_each_count():
+    tables = SimpleNamespace(raw_names=["speed_rpm"], valid_min=np.array([0.0]), valid_max=np.array([8000.0]))
+    speed = np.full((10, 1), 1000.0)
+    speed[2:5, 0] = np.nan
+    speed[7, 0] = -5.0
+    found, notes = fault_readings(tables, speed, np.full(10, FAULT_HELD))
+    assert found["readings_out_of_range"][0]["samples"] == 4
+    assert "speed_rpm -5..-5 on 1 sample(s) and not a number on 3 sample(s) (valid 0..8000)" in notes[0]
+    speed[7, 0] = 1000.0
+    assert (
+        "speed_rpm not a number on 3 sample(s) (valid" in fault_readings(tables, speed, np.full(10, FAULT_HELD))[1][0]
+    )

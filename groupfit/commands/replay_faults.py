@@ -45,8 +45,13 @@ def fault_readings(tables, readings: np.ndarray, fault: np.ndarray) -> tuple[dic
         return {}, []
     parts = []
     for f in found:
-        seen = f"{f['seen'][0]:.4g}..{f['seen'][1]:.4g}" if f["seen"] else "not a number"
-        parts.append(f"{f['reading']} {seen} on {f['samples']} sample(s) (valid {f['valid'][0]:g}..{f['valid'][1]:g})")
+        kinds = []
+        if f["seen"]:
+            beyond = f["samples"] - f["not_a_number"]
+            kinds.append(f"{f['seen'][0]:.4g}..{f['seen'][1]:.4g} on {beyond} sample(s)")
+        if f["not_a_number"]:
+            kinds.append(f"not a number on {f['not_a_number']} sample(s)")
+        parts.append(f"{f['reading']} {' and '.join(kinds)} (valid {f['valid'][0]:g}..{f['valid'][1]:g})")
     n = len(readings)
     whole = [f["reading"] for f in found if f["samples"] - f["not_a_number"] > n // 2]
     hint = (
