@@ -27,8 +27,14 @@ should not have to rewrite one before groupfit reads it:
   ``***End_of_Header***``, Graphtec's channel list, a TwinCAT Scope or
   SINUMERIK trace head). A text without such a body takes the first line of
   two or more text fields whose next lines have as many;
-* the decimal mark: a comma when the separator is not one and a data cell is
-  written so (``20,5``);
+* the decimal mark: a comma when a data cell is written so (``20,5``), in a
+  table whose fields a comma separates when its quoted numbers with a comma
+  (``"18,66"``) hold one decimal comma each and no cell has a decimal point;
+  ``"1,500"`` alone, which may separate thousands or decimals, is refused there
+  naming its column;
+* a table aligned in columns by spaces whose rows do not all split into the
+  header's names (an empty cell, ``Temp Spindel``): read by the position of
+  its cells (:mod:`groupfit.fixedwidth`);
 * how a cell writes a number (thousands separators, a typeset minus, a unit after it):
   :mod:`groupfit.numbercells`;
 * a comment mark before the header's first name (NumPy's ``savetxt``: ``# time_s,T1``) is dropped; a column
@@ -56,9 +62,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from groupfit.decimalmark import decimal_mark, quoted_decimal_mark, undecided_commas
+from groupfit.fixedwidth import first_uneven_row, read_aligned
 from groupfit.numbercells import (
-    COMMA_THOUSANDS,
-    DOT_THOUSANDS,
     as_numbers,
     is_number,
     without_cell_units,
@@ -83,8 +89,6 @@ WORDS = re.compile(r"[^\W\d_]")
 DIGIT = re.compile(r"\d")
 RULER = re.compile(r"[-=_~*+|\s]+")
 """A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
-DECIMAL_POINT = re.compile(r"[+-]?\d*\.\d+(?:[eE][+-]?\d+)?")
-COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 STATISTIC = re.compile(
     r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
     r"count|median|range|mittelwert|mittel|summe|anzahl|std\.?\s*abw|standardabweichung|spanne|streuung|varianz|"
@@ -102,6 +106,9 @@ class TextLayout:
     header_line: int
     """0-based line of the header: the lines before it are a preamble."""
     decimal: str
+    undecided: tuple[int, str] | None = None
+    """In a table whose fields a comma separates and no number tells its decimal mark: the column (0-based)
+    and a quoted cell whose comma may separate thousands or decimals (``"1,500"``); None otherwise."""
 
 
 @dataclass(frozen=True)
@@ -168,22 +175,11 @@ def layout_of(text: str) -> TextLayout:
     else:
         sep, header = found
     below = [line for line in lines[header + 1 :] if line.strip()]
-    return TextLayout(sep=sep, header_line=header, decimal=_decimal_mark(below, sep))
-
-
-def _decimal_mark(below: list[str], sep: str) -> str:
-    """A comma when the separator is not one and a data cell is a number written with a comma, unless every
-    such cell separates thousands (``1,000``) and another is written with a decimal point (``20.15``): a US
-    table that groups its thousands."""
     if sep == ",":
-        return "."
-    fields = [field.strip().strip('"') for line in below for field in fields_of(line, sep)]
-    commas = [field for field in fields if _comma_number(field)]
-    if not commas:
-        return "."
-    grouped = all(COMMA_THOUSANDS.fullmatch(field) for field in commas)
-    pointed = any(DECIMAL_POINT.fullmatch(field) and not DOT_THOUSANDS.fullmatch(field) for field in fields)
-    return "." if grouped and pointed else ","
+        decimal, undecided = quoted_decimal_mark([[field.strip() for field in _split(line, sep)] for line in below])
+        return TextLayout(sep=sep, header_line=header, decimal=decimal, undecided=undecided)
+    cells = [field.strip().strip('"') for line in below for field in fields_of(line, sep)]
+    return TextLayout(sep=sep, header_line=header, decimal=decimal_mark(cells))
 
 
 def _rows(lines: list[str], sep: str) -> list[_Row]:
@@ -309,16 +305,31 @@ def _longer_row(body: str, header: list[str], sep: str) -> str | None:
     return None
 
 
-def _comma_number(field: str) -> bool:
-    return COMMA_NUMBER.fullmatch(field.strip().strip('"')) is not None
-
-
 def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.DataFrame, list[str]]:
     """A text table's frame and its header as written (pandas renames a repeated name on reading); ``encoding``:
     the one that wrote it, when detection is not to decide (:func:`groupfit.textencoding.decode`)."""
     text = with_newlines(decode(content, encoding))
     layout = layout_of(text)
     body = _without_comment_mark(_without_footer(_from_line(text, layout.header_line), layout), layout.sep)
+    header_text, *rows = body.split("\n")
+    if layout.sep == WHITESPACE and first_uneven_row(header_text, rows) is not None:
+        frame, header = read_aligned(header_text, rows, layout.decimal)
+    else:
+        frame, header = _read_split(body, layout)
+    header = [str(name) for name in header]
+    if layout.undecided is not None:
+        column, cell = layout.undecided
+        raise ValueError(undecided_commas(header[column] if column < len(header) else f"column {column + 1}", cell))
+    frame, header = _without_empty_unnamed_columns(frame, header)
+    frame = without_thousands_separators(without_units_row(frame, decimal=layout.decimal), layout.decimal)
+    frame = without_cell_units(frame, layout.decimal)
+    frame.attrs["decimal"] = layout.decimal  # for the columns left as text by a stray row, read when it goes
+    return frame, header
+
+
+def _read_split(body: str, layout: TextLayout) -> tuple[pd.DataFrame, list[str]]:
+    """The frame of a table's body (its header line first) split at the layout's separator, and its header
+    as written; a row with more values than the header has names refused, naming it."""
     header_text = body.split("\n", 1)[0]
     if layout.sep == WHITESPACE:
         header, sep = header_text.split(), r"\s+"
@@ -340,11 +351,6 @@ def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.Dat
             if longer is None and isinstance(exc, pd.errors.ParserError):
                 raise
             raise ValueError(longer or "a row has more values than the header has names; name every column") from None
-    header = [str(name) for name in header]
-    frame, header = _without_empty_unnamed_columns(frame, header)
-    frame = without_thousands_separators(without_units_row(frame, decimal=layout.decimal), layout.decimal)
-    frame = without_cell_units(frame, layout.decimal)
-    frame.attrs["decimal"] = layout.decimal  # for the columns left as text by a stray row, read when it goes
     return frame, header
 
 
@@ -360,7 +366,8 @@ def _without_comment_mark(body: str, sep: str) -> str:
         fields = header.split()
         rest = rows.split("\n", 1)[0].split()
         if fields and fields[0] in ("#", "%", "//") and len(fields) == len(rest) + 1:
-            return header.split(fields[0], 1)[1].lstrip() + "\n" + rows
+            mark = header.index(fields[0])  # blanked, not cut: the names stay over their columns
+            return header[:mark] + " " * len(fields[0]) + header[mark + len(fields[0]) :] + "\n" + rows
         return body
     first = header.split(sep, 1)[0]
     if COMMENT_MARK.match(first) and first.strip().strip('"') not in ("#", "%", "//"):
@@ -427,8 +434,8 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
     text_rows = 0
     while text_rows < len(frame) - 1:
         cells = [str(v).strip() for v in frame.iloc[text_rows] if not _empty(v)]
-        if not cells or any(is_number(cell, decimal) for cell in cells):
-            break  # a number in the row (or nothing in it): a data row
+        if not cells or any(is_number(cell, decimal) or is_number(cell, ",") for cell in cells):
+            break  # a number in the row, a decimal comma's too (or nothing in it): a data row
         text_rows += 1
     if text_rows == 0:
         return frame

@@ -292,3 +292,28 @@ def test_quoted_decimal_commas_in_a_comma_separated_table_are_read(tmp_path, cel
     plain_truth(tmp_path, cells).to_csv(path, index=False, sep=",", decimal=",")
     assert '"' in path.read_text().splitlines()[1]
     same_frame(read(path), plain_truth(tmp_path, cells))
+
+
+@pytest.mark.parametrize("rows", [12, None], ids=["short", "whole"])
+def test_a_comma_separated_table_of_quoted_decimal_commas_in_every_cell_is_read_whole(tmp_path, cells, rows):
+    """Every cell quoted and written with a decimal comma (``"0,00","18,66",…``): no row taken for a units row."""
+    table = cells.head(rows) if rows else cells
+    lines = lines_of(table, ",", lambda column, cell: '"' + f"{float(cell):.2f}".replace(".", ",") + '"')
+    assert lines[1].startswith('"0,00","')
+    path = write(tmp_path / "quoted.csv", lines)
+    assert layout_of(path.read_text()).decimal == ","
+    same_frame(read(path), plain_truth(tmp_path, table))
+
+
+def test_quoted_numbers_whose_comma_may_separate_thousands_or_decimals_are_refused(tmp_path, capsys):
+    """``"1,500"`` in a table with no decimal point and no other comma: 1500 or 1.5, nothing tells."""
+    table = pd.DataFrame({"time_s": range(0, 600, 60), "T1": range(20, 30), "speed_rpm": "1,500"})
+    table["error_um"] = range(10)
+    path = tmp_path / "grouped.csv"
+    table.to_csv(path, index=False)
+    assert '"1,500"' in path.read_text()
+    line = refusal(path, tmp_path, capsys)
+    assert "grouped.csv" in line and "column 'speed_rpm' holds quoted numbers such as '1,500'" in line
+    assert "save the table with decimal points and no thousands separators" in line
+    table.assign(T1=table["T1"] + 0.5).to_csv(path, index=False)  # a decimal point: the commas group thousands
+    assert read(path)["speed_rpm"].tolist() == [1500.0] * len(table)
