@@ -38,7 +38,7 @@ from groupfit.default_columns import (
     found_time_column,
 )
 from groupfit.default_columns import length_unit as length_unit
-from groupfit.error_level import error_unit_note, refuse_position_level
+from groupfit.error_level import error_unit_note
 from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
@@ -390,8 +390,6 @@ def _validated(
                 check_range(temp_array[:, j], t, label, temp_range, "°C", TEMP_RANGE_OPTION)
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", ERROR_RANGE_OPTION)
-        if error_values is not None and options.require_error and error_limit == ERROR_LIMIT_UM:
-            refuse_position_level(error_values, error, label)
     if options.drop_glitches:  # after the ranges: an implausible reading is refused, not interpolated
         frame, temp_array, glitched = temperatures_without_glitches(frame, temps, temp_array, label, options.ambient)
         notes = notes + ((glitched,) if glitched else ())

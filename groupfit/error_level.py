@@ -6,8 +6,10 @@ cannot go onto a machine:
 * a probe's or an axis's **position logged from the machine's zero** within
   the plausible ±100 mm (``probe_z_mm`` at 12.34 mm, drifting by 20 µm): every
   reading lies millimetres from zero while they move by micrometres. A model
-  of it compensates 12 mm. It is refused, and ``--error 'COLUMN-start'``
-  (the drift since the run's start) is what to give instead;
+  of it compensates 12 mm. It gets a note that ``--error 'COLUMN-start'``
+  (the drift since the run's start) reads the drift; it is not refused, since
+  a printer's step count logged from its zero is modelled as logged by users
+  who replay it the same way;
 * an **error in mm under a name that gives no unit** that moves by 0.1-1 mm:
   read as µm it spans 0.1-1 µm while the inputs move by tens of kelvin, a
   thousandth of what thermal drift shows per kelvin. It gets a note that says
@@ -20,7 +22,7 @@ import numpy as np
 
 from groupfit.column_values import unit_note
 from groupfit.default_columns import factored_length_unit, named_length_unit, scaled_name
-from groupfit.errors import InputError
+from groupfit.error_start import is_from_start
 
 LEVEL_FLOOR_UM = 1000.0
 """An error every reading of which lies farther from zero than this (µm) ..."""
@@ -34,24 +36,23 @@ SMALLEST_INPUT_SPAN_K = 1.0
 """The inputs must move by this much (K) before the error's span per kelvin says anything."""
 
 
-def refuse_position_level(values: np.ndarray, column: str, label: str) -> None:
-    """Refuse an error (µm) every reading of which lies more than :data:`LEVEL_FLOOR_UM` from zero while all of
-    them span less than :data:`LEVEL_SHARE` of the nearest one's distance; nothing otherwise."""
+def position_level_note(values: np.ndarray, column: str, label: str) -> str | None:
+    """The note of an error (µm) every reading of which lies more than :data:`LEVEL_FLOOR_UM` from zero while all
+    of them span less than :data:`LEVEL_SHARE` of the nearest one's distance; None otherwise."""
     measured = values[np.isfinite(values)]
     if measured.size < 2:
-        return
+        return None
     nearest = float(np.min(np.abs(measured)))
     same_side = bool(np.all(measured > 0) or np.all(measured < 0))
     spread = float(np.ptp(measured))
-    if same_side and nearest > LEVEL_FLOOR_UM and spread < LEVEL_SHARE * nearest:
-        row = int(np.flatnonzero(np.isfinite(values))[0])
-        raise InputError(
-            f"{label}: column '{column}': every reading lies at least {nearest:.6g} µm from zero (row {row + 1}: "
-            f"{values[row]:.6g} µm) while they span only {spread:.4g} µm: a position logged from the machine's "
-            f"zero, not a thermal error; read it as the drift since the run's start with --error '{column}-start', "
-            "name the thermal error's column with --error COLUMN, or, to model it as logged, widen the plausible range "
-            "beyond the default's with --range-error MAX"
-        )
+    if not (same_side and nearest > LEVEL_FLOOR_UM and spread < LEVEL_SHARE * nearest):
+        return None
+    return (
+        f"{label}: column '{column}': every reading lies at least {nearest:.6g} µm from zero while they span only "
+        f"{spread:.4g} µm, read as logged: a position from the machine's zero, not a thermal error? The model "
+        f"then compensates that level, and a run homed anew is off by the change; --error '{column}-start' reads "
+        "the drift since the run's start"
+    )
 
 
 def _drift_per_kelvin_note(name: str, label: str, values: np.ndarray, temps: np.ndarray) -> str | None:
@@ -77,9 +78,13 @@ def _drift_per_kelvin_note(name: str, label: str, values: np.ndarray, temps: np.
 
 
 def error_unit_note(name: str | None, label: str, values: np.ndarray, temps: np.ndarray) -> str | None:
-    """The note of an error column read in another unit than µm, or whose size says it may be in one
-    (:func:`groupfit.column_values.unit_note`, then the span per kelvin of the inputs); None otherwise."""
+    """The note of an error column read in another unit than µm, or whose level or size says it may not be a
+    thermal error in µm (:func:`groupfit.column_values.unit_note`, then :func:`position_level_note`, then the
+    span per kelvin of the inputs); None otherwise."""
     note = unit_note(name, label, values)
+    level = position_level_note(values, name, label) if name is not None and not is_from_start(name) else None
+    if level is not None:
+        return f"{note}; {level}" if note else level
     if note is not None or name is None or scaled_name(name) is not None:
         return note
     if named_length_unit(name) is not None or factored_length_unit(name) is not None:
@@ -87,4 +92,4 @@ def error_unit_note(name: str | None, label: str, values: np.ndarray, temps: np.
     return _drift_per_kelvin_note(name, label, values, temps)
 
 
-__all__ = ["error_unit_note", "refuse_position_level"]
+__all__ = ["error_unit_note", "position_level_note"]
