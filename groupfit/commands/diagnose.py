@@ -46,6 +46,7 @@ def add_parser(verbs) -> None:
     )
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     common.add_json_option(parser)
+    common.add_quiet_option(parser)
     common.add_range_options(parser)
     common.add_clock_options(parser)
     add_encoding_option(parser)
@@ -248,7 +249,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise InputError(
             f"--keep-reference: {args.model} has no reference sensor to keep (absolute readings or 'start')"
         )
-    with running.stage("loading"):
+    with running.stage("loading", enabled=not args.quiet):
         data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
         validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
     refuse_too_short(data, model)
@@ -265,7 +266,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     ridge = None
     if args.ridge is not None:
         start, ridge = ridge_base_model(start, data, args.ridge)
-    with running.stage("diagnosis"):
+    with running.stage("diagnosis", enabled=not args.quiet):
         result = diagnose(
             start,
             data,
@@ -286,7 +287,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         result = replace(result, selection=selection)
     result = replace(result, ridge=ridge)
 
-    with running.stage("next-run estimate"):
+    with running.stage("next-run estimate", enabled=not args.quiet):
         expectations = {"before": expect_for_model(model, data)}
         expectations["after"] = expect_for_model(result.model, data) if result.changed else expectations["before"]
     if result.changed and expectations["after"] is not None:
@@ -305,7 +306,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     written = []
     recal_note = ""
     if result.changed or args.recalibrate not in (None, "auto"):
-        with running.stage("recalibration"):
+        with running.stage("recalibration", enabled=not args.quiet):
             augmented, recal_note = recalibrated(
                 ModelFile.coerce(result.model), [(r.frame, r.error) for r in data], args.recalibrate or "auto"
             )

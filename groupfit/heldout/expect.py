@@ -15,6 +15,7 @@ from groupfit.data import Run
 from groupfit.grouping import min_group_size
 from groupfit.heldout import calibration
 from groupfit.heldout.choice import RMS_TOLERANCE, next_run_choice
+from groupfit.heldout.design import shared_columns
 from groupfit.heldout.nextrun import (
     LEAVE_ONE_RUN_OUT,
     MIN_SEGMENTS,
@@ -191,11 +192,15 @@ def expect_next_run(
     c: float = 3.0,
     fit_intercept: bool = True,
     ridge_alpha: float = 0.0,
+    shared: np.ndarray | None = None,
+    criterion: str | None = None,
 ) -> NextRunExpectation:
     """The next-run expectation of every p of ``p_values`` (one run) or of the global model (several runs).
 
     ``runs`` hold the model's inputs (``temps``, the reference applied) and a
     measured error on every row (:func:`groupfit.data.measured_rows`).
+    ``shared``, ``criterion``: a grouped model's inputs with one coefficient
+    for every group and its switching sensor (:func:`forward_chaining`).
     """
     if len(runs) > 1:
         n_coef = runs[0].temps.shape[1] + int(fit_intercept)
@@ -203,7 +208,14 @@ def expect_next_run(
         scores = leave_one_run_out(runs, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha, min_train=min_train)
     else:
         scores = forward_chaining(
-            runs[0], list(p_values), n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
+            runs[0],
+            list(p_values),
+            n=n,
+            c=c,
+            fit_intercept=fit_intercept,
+            ridge_alpha=ridge_alpha,
+            shared=shared,
+            criterion=criterion,
         )
     chosen = next_run_choice(*scores.pooled())
     not_tried = tuple(p for p in p_values if p not in scores.candidates) if len(runs) == 1 else ()
@@ -211,7 +223,8 @@ def expect_next_run(
 
 
 def expect_for_model(model: ModelFile | Mapping[str, Any], runs: Sequence[Run]) -> NextRunExpectation | None:
-    """The expected next-run error of a model file's structure (its inputs, p, penalty) refitted on ``runs``.
+    """The expected next-run error of a model file's structure (its inputs, p, penalty, the effects a diagnosis
+    added with one coefficient for every group, the switching sensor) refitted on ``runs``.
 
     ``runs`` as loaded (readings as recorded); the model's inputs, derived ones
     included, are computed from each run's table (:meth:`ModelFile.inputs`). None
@@ -244,6 +257,8 @@ def expect_for_model(model: ModelFile | Mapping[str, Any], runs: Sequence[Run]) 
             c=model.c,
             fit_intercept=model.intercept,
             ridge_alpha=model.ridge_alpha or 0.0,
+            shared=shared_columns(model) if model.p > 0 else None,
+            criterion=model.switching.criterion if model.p > 0 else None,
         )
     except ValueError:
         return None

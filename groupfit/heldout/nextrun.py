@@ -180,14 +180,16 @@ def feasible_pmax(n_samples: int, *, n: int, c: float, n_coef: int, pmax: int) -
     return best
 
 
-def rule_prediction(estimator: GroupedRegressor, fitted_on: Run, temps: np.ndarray) -> np.ndarray:
+def rule_prediction(
+    estimator: GroupedRegressor, fitted_on: Run, temps: np.ndarray, criterion: str | None = None
+) -> np.ndarray:
     """What a controller compensates over ``temps`` from sample 1 on: the group chosen by the model's rule, with
     its bumpless transfer after a switch, within the clamp the rule sets from ``fitted_on`` (as ``replay``
-    scores it)."""
+    scores it). ``criterion``: the rule's switching sensor (default: the input that moves most)."""
     if estimator.p == 0 and not estimator.breaks_:
         clamp = compensation_clamp(estimator.intercept_[0] + fitted_on.temps @ estimator.coef_[0])
         return np.clip(estimator.intercept_[0] + temps @ estimator.coef_[0], -clamp, clamp)
-    model = estimator.to_model_file(fitted_on)
+    model = estimator.to_model_file(fitted_on, criterion)
     prediction = model.predict(temps, replay_groups(model, temps), transfer=True)  # with the bumpless transfer
     return within_compensation_clamp(prediction, model.switching)
 
@@ -202,17 +204,24 @@ def forward_chaining(
     ridge_alpha: float = 0.0,
     max_samples: int = MAX_SAMPLES,
     min_train: float = MIN_TRAIN_FRACTION,
+    shared: np.ndarray | None = None,
+    criterion: str | None = None,
 ) -> NextRunScores:
     """Every p of ``p_values`` scored by forward chaining over ``run``'s operating segments (module docstring).
 
     The breaks of each prefix are the exact optimum of Σe² for every p at once;
     the groups are fitted by least squares (a global model, p = 0, with the
     ridge penalty ``ridge_alpha``). A p whose groups do not fit in the shortest
-    prefix is left out of ``candidates``.
+    prefix is left out of ``candidates``. ``shared`` marks the inputs with one
+    coefficient for every group (a diagnosis's effects,
+    :func:`groupfit.heldout.design.shared_columns`): the breaks are sought on
+    the others, as the model's were before the effects were added, and the
+    groups fitted with them shared; ``criterion``: the rule's switching sensor.
     """
     stride = thinning_stride(run.n_samples, max_samples)
+    settings = (p_values, n, c, fit_intercept, ridge_alpha, min_train)
     phases = [
-        _phase_scores(thinned_from(run, stride, offset), p_values, n, c, fit_intercept, ridge_alpha, min_train)
+        _phase_scores(thinned_from(run, stride, offset), *settings, shared=shared, criterion=criterion)
         for offset in phase_offsets(stride)
     ]
     candidates = tuple(p for p in phases[0][0] if all(p in phase[0] for phase in phases))
@@ -239,9 +248,10 @@ def thinned_from(run: Run, stride: int, offset: int) -> Run:
     return sliced(run, np.arange(offset, run.n_samples, stride), period=run.period * stride)
 
 
-def _phase_scores(thin: Run, p_values, n, c, fit_intercept, ridge_alpha, min_train):
+def _phase_scores(thin: Run, p_values, n, c, fit_intercept, ridge_alpha, min_train, *, shared=None, criterion=None):
     """Forward chaining on one thinned run: candidates, sse, counts, how, conditions, blocks, samples, and
     whether a scored segment leaves the one condition of the run before it."""
+    own = None if shared is None or not np.any(shared) else ~np.asarray(shared, dtype=bool)
     starts, how, conditions, blocks, codes = segment_starts(thin)
     folds = forward_folds(thin, starts, min_train)
     if not folds:  # no segment starts late enough: score the run's last blocks of time
@@ -259,15 +269,16 @@ def _phase_scores(thin: Run, p_values, n, c, fit_intercept, ridge_alpha, min_tra
     X, y = thin.temps, thin.error
     for k, (start, end) in enumerate(folds):
         prefix = sliced(thin, slice(0, start))
-        breaks = prefix_breaks(prefix, max(candidates), n=n, c=c, fit_intercept=fit_intercept)
+        searched = prefix if own is None else dataclasses.replace(prefix, temps=prefix.temps[:, own])
+        breaks = prefix_breaks(searched, max(candidates), n=n, c=c, fit_intercept=fit_intercept)
         scored = slice(start, end)
         counts[k] = end - start
         for i, p in enumerate(candidates):
             estimator = candidate_estimator(
-                p, breaks[p], n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha
+                p, breaks[p], n=n, c=c, fit_intercept=fit_intercept, ridge_alpha=ridge_alpha, shared=shared
             )
             estimator.fit(prefix.temps, prefix.error)
-            prediction = rule_prediction(estimator, prefix, X[:end])
+            prediction = rule_prediction(estimator, prefix, X[:end], criterion if p else None)
             sse[i, k] = float(np.sum((y[scored] - prediction[scored]) ** 2))
     return candidates, sse, counts, how, conditions, blocks, thin.n_samples, leaves_one_condition(folds, codes)
 
@@ -283,12 +294,28 @@ def prefix_breaks(prefix: Run, pmax: int, *, n: int, c: float, fit_intercept: bo
 
 
 def candidate_estimator(
-    p: int, breaks: Sequence[int], *, n: int, c: float, fit_intercept: bool, ridge_alpha: float = 0.0
+    p: int,
+    breaks: Sequence[int],
+    *,
+    n: int,
+    c: float,
+    fit_intercept: bool,
+    ridge_alpha: float = 0.0,
+    shared: np.ndarray | None = None,
 ) -> GroupedRegressor:
-    """The model of p breaks at ``breaks`` (groups by least squares; p = 0 with the ridge penalty)."""
+    """The model of p breaks at ``breaks`` (groups by least squares, the ``shared`` inputs with one coefficient
+    for every group; p = 0 with the ridge penalty)."""
     if p == 0:
         return GroupedRegressor(p=0, n=n, c=c, objective="sse", fit_intercept=fit_intercept, ridge_alpha=ridge_alpha)
-    return GroupedRegressor(p=p, n=n, c=c, objective="sse", fit_intercept=fit_intercept, fixed_breaks=list(breaks))
+    return GroupedRegressor(
+        p=p,
+        n=n,
+        c=c,
+        objective="sse",
+        fit_intercept=fit_intercept,
+        fixed_breaks=list(breaks),
+        shared_columns=None if shared is None else [bool(v) for v in shared],
+    )
 
 
 def next_run_splits(runs: Sequence[Run]) -> list[tuple[np.ndarray, np.ndarray]]:
