@@ -24,6 +24,7 @@ from groupfit.commands.replay_probes import (
     probe_summary,
     sample_probe,
 )
+from groupfit.commands.replay_rate import rate_check
 from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.replay_register import register_check
 from groupfit.commands.replay_span import range_check
@@ -229,8 +230,9 @@ def run_replay(args: argparse.Namespace) -> int:
     register, register_notes = register_check(counts, residual, replay)
     out_of_range, fault_notes = fault_readings(rule.tables, run.temps, replay.fault)
     notes = span.get("notes", []) + fault_notes + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
-    notes += register_notes
-    extra = {**span, **out_of_range, **glitches, **offset, **register, "clamped_samples": clamped}
+    lagging, lag_notes = rate_check(run.error, replay)
+    notes += register_notes + lag_notes
+    extra = {**span, **out_of_range, **glitches, **offset, **register, **lagging, "clamped_samples": clamped}
     result = ReplayResult({**data, **extra, **({"notes": notes} if notes else {})})
     with running.stage("writing the outputs"):
         written = []
