@@ -41,6 +41,14 @@ def min_group_size(c: float, n_coef: int, n: int = 0) -> int:
     return max(int(math.floor(c * n_coef + 1e-12)) + 1, n_coef + 1, n + 1)
 
 
+def check_spacing(n: int, c: float) -> None:
+    """Refuse a soft offset ``n`` that is not a whole number ≥ 0 or a spacing coefficient ``c`` outside
+    0 … :data:`MAX_SPACING` (one line naming the value)."""
+    min_group_size(c, 1)
+    if int(n) != n or n < 0:
+        raise InputError(f"n = {n!r}: the soft offset must be a whole number ≥ 0")
+
+
 @dataclass(frozen=True)
 class Constraints:
     """Feasible break vectors for N samples.

@@ -33,7 +33,17 @@ def check_tables(raw: dict[str, Any], tables: Iterable[str], label: str | None =
     """Refuse a top-level table this kind of file does not have, or a key that is not a table."""
     tables = tuple(tables)
     prefix = f"{label}: " if label else ""
+    if isinstance(raw.get("kind"), str) and "kind" not in tables:
+        raise InputError(
+            f"{prefix}kind = {raw['kind']!r} at the top level: a scenario configuration for groupfit simulate, not "
+            f"this kind of file, whose tables are {', '.join(tables)}"
+        )
     for table, values in raw.items():
+        if table not in tables and not isinstance(values, dict):
+            raise InputError(
+                f"{prefix}key '{table}' at the top level: every key belongs in a table (e.g. [{tables[0]}]); "
+                f"the tables are {', '.join(tables)}"
+            )
         if table not in tables:
             raise InputError(f"{prefix}unknown table [{table}]; the tables are {', '.join(tables)}")
         if not isinstance(values, dict):

@@ -30,6 +30,7 @@ def add_parser(verbs) -> None:
         "thermal state (--state); all: every target (with table for a position model)",
     )
     common.add_out_option(export, "folder for the exported files (required)", required=True)
+    common.add_quiet_option(export)
     export.add_argument("--real", choices=("REAL", "LREAL"), help="st, table: real type (default LREAL)")
     export.add_argument(
         "--name", help="st, table: function block name (default FB_GroupfitComp; AR(1): FB_GroupfitAR1)"

@@ -17,6 +17,7 @@ from groupfit.data import Run, join_runs, loading_notes, measured_rows
 from groupfit.errors import InputError
 from groupfit.fit_budget import segment_table_over
 from groupfit.fitting import FitResult, selection_rule
+from groupfit.grouping import check_spacing
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
 from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.nextrun import next_run_splits
@@ -304,6 +305,7 @@ def decided_p(args: argparse.Namespace, data: FitData) -> tuple:
     elif settings.search.method == "exact" and isinstance(model.p, int):
         common.check_exact_budget(args, run, n_coef, model.objective, model.p, "the exact search")
     selection = expectation = None
+    check_spacing(model.n, float(model.c))  # before the estimate, whose refusal would blame the run
     if model.p == "auto" and model.pmax < 0:
         raise InputError(f"--pmax {model.pmax}: the largest p tried must be 0 or more")
     table = None if args.no_budget else segment_table_over(run.n_samples, n_coef, run.period, common.EXACT_BUDGET_BYTES)

@@ -70,6 +70,7 @@ def add_parser(verbs) -> None:
         "(training.recordings; by default that file is replayed first, as --continues does)",
     )
     common.add_clock_options(replay)
+    common.add_quiet_option(replay)
     add_encoding_option(replay)
     replay.add_argument(
         "--keep-glitches",
@@ -168,7 +169,7 @@ def run_replay(args: argparse.Namespace) -> int:
     options.update(error_is_default=args.error is None, error_limit=common.range_options(args)["error_limit"])
     options.update(sparse=probe_columns(args.probe_column))
     options.update(common.clock_options(args), **({"drop_glitches": False} if args.keep_glitches else {}))
-    with running.stage("loading"):
+    with running.stage("loading", enabled=not args.quiet):
         run = load_readings(args.data, tables, **options)
         continued, history, found_note, saved = earlier_recordings(
             args, model, run, lambda path: load_readings(path, tables, **options)
@@ -188,7 +189,7 @@ def run_replay(args: argparse.Namespace) -> int:
         temps = joined[-1].temps
         run = picked_up(run, zero_of(joined[-1]))  # an error read from the start: from the recording's
     probes = probe_schedule(args, run, continued=bool(history) or saved is not None)
-    with running.stage("replay"):
+    with running.stage("replay", enabled=not args.quiet):
         if history:
             checks = None if probes is None else np.r_[np.full(rows, np.nan), probes]  # checks on this file only
             replay = rule.replay(temps, checks).tail(rows)
@@ -234,7 +235,7 @@ def run_replay(args: argparse.Namespace) -> int:
     notes += register_notes + lag_notes
     extra = {**span, **out_of_range, **glitches, **offset, **register, **lagging, "clamped_samples": clamped}
     result = ReplayResult({**data, **extra, **({"notes": notes} if notes else {})})
-    with running.stage("writing the outputs"):
+    with running.stage("writing the outputs", enabled=not args.quiet):
         written = []
         if out_dir is not None:
             figure = out_dir / "replay.png"

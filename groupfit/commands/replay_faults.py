@@ -50,7 +50,7 @@ def fault_readings(tables, readings: np.ndarray, fault: np.ndarray) -> tuple[dic
             beyond = f["samples"] - f["not_a_number"]
             kinds.append(f"{f['seen'][0]:.4g}..{f['seen'][1]:.4g} on {beyond} sample(s)")
         if f["not_a_number"]:
-            kinds.append(f"not a number on {f['not_a_number']} sample(s)")
+            kinds.append(f"not finite (NaN or ±inf) on {f['not_a_number']} sample(s)")
         parts.append(f"{f['reading']} {' and '.join(kinds)} (valid {f['valid'][0]:g}..{f['valid'][1]:g})")
     n = len(readings)
     whole = [f["reading"] for f in found if f["samples"] - f["not_a_number"] > n // 2]

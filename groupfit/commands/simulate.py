@@ -7,6 +7,7 @@ from pathlib import Path
 
 from groupfit import fe
 from groupfit.commands.common import add_out_option, add_quiet_option, commit_outputs
+from groupfit.config import SCHEMA
 from groupfit.errors import InputError
 from groupfit.io import atomic_write_text
 from groupfit.outputs import current_plan
@@ -27,6 +28,12 @@ def read_scenario(path: str | Path) -> dict:
         raise InputError(
             f"{path}: the scenario configuration is empty; set kind = {KINDS_TEXT} and its keys (see configs/)"
         )
+    run_tables = sorted(RUN_TABLES.intersection(config))
+    if "kind" not in config and run_tables:
+        raise InputError(
+            f"{path}: a run configuration ([{'], ['.join(run_tables)}]), not a scenario; a scenario sets "
+            f"kind = {KINDS_TEXT} and its keys (see configs/)"
+        )
     return config
 
 
@@ -40,6 +47,8 @@ def simulate_scenario(config: dict, *, progress: bool):
     return fe.simulate_config(config, progress=progress)
 
 
+RUN_TABLES = frozenset(SCHEMA)
+"""Tables of a run configuration (``groupfit fit CONFIG``), which no scenario has."""
 CSV_SUFFIXES = (".csv", ".txt", "")
 """Names simulate writes its CSV text under: any other suffix names a format it does not write."""
 
