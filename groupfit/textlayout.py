@@ -140,6 +140,11 @@ class _Row:
             and all(WORDS.search(field) and not DIGIT.search(field) for field in filled)
         )
 
+    def short_message(self, width: int) -> bool:
+        """A logger's message in a table split at spaces (``Logging paused``): words without digits, fewer than
+        half the body's ``width`` of fields."""
+        return 2 * len(self.fields) < width and all(WORDS.search(f) and not DIGIT.search(f) for f in self.fields)
+
     @property
     def is_text(self) -> bool:
         """Two fields or more, not blank, and no number in most of them: a header, units, or a preamble
@@ -247,7 +252,9 @@ def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> in
             continue  # a row with a value more or less (a note typed into the log): the body goes on above it
         seen_above = {tuple(row.fields) for row in rows[:start] if row.is_text}
         between = [
-            row for row in rows[end:first] if row.is_text and not row.message and tuple(row.fields) not in seen_above
+            row
+            for row in rows[end:first]
+            if row.is_text and not row.message and not row.short_message(width) and tuple(row.fields) not in seen_above
         ]
         if len(rows[start].fields) != width or between:
             break

@@ -398,3 +398,15 @@ def test_a_time_of_day_saved_as_a_fraction_of_a_day_is_named_and_read_in_days(tm
     log.to_csv(clean, index=False)
     days = fitted_coefficients(tmp_path, named, options=[*QUICK, "--time", "Uhrzeit [d]"])
     assert np.allclose(days, fitted_coefficients(tmp_path, clean), rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("after_row", [3, 49, 300])
+def test_a_message_line_in_a_table_split_at_spaces_is_passed_over_wherever_it_falls(tmp_path, capsys, after_row):
+    clean = tmp_path / "clean.csv"
+    pd.read_csv(DATASETS / "paper_cycle.csv").to_csv(clean, index=False)
+    lines = [line.replace(",", "  ") for line in clean.read_text().splitlines()]
+    path = tmp_path / "spaced.txt"
+    path.write_text("\n".join([*lines[: 1 + after_row], "Logging paused", *lines[1 + after_row :]]) + "\n")
+    passed_over, plain = fitted_coefficients(tmp_path, path, clean)
+    assert passed_over == plain
+    assert f"(row {after_row + 1}: a logger's message, such as 'Logging paused')" in capsys.readouterr().out
