@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-LABELS = {"mlr": "MLR"}
+LABELS = {"mlr": "MLR", "ar1": "AR(1)", "fit": "fit's model"}
 
 
 def within_compensation_clamp(prediction: np.ndarray, switching: Any) -> np.ndarray:

@@ -11,7 +11,15 @@ predicted without any refitting or tuning:
   (by sample index); on other runs the run-time switching rule
   (:mod:`groupfit.runtime`) chooses the group from the live criterion
   temperature when it is available, else the groups are applied by sample
-  index, and the table says which.
+  index, and the table says which;
+* fit's model: when the p ``fit`` would choose is 0 and ``fit`` writes
+  another model than the MLR (a ridge penalty, a fast-response stage), that
+  model, replayed by its run-time rule on every run
+  (:mod:`groupfit.comparison_fit`).
+
+A validation run is read as ``replay`` reads a next run: a reading that is
+not a number is held, then a sensor fault of the rule, and those samples are
+not scored (:mod:`groupfit.comparison_faults`).
 
 A modelling run whose error is measured on some rows only (a probe cycle
 every few minutes) gets the global models only: MLR fitted on its measured
@@ -29,18 +37,14 @@ from typing import Any, Callable, ContextManager, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.ar1.inputs import ar1_inputs
 from groupfit.clamped_scores import clamped
 from groupfit.columns import input_order
-from groupfit.comparison_ar1 import (
-    ar1_left_out_reason,
-    early_rise_ratio,
-    expect_compared_ar1,
-    first_measured,
-    fit_ar1,
-    rise_notes,
-)
+from groupfit.comparison_ar1 import ar1_left_out_reason, expect_compared_ar1, fit_ar1, rise_notes
+from groupfit.comparison_faults import replayed_on_faults
+from groupfit.comparison_fit import FIT_KEY, differs_from_mlr, fit_model_file, fit_model_summary
 from groupfit.comparison_path import grouped_path
+from groupfit.comparison_runs import FittedModels, modelling_predictions, scored_rows, validation_predictions
+from groupfit.comparison_runs import distance_to_change as distance_to_change
 from groupfit.comparison_text import comparison_summary
 from groupfit.conditions import condition_changes, run_condition
 from groupfit.data import Run, join_runs, measured_rows
@@ -49,8 +53,6 @@ from groupfit.heldout.expect import NextRunExpectation, expect_next_run
 from groupfit.heldout.penalty import penalised_expectation
 from groupfit.inference import break_intervals
 from groupfit.inference.cli import AUTO_BUDGET_S
-from groupfit.inference.prediction import band_for
-from groupfit.metrics import error_metrics, prediction_accuracy
 from groupfit.model import ModelFile
 from groupfit.models.mlr import MLR
 from groupfit.models.select_p import choose_p
@@ -146,6 +148,9 @@ class ComparisonResult:
     fit_choice: int | None = None
     fit_penalty: dict[str, Any] | None = None
     """The ridge penalty fit gives its choice of p = 0 (:func:`groupfit.heldout.penalty.penalised_expectation`)."""
+    fit_model: ModelFile | None = None
+    """The global model fit would write, when it is another than the MLR (a ridge penalty, a fast-response
+    stage): scored on every run as replay scores it, in the rows ``"model": "fit"`` (:mod:`groupfit.comparison_fit`)."""
     notes: list[str] = field(default_factory=list)
     """What was left out and why (a modelling run whose error is not measured on every row, several runs)."""
     ar1_left_out: str | None = None
@@ -172,6 +177,7 @@ class ComparisonResult:
             "run_conditions": self.run_conditions,
             "reference": self.reference,
             "notes": self.notes,
+            "fit_model": self.fit_model and fit_model_summary(self.fit_model),
             "expected_next_run": self.expectation
             and {
                 **self.expectation.to_json(),
@@ -185,13 +191,6 @@ class ComparisonResult:
     def summary(self) -> str:
         """The comparison table and its notes, as ``groupfit compare`` prints them."""
         return comparison_summary(self)
-
-
-def distance_to_change(breaks: list[int], changes: list[int]) -> list[int | None]:
-    """Each break's distance in samples to the nearest change of operating condition."""
-    if not changes:
-        return [None] * len(breaks)
-    return [int(min(abs(b - c) for c in changes)) for b in breaks]
 
 
 def break_stability(path_breaks: list[list[int]]) -> list[dict[str, Any]]:
@@ -217,7 +216,7 @@ def compare_models(
     live_rule: Callable[[ModelFile, np.ndarray], np.ndarray] | None = None,
     progress: Callable[[str, float], None] | None = None,
     *,
-    histories: Mapping[str, np.ndarray] | None = None,
+    recordings: Mapping[str, Run] | None = None,
     stage: Callable[[str], ContextManager] = lambda name: nullcontext(),
 ) -> ComparisonResult:
     """Fit every model on ``modelling`` and score it on every run.
@@ -228,18 +227,22 @@ def compare_models(
         The modelling run; several runs are joined (:func:`groupfit.data.join_runs`)
         and get the global models only, their next-run expectation leaving one
         run out (:func:`joined_run_notes`).
+    validation : list of Run
+        The validation runs. A reading that is not a number is a sensor fault
+        of the run-time rule, as ``replay`` reads it: held, then not scored
+        (:mod:`groupfit.comparison_faults`).
     live_rule : callable, optional
         ``live_rule(model, inputs) -> group index per sample (0-based)``;
         when given, grouped models serve validation runs through it.
-    histories : mapping, optional
-        Per validation run (by name) that continues a recording, the inputs of
-        what came before it: the live rule runs through them first
-        (:mod:`groupfit.continuation`), so its state carries into the run.
+    recordings : mapping, optional
+        Per validation run (by name) that continues a recording, that run with
+        what came before it in front (:func:`groupfit.continuation.with_histories`):
+        the live rule runs through it first, so its state carries into the run.
     stage : callable, optional
         ``stage(name)``: a context each stage without progress of its own runs in
         (:func:`groupfit.running.stage` says when it runs long).
     """
-    histories = histories or {}
+    recordings = recordings or {}
     parts = [modelling] if isinstance(modelling, Run) else list(modelling)
     modelling = join_runs(parts)
     if len(parts) > 1:
@@ -282,53 +285,46 @@ def compare_models(
             p: break_intervals(model, X, y, seed=settings.search.seed, budget_s=AUTO_BUDGET_S, **settings.intervals)
             for p, model in grouped.items()
         }
-    bands: dict[str, dict[str, tuple]] = {}
+    with stage("next-run estimate"):
+        estimate = next_run_estimate(parts, modelling, measured, settings, pmax, with_ar1=ar1 is not None)
+    fit_model = None
+    if estimate.fit_penalty is not None:
+        with stage("fit's model"):
+            fit_model = fit_model_file(
+                parts,
+                modelling,
+                measured,
+                ridge_alpha=float(estimate.fit_penalty["alpha"]),
+                n=settings.n,
+                c=settings.c,
+                fit_intercept=settings.fit_intercept,
+                objective=settings.objective,
+                search=settings.search,
+            )
+        fit_model = fit_model if differs_from_mlr(fit_model) else None
+    files = {"mlr": mlr.to_model_file(modelling), **{f"grouped{p}": f for p, f in model_files.items()}}
+    files |= {FIT_KEY: fit_model} if fit_model is not None else {}
+    models = FittedModels(mlr, ar1, grouped, files)
 
     changes = condition_changes(modelling, settings.conditions)
     clamps = {"mlr": float(compensation_clamp(mlr.predict(modelling.temps)))}  # what its model file would hold
-    clamps |= {f"grouped{p}": float(model.switching.comp_max_um) for p, model in model_files.items()}
-    clamp_notes: list[str] = []
+    clamps |= {key: float(f.switching.comp_max_um) for key, f in files.items() if key != "mlr"}
+    run_notes: list[str] = []
     rows: list[dict[str, Any]] = []
     predictions: dict[str, dict[str, np.ndarray]] = {}
+    bands: dict[str, dict[str, tuple]] = {}
     for run in runs:
         is_modelling = run is modelling
-        preds: dict[str, np.ndarray] = {}
-        preds["mlr"] = mlr.predict(run.temps)
-        rise_ratio = early_rise_ratio(run, modelling, settings) if ar1 is not None else None
-        if ar1 is not None:
-            initial = first_measured(run.error) if settings.ar1_start == "measured" else 0.0
-            preds["ar1"] = ar1.predict(
-                ar1_inputs(run, settings.heat, settings.structural_sensor), initial_error=initial, rise_ratio=rise_ratio
-            )
-        bands[run.name] = {"mlr": tuple(mlr.prediction_interval(run.temps).T)}
-        for p, model in grouped.items():
-            groups = None
-            if is_modelling or live_rule is None:
-                preds[f"grouped{p}"] = model.predict(run.temps)
-            else:
-                history = histories.get(run.name, np.empty((0, run.temps.shape[1])))
-                whole = np.vstack([history, run.temps])
-                groups = live_rule(model_files[p], whole)  # the rule's groups and its bumpless transfer
-                preds[f"grouped{p}"] = model_files[p].predict(whole, groups, transfer=True)[len(history) :]
-                groups = groups[len(history) :]
-            bands[run.name][f"grouped{p}"] = band_for(model, run.temps, preds[f"grouped{p}"], groups)
-        if not is_modelling:
+        whole = recordings.get(run.name, run)
+        if is_modelling:
+            preds, bands[run.name] = modelling_predictions(models, parts, modelling, settings)
+        else:
+            preds, bands[run.name] = validation_predictions(models, whole, run, modelling, settings, live_rule)
+            preds, faults = replayed_on_faults(preds, files, whole, whole.n_samples - run.n_samples)
             preds, held = clamped(preds, clamps, run.name)
-            clamp_notes += held
+            run_notes += faults + held
         predictions[run.name] = preds
-        scored = np.isfinite(run.error)
-        for key, prediction in preds.items():
-            metrics = error_metrics((run.error - prediction)[scored])
-            if key.startswith("grouped"):
-                p = int(key[len("grouped") :])
-                breaks = grouped[p].breaks_
-                row = {"model": "grouped", "p": p, "breaks": breaks}
-                row["break_distance"] = distance_to_change(breaks, changes) if is_modelling else None
-            else:
-                row = {"model": key, "p": 0 if key == "mlr" else None, "breaks": None, "break_distance": None}
-            accuracy = prediction_accuracy(run.error, run.error - prediction)
-            row.update({"run": run.name, **metrics, "accuracy_percent": accuracy, "R_mm": metrics["R_um"] / 1000.0})
-            rows.append(row)
+        rows += scored_rows(run, preds, grouped, changes if is_modelling else None, fit_model)
 
     selection = {
         rule: choose_p(
@@ -341,22 +337,6 @@ def compare_models(
         )
         for rule in ("bic", "target")
     }
-    fit_pmax = path_pmax(modelling, settings.fit_pmax)
-    candidates = range(max(pmax, fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
-    scored_runs = [measured_rows(part) for part in parts] if len(parts) > 1 else [measured]
-    with stage("next-run estimate"):
-        expectation = expect_next_run(
-            scored_runs, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
-        )
-        if fit_pmax < settings.fit_pmax:  # the error not on every row: the global model alone
-            expectation = expectation.on_measured_rows(measured.n_samples, modelling.n_samples, settings.fit_pmax)
-        fit_choice = expectation.choice_among(fit_pmax + 1)
-        fit_penalty = (
-            penalised_expectation(measured, fit_intercept=settings.fit_intercept, parts=scored_runs)
-            if fit_choice == 0
-            else None
-        )
-        ar1_expectation = expect_compared_ar1(modelling, settings) if ar1 is not None else None
     ar1_summary = None
     if ar1 is not None:
         ar1_summary = {
@@ -391,13 +371,46 @@ def compare_models(
             for run in runs
         },
         reference=modelling.reference,
-        expectation=expectation,
-        ar1_expectation=ar1_expectation,
-        fit_choice=fit_choice,
-        fit_penalty=fit_penalty,
-        notes=notes + clamp_notes,
+        expectation=estimate.expectation,
+        ar1_expectation=estimate.ar1_expectation,
+        fit_choice=estimate.fit_choice,
+        fit_penalty=estimate.fit_penalty,
+        fit_model=fit_model,
+        notes=notes + run_notes,
         ar1_left_out=ar1_left_out if settings.heat is not None else None,
     )
+
+
+@dataclass(frozen=True)
+class NextRunEstimate:
+    """The expected next-run error of p = 0…pmax, the p ``fit`` would choose and the penalty it gives p = 0."""
+
+    expectation: NextRunExpectation
+    fit_choice: int | None
+    fit_penalty: dict[str, Any] | None
+    ar1_expectation: NextRunExpectation | None
+
+
+def next_run_estimate(
+    parts: Sequence[Run], modelling: Run, measured: Run, settings: ComparisonSettings, pmax: int, *, with_ar1: bool
+) -> NextRunEstimate:
+    """The next-run expectation of every p compared (:mod:`groupfit.heldout.expect`), as ``fit`` decides it."""
+    fit_pmax = path_pmax(modelling, settings.fit_pmax)
+    candidates = range(max(pmax, fit_pmax) + 1)  # the next-run expectation of p = 0…pmax
+    scored_runs = [measured_rows(part) for part in parts] if len(parts) > 1 else [measured]
+    expectation = expect_next_run(
+        scored_runs, candidates, n=settings.n, c=settings.c, fit_intercept=settings.fit_intercept
+    )
+    if fit_pmax < settings.fit_pmax:  # the error not on every row: the global model alone
+        expectation = expectation.on_measured_rows(measured.n_samples, modelling.n_samples, settings.fit_pmax)
+    fit_choice = expectation.choice_among(fit_pmax + 1)
+    fit_penalty = (
+        penalised_expectation(measured, fit_intercept=settings.fit_intercept, parts=scored_runs)
+        if fit_choice == 0
+        else None
+    )
+    ar1_expectation = expect_compared_ar1(modelling, settings) if with_ar1 else None
+    return NextRunEstimate(expectation, fit_choice, fit_penalty, ar1_expectation)
 
 
 def path_pmax(modelling: Run, pmax: int) -> int:

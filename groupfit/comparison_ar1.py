@@ -91,6 +91,14 @@ def early_rise_ratio(run: Run, modelling: Run, settings) -> float | None:
     return early_rise(_column(run, sensor), run.period, settings.rise_window_s) / base
 
 
+def ar1_prediction(ar1: AR1Model, run: Run, modelling: Run, settings) -> np.ndarray:
+    """The AR(1) model's free run over ``run``, from its first measured error or from 0."""
+    rise_ratio = early_rise_ratio(run, modelling, settings)
+    initial = first_measured(run.error) if settings.ar1_start == "measured" else 0.0
+    inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
+    return ar1.predict(inputs, initial_error=initial, rise_ratio=rise_ratio)
+
+
 def rise_sensor(modelling: Run, settings) -> str:
     """The temperature whose early rise scales C2 (``[compare] rise_sensor``, else the first input), refused when
     it is the run's time, error or a speed."""

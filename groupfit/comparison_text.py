@@ -6,10 +6,11 @@ from typing import Any
 
 import numpy as np
 
+from groupfit.comparison_fit import fit_model_line
 from groupfit.heldout.penalty import penalty_lines
 from groupfit.inference.cli import interval_notes
 
-MODEL_LABELS = {"mlr": "MLR (p = 0)", "ar1": "AR(1) free run"}
+MODEL_LABELS = {"mlr": "MLR (p = 0)", "fit": "fit's model", "ar1": "AR(1) free run"}
 
 
 def comparison_summary(result: Any) -> str:
@@ -19,7 +20,8 @@ def comparison_summary(result: Any) -> str:
     grouped_keys = sorted(
         {f"grouped{r['p']}" for r in result.rows if r["model"] == "grouped"}, key=lambda k: int(k[7:])
     )
-    keys = ["mlr"] + (["ar1"] if result.ar1 is not None else []) + grouped_keys
+    fit_key = ["fit"] if getattr(result, "fit_model", None) is not None else []
+    keys = ["mlr"] + fit_key + (["ar1"] if result.ar1 is not None else []) + grouped_keys
     index = {(r["model"] if r["model"] != "grouped" else f"grouped{r['p']}", r["run"]): r for r in result.rows}
     lines = [f"note    {note}" for note in result.notes] + comparison_table(result, keys, index)
     lines += (
@@ -52,6 +54,7 @@ def comparison_summary(result: Any) -> str:
     )
     lines += result.expectation.candidate_lines(result.runs[0], result.fit_choice) if result.expectation else []
     lines += penalty_lines(result.fit_penalty)
+    lines += [fit_model_line(result.fit_model)] if fit_key else []
     stats = result.mlr_statistics
     terms = ", ".join(
         f"{t['name']} {t['estimate']:.4g} ± {t['std_error']:.2g} (t = {t['t']:.1f})" for t in stats["terms"]
@@ -102,7 +105,10 @@ def ar1_line(ar1: dict[str, Any] | None, left_out: str | None = None) -> str:
 
 def comparison_table(result: Any, keys: list[str], index: dict) -> list[str]:
     """One line per run (its condition, then every model's RMS, R, max |e| and accuracy %), the best model named."""
-    names = [MODEL_LABELS.get(key, f"p = {key[7:]}").replace(" (p = 0)", "").replace(" free run", "") for key in keys]
+    names = [
+        MODEL_LABELS.get(key, f"p = {key[7:]}").replace(" (p = 0)", "").replace(" free run", "").replace(" model", "")
+        for key in keys
+    ]
     width = max(len(run) for run in result.runs)
     reference = result.reference or "none (absolute temperatures)"
     lines = [f"inputs relative to: {reference}"]

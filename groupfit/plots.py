@@ -98,7 +98,11 @@ def plot_dataset(frame, path: str | Path, title: str = "") -> None:
     save_figure(fig, Path(path), dpi=120)
 
 
-MODEL_STYLE = {"mlr": ("MLR", "tab:green", "-."), "ar1": ("AR(1) free run", "tab:orange", ":")}
+MODEL_STYLE = {
+    "mlr": ("MLR", "tab:green", "-."),
+    "fit": ("fit's model", "tab:cyan", "-"),
+    "ar1": ("AR(1) free run", "tab:orange", ":"),
+}
 
 
 def plot_run_comparison(

@@ -66,8 +66,10 @@ def test_compare_json_has_one_row_per_model_and_run(comparison):
     out, result = comparison
     assert result["runs"][0] == "paper_cycle" and len(result["runs"]) == 6
     models = {(r["model"], r["p"]) for r in result["rows"]}
-    assert models == {("mlr", 0), ("ar1", None)} | {("grouped", p) for p in range(1, 5)}
-    assert len(result["rows"]) == 6 * 6
+    # fit's choice, p = 0, takes a fast-response stage here: the model fit writes is a row of its own
+    assert result["fit_model"]["p"] == 0 and result["fit_model"]["fast_response"]
+    assert models == {("mlr", 0), ("fit", 0), ("ar1", None)} | {("grouped", p) for p in range(1, 5)}
+    assert len(result["rows"]) == 7 * 6
     for row in result["rows"]:
         assert row["R_um"] >= row["max_um"] >= row["rms_um"] > 0
         assert row["R_mm"] == pytest.approx(row["R_um"] / 1000)

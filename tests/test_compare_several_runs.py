@@ -31,11 +31,14 @@ def several(tmp_path_factory):
     assert main(["fit", *data, "--reference", "T_amb", "--out", str(tmp / "chosen"), "--quiet"]) == 0
     replay = ["replay", str(tmp / "ls" / "model.json"), "--data", str(NEXT), "--json", str(tmp / "ls.json")]
     assert main(replay) == 0
+    replay = ["replay", str(tmp / "chosen" / "model.json"), "--data", str(NEXT), "--json", str(tmp / "chosen.json")]
+    assert main(replay) == 0
     return {
         "compare": json.loads((tmp / "compare.json").read_text()),
         "ls": json.loads((tmp / "ls" / "model.json").read_text()),
         "chosen": json.loads((tmp / "chosen" / "model.json").read_text()),
         "replay_ls": json.loads((tmp / "ls.json").read_text()),
+        "replay_chosen": json.loads((tmp / "chosen.json").read_text()),
         "figures": sorted(p.name for p in (tmp / "cmp").iterdir()),
     }
 
@@ -43,7 +46,8 @@ def several(tmp_path_factory):
 def test_the_runs_are_joined_and_only_the_global_models_are_compared(several):
     result = several["compare"]
     assert result["runs"] == ["paper_cycle+repeat_timing", "validation_speed"]
-    assert {row["model"] for row in result["rows"]} == {"mlr"}  # no grouped rows, no AR(1) across the joint
+    # no grouped rows, no AR(1) across the joint; fit's model (a fast-response stage here) beside the MLR
+    assert {row["model"] for row in result["rows"]} == {"mlr", "fit"}
     assert result["ar1"] is None
     assert any("2 modelling runs joined" in note for note in result["notes"])
     assert "compare_paper_cycle+repeat_timing.png" in several["figures"]
@@ -76,6 +80,17 @@ def test_compare_marks_what_fit_chooses_on_the_same_runs(several):
     assert expected["fit_would_choose_p"] == chosen["p"] == 0
     ridge = expected["fit_would_choose_ridge"]
     assert ridge["expected_next_run_rms_um"] == pytest.approx(chosen["training"]["expected_next_run_rms_um"], rel=1e-9)
+
+
+def test_the_fit_row_is_the_model_fit_writes_on_the_same_runs_scored_as_replay_scores_it(several):
+    """fit's choice on the joined runs is not the least-squares MLR: its row is the model fit writes, with the
+    penalty and the stage fit gives it, and its figure on the next run is replay's of that model file."""
+    result, chosen = several["compare"], several["chosen"]
+    assert result["fit_model"]["ridge_alpha"] == (chosen.get("ridge_alpha") or 0.0)
+    assert bool(result["fit_model"]["fast_response"]) == ("fast_response" in chosen["training"])
+    row = {(r["model"], r["run"]): r for r in result["rows"]}[("fit", "validation_speed")]
+    assert row["rms_um"] == pytest.approx(several["replay_chosen"]["rms_um"], rel=0, abs=1e-6)
+    assert row["max_um"] == pytest.approx(several["replay_chosen"]["max_um"], rel=0, abs=1e-6)
 
 
 def test_a_run_whose_columns_come_in_another_order_gives_the_same_figures(tmp_path):

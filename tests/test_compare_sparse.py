@@ -68,11 +68,12 @@ def least_squares_residuals(sparse) -> dict[str, np.ndarray]:
 
 def test_compare_fits_the_global_regression_on_the_measured_rows_and_scores_each_run_on_its_own(sparse):
     result = sparse["compare"]
-    assert {r["model"] for r in result["rows"]} == {"mlr"}  # grouped models and AR(1) need the error on every row
+    # grouped models and AR(1) need the error on every row; fit's model (with its ridge penalty) beside the MLR
+    assert {r["model"] for r in result["rows"]} == {"mlr", "fit"}
     assert any("measured on 107 of 532 rows" in note for note in result["notes"])
     assert result["ar1"] is None and result["exact_path"]["breaks"] == [[]]
     for name, residual in least_squares_residuals(sparse).items():
-        row = next(r for r in result["rows"] if r["run"] == name)
+        row = next(r for r in result["rows"] if r["run"] == name and r["model"] == "mlr")
         measured = residual[np.isfinite(residual)]
         assert row["rms_um"] == pytest.approx(np.sqrt(np.mean(measured**2)), rel=1e-9)
         assert row["max_um"] == pytest.approx(np.max(np.abs(measured)), rel=1e-9)
@@ -116,7 +117,8 @@ def test_a_complete_modelling_run_keeps_every_model_and_scores_a_sparse_next_run
     args += ["--temps", ",".join(TEMPS), "--reference", "none", "--heat", "speed_rpm", "--pmax", "2"]
     assert main([*args, "--out", str(tmp_path / "cmp"), "--json", str(out), "--quiet"]) == 0
     rows = [r for r in json.loads(out.read_text())["rows"] if r["run"] == "next_run"]
-    assert {(r["model"], r["p"]) for r in rows} == {("mlr", 0), ("ar1", None), ("grouped", 1), ("grouped", 2)}
+    models = {("mlr", 0), ("fit", 0), ("ar1", None), ("grouped", 1), ("grouped", 2)}
+    assert {(r["model"], r["p"]) for r in rows} == models
     assert all(np.isfinite(r["rms_um"]) for r in rows)  # the AR(1) free run starts from the first reading
     model = pd.read_csv(DATASETS / "paper_cycle.csv")
     design = np.column_stack([np.ones(len(model)), model[TEMPS]])

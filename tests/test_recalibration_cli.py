@@ -224,7 +224,7 @@ def test_compare_prints_and_writes_the_error_against_the_check_interval(tmp_path
     report = capsys.readouterr().out
     table = json.loads((tmp_path / "c.json").read_text())["probe_intervals"]
     assert table["intervals_s"] == [900.0, 3600.0] and table["method"] == "offset hold"
-    assert {row["model"] for row in table["rows"]} == {"mlr", "ar1", "grouped1"}
+    assert {row["model"] for row in table["rows"]} == {"mlr", "fit", "ar1", "grouped1"}  # fit's: p = 0, a stage
     assert "RMS µm with a probe check every T" in report
     assert (out / "error_against_check_interval.png").stat().st_size > 10_000
 

@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from groupfit import running
 from groupfit.commands import common, option_values, reference_options
 from groupfit.comparison import ComparisonSettings, compare_models, in_modelling_order, path_pmax
@@ -119,6 +121,19 @@ def modelling_runs(data) -> list:
     return [common.load_configured_run(data, missing_error=True)]
 
 
+def validation_runs(data, path) -> list[Run]:
+    """The runs of one ``--validate`` file, read as ``replay`` reads a next run: a reading that is not a number
+    is kept, a sensor fault of the run-time rule (held, then not scored: :mod:`groupfit.comparison_faults`);
+    implausible readings are refused as in a modelling run, and so is an error column empty on every row."""
+    runs = common.load_configured_runs(data, path, missing_error=True, allow_nonfinite=True, check_ranges=True)
+    for run in runs:
+        if run.error is not None and not np.isfinite(run.error).any():
+            raise InputError(
+                f"{run.source}: error column '{run.error_name}' is empty on every row; a validation run is scored on it"
+            )
+    return runs
+
+
 def global_models_only(args, settings: ComparisonSettings, n_parts: int, modelling: Run, n_coef: int) -> None:
     """No grouped models with several modelling runs (their breaks belong to one run), nor when a grouped model's
     table of segment sums would exceed the memory budget (said in a note)."""
@@ -170,7 +185,7 @@ def run_compare(args: argparse.Namespace) -> int:
     modelling = join_runs(parts)
     n_coef = modelling.temps.shape[1] + int(settings.fit_intercept)
     global_models_only(args, settings, len(parts), modelling, n_coef)
-    validation = [run for path in data.validate for run in common.load_configured_runs(data, path, missing_error=True)]
+    validation = [run for path in data.validate for run in validation_runs(data, path)]
     refuse_overlapping([*parts, *validation], "as data (--data, --validate)")
     if args.probe_every:
         check_intervals_fit(args.probe_every, args.probe_first, validation or [modelling])
@@ -194,7 +209,7 @@ def run_compare(args: argparse.Namespace) -> int:
     validation = [in_modelling_order(modelling, with_reference(run, reference)) for run in validation]
     joined, skipped, notes = with_histories(validation, parts, assume_continued=args.continues)
     validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
-    histories = {run.name: whole.temps[:rows] for run, whole, rows in zip(validation, joined, skipped) if rows}
+    recordings = {run.name: whole for run, whole, rows in zip(validation, joined, skipped) if rows}
     for note in notes:
         data_notes.append(
             note.replace("derived inputs and run-time state carry their", "run-time switching carries its")
@@ -223,7 +238,7 @@ def run_compare(args: argparse.Namespace) -> int:
                 budget_s=None if args.no_budget else common.EXACT_BUDGET_SECONDS,
                 estimate=lambda line: print(f"estimate {line}", file=sys.stderr, flush=True),
             ),
-            histories=histories,
+            recordings=recordings,
             stage=lambda name: running.stage(name, enabled=not args.quiet),
         )
     finally:

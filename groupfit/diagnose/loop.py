@@ -73,14 +73,16 @@ from groupfit.diagnose.effects import Tried, choose, ranking, tried_features
 from groupfit.diagnose.history import started_running_notes
 from groupfit.diagnose.joint import joint_start
 from groupfit.diagnose.measures import joint_name, metrics_of, metrics_per_run, residual_checks
-from groupfit.diagnose.notes import CLAMP, COLD_START, OVERFIT, Note, notes_of
+from groupfit.diagnose.notes import CLAMP, COLD_START, FAULTS, OVERFIT, Note, notes_of
 from groupfit.diagnose.policy import DEFAULT_POLICY, AcceptancePolicy
 from groupfit.diagnose.problem import Fit, Model, Problem, check_arguments, diagnosis_problem
 from groupfit.diagnose.reference import droppable_reference
 from groupfit.diagnose.residual import LiveRule, ModelLike
 from groupfit.diagnose.result import DiagnosisResult, InputSelection, ReferenceCheck, Refused, Step
+from groupfit.errors import InputError
 from groupfit.heldout.check import overfit_check
 from groupfit.model import ModelFile
+from groupfit.rule_faults import unscored_note, unscored_samples
 
 MIN_SCORE = DEFAULT_POLICY.min_score
 MIN_EFFECT_RMS_UM = DEFAULT_POLICY.min_effect_rms_um
@@ -187,6 +189,12 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
         model, data_runs, validate_runs, live_rule=options.live_rule, validation_continues=options.validation_continues
     )
     before = problem.residuals(model if options.baseline is None else options.baseline)
+    if "validate" in before and not np.isfinite(before["validate"]).any():
+        raise InputError(
+            f"{validate_runs[0].source}: no sample of the validation run(s) is left to judge the model on: the "
+            "run-time rule is in sensor fault wherever the error is measured (a reading that is not a number for "
+            "longer than its hold); repair those readings or leave the run out"
+        )
     inputs = problem.inputs(model)
     residuals = dict(before) if options.baseline is None else problem.residuals(model)
     current = Fit(model, inputs, residuals, problem.scorer(model, inputs))
@@ -245,6 +253,7 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
         state.notes += notes_of(COLD_START, started_running_notes(validate_runs, problem.skipped["validate"], features))
         baseline = model if options.baseline is None else options.baseline
         state.notes += notes_of(CLAMP, clamp_notes(problem, baseline, state.current.model))
+        state.notes += notes_of(FAULTS, fault_notes(problem, baseline, state.current.model))
     return result_of(problem, state, before=before, base_check=base_check, ambient=options.ambient)
 
 
@@ -258,6 +267,21 @@ def clamp_notes(problem: Problem, before: Model, after: Model) -> list[str]:
         for name in counts["before"]
         if counts["before"][name] or counts["after"][name]
     ]
+
+
+def fault_notes(problem: Problem, before: Model, after: Model) -> list[str]:
+    """A note per validation run with a reading that is not a number: the samples the run-time rule's faults
+    leave unscored (as replay leaves them), after, and before when that differs."""
+    if problem.live_rule is None:
+        return []
+    before, after = ModelFile.coerce(before), ModelFile.coerce(after)
+    notes = []
+    for run, skip in zip(problem.runs.get("validate", []), problem.skipped.get("validate") or []):
+        counts = [unscored_samples(model, run, skip) for model in (before, after)]
+        others = f" after ({counts[0]} before)" if counts[0] != counts[1] else ""
+        note = unscored_note(after, run, skip, others=others) or unscored_note(before, run, skip)
+        notes += [note] if note else []
+    return notes
 
 
 def effect_loop(problem: Problem, state: State, policy: AcceptancePolicy) -> None:

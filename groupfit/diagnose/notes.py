@@ -22,6 +22,9 @@ AMBIENT = "ambient"
 """Which columns were read as the air, and which as machine sensors."""
 CLAMP = "clamp"
 """The compensation's clamp held the prediction on a validation run (scored as replay scores it)."""
+FAULTS = "faults"
+"""A validation run's reading that is not a number: the run-time rule held it, then was in sensor fault; the
+samples in fault are not scored, as replay scores the run (:mod:`groupfit.rule_faults`)."""
 JOINT = "joint"
 """The joint selection is not expected to carry to a new condition."""
 

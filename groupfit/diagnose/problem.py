@@ -131,7 +131,7 @@ def diagnosis_problem(
     notes = [Note(INPUTS, n) for run in data_runs for n in check_inputs(model, run, model_inputs(model, run))]
     notes += notes_of(HISTORY, chain_notes)
     for run in validate_runs:
-        notes += notes_of(INPUTS, check_inputs(model, run, model_inputs(model, run)))
+        notes += notes_of(INPUTS, check_inputs(model, run, model_inputs(model, run), next_run=True))
     used = set(model.temps) | {feature.column for feature in model.derived_inputs or ()}
     columns, column_notes = common_usable_columns(data_runs, {data_runs[0].time_name, model.error} | used)
     notes += notes_of(COLUMNS, column_notes)
@@ -216,8 +216,14 @@ def _read_at(run: Run, column: str, row: int) -> bool:
     return bool(np.isfinite(pd.to_numeric(run.frame[column].iloc[[row - 1]], errors="coerce")).all())
 
 
-def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
-    """Refuse runs whose model inputs cannot be evaluated; note dead-looking inputs."""
+def check_inputs(model: Model, run: Run, inputs: np.ndarray, *, next_run: bool = False) -> list[str]:
+    """Refuse runs whose model inputs cannot be evaluated; note dead-looking inputs.
+
+    ``next_run``: a validation run, read as ``replay`` reads a next run: an
+    input that is not a number on some rows is a sensor fault of the run-time
+    rule (:mod:`groupfit.rule_faults`), not refused; one that is never a
+    number is.
+    """
     notes = []
     for j, name in enumerate(model.temps):
         column = inputs[:, j]
@@ -227,7 +233,7 @@ def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
                 f"{run.source}: model input '{name}' has no finite value (a dead sensor): the model cannot be "
                 "evaluated; replace the sensor or fit a model without it"
             )
-        if bad.any():
+        if bad.any() and not next_run:
             row = int(np.flatnonzero(bad)[0]) + 1
             reference = getattr(model, "reference", None)
             what = f"model input '{name}'"
@@ -238,7 +244,7 @@ def check_inputs(model: Model, run: Run, inputs: np.ndarray) -> list[str]:
                 "repair or drop those rows before diagnosing, or let --resample SECONDS interpolate up to "
                 f"{GAP_PERIODS} missed readings in a row"
             )
-        if np.ptp(column) == 0.0:
+        if np.ptp(column[~bad]) == 0.0:
             notes.append(f"model input '{name}' is constant on {run.name} (a dead sensor?)")
     return notes
 

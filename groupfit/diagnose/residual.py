@@ -11,6 +11,7 @@ from groupfit.data import Run
 from groupfit.errors import InputError
 from groupfit.features import Feature
 from groupfit.model import ModelFile
+from groupfit.rule_faults import replayed_prediction
 
 LiveRule = Callable[[ModelFile, np.ndarray], np.ndarray]
 ModelLike = ModelFile | Mapping[str, Any]
@@ -27,11 +28,19 @@ def model_inputs(model: ModelLike, run: Run) -> np.ndarray:
 
 def predict(model: ModelLike, run: Run, live_rule: LiveRule | None = None) -> np.ndarray:
     """Predicted error: groups by the run-time rule when given, with its bumpless transfer after each switch (what
-    ``groupfit replay`` computes), else by sample index (the offline model, as fitted)."""
+    ``groupfit replay`` computes), else by sample index (the offline model, as fitted).
+
+    With the rule, a run with an input that is not a number (a validation
+    run's sensor fault) is replayed by the rule itself, as ``replay`` replays
+    it: the reading held, then NaN where the rule is in sensor fault (not
+    scored; :mod:`groupfit.rule_faults`).
+    """
     model = ModelFile.coerce(model)
     X = model.inputs(run.frame, run.source)
     if live_rule is None:
         return model.predict(np.nan_to_num(X)) + np.where(np.isfinite(X).all(axis=1), 0.0, np.nan)
+    if not np.isfinite(X).all():
+        return replayed_prediction(model, run)[0]
     return model.predict(X, live_rule(model, X), transfer=True)
 
 

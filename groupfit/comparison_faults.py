@@ -1,0 +1,67 @@
+"""``compare`` on a validation run with a reading that is not a number: the models replayed as ``replay`` replays
+them.
+
+A validation run is read as ``replay`` reads a next run (:mod:`groupfit.rule_faults`): a reading that is
+not a number is held for the run-time rule's hold, then the rule is in sensor fault and those samples are not
+scored. On such a run the MLR, the grouped models and fit's model are each replayed by the rule of its model
+file (the MLR's as ``fit --p 0`` writes it); the AR(1) model, which has no such rule, is left unscored on the
+samples where any of them is in fault, so that it is scored on the samples the others are. A note says how many
+samples were not scored, and why.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from groupfit.clamped_scores import LABELS
+from groupfit.data import Run
+from groupfit.model import ModelFile
+from groupfit.rule_faults import has_faulty_readings, replayed_prediction, unscored_note
+from groupfit.runtime import FAULT_SENSOR
+
+
+def model_label(key: str) -> str:
+    """A compared model by name: ``MLR``, ``grouped p = 2``, ``fit's model``."""
+    return LABELS.get(key, key.replace("grouped", "grouped p = "))
+
+
+def replayed_on_faults(
+    predictions: Mapping[str, np.ndarray], model_files: Mapping[str, ModelFile], whole: Run, skip: int = 0
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """The ``predictions`` of a validation run, each model of ``model_files`` whose rule reads a value that is
+    not a number on it replayed by that rule (NaN in sensor fault), a model without a model file (the AR(1))
+    NaN where any replayed one is in fault; and a note on what was not scored (none when no rule reads such a
+    value on the run itself).
+
+    ``whole``: the run with its history in front, of which the first ``skip``
+    rows are the history.
+    """
+    replayed, in_fault, counts = dict(predictions), np.zeros(whole.n_samples - skip, dtype=bool), {}
+    for key, model in model_files.items():
+        if key in predictions and has_faulty_readings(model, whole):
+            replayed[key], fault = replayed_prediction(model, whole, skip)
+            counts[key] = (fault & FAULT_SENSOR) != 0
+            in_fault |= counts[key]
+    if not counts:
+        return replayed, []
+    unscored = [key for key in predictions if key not in model_files]
+    for key in unscored:
+        replayed[key] = np.where(in_fault, np.nan, predictions[key])
+    first = next(iter(counts))
+    differing = [
+        f"{model_label(key)}: {int(mask.sum())}" for key, mask in counts.items() if (mask != counts[first]).any()
+    ]
+    others = f" by {model_label(first)} ({', '.join(differing)})" if differing else ""
+    note = unscored_note(model_files[first], whole, skip, others=others)
+    if note is None:  # the readings that are not a number lie in the history in front
+        return replayed, []
+    if unscored:
+        note += (
+            f"; {' and '.join(model_label(key) for key in unscored)} left unscored on the samples a rule is in fault"
+        )
+    return replayed, [note]
+
+
+__all__ = ["model_label", "replayed_on_faults"]
