@@ -84,7 +84,8 @@ def faulty_readings(tables: RuleTables, readings: np.ndarray) -> list[dict[str, 
 
 
 def reading_parts(found: list[dict[str, Any]]) -> list[str]:
-    """Each faulty reading of :func:`faulty_readings` in words: ``T1 not a number on 20 sample(s) (valid 3..95)``."""
+    """Each faulty reading of :func:`faulty_readings` in words: ``T1 not finite (NaN or ±inf) on 20 sample(s)
+    (valid 3..95)``."""
     parts = []
     for f in found:
         kinds = []

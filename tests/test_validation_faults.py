@@ -105,7 +105,8 @@ def test_compare_reads_a_validation_run_with_a_sensor_dropout_as_replay_does(com
         assert row["R_um"] == pytest.approx(replayed["R_um"], rel=0, abs=1e-6)
     assert all(np.isfinite(r["rms_um"]) for r in result["rows"] if r["run"] == "dropout")
     note = next(n for n in result["notes"] if n.startswith("dropout: "))
-    assert "T3 not a number on 16 sample(s)" in note and "T_amb not a number on 2 sample(s)" in note
+    assert "T3 not finite (NaN or ±inf) on 16 sample(s)" in note
+    assert "T_amb not finite (NaN or ±inf) on 2 sample(s)" in note
     assert f"{16 - HOLD_SAMPLES} sample(s) in sensor fault are not scored" in note
     assert f"{HOLD_SAMPLES + 2} on held readings are" in note
 
@@ -144,7 +145,7 @@ def test_diagnose_judges_on_a_validation_run_with_a_dropout_as_replay_scores_it(
         assert report[when]["validate"]["rms_um"] == pytest.approx(replayed["rms_um"], rel=0, abs=1e-6)
         assert report[when]["validate"]["max_um"] == pytest.approx(replayed["max_um"], rel=0, abs=1e-6)
     note = next(n for n in report["notes"] if n.startswith("dropout: "))
-    assert "T1 not a number on 20 sample(s)" in note
+    assert "T1 not finite (NaN or ±inf) on 20 sample(s)" in note
     assert f"{20 - HOLD_SAMPLES} sample(s) in sensor fault are not scored" in note
 
 
