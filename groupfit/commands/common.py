@@ -181,14 +181,12 @@ def add_out_option(
     required: bool = False,
     aliases: tuple[str, ...] = ("-o", "--output"),
 ) -> None:
-    """``--out`` (and ``-o``, which SPEC names): where a verb writes its files; the older spellings
-    (``--output``, ``--report``) stay hidden aliases."""
+    """``--out``: where a verb writes its files; the older spellings (``-o``, ``--output``, ``--report``) stay
+    hidden aliases."""
     shown = f"{help} (default {default})" if default else help
-    short = ("-o",) if "-o" in aliases else ()
-    parser.add_argument(*short, "--out", dest="out", metavar=metavar, default=default, help=shown)
-    hidden = tuple(alias for alias in aliases if alias != "-o")
-    if hidden:
-        parser.add_argument(*hidden, dest="out", metavar=metavar, help=argparse.SUPPRESS)
+    parser.add_argument("--out", dest="out", metavar=metavar, default=default, help=shown)
+    if aliases:
+        parser.add_argument(*aliases, dest="out", metavar=metavar, help=argparse.SUPPRESS)
     if required:
         parser.set_defaults(out_required=True)
     add_force_option(parser)
