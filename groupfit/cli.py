@@ -43,7 +43,7 @@ VERBS = {
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The parser; only the verb named in ``argv`` is imported (``groupfit --help`` imports none)."""
-    parser = OneLineParser(prog="groupfit", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="groupfit", description=__doc__.splitlines()[0].replace("``", ""))
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     verbs = parser.add_subparsers(dest="verb", required=True, parser_class=OneLineParser, metavar="VERB")
     chosen = _chosen_verb(sys.argv[1:] if argv is None else argv)
