@@ -50,6 +50,18 @@ def first_uneven_row(header: str, rows: list[str]) -> int | None:
     )
 
 
+def named_otherwise(header: str, rows: list[str], sample: int = 200) -> bool:
+    """Whether the columns the first ``sample`` rows of numbers stand in take other names from the header than
+    its words split at spaces (``T2 spindle`` over one column, an unnamed index column in front): a table whose
+    rows all split evenly, though its names and columns do not pair up one to one."""
+    numbers = [row.expandtabs() for row in rows if row.strip() and DIGIT.search(row)][:sample]
+    if not numbers:
+        return False
+    spans = _filled_runs(numbers)
+    named = _named_columns(header.expandtabs(), spans, numbers) if _one_value_per_cell(numbers, spans) else None
+    return named is not None and named[1] != header.split()
+
+
 def read_aligned(header: str, rows: list[str], decimal: str) -> tuple[pd.DataFrame, list[str]]:
     """The frame of a table aligned in columns, read by position, and its header's names (``""``: a column
     without a name).

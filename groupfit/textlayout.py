@@ -63,7 +63,7 @@ import numpy as np
 import pandas as pd
 
 from groupfit.decimalmark import decimal_mark, quoted_decimal_mark, undecided_commas
-from groupfit.fixedwidth import first_uneven_row, read_aligned
+from groupfit.fixedwidth import first_uneven_row, named_otherwise, read_aligned
 from groupfit.numbercells import (
     as_numbers,
     is_number,
@@ -319,7 +319,9 @@ def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.Dat
     layout = layout_of(text)
     body = _without_comment_mark(_without_footer(_from_line(text, layout.header_line), layout), layout.sep)
     header_text, *rows = body.split("\n")
-    if layout.sep == WHITESPACE and first_uneven_row(header_text, rows) is not None:
+    if layout.sep == WHITESPACE and (
+        first_uneven_row(header_text, rows) is not None or named_otherwise(header_text, rows)
+    ):
         frame, header = read_aligned(header_text, rows, layout.decimal)
     else:
         frame, header = _read_split(body, layout)

@@ -81,7 +81,7 @@ def test_names_with_spaces_and_an_empty_cell_together(tmp_path, log):
     assert np.isnan(same_values(path, truth).loc[7, "Temp Bett"])
 
 
-@pytest.mark.parametrize("names", [{}, SPACED])
+@pytest.mark.parametrize("names", [{}, SPACED, {"T2": "T2 spindle"}, {"T1": "T1 spindle", "T3": "T3 bed"}])
 def test_the_index_of_a_to_string_export_is_kept_as_a_csvs_index_column_is(tmp_path, log, names):
     indexed = log.rename(columns=names)
     path, truth = tmp_path / "to_string.txt", tmp_path / "indexed.csv"
