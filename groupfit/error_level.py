@@ -32,6 +32,9 @@ LEVEL_SHARE = 0.1
 SMALLEST_DRIFT_PER_KELVIN_UM = 0.05
 """The least error span per kelvin of the inputs' span (µm/K) a thermal error shows; the shipped runs and the
 measured spindle test show 1.0-3.3, an error in mm read as µm a thousandth of that."""
+INPUT_SPAN_PERCENTILES = (1.0, 99.0)
+"""An input's span for the ratio: between these percentiles, so that a glitch (450 °C for one sample) does not
+count."""
 SMALLEST_INPUT_SPAN_K = 1.0
 """The inputs must move by this much (K) before the error's span per kelvin says anything."""
 
@@ -61,7 +64,11 @@ def _drift_per_kelvin_note(name: str, label: str, values: np.ndarray, temps: np.
     if measured.size < 2 or temps.size == 0:
         return None
     finite = np.where(np.isfinite(temps), temps, np.nan)
-    spans = [float(np.nanmax(column) - np.nanmin(column)) for column in finite.T if np.isfinite(column).any()]
+    spans = [
+        float(np.diff(np.nanpercentile(column, INPUT_SPAN_PERCENTILES))[0])
+        for column in finite.T
+        if np.isfinite(column).any()
+    ]
     input_span = max(spans, default=0.0)
     span = float(np.ptp(measured))
     if input_span < SMALLEST_INPUT_SPAN_K or span <= 0.0:

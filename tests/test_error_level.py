@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from groupfit.data import load_run
-from groupfit.error_level import LEVEL_FLOOR_UM, SMALLEST_DRIFT_PER_KELVIN_UM
+from groupfit.error_level import INPUT_SPAN_PERCENTILES, LEVEL_FLOOR_UM, SMALLEST_DRIFT_PER_KELVIN_UM
 
 DATASETS = Path(__file__).resolve().parents[1] / "datasets"
 
@@ -51,14 +51,14 @@ def test_a_large_drift_far_from_zero_that_moves_by_more_than_a_tenth_of_its_leve
 
 
 def test_an_error_in_mm_that_moves_by_tenths_of_a_mm_under_a_bare_name_gets_a_note_of_its_size(tmp_path):
-    error_mm = paper_error() * 20 / 1000.0  # 0.48 mm of drift, read as 0.48 "µm"
+    error_mm = paper_error() * 10 / 1000.0  # 0.24 mm of drift, read as 0.24 "µm"
     run = load_run(paper_cycle_with(tmp_path, "Z", error_mm, "bare.csv"), temps=["T1", "T2"], error="Z")
-    inputs = max(np.ptp(run.temps[:, j]) for j in range(run.temps.shape[1]))
+    inputs = max(np.diff(np.percentile(run.temps[:, j], INPUT_SPAN_PERCENTILES))[0] for j in range(2))
     per_kelvin = np.ptp(run.error) / inputs
     assert per_kelvin < SMALLEST_DRIFT_PER_KELVIN_UM
     assert any(f"{per_kelvin:.2g} µm per K" in note and "--error 'Z*1000'" in note for note in run.notes)
     scaled = load_run(paper_cycle_with(tmp_path, "Z", error_mm, "bare.csv"), temps=["T1", "T2"], error="Z*1000")
-    np.testing.assert_allclose(scaled.error, paper_error() * 20, rtol=1e-12)
+    np.testing.assert_allclose(scaled.error, paper_error() * 10, rtol=1e-12)
     assert not any("µm per K" in note for note in scaled.notes)
 
 
@@ -66,3 +66,11 @@ def test_a_thermal_error_in_um_gets_no_note_of_its_size():
     for name in ("paper_cycle", "validation_speed", "repeat_warm", "diag_speed_model"):
         run = load_run(DATASETS / f"{name}.csv", temps=["T1", "T2"])
         assert not any("µm per K" in note for note in run.notes), name
+
+
+def test_a_temperature_glitch_does_not_make_an_error_in_um_look_like_one_in_mm(tmp_path):
+    frame = pd.read_csv(DATASETS / "paper_cycle.csv")
+    frame.loc[100, "T2"] = 450.0  # one glitch: 430 K of span for a sample
+    frame.to_csv(tmp_path / "glitch.csv", index=False)
+    run = load_run(tmp_path / "glitch.csv", temps=["T1", "T2"])
+    assert not any("µm per K" in note for note in run.notes)
