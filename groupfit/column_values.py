@@ -268,9 +268,10 @@ ERROR_RANGE_OPTION = "--range-error MAX (or [data] error_limit)"
 def check_range(
     values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
 ) -> None:
-    """Refuse the first reading outside ``bounds`` (a physically impossible value), naming row and column."""
+    """Refuse the first finite reading outside ``bounds`` (a physically impossible value), naming row and column;
+    a reading that is not finite is the loader's to refuse or keep (a validation run keeps it as a fault)."""
     low, high = bounds
-    outside = np.flatnonzero((values < low) | (values > high))
+    outside = np.flatnonzero(np.isfinite(values) & ((values < low) | (values > high)))
     if outside.size:
         row = int(outside[0])
         if option == ERROR_RANGE_OPTION:

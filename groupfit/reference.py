@@ -102,11 +102,13 @@ def referenced(values: np.ndarray, reference: str | None, frame=None, source: st
     return values - column[:, None]
 
 
-def with_reference(run, reference: str | None):
+def with_reference(run, reference: str | None, *, faults: bool = False):
     """A :class:`groupfit.data.Run` whose ``temps`` are relative to ``reference`` (its ``frame`` as recorded).
 
     Refuses a reference that is one of the inputs, a missing column, and a
-    reference column with a non-finite value where the inputs are finite.
+    reference column with a non-finite value where the inputs are finite,
+    unless the run keeps such readings as faults of the run-time rule
+    (``faults``: a validation run, read as ``replay`` reads a next run).
     """
     reference = parse_reference(reference)
     if reference is None or run.reference == reference:
@@ -128,7 +130,7 @@ def with_reference(run, reference: str | None):
         if reference not in run.frame.columns:
             available = ", ".join(map(str, run.frame.columns))
             raise InputError(f"{run.source}: reference column '{reference}' not found; the columns are: {available}")
-        numeric_column(run.frame, reference, run.source, allow_nonfinite=bool(np.isnan(run.temps).any()))
+        numeric_column(run.frame, reference, run.source, allow_nonfinite=faults or bool(np.isnan(run.temps).any()))
     temps = referenced(run.temps, reference, run.frame, run.source)
     return dataclasses.replace(run, temps=temps, reference=reference)
 

@@ -155,3 +155,30 @@ def test_diagnose_still_refuses_a_modelling_run_with_a_dropout(diagnosed, tmp_pa
     args = ["diagnose", str(diagnosed["model"]), "--data", str(faulty), "--out", str(tmp_path / "d")]
     assert main(args) == 2
     assert "model input 'T1' is not finite at row 300" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "column, value, rows",
+    [("T5", np.inf, slice(50, 52)), ("T_amb", np.nan, slice(200, 209))],  # an infinite reading; the reference
+)
+def test_an_infinite_reading_or_a_reference_dropout_on_a_validation_run_is_scored_as_replay_scores_it(
+    tmp_path, capsys, compared, column, value, rows
+):
+    frame = pd.read_csv(CLEAN)
+    frame.loc[rows, column] = value
+    frame.to_csv(tmp_path / "faulty.csv", index=False)
+    result = run_json(
+        capsys,
+        "compare",
+        "--data",
+        MODELLING,
+        "--validate",
+        tmp_path / "faulty.csv",
+        "--pmax",
+        "0",
+        "--quiet",
+        "--out",
+        tmp_path / "cmp",
+    )
+    replayed = run_json(capsys, "replay", compared["chosen"], "--data", tmp_path / "faulty.csv")
+    assert row_of(result, "fit", "faulty")["rms_um"] == pytest.approx(replayed["rms_um"], rel=0, abs=1e-6)

@@ -206,7 +206,7 @@ def run_compare(args: argparse.Namespace) -> int:
         reference = reference if choice is None else choice.reference
     parts = [with_reference(part, reference) for part in parts]  # a reference at the start: each run's own
     modelling = join_runs(parts)
-    validation = [in_modelling_order(modelling, with_reference(run, reference)) for run in validation]
+    validation = [in_modelling_order(modelling, with_reference(run, reference, faults=True)) for run in validation]
     joined, skipped, notes = with_histories(validation, parts, assume_continued=args.continues)
     validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
     recordings = {run.name: whole for run, whole, rows in zip(validation, joined, skipped) if rows}
