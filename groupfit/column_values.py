@@ -27,7 +27,7 @@ from groupfit.default_columns import (
 )
 from groupfit.error_start import from_start, is_from_start
 from groupfit.errors import InputError
-from groupfit.resample import GAP_PERIODS
+from groupfit.gap_advice import missing_advice
 from groupfit.textencoding import misread
 
 TEMP_RANGE_C = (-50.0, 500.0)
@@ -185,25 +185,9 @@ def numeric_column(
             raise InputError(
                 f"{label}: row {row + 1}, column '{column}' is {what} "
                 f"({int(nonfinite.sum())} non-finite value(s) in that column); "
-                f"a model can only be fitted on finite values: {_missing_advice(nonfinite, row, column)}"
+                f"a model can only be fitted on finite values: {missing_advice(nonfinite, column)}"
             )
     return array
-
-
-def _missing_advice(nonfinite: np.ndarray, row: int, column: str) -> str:
-    """What to do about missed readings from ``row`` on: interpolation covers a short gap, not a long one."""
-    after = np.flatnonzero(~nonfinite[row:])
-    length = int(after[0]) if after.size else int(nonfinite.size - row)
-    if length <= GAP_PERIODS:
-        return (
-            f"repair or drop those rows, or let --resample SECONDS interpolate up to {GAP_PERIODS} missed readings "
-            "in a row"
-        )
-    return (
-        f"rows {row + 1}-{row + length} miss {length} readings in a row, more than --resample SECONDS interpolates "
-        f"({GAP_PERIODS}): leave '{column}' out of the inputs (--temps), or split the run there into two files "
-        "and give both (--data A B)"
-    )
 
 
 class _Cells(NamedTuple):
