@@ -100,11 +100,14 @@ def read_aligned(header: str, rows: list[str], decimal: str) -> tuple[pd.DataFra
 
 def _not_aligned(header: str, filled: list[str]) -> str:
     row = first_uneven_row(header, filled) or 1
-    values = len(filled[row - 1].split())
+    values, names = len(filled[row - 1].split()), len(header.split())
+    text = filled[row - 1].strip()
+    shown = text if len(text) <= 60 else text[:57] + "..."
+    remedy = "fill the empty cell" if values < names else "remove the extra values or name every column"
     return (
-        f"row {row} has {values} value(s) where the header names {len(header.split())} column(s) (split at "
-        "spaces), and the columns do not line up under the header's names; fill the empty cell, or save the table "
-        "as CSV"
+        f"row {row} ({shown!r}) has {values} value(s) where the header ({header.strip()[:60]!r}) names {names} "
+        f"column(s) (split at spaces), and the columns do not line up under the header's names; {remedy}, or save "
+        "the table as CSV"
     )
 
 

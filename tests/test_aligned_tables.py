@@ -103,5 +103,6 @@ def test_a_table_of_spaces_whose_columns_do_not_line_up_is_refused_naming_its_ro
         read_table(path)
     message = str(refused.value)
     assert len(message.splitlines()) == 1
-    assert str(path) in message and "row 15 has 6 value(s)" in message
+    assert str(path) in message and "row 15 (" in message and ") has 6 value(s)" in message
+    assert "fill the empty cell" in message
     assert "fill the empty cell, or save the table as CSV" in message
