@@ -18,7 +18,7 @@ import numpy as np
 from groupfit.clamped_scores import LABELS
 from groupfit.data import Run
 from groupfit.model import ModelFile
-from groupfit.rule_faults import has_faulty_readings, replayed_prediction, unscored_note
+from groupfit.rule_faults import has_faulty_readings, rule_replay, unscored_note
 from groupfit.runtime import FAULT_SENSOR
 
 
@@ -38,11 +38,11 @@ def replayed_on_faults(
     ``whole``: the run with its history in front, of which the first ``skip``
     rows are the history.
     """
-    replayed, in_fault, counts = dict(predictions), np.zeros(whole.n_samples - skip, dtype=bool), {}
+    replayed, in_fault, counts, faults = dict(predictions), np.zeros(whole.n_samples - skip, dtype=bool), {}, {}
     for key, model in model_files.items():
         if key in predictions and has_faulty_readings(model, whole):
-            replayed[key], fault = replayed_prediction(model, whole, skip)
-            counts[key] = (fault & FAULT_SENSOR) != 0
+            replayed[key], faults[key] = rule_replay(model, whole, skip)
+            counts[key] = (faults[key][2] & FAULT_SENSOR) != 0
             in_fault |= counts[key]
     if not counts:
         return replayed, []
@@ -54,7 +54,7 @@ def replayed_on_faults(
         f"{model_label(key)}: {int(mask.sum())}" for key, mask in counts.items() if (mask != counts[first]).any()
     ]
     others = f" by {model_label(first)} ({', '.join(differing)})" if differing else ""
-    note = unscored_note(model_files[first], whole, skip, others=others)
+    note = unscored_note(model_files[first], whole, skip, others=others, faults=faults[first])
     if note is None:  # the readings that are not a number lie in the history in front
         return replayed, []
     if unscored:

@@ -45,19 +45,31 @@ def has_faulty_readings(model: ModelFile, run: Run) -> bool:
     return not np.isfinite(rule_readings(RuleTables.from_model(model), run)).all()
 
 
-def replayed_prediction(model: ModelFile, run: Run, skip: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """The prediction of the run-time rule at each sample of ``run`` after its first ``skip`` (a history in
-    front), NaN where the rule is in sensor fault (it commands no compensation there); and each sample's
-    fault bits (:data:`~groupfit.runtime.FAULT_HELD`, :data:`~groupfit.runtime.FAULT_SENSOR`).
+RuleFaults = tuple[RuleTables, np.ndarray, np.ndarray]
+"""The rule's tables, the readings it takes from a run and each sample's fault bits (:func:`rule_faults`)."""
+
+
+def rule_replay(model: ModelFile, run: Run, skip: int = 0) -> tuple[np.ndarray, RuleFaults]:
+    """One replay of ``run`` by the rule of ``model``: the prediction at each sample after the first ``skip``
+    (a history in front), NaN where the rule is in sensor fault (it commands no compensation there); and the
+    rule's tables, the readings and the fault bits on those samples.
 
     The prediction is the model's before the compensation's clamp, with the
     bumpless transfer after each switch and the held readings in place, as
     ``groupfit replay`` computes it without probe checks.
     """
     rule = SwitchingRule(model, period_s=run.period)
-    replay = rule.replay(rule_readings(rule.tables, run)).tail(skip)
+    readings = rule_readings(rule.tables, run)
+    replay = rule.replay(readings).tail(skip)
     in_fault = (replay.fault & FAULT_SENSOR) != 0
-    return np.where(in_fault, np.nan, replay.prediction_um), replay.fault
+    return np.where(in_fault, np.nan, replay.prediction_um), (rule.tables, readings[skip:], replay.fault)
+
+
+def replayed_prediction(model: ModelFile, run: Run, skip: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The prediction of :func:`rule_replay` and each sample's fault bits (:data:`~groupfit.runtime.FAULT_HELD`,
+    :data:`~groupfit.runtime.FAULT_SENSOR`)."""
+    prediction, (_, _, fault) = rule_replay(model, run, skip)
+    return prediction, fault
 
 
 def faulty_readings(tables: RuleTables, readings: np.ndarray) -> list[dict[str, Any]]:
@@ -122,24 +134,25 @@ def fault_readings(tables: RuleTables, readings: np.ndarray, fault: np.ndarray) 
     return {"readings_out_of_range": found}, [note]
 
 
-def rule_faults(model: ModelFile, run: Run, skip: int = 0) -> tuple[RuleTables, np.ndarray, np.ndarray]:
+def rule_faults(model: ModelFile, run: Run, skip: int = 0) -> RuleFaults:
     """The rule's tables, the readings it takes from ``run`` and each sample's fault bits, the last two after
     the run's first ``skip`` rows (a history in front, replayed first)."""
-    rule = SwitchingRule(model, period_s=run.period)
-    readings = rule_readings(rule.tables, run)
-    return rule.tables, readings[skip:], rule.replay(readings).fault[skip:]
+    return rule_replay(model, run, skip)[1]
 
 
-def unscored_samples(model: ModelFile, run: Run, skip: int = 0) -> int:
-    """On how many samples of ``run`` (after its first ``skip``) the rule of ``model`` is in sensor fault."""
-    return int(np.sum((rule_faults(model, run, skip)[2] & FAULT_SENSOR) != 0))
+def unscored_samples(faults: RuleFaults) -> int:
+    """On how many samples the rule is in sensor fault (``faults``: :func:`rule_faults`)."""
+    return int(np.sum((faults[2] & FAULT_SENSOR) != 0))
 
 
-def unscored_note(model: ModelFile, run: Run, skip: int = 0, *, others: str = "") -> str | None:
+def unscored_note(
+    model: ModelFile, run: Run, skip: int = 0, *, others: str = "", faults: RuleFaults | None = None
+) -> str | None:
     """What the rule's faults leave unscored on ``run`` (after its first ``skip`` rows), in one line naming the
     readings; None when the rule of ``model`` reads no value there that is not a number. ``others``: what
-    the count does not cover, said after it (another model's count)."""
-    tables, readings, fault = rule_faults(model, run, skip)
+    the count does not cover, said after it (another model's count); ``faults``: :func:`rule_faults` of
+    ``model`` on ``run``, when it was already replayed."""
+    tables, readings, fault = rule_faults(model, run, skip) if faults is None else faults
     if np.isfinite(readings).all():
         return None
     held = int(np.sum(((fault & FAULT_HELD) != 0) & ((fault & FAULT_SENSOR) == 0)))
@@ -153,6 +166,7 @@ def unscored_note(model: ModelFile, run: Run, skip: int = 0, *, others: str = ""
 
 
 __all__ = [
+    "RuleFaults",
     "fault_readings",
     "faulty_readings",
     "has_faulty_readings",
@@ -160,6 +174,7 @@ __all__ = [
     "replayed_prediction",
     "rule_readings",
     "rule_faults",
+    "rule_replay",
     "unscored_note",
     "unscored_samples",
 ]

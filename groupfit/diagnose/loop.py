@@ -82,7 +82,7 @@ from groupfit.diagnose.result import DiagnosisResult, InputSelection, ReferenceC
 from groupfit.errors import InputError
 from groupfit.heldout.check import overfit_check
 from groupfit.model import ModelFile
-from groupfit.rule_faults import unscored_note, unscored_samples
+from groupfit.rule_faults import has_faulty_readings, rule_faults, unscored_note, unscored_samples
 
 MIN_SCORE = DEFAULT_POLICY.min_score
 MIN_EFFECT_RMS_UM = DEFAULT_POLICY.min_effect_rms_um
@@ -277,9 +277,13 @@ def fault_notes(problem: Problem, before: Model, after: Model) -> list[str]:
     before, after = ModelFile.coerce(before), ModelFile.coerce(after)
     notes = []
     for run, skip in zip(problem.runs.get("validate", []), problem.skipped.get("validate") or []):
-        counts = [unscored_samples(model, run, skip) for model in (before, after)]
+        if not (has_faulty_readings(before, run) or has_faulty_readings(after, run)):
+            continue  # every reading finite: nothing to replay
+        faults = [rule_faults(model, run, skip) for model in (before, after)]
+        counts = [unscored_samples(fault) for fault in faults]
         others = f" after ({counts[0]} before)" if counts[0] != counts[1] else ""
-        note = unscored_note(after, run, skip, others=others) or unscored_note(before, run, skip)
+        note = unscored_note(after, run, skip, others=others, faults=faults[1])
+        note = note or unscored_note(before, run, skip, faults=faults[0])
         notes += [note] if note else []
     return notes
 
