@@ -55,10 +55,7 @@ def named_otherwise(header: str, rows: list[str], sample: int = 200) -> bool:
     its words split at spaces (``T2 spindle`` over one column, an unnamed index column in front): a table whose
     rows all split evenly, though its names and columns do not pair up one to one."""
     numbers = [row.expandtabs() for row in rows if row.strip() and DIGIT.search(row)][:sample]
-    if not numbers:
-        return False
-    spans = _filled_runs(numbers)
-    named = _named_columns(header.expandtabs(), spans, numbers) if _one_value_per_cell(numbers, spans) else None
+    named = _aligned_columns(header.expandtabs(), numbers) if numbers else None
     return named is not None and named[1] != header.split()
 
 
@@ -83,9 +80,7 @@ def read_aligned(header: str, rows: list[str], decimal: str) -> tuple[pd.DataFra
     """
     header = header.expandtabs()
     filled = [row.expandtabs() for row in rows if row.strip()]
-    numbers = [row for row in filled if DIGIT.search(row)]
-    spans = _filled_runs(numbers)
-    named = _named_columns(header, spans, numbers) if _one_value_per_cell(numbers, spans) else None
+    named = _aligned_columns(header, [row for row in filled if DIGIT.search(row)])
     if named is None:
         raise ValueError(_not_aligned(header, filled))
     spans, names = named
@@ -96,6 +91,13 @@ def read_aligned(header: str, rows: list[str], decimal: str) -> tuple[pd.DataFra
     table.seek(0)
     frame = pd.read_csv(table, sep="\t", decimal=decimal, index_col=False, low_memory=False)
     return frame, names
+
+
+def _aligned_columns(header: str, numbers: list[str]) -> tuple[list[Span], list[str]] | None:
+    """The columns the rows of ``numbers`` stand in and their names from ``header``; None when a cell holds two
+    values or the header's words do not line up over the columns."""
+    spans = _filled_runs(numbers)
+    return _named_columns(header, spans, numbers) if _one_value_per_cell(numbers, spans) else None
 
 
 def _not_aligned(header: str, filled: list[str]) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -156,20 +157,26 @@ def same_model(a: dict, b: dict) -> None:
         assert a["training"][key] == pytest.approx(b["training"][key], rel=1e-9)
 
 
-@pytest.mark.parametrize("shape", ["long", "wide"])
-def test_a_table_with_its_error_in_mm_is_fitted_and_replayed_in_um(position_model, shape):
-    folder = position_model
+def scaled_tables(folder: Path, shape: str, name: str, column: str, divisor: float) -> tuple[str, str]:
+    """The table of check runs (``long``: the fixture's ``axis.csv``; ``wide``: one error column per position)
+    and the same with its error divided by ``divisor`` (``long``: under ``column``), written in ``folder``; the
+    two file names."""
     table = check_run_table()
-    in_mm = table.assign(error_mm=table["error_um"] / 1000).drop(columns="error_um")
     if shape == "wide":
         wide = wide_table(table)
         wide.to_csv(folder / "wide_um.csv", index=False)
         errors = [c for c in wide.columns if c.startswith("err_P")]
-        wide.assign(**{c: wide[c] / 1000 for c in errors}).to_csv(folder / "wide_mm.csv", index=False)
-        um, mm = "wide_um.csv", "wide_mm.csv"
-    else:
-        in_mm.to_csv(folder / "axis_mm.csv", index=False)
-        um, mm = "axis.csv", "axis_mm.csv"
+        wide.assign(**{c: wide[c] / divisor for c in errors}).to_csv(folder / f"wide_{name}.csv", index=False)
+        return "wide_um.csv", f"wide_{name}.csv"
+    scaled = table.assign(**{column: table["error_um"] / divisor}).drop(columns="error_um")
+    scaled.to_csv(folder / f"axis_{name}.csv", index=False)
+    return "axis.csv", f"axis_{name}.csv"
+
+
+@pytest.mark.parametrize("shape", ["long", "wide"])
+def test_a_table_with_its_error_in_mm_is_fitted_and_replayed_in_um(position_model, shape):
+    folder = position_model
+    um, mm = scaled_tables(folder, shape, "mm", "error_mm", 1000)
     truth = fitted(folder, um, f"{shape}_um")
     model = fitted(folder, mm, f"{shape}_mm", "--error", "error_mm")
     same_model(model, truth)
@@ -184,16 +191,7 @@ def test_a_table_with_its_error_in_mm_is_fitted_and_replayed_in_um(position_mode
 @pytest.mark.parametrize("shape", ["long", "wide"])
 def test_error_column_times_k_reads_a_table_of_check_runs_as_a_stream(position_model, shape, capsys):
     folder = position_model
-    table = check_run_table()
-    if shape == "wide":
-        wide = wide_table(table)
-        wide.to_csv(folder / "wide_um.csv", index=False)
-        errors = [c for c in wide.columns if c.startswith("err_P")]
-        wide.assign(**{c: wide[c] / 2 for c in errors}).to_csv(folder / "wide_half.csv", index=False)
-        um, half = "wide_um.csv", "wide_half.csv"
-    else:
-        table.assign(e_half=table["error_um"] / 2).drop(columns="error_um").to_csv(folder / "half.csv", index=False)
-        um, half = "axis.csv", "half.csv"
+    um, half = scaled_tables(folder, shape, "half", "e_half", 2)
     truth = fitted(folder, um, f"{shape}_um")
     model = fitted(folder, half, f"{shape}_half", "--error", "e_half*2")
     same_model(model, truth)
