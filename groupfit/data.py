@@ -43,7 +43,7 @@ from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
-from groupfit.readtable import CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
+from groupfit.readtable import CLOCK_NOTES, CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.record_kinds import record_kinds_cycle
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.sampling import clock_of, described_burst_cycle
@@ -300,7 +300,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     note = binned.note(label, float(resample), sum(len(piece) for piece in binned.pieces))
     if bursts is not None:
         note = f"{label}: {bursts[0]} (as --resample {bursts[1]:g} does); " + note.removeprefix(f"{label}: ")
-    notes = tuple(n for n in (missed, glitched) if n) + (note,)
+    notes = tuple(n for n in (missed, glitched) if n) + (note, *frame.attrs.get(CLOCK_NOTES, ()))
     if len(binned.pieces) == 1:
         return [
             _validated(
@@ -377,6 +377,7 @@ def _validated(
     jitter = jitter_note(label, time_values, period)
     notes = tuple(notes) + ((jitter,) if jitter and not notes else ()) + ((spread,) if spread else ())
     notes = notes + unit_notes(label, time, time_values, period, unit_named=not counted)
+    notes = notes + frame.attrs.get(CLOCK_NOTES, ())
 
     temps, temp_array, dropped = temperature_inputs(frame, label, options)
     notes = notes + ((dropped,) if dropped else ())

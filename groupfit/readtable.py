@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from groupfit.clock_changes import through_clock_changes
 from groupfit.errors import InputError, first_line
 from groupfit.io import note_read
 from groupfit.jsonlog import read_json_log
@@ -441,13 +442,18 @@ def _read_parquet(path: Path) -> pd.DataFrame:
 
 CLOCK_ORIGIN = "clock_origin_s"
 """``frame.attrs`` key: the date-time of the first row of a time column read as seconds since that row, in seconds
-since 1970 (naive stamps taken as UTC), so that a file whose stamps go on from another's can be told."""
+since 1970 (naive stamps taken as UTC, in the clock of the last row where a local clock changed to or from summer
+time), so that a file whose stamps go on from another's can be told."""
+CLOCK_NOTES = "clock_notes"
+"""``frame.attrs`` key: the note on a local clock's changes to or from summer time read through
+(:mod:`groupfit.clock_changes`), empty where there were none."""
 
 
 def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
     """A date-time column (a Parquet or Excel time stamp, or text such as ``2026-03-02 08:00:00``) as the
     seconds since its first row, a duration as its seconds, in place; other columns are left as they are.
-    The first row's date-time is kept as ``frame.attrs[CLOCK_ORIGIN]``."""
+    The first row's date-time is kept as ``frame.attrs[CLOCK_ORIGIN]``; a local clock's changes to and from
+    summer time are read through, with a note in ``frame.attrs[CLOCK_NOTES]``."""
     if column not in frame.columns:
         return
     raw = frame[column]
@@ -457,18 +463,21 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
             raise InputError(f"{label}: row {missing[0] + 1}, column '{column}' is empty; fix or remove that row")
         dated = pd.api.types.is_datetime64_any_dtype(raw)
         start = raw.iloc[0] if dated else pd.Timedelta(0)
-        frame[column] = (raw - start).dt.total_seconds()
-        if dated:
-            frame.attrs[CLOCK_ORIGIN] = float(start.timestamp())
-    elif is_text(raw):
-        clock = text_clock(raw, column, label)
-        if clock is not None:
-            frame[column] = clock[0]
-            if clock[1] is not None:
-                frame.attrs[CLOCK_ORIGIN] = float(clock[1])
+        clock = ((raw - start).dt.total_seconds().to_numpy(dtype=float), start.timestamp() if dated else None)
+    else:
+        clock = text_clock(raw, column, label) if is_text(raw) else None
+    if clock is None:
+        return
+    seconds, origin = clock
+    if origin is not None:
+        seconds, origin, note = through_clock_changes(raw, seconds, origin, label, column)
+        frame.attrs[CLOCK_ORIGIN] = float(origin)
+        frame.attrs[CLOCK_NOTES] = (note,) if note else ()
+    frame[column] = seconds
 
 
 __all__ = [
+    "CLOCK_NOTES",
     "CLOCK_ORIGIN",
     "TABLE_SUFFIXES",
     "datetimes_to_seconds",

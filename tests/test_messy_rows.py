@@ -328,43 +328,6 @@ def test_rows_written_twice_are_left_out_with_a_note(tmp_path, capsys, twice):
     assert f"{len(rows)} row(s) identical to the row before left out (row {first}" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("resample", [[], ["--resample", "100"]])
-def test_a_local_clock_going_back_an_hour_is_named_as_daylight_saving_and_offsets_read(tmp_path, capsys, resample):
-    log = pd.read_csv(DATASETS / "paper_cycle.csv").iloc[:120]
-    utc = pd.Timestamp("2026-10-25 00:00:00", tz="UTC") + pd.to_timedelta(log["time_s"], unit="s")
-    local = utc.dt.tz_convert("Europe/Berlin")  # summer time ends at 01:00 UTC, 03:00 back to 02:00 local
-    wall, offset = tmp_path / "wall.csv", tmp_path / "offset.csv"
-    log.assign(time_s=local.dt.strftime("%Y-%m-%d %H:%M:%S")).rename(columns={"time_s": "Timestamp"}).to_csv(
-        wall, index=False
-    )
-    log.assign(time_s=local.map(lambda t: t.isoformat())).rename(columns={"time_s": "Timestamp"}).to_csv(
-        offset, index=False
-    )
-    wall_clock = local.dt.tz_localize(None).to_numpy()
-    change = int(np.flatnonzero(np.diff(wall_clock) < np.timedelta64(0))[0]) + 2  # the first row after the change
-    assert cli("fit", "--data", wall, *QUICK, *resample, "--out", tmp_path / "a") == 2
-    message = capsys.readouterr().err
-    assert f"goes back one hour at row {change}" in message and "daylight saving time ended" in message
-    report = tmp_path / "offset.json"
-    assert cli("fit", "--data", offset, *QUICK, *resample, "--json", report, "--out", tmp_path / "b") == 0
-    assert json.loads(report.read_text())["n_samples"] == len(log)
-
-
-def test_a_local_clock_jumping_ahead_an_hour_is_named_as_daylight_saving_and_offsets_read(tmp_path, capsys):
-    log = pd.read_csv(DATASETS / "paper_cycle.csv").iloc[:120]
-    utc = pd.Timestamp("2026-03-29 00:00:00", tz="UTC") + pd.to_timedelta(log["time_s"], unit="s")
-    local = utc.dt.tz_convert("Europe/Berlin")  # summer time begins at 01:00 UTC, 02:00 forward to 03:00 local
-    wall, offset = tmp_path / "wall.csv", tmp_path / "offset.csv"
-    for path, stamps in ((wall, local.dt.strftime("%Y-%m-%d %H:%M:%S")), (offset, local.map(lambda t: t.isoformat()))):
-        log.assign(time_s=stamps).rename(columns={"time_s": "Timestamp"}).to_csv(path, index=False)
-    assert cli("fit", "--data", wall, *QUICK, "--out", tmp_path / "a") == 2
-    message = capsys.readouterr().err
-    assert "3700 s apart" in message and "daylight saving time began" in message and "UTC offset" in message
-    report = tmp_path / "offset.json"
-    assert cli("fit", "--data", offset, *QUICK, "--json", report, "--out", tmp_path / "b") == 0
-    assert json.loads(report.read_text())["n_samples"] == len(log)
-
-
 def test_a_reading_that_repeats_under_a_stamp_coarser_than_the_clock_is_kept(tmp_path):
     """A 15 s logger stamping whole minutes at display resolution: rows equal to the one before, stamp and all,
     are readings that did not change, not rows written twice."""
