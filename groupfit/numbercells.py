@@ -83,7 +83,8 @@ def _plain_numbers(text: pd.Series, decimal: str, name: str, *, thousands_only: 
         A table of decimal commas holds a dotted number that is not one with thousands separators.
     """
     written = text
-    text = text.map(_without_group_spaces, na_action="ignore").str.replace(UNICODE_MINUS, "-", regex=False)
+    spelled = text.map(_without_group_spaces, na_action="ignore").astype("string")  # an empty column: no text
+    text = spelled.str.replace(UNICODE_MINUS, "-", regex=False)
     respelled = not text.equals(written)
     cells = [cell for cell in text.dropna().unique() if cell]
     if decimal == ",":

@@ -331,3 +331,15 @@ def test_units_after_dotted_numbers_in_a_table_of_decimal_commas_are_refused_wit
         InputError, match=r"log.csv: not a readable CSV table \(column 'T1' holds '\d+\.\d+', a decimal"
     ):
         load_runs(path, temps=TEMPS)
+
+
+@pytest.mark.parametrize("sep", [",", ";", "\t"])
+def test_a_column_empty_under_its_unit_is_read_as_missing(tmp_path, synthetic, sep):
+    frame, plain = synthetic
+    units = {"time_s": "s", "error_um": "µm", "spare": "-", **dict.fromkeys(TEMPS, "°C")}
+    header, body = frame.assign(spare=np.nan).to_csv(index=False, sep=sep).split("\n", 1)
+    path = tmp_path / "log.csv"
+    path.write_text(header + "\n" + sep.join(units.get(c, "") for c in [*frame.columns, "spare"]) + "\n" + body)
+    run = load_run(path, temps=TEMPS)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
