@@ -19,11 +19,13 @@ should not have to rewrite one before groupfit reads it:
   message on a row of the table's width (``;Logging paused;;;``), are one body;
 * the header: of the lines of text directly above the body with about as many
   fields (one more or fewer: a separator closing every data row), below the
-  last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``) and but for
-  ``#`` comments, the topmost that names the most columns; else the line of
-  text just above the body. Blank rows and rulers between the header and the
-  body are passed over. What lies above the header is a preamble and is skipped (a
-  logger's name, ``Start;2024-03-04 08:00``, a LabVIEW
+  last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``, an empty
+  line) and but for ``#`` comments and lines with a value in them, the topmost
+  that names the most columns; else the line of text just above the body; a
+  row of units right above the body is not the header (:mod:`groupfit.tablehead`).
+  Blank rows and rulers between the header and the body are passed over. What
+  lies above the header is a preamble and is skipped (a logger's name,
+  ``Start;2024-03-04 08:00``, a LabVIEW
   ``***End_of_Header***``, Graphtec's channel list, a TwinCAT Scope or
   SINUMERIK trace head). A text without such a body takes the first line of
   two or more text fields whose next lines have as many;
@@ -33,8 +35,8 @@ should not have to rewrite one before groupfit reads it:
   ``"1,500"`` alone, which may separate thousands or decimals, is refused there
   naming its column;
 * a table aligned in columns by spaces whose rows do not all split into the
-  header's names (an empty cell, ``Temp Spindel``): read by the position of
-  its cells (:mod:`groupfit.fixedwidth`);
+  header's names (an empty cell, ``Temp Spindel``, a units row's ``deg C``):
+  read by the position of its cells (:mod:`groupfit.fixedwidth`);
 * how a cell writes a number (thousands separators, a typeset minus, a unit after it):
   :mod:`groupfit.numbercells`;
 * a comment mark before the header's first name (NumPy's ``savetxt``: ``# time_s,T1``) is dropped; a column
@@ -63,13 +65,14 @@ import numpy as np
 import pandas as pd
 
 from groupfit.decimalmark import decimal_mark, quoted_decimal_mark, undecided_commas
-from groupfit.fixedwidth import first_uneven_row, named_otherwise, read_aligned
+from groupfit.fixedwidth import first_uneven_row, named_otherwise, read_aligned, uneven_units_row
 from groupfit.numbercells import (
     as_numbers,
     is_number,
     without_cell_units,
     without_thousands_separators,
 )
+from groupfit.tablehead import below_last_empty_line, is_units_row, without_numbered_lines
 from groupfit.textencoding import decode
 
 DELIMITERS = (",", ";", "\t")
@@ -268,6 +271,8 @@ def _header_above(rows: list[_Row], first: int) -> int:
     top = first
     while top > 0 and rows[top - 1].blank:  # a ruler or a blank row between the header and the body
         top -= 1
+    if top > 1 and rows[top - 2].is_text and is_units_row(rows[top - 1].fields):
+        top -= 1  # a row of units under the header, ``deg C`` giving it more fields than the header
     strays = top
     while strays > 0 and top - strays < STRAY_ROWS and rows[strays - 1].numeric:
         strays -= 1  # rows of numbers of another width right under the header: strays of the body
@@ -276,7 +281,7 @@ def _header_above(rows: list[_Row], first: int) -> int:
     position = top
     while position > 0 and rows[position - 1].is_text and abs(len(rows[position - 1].fields) - width) <= 1:
         position -= 1
-    above = rows[position:top]
+    above = without_numbered_lines(below_last_empty_line(rows[position:top]))
     above = [row for row in above if not row.fields[0].startswith("#")] or above  # a comment, unless all are
     if above:
         most = max(row.filled for row in above)
@@ -320,7 +325,9 @@ def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.Dat
     body = _without_comment_mark(_without_footer(_from_line(text, layout.header_line), layout), layout.sep)
     header_text, *rows = body.split("\n")
     if layout.sep == WHITESPACE and (
-        first_uneven_row(header_text, rows) is not None or named_otherwise(header_text, rows)
+        first_uneven_row(header_text, rows) is not None
+        or named_otherwise(header_text, rows)
+        or uneven_units_row(header_text, rows)
     ):
         frame, header = read_aligned(header_text, rows, layout.decimal)
     else:

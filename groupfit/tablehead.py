@@ -1,0 +1,80 @@
+"""Which lines of text above a table's body may be its header: not a row of units, not a preamble line.
+
+:mod:`groupfit.textlayout` takes the header from the lines of text directly above the body that have about
+as many fields as its rows. Among them, here:
+
+* a row of units right above the body (``s  °C  °C  µm``, ``[s] [deg C] [deg C] [um]``) is under the header,
+  not the header, though a unit with a space in it (``deg C``) gives it more fields than the header
+  (:func:`is_units_row`);
+* an empty line ends the header's lines: what stands above it is a preamble (a title, a logger's name) even
+  when it has as many words as the table has columns (:func:`below_last_empty_line`);
+* a line with a value for a field (``Machine DMU 50 Spindle 2``, ``Datum 02.03.2026 Uhrzeit 08:00``) is a
+  preamble line, unless every line is (:func:`without_numbered_lines`).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Protocol, Sequence, TypeVar
+
+from groupfit.numbercells import is_number
+
+SPACED_UNIT = re.compile(r"(?<!\S)(deg\.?|°|º)\s+([CFK])(?!\S)", re.IGNORECASE)
+"""A unit of temperature written with a space in it (``deg C``, ``° F``)."""
+TOKEN = re.compile(r"\[[^\]]*\]|\([^)]*\)|[^\s\[(]+")
+"""A word of a line, a bracketed unit (``[deg C]``) kept whole."""
+UNIT = re.compile(
+    r"(?:[°º]\s?[CFK]?|deg\.?\s?[CFK]?|℃|℉|K|celsius|fahrenheit|kelvin"
+    r"|[pnµμuc]?m|mm|micron|microns|мм|мкм"
+    r"|[mµμu]?s|secs?|sek|min|h|hrs?|std|d|hh:mm(?::ss)?|dd\.mm\.yyyy|yyyy-mm-dd"
+    r"|%|%rh|rpm|[1u]/min|min-1|min\^-1|[mk]?v|m?a|m?bar|k?pa|hz|k?w|n|nm|-+|n/a)?",
+    re.IGNORECASE,
+)
+"""A unit a logger writes in a row under its header (bracketed or not; an empty ``[]`` or ``-`` too)."""
+BRACKETS = "[]()"
+VALUE = re.compile(r"[-+]?\d[\d.,:/-]*")
+"""A field that is a value, not a name: a number, a date or a time of day (``12345``, ``2026-03-02``, ``08:00``)."""
+
+
+class _Line(Protocol):
+    line: int
+    fields: list[str]
+
+
+Line = TypeVar("Line", bound=_Line)
+
+
+def units_of_row(fields: Sequence[str]) -> list[str] | None:
+    """The units of a line that holds units alone (``s °C °C µm``, ``[s] [deg C]``; ``-`` or ``[]`` for a column
+    without one), two or more, not all of them blanks, as written; None for any other line."""
+    text = SPACED_UNIT.sub("\\1\0\\2", " ".join(field for field in fields if field))  # ``deg C`` kept whole
+    units = [unit.replace("\0", " ") for unit in TOKEN.findall(text)]
+    bare = [unit.strip(BRACKETS).strip() for unit in units]
+    if len(units) < 2 or not all(UNIT.fullmatch(unit) for unit in bare):
+        return None
+    if not any(unit.strip("-") and unit.lower() != "n/a" for unit in bare):
+        return None
+    return units
+
+
+def is_units_row(fields: Sequence[str]) -> bool:
+    """Whether a line holds units alone (:func:`units_of_row`)."""
+    return units_of_row(fields) is not None
+
+
+def below_last_empty_line(lines: Sequence[Line]) -> list[Line]:
+    """The lines after the last empty one between two of them (their ``line`` numbers are not consecutive)."""
+    start = 0
+    for k in range(1, len(lines)):
+        if lines[k].line - lines[k - 1].line > 1:
+            start = k
+    return list(lines[start:])
+
+
+def without_numbered_lines(lines: Sequence[Line]) -> list[Line]:
+    """The lines none of whose fields is a value (:data:`VALUE`, a number), or all of them when each has one."""
+    named = [line for line in lines if not any(is_number(field) or VALUE.fullmatch(field) for field in line.fields)]
+    return named or list(lines)
+
+
+__all__ = ["below_last_empty_line", "is_units_row", "units_of_row", "without_numbered_lines"]
