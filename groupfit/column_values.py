@@ -121,6 +121,10 @@ class LoadOptions:
     check_ranges: bool | None = None
     """Check ``temp_range`` and ``error_limit``; None: unless ``allow_nonfinite`` (a replay, whose run-time
     rule meets an implausible reading as a sensor fault)."""
+    temps_as_faults: bool = False
+    """A validation run, read as ``replay`` reads a next run: a temperature outside ``temp_range`` is kept, as
+    one that is not a number is, a fault of the run-time rule, where it would be refused (``--resample``
+    still takes it as missed)."""
     sparse: tuple[str, ...] = ()
     """Columns read on some rows only (probe readings): resampled as the error is, never made up nor trimmed."""
 

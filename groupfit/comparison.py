@@ -18,8 +18,10 @@ predicted without any refitting or tuning:
   (:mod:`groupfit.comparison_fit`).
 
 A validation run is read as ``replay`` reads a next run: a reading that is
-not a number is held, then a sensor fault of the rule, and those samples are
-not scored (:mod:`groupfit.comparison_faults`).
+not a number, or outside its valid range (a sensor's fault code), is held,
+then a sensor fault of the rule, and those samples are not scored
+(:mod:`groupfit.comparison_faults`); the AR(1) model's state is held where
+its heat reading is missed, as its routine holds it.
 
 A modelling run whose error is measured on some rows only (a probe cycle
 every few minutes) gets the global models only: MLR fitted on its measured
@@ -39,7 +41,7 @@ import pandas as pd
 
 from groupfit.clamped_scores import clamped
 from groupfit.columns import input_order
-from groupfit.comparison_ar1 import ar1_left_out_reason, expect_compared_ar1, fit_ar1, rise_notes
+from groupfit.comparison_ar1 import ar1_left_out_reason, expect_compared_ar1, fit_ar1, held_heat_notes, rise_notes
 from groupfit.comparison_faults import replayed_on_faults
 from groupfit.comparison_fit import FIT_KEY, differs_from_mlr, fit_model_file, fit_model_summary
 from groupfit.comparison_path import grouped_path
@@ -228,9 +230,12 @@ def compare_models(
         and get the global models only, their next-run expectation leaving one
         run out (:func:`joined_run_notes`).
     validation : list of Run
-        The validation runs. A reading that is not a number is a sensor fault
-        of the run-time rule, as ``replay`` reads it: held, then not scored
-        (:mod:`groupfit.comparison_faults`).
+        The validation runs. A reading that is not a number, or outside its
+        valid range, is a sensor fault of the run-time rule, as ``replay``
+        reads it: held, then not scored (:mod:`groupfit.comparison_faults`).
+        A missed heat reading of the AR(1) model holds its routine's state,
+        as ``replay`` of an AR(1) model file holds it
+        (:func:`groupfit.comparison_ar1.held_heat_notes`).
     live_rule : callable, optional
         ``live_rule(model, inputs) -> group index per sample (0-based)``;
         when given, grouped models serve validation runs through it.
@@ -319,10 +324,12 @@ def compare_models(
         if is_modelling:
             preds, bands[run.name] = modelling_predictions(models, parts, modelling, settings)
         else:
-            preds, bands[run.name] = validation_predictions(models, whole, run, modelling, settings, live_rule)
-            preds, faults = replayed_on_faults(preds, files, whole, whole.n_samples - run.n_samples)
+            preds, band = validation_predictions(models, whole, run, modelling, settings, live_rule)
+            preds, faults, bands[run.name] = replayed_on_faults(
+                preds, files, whole, whole.n_samples - run.n_samples, band
+            )
             preds, held = clamped(preds, clamps, run.name)
-            run_notes += faults + held
+            run_notes += faults + held + (held_heat_notes(run, settings) if ar1 is not None else [])
         predictions[run.name] = preds
         rows += scored_rows(run, preds, grouped, changes if is_modelling else None, fit_model)
 

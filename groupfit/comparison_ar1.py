@@ -8,9 +8,9 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.ar1.inputs import ar1_inputs, moves_like_measurement
+from groupfit.ar1.inputs import ar1_inputs, moves_like_measurement, next_run_inputs
 from groupfit.ar1.nextrun import expect_ar1
-from groupfit.data import Run
+from groupfit.data import Run, numeric_column
 from groupfit.error_start import first_reading
 from groupfit.errors import InputError
 from groupfit.heldout.expect import NextRunExpectation
@@ -91,12 +91,30 @@ def early_rise_ratio(run: Run, modelling: Run, settings) -> float | None:
     return early_rise(_column(run, sensor), run.period, settings.rise_window_s) / base
 
 
-def ar1_prediction(ar1: AR1Model, run: Run, modelling: Run, settings) -> np.ndarray:
-    """The AR(1) model's free run over ``run``, from its first measured error or from 0."""
+def ar1_prediction(ar1: AR1Model, run: Run, modelling: Run, settings, *, next_run: bool = False) -> np.ndarray:
+    """The AR(1) model's free run over ``run``, from its first measured error or from 0; on a ``next_run`` (a
+    validation run) its state held where the heat reading is missed, as the AR(1) routine holds it
+    (:func:`groupfit.ar1.inputs.next_run_inputs`)."""
     rise_ratio = early_rise_ratio(run, modelling, settings)
     initial = first_measured(run.error) if settings.ar1_start == "measured" else 0.0
-    inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
-    return ar1.predict(inputs, initial_error=initial, rise_ratio=rise_ratio)
+    if not next_run:
+        inputs = ar1_inputs(run, settings.heat, settings.structural_sensor)
+        return ar1.predict(inputs, initial_error=initial, rise_ratio=rise_ratio)
+    inputs, held = next_run_inputs(run, settings.heat, settings.structural_sensor)
+    return ar1.predict(inputs, initial_error=initial, rise_ratio=rise_ratio, held=held)
+
+
+def held_heat_notes(run: Run, settings) -> list[str]:
+    """The note on a validation run whose heat reading is missed on some rows (empty, NaN or ±inf): the AR(1)
+    routine holds its state there; none when it is read on every row."""
+    missed = int(np.sum(~np.isfinite(numeric_column(run.frame, settings.heat, str(run.source), allow_nonfinite=True))))
+    if not missed:
+        return []
+    return [
+        f"{run.name}: AR(1) heat column '{settings.heat}': {missed} sample(s) without a reading (empty, NaN or ±inf): "
+        "the AR(1) routine holds its state on such a reading (no step), as replay of an AR(1) model file does; "
+        f"those {missed} sample(s) are scored on the held state"
+    ]
 
 
 def rise_sensor(modelling: Run, settings) -> str:
@@ -135,6 +153,7 @@ __all__ = [
     "expect_compared_ar1",
     "first_measured",
     "fit_ar1",
+    "held_heat_notes",
     "prefix_predictor",
     "rise_notes",
     "rise_sensor",

@@ -78,7 +78,7 @@ def validation_predictions(
     temps = np.where(np.isfinite(run.temps), run.temps, 0.0)  # the estimators take finite values only
     preds = {"mlr": np.where(read, models.mlr.predict(temps), np.nan)}
     if models.ar1 is not None:
-        preds["ar1"] = ar1_prediction(models.ar1, run, modelling, settings)
+        preds["ar1"] = ar1_prediction(models.ar1, run, modelling, settings, next_run=True)
     bands = {"mlr": tuple(np.where(read[:, None], models.mlr.prediction_interval(temps), np.nan).T)}
     skip = whole.n_samples - run.n_samples
     for p, model in models.grouped.items():
@@ -112,8 +112,8 @@ def scored_rows(
         if not np.isfinite(residual).any():
             raise InputError(
                 f"{run.source}: no sample of it is left to score {model_label(key)} on: the run-time rule is in "
-                "sensor fault wherever the error is measured (a reading that is not a number for longer than its "
-                "hold); repair those readings or leave the run out"
+                "sensor fault wherever the error is measured (a reading that is not a number, or outside its valid "
+                "range, for longer than its hold); repair those readings or leave the run out"
             )
         metrics = error_metrics(residual[np.isfinite(residual)])
         if key.startswith("grouped"):

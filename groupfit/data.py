@@ -386,13 +386,15 @@ def _validated(
     in_other_unit = error_unit_note(error, label, error_values, temp_array) if error_values is not None else None
     notes = notes + ((in_other_unit,) if in_other_unit else ())
     if options.ranges_checked:
-        if temp_range is not None:
+        if temp_range is not None and not options.temps_as_faults:
             for j, t in enumerate(temps):
                 check_range(temp_array[:, j], t, label, temp_range, "°C", TEMP_RANGE_OPTION)
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", ERROR_RANGE_OPTION)
-    if options.drop_glitches:  # after the ranges: an implausible reading is refused, not interpolated
-        frame, temp_array, glitched = temperatures_without_glitches(frame, temps, temp_array, label, options.ambient)
+    if options.drop_glitches:  # after the ranges: an implausible reading is refused or a fault, never interpolated
+        frame, temp_array, glitched = temperatures_without_glitches(
+            frame, temps, temp_array, label, options.ambient, temp_range
+        )
         notes = notes + ((glitched,) if glitched else ())
     if options.drop_glitches and error_values is not None:
         error_values, _, glitched = without_glitches(error_values, error, label)

@@ -97,23 +97,30 @@ def without_glitches(error: np.ndarray, column: str, label: str) -> tuple[np.nda
 
 
 def temperatures_without_glitches(
-    frame: pd.DataFrame, temps: list[str], readings: np.ndarray, label: str, ambient: str | None = None
+    frame: pd.DataFrame,
+    temps: list[str],
+    readings: np.ndarray,
+    label: str,
+    ambient: str | None = None,
+    plausible: tuple[float, float] | None = None,
 ) -> tuple[pd.DataFrame, np.ndarray, str | None]:
     """The inputs' ``readings`` and the frame's columns of the air's temperature (the references the inputs
     may be taken against: ``ambient``, the column ``--ambient`` names, and those named as the air's,
     :func:`~groupfit.default_columns.ambient_columns`) with each sensor's glitches (departing by
     :data:`TEMPERATURE_RANGE_SHARE` of its range) interpolated from its neighbours, and a note naming them
-    (None: none; the frame and readings are then those given)."""
+    (None: none; the frame and readings are then those given). A reading outside the ``plausible`` range
+    (°C) is no glitch, nor a neighbour to interpolate from: it is refused, or kept as a fault of the run-time
+    rule (a validation run), as one that is not a number is."""
     readings = np.array(readings, dtype=float)
     found = []
     for j, name in enumerate(temps):
-        readings[:, j], shown = _interpolated_glitches(readings[:, j], name)
+        readings[:, j], shown = _interpolated_glitches(readings[:, j], name, plausible)
         found += shown
     cleaned = {}
     named = [ambient] if ambient in frame.columns and ambient not in temps else []
     for name in dict.fromkeys([*named, *ambient_columns(frame, temps)]):
         values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
-        cleaned[name], shown = _interpolated_glitches(values, name)
+        cleaned[name], shown = _interpolated_glitches(values, name, plausible)
         found += shown
     if not found:
         return frame, readings, None
@@ -127,13 +134,20 @@ def temperatures_without_glitches(
     return frame, readings, note
 
 
-def _interpolated_glitches(values: np.ndarray, name: str) -> tuple[np.ndarray, list[str]]:
-    """One sensor's readings with its glitches interpolated from its neighbours, and the glitches named."""
-    glitches = error_glitches(values, range_share=TEMPERATURE_RANGE_SHARE)
+def _interpolated_glitches(
+    values: np.ndarray, name: str, plausible: tuple[float, float] | None = None
+) -> tuple[np.ndarray, list[str]]:
+    """One sensor's readings with its glitches interpolated from its neighbours, and the glitches named; a
+    reading outside ``plausible`` is passed over as one that is not a number is."""
+    read = values
+    if plausible is not None:
+        with np.errstate(invalid="ignore"):
+            read = np.where((values >= plausible[0]) & (values <= plausible[1]), values, np.nan)
+    glitches = error_glitches(read, range_share=TEMPERATURE_RANGE_SHARE)
     if not glitches.size:
         return values, []
     shown = [f"'{name}' row {i + 1}: {values[i]:.4g} °C" for i in glitches]
-    kept = np.setdiff1d(np.flatnonzero(np.isfinite(values)), glitches)
+    kept = np.setdiff1d(np.flatnonzero(np.isfinite(read)), glitches)
     values = values.copy()
     values[glitches] = np.interp(glitches, kept, values[kept])
     return values, shown

@@ -5,10 +5,11 @@ number, or outside its valid range (``switching.temp_min_c`` … ``temp_max_c``,
 a derived input's source range), is held (its last good value stands in) for
 the rule's hold, then the rule is in sensor fault and commands no
 compensation; those samples are not scored. ``compare`` and ``diagnose`` read
-a validation run with a reading that is not a number the same way: the rule
-replays the run (:func:`replayed_prediction`) and the samples in sensor fault
-are left out of its figures, with a note (:func:`unscored_note`). A modelling
-run is never read so: a model is fitted on finite values only.
+a validation run with such a reading the same way, a finite one outside the
+valid range (a sensor's fault code, -999 °C) as one that is not a number: the
+rule replays the run (:func:`replayed_prediction`) and the samples in sensor
+fault are left out of its figures, with a note (:func:`unscored_note`). A
+modelling run is never read so: a model is fitted on finite values only.
 """
 
 from __future__ import annotations
@@ -40,9 +41,21 @@ def rule_readings(tables: RuleTables, run: Run) -> np.ndarray:
     return np.column_stack(columns) if columns else np.empty((run.n_samples, 0))
 
 
+def outside_valid_range(tables: RuleTables, readings: np.ndarray) -> np.ndarray:
+    """Per sample and reading (the columns of :func:`rule_readings`), whether the rule takes it as a fault: not a
+    number, or outside its valid range (``switching.temp_min_c`` … ``temp_max_c``, a derived input's source
+    range); the rule holds such a reading, then is in sensor fault."""
+    readings = np.asarray(readings, dtype=float)
+    low, high = np.asarray(tables.valid_min, dtype=float), np.asarray(tables.valid_max, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return ~((readings >= low) & (readings <= high))
+
+
 def has_faulty_readings(model: ModelFile, run: Run) -> bool:
-    """Whether the rule of ``model`` reads a value on ``run`` that is not a number (a sensor fault)."""
-    return not np.isfinite(rule_readings(RuleTables.from_model(model), run)).all()
+    """Whether the rule of ``model`` reads a value on ``run`` that it takes as a fault: not a number, or outside
+    its valid range (:func:`outside_valid_range`)."""
+    tables = RuleTables.from_model(model)
+    return bool(outside_valid_range(tables, rule_readings(tables, run)).any())
 
 
 RuleFaults = tuple[RuleTables, np.ndarray, np.ndarray]
@@ -76,10 +89,10 @@ def faulty_readings(tables: RuleTables, readings: np.ndarray) -> list[dict[str, 
     """Per reading outside its valid range on some sample: its name, valid range, the samples, how many of them
     are not a number, and the values seen on the others."""
     found = []
+    outside = outside_valid_range(tables, readings)
     for r, name in enumerate(tables.raw_names):
         low, high = float(tables.valid_min[r]), float(tables.valid_max[r])
-        values = np.asarray(readings[:, r], dtype=float)
-        bad = ~((values >= low) & (values <= high))
+        values, bad = np.asarray(readings[:, r], dtype=float), outside[:, r]
         if not bad.any():
             continue
         seen = values[bad & np.isfinite(values)]
@@ -149,11 +162,12 @@ def unscored_note(
     model: ModelFile, run: Run, skip: int = 0, *, others: str = "", faults: RuleFaults | None = None
 ) -> str | None:
     """What the rule's faults leave unscored on ``run`` (after its first ``skip`` rows), in one line naming the
-    readings; None when the rule of ``model`` reads no value there that is not a number. ``others``: what
+    readings; None when the rule of ``model`` reads no value there that it takes as a fault (not a number, or
+    outside its valid range: :func:`outside_valid_range`). ``others``: what
     the count does not cover, said after it (another model's count); ``faults``: :func:`rule_faults` of
     ``model`` on ``run``, when it was already replayed."""
     tables, readings, fault = rule_faults(model, run, skip) if faults is None else faults
-    if np.isfinite(readings).all():
+    if not outside_valid_range(tables, readings).any():
         return None
     held = int(np.sum(((fault & FAULT_HELD) != 0) & ((fault & FAULT_SENSOR) == 0)))
     in_fault = int(np.sum((fault & FAULT_SENSOR) != 0))
@@ -170,6 +184,7 @@ __all__ = [
     "fault_readings",
     "faulty_readings",
     "has_faulty_readings",
+    "outside_valid_range",
     "reading_parts",
     "replayed_prediction",
     "rule_readings",

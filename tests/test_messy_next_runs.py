@@ -45,15 +45,23 @@ def model(tmp_path_factory) -> Path:
     return folder / "model.json"
 
 
-def test_compare_names_a_heat_reading_not_taken_and_resample_fills_it(tmp_path, next_run, capsys):
+def test_compare_holds_the_ar1_state_on_a_heat_reading_not_taken_and_resample_fills_it(tmp_path, next_run, capsys):
+    """A marker in the heat column of a validation run: the AR(1) routine holds its state on that sample, as
+    replay of an AR(1) model file does, and the note names it; --resample interpolates the reading instead."""
     marked = next_run.astype({"speed_rpm": object})
     marked.loc[50, "speed_rpm"] = "n/a"
     path = tmp_path / "marked.csv"
     marked.to_csv(path, index=False)
-    assert cli("compare", "--data", MODELLING, "--validate", path, "--out", tmp_path / "a") == 2
-    message = one_line(capsys)
-    assert "row 51, column 'speed_rpm' has no reading" in message and "--heat none" in message
-    assert not (tmp_path / "a").exists()
+    report = tmp_path / "held.json"
+    assert (
+        cli(
+            "compare", "--data", MODELLING, "--validate", path, "--pmax", "0", "--json", report, "--out", tmp_path / "a"
+        )
+        == 0
+    )
+    notes = [n for n in json.loads(report.read_text())["notes"] if n.startswith("marked: AR(1) heat column")]
+    assert len(notes) == 1 and "'speed_rpm': 1 sample(s) without a reading" in notes[0]
+    assert "the AR(1) routine holds its state" in notes[0]
     assert next_run.loc[49, "speed_rpm"] == next_run.loc[51, "speed_rpm"]  # inside a block: interpolation is exact
     clean = tmp_path / "clean.csv"
     next_run.to_csv(clean, index=False)

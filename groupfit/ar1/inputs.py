@@ -1,5 +1,6 @@
 """The inputs of ``compare``'s AR(1) model from a run: the heat column (and a structural sensor), read on
-every row or refused naming the first row without a reading."""
+every row or refused naming the first row without a reading; on a validation run (:func:`next_run_inputs`)
+a missed heat reading is kept, and the AR(1) routine holds its state there (:mod:`groupfit.ar1.rule`)."""
 
 from __future__ import annotations
 
@@ -66,15 +67,20 @@ def refuse_heat_role(run: Run, heat: str, todo: str) -> None:
 
 def heat_column(run: Run, heat: str) -> np.ndarray:
     """The heat level of ``compare``'s AR(1) model (a speed, a power, a heat flux): read on every row, ≥ 0."""
+    values = read_on_every_row(run, heat_name(run, heat))
+    check_heat(values, source=str(run.source), name=heat)
+    return values
+
+
+def heat_name(run: Run, heat: str) -> str:
+    """``heat``, refused when ``run`` has no such column or it is the run's error or time."""
     if heat not in run.frame.columns:
         raise InputError(
             f"{run.source}: heat column '{heat}' for the AR(1) model not found; name it with --heat COLUMN "
             f"(or [compare] heat), {COMPARE_TODO}"
         )
     refuse_heat_role(run, heat, COMPARE_TODO)
-    values = read_on_every_row(run, heat)
-    check_heat(values, source=str(run.source), name=heat)
-    return values
+    return heat
 
 
 def read_on_every_row(run: Run, column: str) -> np.ndarray:
@@ -91,9 +97,31 @@ def read_on_every_row(run: Run, column: str) -> np.ndarray:
 
 
 def ar1_inputs(run: Run, heat: str, structural_sensor: str | None = None) -> np.ndarray:
-    columns = [heat_column(run, heat)]
-    if structural_sensor:
-        if structural_sensor not in run.frame.columns:
-            raise InputError(f"{run.source}: structural sensor '{structural_sensor}' not found")
-        columns.append(read_on_every_row(run, structural_sensor))
-    return np.column_stack(columns)
+    """The AR(1) model's inputs on a run it is fitted on: the heat column, then the structural sensor's."""
+    return np.column_stack([heat_column(run, heat), *structural_column(run, structural_sensor)])
+
+
+def structural_column(run: Run, structural_sensor: str | None) -> list[np.ndarray]:
+    """The structural sensor's readings, read on every row (none without a structural sensor)."""
+    if not structural_sensor:
+        return []
+    if structural_sensor not in run.frame.columns:
+        raise InputError(f"{run.source}: structural sensor '{structural_sensor}' not found")
+    return [read_on_every_row(run, structural_sensor)]
+
+
+def next_run_inputs(run: Run, heat: str, structural_sensor: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The AR(1) model's inputs on a validation run, read as the AR(1) routine reads them, and where it holds its
+    state: where the heat reading is missed (empty, NaN or ±inf; the heat column is 0 there, not read). A
+    reading below 0 is refused as on the modelling run (:func:`check_heat`), and so is a heat column without a
+    reading on any row, as a dead input is."""
+    values = numeric_column(run.frame, heat_name(run, heat), str(run.source), allow_nonfinite=True)
+    held = ~np.isfinite(values)
+    if held.all():
+        raise InputError(
+            f"{run.source}: heat column '{heat}' has no reading on any row; the AR(1) model has nothing to run on: "
+            f"fill it in, {COMPARE_TODO}"
+        )
+    values = np.where(held, 0.0, values)
+    check_heat(values, source=str(run.source), name=heat)
+    return np.column_stack([values, *structural_column(run, structural_sensor)]), held

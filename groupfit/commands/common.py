@@ -44,9 +44,13 @@ from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
 from groupfit.settings import DataSettings, RunSettings
 
+VALIDATION_RANGE = "a reading outside is refused, in a --validate run a sensor fault of the run-time rule (as replay)"
+"""What becomes of a temperature outside ``--range-temp`` for a verb that also reads validation runs."""
 
-def add_data_options(parser: argparse.ArgumentParser) -> None:
-    """--data, --time, --temps, --error, shared by the verbs that read a run."""
+
+def add_data_options(parser: argparse.ArgumentParser, *, range_temp: str | None = None) -> None:
+    """--data, --time, --temps, --error, shared by the verbs that read a run; ``range_temp``: what becomes of a
+    temperature outside ``--range-temp`` (:func:`add_range_options`, by default refused)."""
     parser.add_argument(
         "--data",
         nargs="+",
@@ -56,7 +60,7 @@ def add_data_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--time", metavar="COLUMN", help="time column in seconds (default time_s)")
     parser.add_argument("--temps", metavar="A,B,C", help="temperature input columns, comma separated")
     parser.add_argument("--error", metavar="COLUMN", help=ERROR_HELP)
-    add_range_options(parser)
+    add_range_options(parser, **({"temp": range_temp} if range_temp else {}))
     add_clock_options(parser)
     add_encoding_option(parser)
     add_glitch_option(parser)
@@ -145,12 +149,12 @@ def print_notes(runs, stream=None) -> None:
         print(f"note     {note}", file=stream or sys.stdout)
 
 
-def add_run_options(parser: argparse.ArgumentParser) -> None:
+def add_run_options(parser: argparse.ArgumentParser, *, range_temp: str | None = None) -> None:
     """CONFIG (a TOML run configuration, default configs/default.toml) and the data options."""
     parser.add_argument(
         "config", nargs="?", metavar="CONFIG", help="TOML run configuration (default configs/default.toml)"
     )
-    add_data_options(parser)
+    add_data_options(parser, range_temp=range_temp)
 
 
 def add_model_argument(parser: argparse.ArgumentParser) -> None:

@@ -39,7 +39,7 @@ from groupfit.settings import CompareSettings
 
 def add_parser(verbs) -> None:
     compare = verbs.add_parser("compare")
-    common.add_run_options(compare)
+    common.add_run_options(compare, range_temp=common.VALIDATION_RANGE)
     compare.add_argument("--validate", nargs="+", metavar="CSV", help="validation runs (not used for fitting)")
     compare.add_argument("--pmax", type=int, help="largest number of breaks compared (default 4)")
     compare.add_argument("--seed", type=option_values.seed_value, help="seed of the genetic algorithm")
@@ -122,10 +122,13 @@ def modelling_runs(data) -> list:
 
 
 def validation_runs(data, path) -> list[Run]:
-    """The runs of one ``--validate`` file, read as ``replay`` reads a next run: a reading that is not a number
-    is kept, a sensor fault of the run-time rule (held, then not scored: :mod:`groupfit.comparison_faults`);
-    implausible readings are refused as in a modelling run, and so is an error column empty on every row."""
-    runs = common.load_configured_runs(data, path, missing_error=True, allow_nonfinite=True, check_ranges=True)
+    """The runs of one ``--validate`` file, read as ``replay`` reads a next run: a reading that is not a number,
+    or a temperature outside the plausible range (a sensor's fault code, -999 °C), is kept, a sensor fault of the
+    run-time rule (held, then not scored: :mod:`groupfit.comparison_faults`); an implausible error is refused
+    as in a modelling run, and so is an error column empty on every row."""
+    runs = common.load_configured_runs(
+        data, path, missing_error=True, allow_nonfinite=True, check_ranges=True, temps_as_faults=True
+    )
     for run in runs:
         if run.error is not None and not np.isfinite(run.error).any():
             raise InputError(

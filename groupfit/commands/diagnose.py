@@ -15,7 +15,7 @@ from groupfit import running
 from groupfit.commands import common, option_values
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.commands.replay_readings import with_end_states
-from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run, load_runs, loading_notes
 from groupfit.data_options import add_encoding_option
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
@@ -47,7 +47,7 @@ def add_parser(verbs) -> None:
     parser.add_argument("--validate", nargs="+", metavar="RUN", help="other run(s), only to judge the result")
     common.add_json_option(parser)
     common.add_quiet_option(parser)
-    common.add_range_options(parser)
+    common.add_range_options(parser, temp=common.VALIDATION_RANGE)
     common.add_clock_options(parser)
     add_encoding_option(parser)
     common.add_glitch_option(parser)
@@ -174,12 +174,14 @@ def heat_exponent(text: str) -> float | str:
     return value
 
 
-def load_measured(path: str, model: dict[str, Any], time: str, **clock) -> Run:
+def load_measured(path: str, model: dict[str, Any], time: str, *, next_run: bool = False, **clock) -> Run:
+    """A run of ``--data`` (``next_run``: of ``--validate``, whose temperatures outside the plausible range are
+    kept, as replay keeps them, faults of the run-time rule) with the model's measured inputs."""
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
-    run = load_run(
-        path, temps=measured, time=time, error=model["error"], allow_nonfinite=True, check_ranges=True, **clock
-    )
+    options = dict(temps=measured, time=time, error=model["error"], allow_nonfinite=True, check_ranges=True, **clock)
+    runs = load_runs(path, **options, temps_as_faults=True) if next_run else []
+    run = runs[0] if len(runs) == 1 else load_run(path, **options)  # a log split at a gap: load_run names it
     period = float(model["sampling_period_s"])
     if abs(run.period - period) > PERIOD_TOLERANCE * period:
         raise InputError(
@@ -251,7 +253,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
         )
     with running.stage("loading", enabled=not args.quiet):
         data = [load_measured(path, model, time, **clock, **glitches) for path in args.data]
-        validate = [load_measured(path, model, time, **clock, **glitches) for path in args.validate or []]
+        validate = [
+            load_measured(path, model, time, next_run=True, **clock, **glitches) for path in args.validate or []
+        ]
     refuse_too_short(data, model)
     refuse_overlapping([*data, *validate], "as data (--data, --validate)")
     common.print_notes([*data, *validate], common.report_stream(args))

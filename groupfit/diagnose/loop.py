@@ -192,8 +192,8 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     if "validate" in before and not np.isfinite(before["validate"]).any():
         raise InputError(
             f"{validate_runs[0].source}: no sample of the validation run(s) is left to judge the model on: the "
-            "run-time rule is in sensor fault wherever the error is measured (a reading that is not a number for "
-            "longer than its hold); repair those readings or leave the run out"
+            "run-time rule is in sensor fault wherever the error is measured (a reading that is not a number, or "
+            "outside its valid range, for longer than its hold); repair those readings or leave the run out"
         )
     inputs = problem.inputs(model)
     residuals = dict(before) if options.baseline is None else problem.residuals(model)
@@ -270,15 +270,16 @@ def clamp_notes(problem: Problem, before: Model, after: Model) -> list[str]:
 
 
 def fault_notes(problem: Problem, before: Model, after: Model) -> list[str]:
-    """A note per validation run with a reading that is not a number: the samples the run-time rule's faults
-    leave unscored (as replay leaves them), after, and before when that differs."""
+    """A note per validation run with a reading the run-time rule takes as a fault (not a number, or outside its
+    valid range): the samples its faults leave unscored (as replay leaves them), after, and before when that
+    differs."""
     if problem.live_rule is None:
         return []
     before, after = ModelFile.coerce(before), ModelFile.coerce(after)
     notes = []
     for run, skip in zip(problem.runs.get("validate", []), problem.skipped.get("validate") or []):
         if not (has_faulty_readings(before, run) or has_faulty_readings(after, run)):
-            continue  # every reading finite: nothing to replay
+            continue  # every reading within its valid range: nothing to replay
         faults = [rule_faults(model, run, skip) for model in (before, after)]
         counts = [unscored_samples(fault) for fault in faults]
         others = f" after ({counts[0]} before)" if counts[0] != counts[1] else ""

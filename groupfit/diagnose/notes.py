@@ -23,8 +23,8 @@ AMBIENT = "ambient"
 CLAMP = "clamp"
 """The compensation's clamp held the prediction on a validation run (scored as replay scores it)."""
 FAULTS = "faults"
-"""A validation run's reading that is not a number: the run-time rule held it, then was in sensor fault; the
-samples in fault are not scored, as replay scores the run (:mod:`groupfit.rule_faults`)."""
+"""A validation run's reading that is not a number, or outside its valid range: the run-time rule held it, then
+was in sensor fault; the samples in fault are not scored, as replay scores the run (:mod:`groupfit.rule_faults`)."""
 JOINT = "joint"
 """The joint selection is not expected to carry to a new condition."""
 

@@ -97,7 +97,10 @@ class Problem:
 
     def residuals(self, model: Model) -> dict[str, np.ndarray]:
         """The model's residuals on the modelling and validation runs, stacked, histories left out."""
-        return {key: stacked_residual(model, rs, self.live_rule, self.skipped[key]) for key, rs in self.runs.items()}
+        return {
+            key: stacked_residual(model, rs, self.live_rule, self.skipped[key], next_run=key == "validate")
+            for key, rs in self.runs.items()
+        }
 
     def clamped(self, model: Model) -> dict[str, int]:
         """Per validation run, on how many of its samples (histories left out) the compensation's clamp holds
@@ -280,11 +283,19 @@ def exogenous_sensors(runs: list[Run], sensors: list[str], operating: list[str],
 
 
 def stacked_residual(
-    model: Model, runs: list[Run], live_rule: LiveRule | None, skipped: Sequence[int] | None = None
+    model: Model,
+    runs: list[Run],
+    live_rule: LiveRule | None,
+    skipped: Sequence[int] | None = None,
+    *,
+    next_run: bool = False,
 ) -> np.ndarray:
-    """The residuals on ``runs``, stacked, each without its first ``skipped`` rows (a history put in front)."""
+    """The residuals on ``runs``, stacked, each without its first ``skipped`` rows (a history put in front);
+    ``next_run``: validation runs, whose faulty readings the run-time rule takes (:func:`residual`)."""
     skipped = skipped or [0] * len(runs)
-    return np.concatenate([residual(model, run, live_rule)[skip:] for run, skip in zip(runs, skipped)])
+    return np.concatenate(
+        [residual(model, run, live_rule, next_run=next_run)[skip:] for run, skip in zip(runs, skipped)]
+    )
 
 
 def model_scorer(model: Model, target: np.ndarray, inputs: list[np.ndarray], folds: Folds, rows: np.ndarray):

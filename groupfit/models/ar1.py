@@ -246,16 +246,20 @@ class AR1Model(RegressorMixin, BaseEstimator):
             return self.c2_[reference] * rise_ratio
         return self.c2_[reference] * math.pow(level / reference, self.heat_exponent)
 
-    def predict(self, X, initial_error: float = 0.0, rise_ratio: float | None = None) -> np.ndarray:
-        """Free-run prediction from ``initial_error`` at the first sample."""
+    def predict(
+        self, X, initial_error: float = 0.0, rise_ratio: float | None = None, held: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Free-run prediction from ``initial_error`` at the first sample; where ``held`` (a heat reading the
+        AR(1) routine does not take, :mod:`groupfit.ar1.rule`) the recursion's state is held, not stepped."""
         check_is_fitted(self, "c1_")
         heat, rise = self._split(X)
+        hold = np.zeros(len(heat), dtype=bool) if held is None else np.asarray(held, dtype=bool)
         structural = rise * (self.structural_gain_ or 0.0)
-        inputs = np.array([self.c2_for(level, rise_ratio) for level in heat])
+        inputs = np.array([0.0 if skip else self.c2_for(level, rise_ratio) for level, skip in zip(heat, hold)])
         remainder = np.empty(len(heat))
         remainder[0] = initial_error - structural[0]
         for k in range(1, len(heat)):
-            remainder[k] = self.c1_ * remainder[k - 1] + inputs[k]
+            remainder[k] = remainder[k - 1] if hold[k] else self.c1_ * remainder[k - 1] + inputs[k]
         return remainder + structural
 
     def ljung_box(self, lags: int = 10) -> dict[str, float]:
