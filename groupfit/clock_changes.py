@@ -17,12 +17,17 @@ from __future__ import annotations
 import dataclasses
 import functools
 import zoneinfo
-from datetime import datetime, timezone
+from datetime import datetime, timedelta, timezone
 
 import numpy as np
 import pandas as pd
 
-from groupfit.timestamps import ZONE_HOURS, ZONE_NAME, hour_off
+from groupfit.timestamps import ZONE_HOURS, ZONE_NAME, stamp_resolution
+
+HOUR = timedelta(hours=1)
+MISSED_PERIODS = 3
+"""Samples a change of the clock may coincide with missing: as many in a row as ``--resample`` interpolates
+(``groupfit.resample.GAP_PERIODS``)."""
 
 WELL_KNOWN_ZONES = (
     "Europe/Berlin",
@@ -75,20 +80,41 @@ def _zones() -> tuple[zoneinfo.ZoneInfo, ...]:
     return tuple(zones)
 
 
-def _offset_s(wall_s: float, zone: zoneinfo.ZoneInfo, fold: int) -> float:
+def _placed(wall_s: float, zone: zoneinfo.ZoneInfo, fold: int) -> datetime | None:
+    """A wall-clock time in ``zone`` (``fold`` 1: the second reading of a repeated hour); None where the zone's
+    clock skips it (the hour summer time begins with)."""
     wall = datetime.fromtimestamp(wall_s, tz=timezone.utc).replace(tzinfo=zone, fold=fold)
-    return wall.utcoffset().total_seconds()
+    there = wall.astimezone(timezone.utc).astimezone(zone)
+    return wall if there.replace(tzinfo=None) == wall.replace(tzinfo=None) else None
 
 
 def _changing_zones(before_s: float, after_s: float, hours: int) -> tuple[str, ...]:
-    """The zones whose UTC offset grows by ``hours`` between two wall-clock times (the later one the second
-    reading of a repeated hour where the clock went back)."""
-    fold_after = 1 if hours < 0 else 0
-    return tuple(
-        zone.key
-        for zone in _zones()
-        if _offset_s(after_s, zone, fold_after) - _offset_s(before_s, zone, 0) == 3600.0 * hours
-    )
+    """The zones whose clock shows both wall-clock times and whose UTC offset grows by ``hours`` between them
+    (the later one the second reading of a repeated hour where the clock went back)."""
+    zones = []
+    for zone in _zones():
+        before, after = _placed(before_s, zone, 0), _placed(after_s, zone, 1 if hours < 0 else 0)
+        if before is not None and after is not None and after.utcoffset() - before.utcoffset() == HOUR * hours:
+            zones.append(zone.key)
+    return tuple(zones)
+
+
+def _candidate_steps(step: np.ndarray, period: float) -> list[tuple[int, int]]:
+    """``(row before, hours)`` of the steps an hour's change of the clock may explain: read an hour shorter (it
+    went ahead) or longer (back), they come to a period, or up to :data:`MISSED_PERIODS` more where
+    samples were missed there, to 2 % of the period, the stamps' rounding
+    (:func:`~groupfit.timestamps.stamp_resolution`) or the most the clock's other steps stray from the period."""
+    ordinary = step[np.abs(step - period) < 0.5 * period]
+    jitter = float(np.max(np.abs(ordinary - period))) if ordinary.size else 0.0
+    resolution = stamp_resolution(np.concatenate([[0.0], np.cumsum(np.abs(step))]), period)
+    spare = max(0.02 * period, resolution, jitter) + 1e-6  # date-times in seconds since 1970 keep about 1e-7 s
+    found = []
+    for hours in (1, -1):
+        corrected = step - 3600.0 * hours
+        periods = np.round(corrected / period)
+        fits = (periods >= 1) & (periods <= MISSED_PERIODS + 1) & (np.abs(corrected - periods * period) <= spare)
+        found += [(int(i), hours) for i in np.flatnonzero(fits & (np.abs(step) > 0.5 * 3600.0))]
+    return found
 
 
 def summer_time_changes(wall_s: np.ndarray) -> list[ClockChange]:
@@ -102,9 +128,9 @@ def summer_time_changes(wall_s: np.ndarray) -> list[ClockChange]:
     Returns
     -------
     list of ClockChange
-        Every step of an hour more or less than the sampling period that some time zone's clock takes between
-        the two rows; empty where there is none, the clock is sampled every half hour or slower, or no tz
-        database is at hand.
+        Every step that, an hour shorter or longer, comes to one sampling period (or a few, where samples were
+        missed there) and that some time zone's clock takes between the two rows; empty where there is none,
+        the clock is sampled every half hour or slower, or no tz database is at hand.
     """
     wall_s = np.asarray(wall_s, dtype=float)
     step = np.diff(wall_s)
@@ -112,12 +138,13 @@ def summer_time_changes(wall_s: np.ndarray) -> list[ClockChange]:
     if not forward.size:
         return []
     period = float(np.median(forward))
+    if period >= 1800.0:
+        return []
     changes = []
-    for hours in (1, -1):
-        for i in np.flatnonzero(hour_off(step, period, hours)):
-            zones = _changing_zones(float(wall_s[i]), float(wall_s[i + 1]), hours)
-            if zones:
-                changes.append(ClockChange(int(i) + 1, hours, zones))
+    for i, hours in _candidate_steps(step, period):
+        zones = _changing_zones(float(wall_s[i]), float(wall_s[i + 1]), hours)
+        if zones:
+            changes.append(ClockChange(i + 1, hours, zones))
     return sorted(changes, key=lambda change: change.row)
 
 
@@ -153,16 +180,20 @@ def change_note(label: str, column: str, wall_s: np.ndarray, changes: list[Clock
     told = []
     for change in changes:
         went, began, moved = ("ahead", "began", "later") if change.hours > 0 else ("back", "ended", "earlier")
-        others = f" and {len(change.zones) - 1} other zones" if len(change.zones) > 1 else ""
+        others = len(change.zones) - 1
+        also = f" and {others} other zone{'s' if others > 1 else ''}" if others else ""
         told.append(
             f"goes {went} an hour at row {change.row + 1} ({stamp(wall_s[change.row - 1])} → "
-            f"{stamp(wall_s[change.row])}: summer time {began}, as in {change.zone}{others}), the rows before it "
+            f"{stamp(wall_s[change.row])}: summer time {began}, as in {change.zone}{also}), the rows before it "
             f"read an hour {moved}"
         )
+    last = changes[-1]
+    placed = _placed(float(wall_s[last.row]), zoneinfo.ZoneInfo(last.zone), 1 if last.hours < 0 else 0)
+    example = placed.isoformat() if placed is not None else "2026-10-25T02:00:00+01:00"
     return (
         f"{label}: the clock in column '{column}' is local time without a UTC offset and {'; it '.join(told)}, so "
-        "that the run keeps its period (write the stamps with their UTC offset, e.g. 2026-10-25T02:00:00+01:00, "
-        "to place them yourself)"
+        f"that the run keeps its period (write the stamps with their UTC offset, e.g. {example}, to place them "
+        "yourself)"
     )
 
 

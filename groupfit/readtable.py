@@ -465,7 +465,11 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
         start = raw.iloc[0] if dated else pd.Timedelta(0)
         clock = ((raw - start).dt.total_seconds().to_numpy(dtype=float), start.timestamp() if dated else None)
     else:
-        clock = text_clock(raw, column, label) if is_text(raw) else None
+
+        def through(seconds: np.ndarray, origin: float) -> np.ndarray:
+            return through_clock_changes(raw, seconds, origin, label, column)[0]
+
+        clock = text_clock(raw, column, label, through) if is_text(raw) else None
     if clock is None:
         return
     seconds, origin = clock

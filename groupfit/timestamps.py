@@ -279,9 +279,11 @@ def text_seconds(column: pd.Series, name: str, label: str) -> np.ndarray | None:
     return None if clock is None else clock[0]
 
 
-def text_clock(column: pd.Series, name: str, label: str) -> tuple[np.ndarray, float | None] | None:
+def text_clock(column: pd.Series, name: str, label: str, read_through=None) -> tuple[np.ndarray, float | None] | None:
     """:func:`text_seconds` and the first row's date-time in seconds since 1970 (UTC when the stamps name their
     zone; None for times of day or elapsed times, which name no date); None when the first cell is a number.
+    ``read_through(seconds, origin)``: the seconds of a dated reading read through a local clock's changes, by
+    which readings of day and month are told apart (the date of 11/01/2026 on which the clock goes back).
 
     Raises
     ------
@@ -311,7 +313,8 @@ def text_clock(column: pd.Series, name: str, label: str) -> tuple[np.ndarray, fl
             f"{label}: row {row + 1}, column '{name}': {str(text.iloc[row])!r} is not a date-time in the form "
             f"of the rows above it ({form}); fix or remove that row"
         )
-    seconds, origin = min(readings, key=lambda reading: _unevenness(reading[0]))
+    through = read_through if read_through is not None and not zone_hours.any() else (lambda seconds, origin: seconds)
+    seconds, origin = min(readings, key=lambda r: _unevenness(r[0] if r[1] is None else through(r[0], r[1])))
     return seconds - 3600.0 * (zone_hours - zone_hours[0]), None if origin is None else origin - 3600.0 * zone_hours[0]
 
 

@@ -121,3 +121,51 @@ def test_the_changes_found_are_those_of_the_zone_as_pandas_converts_it(zone):
     assert [c.row for c in changes] == expected.tolist()
     assert all(zone in c.zones for c in changes)
     assert np.all(np.diff(read_through(wall, changes)) == 600.0)
+
+
+def test_a_us_log_on_the_day_the_clock_goes_back_reads_its_date_as_month_first(tmp_path):
+    """11/01/2026 reads as 1 November and as 11 January alike; only on 1 November does a clock go back, so the
+    month comes first, as the same log stamped in ISO form reads."""
+    log = pd.read_csv(DATASETS / "paper_cycle.csv").iloc[:120]
+    utc = pd.Timestamp("2026-11-01 05:00:00", tz="UTC") + pd.to_timedelta(log["time_s"], unit="s")
+    local = utc.dt.tz_convert("America/New_York")
+    us, iso = tmp_path / "us.csv", tmp_path / "iso.csv"
+    for path, form in ((us, "%m/%d/%Y %I:%M:%S %p"), (iso, "%Y-%m-%d %H:%M:%S")):
+        log.assign(time_s=local.dt.strftime(form)).rename(columns={"time_s": "Timestamp"}).to_csv(path, index=False)
+    [month_first], [in_iso] = load_runs(us, time="Timestamp"), load_runs(iso, time="Timestamp")
+    assert np.array_equal(month_first.time, (utc - utc.iloc[0]).dt.total_seconds().to_numpy())
+    assert month_first.clock_origin_s == in_iso.clock_origin_s
+
+
+@pytest.mark.parametrize(("utc_start", "hours"), [("2026-10-25 00:00:00", -1), ("2026-03-29 00:00:00", 1)])
+def test_a_sample_missed_at_the_change_is_a_missed_sample(tmp_path, utc_start, hours):
+    """The change read through, the sample missed with it is a gap of two periods, which --resample fills."""
+    wall, offset, change = stamped_logs(tmp_path, "Europe/Berlin", utc_start)
+    for path in (wall, offset):
+        pd.read_csv(path).drop(index=change - 1).to_csv(path, index=False)
+    [local], [placed] = (load_runs(p, time="Timestamp", resample=60.0) for p in (wall, offset))
+    assert np.array_equal(local.time, placed.time) and np.allclose(local.error, placed.error)
+    assert any("summer time" in n for n in local.notes)
+
+
+def test_a_jittering_clock_is_read_through_its_change():
+    utc = pd.Timestamp("2026-10-25 00:50", tz="UTC") + pd.to_timedelta(np.arange(1200.0), unit="s")
+    jitter = pd.to_timedelta(np.where(np.arange(len(utc)) % 2, 0.025, -0.025), unit="s")  # steps 50 ms off
+    stamps = utc + jitter
+    wall = stamps.tz_convert("Europe/Berlin").tz_localize(None)
+    frame = pd.DataFrame({"time": wall.strftime("%Y-%m-%d %H:%M:%S.%f"), "T1": 20.0 + 0.001 * np.arange(1200)})
+    frame["error_um"] = 2.0 * (frame["T1"] - 20.0)
+    [run] = load_runs(frame, time="time", period_tolerance=0.1)
+    truth = (stamps - stamps[0]).total_seconds().to_numpy()
+    assert np.allclose(run.time, truth, atol=1e-6)
+
+
+@pytest.mark.parametrize("pause", [("2026-03-29 02:00:00", "Europe/Berlin"), ("2026-03-29 01:29:00", "Europe/London")])
+def test_a_pause_from_a_time_the_zone_skips_is_no_change_of_its_clock(pause):
+    """02:00 does not exist in Berlin on 29 March (nor 01:29 in London): a pause of an hour from there is a gap."""
+    start, zone = pause
+    before = pd.Timestamp(start) - pd.to_timedelta(np.arange(60, 0, -1) * 60.0, unit="s")
+    after = pd.Timestamp(start) + pd.Timedelta(hours=1, minutes=1) + pd.to_timedelta(np.arange(60) * 60.0, unit="s")
+    wall = np.concatenate([before.to_numpy(), [np.datetime64(pd.Timestamp(start))], after.to_numpy()])
+    seconds = (pd.DatetimeIndex(wall) - pd.Timestamp("1970-01-01")).total_seconds().to_numpy()
+    assert summer_time_changes(seconds) == []
