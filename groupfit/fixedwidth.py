@@ -64,14 +64,16 @@ def first_uneven_row(header: str, rows: list[str]) -> int | None:
 
 
 def uneven_units_row(header: str, rows: list[str]) -> bool:
-    """Whether a row of text between the header and the first row with a digit in it (units: ``[deg C]``), a
-    ruler aside, splits at its spaces into another number of values than the header into names."""
+    """Whether a row of units between the header and the first row with a digit in it, a ruler aside, splits at
+    its spaces into another number of values than the header into names only because a unit has a space in it
+    (``[deg C]``): as many units as names, kept whole."""
     names = len(header.split())
     for row in rows:
         if DIGIT.search(row):
             return False
         if row.strip() and not RULER.fullmatch(row) and len(row.split()) != names:
-            return True
+            units = units_of_row(row.split())
+            return units is not None and len(units) == names
     return False
 
 

@@ -6,10 +6,14 @@ as many fields as its rows. Among them, here:
 * a row of units right above the body (``s  °C  °C  µm``, ``[s] [deg C] [deg C] [um]``) is under the header,
   not the header, though a unit with a space in it (``deg C``) gives it more fields than the header
   (:func:`is_units_row`);
-* an empty line ends the header's lines: what stands above it is a preamble (a title, a logger's name) even
-  when it has as many words as the table has columns (:func:`below_last_empty_line`);
-* a line with a value for a field (``Machine DMU 50 Spindle 2``, ``Datum 02.03.2026 Uhrzeit 08:00``) is a
-  preamble line, unless every line is (:func:`without_numbered_lines`).
+* in a table split at spaces, whose rows are not double spaced, where a title's or a logger's words are fields
+  as a header's names are (in a table split at commas, semicolons or tabs a title fills one field, and the
+  line that names the most columns is the header):
+
+  - an empty line ends the header's lines: what stands above it is a preamble (a title, a logger's name)
+    even when it has as many words as the table has columns (:func:`below_last_empty_line`);
+  - a line with a value for a field (``Machine DMU 50 Spindle 2``, ``Datum 02.03.2026 Uhrzeit 08:00``) is a
+    preamble line, unless it is the line right above the body (:func:`without_numbered_lines`).
 """
 
 from __future__ import annotations
@@ -72,9 +76,12 @@ def below_last_empty_line(lines: Sequence[Line]) -> list[Line]:
 
 
 def without_numbered_lines(lines: Sequence[Line]) -> list[Line]:
-    """The lines none of whose fields is a value (:data:`VALUE`, a number), or all of them when each has one."""
-    named = [line for line in lines if not any(is_number(field) or VALUE.fullmatch(field) for field in line.fields)]
-    return named or list(lines)
+    """The lines none of whose fields is a value (:data:`VALUE`, a number), and the last line, right above the
+    body, which is the header when no other line is (a column named by a number, ``4711``, or a date)."""
+    named = [
+        line for line in lines[:-1] if not any(is_number(field) or VALUE.fullmatch(field) for field in line.fields)
+    ]
+    return [*named, *lines[-1:]]
 
 
 __all__ = ["below_last_empty_line", "is_units_row", "units_of_row", "without_numbered_lines"]

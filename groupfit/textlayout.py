@@ -242,7 +242,7 @@ def _body_layout(lines: list[str]) -> tuple[str, int] | None:
         return None
     sep, rows, runs, first = best
     first = _body_start(rows, runs, first)
-    return sep, _header_above(rows, first)
+    return sep, _header_above(rows, first, spaced=sep == WHITESPACE)
 
 
 def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> int:
@@ -265,8 +265,9 @@ def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> in
     return first
 
 
-def _header_above(rows: list[_Row], first: int) -> int:
-    """The header line of the body that starts at ``rows[first]`` (see the module docstring)."""
+def _header_above(rows: list[_Row], first: int, *, spaced: bool = False) -> int:
+    """The header line of the body that starts at ``rows[first]`` (see the module docstring); ``spaced``: the
+    fields are split at runs of spaces, where a title's words are fields as a header's names are."""
     width = len(rows[first].fields)
     top = first
     while top > 0 and rows[top - 1].blank:  # a ruler or a blank row between the header and the body
@@ -281,7 +282,9 @@ def _header_above(rows: list[_Row], first: int) -> int:
     position = top
     while position > 0 and rows[position - 1].is_text and abs(len(rows[position - 1].fields) - width) <= 1:
         position -= 1
-    above = without_numbered_lines(below_last_empty_line(rows[position:top]))
+    above = rows[position:top]
+    if spaced and not (first + 1 < len(rows) and rows[first + 1].line - rows[first].line > 1):  # not double spaced
+        above = without_numbered_lines(below_last_empty_line(above))
     above = [row for row in above if not row.fields[0].startswith("#")] or above  # a comment, unless all are
     if above:
         most = max(row.filled for row in above)
