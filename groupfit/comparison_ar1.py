@@ -8,7 +8,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.ar1.inputs import ar1_inputs, moves_like_measurement, next_run_inputs
+from groupfit.ar1.inputs import ar1_inputs, moves_like_measurement, next_run_inputs, temperature_on_every_row
 from groupfit.ar1.nextrun import expect_ar1
 from groupfit.data import Run, numeric_column
 from groupfit.error_start import first_reading
@@ -143,7 +143,7 @@ def rise_notes(modelling: Run, settings) -> list[str]:
 def _column(run: Run, name: str) -> np.ndarray:
     if name not in run.frame.columns:
         raise InputError(f"{run.source}: rise sensor '{name}' not found; set [compare] rise_sensor")
-    return run.frame[name].to_numpy(dtype=float)
+    return temperature_on_every_row(run, name)
 
 
 __all__ = [

@@ -66,7 +66,7 @@ def replayed_on_faults(
     note = unscored_note(model_files[first], whole, skip, others=others, faults=faults[first])
     if note is None:  # the faulty readings lie in the history in front
         return replayed, [], bands
-    if unscored:
+    if unscored and in_fault.any():
         note += (
             f"; {' and '.join(model_label(key) for key in unscored)} left unscored on the samples a rule is in fault"
         )

@@ -393,7 +393,7 @@ def _validated(
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", ERROR_RANGE_OPTION)
     if options.drop_glitches:  # after the ranges: an implausible reading is refused or a fault, never interpolated
         frame, temp_array, glitched = temperatures_without_glitches(
-            frame, temps, temp_array, label, options.ambient, temp_range
+            frame, temps, temp_array, label, options.ambient, temp_range if options.temps_as_faults else None
         )
         notes = notes + ((glitched,) if glitched else ())
     if options.drop_glitches and error_values is not None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from groupfit.column_values import TEMP_RANGE_C
 from groupfit.data import Run, numeric_column
 from groupfit.errors import InputError
 from groupfit.reference import column_role
@@ -107,7 +108,23 @@ def structural_column(run: Run, structural_sensor: str | None) -> list[np.ndarra
         return []
     if structural_sensor not in run.frame.columns:
         raise InputError(f"{run.source}: structural sensor '{structural_sensor}' not found")
-    return [read_on_every_row(run, structural_sensor)]
+    return [temperature_on_every_row(run, structural_sensor)]
+
+
+def temperature_on_every_row(run: Run, column: str) -> np.ndarray:
+    """A temperature the AR(1) model reads beside its heat column (a structural or a rise sensor), refused
+    naming the first row without a reading or with one outside the plausible range (a sensor's fault code,
+    -999 °C, which a validation run keeps for the run-time rule of the other models to hold)."""
+    values = read_on_every_row(run, column)
+    low, high = TEMP_RANGE_C
+    outside = np.flatnonzero((values < low) | (values > high))
+    if outside.size:
+        raise InputError(
+            f"{run.source}: row {outside[0] + 1}, column '{column}' = {values[outside[0]]:g} °C, outside the plausible "
+            f"{low:g} to {high:g} °C (a sensor's fault code?); the AR(1) model reads it on every row: fix that row, "
+            f"{COMPARE_TODO}"
+        )
+    return values
 
 
 def next_run_inputs(run: Run, heat: str, structural_sensor: str | None = None) -> tuple[np.ndarray, np.ndarray]:

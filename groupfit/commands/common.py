@@ -44,7 +44,10 @@ from groupfit.resample import GAP_PERIODS
 from groupfit.search.exact import estimate_exact_cost, format_seconds
 from groupfit.settings import DataSettings, RunSettings
 
-VALIDATION_RANGE = "a reading outside is refused, in a --validate run a sensor fault of the run-time rule (as replay)"
+VALIDATION_RANGE = (
+    "a reading outside is refused; in a --validate run a reading is scored as replay scores it: outside the run-time "
+    "rule's valid range, held and then a sensor fault"
+)
 """What becomes of a temperature outside ``--range-temp`` for a verb that also reads validation runs."""
 
 
