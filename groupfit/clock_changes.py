@@ -197,25 +197,61 @@ def change_note(label: str, column: str, wall_s: np.ndarray, changes: list[Clock
     )
 
 
+CLOCK_SHIFTS = "clock_shifts"
+"""``frame.attrs`` key: where a local clock without a UTC offset changed, ``(seconds, shift_s)`` for each change
+— the first row after it, in seconds since the first row, and the seconds the rows before it were moved
+(:func:`shift_at`); empty where the clock did not change, None (or no key) where the stamps place themselves."""
+
+
 def through_clock_changes(
     raw: pd.Series, seconds: np.ndarray, origin_s: float, label: str, column: str
-) -> tuple[np.ndarray, float, str | None]:
+) -> tuple[np.ndarray, float, str | None, tuple[tuple[float, float], ...] | None]:
     """A date-time column read as seconds since its first row (``seconds``, the first row ``origin_s`` since
     1970), read through its clock's changes to and from summer time when it names no zone: the seconds, the
-    first row's date-time in the clock of the last row, and the note (None where nothing changed)."""
+    first row's date-time in the clock of the last row, the note (None where nothing changed) and the changes
+    as :data:`CLOCK_SHIFTS` keeps them (None where the column names its zone)."""
+    if not names_no_zone(raw):
+        return seconds, origin_s, None, None
     wall_s = origin_s + np.asarray(seconds, dtype=float)
-    changes = summer_time_changes(wall_s) if names_no_zone(raw) else []
+    changes = summer_time_changes(wall_s)
     if not changes:
-        return seconds, origin_s, None
+        return seconds, origin_s, None, ()
     shifted = read_through(wall_s, changes)
-    return shifted - shifted[0], float(shifted[0]), change_note(label, column, wall_s, changes)
+    elapsed = shifted - shifted[0]
+    shifts = tuple((float(elapsed[change.row]), 3600.0 * change.hours) for change in changes)
+    return elapsed, float(shifted[0]), change_note(label, column, wall_s, changes), shifts
+
+
+def shift_at(shifts: tuple[tuple[float, float], ...] | None, time_s: float) -> float | None:
+    """The seconds a local clock's changes (:data:`CLOCK_SHIFTS`) added to the wall-clock time of the row at
+    ``time_s`` (seconds since the first row, in the last row's clock) to put it in the last row's clock; None
+    where the stamps place themselves."""
+    if shifts is None:
+        return None
+    return float(sum(shift for at, shift in shifts if time_s < at))
+
+
+def change_between(before_s: float, after_s: float, period_s: float, spare_s: float) -> bool:
+    """Whether a local clock that showed ``before_s`` at one row and ``after_s`` (wall-clock date-times in seconds
+    since 1970, read as if UTC) at the next went ahead or back an hour between them: the step, an hour shorter or
+    longer, comes to ``period_s`` within ``spare_s``, and some zone's clock changes so there (two files of one
+    log cut where the clock changed)."""
+    if not 0.0 < period_s < 1800.0:
+        return False
+    for hours in (1, -1):
+        if abs(after_s - before_s - 3600.0 * hours - period_s) <= spare_s:
+            return bool(_changing_zones(before_s, after_s, hours))
+    return False
 
 
 __all__ = [
+    "CLOCK_SHIFTS",
     "ClockChange",
+    "change_between",
     "change_note",
     "names_no_zone",
     "read_through",
+    "shift_at",
     "summer_time_changes",
     "through_clock_changes",
 ]

@@ -24,6 +24,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.clock_changes import change_between
 from groupfit.data import PERIOD_TOLERANCE, Run
 from groupfit.default_columns import length_unit
 from groupfit.error_start import is_from_start
@@ -67,28 +68,38 @@ def clock_runs_on(
     *,
     last_origin_s: float | None = None,
     first_origin_s: float | None = None,
+    local: bool = False,
 ) -> bool:
     """Whether a clock that ended at ``last_time_s`` picks up at ``first_time_s`` one sampling period later.
 
-    ``*_origin_s``: the date-time each clock counts from (:attr:`groupfit.data.Run.clock_origin_s`); two logs
-    stamped with dates are compared by their date-times, a dated log never goes on from one on a clock of its
-    own (or the other way round).
+    ``*_origin_s``: the date-time each clock counts from, the earlier file's in the clock of its last row
+    (:attr:`groupfit.data.Run.clock_origin_s`), the later file's in the clock of its first row
+    (:attr:`~groupfit.data.Run.first_clock_origin_s`), so that either file may cross a change to or from summer
+    time; two logs stamped with dates are compared by their date-times, a dated log never goes on from one on a
+    clock of its own (or the other way round). ``local``: both are stamped in local wall-clock time without a UTC
+    offset, and a file cut where the clock went ahead or back an hour goes on from the one before it
+    (:func:`groupfit.clock_changes.change_between`).
     """
     if (last_origin_s is None) != (first_origin_s is None):
         return False
-    gap = (first_time_s + (first_origin_s or 0.0)) - (last_time_s + (last_origin_s or 0.0))
-    return bool(abs(gap - period_s) <= CONTIGUITY_TOLERANCE * period_s)
+    last, first = last_time_s + (last_origin_s or 0.0), first_time_s + (first_origin_s or 0.0)
+    spare = CONTIGUITY_TOLERANCE * period_s
+    if abs(first - last - period_s) <= spare:
+        return True
+    return bool(local and last_origin_s is not None and change_between(last, first, period_s, spare))
 
 
 def clock_continues(previous: Run, run: Run) -> bool:
     """Whether ``run``'s clock picks up one sampling period after ``previous``'s ends (two logs stamped with dates:
-    by their date-times, each file's clock counting from its first row)."""
+    by their date-times, ``previous``'s last in the clock of its last row, ``run``'s first in the clock of its
+    first row, each file's clock counting from its first row)."""
     return clock_runs_on(
         previous.time[-1],
         previous.period,
         run.time[0],
         last_origin_s=previous.clock_origin_s,
-        first_origin_s=run.clock_origin_s,
+        first_origin_s=run.first_clock_origin_s,
+        local=previous.clock_shift_s is not None and run.clock_shift_s is not None,
     )
 
 
@@ -102,11 +113,20 @@ def continues(previous: Run, run: Run, *, ignore: Sequence[str] = ()) -> bool:
 
 
 def restamped(run: Run, previous: Run) -> Run:
-    """``run`` with its time stamps going on one sampling period after ``previous``'s last (on its clock)."""
+    """``run`` with its time stamps going on one sampling period after ``previous``'s last (on its clock).
+
+    Its first row then keeps the clock ``previous``'s last row kept, and a local clock's changes of its own
+    (:attr:`~groupfit.data.Run.clock_shift_s`) still move its last row's clock from there, so that a file going
+    on from its last row is told as one going on from it unrestamped would be.
+    """
     time = run.time - run.time[0] + previous.time[-1] + previous.period
     frame = run.frame.copy()
     frame[run.time_name] = time
-    return replace(run, time=time, frame=frame, clock_origin_s=previous.clock_origin_s)
+    origin, shift = previous.clock_origin_s, previous.clock_shift_s
+    if origin is not None and shift is not None:  # a local clock: the run's own changes go on from previous's
+        shift = run.clock_shift_s or 0.0
+        origin += shift
+    return replace(run, time=time, frame=frame, clock_origin_s=origin, clock_shift_s=shift)
 
 
 def logged_error(run: Run) -> np.ndarray:

@@ -8,13 +8,13 @@ problem a user can cause is an :class:`~groupfit.errors.InputError` naming the f
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 import pandas as pd
 
+from groupfit.clock_changes import CLOCK_SHIFTS, shift_at
 from groupfit.column_values import ERROR_LIMIT_UM as ERROR_LIMIT_UM
 from groupfit.column_values import (
     ERROR_RANGE_OPTION,
@@ -46,6 +46,7 @@ from groupfit.interleaved import refuse_interleaved, stamp_groups
 from groupfit.readtable import CLOCK_NOTES, CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
 from groupfit.record_kinds import record_kinds_cycle
 from groupfit.resample import jitter_note, resample_frame
+from groupfit.run import Run as Run
 from groupfit.sampling import clock_of, described_burst_cycle
 from groupfit.split_stamps import with_milliseconds
 from groupfit.stuck_sensors import stuck_sensor_notes
@@ -60,41 +61,6 @@ from groupfit.units_row import read_in_row_units
 
 PERIOD_TOLERANCE = 0.02
 """Largest relative deviation of one sampling interval from the run's period (``--period-tolerance``)."""
-
-
-@dataclass(frozen=True)
-class Run:
-    """One validated run."""
-
-    name: str
-    """Short name (the file stem, or the name given for a DataFrame)."""
-    source: str
-    """Where the run came from, used in messages."""
-    time: np.ndarray
-    """Sample times in seconds, strictly increasing, shape (N,)."""
-    temps: np.ndarray
-    """Model input temperatures in °C, shape (N, k), in the order of ``temp_names``."""
-    temp_names: tuple[str, ...]
-    error: np.ndarray | None
-    """Thermal error in µm, shape (N,), when the run has the error column."""
-    error_name: str | None
-    period: float
-    """Sampling period in seconds (median interval)."""
-    frame: pd.DataFrame = field(repr=False)
-    """The whole table, including columns that are not model inputs; readings as recorded."""
-    time_name: str = DEFAULT_TIME
-    reference: str | None = None
-    """What ``temps`` are relative to (:mod:`groupfit.reference`): None for absolute readings (as loaded), a
-    column or ``"start"`` once :func:`groupfit.reference.with_reference` has applied it."""
-    notes: tuple[str, ...] = ()
-    """What loading did to the log (a jittering clock accepted, readings resampled), one line each."""
-    clock_origin_s: float | None = None
-    """The date-time ``time`` counts from, in seconds since 1970, when the log's stamps were dates (None: a clock
-    of its own, in seconds); a file whose stamps go on from another's continues it."""
-
-    @property
-    def n_samples(self) -> int:
-        return len(self.time)
 
 
 MAX_TIME_S = 1e11
@@ -291,7 +257,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
     else:
         time_seconds(frame, time, label)
     error = options.get("error", DEFAULT_ERROR)
-    origin = frame.attrs.get(CLOCK_ORIGIN)
+    clock = dict(clock_origin=frame.attrs.get(CLOCK_ORIGIN), clock_shifts=frame.attrs.get(CLOCK_SHIFTS))
     refuse_bad_cells(frame, label, skip=(time,))
     frame, missed = implausible_as_missed(frame, label, LoadOptions(**options))
     frame, glitched = _glitches_as_missed(frame, label, LoadOptions(**options))
@@ -309,7 +275,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
                 label,
                 period_tolerance=period_tolerance,
                 notes=notes,
-                clock_origin=origin,
+                **clock,
                 **options,
             )
         ]
@@ -321,7 +287,7 @@ def _read_runs(frame, run_name, label, period_tolerance, resample, options) -> l
             f"{label} (part {k} of {total})",
             period_tolerance=period_tolerance,
             notes=notes if k == 1 else (),
-            clock_origin=origin,
+            **clock,
             **options,
         )
         for k, piece in enumerate(binned.pieces, start=1)
@@ -361,16 +327,19 @@ def _validated(
     period_tolerance: float = PERIOD_TOLERANCE,
     notes: tuple[str, ...] = (),
     clock_origin: float | None = None,
+    clock_shifts: tuple[tuple[float, float], ...] | None = None,
     **given,
 ) -> Run:
     """The checks of :func:`load_run` on a table already read (its keywords in ``given``); ``ambient`` (a
-    column) is never a default input."""
+    column) is never a default input. ``clock_*``: the log's :data:`~groupfit.readtable.CLOCK_ORIGIN` and
+    :data:`~groupfit.clock_changes.CLOCK_SHIFTS` where ``frame`` is a part of it built anew (``--resample``)."""
     options = LoadOptions(**given)
     time, error = options.time, options.error
     temp_range, error_limit = options.temp_range, options.error_limit
     counted = time in frame.columns and pd.api.types.is_numeric_dtype(frame[time]) and not names_a_unit(time)
     time_values = time_seconds(frame, time, label)
     clock_origin = frame.attrs.get(CLOCK_ORIGIN, clock_origin)
+    clock_shifts = frame.attrs.get(CLOCK_SHIFTS, clock_shifts)
     if np.any(np.diff(time_values) <= 0):  # before check_time advises averaging the readings of each period
         refuse_interleaved(frame, [stamp_groups(time_values)], time=time, label=label)
     time_values, period, spread = clock_of(time_values, label, time, tolerance=period_tolerance)
@@ -414,6 +383,7 @@ def _validated(
         time_name=time,
         notes=notes,
         clock_origin_s=clock_origin,
+        clock_shift_s=None if clock_origin is None else shift_at(clock_shifts, float(time_values[0])),
     )
 
 

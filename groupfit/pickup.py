@@ -153,7 +153,7 @@ def run_picks_up(previous: Run, run: Run) -> bool:
         previous.time[-1],
         run.time[0],
         last_origin_s=previous.clock_origin_s,
-        first_origin_s=run.clock_origin_s,
+        first_origin_s=run.first_clock_origin_s,
     ):
         return False
     return picks_up(*end_row(previous), run)

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from groupfit.clock_changes import through_clock_changes
+from groupfit.clock_changes import CLOCK_SHIFTS, through_clock_changes
 from groupfit.errors import InputError, first_line
 from groupfit.io import note_read
 from groupfit.jsonlog import read_json_log
@@ -453,7 +453,8 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
     """A date-time column (a Parquet or Excel time stamp, or text such as ``2026-03-02 08:00:00``) as the
     seconds since its first row, a duration as its seconds, in place; other columns are left as they are.
     The first row's date-time is kept as ``frame.attrs[CLOCK_ORIGIN]``; a local clock's changes to and from
-    summer time are read through, with a note in ``frame.attrs[CLOCK_NOTES]``."""
+    summer time are read through, with a note in ``frame.attrs[CLOCK_NOTES]`` and where they moved the rows in
+    ``frame.attrs[CLOCK_SHIFTS]``."""
     if column not in frame.columns:
         return
     raw = frame[column]
@@ -474,7 +475,7 @@ def datetimes_to_seconds(frame: pd.DataFrame, column: str, label: str) -> None:
         return
     seconds, origin = clock
     if origin is not None:
-        seconds, origin, note = through_clock_changes(raw, seconds, origin, label, column)
+        seconds, origin, note, frame.attrs[CLOCK_SHIFTS] = through_clock_changes(raw, seconds, origin, label, column)
         frame.attrs[CLOCK_ORIGIN] = float(origin)
         frame.attrs[CLOCK_NOTES] = (note,) if note else ()
     frame[column] = seconds

@@ -12,8 +12,11 @@ rule's state at that file's end, which the entry keeps, when it is not
 (:mod:`groupfit.commands.replay_readings`; ``--fresh``: start afresh all the
 same). A file whose time stamps are dates starts its clock at
 0 (:func:`groupfit.readtable.datetimes_to_seconds`) and keeps the date-time of
-its first row (``clock_origin_s``, seconds since 1970): the next file of a
-logger that rolls its files is told by its date-times. A file whose clock
+its first row (``clock_origin_s``, seconds since 1970, in the clock of its last
+row; ``clock_shift_s``, where a local clock without a UTC offset changed to or
+from summer time, what that moved its first row by): the next file of a
+logger that rolls its files is told by its date-times, its first row's in the
+clock of that row. A file whose clock
 starts again is told by its first row (:mod:`groupfit.pickup`), against the
 recording's last row kept in the entry.
 """
@@ -33,7 +36,7 @@ from groupfit.error_start import ZERO_KEY
 from groupfit.io import file_sha256
 from groupfit.pickup import clock_starts_again, end_row, picks_up
 from groupfit.readtable import CLOCK_ORIGIN
-from groupfit.training_checks import END_STATE, LAST_READINGS, PICKUP_LIMIT, READING_STEPS, RECORDINGS_KEY
+from groupfit.training_checks import CLOCK_SHIFT, END_STATE, LAST_READINGS, PICKUP_LIMIT, READING_STEPS, RECORDINGS_KEY
 
 
 def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str | Path | None = None) -> list[dict]:
@@ -67,6 +70,8 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
         }
         if own[0].clock_origin_s is not None:
             entry[CLOCK_ORIGIN] = float(own[0].clock_origin_s)
+            if own[0].clock_shift_s is not None:
+                entry[CLOCK_SHIFT] = float(own[0].clock_shift_s)
         zero = zero_of(own[-1])  # the part a next file goes on from
         if zero is not None:
             entry[ZERO_KEY] = zero
@@ -81,9 +86,10 @@ def recording_entries(paths: Sequence[Any], runs: Sequence[Run], model_dir: str 
 
 def overlap_note(training: Mapping[str, Any] | None, run: Run) -> str | None:
     """A note when ``run``'s clock starts inside a modelling file's (the same clock origin): the two overlap, and
-    rows the model was fitted on would be scored as a next run's; None otherwise."""
+    rows the model was fitted on would be scored as a next run's; None otherwise. The origins are compared in the
+    clock of each file's first row, so that either may cross a change to or from summer time."""
     for entry in (training or {}).get(RECORDINGS_KEY) or []:
-        if entry.get(CLOCK_ORIGIN) != run.clock_origin_s or "first_time_s" not in entry:
+        if _first_origin(entry) != run.first_clock_origin_s or "first_time_s" not in entry:
             continue
         if entry["first_time_s"] <= float(run.time[0]) < entry["last_time_s"]:
             return (
@@ -97,10 +103,16 @@ def overlap_note(training: Mapping[str, Any] | None, run: Run) -> str | None:
 def _continued_by(entry: Mapping[str, Any], run: Run) -> str | None:
     """How ``run`` continues the recording of ``entry``: "clock", "readings" (its clock starts again and its first
     row picks up where the recording's last left off, :mod:`groupfit.pickup`), or None."""
-    last_origin, first_origin = entry.get(CLOCK_ORIGIN), run.clock_origin_s
+    last_origin, first_origin = entry.get(CLOCK_ORIGIN), run.first_clock_origin_s
     first_time = float(run.time[0])
+    local = CLOCK_SHIFT in entry and run.clock_shift_s is not None
     if clock_runs_on(
-        entry["last_time_s"], entry["period_s"], first_time, last_origin_s=last_origin, first_origin_s=first_origin
+        entry["last_time_s"],
+        entry["period_s"],
+        first_time,
+        last_origin_s=last_origin,
+        first_origin_s=first_origin,
+        local=local,
     ):
         return "clock"
     if any(key not in entry for key in (LAST_READINGS, READING_STEPS, PICKUP_LIMIT)):
@@ -112,6 +124,13 @@ def _continued_by(entry: Mapping[str, Any], run: Run) -> str | None:
     if picks_up(entry[LAST_READINGS], entry[READING_STEPS], entry[PICKUP_LIMIT], run) and not _same_file(entry, run):
         return "readings"
     return None
+
+
+def _first_origin(entry: Mapping[str, Any]) -> float | None:
+    """The date-time a recording's clock counts from, in the clock of its first row (an entry written before the
+    shift was kept: in the clock of its last row)."""
+    origin = entry.get(CLOCK_ORIGIN)
+    return None if origin is None else origin - entry.get(CLOCK_SHIFT, 0.0)
 
 
 def _same_file(entry: Mapping[str, Any], run: Run) -> bool:

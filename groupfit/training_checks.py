@@ -29,6 +29,10 @@ END_STATE = "end_state"
 (:mod:`groupfit.runtime.state`), checked against the rule when it is used."""
 PICKUP_LIMIT = "pickup_limit"
 """A recording's optional key: how far a next file's first row may be from ``last_readings`` to pick up there."""
+CLOCK_SHIFT = "clock_shift_s"
+"""A recording's optional key, beside ``clock_origin_s``, for a file stamped in local wall-clock time without a UTC
+offset: the seconds its clock's changes to and from summer time added to its first row's date-time to put it in
+the clock of its last row (:attr:`groupfit.data.Run.clock_shift_s`; 0 where the clock did not change)."""
 
 
 FAST_KEY = "fast_response"
@@ -87,9 +91,12 @@ def stage_problem(training: Mapping[str, Any], temps: Sequence[str], n_groups: i
 
 
 def _numbers_problem(entry: Mapping[str, Any], where: str) -> str | None:
-    """What is wrong with an entry's optional numbers: its clock's origin and its error's zero."""
+    """What is wrong with an entry's optional numbers: its clock's origin and shift and its error's zero."""
     if "clock_origin_s" in entry and not is_number(entry["clock_origin_s"]):
         return f"{where}.clock_origin_s must be the first row's date-time in seconds since 1970"
+    shift = entry.get(CLOCK_SHIFT)
+    if shift is not None and not (is_number(shift) and "clock_origin_s" in entry and float(shift) % 3600.0 == 0.0):
+        return f"{where}.{CLOCK_SHIFT} must be the whole hours (in seconds) a local clock's changes moved its first row"
     if ZERO_KEY in entry and not is_number(entry[ZERO_KEY]):
         return f"{where}.{ZERO_KEY} must be the error's first reading as logged (µm)"
     return None
