@@ -4,14 +4,13 @@ to or from summer time, wherever the change falls: checked against the same file
 from __future__ import annotations
 
 import json
-import zoneinfo
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from support.clocks import cli, needs_zones
 
-from groupfit.cli import main
 from groupfit.continuation import clock_continues, restamped
 from groupfit.data import load_runs
 from groupfit.errors import InputError
@@ -29,14 +28,7 @@ CUTS = {"before": (60,), "after": (180,), "at": (CHANGE_ROW,)}
 """Where the modelling file ends: before the change (the next file crosses it), after it (the modelling file
 crosses it), and at it (the next file starts with the first row after the change)."""
 
-pytestmark = pytest.mark.skipif(not zoneinfo.available_timezones(), reason="no tz database at hand")
-
-
-def cli(*args) -> int:
-    try:
-        return main([str(a) for a in args])
-    except SystemExit as exc:
-        return int(exc.code)
+pytestmark = needs_zones
 
 
 def split_logs(folder: Path, change: str, cuts: tuple[int, ...]) -> dict[str, list[Path]]:

@@ -4,14 +4,13 @@ the change: checked against the same log stamped with its offsets, and against p
 from __future__ import annotations
 
 import json
-import zoneinfo
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from support.clocks import cli, needs_zones
 
-from groupfit.cli import main
 from groupfit.clock_changes import read_through, summer_time_changes
 from groupfit.data import load_runs
 
@@ -25,14 +24,7 @@ CHANGES = [
     ("Australia/Sydney", "2026-10-03 15:00:00", 1),  # 02:00 ahead to 03:00
 ]
 
-pytestmark = pytest.mark.skipif(not zoneinfo.available_timezones(), reason="no tz database at hand")
-
-
-def cli(*args) -> int:
-    try:
-        return main([str(a) for a in args])
-    except SystemExit as exc:
-        return int(exc.code)
+pytestmark = needs_zones
 
 
 def stamped_logs(tmp_path: Path, zone: str, utc_start: str, rows: int = 120) -> tuple[Path, Path, int]:
