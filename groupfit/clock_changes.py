@@ -104,6 +104,9 @@ def _candidate_steps(step: np.ndarray, period: float) -> list[tuple[int, int]]:
     went ahead) or longer (back), they come to a period, or up to :data:`MISSED_PERIODS` more where
     samples were missed there, to 2 % of the period, the stamps' rounding
     (:func:`~groupfit.timestamps.stamp_resolution`) or the most the clock's other steps stray from the period."""
+    near_an_hour = np.abs(step) > 0.5 * 3600.0
+    if not near_an_hour.any():
+        return []
     ordinary = step[np.abs(step - period) < 0.5 * period]
     jitter = float(np.max(np.abs(ordinary - period))) if ordinary.size else 0.0
     resolution = stamp_resolution(np.concatenate([[0.0], np.cumsum(np.abs(step))]), period)
@@ -113,7 +116,7 @@ def _candidate_steps(step: np.ndarray, period: float) -> list[tuple[int, int]]:
         corrected = step - 3600.0 * hours
         periods = np.round(corrected / period)
         fits = (periods >= 1) & (periods <= MISSED_PERIODS + 1) & (np.abs(corrected - periods * period) <= spare)
-        found += [(int(i), hours) for i in np.flatnonzero(fits & (np.abs(step) > 0.5 * 3600.0))]
+        found += [(int(i), hours) for i in np.flatnonzero(fits & near_an_hour)]
     return found
 
 

@@ -253,13 +253,20 @@ TEMP_RANGE_OPTION = "--range-temp=LOW,HIGH (or [data] temp_range)"
 ERROR_RANGE_OPTION = "--range-error MAX (or [data] error_limit)"
 
 
+def outside_bounds(values: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+    """The rows (0-based) of the finite readings outside ``bounds``."""
+    low, high = bounds
+    values = np.asarray(values, dtype=float)
+    return np.flatnonzero(np.isfinite(values) & ((values < low) | (values > high)))
+
+
 def check_range(
     values: np.ndarray, column: str, label: str, bounds: tuple[float, float], unit: str, option: str
 ) -> None:
     """Refuse the first finite reading outside ``bounds`` (a physically impossible value), naming row and column;
     a reading that is not finite is the loader's to refuse or keep (a validation run keeps it as a fault)."""
     low, high = bounds
-    outside = np.flatnonzero(np.isfinite(values) & ((values < low) | (values > high)))
+    outside = outside_bounds(values, bounds)
     if outside.size:
         row = int(outside[0])
         if option == ERROR_RANGE_OPTION:
@@ -478,6 +485,7 @@ __all__ = [
     "TEMP_RANGE_C",
     "LoadOptions",
     "check_range",
+    "outside_bounds",
     "error_values",
     "implausible_as_missed",
     "numeric_column",

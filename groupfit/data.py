@@ -121,6 +121,7 @@ def load_run(
     check_ranges: bool | None = None,
     encoding: str | None = None,
     sparse: tuple[str, ...] = (),
+    temps_as_faults: bool = False,
 ) -> Run:
     """Read and validate a run.
 
@@ -185,6 +186,9 @@ def load_run(
         The text's encoding (``--encoding``); by default it is told from the bytes (:mod:`groupfit.textencoding`).
     sparse : tuple of str
         Columns read on some rows only (a probe's readings): ``resample`` fills no period of theirs.
+    temps_as_faults : bool
+        A validation run, read as ``replay`` reads a next run: a temperature outside ``temp_range`` is kept, a
+        fault of the run-time rule, as one that is not a number is.
 
     Raises
     ------
@@ -194,6 +198,7 @@ def load_run(
     options = dict(temps=temps, time=time, error=error, require_error=require_error, allow_nonfinite=allow_nonfinite)
     options.update(missing_error=missing_error, temp_range=temp_range, error_limit=error_limit)
     options.update(drop_glitches=drop_glitches, check_ranges=check_ranges, encoding=encoding, sparse=tuple(sparse))
+    options.update(temps_as_faults=temps_as_faults)
     defaults = dict(time_is_default=time_is_default, error_is_default=error_is_default)
     runs = load_runs(source, name=name, period_tolerance=period_tolerance, resample=resample, **defaults, **options)
     if len(runs) > 1:

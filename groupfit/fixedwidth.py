@@ -40,11 +40,10 @@ import numpy as np
 import pandas as pd
 
 from groupfit.flushnames import LEFT, RIGHT, flush_side
-from groupfit.tablehead import units_of_row
+from groupfit.tablehead import RULER, units_of_row
 
 WORD = re.compile(r"\S+")
 DIGIT = re.compile(r"\d")
-RULER = re.compile(r"[-=_~*+|\s]+")
 CHUNK_ROWS = 10_000
 """Rows whose filled positions are found at once (bounds the memory a long log takes)."""
 
@@ -210,13 +209,13 @@ def _placed_names(header: str, spans: list[Span], numbers: list[str]) -> tuple[l
     placed = _placed_words(header, spans)
     if placed is None:
         return None
-    names, extents = [], []
+    names = []
     for column in range(len(spans)):
         words = [word for word, at in placed if at == column]
         if any(later.start() - earlier.end() != 1 for earlier, later in zip(words, words[1:])):
             return None  # two names over one column
         names.append(header[words[0].start() : words[-1].end()] if words else "")
-        extents.append((words[0].start(), words[-1].end()) if words else None)
+    extents = _word_extents([word for word, _ in placed], [at for _, at in placed], len(spans))
     spans, names = _with_unnamed_parts_joined(spans, names, flush_side(extents, spans))
     if not names or not all(names[1:]):
         return None

@@ -26,7 +26,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from groupfit.column_values import TEMP_RANGE_C
+from groupfit.column_values import TEMP_RANGE_C, outside_bounds
 from groupfit.data import numeric_column
 from groupfit.default_columns import SPEED_NAME, ambient_columns
 from groupfit.errors import InputError
@@ -144,7 +144,7 @@ def refuse_implausible_reference(values: np.ndarray, reference: str, source) -> 
     """Refuse a reading of a modelling run's reference column outside the plausible temperatures (a sensor's
     fault code, -999 °C, on more rows than a glitch), naming its row: the inputs taken against it would carry it."""
     low, high = TEMP_RANGE_C
-    outside = np.flatnonzero(np.isfinite(values) & ((values < low) | (values > high)))
+    outside = outside_bounds(values, TEMP_RANGE_C)
     if outside.size:
         raise InputError(
             f"{source}: row {outside[0] + 1}, column '{reference}' = {values[outside[0]]:g} °C ({outside.size} row(s) "

@@ -36,6 +36,8 @@ UNIT = re.compile(
 )
 """A unit a logger writes in a row under its header (bracketed or not; an empty ``[]`` or ``-`` too)."""
 BRACKETS = "[]()"
+RULER = re.compile(r"[-=_~*+|\s]+")
+"""A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 VALUE = re.compile(r"[-+]?\d[\d.,:/-]*")
 """A field that is a value, not a name: a number, a date or a time of day (``12345``, ``2026-03-02``, ``08:00``)."""
 
@@ -84,4 +86,4 @@ def without_numbered_lines(lines: Sequence[Line]) -> list[Line]:
     return [*named, *lines[-1:]]
 
 
-__all__ = ["below_last_empty_line", "is_units_row", "units_of_row", "without_numbered_lines"]
+__all__ = ["RULER", "below_last_empty_line", "is_units_row", "units_of_row", "without_numbered_lines"]

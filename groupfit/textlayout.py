@@ -19,10 +19,11 @@ should not have to rewrite one before groupfit reads it:
   message on a row of the table's width (``;Logging paused;;;``), are one body;
 * the header: of the lines of text directly above the body with about as many
   fields (one more or fewer: a separator closing every data row), below the
-  last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``, an empty
-  line) and but for ``#`` comments and lines with a value in them, the topmost
-  that names the most columns; else the line of text just above the body; a
-  row of units right above the body is not the header (:mod:`groupfit.tablehead`).
+  last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``; in a table
+  split at spaces, not double spaced, an empty line too, and lines with a
+  value in them are passed over) and but for ``#`` comments, the topmost that
+  names the most columns; else the line of text just above the body; a row of
+  units right above the body is not the header (:mod:`groupfit.tablehead`).
   Blank rows and rulers between the header and the body are passed over. What
   lies above the header is a preamble and is skipped (a logger's name,
   ``Start;2024-03-04 08:00``, a LabVIEW
@@ -72,7 +73,7 @@ from groupfit.numbercells import (
     without_cell_units,
     without_thousands_separators,
 )
-from groupfit.tablehead import below_last_empty_line, is_units_row, without_numbered_lines
+from groupfit.tablehead import RULER, below_last_empty_line, is_units_row, without_numbered_lines
 from groupfit.textencoding import decode
 
 DELIMITERS = (",", ";", "\t")
@@ -90,8 +91,6 @@ STRAY_ROWS = 2
 """Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
 WORDS = re.compile(r"[^\W\d_]")
 DIGIT = re.compile(r"\d")
-RULER = re.compile(r"[-=_~*+|\s]+")
-"""A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 STATISTIC = re.compile(
     r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
     r"count|median|range|mittelwert|mittel|summe|anzahl|std\.?\s*abw|standardabweichung|spanne|streuung|varianz|"

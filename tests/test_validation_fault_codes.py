@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from support.validation import assert_judged_as_replayed, run_json
 
 from groupfit.cli import main
 from groupfit.data import TEMP_RANGE_C
@@ -35,10 +36,8 @@ FAULTY_ROWS = slice(200, 209)  # ten rows, longer than the rule's hold
 SPIKE_ROWS = slice(300, 301)  # two rows, within the rule's hold: held, never in fault
 
 
-def run_json(capsys, *args) -> dict:
-    capsys.readouterr()
-    assert main([str(a) for a in [*args, "--json", "-"]]) == 0
-    return json.loads(capsys.readouterr().out)
+def hold_of(model: Path) -> int:
+    return json.loads(model.read_text())["switching"]["hold_samples"]
 
 
 def written(tmp: Path, name: str, change) -> Path:
@@ -190,12 +189,9 @@ def test_diagnose_judges_on_a_validation_run_with_a_fault_code_as_replay_scores_
     report = diagnosed["report"]
     augmented = diagnosed["out"] / "model_augmented.json"
     assert report["added"] and report["model"] == str(augmented)
-    for when, path in (("before", diagnosed["model"]), ("after", augmented)):
-        replayed = run_json(capsys, "replay", path, "--data", diagnosed["run"])
-        hold = json.loads(path.read_text())["switching"]["hold_samples"]
-        assert replayed["faults"]["sensor_fault_samples"] == 20 - hold
-        assert report[when]["validate"]["rms_um"] == pytest.approx(replayed["rms_um"], rel=0, abs=1e-6)
-        assert report[when]["validate"]["max_um"] == pytest.approx(replayed["max_um"], rel=0, abs=1e-6)
+    models = {"before": diagnosed["model"], "after": augmented}
+    assert_judged_as_replayed(capsys, report, models, diagnosed["run"], lambda path: 20 - hold_of(path))
+    hold = hold_of(augmented)
     note = next(n for n in report["notes"] if n.startswith("code: "))
     assert "T1 -999..-999 on 20 sample(s)" in note
     assert f"{20 - hold} sample(s) in sensor fault are not scored" in note

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from support.validation import assert_judged_as_replayed, run_json
 
 from groupfit.cli import main
 
@@ -36,12 +37,6 @@ def with_dropouts(source: Path, target: Path, column: str, first: int, count: in
     frame.loc[first + count + 99 : first + count + 100, "T_amb"] = np.nan
     frame.to_csv(target, index=False)
     return target
-
-
-def run_json(capsys, *args) -> dict:
-    capsys.readouterr()
-    assert main([str(a) for a in [*args, "--json", "-"]]) == 0
-    return json.loads(capsys.readouterr().out)
 
 
 @pytest.fixture(scope="module")
@@ -139,11 +134,8 @@ def test_diagnose_judges_on_a_validation_run_with_a_dropout_as_replay_scores_it(
     assert report["added"], "the speed effect is found"
     augmented = diagnosed["out"] / "model_augmented.json"
     assert report["model"] == str(augmented)
-    for when, path in (("before", diagnosed["model"]), ("after", augmented)):
-        replayed = run_json(capsys, "replay", path, "--data", diagnosed["faulty"])
-        assert replayed["faults"]["sensor_fault_samples"] == 20 - HOLD_SAMPLES
-        assert report[when]["validate"]["rms_um"] == pytest.approx(replayed["rms_um"], rel=0, abs=1e-6)
-        assert report[when]["validate"]["max_um"] == pytest.approx(replayed["max_um"], rel=0, abs=1e-6)
+    models = {"before": diagnosed["model"], "after": augmented}
+    assert_judged_as_replayed(capsys, report, models, diagnosed["faulty"], lambda path: 20 - HOLD_SAMPLES)
     note = next(n for n in report["notes"] if n.startswith("dropout: "))
     assert "T1 not finite (NaN or ±inf) on 20 sample(s)" in note
     assert f"{20 - HOLD_SAMPLES} sample(s) in sensor fault are not scored" in note

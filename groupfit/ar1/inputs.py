@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from groupfit.column_values import TEMP_RANGE_C
+from groupfit.column_values import TEMP_RANGE_C, outside_bounds
 from groupfit.data import Run, numeric_column
 from groupfit.errors import InputError
 from groupfit.reference import column_role
@@ -117,7 +117,7 @@ def temperature_on_every_row(run: Run, column: str) -> np.ndarray:
     -999 °C, which a validation run keeps for the run-time rule of the other models to hold)."""
     values = read_on_every_row(run, column)
     low, high = TEMP_RANGE_C
-    outside = np.flatnonzero((values < low) | (values > high))
+    outside = outside_bounds(values, TEMP_RANGE_C)
     if outside.size:
         raise InputError(
             f"{run.source}: row {outside[0] + 1}, column '{column}' = {values[outside[0]]:g} °C, outside the plausible "

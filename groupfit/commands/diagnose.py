@@ -15,7 +15,7 @@ from groupfit import running
 from groupfit.commands import common, option_values
 from groupfit.commands.recalibrate_option import add_recalibrate_option, recalibrated
 from groupfit.commands.replay_readings import with_end_states
-from groupfit.data import PERIOD_TOLERANCE, Run, load_run, load_runs, loading_notes
+from groupfit.data import PERIOD_TOLERANCE, Run, load_run, loading_notes
 from groupfit.data_options import add_encoding_option
 from groupfit.diagnose import diagnose
 from groupfit.diagnose.candidates import HEAT_EXPONENT
@@ -179,9 +179,16 @@ def load_measured(path: str, model: dict[str, Any], time: str, *, next_run: bool
     kept, as replay keeps them, faults of the run-time rule) with the model's measured inputs."""
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
-    options = dict(temps=measured, time=time, error=model["error"], allow_nonfinite=True, check_ranges=True, **clock)
-    runs = load_runs(path, **options, temps_as_faults=True) if next_run else []
-    run = runs[0] if len(runs) == 1 else load_run(path, **options)  # a log split at a gap: load_run names it
+    run = load_run(
+        path,
+        temps=measured,
+        time=time,
+        error=model["error"],
+        allow_nonfinite=True,
+        check_ranges=True,
+        temps_as_faults=next_run,
+        **clock,
+    )
     period = float(model["sampling_period_s"])
     if abs(run.period - period) > PERIOD_TOLERANCE * period:
         raise InputError(
