@@ -26,10 +26,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from groupfit.column_values import TEMP_RANGE_C, outside_bounds
 from groupfit.data import numeric_column
 from groupfit.default_columns import SPEED_NAME, ambient_columns
 from groupfit.errors import InputError
+from groupfit.fault_codes import refuse_implausible_temperature
 
 START = "start"
 """The reference that takes every input relative to its own first reading."""
@@ -134,23 +134,11 @@ def with_reference(run, reference: str | None, *, faults: bool = False):
         values = numeric_column(
             run.frame, reference, run.source, allow_nonfinite=faults or bool(np.isnan(run.temps).any())
         )
-        if not faults:
-            refuse_implausible_reference(values, reference, run.source)
+        if not faults:  # a modelling run: the inputs taken against it would carry a fault code
+            what = "it is the reference the inputs are taken against: fix or remove those rows, or take the inputs "
+            refuse_implausible_temperature(values, reference, run.source, what + "absolute with --reference none")
     temps = referenced(run.temps, reference, run.frame, run.source)
     return dataclasses.replace(run, temps=temps, reference=reference)
-
-
-def refuse_implausible_reference(values: np.ndarray, reference: str, source) -> None:
-    """Refuse a reading of a modelling run's reference column outside the plausible temperatures (a sensor's
-    fault code, -999 °C, on more rows than a glitch), naming its row: the inputs taken against it would carry it."""
-    low, high = TEMP_RANGE_C
-    outside = outside_bounds(values, TEMP_RANGE_C)
-    if outside.size:
-        raise InputError(
-            f"{source}: row {outside[0] + 1}, column '{reference}' = {values[outside[0]]:g} °C ({outside.size} row(s) "
-            f"outside the plausible {low:g} to {high:g} °C: a sensor's fault code?) is the reference the inputs are "
-            "taken against; fix or remove those rows, or take the inputs absolute with --reference none"
-        )
 
 
 def column_role(run, column: str) -> str | None:

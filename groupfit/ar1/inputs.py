@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from groupfit.column_values import TEMP_RANGE_C, outside_bounds
 from groupfit.data import Run, numeric_column
 from groupfit.errors import InputError
+from groupfit.fault_codes import refuse_implausible_temperature
 from groupfit.reference import column_role
 from groupfit.resample import GAP_PERIODS
 from groupfit.setting_levels import is_setting
@@ -116,14 +116,8 @@ def temperature_on_every_row(run: Run, column: str) -> np.ndarray:
     naming the first row without a reading or with one outside the plausible range (a sensor's fault code,
     -999 °C, which a validation run keeps for the run-time rule of the other models to hold)."""
     values = read_on_every_row(run, column)
-    low, high = TEMP_RANGE_C
-    outside = outside_bounds(values, TEMP_RANGE_C)
-    if outside.size:
-        raise InputError(
-            f"{run.source}: row {outside[0] + 1}, column '{column}' = {values[outside[0]]:g} °C, outside the plausible "
-            f"{low:g} to {high:g} °C (a sensor's fault code?); the AR(1) model reads it on every row: fix that row, "
-            f"{COMPARE_TODO}"
-        )
+    what = f"the AR(1) model reads it on every row: fix those rows, {COMPARE_TODO}"
+    refuse_implausible_temperature(values, column, str(run.source), what)
     return values
 
 
