@@ -9,19 +9,23 @@ readings sit in their middle: their edges lie half a period away from the
 circular mean of the readings' phases (a log whose readings come in bursts
 keeps each burst in one bin, whatever the clock's offset).
 
-A period without a reading is an *empty* bin. A run of at most
-:data:`GAP_PERIODS` empty bins is filled by linear interpolation between the
-bins around it (a missed cycle); a longer run is a *gap*: the log is split
-there into separate runs, never bridged by made-up samples. A column read in
-none of the rows of a period (an empty cell: one sensor missed a reading) is
-interpolated in that period the same way when it misses at most
-:data:`GAP_PERIODS` periods in a row between two readings; a longer silence
-stays empty, and the loader names its first row. At either end of a stretch,
-the periods before a column's first reading or after its last (records of
-several kinds that start and stop at other times: a temperature record every
-20 s among probe readings every 2 s) are dropped when there are at most
-:data:`GAP_PERIODS` of them; the measured columns, which may be read on some
-periods alone, do not count.
+A period without a reading is an *empty* bin. Missed readings are counted
+in the log's own cycles: one cycle is one period, or, for a period shorter
+than the log's (a 60 s log resampled to 20 s), the log's typical step between
+occupied periods. A run of empty bins that misses at most
+:data:`GAP_PERIODS` of the log's cycles is filled by linear interpolation
+between the bins around it (a missed cycle); a longer run is a *gap*: the log
+is split there into separate runs, never bridged by made-up samples. A column
+read in none of the rows of a period (an empty cell: one sensor missed a
+reading) is interpolated the same way when it misses at most
+:data:`GAP_PERIODS` periods with readings in a row between two readings of
+its own (the empty bins among them with it); a longer silence stays empty,
+and the loader names its first row. At either end of a stretch, the periods
+before a column's first reading or after its last (records of several kinds
+that start and stop at other times: a temperature record every 20 s among
+probe readings every 2 s) are dropped when at most :data:`GAP_PERIODS` of
+them hold readings; the measured columns, which may be read on some periods
+alone, do not count.
 """
 
 from __future__ import annotations
@@ -73,7 +77,7 @@ class Resampled:
             where = ", ".join(f"{a:g} s to {b:g} s" for a, b in self.gaps)
             text += (
                 f"; split into {len(self.pieces)} runs at {len(self.gaps)} gap(s) of more than {GAP_PERIODS} "
-                f"periods ({where})"
+                f"missed cycles ({where})"
             )
         return text
 
@@ -153,12 +157,12 @@ def resample_frame(
     occupied = counts > 0
     pieces, gaps, empty, unread, trimmed = [], [], 0, 0, 0
     first = 0
-    for stop in _stretch_ends(occupied):
+    for stop in _stretch_ends(occupied, _gap_bins(occupied)):
         piece = pd.DataFrame({time: centres[first:stop], **{c: v[first:stop] for c, v in table.items()}})
         filled, missed = _interpolate_empty(piece, occupied[first:stop], time, measured)
         empty += filled
         unread += missed
-        piece, dropped = _without_ragged_ends(piece, (time, *measured))
+        piece, dropped = _without_ragged_ends(piece, occupied[first:stop], (time, *measured))
         trimmed += dropped
         pieces.append(piece)
         following = _next_occupied(occupied, stop)
@@ -181,27 +185,44 @@ def _refuse_too_many_rows(stamps: np.ndarray, period_s: float, label: str) -> No
         )
 
 
-def _without_ragged_ends(piece: pd.DataFrame, exempt: tuple[str, ...]) -> tuple[pd.DataFrame, int]:
+def _without_ragged_ends(
+    piece: pd.DataFrame, occupied: np.ndarray, exempt: tuple[str, ...]
+) -> tuple[pd.DataFrame, int]:
     """``piece`` without the periods at its ends that come before a column's first reading or after its last,
-    where there are at most :data:`GAP_PERIODS` of them (a longer silence is left for the loader to name), and
-    how many were dropped. The ``exempt`` columns (the time, the measured error, which may be read on some
+    where at most :data:`GAP_PERIODS` of them hold readings (a longer silence is left for the loader to name),
+    and how many were dropped. The ``exempt`` columns (the time, the measured error, which may be read on some
     periods alone) do not count."""
     n = len(piece)
     known = np.isfinite(piece.drop(columns=[c for c in exempt if c in piece.columns]).to_numpy(dtype=float))
     read = known.any(axis=0)
     if n <= 2 * GAP_PERIODS + 1 or not read.any():
         return piece, 0
-    leads = np.argmax(known[:, read], axis=0)
-    tails = np.argmax(known[::-1, read], axis=0)
-    lead = int(max((k for k in leads if k <= GAP_PERIODS), default=0))
-    tail = int(max((k for k in tails if k <= GAP_PERIODS), default=0))
+    lead = _silent_end(known[:, read], occupied)
+    tail = _silent_end(known[::-1, read], occupied[::-1])
     if not lead + tail:
         return piece, 0
     return piece.iloc[lead : n - tail].reset_index(drop=True), lead + tail
 
 
-def _stretch_ends(occupied: np.ndarray) -> list[int]:
-    """End (exclusive) of every stretch of bins between gaps of more than GAP_PERIODS empty bins."""
+def _silent_end(known: np.ndarray, occupied: np.ndarray) -> int:
+    """The most leading bins before a column's first reading among the columns whose silence there spans at
+    most :data:`GAP_PERIODS` occupied bins."""
+    before = np.concatenate([[0], np.cumsum(occupied)])
+    leads = np.argmax(known, axis=0)
+    return int(max((k for k in leads if before[k] <= GAP_PERIODS), default=0))
+
+
+def _gap_bins(occupied: np.ndarray) -> int:
+    """The most empty bins in a row that are still missed cycles: :data:`GAP_PERIODS` of the log's own cycles,
+    whose length in bins is the typical step between occupied bins (1 unless the period is shorter than the
+    log's)."""
+    steps = np.diff(np.flatnonzero(occupied))
+    cycle = max(1, int(round(float(np.median(steps))))) if steps.size else 1
+    return (GAP_PERIODS + 1) * cycle - 1
+
+
+def _stretch_ends(occupied: np.ndarray, gap_bins: int) -> list[int]:
+    """End (exclusive) of every stretch of bins between gaps of more than ``gap_bins`` empty bins."""
     ends = []
     k, n = 0, len(occupied)
     while k < n:
@@ -211,7 +232,7 @@ def _stretch_ends(occupied: np.ndarray) -> list[int]:
         run_end = k
         while run_end < n and not occupied[run_end]:
             run_end += 1
-        if run_end - k > GAP_PERIODS and run_end < n:
+        if run_end - k > gap_bins and run_end < n:
             ends.append(k)
         k = run_end
     last = int(np.flatnonzero(occupied)[-1]) + 1
@@ -226,13 +247,13 @@ def _next_occupied(occupied: np.ndarray, stop: int) -> int | None:
 def _interpolate_empty(
     piece: pd.DataFrame, occupied: np.ndarray, time: str, measured: tuple[str, ...]
 ) -> tuple[int, int]:
-    """Fill the empty bins of one stretch linearly from its occupied ones, and in every column the runs of at
-    most :data:`GAP_PERIODS` bins without a reading of it (a missed reading of one sensor); longer runs stay
-    empty; the ``measured`` columns get the empty bins filled (a missed cycle) only between two readings of
-    theirs in the bins on either side, and never a missed reading (a sparse probe column is not made up).
-    Returns the empty bins and the missed readings filled."""
-    missing = np.flatnonzero(~occupied)
+    """Fill, in every column, the runs of bins without a reading of it that lie between two of its readings and
+    span at most :data:`GAP_PERIODS` occupied bins (a missed reading of one sensor, with the empty bins around
+    it); longer runs stay empty. The ``measured`` columns get only runs of empty bins filled (a missed cycle),
+    never a missed reading (a sparse probe column is not made up). Returns the empty bins of the stretch and
+    the missed readings filled."""
     t = piece[time].to_numpy()
+    before = np.concatenate([[0], np.cumsum(occupied)])
     missed = 0
     for column in piece.columns:
         if column == time:
@@ -240,28 +261,13 @@ def _interpolate_empty(
         values = piece[column].to_numpy(dtype=float).copy()
         known = occupied & np.isfinite(values)
         if known.sum() >= 2:
-            fill = _between_readings(missing, known) if column in measured else missing
+            most = 0 if column in measured else GAP_PERIODS
+            fill = _inner_runs(~known, lambda a, b, most=most: before[b] - before[a] <= most)
             values[fill] = np.interp(t[fill], t[known], values[known])
             if column not in measured:
-                unread = _short_runs(occupied & ~np.isfinite(values))
-                values[unread] = np.interp(t[unread], t[known], values[known])
-                missed += int(unread.size)
+                missed += int(occupied[fill].sum())
         piece[column] = values
-    return int(missing.size), missed
-
-
-def _between_readings(missing: np.ndarray, known: np.ndarray) -> np.ndarray:
-    """The ``missing`` bins whose run of missing bins has a ``known`` reading in the bin just before it and in
-    the bin just after it."""
-    gap = np.zeros(len(known), dtype=bool)
-    gap[missing] = True
-    return _inner_runs(gap, lambda a, b: bool(known[a - 1] and known[b]))
-
-
-def _short_runs(flags: np.ndarray) -> np.ndarray:
-    """Indices of the flagged entries in runs of at most :data:`GAP_PERIODS` that have an entry unflagged on
-    both sides (a run at either end is not between two readings)."""
-    return _inner_runs(flags, lambda a, b: b - a <= GAP_PERIODS)
+    return int((~occupied).sum()), missed
 
 
 def _inner_runs(flags: np.ndarray, keep) -> np.ndarray:
