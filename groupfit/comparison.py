@@ -329,7 +329,7 @@ def compare_models(
                 preds, files, whole, whole.n_samples - run.n_samples, band
             )
             preds, held = clamped(preds, clamps, run.name)
-            run_notes += faults + held + (held_heat_notes(run, settings) if ar1 is not None else [])
+            run_notes += faults + held + (held_heat_notes(run, settings, preds["ar1"]) if ar1 is not None else [])
         predictions[run.name] = preds
         rows += scored_rows(run, preds, grouped, changes if is_modelling else None, fit_model)
 

@@ -104,16 +104,20 @@ def ar1_prediction(ar1: AR1Model, run: Run, modelling: Run, settings, *, next_ru
     return ar1.predict(inputs, initial_error=initial, rise_ratio=rise_ratio, held=held)
 
 
-def held_heat_notes(run: Run, settings) -> list[str]:
+def held_heat_notes(run: Run, settings, prediction: np.ndarray) -> list[str]:
     """The note on a validation run whose heat reading is missed on some rows (empty, NaN or ±inf): the AR(1)
-    routine holds its state there; none when it is read on every row."""
-    missed = int(np.sum(~np.isfinite(numeric_column(run.frame, settings.heat, str(run.source), allow_nonfinite=True))))
-    if not missed:
+    routine holds its state there, and of those rows the ones with a measured error and a ``prediction`` (the
+    AR(1) row's, as scored) are scored on the held state; none when the heat is read on every row."""
+    heat = numeric_column(run.frame, settings.heat, str(run.source), allow_nonfinite=True)
+    missed = ~np.isfinite(heat)
+    if not missed.any():
         return []
+    scored = int(np.sum(missed & np.isfinite(run.error - prediction)))
     return [
-        f"{run.name}: AR(1) heat column '{settings.heat}': {missed} sample(s) without a reading (empty, NaN or ±inf): "
-        "the AR(1) routine holds its state on such a reading (no step), as replay of an AR(1) model file does; "
-        f"those {missed} sample(s) are scored on the held state"
+        f"{run.name}: AR(1) heat column '{settings.heat}': {int(missed.sum())} sample(s) without a reading (empty, "
+        "NaN or ±inf): the AR(1) routine holds its state on such a reading (no step), as replay of an AR(1) model "
+        f"file does; {scored} of those sample(s) are scored on the held state"
+        + ("" if scored == missed.sum() else " (the others have no measured error)")
     ]
 
 

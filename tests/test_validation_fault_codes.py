@@ -55,6 +55,17 @@ def set_rows(column: str, rows: slice, value):
     return change
 
 
+def both(*changes):
+    def change(frame: pd.DataFrame) -> None:
+        for one in changes:
+            one(frame)
+
+    return change
+
+
+UNMEASURED = set_rows("error_um", slice(FAULTY_ROWS.start, FAULTY_ROWS.start + 4), np.nan)  # 5 of the 10 rows
+
+
 def row_of(result: dict, model: str, run: str) -> dict:
     return next(r for r in result["rows"] if r["model"] == model and r["run"] == run)
 
@@ -91,6 +102,7 @@ def faulty_runs(tmp_path_factory, models) -> dict[str, Path]:
         "reference": written(tmp, "reference", set_rows("T_amb", FAULTY_ROWS, -999.0)),  # the inputs' reference
         "unheated": written(tmp, "unheated", set_rows("speed_rpm", FAULTY_ROWS, np.nan)),
         "infinite": written(tmp, "infinite", set_rows("speed_rpm", SPIKE_ROWS, np.inf)),
+        "unmeasured": written(tmp, "unmeasured", both(set_rows("speed_rpm", FAULTY_ROWS, np.nan), UNMEASURED)),
     }
 
 
@@ -142,8 +154,18 @@ def test_compare_holds_the_ar1_state_on_a_missed_heat_reading_as_its_routine_doe
     for model in ("mlr", "fit"):
         assert row_of(compared, model, run)["rms_um"] == row_of(compared, model, "validation_timing")["rms_um"]
     note = next(note for note in compared["notes"] if note.startswith(f"{run}: AR(1) heat column 'speed_rpm'"))
-    assert f"those {n} sample(s) are scored on the held state" in note
+    assert f"{n} of those sample(s) are scored on the held state" in note and "the others" not in note
     assert f"'speed_rpm': {n} sample(s) without a reading" in note
+
+
+def test_the_held_heat_note_counts_only_the_samples_it_scores(compared, models, faulty_runs, capsys):
+    """Ten rows without a heat reading, five of them without a measured error: five are scored on the held
+    state (the note said ten), and the AR(1) row is still replay's."""
+    note = next(n for n in compared["notes"] if n.startswith("unmeasured: AR(1) heat column 'speed_rpm'"))
+    assert "'speed_rpm': 10 sample(s) without a reading" in note
+    assert "5 of those sample(s) are scored on the held state (the others have no measured error)" in note
+    replayed = run_json(capsys, "replay", models["ar1"], "--data", faulty_runs["unmeasured"])
+    assert row_of(compared, "ar1", "unmeasured")["rms_um"] == pytest.approx(replayed["rms_um"], rel=0, abs=1e-6)
 
 
 def test_a_heat_column_empty_throughout_a_validation_run_is_refused(tmp_path, capsys):

@@ -9,16 +9,11 @@ import numpy as np
 from groupfit.clamped_scores import within_compensation_clamp
 from groupfit.data import Run
 from groupfit.errors import InputError
-from groupfit.features import Feature
 from groupfit.model import ModelFile
 from groupfit.rule_faults import has_faulty_readings, replayed_prediction
 
 LiveRule = Callable[[ModelFile, np.ndarray], np.ndarray]
 ModelLike = ModelFile | Mapping[str, Any]
-
-
-def derived_features(model: ModelLike) -> list[Feature]:
-    return list(ModelFile.coerce(model).derived_inputs or ())
 
 
 def model_inputs(model: ModelLike, run: Run) -> np.ndarray:
