@@ -13,8 +13,8 @@ from groupfit.errors import InputError
 from groupfit.grouping import (
     DEFAULT_SOFT_OFFSET,
     DEFAULT_SPACING,
-    MAX_SPACING,
     Constraints,
+    check_spacing,
     hard_groups,
     serving_group_index,
     shared_fit,
@@ -432,10 +432,7 @@ class GroupedRegressor(RegressorMixin, BaseEstimator):
             raise InputError(f"search {self.search!r}: choose one of {', '.join(SEARCHES)}")
         if int(self.p) != self.p or self.p < 0:
             raise InputError(f"p = {self.p!r}: the number of breaks must be a whole number ≥ 0")
-        if int(self.n) != self.n or self.n < 0:
-            raise InputError(f"n = {self.n!r}: the soft offset must be a whole number ≥ 0")
-        if not (np.isfinite(self.c) and 0 <= self.c <= MAX_SPACING):
-            raise InputError(f"c = {self.c!r}: the spacing coefficient must be a number from 0 to {MAX_SPACING:g}")
+        check_spacing(self.n, self.c)
         if check_ridge_alpha(self.ridge_alpha) > 0 and (self.p != 0 or self.fixed_breaks):
             raise InputError(
                 f"ridge alpha {self.ridge_alpha:g} with p = {self.p}: the ridge penalty is for one global model "
