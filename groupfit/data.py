@@ -31,12 +31,8 @@ from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import numeric_column as numeric_column
 from groupfit.columns import aligned_inputs
-from groupfit.default_columns import (
-    DEFAULT_ERROR,
-    DEFAULT_TIME,
-    found_error_column,
-    found_time_column,
-)
+from groupfit.date_time_columns import found_stamp_column
+from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, found_error_column
 from groupfit.default_columns import length_unit as length_unit
 from groupfit.error_level import error_unit_note
 from groupfit.error_scale import with_scaled_error
@@ -227,7 +223,7 @@ def load_runs(
     """
     frame, run_name, label = read_table(source, name, options.pop("encoding", None))
     frame, stray_notes, left_out = without_stray_rows(frame, label)
-    time, time_note = found_time_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
+    time, time_note = found_stamp_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
     lengths, units_notes = read_in_row_units(frame, time, label)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     millis_note = with_milliseconds(frame, time, label)

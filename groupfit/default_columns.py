@@ -7,8 +7,9 @@ the role is taken, with a note naming it:
 
 * the time: a name such as ``Timestamp``, ``Date/Time``, ``Time``, ``Zeit
   [min]``, ``elapsed_h`` or ``t_s`` (:func:`groupfit.timestamps.time_like_columns`);
-  of several, the first whose values increase from most rows to the next (of
-  a ``Date`` and a ``Time`` column, the time of day);
+  of several, the first whose values increase from most rows to the next (a
+  ``Date`` column and a ``Time`` of day beside it are read as one stamp by
+  :mod:`groupfit.date_time_columns`);
 * the thermal error: the one column named as an error, a deviation, a
   displacement or a drift (of an axis: ``Z drift``), or in µm (``dZ_um``,
   ``Abweichung [µm]``); with

@@ -358,7 +358,7 @@ def _readings(text: pd.Series, first: str, last: str, name: str, label: str):
         yield _since_first(stamps), stamps.iloc[0].timestamp()
         return
     for form in FORMATS:
-        if not (_parses(first, form) and _parses(last, form)):
+        if not (parses(first, form) and parses(last, form)):
             continue
         try:
             stamps = pd.to_datetime(text, format=form)
@@ -371,14 +371,14 @@ def _readings(text: pd.Series, first: str, last: str, name: str, label: str):
 def _first_unread(text: pd.Series) -> tuple[int, str] | None:
     """The first row no form of the first row reads, with that form; None when the first row reads in none."""
     first = str(text.iloc[0])
-    forms = [form for form in FORMATS if _parses(first, form)]
+    forms = [form for form in FORMATS if parses(first, form)]
     if _is_iso(first):
         forms.insert(0, "ISO 8601")
     if not forms:
         return None
     form = forms[0]
     for row, value in enumerate(text.tolist()):
-        if not (_is_iso(value) if form == "ISO 8601" else _parses(value, form)):
+        if not (_is_iso(value) if form == "ISO 8601" else parses(value, form)):
             return row, form
     return None
 
@@ -400,7 +400,7 @@ def _unevenness(seconds: np.ndarray) -> tuple[bool, float]:
     return (bool(np.any(steps <= 0)), float(np.max(np.abs(steps - np.median(steps)))))
 
 
-def _parses(value: str, form: str) -> bool:
+def parses(value: str, form: str) -> bool:
     try:
         datetime.strptime(value, form)
     except ValueError:
@@ -493,6 +493,7 @@ __all__ = [
     "text_seconds",
     "time_like_columns",
     "named_time_unit",
+    "parses",
     "unit_notes",
     "unit_seconds",
 ]

@@ -116,7 +116,8 @@ def test_a_german_date_and_time_in_two_columns_read_as_the_semicolon_csv_reads_t
     assert_reads_as(path, german)
     german.to_csv(tmp_path / "messung.csv", sep=";", index=False)
     run, csv = (load_run(tmp_path / name, temps=TEMPS, resample=60.0) for name in ("messung.txt", "messung.csv"))
-    assert run.time_name == csv.time_name == "Zeit"
+    assert run.time_name == csv.time_name == "Datum Zeit"  # the date and the time of day read as one stamp
+    assert run.clock_origin_s == csv.clock_origin_s == pd.Timestamp("2026-03-02 23:45:00").timestamp()
     np.testing.assert_array_equal(run.time, np.arange(len(log)) * 60.0)  # on past midnight
     np.testing.assert_array_equal(run.temps, csv.temps)
     np.testing.assert_array_equal(run.error, log["error_um"].to_numpy())

@@ -469,8 +469,8 @@ def split_stamps(frame):
 def test_a_log_without_time_s_is_read_on_the_column_named_as_its_time(tmp_path, frame, plain):
     path = tmp_path / "split.csv"
     split_stamps(frame).to_csv(path, index=False, sep=";")
-    run = load_run(path, temps=TEMPS)  # the date alone does not increase from row to row: the time of day does
-    assert run.time_name == "Time" and "time from column 'Time'" in run.notes[0]
+    run = load_run(path, temps=TEMPS)  # the date and the time of day beside it read as one stamp
+    assert run.time_name == "Date Time" and "time from columns 'Date' and 'Time'" in run.notes[0]
     same_run(run, plain, time=False)
     np.testing.assert_allclose(run.time, plain.time - plain.time[0], rtol=0, atol=1e-9)
     named = frame.rename(columns={"time_s": "t [min]"}).assign(**{"t [min]": frame["time_s"] / 60})
@@ -503,7 +503,7 @@ def test_a_model_fitted_on_a_split_stamped_log_replays_it_as_the_plain_model_rep
         replay = ["replay", str(out / "model.json"), "--data", str(data), "--json", str(out / "replay.json")]
         assert main(replay) == 0
         replays[name] = json.loads((out / "replay.json").read_text())
-    assert json.loads((tmp_path / "split" / "model.json").read_text())["training"]["time"] == "Time"
+    assert json.loads((tmp_path / "split" / "model.json").read_text())["training"]["time"] == "Date Time"
     on_split, on_plain = replays["split"]["samples"], replays["plain"]["samples"]
     assert [{**r, "time_s": None} for r in on_split] == [{**r, "time_s": None} for r in on_plain]
     assert replays["split"]["rms_um"] == replays["plain"]["rms_um"]
