@@ -241,7 +241,7 @@ def load_position_run(
     checks = frame.iloc[first].reset_index(drop=True)
     checks[error] = np.bincount(check, weights=logged) / np.bincount(check)  # as logged: load_run reads its unit
     checks = checks.drop(columns=[position])
-    refuse_unread_inputs(checks, temps, label, file_row[first])
+    refuse_unread_inputs(checks, inputs, label, file_row[first])
     run = load_run(
         checks,
         temps=temps,

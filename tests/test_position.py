@@ -514,6 +514,19 @@ def test_fit_position_writes_a_position_model_and_export_writes_its_table(tmp_pa
     assert (tmp_path / "table" / "groupfit_position_table.h").is_file()
 
 
+def test_fit_position_without_temps_takes_the_temperature_columns_by_name(tmp_path, capsys):
+    """The README's example names no --temps: the inputs are the table's temperature columns, as without
+    --position, and the model is the one --temps names them in."""
+    long_table(3).to_csv(tmp_path / "axis.csv", index=False)
+    common = ["fit", "--data", str(tmp_path / "axis.csv"), "--position", "P_mm", "--reference", "none", "--quiet"]
+    assert main([*common, "--out", str(tmp_path / "default")]) == 0
+    assert main([*common, "--temps", "T1,T2", "--out", str(tmp_path / "named")]) == 0
+    default = ModelFile.load(tmp_path / "default" / "model.json")
+    named = ModelFile.load(tmp_path / "named" / "model.json")
+    assert list(default.temps) == list(named.temps) == ["T1", "T2"]
+    np.testing.assert_array_equal(default.coefficients, named.coefficients)
+
+
 def test_fit_refuses_a_missing_position_column(tmp_path, capsys):
     long_table(1).to_csv(tmp_path / "axis.csv", index=False)
     code = main(
