@@ -17,11 +17,16 @@ The rules:
   links, each before the ``..`` after it, or the same file under another
   name) is refused;
 * an existing data file named as an output (CSV, TSV, Excel, OpenDocument, Parquet, MATLAB, TOML,
-  or the data set of ``simulate --out``) is replaced only with ``--force``
-  (the files a verb writes into its ``--out`` folder are its own, replaced
-  on every run; a table there, ``sweep``'s ``runs.csv``, only when its
-  header line is the one written in its place: another table of that name is
-  the user's);
+  or the data set of ``simulate --out``) is replaced only with ``--force``;
+* a file a verb writes into its ``--out`` folder replaces one of that name
+  there only when that one is an earlier output of its kind (otherwise only
+  with ``--force``): a table (``sweep``'s ``runs.csv``) whose header line is
+  the one written in its place (checked before the work where the verb
+  declares the header, :meth:`OutputPlan.folder`), a PNG image, a JSON
+  document (a model file only by a model file of its format), any other file
+  (an exported routine, a sheet, a report) one that names groupfit in its
+  first lines or starts with the line written in its place. A hand-written
+  ``groupfit_model.c`` or notes saved as ``model.json`` are the user's;
 * an existing model file (JSON whose ``format`` is a groupfit model's:
   ``groupfit-model/1``, ``groupfit-ballscrew/1``) named as an output file
   (``--json``) of a report (``replay``, ``compare`` …) is replaced only with
@@ -57,6 +62,11 @@ MODEL_FORMATS = (GROUPED_MODELS, SCREW_MODELS)
 """The ``format`` of the model files an output file named on the command line replaces only with ``--force``."""
 MODEL_SNIFF_BYTES = 64 * 1024 * 1024
 """A JSON file larger than this is not read to tell whether it is a model file (none is that large)."""
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+"""The first bytes of every PNG image."""
+OWN_MARK = b"groupfit"
+"""A text output names groupfit in its first :data:`HEAD_BYTES` (the exported routines, the controller sheet)."""
+HEAD_BYTES = 1024
 
 
 def resolved_path(path: str | Path) -> Path:
@@ -94,6 +104,39 @@ def _first_line(path: Path) -> bytes:
         return b""
 
 
+def _head(path: Path) -> bytes:
+    """The first :data:`HEAD_BYTES` of a file (empty when it cannot be read)."""
+    try:
+        with path.open("rb") as handle:
+            return handle.read(HEAD_BYTES)
+    except OSError:
+        return b""
+
+
+def foreign_output(existing: Path, written: Path | None = None) -> str | None:
+    """What ``existing``, a file in an output folder, is when it is not an earlier output of the file that would
+    replace it (``written``; None: not known yet, only what the name promises is checked); None when it is one.
+    Tables are left to their header check (:meth:`OutputPlan.commit`)."""
+    head = _head(existing)
+    suffix = existing.suffix.lower()
+    if not head.strip() or suffix in DATA_SUFFIXES:
+        return None
+    if suffix == ".png":
+        return None if head.startswith(PNG_SIGNATURE) else "a file that is not a PNG image"
+    if suffix == ".json":
+        if not _holds_json(existing):
+            return "a file that is not a JSON document"
+        kind = _model_format(existing)
+        if kind is None or written is None or _model_format(written) == kind:
+            return None
+        return f"a model file ({kind.rstrip('/')})"
+    if OWN_MARK in head.lower():
+        return None
+    if written is not None and _first_line(existing) == _first_line(written):
+        return None
+    return "a file groupfit did not write" if written is not None else None
+
+
 def _holds_json(path: Path) -> bool:
     """Whether ``path`` is empty or starts as a JSON document does (an object or an array)."""
     with open(path, "rb") as handle:
@@ -122,6 +165,8 @@ class OutputPlan:
         """Tables in an output folder that exist (and the option): replaced only by one with their header."""
         self.folders: dict[Path, str] = {}
         """Every declared output folder and the option that names it: no output file may be one of them."""
+        self.declared_folders: dict[Path, str] = {}
+        """The output folders (and their option) whose files are checked as earlier outputs when written."""
 
     # ------------------------------------------------------------ declaring
     def read(self, *paths) -> OutputPlan:
@@ -159,6 +204,8 @@ class OutputPlan:
             what = "an existing data file"
         elif json and not _holds_json(target):
             what = "an existing file that is not a JSON result (a log, an archive or a database?)"
+        elif target.suffix.lower() == ".png" and foreign_output(target) is not None:
+            what = "an existing file that is not a PNG image"
         else:
             kind = _model_format(target)
             if kind is None or kind == model:
@@ -168,8 +215,13 @@ class OutputPlan:
             f"{target}: {option} would replace {what}; choose another {option}, or pass --force to replace it"
         )
 
-    def folder(self, path: str | Path | None, option: str, files: Iterable[str] = ()) -> Path | None:
-        """Check that ``path`` (an output folder) may hold ``files``; None passes (no such output)."""
+    def folder(
+        self, path: str | Path | None, option: str, files: Iterable[str] = (), headers: dict[str, str] | None = None
+    ) -> Path | None:
+        """Check that ``path`` (an output folder) may hold ``files``; None passes (no such output).
+
+        ``headers``: for a table among ``files``, how the header line written there starts, so that a table of
+        that name with another header (the user's) is refused now, before the work, not when it is done."""
         if path is None:
             return None
         if str(path) == "-":
@@ -181,9 +233,23 @@ class OutputPlan:
             self._check_input(target, option)
             self._claim(target, option)
             check_output_file(target, option)
-            if target.is_file() and target.suffix.lower() in DATA_SUFFIXES and not self.force:
+            if not target.is_file() or self.force:
+                continue
+            if target.suffix.lower() in DATA_SUFFIXES:
                 self.tables[resolved_path(target)] = option
+                start = (headers or {}).get(name)
+                if start is not None and _head(target).strip() and not _first_line(target).startswith(start.encode()):
+                    raise self._foreign(target, option, "a table that is not an earlier output of this command")
+            elif (what := foreign_output(target)) is not None:
+                raise self._foreign(target, option, what)
+        self.declared_folders[resolved_path(folder)] = option
         return folder
+
+    @staticmethod
+    def _foreign(target: Path, option: str, what: str, *, done: str = "") -> InputError:
+        return InputError(
+            f"{target}: {option} would replace {what}{done}; choose another {option}, or pass --force to replace it"
+        )
 
     def _target(self, path: str | Path, option: str) -> Path:
         if not str(path).strip():
@@ -246,12 +312,7 @@ class OutputPlan:
             if target.is_dir():
                 raise InputError(f"{target}: is a folder; nothing was written (choose another output)")
         for temporary, target in self.staged:
-            option = self.tables.get(resolved_path(target))
-            if option is not None and target.is_file() and _first_line(target) != _first_line(temporary):
-                raise InputError(
-                    f"{target}: {option} would replace a table that is not an earlier output of this command (its "
-                    f"header differs); nothing was written: choose another {option}, or pass --force to replace it"
-                )
+            self._check_own(temporary, target)
         written = []
         try:
             for temporary, target in self.staged:
@@ -264,6 +325,21 @@ class OutputPlan:
         finally:
             self.discard()
         return written
+
+    def _check_own(self, temporary: Path, target: Path) -> None:
+        """Refuse, before anything is renamed, to replace a file in an output folder that is not an earlier output
+        of the file written in its place."""
+        if self.force or not target.is_file():
+            return
+        option = self.tables.get(resolved_path(target))
+        if option is not None:
+            if _first_line(target) != _first_line(temporary):
+                what = "a table that is not an earlier output of this command (its header differs)"
+                raise self._foreign(target, option, what, done=f"; nothing was written to {option}")
+            return
+        option = self.declared_folders.get(resolved_path(target.parent))
+        if option is not None and (what := foreign_output(target, temporary)) is not None:
+            raise self._foreign(target, option, what, done=f"; nothing was written to {option}")
 
     def discard(self) -> None:
         """Remove every staged file not yet renamed, and the folders made for them when left empty."""
@@ -293,6 +369,7 @@ def commit_outputs() -> list[Path]:
 
 __all__ = [
     "DATA_SUFFIXES",
+    "foreign_output",
     "GROUPED_MODELS",
     "SCREW_MODELS",
     "OutputPlan",

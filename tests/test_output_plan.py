@@ -111,6 +111,12 @@ def _snapshot(*folders):
     return {p: (p.stat().st_size, p.stat().st_mtime_ns) for f in folders for p in f.rglob("*")}
 
 
+def _contents(*folders):
+    """Every file's bytes: a refusal when the outputs are committed leaves the files as they were (the folders'
+    times change with the temporary files made and removed beside the targets)."""
+    return {p: p.read_bytes() for f in folders for p in f.rglob("*") if p.is_file()}
+
+
 def _run(argv, inputs, tmp_path, capsys):
     argv = [a.replace("{in}", str(inputs)).replace("{tmp}", str(tmp_path)) for a in argv]
     before = _snapshot(inputs, tmp_path)
@@ -424,3 +430,54 @@ def test_a_symbolic_link_as_an_output_is_written_through_and_stays_a_link(inputs
     assert link.is_symlink() and os.readlink(link) == str(target)
     assert json.loads(target.read_text())["p"] == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["o", "r.json", "results"]
+
+
+@pytest.mark.parametrize(
+    "name, content, what",
+    [
+        ("model.json", b"hand notes on the spindle\n", "not a JSON document"),
+        ("model.json", b'{"format": "groupfit-ballscrew/1", "kind": "ballscrew"}\n', "a model file (groupfit-ballscrew)"),
+        ("fit.png", b"a photo of the set-up, not a PNG\n", "not a PNG image"),
+    ],
+    ids=["notes as model.json", "a ball-screw model as model.json", "notes as fit.png"],
+)
+def test_a_file_in_the_out_folder_is_replaced_only_when_it_is_an_earlier_output_of_its_kind(
+    inputs, tmp_path, capsys, name, content, what
+):
+    """fit replaced every file of its output names in its --out folder, whatever it held."""
+    folder = tmp_path / "o"
+    folder.mkdir()
+    (folder / name).write_bytes(content)
+    before = _contents(inputs, tmp_path)
+    status, err, _ = _run(_fit(), inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and what in err[0] and "--force" in err[0]
+    assert _contents(inputs, tmp_path) == before
+    assert _run((*_fit(), "--force"), inputs, tmp_path, capsys)[0] == 0
+    assert json.loads((folder / "model.json").read_text())["format"].startswith("groupfit-model/")
+    # its own outputs, and an AR(1) or global model of the same format, are replaced on every run
+    assert _run(_fit(), inputs, tmp_path, capsys)[0] == 0
+    assert (folder / "fit.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_export_replaces_its_own_routines_but_not_a_hand_written_file_of_that_name(inputs, tmp_path, capsys):
+    argv = ("export", "{in}/model.json", "--target", "c", "--out", "{tmp}/c")
+    assert _run(argv, inputs, tmp_path, capsys)[0] == 0
+    assert _run(argv, inputs, tmp_path, capsys)[0] == 0  # an earlier export is replaced
+    own = tmp_path / "c" / "groupfit_model.c"
+    own.write_text("int my_own_code(void) { return 42; }\n")
+    before = _contents(inputs, tmp_path)
+    status, err, _ = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and "a file groupfit did not write" in err[0]
+    assert _contents(inputs, tmp_path) == before  # the header written before it is not left either
+    assert _run((*argv, "--force"), inputs, tmp_path, capsys)[0] == 0
+    assert "gf_step" in own.read_text()
+
+
+def test_sweep_refuses_a_users_table_in_its_report_folder_before_it_runs_the_study(inputs, tmp_path, capsys):
+    report = tmp_path / "report"
+    report.mkdir()
+    (report / "runs.csv").write_text("time_s,T1,error_um\n0,20.1,0.5\n")
+    argv = ("sweep", "{in}/sweep.toml", "--workers", "1", "--db", "{tmp}/s.sqlite", "--out", "{tmp}/report")
+    status, err, unchanged = _run(argv, inputs, tmp_path, capsys)
+    assert status == 2 and len(err) == 1 and "a table that is not an earlier output" in err[0] and unchanged
+    assert not (tmp_path / "s.sqlite").exists()  # refused before the study, whose database it would have written

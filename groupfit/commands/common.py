@@ -224,20 +224,22 @@ def plan_outputs(
     files=(),
     option: str | None = None,
     json_model: str | None = None,
+    headers: dict[str, str] | None = None,
 ) -> Path | None:
     """Declare what a verb reads and writes, and check every output before any work (one line when refused).
 
     ``inputs`` are the files the verb reads (paths or lists of paths; None
     skipped); the outputs are ``--json`` and the files ``files`` in ``folder``
     (``option`` names it, by default :func:`out_option`; ``json_model``: the
-    format of the model file the ``--json`` is, e.g. ``groupfit-model/``). An
+    format of the model file the ``--json`` is, e.g. ``groupfit-model/``; ``headers``: how the header lines of
+    the tables among ``files`` start, checked now against tables of those names). An
     output that is an input, an existing data file without ``--force``, or an
     empty path is refused
     (:class:`groupfit.outputs.OutputPlan`). Returns the folder (None when none).
     """
     plan = current_plan(force=getattr(args, "force", False)).read(*inputs)
     plan.file(getattr(args, "json", None), "--json", model=json_model or None, json=True)
-    return plan.folder(folder, option or out_option(args), files)
+    return plan.folder(folder, option or out_option(args), files, headers)
 
 
 def add_register_options(

@@ -17,7 +17,7 @@ from groupfit.outputs import current_plan
 from groupfit.sweep.config import read_study
 from groupfit.sweep.executors import DaskExecutor, LocalExecutor
 from groupfit.sweep.feasibility import check_exact_time, check_feasible, check_table_memory
-from groupfit.sweep.report import write_report
+from groupfit.sweep.report import REPORT_HEADERS, write_report
 from groupfit.sweep.store import StudyStore
 from groupfit.sweep.study import run_study
 
@@ -102,6 +102,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         [d.path for d in study.datasets],
         folder=args.out,
         files=("runs.csv", "summary.csv", "summary.md"),
+        headers=REPORT_HEADERS,
     )
     current_plan().file(db, "--db")
     if not args.scheduler:  # a cluster's size is known only once connected

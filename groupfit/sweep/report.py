@@ -35,6 +35,8 @@ from groupfit.io import atomic_write_files, save_figure
 SUCCESS_PERCENT = 0.1
 """A GA run succeeds when its Rg is within this many percent of the exact optimum."""
 SETTING = ["dataset", "sensor_set", "objective_kind", "intercept", "n", "c"]
+REPORT_HEADERS = {"runs.csv": "run_hash,", "summary.csv": f"{SETTING[0]},"}
+"""How the header lines of the report's tables start (a table of those names with another header is the user's)."""
 MAX_PANELS = 6
 
 
@@ -161,7 +163,7 @@ def write_report(rows: list[dict], folder: str | Path, title: str = "study") -> 
     folder.mkdir(parents=True, exist_ok=True)
     runs = runs_frame(rows)
     if runs.empty:
-        return atomic_write_files({folder / "summary.md": f"# {title}\n\nNo runs recorded.\n"})
+        return atomic_write_files({folder / "summary.md": f"# {title}\n\ngroupfit sweep: no runs recorded.\n"})
     summary = summary_frame(runs)
     success = success_frame(runs)
     written = atomic_write_files(
@@ -184,7 +186,7 @@ def markdown_report(title: str, runs: pd.DataFrame, summary: pd.DataFrame, succe
     lines = [
         f"# {title}",
         "",
-        f"{len(runs)} runs: {int(counts.get('done', 0))} done, {int(counts.get('failed', 0))} failed.",
+        f"groupfit sweep: {len(runs)} runs, {int(counts.get('done', 0))} done, {int(counts.get('failed', 0))} failed.",
         "",
         "## Objective against p",
         "",
