@@ -436,7 +436,7 @@ def test_a_symbolic_link_as_an_output_is_written_through_and_stays_a_link(inputs
     "name, content, what",
     [
         ("model.json", b"hand notes on the spindle\n", "not a JSON document"),
-        ("model.json", b'{"format": "groupfit-ballscrew/1", "kind": "ballscrew"}\n', "a model file (groupfit-ballscrew)"),
+        ("model.json", b'{"format": "groupfit-ballscrew/1"}\n', "a model file (groupfit-ballscrew)"),
         ("fit.png", b"a photo of the set-up, not a PNG\n", "not a PNG image"),
     ],
     ids=["notes as model.json", "a ball-screw model as model.json", "notes as fit.png"],
