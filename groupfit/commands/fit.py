@@ -19,7 +19,7 @@ from groupfit.fit_budget import segment_table_over
 from groupfit.fitting import FitResult, selection_rule
 from groupfit.grouping import check_spacing
 from groupfit.heldout.check import held_out_check, ridge_setting, select_inputs
-from groupfit.heldout.expect import NextRunExpectation, expect_next_run
+from groupfit.heldout.expect import NextRunExpectation, expect_next_run, penalty_disagreement
 from groupfit.heldout.nextrun import next_run_splits
 from groupfit.heldout.reference_choice import ReferenceChoice, default_reference_choice
 from groupfit.heldout.span import SPAN_KEY, training_span
@@ -118,6 +118,8 @@ def run_fit(args: argparse.Namespace) -> int:
     model = estimator.to_model_file(run, model_settings.criterion)  # the valid ranges over every row
     expectation, no_estimate = fitted_model_expectation(args, replace(data, settings=settings), expectation, alpha)
     notes = f"\nnote    no next-run estimate: {no_estimate}" if no_estimate else ""
+    if alpha > 0 and args.ridge is None and expectation is not None and p_expectation is not None:
+        notes += penalty_disagreement(expectation, p_expectation, alpha)
     span = training_span(run.temp_names, run.temps, [run.frame], run.reference)
     training = {**model.training, SPAN_KEY: span}
     if position_run is None:

@@ -309,9 +309,28 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
     return tuple(notes)
 
 
+def penalty_disagreement(penalised: NextRunExpectation, least_squares: NextRunExpectation, alpha: float) -> str:
+    """The note when the ridge penalty chosen on held-out operating conditions raises the next-run estimate of
+    the global model above least squares' (more than 1 %); empty otherwise. The two checks measure different
+    things (a condition the model never saw, a later stretch of the same programme); a next run settles it."""
+    plain = least_squares.for_candidate(0)
+    if plain is None:
+        return ""
+    ours, theirs = penalised.expected()[0], plain[0]
+    if not ours > 1.01 * theirs:
+        return ""
+    return (
+        f"\nnote    the ridge penalty (alpha {alpha:g}) was chosen on held-out operating conditions, but the next-run "
+        f"estimate puts the penalised model above least squares ({ours:.3g} against {theirs:.3g} µm): the two "
+        'checks disagree (docs/nextrun.md, "Which model"); --ridge 0 keeps least squares, and a next run replayed '
+        "with both settles it"
+    )
+
+
 __all__ = [
     "CHOICE_RULE",
     "NextRunExpectation",
+    "penalty_disagreement",
     "expect_for_model",
     "expect_next_run",
     "trust_notes",
