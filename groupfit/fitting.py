@@ -104,11 +104,17 @@ class FitResult:
 
 
 def backward_summary(selection: dict) -> str:
-    dropped = ", ".join(f"{d['name']} (t = {d['t']:.2f}, p = {d['p_value']:.3g})" for d in selection["dropped"])
+    dropped = ", ".join(f"{d['name']} ({_why_dropped(d)})" for d in selection["dropped"])
     return (
         f"inputs  backward elimination at alpha = {selection['alpha']:g}: kept {', '.join(selection['inputs'])} "
         f"of {selection['candidates']}; dropped {dropped or 'none'}"
     )
+
+
+def _why_dropped(dropped: dict) -> str:
+    if dropped.get("t") is None:
+        return f"linearly dependent on {', '.join(dropped.get('dependent_on') or ['the others'])}"
+    return f"t = {dropped['t']:.2f}, p = {dropped['p_value']:.3g}"
 
 
 def statistics_summary(stats: dict) -> str:

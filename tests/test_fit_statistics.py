@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -85,6 +86,24 @@ def test_backward_elimination_keeps_the_inputs_that_carry_the_error():
         assert ["T1", "T2", "T3", "T4"][keep[worst]] == step["name"] and p[worst] > 0.05
         assert step["p_value"] == pytest.approx(p[worst], rel=1e-8)
         del keep[worst]
+
+
+@pytest.mark.parametrize("copy_of", ["T1", "T1+T2"])
+def test_backward_elimination_drops_an_input_in_a_linear_dependence_first(copy_of):
+    """A sensor logged twice (or one the sum of others): statsmodels' t-tests on the rank-deficient design
+    split one effect arbitrarily (a SingularMatrixWarning, nothing dropped); the dependent input goes first,
+    and the rest is eliminated as on the design without it."""
+    frame = synthetic_frame(seed=2, n=400)
+    rises = frame[["T1", "T2", "T3", "T4"]].to_numpy() - frame[["T_amb"]].to_numpy()
+    extra = rises[:, 0] if copy_of == "T1" else rises[:, 0] + rises[:, 1]
+    names = ["T1", "T2", "T3", "T4", "T5"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning reaches the user
+        chosen = backward_elimination(np.column_stack([rises, extra]), frame["error_um"].to_numpy(), names, alpha=0.05)
+    first = chosen["dropped"][0]
+    assert first["name"] == "T5" and first["t"] is None and set(first["dependent_on"]) == set(copy_of.split("+"))
+    alone = backward_elimination(rises, frame["error_um"].to_numpy(), names[:4], alpha=0.05)
+    assert chosen["inputs"] == alone["inputs"] and chosen["dropped"][1:] == alone["dropped"]
 
 
 def test_backward_option_through_fit_and_its_errors(tmp_path, capsys):

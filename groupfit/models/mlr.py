@@ -59,8 +59,11 @@ def backward_elimination(X, y, names: list[str], *, alpha: float, fit_intercept:
 
     Each round refits the regression (statsmodels OLS) on the inputs left and drops
     the one with the largest p-value above ``alpha`` (the intercept is never
-    dropped); at least one input stays. Returns the inputs kept, in their order,
-    and each round's dropped input with its t and p.
+    dropped); at least one input stays. Inputs in a linear dependence (a sensor
+    logged twice, one the sum of others), whose t-tests split one effect
+    arbitrarily, go first, the last of them in each round, with ``t`` and
+    ``p_value`` None and ``dependent_on`` the others. Returns the inputs kept, in
+    their order, and each round's dropped input with its t and p.
     """
     if not 0 < alpha < 1:
         raise InputError(f"significance level {alpha!r}: give a number between 0 and 1 (e.g. 0.05)")
@@ -68,7 +71,13 @@ def backward_elimination(X, y, names: list[str], *, alpha: float, fit_intercept:
     keep, dropped = list(range(X.shape[1])), []
     offset = int(fit_intercept)
     while len(keep) > 1:
-        ols = sm.OLS(y, design_matrix(X[:, keep], fit_intercept=fit_intercept)).fit()
+        design = design_matrix(X[:, keep], fit_intercept=fit_intercept)
+        dependent = dependent_columns(design[:, offset:], [names[j] for j in keep])
+        if dependent:  # no t-test tells their share apart: the last of them goes first
+            dropped.append({"name": dependent[-1], "t": None, "p_value": None, "dependent_on": dependent[:-1]})
+            del keep[[names[j] for j in keep].index(dependent[-1])]
+            continue
+        ols = sm.OLS(y, design).fit()
         pvalues = np.asarray(ols.pvalues)[offset:]
         worst = int(np.argmax(pvalues))
         if not pvalues[worst] > alpha:
