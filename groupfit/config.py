@@ -39,7 +39,8 @@ A configuration has up to four tables; every key is optional::
                                # or "auto" (when cheap: N²/2 ≤ 5 M segments for sse, 0.2 M for sae)
 
     [output]
-    dir = "groupfit-out"
+    dir = "groupfit-out"       # relative to the folder the command runs in (not the config file's): outputs
+                               # land where the user works, whichever configuration wrote them
 
     [compare]                  # groupfit compare
     pmax = 4

@@ -39,6 +39,8 @@ from groupfit.setting_levels import is_setting
 from groupfit.timestamps import time_like_columns
 from groupfit.unit_factors import factored_unit
 
+WIDE_PREFIX = "err_P"
+
 DEFAULT_TIME = "time_s"
 DEFAULT_ERROR = "error_um"
 ERROR_NAME = re.compile(
@@ -260,9 +262,16 @@ def found_error_column(
             f"{label}: there is no column '{error}' and {len(names)} could be the error ({listed}); --error names one",
         )
     if len(names) > 1:
+        wide = all(name.startswith(WIDE_PREFIX) for name in names)
+        advice = (
+            f"columns {WIDE_PREFIX}<mm> are a wide position table's errors, one per axis position: fit them with "
+            "--position COLUMN (the name the positions take), or name one with --error COLUMN"
+            if wide
+            else "name it with --error COLUMN"
+        )
         raise InputError(
             f"{label}: there is no column '{DEFAULT_ERROR}' and {len(names)} could be the thermal error "
-            f"({', '.join(names)}); name it with --error COLUMN"
+            f"({', '.join(names)}); {advice}"
         )
     note = f"{label}: thermal error from column '{names[0]}' (there is no '{error}'; --error names another)"
     return names[0], note

@@ -98,7 +98,8 @@ class Constraints:
         largest = self.max_breaks()
         if p > largest:
             if largest < 0:
-                hint = "no model can be fitted: give more samples or lower c"
+                lower = "n (the soft offset)" if self.n + 1 >= self.min_size and self.n >= c * n_coef else "c"
+                hint = f"no model can be fitted: give more samples or lower {lower}"
             else:
                 hint = f"the largest feasible p is {largest}"
             raise InputError(

@@ -33,11 +33,10 @@ from groupfit.data import (
     read_table,
     refuse_beyond,
 )
-from groupfit.default_columns import default_temperature_columns, length_unit, length_unit_named
+from groupfit.default_columns import WIDE_PREFIX, default_temperature_columns, length_unit, length_unit_named
 from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 
-WIDE_PREFIX = "err_P"
 WIDE_COLUMN = re.compile(r"^err_P(-?\d+(?:\.\d+)?)$")
 """A wide table's error column at one position: ``err_P`` and the position in mm (``err_P0100`` = 100 mm)."""
 

@@ -36,7 +36,7 @@ def parse_intervals(text: str) -> list[float]:
     """``"5m,15m,1h,900"`` as seconds (a bare number: seconds); InputError naming the bad entry."""
     intervals = []
     for item in text.split(","):
-        match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|min|m|h)?\s*", item)
+        match = re.fullmatch(r"\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|min|m|h)?\s*", item)
         if not match:
             raise InputError(f"--probe-every: {item.strip()!r} is not an interval; write e.g. 5m,15m,30m,1h or 900")
         seconds = float(match.group(1)) * UNITS_S[match.group(2) or ""]

@@ -30,6 +30,7 @@ def add_parser(verbs) -> None:
     )
     common.add_json_option(iso, "the evaluation")
     common.add_out_option(iso, "folder for iso230.png (the mean deviations with their ±2s bands)")
+    common.add_quiet_option(iso)
     iso.set_defaults(handler=run_iso230)
 
 

@@ -78,10 +78,12 @@ def add_parser(verbs) -> None:
 
 
 def _output_options(parser, json_help: str, out_help: str) -> None:
-    """``--json`` (``json_help``, then ``('-' for stdout)``), ``--out``, ``--force`` and the clock options."""
+    """``--json`` (``json_help``, then ``('-' for stdout)``), ``--out``, ``--force``, ``--quiet`` (accepted as by
+    every verb; the screw verbs show no progress bar) and the clock options."""
     parser.add_argument("--json", metavar="FILE", help=f"{json_help} ('-' for stdout)")
     parser.add_argument("--out", metavar="DIR", help=out_help)
     common.add_force_option(parser)
+    common.add_quiet_option(parser)
     common.add_clock_options(parser)
     common.add_range_options(parser)
 
