@@ -14,6 +14,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from groupfit.channel_row import without_channel_row
 from groupfit.clock_changes import CLOCK_SHIFTS, shift_at
 from groupfit.column_values import ERROR_LIMIT_UM as ERROR_LIMIT_UM
 from groupfit.column_values import (
@@ -39,7 +40,14 @@ from groupfit.error_scale import with_scaled_error
 from groupfit.errors import InputError
 from groupfit.glitches import temperatures_without_glitches, without_glitches
 from groupfit.interleaved import refuse_interleaved, stamp_groups
-from groupfit.readtable import CLOCK_NOTES, CLOCK_ORIGIN, datetimes_to_seconds, read_table, without_stray_rows
+from groupfit.readtable import (
+    CLOCK_NOTES,
+    CLOCK_ORIGIN,
+    LEFT_OUT_TAIL,
+    datetimes_to_seconds,
+    read_table,
+    without_stray_rows,
+)
 from groupfit.record_kinds import record_kinds_cycle
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.run import Run as Run
@@ -224,6 +232,9 @@ def load_runs(
     frame, run_name, label = read_table(source, name, options.pop("encoding", None))
     frame, stray_notes, left_out = without_stray_rows(frame, label)
     time, time_note = found_stamp_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
+    frame, channel_note = without_channel_row(frame, time, label)
+    if channel_note:
+        left_out = "; ".join(filter(None, (left_out, channel_note[len(label) + 2 : channel_note.index(LEFT_OUT_TAIL)])))
     lengths, units_notes = read_in_row_units(frame, time, label)
     serial_note = serial_days_to_seconds(frame, time, label) or epoch_to_seconds(frame, time, label)
     millis_note = with_milliseconds(frame, time, label)
@@ -239,7 +250,7 @@ def load_runs(
         if left_out and " row " in str(exc):
             raise InputError(f"{exc} (rows are counted without those left out: {left_out})") from None
         raise
-    notes = (*stray_notes, time_note, *units_notes, serial_note, millis_note, error_note)
+    notes = (*stray_notes, time_note, channel_note, *units_notes, serial_note, millis_note, error_note)
     found = tuple(note for note in notes if note)
     return [dataclasses.replace(run, notes=(*found, *run.notes)) for run in runs] if found else runs
 

@@ -331,4 +331,25 @@ def _cells(row: str, spans: list[Span], *, under_header: bool = False) -> list[s
     return cells
 
 
-__all__ = ["first_uneven_row", "named_otherwise", "read_aligned", "uneven_units_row"]
+def stands_in_columns(rows: list[str]) -> bool:
+    """Whether the values of rows of numbers stand in columns, one value to a cell (not one space apart, each
+    row's values as wide as they are)."""
+    numbers = [row.expandtabs() for row in rows if row.strip()]
+    return bool(numbers) and _one_value_per_cell(numbers, _filled_runs(numbers))
+
+
+def names_columns(header: str, rows: list[str]) -> bool:
+    """Whether the header's names stand over the columns the rows with a digit in them stand in, as
+    :func:`read_aligned` reads them."""
+    numbers = [row.expandtabs() for row in rows if row.strip() and DIGIT.search(row)]
+    return _aligned_columns(header.expandtabs(), numbers) is not None
+
+
+__all__ = [
+    "first_uneven_row",
+    "named_otherwise",
+    "names_columns",
+    "read_aligned",
+    "stands_in_columns",
+    "uneven_units_row",
+]

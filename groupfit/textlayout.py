@@ -16,7 +16,9 @@ should not have to rewrite one before groupfit reads it:
   such run, the header's own deciding a tie: a name with a comma in it
   (SINUMERIK's ``T1[u1,1]``) does not make the comma the separator of a
   semicolon table. Runs cut by a line of one field (``Logging paused``), or by a
-  message on a row of the table's width (``;Logging paused;;;``), are one body;
+  message on a row of the table's width (``;Logging paused;;;``), are one body; in
+  a table split at spaces, so are first rows with a cell left empty (a sensor that
+  began late) under a line of the body's width;
 * the header: of the lines of text directly above the body with about as many
   fields (one more or fewer: a separator closing every data row), below the
   last blank one (a spreadsheet's ``;;;;`` row, a ruler ``-----``; in a table
@@ -40,8 +42,9 @@ should not have to rewrite one before groupfit reads it:
   read by the position of its cells (:mod:`groupfit.fixedwidth`);
 * how a cell writes a number (thousands separators, a typeset minus, a unit after it):
   :mod:`groupfit.numbercells`;
-* a comment mark before the header's first name (NumPy's ``savetxt``: ``# time_s,T1``) is dropped; a column
-  named ``#`` alone (a HOBO logger's row number) keeps its name;
+* a comment mark before the header's first name (NumPy's ``savetxt``: ``# time_s,T1``), and before a row of
+  units right under it, is dropped; a column named ``#`` alone (a HOBO logger's row number) keeps its name
+  (:mod:`groupfit.commentmark`);
 * a separator at the end of every data row (not of the header) is dropped
   rather than shifting the columns; a column with no name and no value in
   any row (a spreadsheet's trailing ``;;;``) is dropped;
@@ -50,7 +53,7 @@ should not have to rewrite one before groupfit reads it:
   dropped and their columns read as numbers;
 * a footer: lines after the last one that holds a number (``Logging stopped
   at 04:00``, ``END``), and rows of statistics under the readings (``Max``,
-  ``Min``, ``Avg``: :data:`STATISTIC`), are not read; in a sheet, rows
+  ``Min``, ``Avg``: :data:`groupfit.footer.STATISTIC`), are not read; in a sheet, rows
   (:func:`without_footer_rows`).
 """
 
@@ -61,19 +64,35 @@ import io
 import re
 import warnings
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import pandas as pd
 
+from groupfit.commentmark import without_comment_marks
 from groupfit.decimalmark import decimal_mark, quoted_decimal_mark, undecided_commas
-from groupfit.fixedwidth import first_uneven_row, named_otherwise, read_aligned, uneven_units_row
-from groupfit.numbercells import (
-    as_numbers,
-    is_number,
-    without_cell_units,
-    without_thousands_separators,
+from groupfit.fixedwidth import (
+    first_uneven_row,
+    named_otherwise,
+    names_columns,
+    read_aligned,
+    stands_in_columns,
+    uneven_units_row,
 )
-from groupfit.tablehead import RULER, below_last_empty_line, is_units_row, without_numbered_lines
+from groupfit.footer import without_footer, without_footer_rows
+from groupfit.numbercells import as_numbers, is_number, without_cell_units, without_thousands_separators
+from groupfit.spacedtext import with_text_rows_quoted
+from groupfit.tablehead import (
+    RULER,
+    below_last_empty_line,
+    full_row_above,
+    is_padded_title,
+    is_units_row,
+    message_under_header,
+    names_over_numbers,
+    naming_most,
+    without_numbered_lines,
+)
 from groupfit.textencoding import decode
 
 DELIMITERS = (",", ";", "\t")
@@ -91,13 +110,6 @@ STRAY_ROWS = 2
 """Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
 WORDS = re.compile(r"[^\W\d_]")
 DIGIT = re.compile(r"\d")
-STATISTIC = re.compile(
-    r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
-    r"count|median|range|mittelwert|mittel|summe|anzahl|std\.?\s*abw|standardabweichung|spanne|streuung|varianz|"
-    r"variance|moyenne|écart[-\s]type|promedio|media|desv(?:\.|iación)?(?:\s*est)?)\.?\s*:?",
-    re.IGNORECASE,
-)
-"""The label of a row of statistics a logger writes under its readings (``Max``, ``Min``, ``Avg``, ``P-P``)."""
 
 
 @dataclass(frozen=True)
@@ -240,18 +252,29 @@ def _body_layout(lines: list[str]) -> tuple[str, int] | None:
     if best is None:
         return None
     sep, rows, runs, first = best
-    first = _body_start(rows, runs, first)
-    return sep, _header_above(rows, first, spaced=sep == WHITESPACE)
+    width, spaced = len(rows[first].fields), sep == WHITESPACE
+    first = _body_start(rows, runs, first, spaced=spaced)
+    body = [lines[row.line] for row in rows[first : first + SNIFF_LINES] if row.numeric]
+    fits = None
+    if spaced:  # a line of more words than columns names them when they stand under its words, else none
+        aligned = stands_in_columns(body)
+        fits = (lambda row: names_columns(lines[row.line], body)) if aligned else (lambda row: row.filled == width)
+    return sep, _header_above(rows, first, width, spaced=spaced, fits=fits)
 
 
-def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> int:
+def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int, *, spaced: bool = False) -> int:
     """The start of the body that holds the run at ``first``: earlier runs of its width belong to it when
     nothing between them could be a header (a ``Logging paused`` line, a message on a row of separators, a cut
-    row) but a repeat of a line above them (a header written again after a logger's restart)."""
+    row) but a repeat of a line above them (a header written again after a logger's restart); in a table split
+    at spaces (``spaced``), so does a run right above it whose rows have cells left empty (a sensor that began
+    late), under a line of the body's width."""
     width = len(rows[first].fields)
     for start, end in reversed([run for run in runs if run[1] <= first]):
         if len(rows[start].fields) != width and end - start <= STRAY_ROWS:
             continue  # a row with a value more or less (a note typed into the log): the body goes on above it
+        if spaced and end == first and len(rows[start].fields) < width and full_row_above(rows, start, width):
+            first = start
+            continue
         seen_above = {tuple(row.fields) for row in rows[:start] if row.is_text}
         between = [
             row
@@ -264,13 +287,31 @@ def _body_start(rows: list[_Row], runs: list[tuple[int, int]], first: int) -> in
     return first
 
 
-def _header_above(rows: list[_Row], first: int, *, spaced: bool = False) -> int:
-    """The header line of the body that starts at ``rows[first]`` (see the module docstring); ``spaced``: the
-    fields are split at runs of spaces, where a title's words are fields as a header's names are."""
-    width = len(rows[first].fields)
+def _header_above(
+    rows: list[_Row], first: int, width: int, *, spaced: bool = False, fits: Callable[[_Row], bool] | None = None
+) -> int:
+    """The header line of the body of ``width`` fields that starts at ``rows[first]`` (see the module
+    docstring); ``spaced``: the fields are split at runs of spaces, where a title's words are fields as a
+    header's names are; ``fits``: whether a line names the body's columns, one name to each
+    (:func:`~groupfit.tablehead.naming_most`)."""
+    above, top = _lines_above(rows, first, width, spaced=spaced)
+    if above:
+        chosen = naming_most(above, width, fits)
+    elif top > 0 and rows[top - 1].is_text:
+        chosen = rows[top - 1]
+    else:
+        return rows[first].line
+    if first + 1 < len(rows) and is_padded_title(chosen.fields) and names_over_numbers(rows[first], rows[first + 1]):
+        return rows[first].line  # a title above a header that names columns by numbers (``Zeit;101;102``)
+    return chosen.line
+
+
+def _lines_above(rows: list[_Row], first: int, width: int, *, spaced: bool) -> tuple[list[_Row], int]:
+    """The lines of text right above the body that may be its header, and the position below the lowest line
+    that is no row of the body (a row of units, a message and blank rows under the header passed over)."""
     top = first
-    while top > 0 and rows[top - 1].blank:  # a ruler or a blank row between the header and the body
-        top -= 1
+    while top > 0 and (rows[top - 1].blank or message_under_header(rows, top, width)):
+        top -= 1  # a ruler, a blank row or a logger's message between the header and the body
     if top > 1 and rows[top - 2].is_text and is_units_row(rows[top - 1].fields):
         top -= 1  # a row of units under the header, ``deg C`` giving it more fields than the header
     strays = top
@@ -284,13 +325,9 @@ def _header_above(rows: list[_Row], first: int, *, spaced: bool = False) -> int:
     above = rows[position:top]
     if spaced and not (first + 1 < len(rows) and rows[first + 1].line - rows[first].line > 1):  # not double spaced
         above = without_numbered_lines(below_last_empty_line(above))
-    above = [row for row in above if not row.fields[0].startswith("#")] or above  # a comment, unless all are
-    if above:
-        most = max(row.filled for row in above)
-        return next(row.line for row in above if row.filled == most)
-    if top > 0 and rows[top - 1].is_text:
-        return rows[top - 1].line
-    return rows[first].line
+    # a line that begins with ``#`` is a comment; split at commas, ``"#"`` alone names a column (HOBO's row number)
+    comments = [row.fields[0].startswith("#") and (spaced or row.fields[0] != "#") for row in above]
+    return [row for row, comment in zip(above, comments) if not comment] or above, top
 
 
 def _first_agreeing_header(lines: list[str]) -> int:
@@ -324,12 +361,15 @@ def read_text_table(content: bytes, encoding: str | None = None) -> tuple[pd.Dat
     the one that wrote it, when detection is not to decide (:func:`groupfit.textencoding.decode`)."""
     text = with_newlines(decode(content, encoding))
     layout = layout_of(text)
-    body = _without_comment_mark(_without_footer(_from_line(text, layout.header_line), layout), layout.sep)
+    body = without_comment_marks(
+        without_footer(_from_line(text, layout.header_line), layout.sep, layout.decimal),
+        None if layout.sep == WHITESPACE else layout.sep,
+    )
     header_text, *rows = body.split("\n")
     if layout.sep == WHITESPACE and (
         first_uneven_row(header_text, rows) is not None
         or named_otherwise(header_text, rows)
-        or uneven_units_row(header_text, rows)
+        or (uneven_units_row(header_text, rows) and names_columns(header_text, rows))
     ):
         frame, header = read_aligned(header_text, rows, layout.decimal)
     else:
@@ -350,7 +390,7 @@ def _read_split(body: str, layout: TextLayout) -> tuple[pd.DataFrame, list[str]]
     as written; a row with more values than the header has names refused, naming it."""
     header_text = body.split("\n", 1)[0]
     if layout.sep == WHITESPACE:
-        header, sep = header_text.split(), r"\s+"
+        header, sep, body = header_text.split(), r"\s+", with_text_rows_quoted(body)
     else:
         header, sep = next(csv.reader([header_text], delimiter=layout.sep, skipinitialspace=True), []), layout.sep
     with warnings.catch_warnings():
@@ -372,49 +412,11 @@ def _read_split(body: str, layout: TextLayout) -> tuple[pd.DataFrame, list[str]]
     return frame, header
 
 
-COMMENT_MARK = re.compile(r"^\s*(?:#|%|//)\s*(?=\S)")
-"""A comment mark before a header's first name (NumPy's ``savetxt``: ``# time_s,T1``; MATLAB: ``% time T1``)."""
-
-
-def _without_comment_mark(body: str, sep: str) -> str:
-    """The body with the comment mark before its header's first name dropped; a column named ``#`` alone (a
-    HOBO logger's row number: ``"#","Date Time"``) is a name, not a mark."""
-    header, _, rows = body.partition("\n")
-    if sep == WHITESPACE:
-        fields = header.split()
-        rest = rows.split("\n", 1)[0].split()
-        if fields and fields[0] in ("#", "%", "//") and len(fields) == len(rest) + 1:
-            mark = header.index(fields[0])  # blanked, not cut: the names stay over their columns
-            return header[:mark] + " " * len(fields[0]) + header[mark + len(fields[0]) :] + "\n" + rows
-        return body
-    first = header.split(sep, 1)[0]
-    if COMMENT_MARK.match(first) and first.strip().strip('"') not in ("#", "%", "//"):
-        return COMMENT_MARK.sub("", header, count=1) + "\n" + rows
-    return body
-
-
 def _from_line(text: str, line: int) -> str:
     start = 0
     for _ in range(line):
         start = text.index("\n", start) + 1
     return text[start:]
-
-
-def _without_footer(body: str, layout: TextLayout) -> str:
-    """The table's lines up to its last one that holds a number and is no row of statistics: what follows is
-    a footer (``Logging stopped``, ``Max;25.3;26.1``), not data."""
-    lines = body.split("\n")
-    for end in range(len(lines), 1, -1):
-        fields = [field.strip().strip('"') for field in fields_of(lines[end - 1].rstrip("\r"), layout.sep)]
-        if any(is_number(field, layout.decimal) for field in fields) and not _statistics_row(fields):
-            return body if end == len(lines) else "\n".join(lines[:end]) + "\n"
-    return body
-
-
-def _statistics_row(cells) -> bool:
-    """Whether a row's first filled cell labels it as statistics (:data:`STATISTIC`)."""
-    filled = [str(cell).strip() for cell in cells if not _empty(cell)]
-    return bool(filled) and STATISTIC.fullmatch(filled[0]) is not None
 
 
 def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tuple[pd.DataFrame, list[str]]:
@@ -426,24 +428,6 @@ def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tu
     if len(kept) == len(header):
         return frame, header
     return frame.iloc[:, kept], [header[k] for k in kept]
-
-
-def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
-    """A sheet's frame without the rows after its last one that holds a number and is no row of statistics
-    (a footer), its columns read as numbers where the footer alone was text."""
-    numeric = frame.apply(lambda column: pd.to_numeric(column, errors="coerce")).notna().any(axis=1).to_numpy()
-    end = len(frame)
-    while end and (not numeric[end - 1] or _statistics_row(frame.iloc[end - 1])):  # only the last rows are read
-        end -= 1
-    if end in (0, len(frame)):
-        return frame
-    kept = frame.iloc[:end].copy()
-    for column in kept.columns:
-        if not pd.api.types.is_numeric_dtype(kept[column]):
-            values = as_numbers(kept[column], ".", str(column))
-            if values is not None:
-                kept[column] = values
-    return kept
 
 
 def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFrame:

@@ -83,6 +83,7 @@ TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", 
 
 TIME_NAME = re.compile(
     r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
+    r"(?:[a-z]+[\s_-]){2,3}(?:time|zeit)(?=\s*[\[(]\s*(?:" + "|".join(UNIT_SECONDS) + r")\.?\s*[\])])|"
     r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|ts|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
     r"horodatage|temps(?![\s_-]*[\[(]?\s*(?:°|c(?![a-z])|deg))|tiempo|tempo|fecha|heure|"
     r"[\u3040-\u30ff\u4e00-\u9fff]{0,8}?(?:时间|時間|时刻|時刻|日时|日時|日期|日付)|"
@@ -92,7 +93,7 @@ TIME_NAME = re.compile(
     re.IGNORECASE,
 )
 """Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``,
-``Relative Time``, ``Laufzeit [s]``, ``Seconds``, ``Temps (s)``, ``Horodatage``, ``Tiempo``,
+``Relative Time``, ``Scan Sweep Time (Sec)``, ``Laufzeit [s]``, ``Seconds``, ``Temps (s)``, ``Horodatage``, ``Tiempo``,
 LabVIEW's ``X_Value``, a JSON log's ``ts``, ``时间``,
 ``経過時間``, ``日時``, ``경과시간``, ``일시``, ``Время``, ``Дата и время``)."""
 OF_DAY = re.compile(r"\bof[\s_-]+day\s*$", re.IGNORECASE)
