@@ -61,13 +61,52 @@ def unit_of(cell: str) -> tuple[str, str] | None:
     return None
 
 
-def row_units(frame: pd.DataFrame) -> dict[str, tuple[str, str]]:
+def row_units(frame: pd.DataFrame, time: str | None = None, label: str = "") -> dict[str, tuple[str, str]]:
     """The units of the frame's columns by the text row under its header that names the most, and by the
-    units written in their cells (``20.5 °C``; empty: none)."""
+    units written in their cells (``20.5 °C``; empty: none); see :func:`aligned_row_units` for a row with fewer
+    units than columns."""
+    return units_and_note(frame, time, label)[0]
+
+
+def units_and_note(frame: pd.DataFrame, time: str | None, label: str) -> tuple[dict[str, tuple[str, str]], str | None]:
+    """:func:`row_units` and the note when the units row was read as the units of the last columns."""
     rows = frame.attrs.get("text_rows") or []
-    found = [{column: unit for column, cell in row.items() if (unit := unit_of(cell))} for row in rows]
+    columns = [str(column) for column in frame.columns]
+    found = [aligned_row_units(row, columns, time, label) for row in rows]
+    units, note = max(found, key=lambda pair: len(pair[0]), default=({}, None))
     in_cells = {column: unit for column, cell in frame.attrs.get("cell_units", {}).items() if (unit := unit_of(cell))}
-    return {**max(found, key=len, default={}), **in_cells}
+    return {**units, **in_cells}, note
+
+
+def aligned_row_units(
+    row: dict[str, str], columns: list[str], time: str | None, label: str
+) -> tuple[dict[str, tuple[str, str]], str | None]:
+    """The units a text row under the header gives its columns, and a note when it was realigned.
+
+    A row split at spaces with fewer cells than columns is placed from the left (``°F °F µm`` under ``time_s
+    T1 T2 error_um``), which puts a unit of temperature or length over the time column and shifts every other
+    unit one column off: °F converted on the time, µm on a temperature, the error left in mm. Such a row is
+    read as the units of the last columns when that puts no unit of temperature or length over the time;
+    otherwise it is refused, naming the unit and the column.
+    """
+    units = {column: unit for column, cell in row.items() if (unit := unit_of(cell))}
+    if time is None or units.get(time, ("time",))[0] == "time":
+        return units, None
+    cells = list(row.values())
+    if len(cells) < len(columns):
+        last = columns[len(columns) - len(cells) :]
+        moved = {column: unit for column, cell in zip(last, cells) if (unit := unit_of(cell))}
+        if moved.get(time, ("time",))[0] == "time":
+            return moved, (
+                f"{label}: the row of units under the header gives {len(cells)} units for {len(columns)} columns "
+                f"({' '.join(cells)}): read as the units of the last {len(cells)}, from '{last[0]}' on (placed from "
+                f"the first, '{row[time]}' would stand over the time column '{time}')"
+            )
+    raise InputError(
+        f"{label}: the row of units under the header puts '{row[time]}', a unit of {units[time][0]}, over the time "
+        f"column '{time}' ({len(cells)} units for {len(columns)} columns); write one unit per column, '-' for a "
+        "column without one"
+    )
 
 
 def named_temperature_unit(name: str) -> str | None:
@@ -97,7 +136,7 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
     InputError
         A column whose name and units row give different units.
     """
-    units = row_units(frame)
+    units, aligned = units_and_note(frame, time, label)
     lengths, converted = [], []
     for column in frame.columns:
         factored = temperature_factor(column)
@@ -116,9 +155,9 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
         if (scale, offset) != (1.0, 0.0):
             frame[column] = frame[column].to_numpy(dtype=float) * scale + offset
             converted.append(f"'{column}' from {SHOWN.get(unit, unit)}")
-    notes = ()
+    notes = (aligned,) if aligned else ()
     if converted:
-        notes = (
+        notes += (
             f"{label}: converted to µm, s and °C from the units of their names, cells or the row under the header: "
             + ", ".join(converted),
         )
@@ -167,4 +206,4 @@ def _to_base(column, kind: str, unit: str, time: str, label: str) -> tuple[float
     return 1.0, 0.0  # the name's unit is read where the column is
 
 
-__all__ = ["read_in_row_units", "row_units", "temperature_factor", "unit_of"]
+__all__ = ["aligned_row_units", "read_in_row_units", "row_units", "temperature_factor", "unit_of", "units_and_note"]

@@ -343,3 +343,41 @@ def test_a_column_empty_under_its_unit_is_read_as_missing(tmp_path, synthetic, s
     run = load_run(path, temps=TEMPS)
     np.testing.assert_array_equal(run.temps, plain.temps)
     np.testing.assert_array_equal(run.error, plain.error)
+
+
+def spaced_with_units(frame: pd.DataFrame, units: list[str]) -> str:
+    """The table split at single spaces, a units row of ``units`` under its names (as many as given)."""
+    lines = [" ".join(frame.columns), " ".join(units)]
+    lines += [" ".join(f"{v:.10g}" for v in row) for row in frame.to_numpy(dtype=float)]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("temperature, error", [("°F", "mm"), ("degF", "µm"), ("°C", "mm"), ("K", "nm")])
+def test_a_units_row_without_the_times_unit_is_read_as_the_units_of_the_last_columns(
+    tmp_path, synthetic, temperature, error
+):
+    """``°F °F °F °F mm`` under ``time_s T1 T2 T3 T4 error_um spindle_on`` minus the switch column: placed from
+    the first column, °F stood over the time (the times converted as temperatures), every unit one column
+    off and the error left in mm."""
+    frame, plain = synthetic
+    celsius = frame[TEMPS].to_numpy(dtype=float)
+    logged = {"F": celsius * 9.0 / 5.0 + 32.0, "C": celsius, "K": celsius + 273.15}[temperature[-1]]
+    per_um = {"mm": 1e-3, "µm": 1.0, "nm": 1e3}[error]
+    table = frame.assign(**dict(zip(TEMPS, logged.T)), error_um=frame["error_um"] * per_um)
+    table = table[["time_s", *TEMPS, "error_um"]].rename(columns={"error_um": "error"})
+    path = tmp_path / "log.txt"
+    path.write_text(spaced_with_units(table, [temperature] * 4 + [error]))
+    run = load_run(path, temps=TEMPS, error="error")
+    np.testing.assert_allclose(run.time, plain.time, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(run.temps, plain.temps, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(run.error, plain.error, rtol=1e-9, atol=1e-9)
+    assert any("5 units for 6 columns" in note and "from 'T1' on" in note for note in run.notes)
+
+
+def test_a_units_row_that_puts_a_temperature_over_the_time_either_way_is_refused(tmp_path, synthetic):
+    frame, _ = synthetic
+    table = frame[["time_s", *TEMPS, "error_um"]]
+    path = tmp_path / "log.txt"
+    path.write_text(spaced_with_units(table, ["°F"] * 6))  # as many units as columns, one over the time
+    with pytest.raises(InputError, match=r"puts '°F', a unit of temperature, over the time column 'time_s'"):
+        load_run(path, temps=TEMPS)
