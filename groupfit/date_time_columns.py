@@ -27,6 +27,9 @@ from groupfit.default_columns import found_time_column
 from groupfit.errors import InputError
 from groupfit.timestamps import DATE_FORMATS, TIME_FORMATS, named_time_unit, parses, time_like_columns
 
+MIDNIGHT_STEP_S = 2 * 3600.0
+"""A time of day that goes back by more than this on one date passed midnight (a change to or from summer time
+goes back an hour)."""
 Pair = tuple[str, str]
 """The date column and the time-of-day column after it."""
 
@@ -89,7 +92,38 @@ def _pair_of(frame: pd.DataFrame, column: str) -> Pair | None:
         pair = (names[k], names[k + 1])
     elif k > 0 and _holds_times_of_day(frame.iloc[:, k]) and _holds_dates(frame.iloc[:, k - 1]):
         pair = (names[k - 1], names[k])
-    return pair if pair is not None and f"{pair[0]} {pair[1]}" not in names else None
+    if pair is None or f"{pair[0]} {pair[1]}" in names:
+        return None
+    return pair if _joinable(frame[pair[0]], frame[pair[1]]) else None
+
+
+def _joinable(date_cells: pd.Series, time_cells: pd.Series) -> bool:
+    """Whether the two columns make one stamp: a date on every row with a time of day (a date written on the
+    first row alone, or missing on the last, leaves the time of day to be read alone, as before), numbers as
+    fractions of a day only where the date changes (below a day, hours or minutes under ``Time`` read so
+    too), and on a single date times that do not pass midnight (a start date over a clock that rolls over is
+    no date of every row; going back an hour where summer time ends is no midnight)."""
+    dates, times = _date_text(date_cells), _time_text(time_cells)
+    if (dates.isna() & times.notna()).any():
+        return False
+    days = dates.dropna().nunique()
+    if pd.api.types.is_numeric_dtype(time_cells) and days < 2:
+        return False
+    if days > 1:
+        return True
+    seconds = _seconds_of_day(times.dropna())
+    return seconds is not None and bool(np.all(np.diff(seconds) > -MIDNIGHT_STEP_S))
+
+
+def _seconds_of_day(times: pd.Series) -> np.ndarray | None:
+    """The times of day in seconds after midnight, read in the first of
+    :data:`~groupfit.timestamps.TIME_FORMATS` that reads the first and the last; None when none does."""
+    first, last = str(times.iloc[0]), str(times.iloc[-1])
+    for form in TIME_FORMATS:
+        if parses(first, form) and parses(last, form):
+            clock = pd.to_datetime(times, format=form, errors="coerce")
+            return (clock - clock.dt.normalize()).dt.total_seconds().to_numpy()
+    return None
 
 
 def _holds_dates(cells: pd.Series) -> bool:

@@ -79,11 +79,10 @@ BRACKETED_UNIT = re.compile(r"[\[(（［]\s*([a-z]{1,12})\.?\s*[\])）］]\s*$",
 """A unit in brackets at the end of a name (``Zeit [xyz]``): a time column's must be one of :data:`UNIT_SECONDS`."""
 TIME_ZONES = frozenset({"utc", "gmt", "z", "local", "lt", "cet", "cest", "mez", "mesz", "est", "pst"})
 """Bracketed words a time column's name may end in that are not units (``Time (UTC)``)."""
-
-
+LONG_TIME = r"(?:[a-z]+[\s_-]){2,3}(?:time|zeit)(?=\s*[\[(]\s*(?:" + "|".join(UNIT_SECONDS) + r")\.?\s*[\])])"
+"""A time named in several words and a unit (``Scan Sweep Time (Sec)``; after ``Time`` beside ``Run Time (s)``)."""
 TIME_NAME = re.compile(
-    r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|"
-    r"(?:[a-z]+[\s_-]){2,3}(?:time|zeit)(?=\s*[\[(]\s*(?:" + "|".join(UNIT_SECONDS) + r")\.?\s*[\])])|"
+    r"^\s*(?:date[\s_-]?time|time[\s_-]?stamp|datum[\s_-]?zeit|zeitstempel|zeitpunkt|datum|date|" + LONG_TIME + "|"
     r"(?:[a-z]+[\s_-]?)?(?:time|zeit)|elapsed|x_value|ts|seconds|secs?|sekunden|minutes|minuten|hours|stunden|"
     r"horodatage|temps(?![\s_-]*[\[(]?\s*(?:°|c(?![a-z])|deg))|tiempo|tempo|fecha|heure|"
     r"[\u3040-\u30ff\u4e00-\u9fff]{0,8}?(?:时间|時間|时刻|時刻|日时|日時|日期|日付)|"
@@ -92,10 +91,9 @@ TIME_NAME = re.compile(
     r"(?=$|[^a-z0-9])",
     re.IGNORECASE,
 )
-"""Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``,
-``Relative Time``, ``Scan Sweep Time (Sec)``, ``Laufzeit [s]``, ``Seconds``, ``Temps (s)``, ``Horodatage``, ``Tiempo``,
-LabVIEW's ``X_Value``, a JSON log's ``ts``, ``时间``,
-``経過時間``, ``日時``, ``경과시간``, ``일시``, ``Время``, ``Дата и время``)."""
+"""Names a logger gives its time column (``Timestamp``, ``Date/Time``, ``Zeit [min]``, ``elapsed_h``, ``Relative
+Time``, ``Laufzeit [s]``, ``Seconds``, ``Temps (s)``, ``Horodatage``, ``Tiempo``, LabVIEW's ``X_Value``, a JSON
+log's ``ts``, ``时间``, ``経過時間``, ``日時``, ``경과시간``, ``일시``, ``Время``, ``Дата и время``)."""
 OF_DAY = re.compile(r"\bof[\s_-]+day\s*$", re.IGNORECASE)
 """A time of day (``Time of day``): its last word is no unit."""
 BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")\s*[\])]?)?\s*$", re.IGNORECASE)
@@ -103,8 +101,9 @@ BARE_T = re.compile(r"^\s*t\s*(?:[_\s\[(/]\s*(?:" + "|".join(UNIT_SECONDS) + r")
 
 
 def time_like_columns(columns) -> list[str]:
-    """The columns whose names say they hold the time, in table order."""
-    return [str(c) for c in columns if TIME_NAME.match(str(c)) or BARE_T.match(str(c))]
+    """The columns whose names say they hold the time, in table order, a long name (:data:`LONG_TIME`) last."""
+    named = [str(c) for c in columns if TIME_NAME.match(str(c)) or BARE_T.match(str(c))]
+    return sorted(named, key=lambda name: re.match(r"^\s*" + LONG_TIME, name, re.IGNORECASE) is not None)
 
 
 SERIAL_DAYS = (20000.0, 80000.0)

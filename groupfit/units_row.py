@@ -19,7 +19,12 @@ import re
 import numpy as np
 import pandas as pd
 
-from groupfit.default_columns import MICROMETRES_PER_UNIT, named_length_unit
+from groupfit.default_columns import (
+    MICROMETRES_PER_UNIT,
+    default_temperature_columns,
+    error_like_columns,
+    named_length_unit,
+)
 from groupfit.errors import InputError
 from groupfit.timestamps import UNIT_SECONDS, named_time_unit
 from groupfit.unit_factors import FactoredUnit, factored_unit
@@ -86,8 +91,9 @@ def aligned_row_units(
     A row split at spaces with fewer cells than columns is placed from the left (``°F °F µm`` under ``time_s
     T1 T2 error_um``), which puts a unit of temperature or length over the time column and shifts every other
     unit one column off: °F converted on the time, µm on a temperature, the error left in mm. Such a row is
-    read as the units of the last columns when that puts no unit of temperature or length over the time;
-    otherwise it is refused, naming the unit and the column.
+    read as the units of the last columns when that puts no unit of temperature or length over the time, no
+    temperature over a column named as the error and no length over one named as a sensor; otherwise it is
+    refused, naming the unit and the column.
     """
     units = {column: unit for column, cell in row.items() if (unit := unit_of(cell))}
     if time is None or units.get(time, ("time",))[0] == "time":
@@ -96,7 +102,7 @@ def aligned_row_units(
     if len(cells) < len(columns):
         last = columns[len(columns) - len(cells) :]
         moved = {column: unit for column, cell in zip(last, cells) if (unit := unit_of(cell))}
-        if moved.get(time, ("time",))[0] == "time":
+        if moved.get(time, ("time",))[0] == "time" and not _against_names(moved, columns):
             return moved, (
                 f"{label}: the row of units under the header gives {len(cells)} units for {len(columns)} columns "
                 f"({' '.join(cells)}): read as the units of the last {len(cells)}, from '{last[0]}' on (placed from "
@@ -121,6 +127,17 @@ def temperature_factor(name: object) -> FactoredUnit | None:
     factored = factored_unit(name)
     unit = unit_of(factored.unit.replace(" ", "")) if factored is not None else None
     return factored if unit is not None and unit[0] == "temperature" else None
+
+
+def _against_names(units: dict[str, tuple[str, str]], columns: list[str]) -> bool:
+    """Whether ``units`` put a unit of temperature over a column named as the thermal error, or a unit of
+    length over one named as a temperature sensor (a row two units short, placed from either end)."""
+    errors = set(error_like_columns(columns))
+    sensors = set(default_temperature_columns(columns)) - errors
+    return any(
+        (kind == "temperature" and column in errors) or (kind == "length" and column in sensors)
+        for column, (kind, _) in units.items()
+    )
 
 
 def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[str], tuple[str, ...]]:

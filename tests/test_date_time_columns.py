@@ -312,10 +312,10 @@ def test_a_time_of_day_alone_and_a_date_alone_keep_their_reading(tmp_path):
     assert daily.clock_origin_s == pd.Timestamp("2026-10-01").timestamp()
 
 
-def test_an_empty_date_or_time_of_day_is_refused_as_an_empty_stamp(tmp_path, capsys):
+def test_an_empty_time_of_day_is_refused_as_an_empty_stamp(tmp_path, capsys):
     layout = LAYOUTS["german"]
     separate, joined = twin_tables(layout)
-    for column, table in (("Zeit", separate), ("Datum", separate), (JOINED, joined)):
+    for column, table in (("Zeit", separate), (JOINED, joined)):
         broken = table.copy()
         broken.loc[6, column] = None
         path = write(broken, tmp_path / column / "log.csv", layout)
@@ -323,6 +323,36 @@ def test_an_empty_date_or_time_of_day_is_refused_as_an_empty_stamp(tmp_path, cap
         assert f"{path}: row 7, column '{column}' is empty; fix or remove that row" in capsys.readouterr().err
         with pytest.raises(InputError, match=f"row 7, column '{column}' is empty"):
             load_run(path)
+
+
+@pytest.mark.parametrize("missing", ["one row", "the last row", "all but the first row"])
+def test_a_date_missing_where_the_time_of_day_is_written_leaves_the_time_of_day_read_alone(tmp_path, missing):
+    """A date column not written on every row (left empty on the last row, written on the first alone) is no
+    date of every row: the time of day is read alone, as before the two were joined."""
+    separate, _ = twin_tables(LAYOUTS["german"])
+    dates = separate["Datum"].iloc[:CHANGE_ROW].astype(object).copy()
+    where = {"one row": [6], "the last row": [CHANGE_ROW - 1], "all but the first row": list(range(1, CHANGE_ROW))}
+    dates.iloc[where[missing]] = None
+    [run] = load_runs(german_log(tmp_path, Datum=dates, Zeit=separate["Zeit"].iloc[:CHANGE_ROW]))
+    assert run.time_name == "Zeit" and run.clock_origin_s is None
+    np.testing.assert_array_equal(run.time, 100.0 * np.arange(CHANGE_ROW))
+
+
+def test_a_start_date_over_a_clock_that_passes_midnight_is_not_joined(tmp_path):
+    """The date the run started on, on every row, while the time of day rolls past midnight: joined, the clock
+    went back a day; the time of day is read alone, through midnight, as before."""
+    stamps = pd.date_range("2026-03-02 23:00", periods=30, freq="5min")
+    [run] = load_runs(german_log(tmp_path, Datum=["02.03.2026"] * 30, Zeit=stamps.strftime("%H:%M:%S")))
+    assert run.time_name == "Zeit"
+    np.testing.assert_array_equal(run.time, 300.0 * np.arange(30))
+
+
+def test_numbers_below_one_under_time_beside_one_date_are_not_taken_for_fractions_of_a_day(tmp_path):
+    """``Time`` 0.0, 0.0167 … (hours) beside one date: fractions of a day only where the date changes."""
+    hours = np.round(np.arange(30) / 60.0, 6)
+    [run] = load_runs(german_log(tmp_path, Datum=["02.03.2026"] * 30, Zeit=hours))
+    assert run.time_name == "Zeit" and run.clock_origin_s is None
+    np.testing.assert_allclose(run.time, hours)
 
 
 def test_a_time_of_day_that_is_none_is_named_with_its_row(tmp_path):

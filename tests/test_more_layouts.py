@@ -75,6 +75,43 @@ def test_a_time_column_named_with_several_words_and_a_unit_is_the_time(tmp_path,
     assert any("time from column 'Scan Sweep Time (Sec)'" in note for note in run.notes)
 
 
+def test_a_counter_named_with_several_words_and_a_unit_does_not_take_the_time_from_time(tmp_path, log):
+    """``Spindle Run Time (s)`` (hours of a spindle, a counter) before the log's ``Time``: the time is ``Time``."""
+    counter = 3600.0 + 0.75 * log["time_s"]
+    rows = [f"{hours:.2f}," + line for hours, line in zip(counter, joined(log, ","))]
+    path = write(tmp_path / "counter.csv", ["Spindle Run Time (s),Time,T1,T2,T3,error_um", *rows])
+    run = load_run(path, temps=["T1", "T2", "T3"])
+    assert run.time_name == "Time"
+    np.testing.assert_array_equal(run.time, log["time_s"].to_numpy())
+
+
+@pytest.mark.parametrize(
+    "units, scale",
+    [("deg F deg F deg F um", None), ("deg C deg C deg C mm", 1e-3), ("s deg F deg F deg F", None)],
+)
+def test_a_single_spaced_units_row_of_two_word_units_one_short_converts_the_right_columns(tmp_path, log, units, scale):
+    """``deg F deg F deg F um`` under ``time_s T1 T2 T3 error_um``: a unit short, its units were dropped whole with
+    the row (°F read as °C, an error in mm as µm)."""
+    fahrenheit = "deg F" in units
+    written = log.copy()
+    if fahrenheit:
+        written[["T1", "T2", "T3"]] = written[["T1", "T2", "T3"]] * 9 / 5 + 32
+    if scale:
+        written["error_um"] = written["error_um"] * scale
+    body = [" ".join(f"{v:.10g}" for v in row) for row in written.to_numpy()]
+    header = " ".join([*NAMES[:-1], "error"])  # named without its unit: the units row gives it
+    run = load_run(write(tmp_path / "short.txt", [header, units, *body]), temps=["T1", "T2", "T3"], error="error")
+    np.testing.assert_allclose(run.temps, log[["T1", "T2", "T3"]].to_numpy(), atol=1e-9)
+    np.testing.assert_allclose(run.error, log["error_um"].to_numpy(), atol=1e-9)
+    np.testing.assert_array_equal(run.time, log["time_s"].to_numpy())
+
+
+def test_a_single_spaced_units_row_two_units_short_is_refused(tmp_path, log, capsys):
+    body = [" ".join(f"{v:.10g}" for v in row) for row in log.to_numpy()]
+    path = write(tmp_path / "two_short.txt", [" ".join(NAMES), "deg F deg F deg F", *body])
+    assert "a unit of temperature, over the time column 'time_s'" in refusal(path, capsys)
+
+
 def test_a_row_of_channel_numbers_under_a_csv_header_is_left_out_with_a_note(tmp_path, log):
     path = write(tmp_path / "channels.csv", ["Time,T1,T2,T3,Error", ",101,102,103,", *joined(log, ",")])
     run = assert_read(path, log)
