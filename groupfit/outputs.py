@@ -164,9 +164,8 @@ class OutputPlan:
         self.tables: dict[Path, str] = {}
         """Tables in an output folder that exist (and the option): replaced only by one with their header."""
         self.folders: dict[Path, str] = {}
-        """Every declared output folder and the option that names it: no output file may be one of them."""
-        self.declared_folders: dict[Path, str] = {}
-        """The output folders (and their option) whose files are checked as earlier outputs when written."""
+        """Every declared output folder and the option that names it: no output file may be one of them, and a
+        file written into one replaces only an earlier output of its kind (:func:`foreign_output`)."""
 
     # ------------------------------------------------------------ declaring
     def read(self, *paths) -> OutputPlan:
@@ -242,7 +241,6 @@ class OutputPlan:
                     raise self._foreign(target, option, "a table that is not an earlier output of this command")
             elif (what := foreign_output(target)) is not None:
                 raise self._foreign(target, option, what)
-        self.declared_folders[resolved_path(folder)] = option
         return folder
 
     @staticmethod
@@ -337,7 +335,7 @@ class OutputPlan:
                 what = "a table that is not an earlier output of this command (its header differs)"
                 raise self._foreign(target, option, what, done=f"; nothing was written to {option}")
             return
-        option = self.declared_folders.get(resolved_path(target.parent))
+        option = self.folders.get(resolved_path(target.parent))
         if option is not None and (what := foreign_output(target, temporary)) is not None:
             raise self._foreign(target, option, what, done=f"; nothing was written to {option}")
 
