@@ -19,6 +19,7 @@ date column keep their reading.
 from __future__ import annotations
 
 import datetime
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -30,8 +31,17 @@ from groupfit.timestamps import DATE_FORMATS, TIME_FORMATS, named_time_unit, par
 MIDNIGHT_STEP_S = 2 * 3600.0
 """A time of day that goes back by more than this on one date passed midnight (a change to or from summer time
 goes back an hour)."""
-Pair = tuple[str, str]
-"""The date column and the time-of-day column after it."""
+
+
+class Stamp(NamedTuple):
+    """A date column and the time-of-day column after it, and their cells as text (empty cells missing)."""
+
+    date: str
+    clock: str
+    dates: pd.Series
+    times: pd.Series
+    fractions: bool
+    """The times of day are numbers, fractions of a day."""
 
 
 def found_stamp_column(frame: pd.DataFrame, time: str, label: str, *, default: bool = False) -> tuple[str, str | None]:
@@ -46,68 +56,81 @@ def found_stamp_column(frame: pd.DataFrame, time: str, label: str, *, default: b
     InputError
         A row whose date or time of day is empty, naming the row and the column.
     """
-    pair = _pair_named(frame, time)
+    stamp = _pair_named(frame, time)
     note = None
-    if pair is None:
+    if stamp is None:
         chosen, note = found_time_column(frame, time, label, default=default)
-        pair = _pair_of(frame, chosen)
-        if pair is None and note is not None:
-            pair = next(filter(None, (_pair_of(frame, name) for name in time_like_columns(frame.columns))), None)
-        if pair is None:
+        stamp = _pair_of(frame, chosen)
+        if stamp is None and note is not None:
+            stamp = next(filter(None, (_pair_of(frame, name) for name in time_like_columns(frame.columns))), None)
+        if stamp is None:
             return chosen, note
-    joined = _joined(frame, pair, label)
+    joined = _joined(frame, stamp, label)
     if joined == time:
         return joined, None
     unasked = f" (there is no '{time}'; --time names another)" if note is not None else ""
     return joined, (
-        f"{label}: time from columns '{pair[0]}' and '{pair[1]}', a date and a time of day read as one stamp, "
-        f"'{joined}'{unasked}"
+        f"{label}: time from columns '{stamp.date}' and '{stamp.clock}', a date and a time of day read as one "
+        f"stamp, '{joined}'{unasked}"
     )
 
 
-def _pair_named(frame: pd.DataFrame, time: str) -> Pair | None:
+def _pair_named(frame: pd.DataFrame, time: str) -> Stamp | None:
     """The pair whose joined name ``time`` is, when the frame has no column of that name."""
     names = [str(c) for c in frame.columns]
     if time in names:
         return None
-    return next(
-        (
-            (date, clock)
-            for date, clock in zip(names, names[1:])
-            if f"{date} {clock}" == time and _pair_of(frame, date) == (date, clock)
-        ),
-        None,
-    )
+    for date, clock in zip(names, names[1:]):
+        if f"{date} {clock}" == time:
+            stamp = _pair_of(frame, date)
+            if stamp is not None and (stamp.date, stamp.clock) == (date, clock):
+                return stamp
+    return None
 
 
-def _pair_of(frame: pd.DataFrame, column: str) -> Pair | None:
+def _pair_of(frame: pd.DataFrame, column: str) -> Stamp | None:
     """The date column and the time-of-day column ``column`` is one of (None: it is neither, or its neighbour is
-    not the other, or the frame already has a column of their joined name)."""
+    not the other, or the frame already has a column of their joined name, or they make no stamp of every
+    row, :func:`_joinable`)."""
     names = [str(c) for c in frame.columns]
     if column not in names:
         return None
     k = names.index(column)
-    pair = None
-    if k + 1 < len(names) and _holds_dates(frame.iloc[:, k]) and _holds_times_of_day(frame.iloc[:, k + 1]):
-        pair = (names[k], names[k + 1])
-    elif k > 0 and _holds_times_of_day(frame.iloc[:, k]) and _holds_dates(frame.iloc[:, k - 1]):
-        pair = (names[k - 1], names[k])
-    if pair is None or f"{pair[0]} {pair[1]}" in names:
+    stamp = _stamp_at(frame, k) if k + 1 < len(names) else None
+    if stamp is None and k > 0:
+        stamp = _stamp_at(frame, k - 1)
+    if stamp is None or f"{stamp.date} {stamp.clock}" in names:
         return None
-    return pair if _joinable(frame[pair[0]], frame[pair[1]]) else None
+    return stamp if _joinable(stamp) else None
 
 
-def _joinable(date_cells: pd.Series, time_cells: pd.Series) -> bool:
+def _stamp_at(frame: pd.DataFrame, k: int) -> Stamp | None:
+    """Column ``k`` as dates and column ``k + 1`` as times of day, when they hold them (the first and the last
+    written cell read in one of :data:`~groupfit.timestamps.DATE_FORMATS`, of
+    :data:`~groupfit.timestamps.TIME_FORMATS`: a workbook's date cells, its time cells or fractions of a day
+    under a name that marks a time)."""
+    dates = _date_text(frame.iloc[:, k])
+    if dates is None or _form_of(dates, DATE_FORMATS) is None:
+        return None
+    clock = frame.iloc[:, k + 1]
+    times = _time_text(clock)
+    if times is None or _form_of(times, TIME_FORMATS) is None:
+        return None
+    names = [str(c) for c in frame.columns]
+    return Stamp(names[k], names[k + 1], dates, times, pd.api.types.is_numeric_dtype(clock))
+
+
+def _joinable(stamp: Stamp) -> bool:
     """Whether the two columns make one stamp: a date on every row with a time of day (a date written on the
     first row alone, or missing on the last, leaves the time of day to be read alone, as before), numbers as
     fractions of a day only where the date changes (below a day, hours or minutes under ``Time`` read so
     too), and on a single date times that do not pass midnight (a start date over a clock that rolls over is
     no date of every row; going back an hour where summer time ends is no midnight)."""
-    dates, times = _date_text(date_cells), _time_text(time_cells)
+    dates, times = stamp.dates, stamp.times
     if (dates.isna() & times.notna()).any():
         return False
     days = dates.dropna().nunique()
-    if pd.api.types.is_numeric_dtype(time_cells) and days < 2:
+    if stamp.fractions and days < 2:
         return False
     if days > 1:
         return True
@@ -116,38 +139,22 @@ def _joinable(date_cells: pd.Series, time_cells: pd.Series) -> bool:
 
 
 def _seconds_of_day(times: pd.Series) -> np.ndarray | None:
-    """The times of day in seconds after midnight, read in the first of
-    :data:`~groupfit.timestamps.TIME_FORMATS` that reads the first and the last; None when none does."""
-    first, last = str(times.iloc[0]), str(times.iloc[-1])
-    for form in TIME_FORMATS:
-        if parses(first, form) and parses(last, form):
-            clock = pd.to_datetime(times, format=form, errors="coerce")
-            return (clock - clock.dt.normalize()).dt.total_seconds().to_numpy()
-    return None
+    """The times of day in seconds after midnight, read in the form of :func:`_form_of`; None when none reads."""
+    form = _form_of(times, TIME_FORMATS)
+    if form is None:
+        return None
+    clock = pd.to_datetime(times, format=form, errors="coerce")
+    return (clock - clock.dt.normalize()).dt.total_seconds().to_numpy()
 
 
-def _holds_dates(cells: pd.Series) -> bool:
-    """Whether a column holds dates without a time of day (text in one of
-    :data:`~groupfit.timestamps.DATE_FORMATS`, a workbook's date cells)."""
-    text = _date_text(cells)
-    return text is not None and _first_and_last_read(text, DATE_FORMATS)
-
-
-def _holds_times_of_day(cells: pd.Series) -> bool:
-    """Whether a column holds times of day (text in one of :data:`~groupfit.timestamps.TIME_FORMATS`, a
-    workbook's time cells, fractions of a day under a name that marks a time)."""
-    text = _time_text(cells)
-    return text is not None and _first_and_last_read(text, TIME_FORMATS)
-
-
-def _first_and_last_read(text: pd.Series, forms) -> bool:
-    """Whether the first and the last written cell read in one of ``forms``, as the stamps of a time column are
-    told (:func:`groupfit.timestamps.text_clock` names a cell between them that does not)."""
+def _form_of(text: pd.Series, forms) -> str | None:
+    """The first of ``forms`` the first and the last written cell read in, as the stamps of a time column are
+    told (:func:`groupfit.timestamps.text_clock` names a cell between them that does not); None when none."""
     written = text.dropna()
     if written.empty:
-        return False
+        return None
     first, last = str(written.iloc[0]), str(written.iloc[-1])
-    return any(parses(first, form) and parses(last, form) for form in forms)
+    return next((form for form in forms if parses(first, form) and parses(last, form)), None)
 
 
 def _date_text(cells: pd.Series) -> pd.Series | None:
@@ -206,22 +213,19 @@ def _text(cells: pd.Series) -> pd.Series:
     return text.mask(text == "")
 
 
-def _joined(frame: pd.DataFrame, pair: Pair, label: str) -> str:
+def _joined(frame: pd.DataFrame, stamp: Stamp, label: str) -> str:
     """Replace the two columns by one of their stamps (``date time``) where the date column stood, in place;
     its name."""
-    date, clock = pair
-    names = [str(c) for c in frame.columns]
-    dates, times = _date_text(frame.iloc[:, names.index(date)]), _time_text(frame.iloc[:, names.index(clock)])
-    empty = (dates.isna() | times.isna()).to_numpy()
+    empty = (stamp.dates.isna() | stamp.times.isna()).to_numpy()
     if empty.any():
         row = int(np.argmax(empty))
-        column = date if pd.isna(dates.iloc[row]) else clock
+        column = stamp.date if pd.isna(stamp.dates.iloc[row]) else stamp.clock
         raise InputError(f"{label}: row {row + 1}, column '{column}' is empty; fix or remove that row")
-    stamps = [str(stamp) for stamp in dates + " " + times]
-    position = names.index(date)
+    stamps = [str(text) for text in stamp.dates + " " + stamp.times]
+    position = [str(c) for c in frame.columns].index(stamp.date)
     del frame[frame.columns[position + 1]]
     del frame[frame.columns[position]]
-    name = f"{date} {clock}"
+    name = f"{stamp.date} {stamp.clock}"
     frame.insert(position, name, pd.Series(stamps, index=frame.index))
     return name
 
