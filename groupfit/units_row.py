@@ -66,15 +66,10 @@ def unit_of(cell: str) -> tuple[str, str] | None:
     return None
 
 
-def row_units(frame: pd.DataFrame, time: str | None = None, label: str = "") -> dict[str, tuple[str, str]]:
+def row_units(frame: pd.DataFrame, time: str | None, label: str) -> tuple[dict[str, tuple[str, str]], str | None]:
     """The units of the frame's columns by the text row under its header that names the most, and by the
-    units written in their cells (``20.5 °C``; empty: none); see :func:`aligned_row_units` for a row with fewer
-    units than columns."""
-    return units_and_note(frame, time, label)[0]
-
-
-def units_and_note(frame: pd.DataFrame, time: str | None, label: str) -> tuple[dict[str, tuple[str, str]], str | None]:
-    """:func:`row_units` and the note when the units row was read as the units of the last columns."""
+    units written in their cells (``20.5 °C``; empty: none); and the note when the units row was read as the
+    units of the last columns (:func:`aligned_row_units`)."""
     rows = frame.attrs.get("text_rows") or []
     columns = [str(column) for column in frame.columns]
     found = [aligned_row_units(row, columns, time, label) for row in rows]
@@ -96,13 +91,13 @@ def aligned_row_units(
     refused, naming the unit and the column.
     """
     units = {column: unit for column, cell in row.items() if (unit := unit_of(cell))}
-    if time is None or units.get(time, ("time",))[0] == "time":
+    if time is None or _time_fits(units, time):
         return units, None
     cells = list(row.values())
     if len(cells) < len(columns):
         last = columns[len(columns) - len(cells) :]
         moved = {column: unit for column, cell in zip(last, cells) if (unit := unit_of(cell))}
-        if moved.get(time, ("time",))[0] == "time" and not _against_names(moved, columns):
+        if _time_fits(moved, time) and not _against_names(moved, columns):
             return moved, (
                 f"{label}: the row of units under the header gives {len(cells)} units for {len(columns)} columns "
                 f"({' '.join(cells)}): read as the units of the last {len(cells)}, from '{last[0]}' on (placed from "
@@ -129,6 +124,11 @@ def temperature_factor(name: object) -> FactoredUnit | None:
     return factored if unit is not None and unit[0] == "temperature" else None
 
 
+def _time_fits(units: dict[str, tuple[str, str]], time: str) -> bool:
+    """Whether ``units`` give the time column a unit of time or none."""
+    return units.get(time, ("time",))[0] == "time"
+
+
 def _against_names(units: dict[str, tuple[str, str]], columns: list[str]) -> bool:
     """Whether ``units`` put a unit of temperature over a column named as the thermal error, or a unit of
     length over one named as a temperature sensor (a row two units short, placed from either end)."""
@@ -153,7 +153,7 @@ def read_in_row_units(frame: pd.DataFrame, time: str, label: str) -> tuple[list[
     InputError
         A column whose name and units row give different units.
     """
-    units, aligned = units_and_note(frame, time, label)
+    units, aligned = row_units(frame, time, label)
     lengths, converted = [], []
     for column in frame.columns:
         factored = temperature_factor(column)
@@ -223,4 +223,4 @@ def _to_base(column, kind: str, unit: str, time: str, label: str) -> tuple[float
     return 1.0, 0.0  # the name's unit is read where the column is
 
 
-__all__ = ["aligned_row_units", "read_in_row_units", "row_units", "temperature_factor", "unit_of", "units_and_note"]
+__all__ = ["aligned_row_units", "read_in_row_units", "row_units", "temperature_factor", "unit_of"]
