@@ -40,10 +40,9 @@ import numpy as np
 import pandas as pd
 
 from groupfit.flushnames import LEFT, RIGHT, flush_side
-from groupfit.tablehead import RULER, units_of_row
+from groupfit.tablehead import DIGIT, RULER, units_of_row
 
 WORD = re.compile(r"\S+")
-DIGIT = re.compile(r"\d")
 CHUNK_ROWS = 10_000
 """Rows whose filled positions are found at once (bounds the memory a long log takes)."""
 

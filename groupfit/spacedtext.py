@@ -11,11 +11,7 @@ leaves it out of the data and keeps its units).
 
 from __future__ import annotations
 
-import re
-
-from groupfit.tablehead import units_of_row
-
-DIGIT = re.compile(r"\d")
+from groupfit.tablehead import DIGIT, units_of_row
 
 
 def with_text_rows_quoted(body: str) -> str:

@@ -43,6 +43,8 @@ UNIT = re.compile(
 )
 """A unit a logger writes in a row under its header (bracketed or not; an empty ``[]`` or ``-`` too)."""
 BRACKETS = "[]()"
+DIGIT = re.compile(r"\d")
+"""A digit: a line with one in it holds readings (or a title with a number), a line without one is text."""
 RULER = re.compile(r"[-=_~*+|\s]+")
 """A field of a ruler line (``-----``, ``=====``, ``--+--``) drawn under a header or between blocks."""
 WORD = re.compile(r"[^\W\d_]{2,}")

@@ -83,6 +83,7 @@ from groupfit.footer import without_footer, without_footer_rows
 from groupfit.numbercells import as_numbers, is_number, without_cell_units, without_thousands_separators
 from groupfit.spacedtext import with_text_rows_quoted
 from groupfit.tablehead import (
+    DIGIT,
     RULER,
     below_last_empty_line,
     full_row_above,
@@ -105,11 +106,10 @@ SEPARATORS = (*DELIMITERS, WHITESPACE)
 SNIFF_LINES = 200
 """Lines looked at for the body, the header and, below it, the decimal mark."""
 AGREEING_LINES = 3
+"""Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
 STRAY_ROWS = 2
 """Rows of numbers of another width than the body's (a value more or less) that do not end it."""
-"""Lines below a header candidate that must have as many fields as it (a text without a body of numbers)."""
 WORDS = re.compile(r"[^\W\d_]")
-DIGIT = re.compile(r"\d")
 
 
 @dataclass(frozen=True)
