@@ -6,10 +6,9 @@ from __future__ import annotations
 
 import re
 
-import numpy as np
 import pandas as pd
 
-from groupfit.numbercells import as_numbers, is_number
+from groupfit.numbercells import as_numbers, is_empty_cell, is_number
 
 STATISTIC = re.compile(
     r"(?:max(?:imum)?|min(?:imum)?|avg|average|mean|ave|std(?:\.?\s*dev)?|stdev|sigma|rms|p-p|peak-peak|sum|total|"
@@ -33,7 +32,7 @@ def without_footer(body: str, sep: str, decimal: str) -> str:
 
 def statistics_row(cells) -> bool:
     """Whether a row's first filled cell labels it as statistics (:data:`STATISTIC`)."""
-    filled = [str(cell).strip() for cell in cells if not _empty(cell)]
+    filled = [str(cell).strip() for cell in cells if not is_empty_cell(cell)]
     return bool(filled) and STATISTIC.fullmatch(filled[0]) is not None
 
 
@@ -58,10 +57,6 @@ def without_footer_rows(frame: pd.DataFrame) -> pd.DataFrame:
             if values is not None:
                 kept[column] = values
     return kept
-
-
-def _empty(value) -> bool:
-    return value is None or (isinstance(value, float) and np.isnan(value)) or (str(value).strip() == "")
 
 
 __all__ = ["STATISTIC", "statistics_row", "without_footer", "without_footer_rows"]

@@ -215,8 +215,14 @@ def _without_group_spaces(cell: str) -> str:
     return GROUP_MARK.sub("", cell) if SPACED_THOUSANDS.fullmatch(cell) else cell
 
 
+def is_empty_cell(value) -> bool:
+    """Whether a cell as read holds nothing: None, NaN or only spaces."""
+    return value is None or (isinstance(value, float) and value != value) or not str(value).strip()
+
+
 __all__ = [
     "as_numbers",
+    "is_empty_cell",
     "is_number",
     "sheet_text_numbers",
     "without_cell_units",

@@ -66,7 +66,6 @@ import warnings
 from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
 import pandas as pd
 
 from groupfit.commentmark import without_comment_marks
@@ -80,7 +79,7 @@ from groupfit.fixedwidth import (
     uneven_units_row,
 )
 from groupfit.footer import without_footer, without_footer_rows
-from groupfit.numbercells import as_numbers, is_number, without_cell_units, without_thousands_separators
+from groupfit.numbercells import as_numbers, is_empty_cell, is_number, without_cell_units, without_thousands_separators
 from groupfit.spacedtext import with_text_rows_quoted
 from groupfit.tablehead import (
     DIGIT,
@@ -424,7 +423,7 @@ def _without_empty_unnamed_columns(frame: pd.DataFrame, header: list[str]) -> tu
     trailing ``;;;``); a column with no name that holds a value is kept (and refused when named twice)."""
     if len(header) != frame.shape[1]:
         return frame, header
-    kept = [k for k, name in enumerate(header) if name.strip() or not frame.iloc[:, k].map(_empty).all()]
+    kept = [k for k, name in enumerate(header) if name.strip() or not frame.iloc[:, k].map(is_empty_cell).all()]
     if len(kept) == len(header):
         return frame, header
     return frame.iloc[:, kept], [header[k] for k in kept]
@@ -435,7 +434,7 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
     and no number), its columns read as numbers where all of the rest are."""
     text_rows = 0
     while text_rows < len(frame) - 1:
-        cells = [str(v).strip() for v in frame.iloc[text_rows] if not _empty(v)]
+        cells = [str(v).strip() for v in frame.iloc[text_rows] if not is_empty_cell(v)]
         if not cells or any(is_number(cell, decimal) or is_number(cell, ",") for cell in cells):
             break  # a number in the row, a decimal comma's too (or nothing in it): a data row
         text_rows += 1
@@ -450,14 +449,10 @@ def without_units_row(frame: pd.DataFrame, *, decimal: str = ".") -> pd.DataFram
         if values is not None:
             rest[column] = values
     rest.attrs["text_rows"] = [
-        {str(column): str(value).strip() for column, value in frame.iloc[row].items() if not _empty(value)}
+        {str(column): str(value).strip() for column, value in frame.iloc[row].items() if not is_empty_cell(value)}
         for row in range(text_rows)
     ]  # a units row among them gives the columns' units (groupfit.units_row)
     return rest
-
-
-def _empty(value) -> bool:
-    return value is None or (isinstance(value, float) and np.isnan(value)) or (str(value).strip() == "")
 
 
 __all__ = [
