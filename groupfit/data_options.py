@@ -13,8 +13,8 @@ from groupfit.errors import InputError
 
 ERROR_HELP = (
     "thermal-error column in µm, or mm, nm by its name (default error_um); COLUMN*K reads it ×K µm per unit as "
-    "logged (steps, counts, inches; K < 0 flips its sign); COLUMN-start (COLUMN*K-start) reads it less the run's "
-    "first reading (a position or a sensor logged from another zero)"
+    "logged (steps, counts, inches; K < 0 flips its sign); COLUMN-start (COLUMN*K-start or COLUMN-start*K) reads "
+    "it less the run's first reading (a position or a sensor logged from another zero)"
 )
 MAX_PERIOD_TOLERANCE = 0.5
 """The widest ``--period-tolerance``: an interval half a period off the period is a missed or an extra

@@ -7,7 +7,7 @@ distance in it, a 3-D printer's probe position counted from the machine's
 zero after a re-homing (``mcu_pos_z``). Each new mounting or homing moves that
 zero, so a model fitted on one run is off on the next by the difference, far
 more than any thermal drift. ``--error 'COLUMN-start'`` (``mcu_pos_z*2.5-start``
-with a factor) reads each run's error less its first reading. The model file
+or ``mcu_pos_z-start*2.5`` with a factor) reads each run's error less its first reading. The model file
 keeps the name as its ``error``, so ``replay``, ``diagnose`` and ``compare``
 read a next run the same way.
 
@@ -26,15 +26,20 @@ import re
 import numpy as np
 
 START_SUFFIX = re.compile(r"\s*-\s*start\s*$", re.IGNORECASE)
+START_BEFORE_FACTOR = re.compile(r"^(?P<column>.*\S)\s*-\s*start\s*(?P<factor>\*\s*\S+)\s*$", re.IGNORECASE)
 ZERO_KEY = "error_zero_um"
 """The reading (µm, as logged) the error of a modelling file's last run was taken from (``training.recordings``): what
 the rest of the recording reads its error from."""
 
 
 def logged_spec(name: str | None) -> str | None:
-    """The column (or ``COLUMN*K``) a name that asks for the drift since the start reads; None for any other."""
+    """The column (or ``COLUMN*K``) a name that asks for the drift since the start reads (``COLUMN-start``,
+    ``COLUMN*K-start`` or ``COLUMN-start*K``); None for any other."""
     if not isinstance(name, str):
         return None
+    before = START_BEFORE_FACTOR.match(name)
+    if before:
+        return f"{before.group('column')}{before.group('factor')}"
     spec = START_SUFFIX.sub("", name)
     return spec if spec != name and spec.strip() else None
 

@@ -50,13 +50,14 @@ def residuals(result: dict) -> np.ndarray:
     return np.array([s["residual_um"] for s in result["samples"]], dtype=float)
 
 
-def test_runs_homed_to_other_zeros_give_the_model_and_the_replay_of_their_drift_since_the_start(tmp_path):
+@pytest.mark.parametrize("spec", [SPEC, f"mcu_pos_z-start*{STEP_UM}", f"mcu_pos_z - start * {STEP_UM}"])
+def test_runs_homed_to_other_zeros_give_the_model_and_the_replay_of_their_drift_since_the_start(tmp_path, spec):
     model_run = pd.read_csv(DATASETS / "paper_cycle.csv")
     next_run = pd.read_csv(DATASETS / "repeat_timing.csv")
-    raw = fit(tmp_path, write(as_positions(model_run, -89869.0), tmp_path / "a.csv"), SPEC, "raw")
+    raw = fit(tmp_path, write(as_positions(model_run, -89869.0), tmp_path / "a.csv"), spec, "raw")
     truth = fit(tmp_path, write(from_first(model_run), tmp_path / "a_truth.csv"), "error_um", "truth")
     fitted, expected = ModelFile.load(raw), ModelFile.load(truth)
-    assert fitted.error == SPEC
+    assert fitted.error == spec
     np.testing.assert_allclose(fitted.coefficients, expected.coefficients, rtol=1e-7, atol=1e-7)
     assert fitted.training["recordings"][0]["error_zero_um"] == pytest.approx(
         (model_run["error_um"].iloc[0] / STEP_UM - 89869.0) * STEP_UM, rel=1e-12
@@ -67,7 +68,7 @@ def test_runs_homed_to_other_zeros_give_the_model_and_the_replay_of_their_drift_
     np.testing.assert_allclose(residuals(got), residuals(want), atol=1e-7)
     assert got["rms_um"] == pytest.approx(want["rms_um"], rel=1e-7) and got["rms_um"] < 1.0
     assert "constant_offset_um" not in got
-    logged_checks = replay(raw, rehomed, "--probe-every", "3600", "--probe-column", SPEC)  # the checks as logged
+    logged_checks = replay(raw, rehomed, "--probe-every", "3600", "--probe-column", spec)  # the checks as logged
     np.testing.assert_allclose(residuals(logged_checks), residuals(want), atol=1e-7)
 
 
