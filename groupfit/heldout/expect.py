@@ -290,10 +290,10 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
         notes.append(
             "a scored segment starts a condition the run before it never saw (a cool-down after the warm-up "
             "alone): every candidate extrapolates there, and that segment weighs most in the figure and the "
-            "choice, which price a next run into an unseen condition rather than a repeat of the programme (a "
-            "3-D printer's heat-then-cool repeats came out at 0.3-0.5 × the figure, simulated warm-up/cool-down "
-            "repeats on another day at 0.8-30 ×); a rough estimate: record a second run and fit on both "
-            "(--data A B --p 0)"
+            "choice, which price a next run into an unseen condition rather than a repeat of the programme (two "
+            "heat-then-cool runs of a 3-D printer, each the other's next run, came out at 0.95 and 2.3 × the "
+            "figure, simulated warm-up/cool-down repeats on another day at 0.8-30 ×); a rough estimate: record a "
+            "second run and fit on both (--data A B --p 0)"
         )
     elif scores.n_conditions < MIN_SEGMENTS:
         notes.append(
