@@ -54,7 +54,7 @@ def position_level_note(values: np.ndarray, column: str, label: str) -> str | No
         f"{label}: column '{column}': every reading lies at least {nearest:.6g} µm from zero while they span only "
         f"{spread:.4g} µm, read as logged: a position from the machine's zero, not a thermal error? The model "
         f"then compensates that level, and a run homed anew is off by the change; --error '{column}-start' reads "
-        "the drift since the run's start"
+        f"the drift since the run's start ('{column}*K-start' when it counts steps or encoder counts of K µm each)"
     )
 
 

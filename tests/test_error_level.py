@@ -36,6 +36,18 @@ def test_a_probe_position_millimetres_from_zero_is_read_as_logged_with_a_note_of
     assert not any("machine's zero" in note for note in drift.notes)
 
 
+def test_a_step_count_from_the_machines_zero_is_noted_with_the_spec_that_reads_its_drift_in_micrometres(tmp_path):
+    """A 3-D printer's probe position in steps of 2.5 µm from the machine's zero: the note's spec with the
+    factor, written with the start first as a user may write it, reads the drift in µm."""
+    steps = -89869.0 + paper_error() / 2.5
+    data = paper_cycle_with(tmp_path, "mcu_pos_z", steps, "steps.csv")
+    notes = [note for note in load_run(data, temps=["T1", "T2"], error="mcu_pos_z").notes if "zero" in note]
+    assert len(notes) == 1 and "'mcu_pos_z*K-start' when it counts steps" in notes[0]
+    for spec in ("mcu_pos_z*2.5-start", "mcu_pos_z-start*2.5"):
+        drift = load_run(data, temps=["T1", "T2"], error=spec)
+        np.testing.assert_allclose(drift.error, paper_error() - paper_error()[0], atol=1e-7)
+
+
 @pytest.mark.parametrize("level_um", [0.0, 0.5 * LEVEL_FLOOR_UM, 300.0])
 def test_an_error_near_zero_gets_no_note_of_its_level(tmp_path, level_um):
     error = level_um + paper_error()
