@@ -124,7 +124,7 @@ class LoadOptions:
     temps_as_faults: bool = False
     """A validation run, read as ``replay`` reads a next run: a temperature outside ``temp_range`` is kept, as
     one that is not a number is, a fault of the run-time rule, where it would be refused (``--resample``
-    still takes it as missed)."""
+    still takes it as missed); a temperature's glitch is named and kept as logged, not interpolated."""
     sparse: tuple[str, ...] = ()
     """Columns read on some rows only (probe readings): resampled as the error is, never made up nor trimmed."""
 

@@ -192,7 +192,8 @@ def load_run(
         Columns read on some rows only (a probe's readings): ``resample`` fills no period of theirs.
     temps_as_faults : bool
         A validation run, read as ``replay`` reads a next run: a temperature outside ``temp_range`` is kept, a
-        fault of the run-time rule, as one that is not a number is.
+        fault of the run-time rule, as one that is not a number is; a temperature's glitch is named in a note
+        and kept as logged (with ``drop_glitches``), not interpolated.
 
     Raises
     ------
@@ -373,8 +374,9 @@ def _validated(
         if error_limit is not None and error_values is not None:
             check_range(error_values, error, label, (-error_limit, error_limit), "µm", ERROR_RANGE_OPTION)
     if options.drop_glitches:  # after the ranges: an implausible reading is refused or a fault, never interpolated
-        frame, temp_array, glitched = temperatures_without_glitches(
-            frame, temps, temp_array, label, options.ambient, temp_range if options.temps_as_faults else None
+        plausible = temp_range if options.temps_as_faults else None
+        frame, temp_array, glitched = temperatures_without_glitches(  # a validation run's are named, kept as logged
+            frame, temps, temp_array, label, options.ambient, plausible, as_logged=options.temps_as_faults
         )
         notes = notes + ((glitched,) if glitched else ())
     if options.drop_glitches and error_values is not None:

@@ -103,6 +103,8 @@ def temperatures_without_glitches(
     label: str,
     ambient: str | None = None,
     plausible: tuple[float, float] | None = None,
+    *,
+    as_logged: bool = False,
 ) -> tuple[pd.DataFrame, np.ndarray, str | None]:
     """The inputs' ``readings`` and the frame's columns of the air's temperature (the references the inputs
     may be taken against: ``ambient``, the column ``--ambient`` names, and those named as the air's,
@@ -110,7 +112,12 @@ def temperatures_without_glitches(
     :data:`TEMPERATURE_RANGE_SHARE` of its range) interpolated from its neighbours, and a note naming them
     (None: none; the frame and readings are then those given). A reading outside the ``plausible`` range
     (°C) is no glitch, nor a neighbour to interpolate from: it is refused, or kept as a fault of the run-time
-    rule (a validation run), as one that is not a number is."""
+    rule (a validation run), as one that is not a number is.
+
+    ``as_logged``: a validation run, scored as ``replay`` scores a next run: the glitches are named in the
+    note but every reading is kept as logged (the frame and readings those given), for the run-time rule
+    to read as the controller reads it."""
+    given = readings
     readings = np.array(readings, dtype=float)
     found = []
     for j, name in enumerate(temps):
@@ -124,14 +131,15 @@ def temperatures_without_glitches(
         found += shown
     if not found:
         return frame, readings, None
-    frame = frame.assign(**{name: values for name, values in cleaned.items()}) if cleaned else frame
     more = f" and {len(found) - SHOWN} more" if len(found) > SHOWN else ""
-    note = (
+    named = (
         f"{label}: {len(found)} temperature reading(s) leave their neighbours and come back "
-        f"({', '.join(found[:SHOWN])}{more}), a sensor's glitch: interpolated from its neighbours; "
-        "--keep-glitches keeps them"
+        f"({', '.join(found[:SHOWN])}{more}), a sensor's glitch: "
     )
-    return frame, readings, note
+    if as_logged:
+        return frame, given, named + "kept as logged in a validation run, scored as replay scores it"
+    frame = frame.assign(**{name: values for name, values in cleaned.items()}) if cleaned else frame
+    return frame, readings, named + "interpolated from its neighbours; --keep-glitches keeps them"
 
 
 def _interpolated_glitches(

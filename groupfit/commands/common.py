@@ -104,8 +104,8 @@ def add_glitch_option(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         default=None,
         help="keep error and temperature readings that leave their neighbours and come back (by default such a "
-        "glitch of the error is left out as not measured, one of a temperature interpolated from its neighbours, "
-        "with a note naming its rows)",
+        "glitch of the error is left out as not measured, one of a temperature interpolated from its neighbours "
+        "(kept as logged in a --validate run, as replay reads it), with a note naming its rows)",
     )
 
 

@@ -124,8 +124,9 @@ def modelling_runs(data) -> list:
 def validation_runs(data, path) -> list[Run]:
     """The runs of one ``--validate`` file, read as ``replay`` reads a next run: a reading that is not a number,
     or a temperature outside the plausible range (a sensor's fault code, -999 °C), is kept, a sensor fault of the
-    run-time rule (held, then not scored: :mod:`groupfit.comparison_faults`); an implausible error is refused
-    as in a modelling run, and so is an error column empty on every row."""
+    run-time rule (held, then not scored: :mod:`groupfit.comparison_faults`), and a temperature's glitch is
+    kept as logged, with a note; an implausible error is refused as in a modelling run, and so is an error
+    column empty on every row."""
     runs = common.load_configured_runs(
         data, path, missing_error=True, allow_nonfinite=True, check_ranges=True, temps_as_faults=True
     )

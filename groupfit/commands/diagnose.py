@@ -176,7 +176,8 @@ def heat_exponent(text: str) -> float | str:
 
 def load_measured(path: str, model: dict[str, Any], time: str, *, next_run: bool = False, **clock) -> Run:
     """A run of ``--data`` (``next_run``: of ``--validate``, whose temperatures outside the plausible range are
-    kept, as replay keeps them, faults of the run-time rule) with the model's measured inputs."""
+    kept, as replay keeps them, faults of the run-time rule, and whose temperature glitches are kept as
+    logged) with the model's measured inputs."""
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
     run = load_run(
