@@ -14,7 +14,6 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from groupfit.channel_row import without_channel_row
 from groupfit.clock_changes import CLOCK_SHIFTS, shift_at
 from groupfit.column_values import ERROR_LIMIT_UM as ERROR_LIMIT_UM
 from groupfit.column_values import (
@@ -32,7 +31,6 @@ from groupfit.column_values import check_range as check_range
 from groupfit.column_values import error_values as read_error_values
 from groupfit.column_values import numeric_column as numeric_column
 from groupfit.columns import aligned_inputs
-from groupfit.date_time_columns import found_stamp_column
 from groupfit.default_columns import DEFAULT_ERROR, DEFAULT_TIME, found_error_column
 from groupfit.default_columns import length_unit as length_unit
 from groupfit.error_level import error_unit_note
@@ -53,6 +51,7 @@ from groupfit.resample import jitter_note, resample_frame
 from groupfit.run import Run as Run
 from groupfit.sampling import clock_of, described_burst_cycle
 from groupfit.split_stamps import with_milliseconds
+from groupfit.stamp_channel_row import found_time_without_channel_row
 from groupfit.stuck_sensors import stuck_sensor_notes
 from groupfit.timestamps import (
     epoch_to_seconds,
@@ -232,8 +231,10 @@ def load_runs(
     """
     frame, run_name, label = read_table(source, name, options.pop("encoding", None))
     frame, stray_notes, left_out = without_stray_rows(frame, label)
-    time, time_note = found_stamp_column(frame, options.get("time", DEFAULT_TIME), label, default=time_is_default)
-    frame, channel_note = without_channel_row(frame, time, label)
+    asked_time = options.get("time", DEFAULT_TIME)
+    frame, time, time_note, channel_note = found_time_without_channel_row(
+        frame, asked_time, label, default=time_is_default
+    )
     if channel_note:
         left_out = "; ".join(filter(None, (left_out, channel_note[len(label) + 2 : channel_note.index(LEFT_OUT_TAIL)])))
     lengths, units_notes = read_in_row_units(frame, time, label)

@@ -362,3 +362,59 @@ def test_a_time_of_day_that_is_none_is_named_with_its_row(tmp_path):
     path = write(separate, tmp_path / "log.csv", layout)
     with pytest.raises(InputError, match=r"row 10, column 'Datum Zeit': '\d\d\.10\.2026 25:70:00' is not a date-time"):
         load_run(path)
+
+
+def under_the_header(path: Path, line: str, folder: str = "with_row") -> Path:
+    """The file with ``line`` written between its header and its first row, under the same name in ``folder``
+    beside it (its notes name the same file)."""
+    header, rest = path.read_text(encoding="utf-8").split("\n", 1)
+    written = path.parent / folder / path.name
+    written.parent.mkdir()
+    written.write_text(f"{header}\n{line}\n{rest}", encoding="utf-8")
+    return written
+
+
+@pytest.mark.parametrize(
+    "row", [";;101;102;103;104;105;106;107;;;", "Ch;Ch;1;2;3;4;5;6;7;;;", "Kanal;;1;2;3;4;5;6;7;;;"]
+)
+def test_a_row_of_channel_numbers_over_a_date_and_a_time_of_day_is_left_out_as_over_one_stamp(tmp_path, row):
+    layout = LAYOUTS["german"]
+    separate, _ = twin_files(tmp_path, layout)
+    channels = under_the_header(separate, row)
+    [plain], [run] = load_runs(separate), load_runs(channels)
+    seconds, origin, shift = pandas_clock(separate, layout)
+    np.testing.assert_array_equal(run.time, seconds)
+    np.testing.assert_array_equal(run.time, plain.time)
+    assert (run.clock_origin_s, run.clock_shift_s) == (plain.clock_origin_s, plain.clock_shift_s) == (origin, shift)
+    assert run.time_name == plain.time_name == "Datum Zeit" and run.temp_names == plain.temp_names
+    assert list(run.frame.columns) == list(plain.frame.columns)
+    np.testing.assert_array_equal(run.temps, plain.temps)
+    np.testing.assert_array_equal(run.error, plain.error)
+    shown = ", ".join(cell for cell in row.split(";")[2:] if cell)
+    told = f"{channels}: 1 row of channel numbers left out (row 1: {shown} under the header, without a time"
+    assert [note.replace(str(channels), str(separate)) for note in run.notes if not note.startswith(told)] == list(
+        plain.notes
+    )
+    assert run.notes[1].startswith(told)
+
+
+def test_a_first_row_with_its_date_and_time_or_with_a_reading_among_the_others_is_no_channel_row(tmp_path):
+    layout = LAYOUTS["german"]
+    separate, _ = twin_files(tmp_path, layout)
+    first = separate.read_text(encoding="utf-8").splitlines()[1].split(";")
+    before = pd.to_datetime(" ".join(first[:2]), format=" ".join(layout.forms)) - pd.Timedelta(seconds=100)
+    stamp = [f"{before:%d.%m.%Y}", f"{before:%H:%M:%S}"]
+    rising = [str(k) for k in range(1, 8)]
+    [plain], [run] = load_runs(separate), load_runs(under_the_header(separate, ";".join([*stamp, *rising, *first[9:]])))
+    np.testing.assert_array_equal(run.time, np.concatenate([[0.0], plain.time + 100.0]))
+    readings = ["T1", "T2", "T3", "T4", "T5", "T6", "T_amb"]
+    np.testing.assert_array_equal(run.frame[readings].iloc[0].to_numpy(dtype=float), np.arange(1.0, 8.0))
+    np.testing.assert_array_equal(run.temps[1:], plain.temps)
+    assert not any("channel numbers" in note for note in run.notes)
+    unread = {
+        ";;101;102;103;104;105;106;107;4;;": "row 1, column 'Datum' is empty",  # 4 µm: among the error's readings
+        ";".join([*stamp, *rising, "", "", ""]): "row 1, column 'error_um' is empty",
+    }
+    for k, (row, refused) in enumerate(unread.items()):
+        with pytest.raises(InputError, match=refused):
+            load_runs(under_the_header(separate, row, f"unread_{k}"))
