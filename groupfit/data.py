@@ -50,13 +50,13 @@ from groupfit.record_kinds import record_kinds_cycle
 from groupfit.resample import jitter_note, resample_frame
 from groupfit.run import Run as Run
 from groupfit.sampling import clock_of, described_burst_cycle
+from groupfit.serial_dates import serial_days_to_seconds
 from groupfit.split_stamps import with_milliseconds
 from groupfit.stamp_channel_row import found_time_without_channel_row
 from groupfit.stuck_sensors import stuck_sensor_notes
 from groupfit.timestamps import (
     epoch_to_seconds,
     names_a_unit,
-    serial_days_to_seconds,
     unit_notes,
     unit_seconds,
 )

@@ -106,46 +106,6 @@ def time_like_columns(columns) -> list[str]:
     return sorted(named, key=lambda name: re.match(r"^\s*" + LONG_TIME, name, re.IGNORECASE) is not None)
 
 
-SERIAL_DAYS = (20000.0, 80000.0)
-"""Spreadsheet serial dates (days since 1899-12-30) of 1954 … 2119: a date column exported as numbers."""
-DATENUM_OFFSET = 693960.0
-"""MATLAB's datenum (days since the year 0) less a spreadsheet's serial date of the same day."""
-SERIAL_KINDS = (
-    (0.0, "spreadsheet serial dates (days since 1899-12-30)"),
-    (DATENUM_OFFSET, "MATLAB datenums (days since the year 0)"),
-)
-DATE_WORD = re.compile(r"date|datum", re.IGNORECASE)
-
-
-def serial_days_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
-    """A date column of spreadsheet serial dates or MATLAB datenums converted to seconds in place, and its note
-    (None: not one).
-
-    A time column without a unit whose numbers all lie among the serial dates of 1954 … 2119 (or the
-    datenums of those years), less than a day apart, is a date-time written as a number when its name says
-    it is a date (``Date``, ``Datum/Zeit``), or when only the reading in days makes a thermal run of it:
-    read in seconds it lasts less than :data:`SHORTEST_RUN_S`, read in days it lasts longer, sampled at least
-    every :data:`SLOWEST_PERIOD_S` (``Timestamp`` 46082.333, 46082.334 …; ``time`` 740042.333 …).
-    """
-    days = _numbers_without_unit(frame, column)
-    if days is None or len(days) < 2:
-        return None
-    kind = next(
-        (what for offset, what in SERIAL_KINDS if SERIAL_DAYS[0] <= days.min() - offset <= SERIAL_DAYS[1]), None
-    )
-    if kind is None or days.max() - days.min() > SERIAL_DAYS[1] - SERIAL_DAYS[0]:
-        return None
-    step = float(np.median(np.diff(days)))
-    if not 0.0 < step < 1.0:
-        return None
-    span = float(days[-1] - days[0])
-    a_run_in_days = span < SHORTEST_RUN_S <= span * DAY_S and step * DAY_S <= SLOWEST_PERIOD_S
-    if not (DATE_WORD.search(str(column)) or a_run_in_days):
-        return None
-    frame[column] = days * DAY_S
-    return f"{label}: column '{column}' holds {kind}: read in seconds"
-
-
 EPOCH_UNITS = (
     (1e12, 1e13, 1e-3, "Unix times in milliseconds"),
     (1e15, 1e16, 1e-6, "Unix times in microseconds"),
@@ -159,7 +119,7 @@ far beyond any time in seconds, so read in their unit."""
 def epoch_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None:
     """A numeric time column of Unix times in ms, µs or ns or of Windows file times (its name giving no unit)
     converted to seconds in place, and its note (None: not one)."""
-    values = _numbers_without_unit(frame, column)
+    values = numbers_without_unit(frame, column)
     if values is None or not values.size:
         return None
     for low, high, scale, unit in EPOCH_UNITS:
@@ -169,7 +129,7 @@ def epoch_to_seconds(frame: pd.DataFrame, column: str, label: str) -> str | None
     return None
 
 
-def _numbers_without_unit(frame: pd.DataFrame, column: str) -> np.ndarray | None:
+def numbers_without_unit(frame: pd.DataFrame, column: str) -> np.ndarray | None:
     """A numeric time column's finite values when its name gives no unit of time (None otherwise)."""
     if column not in frame.columns or names_a_unit(column) or not pd.api.types.is_numeric_dtype(frame[column]):
         return None
@@ -493,6 +453,7 @@ __all__ = [
     "text_seconds",
     "time_like_columns",
     "named_time_unit",
+    "numbers_without_unit",
     "parses",
     "unit_notes",
     "unit_seconds",
