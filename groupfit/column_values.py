@@ -27,7 +27,7 @@ from groupfit.default_columns import (
 )
 from groupfit.error_start import from_start, is_from_start
 from groupfit.errors import InputError
-from groupfit.gap_advice import missing_advice
+from groupfit.gap_advice import log_readings, missing_advice, missing_count
 from groupfit.textencoding import misread
 
 TEMP_RANGE_C = (-50.0, 500.0)
@@ -186,10 +186,10 @@ def numeric_column(
                 if np.isnan(array[row])
                 else array[row]
             )
+            readings = log_readings(frame)
             raise InputError(
-                f"{label}: row {row + 1}, column '{column}' is {what} "
-                f"({int(nonfinite.sum())} non-finite value(s) in that column); "
-                f"a model can only be fitted on finite values: {missing_advice(nonfinite, column)}"
+                f"{label}: row {row + 1}, column '{column}' is {what} ({missing_count(nonfinite, readings)}); "
+                f"a model can only be fitted on finite values: {missing_advice(nonfinite, column, readings)}"
             )
     return array
 

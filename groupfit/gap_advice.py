@@ -1,25 +1,66 @@
-"""What a refusal of a column's missed readings advises: what ``--resample`` bridges, what it does not."""
+"""What a refusal of a column's missed readings advises: what ``--resample`` bridges, what it does not.
+
+In a table built by ``--resample`` (its ``attrs`` holding :data:`~groupfit.resample.LOG_READINGS`) the
+missed readings are counted in the log's own cycles (the periods holding its readings), as ``--resample``
+counts them, not in periods: a 60 s log resampled to 20 s whose sensor was silent for 10 minutes missed 9
+readings, over 29 periods.
+"""
 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
-from groupfit.resample import GAP_PERIODS
+from groupfit.resample import GAP_PERIODS, LOG_READINGS
 
 
-def missing_advice(nonfinite: np.ndarray, column: str) -> str:
+def log_readings(frame: pd.DataFrame) -> np.ndarray | None:
+    """Which rows of a resampled ``frame`` hold readings of the log (one of the log's cycles each, however many
+    rows of the log were averaged into it; an empty period none); None when ``frame`` is the log."""
+    counts = frame.attrs.get(LOG_READINGS)
+    if counts is None or len(counts) != len(frame):
+        return None
+    return np.asarray(counts, dtype=int) > 0
+
+
+def missing_count(nonfinite: np.ndarray, readings: np.ndarray | None) -> str:
+    """How many values the refused column misses: non-finite values of the log, or, resampled, the readings
+    of the log it missed and the periods without a value."""
+    missed = int(nonfinite.sum() if readings is None else readings[nonfinite].sum())
+    if missed == nonfinite.sum():
+        return f"{missed} non-finite value(s) in that column"
+    return f"{missed} missed reading(s) of the log in that column, {int(nonfinite.sum())} period(s) without a value"
+
+
+def missing_advice(nonfinite: np.ndarray, column: str, readings: np.ndarray | None = None) -> str:
     """What to do about the column's missed readings: interpolation covers short gaps; the longest is named
-    when it is longer, and dropped at either end of the run or split at in its middle."""
+    when it is longer, and dropped at either end of the run or split at in its middle.
+
+    Parameters
+    ----------
+    nonfinite : ndarray of bool
+        Where the column holds no finite value.
+    column : str
+        The column's name.
+    readings : ndarray of bool, optional
+        For a resampled table, which of its rows hold readings of the log (:func:`log_readings`): a gap's
+        length is then the readings the log missed in it, not its periods.
+    """
     edges = np.flatnonzero(np.diff(np.concatenate([[0], nonfinite.astype(int), [0]])))
     gaps = list(zip(edges[::2], edges[1::2]))
-    first, end = max(gaps, key=lambda gap: gap[1] - gap[0])
-    length = int(end - first)
+    counts = np.ones(nonfinite.size, dtype=int) if readings is None else readings.astype(int)
+    first, end = max(gaps, key=lambda gap: (int(counts[gap[0] : gap[1]].sum()), gap[1] - gap[0]))
+    length = int(counts[first:end].sum())
     if length <= GAP_PERIODS:
         return (
             f"repair or drop those rows, or let --resample SECONDS interpolate up to {GAP_PERIODS} missed readings "
             "in a row"
         )
-    where = f"rows {first + 1}-{end} miss {length} readings in a row, more than --resample SECONDS interpolates"
+    where = f"rows {first + 1}-{end} miss {length} readings in a row"
+    if length != end - first:
+        periods = f"({end - first} periods)"
+        where = f"rows {first + 1}-{end} of the resampled run miss {length} readings of the log in a row {periods}"
+    where += ", more than --resample SECONDS interpolates"
     if first == 0 or end == nonfinite.size:
         return f"{where} ({GAP_PERIODS}): drop those rows at the run's {'start' if first == 0 else 'end'}"
     return (
@@ -28,4 +69,4 @@ def missing_advice(nonfinite: np.ndarray, column: str) -> str:
     )
 
 
-__all__ = ["missing_advice"]
+__all__ = ["log_readings", "missing_advice", "missing_count"]

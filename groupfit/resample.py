@@ -25,7 +25,9 @@ before a column's first reading or after its last (records of several kinds
 that start and stop at other times: a temperature record every 20 s among
 probe readings every 2 s) are dropped when at most :data:`GAP_PERIODS` of
 them hold readings; the measured columns, which may be read on some periods
-alone, do not count.
+alone, do not count. Each piece keeps, under :data:`LOG_READINGS` in its
+``attrs``, how many of the log's rows each of its periods holds, so that a
+refusal of a sensor's longer silence counts the readings the log missed.
 """
 
 from __future__ import annotations
@@ -42,6 +44,9 @@ from groupfit.timestamps import clock_restart, refuse_clock_change, restart_refu
 
 GAP_PERIODS = 3
 """More empty periods in a row than this split the log into runs; fewer are interpolated."""
+LOG_READINGS = "groupfit.log_readings"
+"""The ``attrs`` key of a resampled piece: for each of its rows (periods), the number of the log's rows binned
+into it (0: an empty period), so that a refusal counts the readings the log missed, not the periods."""
 MAX_RESAMPLED_ROWS = 5_000_000
 """The most rows a resampled run may have (a period far below the log's would fill the memory with empty rows)."""
 
@@ -162,8 +167,9 @@ def resample_frame(
         filled, missed = _interpolate_empty(piece, occupied[first:stop], time, measured)
         empty += filled
         unread += missed
-        piece, dropped = _without_ragged_ends(piece, occupied[first:stop], (time, *measured))
-        trimmed += dropped
+        piece, lead, tail = _without_ragged_ends(piece, occupied[first:stop], (time, *measured))
+        trimmed += lead + tail
+        piece.attrs[LOG_READINGS] = tuple(int(c) for c in counts[first + lead : stop - tail])
         pieces.append(piece)
         following = _next_occupied(occupied, stop)
         if following is not None:
@@ -187,21 +193,21 @@ def _refuse_too_many_rows(stamps: np.ndarray, period_s: float, label: str) -> No
 
 def _without_ragged_ends(
     piece: pd.DataFrame, occupied: np.ndarray, exempt: tuple[str, ...]
-) -> tuple[pd.DataFrame, int]:
+) -> tuple[pd.DataFrame, int, int]:
     """``piece`` without the periods at its ends that come before a column's first reading or after its last,
     where at most :data:`GAP_PERIODS` of them hold readings (a longer silence is left for the loader to name),
-    and how many were dropped. The ``exempt`` columns (the time, the measured error, which may be read on some
-    periods alone) do not count."""
+    and how many were dropped at its start and at its end. The ``exempt`` columns (the time, the measured
+    error, which may be read on some periods alone) do not count."""
     n = len(piece)
     known = np.isfinite(piece.drop(columns=[c for c in exempt if c in piece.columns]).to_numpy(dtype=float))
     read = known.any(axis=0)
     if n <= 2 * GAP_PERIODS + 1 or not read.any():
-        return piece, 0
+        return piece, 0, 0
     lead = _silent_end(known[:, read], occupied)
     tail = _silent_end(known[::-1, read], occupied[::-1])
     if not lead + tail:
-        return piece, 0
-    return piece.iloc[lead : n - tail].reset_index(drop=True), lead + tail
+        return piece, 0, 0
+    return piece.iloc[lead : n - tail].reset_index(drop=True), lead, tail
 
 
 def _silent_end(known: np.ndarray, occupied: np.ndarray) -> int:

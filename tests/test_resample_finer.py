@@ -103,3 +103,21 @@ def test_fit_refuses_a_sensor_silence_that_finer_resampling_would_have_bridged(t
     err = capsys.readouterr().err
     assert "column 'T2'" in err and "more than --resample SECONDS interpolates" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_refused_silence_counts_the_readings_the_log_missed_not_the_periods(tmp_path, capsys):
+    log = _log(180)
+    log.loc[50:58, "T2"] = np.nan  # ten minutes without a reading of T2
+    path = tmp_path / "silent.csv"
+    log.to_csv(path, index=False)
+    t = log["time_s"].to_numpy()
+    read = t[log["T2"].notna().to_numpy()]
+    silent = (t > read[read < 3000.0][-1]) & (t < read[read > 3000.0][0])
+    missed = int(silent.sum())  # the log's rows in the silence
+    periods = int(round((read[read > 3000.0][0] - read[read < 3000.0][-1]) / PERIOD)) - 1
+    assert (missed, periods) == (9, 29)
+    assert main(["fit", "--data", str(path), "--p", "0", "--resample", "20", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"({missed} missed reading(s) of the log in that column, {periods} period(s) without a value)" in err
+    assert f"miss {missed} readings of the log in a row ({periods} periods)" in err
+    assert f"miss {periods} readings" not in err
