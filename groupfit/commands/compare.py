@@ -113,12 +113,23 @@ def settle_heat_and_conditions(args: argparse.Namespace, settings: ComparisonSet
     return f"AR(1): left out: the run has no '{absent}' column, its default heat level{found}; --heat COLUMN names one"
 
 
-def modelling_runs(data) -> list:
+def modelling_runs(data, *, as_logged: bool = False) -> list:
     """The modelling runs: each file of several, or the one log (which --resample may not split at its gaps:
-    a grouped model's breaks belong to one run, and the error says so)."""
+    a grouped model's breaks belong to one run, and the error says so). ``as_logged``: their temperature
+    glitches kept as logged (named, not interpolated), as ``replay`` reads a modelling file."""
+    options = {"missing_error": True, **({"temps_as_faults": True} if as_logged else {})}
     if len(data.paths) > 1:
-        return common.load_configured_runs(data, missing_error=True)
-    return [common.load_configured_run(data, missing_error=True)]
+        return common.load_configured_runs(data, **options)
+    return [common.load_configured_run(data, **options)]
+
+
+def histories(data, parts: list[Run], reference: str | None) -> list[Run]:
+    """The modelling runs as a validation run that continues them has them in front: as the controller met
+    them and as ``replay`` reads the modelling file before the run, a temperature glitch kept as logged (the
+    fit interpolates it in ``parts``), the inputs taken against ``reference``."""
+    if data.keep_glitches or not data.validate:
+        return parts
+    return [with_reference(part, reference) for part in modelling_runs(data, as_logged=True)]
 
 
 def validation_runs(data, path) -> list[Run]:
@@ -211,7 +222,9 @@ def run_compare(args: argparse.Namespace) -> int:
     parts = [with_reference(part, reference) for part in parts]  # a reference at the start: each run's own
     modelling = join_runs(parts)
     validation = [in_modelling_order(modelling, with_reference(run, reference, faults=True)) for run in validation]
-    joined, skipped, notes = with_histories(validation, parts, assume_continued=args.continues)
+    joined, skipped, notes = with_histories(
+        validation, histories(data, parts, reference), assume_continued=args.continues
+    )
     validation = [picked_up(run, zero_of(whole)) for run, whole in zip(validation, joined)]  # COLUMN-start
     recordings = {run.name: whole for run, whole, rows in zip(validation, joined, skipped) if rows}
     for note in notes:
