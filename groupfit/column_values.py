@@ -27,7 +27,7 @@ from groupfit.default_columns import (
 )
 from groupfit.error_start import from_start, is_from_start
 from groupfit.errors import InputError
-from groupfit.gap_advice import log_readings, missing_advice, missing_count
+from groupfit.gap_advice import log_readings, log_rows, missing_advice, missing_count, resampled_row
 from groupfit.textencoding import misread
 
 TEMP_RANGE_C = (-50.0, 500.0)
@@ -186,10 +186,11 @@ def numeric_column(
                 if np.isnan(array[row])
                 else array[row]
             )
-            readings = log_readings(frame)
+            readings, rows = log_readings(frame), log_rows(frame)
             raise InputError(
-                f"{label}: row {row + 1}, column '{column}' is {what} ({missing_count(nonfinite, readings)}); "
-                f"a model can only be fitted on finite values: {missing_advice(nonfinite, column, readings)}"
+                f"{label}: {resampled_row(row, rows)}, column '{column}' is {what} "
+                f"({missing_count(nonfinite, readings)}); a model can only be fitted on finite values: "
+                f"{missing_advice(nonfinite, column, readings, rows)}"
             )
     return array
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from groupfit.resample import GAP_PERIODS, LOG_READINGS
+from groupfit.resample import GAP_PERIODS, LOG_READINGS, LOG_ROWS
 
 
 def log_readings(frame: pd.DataFrame) -> np.ndarray | None:
@@ -23,6 +23,39 @@ def log_readings(frame: pd.DataFrame) -> np.ndarray | None:
     return np.asarray(counts, dtype=int) > 0
 
 
+def log_rows(frame: pd.DataFrame) -> np.ndarray | None:
+    """For each row of a resampled ``frame`` and one past its last, the position in the log of the first row
+    binned into it or later (:data:`~groupfit.resample.LOG_ROWS`); None when ``frame`` is the log."""
+    rows = frame.attrs.get(LOG_ROWS)
+    if rows is None or len(rows) != len(frame) + 1:
+        return None
+    return np.asarray(rows, dtype=int)
+
+
+def rows_in_log(rows: np.ndarray, first: int, end: int) -> str:
+    """The log's rows binned into the resampled rows ``first`` to ``end - 1`` (1-based, as a user counts them);
+    between which two they fall when none was."""
+    low, high = int(rows[first]), int(rows[end])
+    if high == low:
+        return f"between the log's rows {low} and {low + 1}"
+    return f"the log's row {low + 1}" if high == low + 1 else f"the log's rows {low + 1}-{high}"
+
+
+def same_rows(rows: np.ndarray | None, first: int, end: int) -> bool:
+    """Whether the resampled rows ``first`` to ``end - 1`` are the log's rows of the same numbers, one each (a
+    log resampled to its own period), or the table is the log."""
+    return rows is None or (
+        int(rows[first]) == first and int(rows[end]) == end and bool(np.all(np.diff(rows[first : end + 1]) == 1))
+    )
+
+
+def resampled_row(row: int, rows: np.ndarray | None) -> str:
+    """Row ``row`` (0-based) of a table, named in the log as well when the table was resampled."""
+    if same_rows(rows, row, row + 1):
+        return f"row {row + 1}"
+    return f"row {row + 1} of the resampled run ({rows_in_log(rows, row, row + 1)})"
+
+
 def missing_count(nonfinite: np.ndarray, readings: np.ndarray | None) -> str:
     """How many values the refused column misses: non-finite values of the log, or, resampled, the readings
     of the log it missed and the periods without a value."""
@@ -32,7 +65,9 @@ def missing_count(nonfinite: np.ndarray, readings: np.ndarray | None) -> str:
     return f"{missed} missed reading(s) of the log in that column, {int(nonfinite.sum())} period(s) without a value"
 
 
-def missing_advice(nonfinite: np.ndarray, column: str, readings: np.ndarray | None = None) -> str:
+def missing_advice(
+    nonfinite: np.ndarray, column: str, readings: np.ndarray | None = None, rows: np.ndarray | None = None
+) -> str:
     """What to do about the column's missed readings: interpolation covers short gaps; the longest is named
     when it is longer, and dropped at either end of the run or split at in its middle.
 
@@ -45,6 +80,8 @@ def missing_advice(nonfinite: np.ndarray, column: str, readings: np.ndarray | No
     readings : ndarray of bool, optional
         For a resampled table, which of its rows hold readings of the log (:func:`log_readings`): a gap's
         length is then the readings the log missed in it, not its periods.
+    rows : ndarray of int, optional
+        For a resampled table, :func:`log_rows`: the gap is named in the log's rows as well.
     """
     edges = np.flatnonzero(np.diff(np.concatenate([[0], nonfinite.astype(int), [0]])))
     gaps = list(zip(edges[::2], edges[1::2]))
@@ -57,9 +94,10 @@ def missing_advice(nonfinite: np.ndarray, column: str, readings: np.ndarray | No
             "in a row"
         )
     where = f"rows {first + 1}-{end} miss {length} readings in a row"
-    if length != end - first:
-        periods = f"({end - first} periods)"
-        where = f"rows {first + 1}-{end} of the resampled run miss {length} readings of the log in a row {periods}"
+    if readings is not None and not (rows is not None and same_rows(rows, first, end)):
+        log = f" ({rows_in_log(rows, first, end)})" if rows is not None else ""
+        periods = f" ({end - first} periods)" if length != end - first else ""
+        where = f"rows {first + 1}-{end} of the resampled run{log} miss {length} readings of the log in a row{periods}"
     where += ", more than --resample SECONDS interpolates"
     if first == 0 or end == nonfinite.size:
         return f"{where} ({GAP_PERIODS}): drop those rows at the run's {'start' if first == 0 else 'end'}"
@@ -69,4 +107,4 @@ def missing_advice(nonfinite: np.ndarray, column: str, readings: np.ndarray | No
     )
 
 
-__all__ = ["log_readings", "missing_advice", "missing_count"]
+__all__ = ["log_readings", "log_rows", "missing_advice", "missing_count", "resampled_row", "rows_in_log", "same_rows"]

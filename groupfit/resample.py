@@ -27,7 +27,8 @@ probe readings every 2 s) are dropped when at most :data:`GAP_PERIODS` of
 them hold readings; the measured columns, which may be read on some periods
 alone, do not count. Each piece keeps, under :data:`LOG_READINGS` in its
 ``attrs``, how many of the log's rows each of its periods holds, so that a
-refusal of a sensor's longer silence counts the readings the log missed.
+refusal of a sensor's longer silence counts the readings the log missed, and, under
+:data:`LOG_ROWS`, the log's row each period starts at, so that it names the log's rows.
 """
 
 from __future__ import annotations
@@ -47,6 +48,10 @@ GAP_PERIODS = 3
 LOG_READINGS = "groupfit.log_readings"
 """The ``attrs`` key of a resampled piece: for each of its rows (periods), the number of the log's rows binned
 into it (0: an empty period), so that a refusal counts the readings the log missed, not the periods."""
+LOG_ROWS = "groupfit.log_rows"
+"""The ``attrs`` key of a resampled piece: for each of its rows (periods) and one past its last, the position in
+the log of the first row binned into that period or later (the log's rows ``LOG_ROWS[i]`` to
+``LOG_ROWS[i + 1] - 1`` fall into period ``i``)."""
 MAX_RESAMPLED_ROWS = 5_000_000
 """The most rows a resampled run may have (a period far below the log's would fill the memory with empty rows)."""
 
@@ -151,6 +156,7 @@ def resample_frame(
     refuse_interleaved(frame, [stamp_groups(stamps), index], time=time, label=label)
     n_bins = int(index[-1]) + 1
     counts = np.bincount(index, minlength=n_bins)
+    log_rows = np.searchsorted(index, np.arange(n_bins + 1))
     table = {}
     for column, values in numeric.items():
         finite = np.isfinite(values)
@@ -170,6 +176,7 @@ def resample_frame(
         piece, lead, tail = _without_ragged_ends(piece, occupied[first:stop], (time, *measured))
         trimmed += lead + tail
         piece.attrs[LOG_READINGS] = tuple(int(c) for c in counts[first + lead : stop - tail])
+        piece.attrs[LOG_ROWS] = tuple(int(r) for r in log_rows[first + lead : stop - tail + 1])
         pieces.append(piece)
         following = _next_occupied(occupied, stop)
         if following is not None:

@@ -121,3 +121,10 @@ def test_a_refused_silence_counts_the_readings_the_log_missed_not_the_periods(tm
     assert f"({missed} missed reading(s) of the log in that column, {periods} period(s) without a value)" in err
     assert f"miss {missed} readings of the log in a row ({periods} periods)" in err
     assert f"miss {periods} readings" not in err
+    silent_rows = np.flatnonzero(silent) + 1  # the log's rows in the silence, as a user counts them
+    assert f"(the log's rows {silent_rows[0]}-{silent_rows[-1]}) miss {missed} readings" in err
+    first_empty = int(err.split(": row ")[1].split(" ")[0]) - 1  # the resampled row the refusal names first
+    start = t[0] + first_empty * PERIOD - PERIOD / 2  # that period's left edge: the bins are centred on the rows
+    after = int(np.searchsorted(t, start))  # the log's first row at or after it (0-based)
+    assert t[after] >= start + PERIOD  # no row of the log in that period: it falls between two of them
+    assert f"row {first_empty + 1} of the resampled run (between the log's rows {after} and {after + 1})" in err
