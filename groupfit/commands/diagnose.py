@@ -213,6 +213,17 @@ def load_measured(path: str, model: dict[str, Any], time: str, *, next_run: bool
     return run
 
 
+def modelling_runs_as_logged(
+    args: argparse.Namespace, model: dict[str, Any], time: str, clock: dict[str, Any]
+) -> list[Run] | None:
+    """The ``--data`` runs with their temperature glitches kept as logged, named, not interpolated as for the
+    fit: a ``--validate`` run that continues them has them in front so, as ``replay`` reads the modelling file and
+    as the controller met the readings. None where the runs loaded serve (no ``--validate``, ``--keep-glitches``)."""
+    if not args.validate or args.keep_glitches:
+        return None
+    return [load_measured(path, model, time, next_run=True, **clock, drop_glitches=True) for path in args.data]
+
+
 def refuse_too_short(runs: list[Run], model: dict[str, Any]) -> None:
     """Refuse data too short to refit the model's coefficients on part of it: fewer than twice their number
     and one more samples in all."""
@@ -264,6 +275,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         validate = [
             load_measured(path, model, time, next_run=True, **clock, **glitches) for path in args.validate or []
         ]
+        data_as_logged = modelling_runs_as_logged(args, model, time, clock)
     refuse_too_short(data, model)
     refuse_overlapping([*data, *validate], "as data (--data, --validate)")
     common.print_notes([*data, *validate], common.report_stream(args))
@@ -294,6 +306,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
             check_reference=not args.keep_reference,
             ambient=args.ambient,
             validation_continues=args.continues,
+            data_as_logged=data_as_logged,
         )
     if selection is not None:
         result = replace(result, selection=selection)

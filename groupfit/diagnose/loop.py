@@ -102,6 +102,7 @@ class DiagnoseOptions:
     check_reference: bool = True
     ambient: tuple[str, ...] = ()
     validation_continues: bool = False
+    data_as_logged: tuple[Run, ...] | None = None
 
 
 @dataclass
@@ -136,6 +137,7 @@ def diagnose(
     min_further_effect_rms_um: float = MIN_FURTHER_EFFECT_RMS_UM,
     ambient: Sequence[str] = (),
     validation_continues: bool = False,
+    data_as_logged: Sequence[Run] | None = None,
 ) -> DiagnosisResult:
     """Find what the model misses on ``data``, add it, and judge the result on ``validate``.
 
@@ -158,7 +160,11 @@ def diagnose(
     names (an air sensor logged as ``T0``): causes, tried with every
     transform, not machine sensors. With ``validation_continues`` each
     validation run is taken to continue the run before it whatever its time
-    stamps (a file whose clock starts again). The thresholds (``min_score``,
+    stamps (a file whose clock starts again). ``data_as_logged``: the
+    modelling runs with their temperature glitches kept as logged (``data``
+    has them interpolated for the fit), the history in front of a validation
+    run that continues them, as ``replay`` reads the modelling file (default
+    ``data``). The thresholds (``min_score``,
     ``min_effect_rms_um``, ``min_further_effect_rms_um``, ``max_effects``,
     ``own_transforms``) are those of the :class:`~groupfit.diagnose.policy.AcceptancePolicy`.
     """
@@ -178,6 +184,7 @@ def diagnose(
         check_reference=check_reference,
         ambient=tuple(ambient),
         validation_continues=validation_continues,
+        data_as_logged=None if data_as_logged is None else tuple(as_runs(data_as_logged)),
     )
     return diagnose_with(ModelFile.coerce(model), as_runs(data), as_runs(validate), options)
 
@@ -186,7 +193,12 @@ def diagnose_with(model: Model, data_runs: list[Run], validate_runs: list[Run], 
     """:func:`diagnose` with its settings in one object: the stages in order."""
     check_arguments(model, data_runs, ambient=options.ambient, select_jointly=options.select_jointly)
     problem, notes = diagnosis_problem(
-        model, data_runs, validate_runs, live_rule=options.live_rule, validation_continues=options.validation_continues
+        model,
+        data_runs,
+        validate_runs,
+        live_rule=options.live_rule,
+        validation_continues=options.validation_continues,
+        data_as_logged=options.data_as_logged,
     )
     before = problem.residuals(model if options.baseline is None else options.baseline)
     if "validate" in before and not np.isfinite(before["validate"]).any():

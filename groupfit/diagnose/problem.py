@@ -128,8 +128,14 @@ def diagnosis_problem(
     *,
     live_rule: LiveRule | None,
     validation_continues: bool,
+    data_as_logged: Sequence[Run] | None = None,
 ) -> tuple[Problem, list[Note]]:
-    """The problem of diagnosing ``model`` on ``data_runs`` (judged on ``validate_runs``), and the notes on it."""
+    """The problem of diagnosing ``model`` on ``data_runs`` (judged on ``validate_runs``), and the notes on it.
+
+    ``data_as_logged``: ``data_runs`` with their temperature glitches kept as logged (``data_runs`` has them
+    interpolated for the fit), put in front of a validation run that continues them, as ``replay`` reads the
+    modelling file; by default ``data_runs`` themselves.
+    """
     data_runs, history_rows, chain_notes = with_histories(data_runs, [])  # a log split into files: one recording
     notes = [Note(INPUTS, n) for run in data_runs for n in check_inputs(model, run, model_inputs(model, run))]
     notes += notes_of(HISTORY, chain_notes)
@@ -164,8 +170,9 @@ def diagnosis_problem(
         raise InputError(f"{data_runs[0].source}: too short to hold out a condition; give a longer run or several")
     runs, skipped = {"data": data_runs}, {"data": list(history_rows)}
     if validate_runs:
+        in_front = data_runs if data_as_logged is None else with_histories(data_as_logged, [])[0]
         runs["validate"], skipped["validate"], history_notes = with_histories(
-            validate_runs, data_runs, assume_continued=validation_continues
+            validate_runs, in_front, assume_continued=validation_continues
         )
         notes += notes_of(HISTORY, history_notes)
     problem = Problem(
