@@ -118,6 +118,7 @@ def pair_result(name, source, model_path: Path, following: Path, intervals_s) ->
         "source": source,
         "p": model.p,
         "recalibration": model.recalibration.description if model.recalibration else "none",
+        "chosen": dict(model.recalibration.chosen or {}) if model.recalibration else {},
         "continued": bool(none["continues"]),
         "rms_none_um": none["rms_um"],
         "rms_in_sample_um": float(model.training["rms_um"]),
