@@ -34,14 +34,15 @@ intervals its held-out stretches hold at least one interval of samples
 after the first check for; when none does, the default hold takes its first
 check's prior from the model's expected next-run range all the same.
 
-Every candidate runs through one vectorised replay of the filter of
-:mod:`groupfit.runtime.recalibration` (double precision, without the
-compensation's clamp and rate limit).
+The candidates and their vectorised replay are in
+:mod:`groupfit.recalibration_candidates`; :func:`score_candidates` gives the
+whole table behind a choice (``bench/bench_recalibration_choice.py`` replays
+it on next runs).
 """
 
 from __future__ import annotations
 
-import itertools
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -52,7 +53,8 @@ from groupfit.fast_response import fit_gains, stage_split
 from groupfit.model import ModelFile, Recalibration
 from groupfit.model_recalibration import RECALIBRATION_LIMIT
 from groupfit.models.ridge import input_spreads, penalty_diagonal, ridge_solve
-from groupfit.probe_intervals import on_measured_rows, whole_samples
+from groupfit.probe_intervals import whole_samples
+from groupfit.recalibration_candidates import GATE_SIGMAS, Candidates, HeldOut, candidate_grid, replay_candidates
 from groupfit.runtime.recalibration import DEFAULT_SECTION, default_section, expected_range_high
 
 INTERVALS_S = (900.0, 1800.0, 3600.0, 7200.0)
@@ -60,24 +62,12 @@ CUTS = (0.5, 0.7)
 """Each modelling run is refitted on its first 50 % and 70 % and the rest of it predicted."""
 INDIFFERENCE = 0.02
 """Held-out scores (mean log RMS ratios) closer than this to the best are not told apart."""
-SIGNIFICANCE_SIGMAS = 2.0
-"""A Kalman candidate applies a correction only beyond this many standard deviations of its estimate."""
 MIN_PROBE_SIGMA_UM = 0.01
-GATE_SIGMAS = 5.0
-CONFIRM_AFTER = 2
 GATE_SPARE = 2.0
 METHODS = ("auto", "hold", "kalman", "none")
 MIN_TRAIN_SAMPLES = 20
 DEFAULT_INITIAL_OFFSET_UM = DEFAULT_SECTION["initial_offset_sigma_um"]
 """The prior of a new run's offset in the default hold, unless the model's expected next-run range is wider."""
-
-
-@dataclass(frozen=True)
-class HeldOut:
-    """One held-out stretch: the refitted model's residual and prediction (µm), NaN where not measured."""
-
-    residual: np.ndarray
-    prediction: np.ndarray
 
 
 def held_out_series(model: ModelFile, runs: Sequence, *, cuts: Sequence[float] = CUTS) -> list[HeldOut]:
@@ -129,77 +119,6 @@ def _solve(design: np.ndarray, target: np.ndarray, alpha: float | None, *, inter
     return ridge_solve(design, target, penalty_diagonal(spreads, alpha, len(design), fit_intercept=intercept))
 
 
-@dataclass(frozen=True)
-class Candidates:
-    """Filters to replay at once: one column per candidate (per-hour units, as the section holds them)."""
-
-    terms: list[tuple[str, ...]]
-    offset_sigma: np.ndarray
-    drift_sigma: np.ndarray
-    drift_tau_h: np.ndarray
-    gain_sigma: np.ndarray
-    initial_offset: np.ndarray
-    initial_drift: np.ndarray
-    initial_gain: np.ndarray
-    probe_sigma: np.ndarray
-    gate_sigmas: np.ndarray
-    significance_sigmas: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.terms)
-
-    def section(self, k: int, *, offset_max_um: float, rate_um: float, chosen: dict) -> Recalibration:
-        terms = self.terms[k]
-        hold = terms == ("offset",) and self.probe_sigma[k] == 0
-        return Recalibration(
-            method="hold" if hold else "kalman",
-            terms=terms,
-            offset_sigma_um_per_sqrt_h=float(self.offset_sigma[k]),
-            drift_sigma_um_per_h_per_sqrt_h=float(self.drift_sigma[k]),
-            drift_tau_h=float(self.drift_tau_h[k]),
-            gain_sigma_per_sqrt_h=float(self.gain_sigma[k]),
-            initial_offset_sigma_um=float(self.initial_offset[k]),
-            initial_drift_sigma_um_per_h=float(self.initial_drift[k]),
-            initial_gain_sigma=float(self.initial_gain[k]),
-            probe_sigma_um=float(self.probe_sigma[k]),
-            gate_sigmas=float(self.gate_sigmas[k]),
-            significance_sigmas=float(self.significance_sigmas[k]),
-            confirm_after=CONFIRM_AFTER,
-            offset_max_um=float(offset_max_um),
-            drift_max_um_per_h=float(offset_max_um) if "drift" in terms else 0.0,
-            gain_max=1.0 if "gain" in terms else 0.0,
-            rate_um_per_sample=float(rate_um),
-            chosen=chosen,
-        )
-
-
-def candidate_grid(*, hold_sigma: float, initial_offset: float, probe_sigma: float, method: str = "auto") -> Candidates:
-    """The hold (first), then the Kalman filters: offset alone, with a drift, a gain, or both.
-
-    ``probe_sigma``: the noise of one check (µm, :func:`white_sigma`), the
-    same for every Kalman candidate; they differ in how the error wanders.
-    """
-    rows = [(("offset",), hold_sigma, 0.0, 1.0, 0.0, initial_offset, 0.0, 0.0, 0.0, 0.0)]
-    if method != "hold":
-        drifts = [(s, tau) for s in (0.3, 1.0, 3.0) for tau in (0.5, 2.0, 8.0)]
-        gains = [(s, g0) for s in (0.0, 0.02) for g0 in (0.1, 0.3, 1.0)]
-        for offset in (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0):
-            for drift, gain in itertools.product([None, *drifts], [None, *gains]):
-                terms = ("offset",) + (("drift",) if drift else ()) + (("gain",) if gain else ())
-                ds, tau = drift or (0.0, 1.0)
-                gs, g0 = gain or (0.0, 0.0)
-                row = (terms, offset, ds, tau, gs, initial_offset, ds * math.sqrt(tau / 2), g0, probe_sigma)
-                rows.append(row + (SIGNIFICANCE_SIGMAS,))
-    columns = list(zip(*rows))
-    arrays = [np.asarray(c, dtype=float) for c in columns[1:-1]]
-    return Candidates(
-        list(columns[0]),
-        *arrays,
-        gate_sigmas=np.full(len(rows), GATE_SIGMAS),
-        significance_sigmas=np.array(columns[-1]),
-    )
-
-
 def white_sigma(series: Sequence[HeldOut]) -> float:
     """The noise of one check (µm): the held-out residual's sample-to-sample scatter, ``√(½·mean(Δr²))``.
 
@@ -214,69 +133,6 @@ def white_sigma(series: Sequence[HeldOut]) -> float:
     return max(MIN_PROBE_SIGMA_UM, float(np.sqrt(0.5 * np.mean(steps**2))))
 
 
-def replay_candidates(held: HeldOut, candidates: Candidates, *, every: int, period_s: float) -> tuple[np.ndarray, int]:
-    """Sum of squared corrected residuals of every candidate over one stretch, checks every ``every`` samples.
-
-    Returns the sums (one per candidate) and the number of scored samples:
-    those after the first check (before it every candidate serves alike).
-    """
-    c = candidates
-    h = period_s / 3600.0
-    g = len(c)
-    q = np.stack([c.offset_sigma**2 * h, c.drift_sigma**2 * h**3, c.gain_sigma**2 * h])
-    phi = np.exp(-period_s / (c.drift_tau_h * 3600.0))
-    r = c.probe_sigma**2
-    gate2 = c.gate_sigmas**2
-    significance2 = c.significance_sigmas**2
-    significant = np.zeros(g, dtype=bool)
-    offset_max = np.full(g, np.inf)
-    x = np.zeros((3, g))
-    P = np.zeros((3, 3, g))
-    P[0, 0], P[1, 1], P[2, 2] = c.initial_offset**2, (c.initial_drift * h) ** 2, c.initial_gain**2
-    P0 = P.copy()
-    rejected = np.zeros(g)
-    total = np.zeros(g)
-    scored = 0
-    due = np.arange(every - 1, len(held.residual), every)
-    checked = np.zeros(len(held.residual), dtype=bool)
-    checked[on_measured_rows(due, np.isfinite(held.residual))] = True  # a check due unmeasured: the next reading
-    for k, (res, m) in enumerate(zip(held.residual.tolist(), held.prediction.tolist())):
-        x[0] = x[0] + x[1]
-        x[1] = phi * x[1]
-        A = np.stack([P[0] + P[1], phi * P[1], P[2]])
-        P = np.stack([A[:, 0] + A[:, 1], A[:, 1] * phi, A[:, 2]], axis=1)
-        P[0, 0] += q[0]
-        P[1, 1] += q[1]
-        P[2, 2] += q[2]
-        if math.isnan(res):
-            continue
-        target = x[0] + x[2] * m
-        served = res - np.where(significant | (significance2 == 0), target, 0.0)
-        if k >= every:  # scored from the first check on: before it every filter serves alike
-            total += served * served
-            scored += 1
-        error = res - target
-        if not checked[k]:
-            continue
-        ph = P[:, 0] + P[:, 2] * m
-        hp = P[0, :] + P[2, :] * m
-        s = hp[0] + hp[2] * m + r
-        outside = error * error > gate2 * np.maximum(s, P0[0, 0])
-        reject = outside & (rejected < CONFIRM_AFTER)
-        fresh = outside & ~reject  # the checks keep disagreeing: the offset takes the change whole
-        rejected = np.where(reject, rejected + 1, 0)
-        gain = np.where(outside, 0.0, ph / s)
-        x = np.clip(x + gain * error, -offset_max, offset_max)
-        P = P - gain[:, None, :] * hp[None, :, :]
-        if fresh.any():
-            x[0] = np.where(fresh, x[0] + error, x[0])
-            P = np.where(fresh, P0, P)
-        target = x[0] + x[2] * m
-        spread = P[0, 0] + P[2, 0] * m + (P[0, 2] + P[2, 2] * m) * m
-        significant = np.where(reject, significant, fresh | (target * target > significance2 * spread))
-    return total, scored
-
-
 @dataclass(frozen=True)
 class Tuning:
     """What :func:`choose_recalibration` found: the section and the held-out table behind it."""
@@ -288,6 +144,91 @@ class Tuning:
     rms_chosen_um: tuple[float, ...]
     rms_none_by_interval_um: tuple[float, ...] = ()
     """Without checks, on the samples each interval's figures are taken from (those after its first check)."""
+
+
+@dataclass(frozen=True)
+class CandidateScores:
+    """The held-out table behind a choice (:func:`score_candidates`).
+
+    Attributes
+    ----------
+    candidates : Candidates or None
+        The filters replayed (None when nothing could be scored).
+    intervals_s : tuple of float
+        The check intervals scored (those the held-out stretches are long enough for).
+    left_out_s : tuple of float
+        The intervals asked for and not scored.
+    rms_um : ndarray, shape (intervals, candidates)
+        Held-out RMS of every candidate with a check every interval, from each stretch's first check on.
+    chosen : int
+        The candidate kept (column of ``rms_um``; 0 is the hold).
+    reason : str
+        Why nothing could be scored ("" when the table holds).
+    """
+
+    series: list[HeldOut]
+    candidates: Candidates | None
+    intervals_s: tuple[float, ...]
+    left_out_s: tuple[float, ...]
+    rms_um: np.ndarray
+    chosen: int
+    rms_none_um: float
+    probe_sigma_um: float
+    offset_max_um: float
+    rate_um: float
+    reason: str = ""
+
+
+def score_candidates(
+    model: ModelFile,
+    runs: Sequence,
+    *,
+    method: str = "auto",
+    intervals_s: Sequence[float] = INTERVALS_S,
+    cuts: Sequence[float] = CUTS,
+) -> CandidateScores:
+    """Every candidate filter of ``model`` replayed on held-out stretches of its modelling ``runs``, and the one
+    :func:`choose_recalibration` keeps (parameters as there; ``method`` "auto", "hold" or "kalman")."""
+    intervals = tuple(float(v) for v in intervals_s)
+    section = model.switching
+    offset_max = float(max(-section.comp_min_um, section.comp_max_um)) if section.comp_max_um else 1000.0
+    offset_max = min(offset_max, RECALIBRATION_LIMIT)  # a clamp wider than any thermal error (--range-error)
+    rate = min(float(section.rate_limit_um), offset_max) if section.rate_limit_um else offset_max
+    period = float(model.sampling_period_s)
+    series = held_out_series(model, runs, cuts=cuts)
+    empty = CandidateScores(series, None, intervals, (), np.empty((0, 0)), 0, math.nan, math.nan, offset_max, rate)
+    if not series:
+        return dataclasses.replace(empty, reason="the modelling runs are too short to hold part out")
+    residuals = np.concatenate([s.residual for s in series])
+    measured = residuals[np.isfinite(residuals)]
+    rms_none = float(np.sqrt(np.mean(measured**2))) if measured.size else math.nan
+    everies = [whole_samples(t, period) for t in intervals]
+    scored = [i for i, every in enumerate(everies) if _scored_span(series, every) >= every]
+    if not scored:
+        reason = f"the held-out stretches are too short to score a check every {min(intervals) / 60:g} min"
+        return dataclasses.replace(empty, rms_none_um=rms_none, reason=reason)
+    left_out = tuple(intervals[i] for i in range(len(intervals)) if i not in scored)
+    intervals, everies = tuple(intervals[i] for i in scored), [everies[i] for i in scored]
+    probe_sigma = white_sigma(series)
+    candidates = candidate_grid(
+        hold_sigma=_hold_sigma(series, everies, period),
+        initial_offset=initial_offset_sigma(model, rms_none, offset_max),
+        probe_sigma=probe_sigma,
+        method=method,
+    )
+    rms = np.empty((len(everies), len(candidates)))
+    for i, every in enumerate(everies):
+        totals = [replay_candidates(s, candidates, every=every, period_s=period) for s in series]
+        rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
+    table = dataclasses.replace(
+        empty, candidates=candidates, intervals_s=intervals, left_out_s=left_out, rms_um=rms, rms_none_um=rms_none
+    )
+    if not np.all(np.isfinite(rms)) or not np.all(rms[:, 0] > 0):
+        return dataclasses.replace(table, reason="the held-out checks leave nothing to compare the filters on")
+    best = _most_responsive_of_the_best(
+        candidates, np.mean(np.log(rms / rms[:, :1]), axis=0), kalman=method == "kalman"
+    )
+    return dataclasses.replace(table, chosen=best, probe_sigma_um=probe_sigma)
 
 
 def choose_recalibration(
@@ -313,83 +254,42 @@ def choose_recalibration(
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    intervals = tuple(float(v) for v in intervals_s)
     if method == "none":
-        return Tuning(None, intervals, math.nan, (), ())
-    section = model.switching
-    offset_max = float(max(-section.comp_min_um, section.comp_max_um)) if section.comp_max_um else 1000.0
-    offset_max = min(offset_max, RECALIBRATION_LIMIT)  # a clamp wider than any thermal error (--range-error)
-    rate = min(float(section.rate_limit_um), offset_max) if section.rate_limit_um else offset_max
-    period = float(model.sampling_period_s)
-    series = held_out_series(model, runs, cuts=cuts)
-    if not series:
+        return Tuning(None, tuple(float(v) for v in intervals_s), math.nan, (), ())
+    scores = score_candidates(model, runs, method=method, intervals_s=intervals_s, cuts=cuts)
+    offset_max, rate, rms, best = scores.offset_max_um, scores.rate_um, scores.rms_um, scores.chosen
+    if scores.reason:
         return _default(
             offset_max,
             rate,
-            intervals,
-            reason="the modelling runs are too short to hold part out",
-            initial_offset=initial_offset_sigma(model, math.nan, offset_max),
+            scores.intervals_s,
+            reason=scores.reason,
+            initial_offset=initial_offset_sigma(model, scores.rms_none_um, offset_max),
         )
-    residuals = np.concatenate([s.residual for s in series])
-    measured = residuals[np.isfinite(residuals)]
-    rms_none = float(np.sqrt(np.mean(measured**2))) if measured.size else math.nan
-    everies = [whole_samples(t, period) for t in intervals]
-    scored = [i for i, every in enumerate(everies) if _scored_span(series, every) >= every]
-    if not scored:
-        return _default(
-            offset_max,
-            rate,
-            intervals,
-            reason=f"the held-out stretches are too short to score a check every {min(intervals) / 60:g} min",
-            initial_offset=initial_offset_sigma(model, rms_none, offset_max),
-        )
-    left_out = [intervals[i] for i in range(len(intervals)) if i not in scored]
-    intervals, everies = tuple(intervals[i] for i in scored), [everies[i] for i in scored]
-    probe_sigma = white_sigma(series)
-    candidates = candidate_grid(
-        hold_sigma=_hold_sigma(series, everies, period),
-        initial_offset=initial_offset_sigma(model, rms_none, offset_max),
-        probe_sigma=probe_sigma,
-        method=method,
-    )
-    rms = np.empty((len(everies), len(candidates)))
-    for i, every in enumerate(everies):
-        totals = [replay_candidates(s, candidates, every=every, period_s=period) for s in series]
-        rms[i] = np.sqrt(sum(t for t, _ in totals) / max(1, sum(n for _, n in totals)))
-    if not np.all(np.isfinite(rms)) or not np.all(rms[:, 0] > 0):
-        return _default(
-            offset_max,
-            rate,
-            intervals,
-            reason="the held-out checks leave nothing to compare the filters on",
-            initial_offset=initial_offset_sigma(model, rms_none, offset_max),
-        )
-    best = _most_responsive_of_the_best(
-        candidates, np.mean(np.log(rms / rms[:, :1]), axis=0), kalman=method == "kalman"
-    )
-    unchecked = [_rms_unchecked(series, every) for every in everies]
+    everies = [whole_samples(t, float(model.sampling_period_s)) for t in scores.intervals_s]
+    unchecked = [_rms_unchecked(scores.series, every) for every in everies]
     chosen = {
         "by": "held-out checks",
         "method_asked": method,
         "folds": f"each run refitted on its first {', '.join(f'{100 * c:g} %' for c in cuts)}, the rest predicted",
-        "held_out_samples": int(np.sum(np.isfinite(residuals))),
-        "intervals_s": list(intervals),
-        "rms_none_um": rms_none,
-        "probe_sigma_um": probe_sigma,
+        "held_out_samples": int(sum(np.sum(np.isfinite(s.residual)) for s in scores.series)),
+        "intervals_s": list(scores.intervals_s),
+        "rms_none_um": scores.rms_none_um,
+        "probe_sigma_um": scores.probe_sigma_um,
         "probe_sigma_from": "the held-out residual's sample-to-sample scatter",
         "indifference": INDIFFERENCE,
         "rms_hold_um": [float(v) for v in rms[:, 0]],
         "rms_chosen_um": [float(v) for v in rms[:, best]],
         "rms_none_by_interval_um": unchecked,
-        "candidates": len(candidates),
+        "candidates": len(scores.candidates),
     }
-    if left_out:
-        chosen["intervals_not_scored_s"] = left_out
+    if scores.left_out_s:
+        chosen["intervals_not_scored_s"] = list(scores.left_out_s)
         chosen["intervals_not_scored_why"] = "held-out stretches too short to score one interval after the first check"
     return Tuning(
-        candidates.section(best, offset_max_um=offset_max, rate_um=rate, chosen=chosen),
-        intervals,
-        rms_none,
+        scores.candidates.section(best, offset_max_um=offset_max, rate_um=rate, chosen=chosen),
+        scores.intervals_s,
+        scores.rms_none_um,
         tuple(float(v) for v in rms[:, 0]),
         tuple(float(v) for v in rms[:, best]),
         tuple(unchecked),
@@ -475,8 +375,10 @@ __all__ = [
     "INTERVALS_S",
     "METHODS",
     "HeldOut",
+    "CandidateScores",
     "Tuning",
     "choose_recalibration",
     "held_out_series",
+    "score_candidates",
     "white_sigma",
 ]

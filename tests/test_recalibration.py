@@ -15,12 +15,14 @@ from groupfit.errors import InputError
 from groupfit.model import ModelFile
 from groupfit.recalibration_tuning import (
     CUTS,
+    INDIFFERENCE,
     HeldOut,
     _most_responsive_of_the_best,
     candidate_grid,
     choose_recalibration,
     held_out_series,
     replay_candidates,
+    score_candidates,
     white_sigma,
 )
 from groupfit.runtime import (
@@ -361,6 +363,29 @@ def test_tuning_keeps_the_hold_on_a_random_walk_and_takes_a_drift_when_the_error
     assert sections["drift"].method == "kalman" and "drift" in sections["drift"].terms
     assert max(ratios["drift"]) < 0.7 and np.mean(ratios["drift"]) < 0.5  # a drift is extrapolated between checks
     assert math.isfinite(sections["drift"].chosen["rms_none_um"])
+
+
+def test_the_scored_table_is_the_one_behind_the_choice_and_the_choice_is_within_the_band_of_its_best():
+    import pandas as pd
+
+    model = ModelFile.from_dict(synthetic_model(p=0)[0])
+    temps, error = ramp_run(1200, drift=0.05, wander=0.01, seed=5)
+    runs = [(pd.DataFrame(temps, columns=["T1", "T2", "T3", "T4"]), error)]
+    intervals = (1000.0, 2000.0, 4000.0)
+    scores = score_candidates(model, runs, intervals_s=intervals)
+    tuning = choose_recalibration(model, runs, intervals_s=intervals)
+    assert scores.reason == "" and scores.intervals_s == tuning.intervals_s
+    assert scores.rms_um.shape == (len(intervals), len(scores.candidates))
+    np.testing.assert_array_equal(scores.rms_um[:, 0], tuning.rms_hold_um)
+    np.testing.assert_array_equal(scores.rms_um[:, scores.chosen], tuning.rms_chosen_um)
+    kept = scores.candidates.section(scores.chosen, offset_max_um=1.0, rate_um=1.0, chosen={})
+    assert kept.terms == tuning.section.terms
+    assert kept.offset_sigma_um_per_sqrt_h == tuning.section.offset_sigma_um_per_sqrt_h
+    score = np.mean(np.log(scores.rms_um / scores.rms_um[:, :1]), axis=0)
+    assert score[scores.chosen] <= score.min() + INDIFFERENCE
+    assert scores.chosen != int(np.argmin(score))  # here the band keeps a simpler or more responsive filter
+    short = score_candidates(model, [(runs[0][0].iloc[:30], error[:30])], intervals_s=intervals)
+    assert short.reason and short.candidates is None  # too short to hold part out: said, nothing scored
 
 
 def test_the_no_check_figure_of_each_interval_is_taken_on_the_samples_the_checked_figures_score():
