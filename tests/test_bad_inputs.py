@@ -42,7 +42,7 @@ from groupfit.screw.runs import load_screw_run
 SCREW_RUN = SYNTHETIC.parent / "screw_A.csv"
 
 WORKERS = 2
-PROCESS_STRIDE = 6
+PROCESS_STRIDE = 12
 KINDS = ("data", "parameters", "model files", "outputs", "configs", "sweep")
 ROOT_USER = hasattr(os, "geteuid") and os.geteuid() == 0
 """The superuser writes into read-only folders: those cases are skipped for it."""
