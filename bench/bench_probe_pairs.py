@@ -35,6 +35,7 @@ import json
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -78,6 +79,32 @@ def pair_frames():
         whole = pd.read_csv(MEASURED)
         for name, model, following, _ in measured_cuts(len(whole)):
             yield name, "measured", whole.iloc[model], whole.iloc[following], MEASURED_SENSORS, "disp_ch3_um"
+
+
+@dataclass(frozen=True)
+class BuiltPair:
+    """A pair on disk: the model built on its model run (``folder/model_run.csv``) and its next run."""
+
+    name: str
+    source: str
+    folder: Path
+    model_path: Path
+    next_path: Path
+    temps: list
+    error: str
+
+
+def built_pairs(root: Path, *, only=None, diagnose: bool = False, fit_args=()):
+    """Every pair (or those named in ``only``) with its model built under ``root``, one folder each."""
+    for k, (name, source, model, following, temps, error) in enumerate(pair_frames()):
+        if only and name not in only:
+            continue
+        folder = root / f"pair{k}"
+        folder.mkdir()
+        model_path = build(folder, model, temps, error, diagnose=diagnose, fit_args=fit_args)
+        next_path = folder / "next_run.csv"
+        following.to_csv(next_path, index=False)
+        yield BuiltPair(name, source, folder, model_path, next_path, list(temps), error)
 
 
 def build(folder: Path, frame: pd.DataFrame, temps, error: str, *, diagnose: bool, fit_args=()) -> Path:
@@ -221,16 +248,9 @@ def run(argv=None) -> int:
     started = time.perf_counter()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
-        for k, (name, source, model, following, temps, error) in enumerate(pair_frames()):
-            if args.only and name not in args.only:
-                continue
-            folder = Path(tmp) / f"pair{k}"
-            folder.mkdir()
-            model_path = build(folder, model, temps, error, diagnose=args.diagnose, fit_args=args.fit_args.split())
-            next_path = folder / "next_run.csv"
-            following.to_csv(next_path, index=False)
-            results.append(pair_result(name, source, model_path, next_path, intervals))
-            print(f"{name}: none {results[-1]['rms_none_um']:.3g} µm, {results[-1]['rms_um']}", flush=True)
+        for pair in built_pairs(Path(tmp), only=args.only, diagnose=args.diagnose, fit_args=args.fit_args.split()):
+            results.append(pair_result(pair.name, pair.source, pair.model_path, pair.next_path, intervals))
+            print(f"{pair.name}: none {results[-1]['rms_none_um']:.3g} µm, {results[-1]['rms_um']}", flush=True)
     print(report(results, intervals))
     print(f"{len(results)} pair(s) in {time.perf_counter() - started:.0f} s")
     if args.json:

@@ -44,7 +44,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from bench_probe_pairs import build, pair_frames, replayed  # noqa: E402
+from bench_probe_pairs import BuiltPair, built_pairs, replayed  # noqa: E402
 
 from groupfit.data import load_run  # noqa: E402
 from groupfit.model import ModelFile  # noqa: E402
@@ -90,7 +90,9 @@ def describe(candidates, k: int) -> str:
     return "Kalman " + ", ".join(words)
 
 
-def pair_result(name, source, folder: Path, model_path: Path, next_path: Path, temps, error, intervals_s) -> dict:
+def pair_result(pair: BuiltPair, intervals_s) -> dict:
+    name, source, folder, model_path, next_path = pair.name, pair.source, pair.folder, pair.model_path, pair.next_path
+    temps, error = pair.temps, pair.error
     model = ModelFile.load(model_path)
     run = load_run(folder / "model_run.csv", temps=temps, error=error)
     scores = score_candidates(model, [(run.frame, run.error)])
@@ -170,16 +172,9 @@ def run(argv=None) -> int:
     started = time.perf_counter()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
-        for k, (name, source, model, following, temps, error) in enumerate(pair_frames()):
-            if args.only and name not in args.only:
-                continue
-            folder = Path(tmp) / f"pair{k}"
-            folder.mkdir()
-            model_path = build(folder, model, temps, error, diagnose=args.diagnose)
-            next_path = folder / "next_run.csv"
-            following.to_csv(next_path, index=False)
-            results.append(pair_result(name, source, folder, model_path, next_path, temps, error, intervals))
-            print(f"{name}: done", flush=True)
+        for pair in built_pairs(Path(tmp), only=args.only, diagnose=args.diagnose):
+            results.append(pair_result(pair, intervals))
+            print(f"{pair.name}: done", flush=True)
     print(report(results, intervals))
     print(f"{len(results)} pair(s) in {time.perf_counter() - started:.0f} s")
     if args.json:
