@@ -91,14 +91,12 @@ def describe(candidates, k: int) -> str:
 
 
 def pair_result(pair: BuiltPair, intervals_s) -> dict:
-    name, source, folder, model_path, next_path = pair.name, pair.source, pair.folder, pair.model_path, pair.next_path
-    temps, error = pair.temps, pair.error
-    model = ModelFile.load(model_path)
-    run = load_run(folder / "model_run.csv", temps=temps, error=error)
+    model = ModelFile.load(pair.model_path)
+    run = load_run(pair.folder / "model_run.csv", temps=pair.temps, error=pair.error)
     scores = score_candidates(model, [(run.frame, run.error)])
     if scores.reason or scores.candidates is None:
-        return {"pair": name, "source": source, "skipped": scores.reason or "no candidates"}
-    unchecked = replayed(folder, model_path, next_path)
+        return {"pair": pair.name, "source": pair.source, "skipped": scores.reason or "no candidates"}
+    unchecked = replayed(pair.folder, pair.model_path, pair.next_path)
     samples = unchecked["samples"]
     prediction = np.array([s["prediction_um"] for s in samples], dtype=float)
     residual = np.array([np.nan if s["residual_um"] is None else s["residual_um"] for s in samples], dtype=float)
@@ -107,11 +105,11 @@ def pair_result(pair: BuiltPair, intervals_s) -> dict:
     per_interval = []
     for t in intervals_s:
         rms = next_run_rms(scores, residual, measured, prediction, whole_samples(t, period), period)
-        cli = replayed(folder, model_path, next_path, "--probe-every", f"{t:g}")["rms_um"]
+        cli = replayed(pair.folder, pair.model_path, pair.next_path, "--probe-every", f"{t:g}")["rms_um"]
         per_interval.append({"candidates": rms.tolist(), "chosen": float(rms[scores.chosen]), "replay_chosen": cli})
     return {
-        "pair": name,
-        "source": source,
+        "pair": pair.name,
+        "source": pair.source,
         "none": float(unchecked["rms_um"]),
         "chosen_index": int(scores.chosen),
         "chosen": model.recalibration.description if model.recalibration else "none",

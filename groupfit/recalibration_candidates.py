@@ -77,7 +77,7 @@ class Candidates:
 def candidate_grid(*, hold_sigma: float, initial_offset: float, probe_sigma: float, method: str = "auto") -> Candidates:
     """The hold (first), then the Kalman filters: offset alone, with a drift, a gain, or both.
 
-    ``probe_sigma``: the noise of one check (µm, :func:`white_sigma`), the
+    ``probe_sigma``: the noise of one check (µm, :func:`groupfit.recalibration_tuning.white_sigma`), the
     same for every Kalman candidate; they differ in how the error wanders.
     """
     rows = [(("offset",), hold_sigma, 0.0, 1.0, 0.0, initial_offset, 0.0, 0.0, 0.0, 0.0)]

@@ -152,6 +152,8 @@ class CandidateScores:
 
     Attributes
     ----------
+    series : list of HeldOut
+        The held-out stretches the candidates were replayed on.
     candidates : Candidates or None
         The filters replayed (None when nothing could be scored).
     intervals_s : tuple of float
@@ -162,6 +164,10 @@ class CandidateScores:
         Held-out RMS of every candidate with a check every interval, from each stretch's first check on.
     chosen : int
         The candidate kept (column of ``rms_um``; 0 is the hold).
+    rms_none_um, probe_sigma_um : float
+        The held-out RMS without checks and the noise of one check (:func:`white_sigma`); NaN when not measured.
+    offset_max_um, rate_um : float
+        The correction's bound and rate limit per sample, from the model's switching rule.
     reason : str
         Why nothing could be scored ("" when the table holds).
     """
