@@ -120,6 +120,42 @@ def test_the_reference_chosen_is_the_one_that_holds_on_a_day_at_another_air_leve
     assert {c["reference"] for c in record["candidates"]} == {"T_amb", None}
 
 
+def quiet_air_day(seed: int, *, air_level: float, truth: str) -> pd.DataFrame:
+    """A day whose air moves (0.15 °C of swing, above its noise) too little against the error's noise (2 µm) for
+    the folds to tell the references apart."""
+    frame = machine_day(seed, air_level=air_level, air_swing=0.15, truth=truth)
+    return frame.assign(error_um=frame["error_um"] + 2.0 * np.random.default_rng(7).standard_normal(len(frame)))
+
+
+@pytest.mark.parametrize("truth", ["absolute", "rises"])
+def test_a_run_that_cannot_tell_the_references_apart_says_what_a_day_at_another_air_level_costs(truth):
+    day = quiet_air_day(2, air_level=21.0, truth=truth)
+    next_day = machine_day(3, air_level=24.0, air_swing=0.15, truth=truth)
+    run = run_of(day)
+    choice = choose_reference([run], "T_amb", (0, 1, 2))
+    assert choice.scored and not choice.told_apart and choice.reference == "T_amb"  # the default stands
+    if truth == "absolute":  # the slope of the absolute readings' model: the sum of the error's gains
+        assert choice.air_slope_um_per_c == pytest.approx(sum(GAINS), rel=0.05)
+    # the next day, 3 °C warmer: the two references part by about the slope times the change, whichever holds
+    shift = next_day["T_amb"].mean() - day["T_amb"].mean()
+    held = {reference: next_day_rms(run, next_day, reference) for reference in ("T_amb", None)}
+    assert abs(held["T_amb"] - held[None]) == pytest.approx(choice.air_slope_um_per_c * shift, rel=0.1)
+    assert held["T_amb" if truth == "rises" else None] < 1.0  # the truth's reference holds (noise 2 µm not in it)
+    note = choice.note()
+    assert "cannot tell" in note and f"{choice.air_slope_um_per_c:.3g} µm for every °C" in note
+    record = choice.to_json()
+    assert record["told_apart"] is False and record["note"] == note
+    assert record["air_slope_um_per_c"] == pytest.approx(choice.air_slope_um_per_c)
+
+
+def test_a_run_that_tells_the_references_apart_has_no_such_note():
+    choice = choose_reference([run_of(machine_day(2, air_level=21.0, air_swing=2.0, truth="rises"))], "T_amb", (0,))
+    assert choice.scored and choice.told_apart and choice.note() is None
+    assert choice.to_json()["told_apart"] is True and choice.to_json()["note"] is None
+    steady = choose_reference([run_of(machine_day(1, air_level=20.0, air_swing=0.0, truth="rises"))], "T_amb", (0,))
+    assert not steady.scored and steady.note() is None and steady.to_json()["told_apart"] is None
+
+
 # ------------------------------------------------------------------------- the verbs
 
 
@@ -184,3 +220,14 @@ def test_compare_takes_the_reference_fit_would_take(tmp_path):
     assert main([*args, "--out", str(out), "--json", str(tmp_path / "cmp.json"), "--quiet"]) == 0
     result = json.loads((tmp_path / "cmp.json").read_text())
     assert result["reference_choice"]["chosen"] is None and result.get("reference") is None
+
+
+def test_fit_says_when_its_run_cannot_tell_the_references_apart(tmp_path, capsys):
+    day = tmp_path / "quiet_air.csv"
+    quiet_air_day(2, air_level=21.0, truth="absolute").to_csv(day, index=False)
+    model, _ = fit_cli(tmp_path, [day])
+    choice = model["training"]["reference_choice"]
+    assert model["reference"] == "T_amb" and choice["told_apart"] is False
+    report = capsys.readouterr()
+    assert f"note    {choice['note']}" in report.out + report.err
+    assert "record a run on a day of another air temperature" in choice["note"]

@@ -16,6 +16,13 @@ and "none" replaces the default only when its expected error is below the
 default's by more than one standard error (the one-standard-error rule, the
 default taken as the simpler model). An ambient that stays within its own
 noise leaves the question open, and the default stands.
+
+When the ambient moves but neither reference is better by a standard error,
+the run cannot tell the two apart either; the default stands, and a note says
+what a day at another air level would cost if the error follows the parts' own
+temperatures: the least-squares model on the absolute readings moves by the
+sum of its coefficients for every °C all parts and the air move together
+(:func:`air_level_slope`), which the model over the air does not follow.
 """
 
 from __future__ import annotations
@@ -67,6 +74,10 @@ class ReferenceChoice:
     signal_to_noise: float
     expectations: dict
     """``{ambient: NextRunExpectation, None: NextRunExpectation}`` when both were scored, else empty."""
+    told_apart: bool = True
+    """Whether the expected errors of the two references differ by more than a standard error (either way)."""
+    air_slope_um_per_c: float = math.nan
+    """The absolute readings' least-squares model's change for every °C the parts and the air move together."""
 
     @property
     def scored(self) -> bool:
@@ -92,6 +103,22 @@ class ReferenceChoice:
             return f"expected next-run RMS {compared}: the error follows the parts' own temperatures"
         return f"expected next-run RMS {compared}: none is not better by a standard error, the default stands"
 
+    def note(self) -> str | None:
+        """The note when the ambient moves and the run cannot tell the references apart; None otherwise."""
+        if not self.scored or self.told_apart or not math.isfinite(self.air_slope_um_per_c):
+            return None
+        (_, amb), (_, none) = self.expected(self.ambient), self.expected(None)
+        slope = abs(self.air_slope_um_per_c)
+        level = f", the expected {amb:.3g} µm at {amb / slope:.2g} °C" if slope > 0 else ""
+        return (
+            f"the run cannot tell whether the error follows the parts' rises over {self.ambient} or their own "
+            f"temperatures (expected next-run RMS {amb:.3g} against {none:.3g} µm, within a standard error): if "
+            f"it follows their own, the model is off by about {slope:.3g} µm for every °C a day's air differs "
+            f"from this run's{level}; record a run on a day of another air temperature and fit on both "
+            "(--data A B), or name the reference the measuring set-up calls for (--reference none or "
+            f"--reference {self.ambient})"
+        )
+
     def line(self) -> str:
         """The report's line (``fit``, ``compare``)."""
         chosen = "none (absolute readings)" if self.reference is None else f"{self.reference} (the default)"
@@ -112,6 +139,9 @@ class ReferenceChoice:
             "ambient_signal_to_noise": self.signal_to_noise if math.isfinite(self.signal_to_noise) else None,
             "candidates": candidates,
             "reason": self.reason(),
+            "told_apart": self.told_apart if self.scored else None,
+            "air_slope_um_per_c": self.air_slope_um_per_c if math.isfinite(self.air_slope_um_per_c) else None,
+            "note": self.note(),
         }
 
 
@@ -133,16 +163,38 @@ def choose_reference(
     """
     bases = [_ambient_rows(run, ambient) for run in runs]
     spread, ratio = ambient_signal_to_noise([_column(run, ambient) for run in bases])
+    slope = air_level_slope(bases, fit_intercept=fit_intercept)
     if not ratio > SIGNAL_TO_NOISE:
-        return ReferenceChoice(ambient, ambient, spread, ratio, {})
+        return ReferenceChoice(ambient, ambient, spread, ratio, {}, air_slope_um_per_c=slope)
     settings = {"n": n, "c": c, "fit_intercept": fit_intercept}
     over_air = expect_next_run([with_reference(run, ambient) for run in bases], p_values, **settings)
     absolute = expect_next_run(
         [dataclasses.replace(run, frame=run.frame.drop(columns=[ambient])) for run in bases], p_values, **settings
     )
     expectations: dict = {ambient: over_air, None: absolute}
-    chosen = None if _clearly_better(absolute, over_air) else ambient
-    return ReferenceChoice(chosen, ambient, spread, ratio, expectations)
+    none_better = _clearly_better(absolute, over_air)
+    told_apart = none_better or _clearly_better(over_air, absolute)
+    chosen = None if none_better else ambient
+    return ReferenceChoice(chosen, ambient, spread, ratio, expectations, told_apart, slope)
+
+
+def air_level_slope(runs: Sequence[Run], *, fit_intercept: bool = True) -> float:
+    """The sum of the coefficients of the least-squares global model of the error on the absolute readings (µm/°C).
+
+    A day whose air is ΔT warmer leaves every part ΔT warmer at the same rises:
+    a model on the absolute readings then moves by this sum times ΔT, and one
+    over the air not at all. NaN when the runs hold too few rows to fit it.
+    """
+    temps = np.vstack([run.temps for run in runs])
+    error = np.concatenate([run.error for run in runs])
+    rows = np.isfinite(temps).all(axis=1) & np.isfinite(error)
+    design = temps[rows]
+    if fit_intercept:
+        design = np.column_stack([np.ones(len(design)), design])
+    if len(design) <= design.shape[1]:
+        return math.nan
+    coef = np.linalg.lstsq(design, error[rows], rcond=None)[0]
+    return float(np.sum(coef[int(fit_intercept) :]))
 
 
 def default_reference_choice(
@@ -190,6 +242,7 @@ __all__ = [
     "RULE",
     "SIGNAL_TO_NOISE",
     "ReferenceChoice",
+    "air_level_slope",
     "ambient_signal_to_noise",
     "choose_reference",
     "default_reference_choice",
