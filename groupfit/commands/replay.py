@@ -27,12 +27,12 @@ from groupfit.commands.replay_probes import (
 from groupfit.commands.replay_rate import rate_check
 from groupfit.commands.replay_readings import earlier_recordings, load_readings
 from groupfit.commands.replay_register import register_check
-from groupfit.commands.replay_span import range_check
+from groupfit.commands.replay_span import modelling_span, range_check
 from groupfit.commands.screw_deploy import run_screw_replay
 from groupfit.continuation import picked_up, started_running_notes, with_histories, zero_of
 from groupfit.data import loading_notes
 from groupfit.data_options import add_encoding_option
-from groupfit.error_zero import zero_offset
+from groupfit.error_zero import level_shift, zero_offset
 from groupfit.errors import InputError
 from groupfit.export.sheet import IntegerForm
 from groupfit.glitches import scored_glitches
@@ -227,7 +227,10 @@ def run_replay(args: argparse.Namespace) -> int:
     clamped, clamp_note = clamp_check(rule.tables, replay)
     glitches, glitch_notes = scored_glitches(run.error, residual)
     moved = next((b for b in span.get("beyond_modelling_range", []) if b.get("reference")), None)
-    offset, offset_notes = zero_offset(without, (model.training or {}).get("expected_next_run_rms_um"), moved)
+    spanned = sum(name in modelling_span(model) for name in model.temps)  # the measured inputs, not derived ones
+    shifted = level_shift(span.get("beyond_modelling_range", []), spanned)
+    expected_rms = (model.training or {}).get("expected_next_run_rms_um")
+    offset, offset_notes = zero_offset(without, expected_rms, moved, shifted)
     register, register_notes = register_check(counts, residual, replay)
     out_of_range, fault_notes = fault_readings(rule.tables, run.temps, replay.fault)
     notes = span.get("notes", []) + fault_notes + ([clamp_note] if clamp_note else []) + glitch_notes + offset_notes
