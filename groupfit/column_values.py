@@ -29,6 +29,7 @@ from groupfit.error_start import from_start, is_from_start
 from groupfit.errors import InputError
 from groupfit.gap_advice import log_readings, log_rows, missing_advice, missing_count, resampled_row
 from groupfit.textencoding import misread
+from groupfit.twin_columns import twin_note
 
 TEMP_RANGE_C = (-50.0, 500.0)
 """Plausible temperature readings (°C) of the sensors of a machine; anything outside is refused.
@@ -405,6 +406,8 @@ def temperature_inputs(frame: pd.DataFrame, label: str, options: LoadOptions) ->
         )
     kept = [j for j, t in enumerate(temps) if t not in constant]
     array = np.column_stack([columns[j] for j in kept]) if kept else np.empty((len(frame), 0))
+    twins = twin_note(label, [temps[j] for j in kept], array) if options.require_error else None
+    notes += [twins] if twins else []
     if constant:
         listed = ", ".join(f"'{t}' ({v:g} °C)" for t, v in constant.items())
         notes.append(
