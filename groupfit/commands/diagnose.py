@@ -175,9 +175,9 @@ def heat_exponent(text: str) -> float | str:
 
 
 def load_measured(path: str, model: dict[str, Any], time: str, *, next_run: bool = False, **clock) -> Run:
-    """A run of ``--data`` (``next_run``: of ``--validate``, whose temperatures outside the plausible range are
-    kept, as replay keeps them, faults of the run-time rule, and whose temperature glitches are kept as
-    logged) with the model's measured inputs."""
+    """A run of ``--data`` with the model's measured inputs. ``next_run``: read as ``replay`` reads a run (a
+    ``--validate`` run, or a ``--data`` run as logged in front of one that continues it): temperatures outside the
+    plausible range kept as faults of the run-time rule, temperature glitches kept as logged."""
     derived = {d["name"] for d in model.get("derived_inputs", [])}
     measured = [t for t in model["temps"] if t not in derived]
     run = load_run(
