@@ -58,11 +58,12 @@ def table(rows: list[dict], title: str) -> None:
 def undecided_references(rows: list[dict], factor: float) -> None:
     """The pairs whose model run cannot tell the two references apart (``fit`` then notes what a day at another
     air level costs): their actual / expected, beside the rest's."""
-    noted = [r for r in rows if (r.get("reference_choice") or {}).get("told_apart") is False]
+    undecided = [(r.get("reference_choice") or {}).get("told_apart") is False for r in rows]
+    noted = [r for r, flag in zip(rows, undecided) if flag]
     if not noted:
         return
     ratios = ", ".join(f"{r['pair']} {r['actual_um'] / (factor * r['raw_um']):.2f}" for r in noted)
-    others = np.array([r["actual_um"] / (factor * r["raw_um"]) for r in rows if r not in noted])
+    others = np.array([r["actual_um"] / (factor * r["raw_um"]) for r, flag in zip(rows, undecided) if not flag])
     print(
         f"  the reference note (the run cannot tell the references apart): {len(noted)} pairs, actual / expected "
         f"{ratios}; the other {len(others)} pairs: beyond 2 on {int(np.sum(others > 2))}"

@@ -288,8 +288,8 @@ def run_compare(args: argparse.Namespace) -> int:
         data["reference_choice"] = choice.to_json()
         if choice.scored:
             summary = choice.line() + "\n" + summary
-        if choice.note():
-            summary = f"{summary}\nnote    {choice.note()}"
+        undecided = choice.note()
+        summary += f"\nnote    {undecided}" if undecided else ""
     if args.probe_every:
         checked = validation or [modelling]
         table = interval_table(

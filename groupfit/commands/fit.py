@@ -136,8 +136,8 @@ def run_fit(args: argparse.Namespace) -> int:
         training["reference_choice"] = data.reference_choice.to_json()
         if data.reference_choice.scored:
             notes += "\n" + data.reference_choice.line()
-        if data.reference_choice.note():
-            notes += f"\nnote    {data.reference_choice.note()}"
+        undecided = data.reference_choice.note()
+        notes += f"\nnote    {undecided}" if undecided else ""
     model = model.replace(training=training)
     if position_run is not None:
         model, position_notes = position_model(args, model, position_run)
