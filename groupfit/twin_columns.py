@@ -17,7 +17,8 @@ def twin_columns(names: Sequence[str], values: np.ndarray) -> list[tuple[str, ..
     where the other's is empty too), each in the columns' order; one pass over the columns."""
     seen: dict[bytes, list[str]] = {}
     for name, column in zip(names, np.asarray(values, dtype=float).T):
-        seen.setdefault(np.where(np.isnan(column), np.nan, column).tobytes(), []).append(name)
+        key = np.where(np.isnan(column), np.nan, column + 0.0)  # one NaN, and -0.0 read as 0.0, as == reads them
+        seen.setdefault(key.tobytes(), []).append(name)
     return [tuple(group) for group in seen.values() if len(group) > 1]
 
 

@@ -22,6 +22,7 @@ def test_twins_are_the_columns_equal_on_every_row_as_a_pairwise_comparison_finds
     values[:, 5] = values[:, 2]
     values[10, 5] = np.nan  # one missed reading on one twin only: no longer alike
     values[:, 8] = values[:, 0]
+    values[40, 0], values[40, 8] = 0.0, -0.0  # equal readings, whatever their sign bit
     values[30, [0, 8]] = np.nan  # missed on both: still alike
     names = [f"T{k}" for k in range(9)]
     pairs = {
