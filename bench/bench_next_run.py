@@ -41,7 +41,7 @@ def table(rows: list[dict], title: str) -> None:
         f"{'best':>4} {'bic':>3}  ok(ch/bic/p3)  actual by p"
     )
     for r in rows:
-        expected = calibration.expected(r["raw_um"])[0]
+        expected = panel.expected_um(r)
         ratio = r["actual_um"] / expected
         by_p = " ".join(f"{v:.3g}" for v in r["actual_by_p"].values())
         ok = "".join("y" if r[k] else "." for k in ("within_chosen", "within_bic", "within_default"))
@@ -62,8 +62,8 @@ def undecided_references(rows: list[dict], factor: float) -> None:
     noted = [r for r, flag in zip(rows, undecided) if flag]
     if not noted:
         return
-    ratios = ", ".join(f"{r['pair']} {r['actual_um'] / (factor * r['raw_um']):.2f}" for r in noted)
-    others = np.array([r["actual_um"] / (factor * r["raw_um"]) for r, flag in zip(rows, undecided) if not flag])
+    ratios = ", ".join(f"{r['pair']} {r['actual_um'] / panel.expected_um(r, factor):.2f}" for r in noted)
+    others = np.array([r["actual_um"] / panel.expected_um(r, factor) for r, flag in zip(rows, undecided) if not flag])
     print(
         f"  the reference note (the run cannot tell the references apart): {len(noted)} pairs, actual / expected "
         f"{ratios}; the other {len(others)} pairs: beyond 2 on {int(np.sum(others > 2))}"
@@ -78,7 +78,7 @@ def within_span(rows: list[dict], factor: float) -> None:
         ("next run beyond it (replay notes it)", [r for r in rows if r["inputs_beyond_span"]]),
     ):
         if part:
-            ratio = np.array([r["actual_um"] / (factor * r["raw_um"]) for r in part])
+            ratio = np.array([r["actual_um"] / panel.expected_um(r, factor) for r in part])
             inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
             print(f"  {label}: {len(part)} pairs, in [0.5, 2]: {100 * inside:.0f} %")
 
@@ -86,7 +86,7 @@ def within_span(rows: list[dict], factor: float) -> None:
 def summary(rows: list[dict], factor: float, label: str) -> None:
     if not rows:
         return
-    ratio = np.array([r["actual_um"] / (factor * r["raw_um"]) for r in rows])
+    ratio = np.array([r["actual_um"] / panel.expected_um(r, factor) for r in rows])
     inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
     shares = {k: np.mean([r[k] for r in rows]) for k in ("within_chosen", "within_bic", "within_default")}
     print(

@@ -62,7 +62,7 @@ def within(rows: list[dict], factor: float) -> float:
 
 def covered(rows: list[dict]) -> float:
     """The share of pairs whose actual RMS lies inside the printed range."""
-    ranges = [calibration.expected(r["raw_um"])[1] for r in rows]
+    ranges = [calibration.expected(r["raw_um"], unseen_condition=r["unseen_condition"])[1] for r in rows]
     return float(np.mean([low <= r["actual_um"] <= high for r, (low, high) in zip(rows, ranges)]))
 
 

@@ -10,6 +10,9 @@ builds such pairs on the independent machine (``independent_machine.py``: random
 spindle at one speed for 3-8 h, then stopped for 3-8 h; the next run the same programme, each stretch ±15 %, on
 another day) and scores both rules with the panel's own scoring (``next_run_panel.score_pair``): the share of
 pairs whose actual / expected lies in [0.5, 2], and the share whose chosen model is within 1.5× of the best p.
+Last, the factor of such runs (:data:`groupfit.heldout.calibration.UNSEEN_CONDITION_FACTOR`, the median of
+actual / raw over the pairs): derived on the even-numbered pairs and checked on the odd-numbered ones and the
+other way round, beside the panel's factor for every run.
 """
 
 from __future__ import annotations
@@ -81,8 +84,12 @@ def seen_after_one_condition(shipped):
     return folds
 
 
-def summary(rows: list[dict], label: str) -> None:
-    ratio = np.array([r["actual_um"] / calibration.expected(r["raw_um"])[0] for r in rows])
+def summary(rows: list[dict], label: str, factor: float | None = None) -> None:
+    """The share of ``rows`` within a factor 2 of their expected figure (``factor`` × raw for every pair when
+    given, else as ``fit`` calibrates each) and the share whose chosen model is within 1.5× of the best p."""
+    ratio = np.array(
+        [r["actual_um"] / (factor * r["raw_um"] if factor is not None else panel.expected_um(r)) for r in rows]
+    )
     inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
     chosen = np.mean([r["within_chosen"] for r in rows])
     print(
@@ -106,7 +113,7 @@ def main() -> None:
     print(f"{'pair':<18} {'rule':<8} {'p':>2} {'expect':>8} {'actual':>8} {'ratio':>6} {'best':>4}  actual by p")
     for label, scored in rows.items():
         for row in scored:
-            expected = calibration.expected(row["raw_um"])[0]
+            expected = panel.expected_um(row)
             by_p = " ".join(f"{v:.3g}" for v in row["actual_by_p"].values())
             print(
                 f"{row['pair']:<18} {label[:8]:<8} {row['chosen_p']:>2} {expected:>8.3g} {row['actual_um']:>8.3g} "
@@ -114,6 +121,20 @@ def main() -> None:
             )
     for label, scored in rows.items():
         summary(scored, label)
+    shipped_rows = next(iter(rows.values()))
+    flagged = [row for row in shipped_rows if row["unseen_condition"]]
+    print(f"\n{len(flagged)} of {len(shipped_rows)} runs start a condition the run before never saw (their own factor)")
+    summary(shipped_rows, "with the panel's factor for every run", calibration.FACTOR)
+    for name, derive_on, check_on in (("even", 0, 1), ("odd", 1, 0)):
+        derived = calibration.derive_calibration(
+            [r["raw_um"] for r in shipped_rows[derive_on::2]], [r["actual_um"] for r in shipped_rows[derive_on::2]]
+        )
+        summary(shipped_rows[check_on::2], f"factor {derived['factor']:.3g} from the {name}-numbered, on the others",
+                derived["factor"])  # fmt: skip
+    everything = calibration.derive_calibration(
+        [r["raw_um"] for r in shipped_rows], [r["actual_um"] for r in shipped_rows]
+    )
+    print(f"derived on all {len(shipped_rows)} (what ships as UNSEEN_CONDITION_FACTOR and its range): {everything}")
 
 
 if __name__ == "__main__":

@@ -25,7 +25,6 @@ import independent_machine as machine  # noqa: E402
 import next_run_panel as panel  # noqa: E402
 from bench_two_conditions import hidden_part  # noqa: E402
 
-from groupfit.heldout import calibration  # noqa: E402
 from groupfit.heldout.nextrun import sliced  # noqa: E402
 
 SPEEDS = (2000, 3000, 4000, 5000, 6000)
@@ -63,7 +62,7 @@ def main() -> None:
     print(f"{'pair':<14} {'p':>2} {'expect':>8} {'actual':>8} {'ratio':>6} {'best':>4} {'bic':>3}  actual by p")
     ratios = []
     for row in rows:
-        expected = calibration.expected(row["raw_um"])[0]
+        expected = panel.expected_um(row)
         ratios.append(row["actual_um"] / expected)
         by_p = " ".join(f"{v:.3g}" for v in row["actual_by_p"].values())
         print(

@@ -30,6 +30,7 @@ import pandas as pd
 
 from groupfit.columns import usable_columns
 from groupfit.data import Run, join_runs, load_run
+from groupfit.heldout import calibration
 from groupfit.heldout.expect import expect_next_run
 from groupfit.heldout.folds import operating_columns
 from groupfit.heldout.nextrun import rule_prediction, sliced
@@ -230,10 +231,20 @@ def score_pair(pair: Pair) -> dict:
         "next_error_sd_um": float(np.std(pair.next.error)),
         "raw_by_p": dict(zip(expectation.candidates, map(float, expectation.scores.raw_rms()))),
         "n_folds": expectation.scores.n_folds,
+        "unseen_condition": expectation.scores.leaves_one_condition,
         "inputs_beyond_span": inputs_beyond_span(model, with_reference(pair.next, chosen_reference)),
         "n_model": n_model,
         "n_next": pair.next.n_samples,
     }
+
+
+def expected_um(row: dict, factor: float | None = None) -> float:
+    """The pair's expected next-run RMS: its raw figure times ``factor`` (default: the shipped
+    :data:`~groupfit.heldout.calibration.FACTOR`), or times the factor of a run whose scored segments start a
+    condition the run before them never saw (:data:`~groupfit.heldout.calibration.UNSEEN_CONDITION_FACTOR`)."""
+    if row.get("unseen_condition"):
+        return calibration.UNSEEN_CONDITION_FACTOR * row["raw_um"]
+    return (calibration.FACTOR if factor is None else factor) * row["raw_um"]
 
 
 def inputs_beyond_span(model: Run, next_run: Run) -> list[str]:

@@ -237,6 +237,18 @@ def test_a_segment_that_leaves_the_one_condition_before_it_is_noted(speeds, leav
     assert scores.leaves_one_condition == leaves
     noted = any("never saw" in note and "--data A B" in note for note in trust_notes(scores))
     assert noted == leaves
+    # such a run takes the factor and range learned on warm-up/cool-down runs repeated on another day
+    expectation = expect_next_run([run], (0,))
+    factor, (low, high) = (
+        (calibration.UNSEEN_CONDITION_FACTOR, calibration.UNSEEN_CONDITION_RATIO_RANGE)
+        if leaves
+        else (calibration.FACTOR, calibration.RATIO_RANGE)
+    )
+    value, band = expectation.expected()
+    assert value == pytest.approx(factor * float(expectation.scores.raw_rms()[0]))
+    assert band == pytest.approx((low * value, high * value))
+    assert ("warm-up/cool-down" in expectation.method()) == leaves
+    assert f"×{factor:.3g}" in expectation.method()
 
 
 def test_two_runs_left_out_are_noted():
@@ -401,3 +413,18 @@ def test_operating_columns_that_never_change_cut_the_run_as_blocks_of_time():
     assert "blocks of time" in constant.method() and "changes of" not in constant.method()
     np.testing.assert_allclose(constant.sse, without.sse, rtol=1e-12)
     assert any("one operating condition" in note for note in trust_notes(constant))
+
+
+def test_fit_expects_a_heat_then_cool_run_with_its_own_calibration(tmp_path):
+    path = tmp_path / "warm_cool.csv"
+    tiny_frame(15, speeds=(1000, 0), segment=120).to_csv(path, index=False)  # a warm-up, then a cool-down
+    result = tmp_path / "fit.json"
+    assert main(["fit", "--data", str(path), *FIT_OPTIONS, "--p", "0", "--json", str(result)]) == 0
+    data = json.loads(result.read_text())
+    scores = forward_chaining(load_run(pd.read_csv(path), name="warm_cool", temps=["T1", "T2"]), [0])
+    assert scores.leaves_one_condition
+    value = data["expected_next_run_rms_um"]
+    assert value == pytest.approx(calibration.UNSEEN_CONDITION_FACTOR * float(scores.raw_rms()[0]), rel=1e-9)
+    low, high = calibration.UNSEEN_CONDITION_RATIO_RANGE
+    assert data["expected_next_run_range_um"] == pytest.approx([low * value, high * value])
+    assert "warm-up/cool-down" in data["expected_next_run_method"]
