@@ -231,7 +231,7 @@ def score_pair(pair: Pair) -> dict:
         "next_error_sd_um": float(np.std(pair.next.error)),
         "raw_by_p": dict(zip(expectation.candidates, map(float, expectation.scores.raw_rms()))),
         "n_folds": expectation.scores.n_folds,
-        "unseen_condition": expectation.scores.leaves_one_condition,
+        "unseen_condition": expectation.scores.unseen_condition,
         "inputs_beyond_span": inputs_beyond_span(model, with_reference(pair.next, chosen_reference)),
         "n_model": n_model,
         "n_next": pair.next.n_samples,

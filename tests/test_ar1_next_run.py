@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 
 from groupfit.ar1.fitting import fit_ar1_file
-from groupfit.ar1.nextrun import ar1_forward_chaining, file_predictor
+from groupfit.ar1.nextrun import ar1_forward_chaining, expect_ar1, file_predictor
 from groupfit.cli import main
-from groupfit.heldout.calibration import FACTOR, RATIO_RANGE
+from groupfit.heldout.calibration import FACTOR, RATIO_RANGE, UNSEEN_CONDITION_FACTOR
 
 C1 = 0.98
 C2 = {0.0: 0.0, 1000.0: 0.05, 2000.0: 0.10, 3000.0: 0.15}
@@ -73,6 +73,18 @@ def test_a_run_whose_prefixes_saw_every_level_expects_nothing_beyond_rounding():
     options = fit_options()
     predict = file_predictor(heat, error, lambda q, e: fit_ar1_file(q, e, **options).model)
     assert ar1_forward_chaining(heat, error, predict, heat_name="speed_rpm").raw_rms()[0] < 1e-9
+
+
+def test_a_cool_down_after_one_warm_up_keeps_the_panels_factor_for_the_physics_model():
+    heat, error = exact_run(levels=[2000.0] * 5 + [0.0] * 5)  # a warm-up, then a cool-down from half the run
+    options = fit_options()
+    predict = file_predictor(heat, error, lambda q, e: fit_ar1_file(q, e, **options).model)
+    expectation = expect_ar1(heat, error, predict, heat_name="speed_rpm")
+    assert expectation.scores.leaves_one_condition and not expectation.scores.unseen_condition
+    raw = float(expectation.scores.raw_rms()[0])
+    assert expectation.expected()[0] == pytest.approx(FACTOR * raw, rel=1e-12)
+    assert FACTOR != UNSEEN_CONDITION_FACTOR and "warm-up/cool-down runs" not in expectation.method()
+    assert any("the heat law carries the physics model there" in note for note in expectation.notes)
 
 
 def test_a_heat_column_that_never_changes_is_cut_into_blocks_of_time_and_says_so(tmp_path, capsys):

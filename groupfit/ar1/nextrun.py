@@ -95,6 +95,7 @@ def ar1_forward_chaining(
         n_conditions=conditions,
         blocks_of_time=conditions == 1,
         leaves_one_condition=leaves_one_condition(folds, codes),
+        physics_model=True,
     )
 
 

@@ -55,7 +55,7 @@ class NextRunExpectation:
         raw = float(self.scores.raw_rms()[index])
         if self.scores.kind == LEAVE_ONE_RUN_OUT:  # each held-out run is a real next run: no factor
             return calibration.expected_several(raw, np.sqrt(self.scores.sse[index] / self.scores.counts))
-        return calibration.expected(raw, unseen_condition=self.scores.leaves_one_condition)
+        return calibration.expected(raw, unseen_condition=self.scores.unseen_condition)
 
     def for_candidate(self, candidate) -> tuple[float, tuple[float, float]] | None:
         """The expected RMS and range of the candidate ``candidate`` (e.g. a p), None when it was not scored."""
@@ -77,7 +77,7 @@ class NextRunExpectation:
                 f"{calibration.LEVELS[1]:g}th percentiles)"
             )
         percentiles = f"{calibration.LEVELS[0]:g}th-{calibration.LEVELS[1]:g}th percentiles"
-        if self.scores.leaves_one_condition:
+        if self.scores.unseen_condition:
             return (
                 f"{self.scores.method()}; calibrated ×{calibration.UNSEEN_CONDITION_FACTOR:.3g} and ranged by the "
                 f"{percentiles} of simulated warm-up/cool-down runs repeated on another day (a scored segment "
@@ -294,13 +294,17 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
             "another day) and fit on both (--data A B --p 0)"
         )
     elif scores.leaves_one_condition:
+        calibrated = (
+            "the figure is calibrated on simulated warm-up/cool-down runs repeated on another day, whose next runs "
+            "lay 0.29-3.2 × it (10th-90th percentiles; two heat-then-cool runs of a 3-D printer, each the other's "
+            "next run, 0.27 and 0.65 ×)"
+            if scores.unseen_condition
+            else "the heat law carries the physics model there, and its figure keeps the panel's factor"
+        )
         notes.append(
             "a scored segment starts a condition the run before it never saw (a cool-down after the warm-up "
             "alone): every candidate extrapolates there, and that segment weighs most in the figure and the "
-            "choice; the figure is calibrated on simulated warm-up/cool-down runs repeated on another day, whose "
-            "next runs lay 0.29-3.2 × it (10th-90th percentiles; two heat-then-cool runs of a 3-D printer, each "
-            "the other's next run, 0.27 and 0.65 ×); a rough estimate: record a second run and fit on both "
-            "(--data A B --p 0)"
+            f"choice; {calibrated}; a rough estimate: record a second run and fit on both (--data A B --p 0)"
         )
     elif scores.n_conditions < MIN_SEGMENTS:
         notes.append(

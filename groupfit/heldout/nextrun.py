@@ -83,6 +83,15 @@ class NextRunScores:
     (:func:`leaves_one_condition`)."""
     unfitted_runs: tuple = ()
     """Runs left out of the folds: the others, trained on without them, hold fewer samples than ``fit`` takes."""
+    physics_model: bool = False
+    """The scores are the AR(1) physics model's (:mod:`groupfit.ar1.nextrun`), whose forward chaining through a
+    cool-down after one warm-up follows the heat law and keeps the panel's factor."""
+
+    @property
+    def unseen_condition(self) -> bool:
+        """Whether the figure takes the factor of a run whose scored segment starts a condition the run before it
+        never saw (:data:`groupfit.heldout.calibration.UNSEEN_CONDITION_FACTOR`)."""
+        return self.leaves_one_condition and not self.physics_model
 
     @property
     def n_folds(self) -> int:
