@@ -88,11 +88,14 @@ def summary(rows: list[dict], factor: float, label: str) -> None:
         return
     ratio = np.array([r["actual_um"] / panel.expected_um(r, factor) for r in rows])
     inside = np.mean((ratio >= 0.5) & (ratio <= 2.0))
+    ranges = [calibration.calibrated(unseen_condition=r.get("unseen_condition", False))[1] for r in rows]
+    in_range = np.mean([low <= x <= high for x, (low, high) in zip(ratio, ranges)])
     shares = {k: np.mean([r[k] for r in rows]) for k in ("within_chosen", "within_bic", "within_default")}
     print(
         f"{label}: {len(rows)} pairs, factor {factor:.3g}: ratio actual/expected median {np.median(ratio):.2f}, "
-        f"in [0.5, 2]: {100 * inside:.0f} %; within 1.5x of the best p: chosen {100 * shares['within_chosen']:.0f} %, "
-        f"BIC {100 * shares['within_bic']:.0f} %, p = 3 {100 * shares['within_default']:.0f} %"
+        f"in [0.5, 2]: {100 * inside:.0f} %, inside the printed range: {100 * in_range:.0f} %; within 1.5x of the "
+        f"best p: chosen {100 * shares['within_chosen']:.0f} %, BIC {100 * shares['within_bic']:.0f} %, "
+        f"p = 3 {100 * shares['within_default']:.0f} %"
     )
 
 
