@@ -294,10 +294,11 @@ def trust_notes(scores: NextRunScores) -> tuple[str, ...]:
             "another day) and fit on both (--data A B --p 0)"
         )
     elif scores.leaves_one_condition:
+        low, high = calibration.UNSEEN_CONDITION_RATIO_RANGE
         calibrated = (
             "the figure is calibrated on simulated warm-up/cool-down runs repeated on another day, whose next runs "
-            "lay 0.29-3.2 × it (10th-90th percentiles; two heat-then-cool runs of a 3-D printer, each the other's "
-            "next run, 0.27 and 0.65 ×)"
+            f"lay {low:.2g}-{high:.2g} × it (10th-90th percentiles; two heat-then-cool runs of a 3-D printer, each "
+            "the other's next run, 0.27 and 0.65 ×)"
             if scores.unseen_condition
             else "the heat law carries the physics model there, and its figure keeps the panel's factor"
         )
